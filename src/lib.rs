@@ -1,0 +1,24 @@
+//! # chainbeam
+//!
+//! A differentiable simulator of slender beams modelled as a chain of rigid pendulums joined by
+//! torsional springs (Nøst, *Optimal Control of Multibody Dynamics with Applications*, NTNU 2023),
+//! integrated with RATTLE and written once over [`num_dual::DualNum`] so the same code runs in
+//! `f64` and in dual arithmetic.
+#![warn(missing_docs)]
+#![deny(clippy::float_cmp)]
+
+pub mod error;
+pub mod euler_bernoulli;
+pub mod model;
+pub mod rattle;
+pub mod scene;
+pub mod simulate;
+pub mod tridiag;
+
+pub use error::{Error, Result};
+pub use model::{Chain, Parameter, Scalar, TipCondition};
+pub use rattle::{Rattle, RattleOptions, State, StepStats};
+pub use scene::{
+    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, Support, TimeGrid,
+};
+pub use simulate::{scene_controls, simulate, simulate_chain, simulate_with_controls, Trajectory};

@@ -1,0 +1,179 @@
+//! Simulation of a scene into a [`Trajectory`] (q, p, λ, μ per step, node positions, energy,
+//! base bending moment M₀(t_k) and solver statistics).
+
+use crate::error::{Error, Result};
+use crate::model::{Chain, Scalar};
+use crate::rattle::{Rattle, State, StepStats};
+use crate::scene::{ControlKind, Scene};
+
+/// A simulated trajectory on the grid t_k = k h, k = 0..=N.
+#[derive(Clone, Debug)]
+pub struct Trajectory<D, const DIM: usize> {
+    n: usize,
+    n_constraints: usize,
+    h: f64,
+    steps: usize,
+    q: Vec<[D; DIM]>,
+    p: Vec<[D; DIM]>,
+    lambda: Vec<D>,
+    mu: Vec<D>,
+    /// Total energy H(q_k, p_k; t_k, u_k) = ½pᵀM⁻¹p + U, k = 0..=N.
+    pub energy: Vec<D>,
+    /// Base bending moment M₀(t_k) (eq. 3.1.3), k = 0..=N.
+    pub moment: Vec<D>,
+    /// Controls u_k used, k = 0..=N.
+    pub controls: Vec<D>,
+    /// Reaction-force variant: tip target ζ_k (zero otherwise).
+    pub tip_target: Vec<D>,
+    /// Per-step Newton statistics, k = 0..N−1.
+    pub stats: Vec<StepStats>,
+    lengths: Vec<f64>,
+}
+
+impl<D: Scalar, const DIM: usize> Trajectory<D, DIM> {
+    /// Number of pendulums.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// Number of steps N (there are N + 1 states).
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+    /// Step h.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+    /// Time t_k = k h.
+    pub fn time(&self, k: usize) -> f64 {
+        k as f64 * self.h
+    }
+    /// Attitudes q at step k.
+    pub fn q(&self, k: usize) -> &[[D; DIM]] {
+        &self.q[k * self.n..(k + 1) * self.n]
+    }
+    /// Momenta p at step k.
+    pub fn p(&self, k: usize) -> &[[D; DIM]] {
+        &self.p[k * self.n..(k + 1) * self.n]
+    }
+    /// λ of the step that ended at k (k ≥ 1; at k = 0 the consistent initial multiplier).
+    pub fn lambda(&self, k: usize) -> &[D] {
+        &self.lambda[k * self.n_constraints..(k + 1) * self.n_constraints]
+    }
+    /// μ of the step that ended at k (k ≥ 1; at k = 0 the consistent initial multiplier).
+    pub fn mu(&self, k: usize) -> &[D] {
+        &self.mu[k * self.n_constraints..(k + 1) * self.n_constraints]
+    }
+    /// Node positions r₁..rₙ at step k as (x, y, z) (x = 0 in the planar model).
+    pub fn positions(&self, k: usize) -> Vec<[f64; 3]> {
+        let mut r = [0.0; 3];
+        self.q(k)
+            .iter()
+            .zip(self.lengths.iter())
+            .map(|(qi, l)| {
+                for d in 0..DIM {
+                    r[3 - DIM + d] += l * qi[d].re();
+                }
+                r
+            })
+            .collect()
+    }
+    /// Total Newton iterations.
+    pub fn newton_iterations(&self) -> usize {
+        self.stats.iter().map(|s| s.iterations).sum()
+    }
+}
+
+/// The per-step controls u_0..u_N of a scene: its `[control]` values expanded (constant → N + 1
+/// copies), or zeros without a control.
+pub fn scene_controls(scene: &Scene) -> Vec<f64> {
+    let n1 = scene.time.steps + 1;
+    match &scene.control {
+        None => vec![0.0; n1],
+        Some(c) => match c.kind {
+            ControlKind::Constant => vec![c.values[0]; n1],
+            ControlKind::PerStep => c.values.clone(),
+        },
+    }
+}
+
+/// Simulates a scene in `f64` with the planar model (every thesis scene is planar: the loads act
+/// along z on a beam along y), using the scene's own controls.
+pub fn simulate(scene: &Scene) -> Result<Trajectory<f64, 2>> {
+    let chain = Chain::<f64, 2>::from_scene(scene)?;
+    let u = scene_controls(scene);
+    simulate_chain(chain, scene.time.step, scene.time.steps, &u)
+}
+
+/// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1).
+pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<Trajectory<f64, 2>> {
+    let mut chain = Chain::<f64, 2>::from_scene(scene)?;
+    if chain.control_node().is_none() {
+        chain.set_control_node(Some(scene.n()))?;
+    }
+    simulate_chain(chain, scene.time.step, scene.time.steps, controls)
+}
+
+/// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls
+/// u_0..u_N, generic over the scalar (dual numbers give forward-mode derivatives of the whole
+/// trajectory) and the dimension.
+pub fn simulate_chain<D: Scalar, const DIM: usize>(
+    chain: Chain<D, DIM>,
+    h: f64,
+    steps: usize,
+    controls: &[D],
+) -> Result<Trajectory<D, DIM>> {
+    if controls.len() != steps + 1 {
+        return Err(Error::InvalidArgument {
+            name: "controls",
+            reason: format!("expected N + 1 = {} values, got {}", steps + 1, controls.len()),
+        });
+    }
+    if let Some(i) = controls.iter().position(|u| !u.re().is_finite()) {
+        return Err(Error::InvalidArgument {
+            name: "controls",
+            reason: format!("u_{i} is not finite"),
+        });
+    }
+    let n = chain.n();
+    let nc = chain.n_constraints();
+    let lengths = chain.lengths().iter().map(|l| l.re()).collect();
+    let mut rattle = Rattle::new(chain, h)?;
+    let mut state: State<D, DIM> = rattle.straight_state();
+    rattle.prepare(&mut state, 0, controls[0])?;
+    let mut traj = Trajectory {
+        n,
+        n_constraints: nc,
+        h,
+        steps,
+        q: Vec::with_capacity((steps + 1) * n),
+        p: Vec::with_capacity((steps + 1) * n),
+        lambda: Vec::with_capacity((steps + 1) * nc),
+        mu: Vec::with_capacity((steps + 1) * nc),
+        energy: Vec::with_capacity(steps + 1),
+        moment: Vec::with_capacity(steps + 1),
+        controls: controls.to_vec(),
+        tip_target: Vec::with_capacity(steps + 1),
+        stats: Vec::with_capacity(steps),
+        lengths,
+    };
+    let mut scratch = vec![[D::zero(); DIM]; n];
+    let record = |traj: &mut Trajectory<D, DIM>, st: &State<D, DIM>, k: usize, scratch: &mut [[D; DIM]], ch: &Chain<D, DIM>| {
+        traj.q.extend_from_slice(&st.q);
+        traj.p.extend_from_slice(&st.p);
+        traj.lambda.extend_from_slice(&st.lambda);
+        traj.mu.extend_from_slice(&st.mu);
+        let t = k as f64 * h;
+        let e = ch.kinetic_energy(&st.p, scratch) + ch.potential_energy(&st.q, t, controls[k]);
+        traj.energy.push(e);
+        traj.moment.push(ch.base_moment(&st.q));
+        traj.tip_target.push(st.tip_target[0]);
+    };
+    state.lambda.copy_from_slice(&state.mu.clone());
+    record(&mut traj, &state, 0, &mut scratch, rattle.chain());
+    for k in 0..steps {
+        let s = rattle.step(&mut state, k, controls[k], controls[k + 1])?;
+        traj.stats.push(s);
+        record(&mut traj, &state, k + 1, &mut scratch, rattle.chain());
+    }
+    Ok(traj)
+}

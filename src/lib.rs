@@ -13,6 +13,7 @@ pub mod model;
 pub mod rattle;
 pub mod scene;
 pub mod simulate;
+pub mod statics;
 pub mod tridiag;
 
 pub use error::{Error, Result};
@@ -21,4 +22,5 @@ pub use rattle::{Rattle, RattleOptions, State, StepStats};
 pub use scene::{
     Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, Support, TimeGrid,
 };
-pub use simulate::{scene_controls, simulate, simulate_chain, simulate_with_controls, Trajectory};
+pub use simulate::{
+    piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls, Trajectory};

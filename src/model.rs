@@ -27,15 +27,15 @@ pub(crate) fn carries_derivatives<D>() -> bool {
     std::mem::size_of::<D>() > std::mem::size_of::<f64>()
 }
 
-/// Index of the z component in a `DIM`-vector.
+/// Index of the z component in a `DIM`-vector (planar: 1, spatial: 2).
 #[inline]
-pub(crate) const fn zi<const DIM: usize>() -> usize {
+pub const fn zi<const DIM: usize>() -> usize {
     DIM - 1
 }
 
 /// Index of the y component in a `DIM`-vector.
 #[inline]
-pub(crate) const fn yi<const DIM: usize>() -> usize {
+pub const fn yi<const DIM: usize>() -> usize {
     DIM - 2
 }
 
@@ -106,6 +106,42 @@ pub fn spring_s<D: Scalar>(x: D) -> D {
         s
     } else {
         x.acos() / (-(x * x) + 1.0).sqrt()
+    }
+}
+
+/// s(x) and s′(x) together (for Jacobian products of the spring force, eq. 2.2.3 differentiated).
+/// Near x = 1 both come from the series of [`spring_s`] (s′(1) = −1/3); elsewhere
+/// s′ = (x s − 1)/(1 − x²).
+#[inline]
+pub fn spring_s_ds<D: Scalar>(x: D) -> (D, D) {
+    let w = (-x + 1.0) * 0.5;
+    if w.re() <= S_SERIES_MAX_W {
+        const C: [f64; 10] = [
+            1.0,
+            2.0 / 3.0,
+            8.0 / 15.0,
+            16.0 / 35.0,
+            128.0 / 315.0,
+            256.0 / 693.0,
+            1024.0 / 3003.0,
+            2048.0 / 6435.0,
+            32768.0 / 109395.0,
+            65536.0 / 230945.0,
+        ];
+        let mut s = D::from(C[9]);
+        for &c in C[..9].iter().rev() {
+            s = s * w + c;
+        }
+        // ds/dw = Σ k c_k w^{k−1} (the exact derivative of the same polynomial); dw/dx = −1/2
+        let mut ds = D::from(9.0 * C[9]);
+        for k in (1..9).rev() {
+            ds = ds * w + (k as f64) * C[k];
+        }
+        (s, ds * (-0.5))
+    } else {
+        let s = x.acos() / (-(x * x) + 1.0).sqrt();
+        let ds = (x * s - 1.0) / (-(x * x) + 1.0);
+        (s, ds)
     }
 }
 
@@ -537,6 +573,83 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             });
         }
         Ok(())
+    }
+
+    /// The product K w of the force Jacobian K = ∂(∂U/∂q)/∂q (symmetric, block-tridiagonal: only
+    /// the springs depend on q) with a vector w, accumulated into `out` with factor `scale`:
+    /// for the spring between a and b (x = a·b), with σ = b·w_a + a·w_b,
+    /// (K w)_a = −k [s w_b + s′ σ b], (K w)_b = −k [s w_a + s′ σ a].
+    pub fn force_jacobian_product(&self, q: &[[D; DIM]], w: &[[D; DIM]], scale: D, out: &mut [[D; DIM]]) {
+        let n = self.n;
+        let e = e2::<D, DIM>();
+        let zero = [D::zero(); DIM];
+        for i in 0..=n {
+            if !self.has_spring[i] {
+                continue;
+            }
+            let (a, wa) = if i == 0 { (&e, &zero) } else { (&q[i - 1], &w[i - 1]) };
+            let (b, wb) = if i == n { (&e, &zero) } else { (&q[i], &w[i]) };
+            let (s, ds) = spring_s_ds(dot(a, b));
+            let sigma = dot(b, wa) + dot(a, wb);
+            let k = -self.springs[i] * scale;
+            if i > 0 {
+                for d in 0..DIM {
+                    out[i - 1][d] += k * (s * wb[d] + ds * sigma * b[d]);
+                }
+            }
+            if i < n {
+                for d in 0..DIM {
+                    out[i][d] += k * (s * wa[d] + ds * sigma * a[d]);
+                }
+            }
+        }
+    }
+
+    /// The contraction w · ∂(∂U/∂q)/∂θ of the force with respect to a parameter at time t, for
+    /// the parameters the force is linear in (stiffnesses, load magnitudes) or, for
+    /// [`Parameter::Mass`], its gravity part (the mass matrix part is the adjoint's business).
+    /// [`Parameter::Drag`] does not enter the force (0).
+    pub fn force_parameter_contraction(&self, q: &[[D; DIM]], t: f64, w: &[[D; DIM]], p: Parameter) -> D {
+        let n = self.n;
+        let z = zi::<DIM>();
+        let e = e2::<D, DIM>();
+        let zero = [D::zero(); DIM];
+        let spring = |i: usize| -> D {
+            if !self.has_spring[i] {
+                return D::zero();
+            }
+            let (a, wa) = if i == 0 { (&e, &zero) } else { (&q[i - 1], &w[i - 1]) };
+            let (b, wb) = if i == n { (&e, &zero) } else { (&q[i], &w[i]) };
+            -spring_s(dot(a, b)) * (dot(b, wa) + dot(a, wb))
+        };
+        match p {
+            Parameter::InteriorStiffness => (1..n).map(spring).fold(D::zero(), |a, b| a + b),
+            Parameter::BaseStiffness => spring(0),
+            Parameter::TipStiffness => spring(n),
+            Parameter::Mass => match self.gravity {
+                Some(g) => (0..n)
+                    .map(|j| g * ((n - j) as f64) * self.lengths[j] * w[j][z])
+                    .fold(D::zero(), |a, b| a + b),
+                None => D::zero(),
+            },
+            Parameter::Drag => D::zero(),
+            Parameter::LoadForce(i) => {
+                let tol = 1e-9 * t.abs().max(1.0);
+                match self.loads.iter().find(|l| l.scene_index == i) {
+                    Some(l) if t + tol >= l.start && t + tol < l.end => (0..l.node)
+                        .map(|j| self.lengths[j] * w[j][z])
+                        .fold(D::zero(), |a, b| a + b),
+                    _ => D::zero(),
+                }
+            }
+        }
+    }
+
+    /// Whether all masses are equal (parameter derivatives with respect to [`Parameter::Mass`]
+    /// are taken at a common mass).
+    pub fn has_uniform_mass(&self) -> bool {
+        let m0 = self.masses[0].re();
+        self.masses.iter().all(|m| (m.re() - m0).abs() <= 1e-15 * m0.abs())
     }
 
     fn folded(&self, step: usize, joint0: usize, a: &[D; DIM], b: &[D; DIM]) -> Error {

@@ -18,8 +18,10 @@
 //! tridiagonal in the length constraints because M̄⁻¹ is, bordered by the tip row and column, and is
 //! solved in O(n) by [`BorderedTridiag`]. The predictor is μ_{k−1}, the multiplier of the previous
 //! projection (at step 0, the consistent multiplier of the initial state), which leaves Newton 1-2
-//! iterations per step on the thesis scenes. When `D` carries derivatives one more update is
-//! applied after the real part has converged, so that the derivative parts are exact too.
+//! iterations per step on the thesis scenes. When `D` carries derivatives, one more update is
+//! applied after the real part has converged, with its real part removed: the derivative parts
+//! (which Newton converges only linearly, at the rate of the residual) become exact, and the real
+//! parts stay bit-for-bit those of the `f64` run.
 //!
 //! **Projection for (p_{k+1}, μ_k)** is linear with the symmetric tridiagonal (bordered) matrix
 //! Ĝ(q_{k+1}) M⁻¹ Ĝ(q_{k+1})ᵀ.
@@ -236,30 +238,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let residual;
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
-            for i in 0..n {
-                let li = ws.lam[i];
-                for d in 0..DIM {
-                    ws.c[i][d] = ws.a[i][d] - li * state.q[i][d] * hh;
-                }
-                if bordered {
-                    ws.c[i][z] -= ws.lam[n] * ch.lengths[i] * hh;
-                }
-            }
-            if let Some(dr) = drag {
-                let two_hd = dr * (2.0 * h);
-                for i in 0..n {
-                    for d in 0..DIM {
-                        let c = ws.c[i][d];
-                        let root = (two_hd * c.abs() + 1.0).sqrt() + 1.0;
-                        let p = c * 2.0 / root;
-                        ws.phalf[i][d] = p;
-                        // W = dp/dc = 1 / (1 + hD|p|)
-                        ws.w[i][d] = (dr * h * p.abs() + 1.0).recip();
-                    }
-                }
-            } else {
-                ws.phalf.copy_from_slice(&ws.c);
-            }
+            half_step_momentum(ch, &state.q, &ws.a, &ws.lam, h, &mut ws.c, &mut ws.phalf, &mut ws.w);
             ch.apply_inverse_mass(&ws.phalf, &mut ws.tmp);
             for i in 0..n {
                 for d in 0..DIM {
@@ -296,43 +275,19 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     iterations,
                 });
             }
-            // Jacobian J = −h²/2 Ĝ(q') M⁻¹ W Ĝ(q_k)ᵀ
-            let s = -(h * hh);
+            newton_jacobian(ch, &state.q, &ws.qnew, &ws.w, h, &mut ws.tri, &mut ws.scal);
             let tri = &mut ws.tri;
-            for i in 0..n {
-                let (dii, off) = ch.minv_entries(i);
-                let wq = wmul(&ws.w[i], &state.q[i], drag.is_some());
-                tri.diag[i] = dot(&ws.qnew[i], &wq) * dii * s;
-                if i + 1 < n {
-                    let wq1 = wmul(&ws.w[i + 1], &state.q[i + 1], drag.is_some());
-                    tri.upper[i] = dot(&ws.qnew[i], &wq1) * off * s;
-                    tri.lower[i + 1] = dot(&ws.qnew[i + 1], &wq) * off * s;
-                }
-            }
-            if bordered {
-                // column: −h²/2 q'_{i,z} (M̄⁻¹ (l ⊙ W_z))_i ; row: −h²/2 δ_{jn} (W_n q_{k,n})_z/(m_n l_n)
-                for j in 0..n {
-                    ws.scal[j] = ch.lengths[j] * ws.w[j][z];
-                }
-                for i in 0..n {
-                    let (dii, off) = ch.minv_entries(i);
-                    let mut v = dii * ws.scal[i];
-                    if i + 1 < n {
-                        v += off * ws.scal[i + 1];
-                    }
-                    if i > 0 {
-                        let (_, offm) = ch.minv_entries(i - 1);
-                        v += offm * ws.scal[i - 1];
-                    }
-                    tri.col[i] = ws.qnew[i][z] * v * s;
-                    tri.row[i] = D::zero();
-                }
-                tri.row[n - 1] = ws.w[n - 1][z] * state.q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1] * s;
-                tri.corner = ws.w[n - 1][z] * inv_mn * s;
-            }
             tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
-            for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
-                *l -= *r;
+            if extra_done {
+                // The derivative-only update: Δ − re(Δ) has a real part of exactly 0, so the real
+                // parts stay bit-for-bit those of the f64 run while the derivative parts converge.
+                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
+                    *l -= *r - r.re();
+                }
+            } else {
+                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
+                    *l -= *r;
+                }
             }
             iterations += 1;
         }
@@ -374,6 +329,97 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             *m = *y / hh;
         }
         Ok(StepStats { iterations, residual })
+    }
+}
+
+/// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p + (hD/2) p ⊙ |p| = c (p = c without drag), with
+/// W = ∂p_{k+½}/∂c = 1/(1 + hD|p|) componentwise (left at 1 without drag).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn half_step_momentum<D: Scalar, const DIM: usize>(
+    ch: &Chain<D, DIM>,
+    q: &[[D; DIM]],
+    a: &[[D; DIM]],
+    lam: &[D],
+    h: f64,
+    c: &mut [[D; DIM]],
+    phalf: &mut [[D; DIM]],
+    w: &mut [[D; DIM]],
+) {
+    let n = ch.n();
+    let hh = 0.5 * h;
+    let z = zi::<DIM>();
+    for i in 0..n {
+        let li = lam[i];
+        for d in 0..DIM {
+            c[i][d] = a[i][d] - li * q[i][d] * hh;
+        }
+        if ch.has_tip_constraint() {
+            c[i][z] -= lam[n] * ch.lengths[i] * hh;
+        }
+    }
+    if let Some(dr) = ch.drag {
+        let two_hd = dr * (2.0 * h);
+        for i in 0..n {
+            for d in 0..DIM {
+                let ci = c[i][d];
+                let root = (two_hd * ci.abs() + 1.0).sqrt() + 1.0;
+                let p = ci * 2.0 / root;
+                phalf[i][d] = p;
+                w[i][d] = (dr * h * p.abs() + 1.0).recip();
+            }
+        }
+    } else {
+        phalf.copy_from_slice(c);
+    }
+}
+
+/// Assembles the Newton matrix J = ∂ĝ(q_{k+1}(λ))/∂λ = −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ into the
+/// bordered tridiagonal `tri`: J_{ij} = −h²/2 M̄⁻¹_{ij} q′ᵢ·(W_j ⊙ q_j) (|i − j| ≤ 1); tip column
+/// −h²/2 q′_{i,z} (M̄⁻¹(l ⊙ W_z))ᵢ; tip row −h²/2 δ_{jn} (W_n ⊙ q_n)_z/(m_n l_n), using
+/// Σᵢ lᵢ M̄⁻¹_{ij} = δ_{jn}/(m_n l_n); corner −h²/2 W_{n,z}/m_n. `scal` is scratch of length n.
+pub(crate) fn newton_jacobian<D: Scalar, const DIM: usize>(
+    ch: &Chain<D, DIM>,
+    q: &[[D; DIM]],
+    qnew: &[[D; DIM]],
+    w: &[[D; DIM]],
+    h: f64,
+    tri: &mut BorderedTridiag<D>,
+    scal: &mut [D],
+) {
+    let n = ch.n();
+    let z = zi::<DIM>();
+    let has_drag = ch.has_drag();
+    let s = -(h * h * 0.5);
+    for i in 0..n {
+        let (dii, off) = ch.minv_entries(i);
+        let wq = wmul(&w[i], &q[i], has_drag);
+        tri.diag[i] = dot(&qnew[i], &wq) * dii * s;
+        if i + 1 < n {
+            let wq1 = wmul(&w[i + 1], &q[i + 1], has_drag);
+            tri.upper[i] = dot(&qnew[i], &wq1) * off * s;
+            tri.lower[i + 1] = dot(&qnew[i + 1], &wq) * off * s;
+        }
+    }
+    if ch.has_tip_constraint() {
+        for j in 0..n {
+            scal[j] = ch.lengths[j] * w[j][z];
+        }
+        for i in 0..n {
+            let (dii, off) = ch.minv_entries(i);
+            let mut v = dii * scal[i];
+            if i + 1 < n {
+                v += off * scal[i + 1];
+            }
+            if i > 0 {
+                let (_, offm) = ch.minv_entries(i - 1);
+                v += offm * scal[i - 1];
+            }
+            tri.col[i] = qnew[i][z] * v * s;
+            tri.row[i] = D::zero();
+        }
+        let inv_mn = ch.inv_masses[n - 1];
+        tri.row[n - 1] = w[n - 1][z] * q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1] * s;
+        tri.corner = w[n - 1][z] * inv_mn * s;
     }
 }
 

@@ -177,3 +177,22 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     }
     Ok(traj)
 }
+
+/// Samples a piecewise-constant control u(t) = uⱼ on [aⱼ, bⱼ) (0 elsewhere) onto the grid as the
+/// cell averages u_k = (1/h) ∫_{t_k − h/2}^{t_k + h/2} u(t) dt, k = 0..=N.
+///
+/// RATTLE applies u_k over the two half-steps around t_k, so with these values the discrete
+/// impulse h Σ u_k equals the exact impulse ∫ u dt, and a push followed by an equal and opposite
+/// push stops the tip exactly (thesis Fig. 3.4, right).
+pub fn piecewise_constant_controls(h: f64, steps: usize, pieces: &[(f64, f64, f64)]) -> Vec<f64> {
+    (0..=steps)
+        .map(|k| {
+            let (lo, hi) = ((k as f64 - 0.5) * h, (k as f64 + 0.5) * h);
+            pieces
+                .iter()
+                .map(|&(a, b, u)| u * (hi.min(b) - lo.max(a)).max(0.0))
+                .sum::<f64>()
+                / h
+        })
+        .collect()
+}

@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 
+pub mod adjoint;
 pub mod error;
 pub mod euler_bernoulli;
 pub mod model;
@@ -16,6 +17,10 @@ pub mod simulate;
 pub mod statics;
 pub mod tridiag;
 
+pub use adjoint::{
+    BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, Objective,
+    Parametrisation, PerStepControl, PiecewiseControl,
+};
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Rattle, RattleOptions, State, StepStats};

@@ -345,6 +345,37 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         }
     }
 
+    /// The same model over another scalar type (parameters lifted with `D2::from`).
+    pub fn lift<D2: Scalar>(&self) -> Chain<D2, DIM> {
+        let l = |v: &[D]| v.iter().map(|x| D2::from(x.re())).collect::<Vec<D2>>();
+        Chain {
+            n: self.n,
+            lengths: l(&self.lengths),
+            masses: l(&self.masses),
+            inv_lengths: l(&self.inv_lengths),
+            inv_masses: l(&self.inv_masses),
+            springs: l(&self.springs),
+            has_spring: self.has_spring.clone(),
+            moment_stiffness: D2::from(self.moment_stiffness.re()),
+            tip: self.tip,
+            loads: self
+                .loads
+                .iter()
+                .map(|t| LoadTerm {
+                    node: t.node,
+                    force: D2::from(t.force.re()),
+                    start: t.start,
+                    end: t.end,
+                    scene_index: t.scene_index,
+                })
+                .collect(),
+            gravity: self.gravity.map(|g| D2::from(g.re())),
+            drag: self.drag.map(|g| D2::from(g.re())),
+            control_node: self.control_node,
+            fold_cos: self.fold_cos,
+        }
+    }
+
     /// Number of pendulums n.
     pub fn n(&self) -> usize {
         self.n

@@ -196,6 +196,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         Ok(())
     }
 
+    /// Evaluates and caches U_q(q_k; u_k) for the next [`Rattle::step`] without touching the
+    /// multipliers (the Newton predictor stays `state.mu`), so that a step recomputed from a stored
+    /// state repeats the original arithmetic bit for bit.
+    pub fn prepare_force(&mut self, state: &State<D, DIM>, k: usize, u_k: D) -> Result<()> {
+        let t = k as f64 * self.h;
+        self.chain.potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
+        self.ws.force_ready = true;
+        Ok(())
+    }
+
     /// Advances `state` from t_k to t_{k+1} with controls u_k (at t_k) and u_{k+1} (at t_{k+1}).
     ///
     /// The caller must pass the same u_k that the previous step received as its u_{k+1} (the force

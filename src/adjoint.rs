@@ -77,11 +77,17 @@ pub struct BendingObjective {
 impl BendingObjective {
     /// c = M₀(t_N)² (eq. 3.3.2).
     pub fn final_moment() -> Self {
-        BendingObjective { kind: ObjectiveKind::Final, effort: 0.0 }
+        BendingObjective {
+            kind: ObjectiveKind::Final,
+            effort: 0.0,
+        }
     }
     /// c_sum = Σ M₀(t_k)² (eq. 3.3.4).
     pub fn summed_moment() -> Self {
-        BendingObjective { kind: ObjectiveKind::Sum, effort: 0.0 }
+        BendingObjective {
+            kind: ObjectiveKind::Sum,
+            effort: 0.0,
+        }
     }
     /// Adds the effort penalty ρ h Σ u_k².
     pub fn with_effort(mut self, rho: f64) -> Self {
@@ -315,7 +321,11 @@ impl<D: Scalar, const DIM: usize> AdjointWorkspace<D, DIM> {
 }
 
 fn singular(step: usize, zp: ZeroPivot) -> Error {
-    Error::SingularSystem { step, index: zp.index, pivot: zp.pivot }
+    Error::SingularSystem {
+        step,
+        index: zp.index,
+        pivot: zp.pivot,
+    }
 }
 
 /// Evaluates a stage cost and accumulates its partial derivatives into q̄_k, ū_k and k̄₁, by nested
@@ -335,7 +345,14 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         if self.obj.uses_positions() {
             z = positions_z(ch, q);
         }
-        self.obj.stage(Stage { k, steps: self.steps, h: self.h, moment: m, control: u, z: &z })
+        self.obj.stage(Stage {
+            k,
+            steps: self.steps,
+            h: self.h,
+            moment: m,
+            control: u,
+            z: &z,
+        })
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -353,7 +370,14 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         let scale = ch.moment_stiffness * 2.0 * ch.inv_lengths[0];
         let m = scale * q[0][zi_];
         let st = |obj: &O, steps, h, m: Dual<D>, u: Dual<D>, z: &[Dual<D>]| {
-            obj.stage(Stage { k, steps, h, moment: m, control: u, z })
+            obj.stage(Stage {
+                k,
+                steps,
+                h,
+                moment: m,
+                control: u,
+                z,
+            })
         };
         let uses_z = self.obj.uses_positions();
         if uses_z {
@@ -364,8 +388,24 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             }
         }
         let zslice: &[Dual<D>] = if uses_z { &self.zbuf } else { &[] };
-        let dm = st(self.obj, self.steps, self.h, Dual::new(m, D::one()), Dual::from_re(u), zslice).eps;
-        let du = st(self.obj, self.steps, self.h, Dual::from_re(m), Dual::new(u, D::one()), zslice).eps;
+        let dm = st(
+            self.obj,
+            self.steps,
+            self.h,
+            Dual::new(m, D::one()),
+            Dual::from_re(u),
+            zslice,
+        )
+        .eps;
+        let du = st(
+            self.obj,
+            self.steps,
+            self.h,
+            Dual::from_re(m),
+            Dual::new(u, D::one()),
+            zslice,
+        )
+        .eps;
         qbar[0][zi_] += dm * scale;
         ubar[k] += du;
         if let Some(kb) = k1bar {
@@ -378,7 +418,15 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             for i in (0..n).rev() {
                 let zi_re = self.zbuf[i].re;
                 self.zbuf[i] = Dual::new(zi_re, D::one());
-                let g = st(self.obj, self.steps, self.h, Dual::from_re(m), Dual::from_re(u), &self.zbuf).eps;
+                let g = st(
+                    self.obj,
+                    self.steps,
+                    self.h,
+                    Dual::from_re(m),
+                    Dual::from_re(u),
+                    &self.zbuf,
+                )
+                .eps;
                 self.zbuf[i] = Dual::from_re(zi_re);
                 acc += g;
                 qbar[i][zi_] += acc * ch.lengths[i];
@@ -401,7 +449,10 @@ fn positions_z<D: Scalar, const DIM: usize>(ch: &Chain<D, DIM>, q: &[[D; DIM]]) 
 }
 
 /// Validates the parameters requested for a gradient.
-fn check_parameters<D: Scalar, const DIM: usize>(ch: &Chain<D, DIM>, params: &[Parameter]) -> Result<()> {
+fn check_parameters<D: Scalar, const DIM: usize>(
+    ch: &Chain<D, DIM>,
+    params: &[Parameter],
+) -> Result<()> {
     for &p in params {
         let ok = match p {
             Parameter::Mass => ch.has_uniform_mass(),
@@ -442,12 +493,20 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
         });
     }
     if let Some(i) = u.iter().position(|x| !x.re().is_finite()) {
-        return Err(Error::InvalidArgument { name: "controls", reason: format!("u_{i} is not finite") });
+        return Err(Error::InvalidArgument {
+            name: "controls",
+            reason: format!("u_{i} is not finite"),
+        });
     }
     check_parameters(chain, params)?;
     let n = chain.n();
     let kk = checkpointing.interval(steps);
-    let mut stage = StageEval { obj: objective, steps, h, zbuf: vec![Dual::from_re(D::zero()); n] };
+    let mut stage = StageEval {
+        obj: objective,
+        steps,
+        h,
+        zbuf: vec![Dual::from_re(D::zero()); n],
+    };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
 
     // Forward sweep with checkpoints.
@@ -473,8 +532,19 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     let mut tip_bar = [D::zero(); 2];
     let mut ubar = vec![D::zero(); steps + 1];
     let mut thbar = vec![D::zero(); params.len()];
-    let last = checkpoints.last().expect("at least the initial state").clone();
-    stage.accumulate(chain, steps, &last.q, u[steps], &mut qbar, &mut ubar, k1_param.map(|i| &mut thbar[i]));
+    let last = checkpoints
+        .last()
+        .expect("at least the initial state")
+        .clone();
+    stage.accumulate(
+        chain,
+        steps,
+        &last.q,
+        u[steps],
+        &mut qbar,
+        &mut ubar,
+        k1_param.map(|i| &mut thbar[i]),
+    );
 
     let mut buffer: Vec<State<D, DIM>> = Vec::with_capacity(kk + 1);
     let n_segments = checkpoints.len() - 1;
@@ -496,19 +566,81 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
         for k in (a..b).rev() {
             let (sk, sk1) = (&buffer[k - a], &buffer[k - a + 1]);
             reverse_step(
-                chain, h, k, sk, sk1, u[k], u[k + 1], &mut ws, &mut qbar, &mut pbar, &mut tip_bar, &mut ubar,
-                params, &mut thbar,
+                chain,
+                h,
+                k,
+                sk,
+                sk1,
+                u[k],
+                u[k + 1],
+                &mut ws,
+                &mut qbar,
+                &mut pbar,
+                &mut tip_bar,
+                &mut ubar,
+                params,
+                &mut thbar,
             )?;
-            stage.accumulate(chain, k, &sk.q, u[k], &mut qbar, &mut ubar, k1_param.map(|i| &mut thbar[i]));
+            stage.accumulate(
+                chain,
+                k,
+                &sk.q,
+                u[k],
+                &mut qbar,
+                &mut ubar,
+                k1_param.map(|i| &mut thbar[i]),
+            );
         }
     }
     let state_bytes = (checkpoints.len() + buffer.capacity()) * state_size;
-    Ok(AdjointResult { value, control_gradient: ubar, parameter_gradient: thbar, state_bytes })
+    Ok(AdjointResult {
+        value,
+        control_gradient: ubar,
+        parameter_gradient: thbar,
+        state_bytes,
+    })
+}
+
+/// J = Σ_k ℓ_k by one forward simulation without storage, generic over the scalar (with dual
+/// numbers this is forward-mode differentiation of the whole objective, the reference the adjoint
+/// is tested against).
+pub fn forward_value<D: Scalar, O: Objective, const DIM: usize>(
+    chain: &Chain<D, DIM>,
+    h: f64,
+    steps: usize,
+    u: &[D],
+    objective: &O,
+) -> Result<D> {
+    if u.len() != steps + 1 {
+        return Err(Error::InvalidArgument {
+            name: "controls",
+            reason: format!("expected N + 1 = {} values, got {}", steps + 1, u.len()),
+        });
+    }
+    let mut r = Rattle::new(chain.clone(), h)?;
+    let mut st = r.straight_state();
+    r.prepare(&mut st, 0, u[0])?;
+    let mut stage = StageEval {
+        obj: objective,
+        steps,
+        h,
+        zbuf: Vec::new(),
+    };
+    let mut j = stage.value(chain, 0, &st.q, u[0]);
+    for k in 0..steps {
+        r.step(&mut st, k, u[k], u[k + 1])?;
+        j += stage.value(chain, k + 1, &st.q, u[k + 1]);
+    }
+    Ok(j)
 }
 
 /// Adds −h/2 Σ_{j < c} l_j w_{j,z} (the control's force term contracted with w) to `ubar`.
 #[inline]
-fn control_contraction<D: Scalar, const DIM: usize>(ch: &Chain<D, DIM>, w: &[[D; DIM]], hh: f64) -> D {
+fn control_contraction<D: Scalar, const DIM: usize>(
+    ch: &Chain<D, DIM>,
+    w: &[[D; DIM]],
+    hh: f64,
+) -> D {
     match ch.control_node {
         Some(c) => {
             let z = zi::<DIM>();
@@ -658,7 +790,9 @@ fn reverse_step<D: Scalar, const DIM: usize>(
         ws.rhs[n] = -s * hh;
     }
     newton_jacobian(ch, q, q1, &ws.w, h, &mut ws.tri, &mut ws.scal);
-    ws.tri.solve_transpose(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
+    ws.tri
+        .solve_transpose(&mut ws.rhs)
+        .map_err(|zp| singular(k, zp))?;
     for i in 0..n {
         let nu = ws.rhs[i];
         for d in 0..DIM {
@@ -745,10 +879,15 @@ impl ControlProblem<Parametrisation, BendingObjective> {
     /// the tip) and `[objective]` (default: final), without effort penalty.
     pub fn from_scene(scene: &Scene) -> Result<Self> {
         let map = match scene.control.as_ref().map(|c| c.kind) {
-            Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl { steps: scene.time.steps }),
+            Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
+                steps: scene.time.steps,
+            }),
             _ => Parametrisation::Constant,
         };
-        let obj = BendingObjective { kind: scene.objective.unwrap_or(ObjectiveKind::Final), effort: 0.0 };
+        let obj = BendingObjective {
+            kind: scene.objective.unwrap_or(ObjectiveKind::Final),
+            effort: 0.0,
+        };
         ControlProblem::new(scene, map, obj)
     }
 }
@@ -801,11 +940,18 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         if theta.len() != self.map.n_params() {
             return Err(Error::InvalidArgument {
                 name,
-                reason: format!("expected {} values, got {}", self.map.n_params(), theta.len()),
+                reason: format!(
+                    "expected {} values, got {}",
+                    self.map.n_params(),
+                    theta.len()
+                ),
             });
         }
         if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-            return Err(Error::InvalidArgument { name, reason: format!("entry {i} is not finite") });
+            return Err(Error::InvalidArgument {
+                name,
+                reason: format!("entry {i} is not finite"),
+            });
         }
         Ok(())
     }
@@ -821,23 +967,21 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// J(θ) by one forward simulation (no storage).
     pub fn value(&self, theta: &[f64]) -> Result<f64> {
         let u = self.controls(theta)?;
-        let mut r = Rattle::new(self.chain.clone(), self.h)?;
-        let mut st = r.straight_state();
-        r.prepare(&mut st, 0, u[0])?;
-        let s = self.steps;
-        let mut stage = StageEval { obj: &self.objective, steps: s, h: self.h, zbuf: Vec::new() };
-        let mut j = stage.value(&self.chain, 0, &st.q, u[0]);
-        for k in 0..s {
-            r.step(&mut st, k, u[k], u[k + 1])?;
-            j += stage.value(&self.chain, k + 1, &st.q, u[k + 1]);
-        }
-        Ok(j)
+        forward_value(&self.chain, self.h, self.steps, &u, &self.objective)
     }
 
     /// (J(θ), ∇J(θ)) by the discrete adjoint.
     pub fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
         let u = self.controls(theta)?;
-        let r = adjoint_gradient(&self.chain, self.h, self.steps, &u, &self.objective, &[], self.checkpointing)?;
+        let r = adjoint_gradient(
+            &self.chain,
+            self.h,
+            self.steps,
+            &u,
+            &self.objective,
+            &[],
+            self.checkpointing,
+        )?;
         let mut g = vec![0.0; self.map.n_params()];
         self.map.transpose(&r.control_gradient, &mut g);
         Ok((r.value, g))
@@ -851,7 +995,15 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// The full adjoint result at θ, with gradients for the physical parameters `params` too.
     pub fn adjoint(&self, theta: &[f64], params: &[Parameter]) -> Result<AdjointResult<f64>> {
         let u = self.controls(theta)?;
-        adjoint_gradient(&self.chain, self.h, self.steps, &u, &self.objective, params, self.checkpointing)
+        adjoint_gradient(
+            &self.chain,
+            self.h,
+            self.steps,
+            &u,
+            &self.objective,
+            params,
+            self.checkpointing,
+        )
     }
 
     /// ∂J/∂θ_phys for physical parameters (stiffnesses, mass, drag, load magnitudes).
@@ -864,11 +1016,23 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     pub fn hessian_vec(&self, theta: &[f64], v: &[f64]) -> Result<Vec<f64>> {
         self.check_theta(theta, "theta")?;
         self.check_theta(v, "v")?;
-        let th: Vec<Dual64> = theta.iter().zip(v).map(|(&t, &d)| Dual64::new(t, d)).collect();
+        let th: Vec<Dual64> = theta
+            .iter()
+            .zip(v)
+            .map(|(&t, &d)| Dual64::new(t, d))
+            .collect();
         let mut u = vec![Dual64::from(0.0); self.steps + 1];
         self.map.controls(&th, &mut u);
         let chain = self.chain_as::<Dual64>();
-        let r = adjoint_gradient(&chain, self.h, self.steps, &u, &self.objective, &[], self.checkpointing)?;
+        let r = adjoint_gradient(
+            &chain,
+            self.h,
+            self.steps,
+            &u,
+            &self.objective,
+            &[],
+            self.checkpointing,
+        )?;
         let mut g = vec![Dual64::from(0.0); self.map.n_params()];
         self.map.transpose(&r.control_gradient, &mut g);
         Ok(g.iter().map(|x| x.eps).collect())

@@ -6,8 +6,12 @@
 //! `f64` and in dual arithmetic.
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
+// Numerical kernels index several arrays with one loop variable; iterator zips of four or five
+// slices would hide the formulas they implement.
+#![allow(clippy::needless_range_loop)]
 
 pub mod adjoint;
+pub mod catalogue;
 pub mod error;
 pub mod euler_bernoulli;
 pub mod model;
@@ -25,7 +29,15 @@ pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Rattle, RattleOptions, State, StepStats};
 pub use scene::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, Support, TimeGrid,
+    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
+    SceneErrorKind, Support, TimeGrid,
 };
 pub use simulate::{
-    piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls, Trajectory};
+    piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls,
+    Trajectory,
+};
+
+/// The README's code runs as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

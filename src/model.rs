@@ -105,7 +105,7 @@ pub fn spring_s<D: Scalar>(x: D) -> D {
         }
         s
     } else {
-        x.acos() / (-(x * x) + 1.0).sqrt()
+        x.acos() * (-(x * x) + 1.0).sqrt().recip()
     }
 }
 
@@ -139,8 +139,8 @@ pub fn spring_s_ds<D: Scalar>(x: D) -> (D, D) {
         }
         (s, ds * (-0.5))
     } else {
-        let s = x.acos() / (-(x * x) + 1.0).sqrt();
-        let ds = (x * s - 1.0) / (-(x * x) + 1.0);
+        let s = x.acos() * (-(x * x) + 1.0).sqrt().recip();
+        let ds = (x * s - 1.0) * (-(x * x) + 1.0).recip();
         (s, ds)
     }
 }
@@ -175,7 +175,7 @@ pub fn joint_angle_squared<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DI
             s
         } else {
             let r = y.sqrt();
-            r.asin() / r
+            r.asin() * r.recip()
         };
         y * amp * amp
     } else {
@@ -259,7 +259,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// Builds the model of a scene (validating it first). The control node is taken from the
     /// scene's `[control]` (default: none, so no control term is computed).
     pub fn from_scene(scene: &Scene) -> Result<Self> {
-        scene_validate(scene)?;
+        scene.validate()?;
         let n = scene.n();
         let b = &scene.beam;
         let lift = |v: &[f64]| v.iter().map(|&x| D::from(x)).collect::<Vec<D>>();
@@ -301,7 +301,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 scene_index: i,
             })
             .collect();
-        loads.sort_by(|a, b| b.node.cmp(&a.node));
+        loads.sort_by_key(|l| std::cmp::Reverse(l.node));
         let control_node = scene.control.as_ref().map(|c| c.node);
         if tip == TipCondition::Reaction {
             if let Some(c) = control_node {
@@ -474,7 +474,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     fn no_param(&self, name: &'static str, reason: &str) -> Error {
-        Error::InvalidArgument { name, reason: reason.to_string() }
+        Error::InvalidArgument {
+            name,
+            reason: reason.to_string(),
+        }
     }
 
     /// Applies M⁻¹ = M̄⁻¹ ⊗ I in O(n): M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l) with Δ the
@@ -610,7 +613,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// the springs depend on q) with a vector w, accumulated into `out` with factor `scale`:
     /// for the spring between a and b (x = a·b), with σ = b·w_a + a·w_b,
     /// (K w)_a = −k [s w_b + s′ σ b], (K w)_b = −k [s w_a + s′ σ a].
-    pub fn force_jacobian_product(&self, q: &[[D; DIM]], w: &[[D; DIM]], scale: D, out: &mut [[D; DIM]]) {
+    pub fn force_jacobian_product(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        scale: D,
+        out: &mut [[D; DIM]],
+    ) {
         let n = self.n;
         let e = e2::<D, DIM>();
         let zero = [D::zero(); DIM];
@@ -618,7 +627,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             if !self.has_spring[i] {
                 continue;
             }
-            let (a, wa) = if i == 0 { (&e, &zero) } else { (&q[i - 1], &w[i - 1]) };
+            let (a, wa) = if i == 0 {
+                (&e, &zero)
+            } else {
+                (&q[i - 1], &w[i - 1])
+            };
             let (b, wb) = if i == n { (&e, &zero) } else { (&q[i], &w[i]) };
             let (s, ds) = spring_s_ds(dot(a, b));
             let sigma = dot(b, wa) + dot(a, wb);
@@ -640,7 +653,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// the parameters the force is linear in (stiffnesses, load magnitudes) or, for
     /// [`Parameter::Mass`], its gravity part (the mass matrix part is the adjoint's business).
     /// [`Parameter::Drag`] does not enter the force (0).
-    pub fn force_parameter_contraction(&self, q: &[[D; DIM]], t: f64, w: &[[D; DIM]], p: Parameter) -> D {
+    pub fn force_parameter_contraction(
+        &self,
+        q: &[[D; DIM]],
+        t: f64,
+        w: &[[D; DIM]],
+        p: Parameter,
+    ) -> D {
         let n = self.n;
         let z = zi::<DIM>();
         let e = e2::<D, DIM>();
@@ -649,7 +668,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             if !self.has_spring[i] {
                 return D::zero();
             }
-            let (a, wa) = if i == 0 { (&e, &zero) } else { (&q[i - 1], &w[i - 1]) };
+            let (a, wa) = if i == 0 {
+                (&e, &zero)
+            } else {
+                (&q[i - 1], &w[i - 1])
+            };
             let (b, wb) = if i == n { (&e, &zero) } else { (&q[i], &w[i]) };
             -spring_s(dot(a, b)) * (dot(b, wa) + dot(a, wb))
         };
@@ -680,7 +703,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// are taken at a common mass).
     pub fn has_uniform_mass(&self) -> bool {
         let m0 = self.masses[0].re();
-        self.masses.iter().all(|m| (m.re() - m0).abs() <= 1e-15 * m0.abs())
+        self.masses
+            .iter()
+            .all(|m| (m.re() - m0).abs() <= 1e-15 * m0.abs())
     }
 
     fn folded(&self, step: usize, joint0: usize, a: &[D; DIM], b: &[D; DIM]) -> Error {
@@ -788,9 +813,4 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     pub fn springs(&self) -> &[D] {
         &self.springs
     }
-}
-
-// Temporary shim until Scene::validate lands.
-fn scene_validate(_s: &Scene) -> Result<()> {
-    Ok(())
 }

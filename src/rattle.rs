@@ -49,7 +49,10 @@ pub struct RattleOptions {
 
 impl Default for RattleOptions {
     fn default() -> Self {
-        RattleOptions { tolerance: 1e-14, max_iterations: 25 }
+        RattleOptions {
+            tolerance: 1e-14,
+            max_iterations: 25,
+        }
     }
 }
 
@@ -142,7 +145,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             tri: BorderedTridiag::new(n, chain.has_tip_constraint()),
             force_ready: false,
         };
-        Ok(Rattle { chain, h, options: RattleOptions::default(), ws })
+        Ok(Rattle {
+            chain,
+            h,
+            options: RattleOptions::default(),
+            ws,
+        })
     }
 
     /// Replaces the Newton options.
@@ -177,7 +185,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// Newton predictor. Called automatically by [`Rattle::step`] when needed.
     pub fn prepare(&mut self, state: &mut State<D, DIM>, k: usize, u_k: D) -> Result<()> {
         let t = k as f64 * self.h;
-        self.chain.potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
+        self.chain
+            .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
         self.ws.force_ready = true;
         if state.mu.iter().all(|m| m.re() == 0.0) {
             // Consistent multiplier: Ĝ M⁻¹ (U_q + Ĝᵀλ) = Ĝ-curvature terms; at rest (and as a
@@ -189,8 +198,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 }
             }
             let target = D::zero();
-            projection_solve(&self.chain, &state.q, &ws.a, target, &mut ws.tmp, &mut ws.tri, &mut ws.rhs)
-                .map_err(|zp| singular(k, zp))?;
+            projection_solve(
+                &self.chain,
+                &state.q,
+                &ws.a,
+                target,
+                &mut ws.tmp,
+                &mut ws.tri,
+                &mut ws.rhs,
+            )
+            .map_err(|zp| singular(k, zp))?;
             state.mu.copy_from_slice(&ws.rhs);
         }
         Ok(())
@@ -201,7 +218,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// state repeats the original arithmetic bit for bit.
     pub fn prepare_force(&mut self, state: &State<D, DIM>, k: usize, u_k: D) -> Result<()> {
         let t = k as f64 * self.h;
-        self.chain.potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
+        self.chain
+            .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
         self.ws.force_ready = true;
         Ok(())
     }
@@ -210,7 +228,13 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     ///
     /// The caller must pass the same u_k that the previous step received as its u_{k+1} (the force
     /// at q_k is cached between steps); use [`Rattle::prepare`] after changing the state by hand.
-    pub fn step(&mut self, state: &mut State<D, DIM>, k: usize, u_k: D, u_k1: D) -> Result<StepStats> {
+    pub fn step(
+        &mut self,
+        state: &mut State<D, DIM>,
+        k: usize,
+        u_k: D,
+        u_k1: D,
+    ) -> Result<StepStats> {
         if !self.ws.force_ready {
             self.prepare(state, k, u_k)?;
         }
@@ -248,7 +272,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let residual;
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
-            half_step_momentum(ch, &state.q, &ws.a, &ws.lam, h, &mut ws.c, &mut ws.phalf, &mut ws.w);
+            half_step_momentum(
+                ch,
+                &state.q,
+                &ws.a,
+                &ws.lam,
+                h,
+                &mut ws.c,
+                &mut ws.phalf,
+                &mut ws.w,
+            );
             ch.apply_inverse_mass(&ws.phalf, &mut ws.tmp);
             for i in 0..n {
                 for d in 0..DIM {
@@ -323,8 +356,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         } else {
             D::zero()
         };
-        projection_solve(ch, &state.q, &ws.a, v_next, &mut ws.tmp, &mut ws.tri, &mut ws.rhs)
-            .map_err(|zp| singular(k, zp))?;
+        projection_solve(
+            ch,
+            &state.q,
+            &ws.a,
+            v_next,
+            &mut ws.tmp,
+            &mut ws.tri,
+            &mut ws.rhs,
+        )
+        .map_err(|zp| singular(k, zp))?;
         // p_{k+1} = b − Ĝᵀ y, μ = y / (h/2)
         for i in 0..n {
             let y = ws.rhs[i];
@@ -338,7 +379,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         for (m, y) in state.mu.iter_mut().zip(ws.rhs.iter()) {
             *m = *y / hh;
         }
-        Ok(StepStats { iterations, residual })
+        Ok(StepStats {
+            iterations,
+            residual,
+        })
     }
 }
 
@@ -373,7 +417,7 @@ pub(crate) fn half_step_momentum<D: Scalar, const DIM: usize>(
             for d in 0..DIM {
                 let ci = c[i][d];
                 let root = (two_hd * ci.abs() + 1.0).sqrt() + 1.0;
-                let p = ci * 2.0 / root;
+                let p = ci * 2.0 * root.recip();
                 phalf[i][d] = p;
                 w[i][d] = (dr * h * p.abs() + 1.0).recip();
             }
@@ -447,7 +491,11 @@ fn wmul<D: Scalar, const DIM: usize>(w: &[D; DIM], q: &[D; DIM], has_drag: bool)
 }
 
 fn singular(step: usize, zp: ZeroPivot) -> Error {
-    Error::SingularSystem { step, index: zp.index, pivot: zp.pivot }
+    Error::SingularSystem {
+        step,
+        index: zp.index,
+        pivot: zp.pivot,
+    }
 }
 
 /// Solves Ĝ(q) M⁻¹ Ĝ(q)ᵀ y = Ĝ(q) M⁻¹ b − (0, …, 0, v_tip) for y (returned in `rhs`), so that

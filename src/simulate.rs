@@ -125,7 +125,11 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     if controls.len() != steps + 1 {
         return Err(Error::InvalidArgument {
             name: "controls",
-            reason: format!("expected N + 1 = {} values, got {}", steps + 1, controls.len()),
+            reason: format!(
+                "expected N + 1 = {} values, got {}",
+                steps + 1,
+                controls.len()
+            ),
         });
     }
     if let Some(i) = controls.iter().position(|u| !u.re().is_finite()) {
@@ -157,7 +161,11 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
         lengths,
     };
     let mut scratch = vec![[D::zero(); DIM]; n];
-    let record = |traj: &mut Trajectory<D, DIM>, st: &State<D, DIM>, k: usize, scratch: &mut [[D; DIM]], ch: &Chain<D, DIM>| {
+    let record = |traj: &mut Trajectory<D, DIM>,
+                  st: &State<D, DIM>,
+                  k: usize,
+                  scratch: &mut [[D; DIM]],
+                  ch: &Chain<D, DIM>| {
         traj.q.extend_from_slice(&st.q);
         traj.p.extend_from_slice(&st.p);
         traj.lambda.extend_from_slice(&st.lambda);
@@ -179,20 +187,25 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
 }
 
 /// Samples a piecewise-constant control u(t) = uⱼ on [aⱼ, bⱼ) (0 elsewhere) onto the grid as the
-/// cell averages u_k = (1/h) ∫_{t_k − h/2}^{t_k + h/2} u(t) dt, k = 0..=N.
-///
-/// RATTLE applies u_k over the two half-steps around t_k, so with these values the discrete
-/// impulse h Σ u_k equals the exact impulse ∫ u dt, and a push followed by an equal and opposite
-/// push stops the tip exactly (thesis Fig. 3.4, right).
+/// averages of u over the part of [0, t_N] that u_k acts on in RATTLE: u_k enters the half-steps
+/// on both sides of t_k, so it stands for [t_k − h/2, t_k + h/2] ∩ [0, t_N] (only half a cell at
+/// t_0 and t_N). With these values the discrete impulse h/2 Σ (u_k + u_{k+1}) equals the exact
+/// impulse ∫ u dt, and a push followed by an equal and opposite push stops the tip exactly
+/// (thesis Fig. 3.4, right).
 pub fn piecewise_constant_controls(h: f64, steps: usize, pieces: &[(f64, f64, f64)]) -> Vec<f64> {
+    let t_end = steps as f64 * h;
     (0..=steps)
         .map(|k| {
-            let (lo, hi) = ((k as f64 - 0.5) * h, (k as f64 + 0.5) * h);
+            let lo = ((k as f64 - 0.5) * h).max(0.0);
+            let hi = ((k as f64 + 0.5) * h).min(t_end);
+            if hi <= lo {
+                return 0.0;
+            }
             pieces
                 .iter()
                 .map(|&(a, b, u)| u * (hi.min(b) - lo.max(a)).max(0.0))
                 .sum::<f64>()
-                / h
+                / (hi - lo)
         })
         .collect()
 }

@@ -8,14 +8,19 @@
 //! U(φ) = ½ Σᵢ kᵢ (φᵢ − φ_{i−1})² + Σⱼ lⱼ cⱼ sin φⱼ   [+ ν Σⱼ lⱼ sin φⱼ for a locked tip]
 //! ```
 //! with cⱼ the load coefficient of pendulum j (point loads, gravity and control, eq. 2.2.2/3.1.1).
-//! Newton's method on ∇U = 0 (and the tip constraint Σ lⱼ sin φⱼ = 0) has a tridiagonal Hessian,
-//! bordered by the constraint, so each iteration is O(n).
+//! Newton's method on ∇U = 0 (and the tip constraint Σ lⱼ sin φⱼ = 0) has a tridiagonal Hessian
+//! bordered by the constraint. It is solved densely with partial pivoting (nalgebra's LU): for a
+//! pinned-pinned beam the tridiagonal block alone is singular at the straight configuration (the
+//! rigid rotation is removed only by the border), so the pivot-free bordered elimination of
+//! [`crate::tridiag`] does not apply. This is a verification tool, not a hot loop; O(n³) is fine
+//! for the n ≤ a few hundred it is used with.
 
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::Scene;
 use crate::simulate::scene_controls;
 use crate::tridiag::BorderedTridiag;
+use nalgebra::{DMatrix, DVector};
 
 /// A static equilibrium of the chain.
 #[derive(Clone, Debug, PartialEq)]
@@ -57,7 +62,8 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
             let prev = if j > 0 { phi[j - 1] } else { 0.0 };
             let (s, c) = phi[j].sin_cos();
             let load = coef[j] + if bordered { nu } else { 0.0 };
-            let g = k[j] * (phi[j] - prev) - k[j + 1] * (ang(j + 1, &phi) - phi[j]) + l[j] * load * c;
+            let g =
+                k[j] * (phi[j] - prev) - k[j + 1] * (ang(j + 1, &phi) - phi[j]) + l[j] * load * c;
             rhs[j] = g;
             rmax = rmax.max(g.abs() / scale);
             tri.diag[j] = k[j] + k[j + 1] - l[j] * load * s;
@@ -96,11 +102,28 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
                 residual: rmax,
             });
         }
-        tri.solve(&mut rhs).map_err(|zp| Error::SingularSystem {
-            step: 0,
-            index: zp.index,
-            pivot: zp.pivot,
-        })?;
+        let m = rhs.len();
+        let mut a = DMatrix::<f64>::zeros(m, m);
+        for j in 0..n {
+            a[(j, j)] = tri.diag[j];
+            if j + 1 < n {
+                a[(j, j + 1)] = tri.upper[j];
+                a[(j + 1, j)] = tri.lower[j + 1];
+            }
+            if bordered {
+                a[(j, n)] = tri.col[j];
+                a[(n, j)] = tri.row[j];
+            }
+        }
+        let sol = a
+            .lu()
+            .solve(&DVector::from_column_slice(&rhs))
+            .ok_or(Error::SingularSystem {
+                step: 0,
+                index: 0,
+                pivot: 0.0,
+            })?;
+        rhs.copy_from_slice(sol.as_slice());
         for j in 0..n {
             phi[j] -= rhs[j];
         }
@@ -108,5 +131,10 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
             nu -= rhs[n];
         }
     }
-    Err(Error::NewtonNotConverged { step: 0, time: t, residual: last, iterations: 100 })
+    Err(Error::NewtonNotConverged {
+        step: 0,
+        time: t,
+        residual: last,
+        iterations: 100,
+    })
 }

@@ -5,6 +5,9 @@
 //! of fixed-fixed and pinned-pinned beams adds one row and column. The border is eliminated by a
 //! Schur complement on the Thomas factorisation (two triangular sweeps, no pivoting: the matrices
 //! are perturbations of the symmetric positive definite G M⁻¹ Gᵀ).
+//!
+//! Divisions are written as multiplications by reciprocals: num-dual divides that way, so the
+//! `f64` and dual-number runs then agree bit for bit in their real parts.
 
 use crate::model::Scalar;
 
@@ -71,16 +74,30 @@ impl<D: Scalar> BorderedTridiag<D> {
         let n = self.n();
         for i in 0..n {
             let (sub, sup) = if transpose {
-                (if i > 0 { self.upper[i - 1] } else { D::zero() }, self.lower.get(i + 1).copied())
+                (
+                    if i > 0 { self.upper[i - 1] } else { D::zero() },
+                    self.lower.get(i + 1).copied(),
+                )
             } else {
                 (self.lower[i], self.upper.get(i).copied())
             };
-            let m = if i > 0 { self.diag[i] - sub * self.cp[i - 1] } else { self.diag[i] };
+            let m = if i > 0 {
+                self.diag[i] - sub * self.cp[i - 1]
+            } else {
+                self.diag[i]
+            };
             if m.re() == 0.0 || !m.re().is_finite() {
-                return Err(ZeroPivot { index: i, pivot: m.re() });
+                return Err(ZeroPivot {
+                    index: i,
+                    pivot: m.re(),
+                });
             }
             self.piv[i] = m;
-            self.cp[i] = if i + 1 < n { sup.unwrap_or(D::zero()) / m } else { D::zero() };
+            self.cp[i] = if i + 1 < n {
+                sup.unwrap_or(D::zero()) * m.recip()
+            } else {
+                D::zero()
+            };
         }
         Ok(())
     }
@@ -89,12 +106,16 @@ impl<D: Scalar> BorderedTridiag<D> {
         let n = self.n();
         for i in 0..n {
             let sub = if transpose {
-                if i > 0 { self.upper[i - 1] } else { D::zero() }
+                if i > 0 {
+                    self.upper[i - 1]
+                } else {
+                    D::zero()
+                }
             } else {
                 self.lower[i]
             };
             let prev = if i > 0 { sub * x[i - 1] } else { D::zero() };
-            x[i] = (x[i] - prev) / self.piv[i];
+            x[i] = (x[i] - prev) * self.piv[i].recip();
         }
         for i in (0..n.saturating_sub(1)).rev() {
             let next = x[i + 1];
@@ -131,9 +152,12 @@ impl<D: Scalar> BorderedTridiag<D> {
             let schur = self.corner - cx2;
             if schur.re() == 0.0 || !schur.re().is_finite() {
                 self.x2 = x2;
-                return Err(ZeroPivot { index: n, pivot: schur.re() });
+                return Err(ZeroPivot {
+                    index: n,
+                    pivot: schur.re(),
+                });
             }
-            let y = (rhs[n] - cx1) / schur;
+            let y = (rhs[n] - cx1) * schur.recip();
             for i in 0..n {
                 rhs[i] -= y * x2[i];
             }

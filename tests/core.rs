@@ -23,7 +23,10 @@ fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
 
 fn max_energy_error(traj: &Trajectory<f64, 2>) -> f64 {
     let e0 = traj.energy[0];
-    traj.energy.iter().map(|e| (e - e0).abs()).fold(0.0, f64::max)
+    traj.energy
+        .iter()
+        .map(|e| (e - e0).abs())
+        .fold(0.0, f64::max)
 }
 
 /// Thesis Fig. 2.5: the energy error of RATTLE on the conservative cantilever (n = 10, l = 1,
@@ -56,13 +59,19 @@ fn energy_bounded_and_constraints_hold_over_1e5_steps() {
     let traj = simulate(&s).unwrap();
     let e0 = traj.energy[0];
     let window = 10_000;
-    let first = traj.energy[..window].iter().map(|e| (e - e0).abs()).fold(0.0, f64::max);
+    let first = traj.energy[..window]
+        .iter()
+        .map(|e| (e - e0).abs())
+        .fold(0.0, f64::max);
     let last = traj.energy[traj.energy.len() - window..]
         .iter()
         .map(|e| (e - e0).abs())
         .fold(0.0, f64::max);
     println!("max energy error: first 1e4 steps {first:e}, last 1e4 steps {last:e}");
-    assert!(first > 0.0 && last < 1.5 * first, "energy drifts: {first:e} -> {last:e}");
+    assert!(
+        first > 0.0 && last < 1.5 * first,
+        "energy drifts: {first:e} -> {last:e}"
+    );
 
     let chain = Chain::<f64, 2>::from_scene(&s).unwrap();
     let mut v = vec![[0.0; 2]; 10];
@@ -78,7 +87,10 @@ fn energy_bounded_and_constraints_hold_over_1e5_steps() {
     assert!(worst_len <= 1e-12 && worst_vel <= 1e-12);
     let iters = traj.newton_iterations() as f64 / traj.steps() as f64;
     println!("mean Newton iterations per step: {iters:.3}");
-    assert!(iters <= 2.0, "predictor too weak: {iters} iterations per step");
+    assert!(
+        iters <= 2.0,
+        "predictor too weak: {iters} iterations per step"
+    );
 }
 
 /// Fixed-fixed and pinned-pinned: the tip constraint l(q) = 0 and its velocity hold to 1e-12.
@@ -122,7 +134,11 @@ fn time_reversibility() {
     }
     let mut err: f64 = 0.0;
     for (q, p) in st.q.iter().zip(&st.p) {
-        err = err.max((q[0] - 1.0).abs()).max(q[1].abs()).max(p[0].abs()).max(p[1].abs());
+        err = err
+            .max((q[0] - 1.0).abs())
+            .max(q[1].abs())
+            .max(p[0].abs())
+            .max(p[1].abs());
     }
     println!("reversibility error after {steps} steps there and back: {err:e} (moved {moved:e})");
     assert!(moved > 1e-3 && err <= 1e-12);
@@ -161,10 +177,12 @@ fn dual_numbers_match_f64_and_finite_differences() {
         assert!(base.moment[k].to_bits() == du.moment[k].re.to_bits());
     }
     let eps_u = 1e-5;
-    let fd_u = (run_f64(u0 + eps_u, 1000.0).moment[steps] - run_f64(u0 - eps_u, 1000.0).moment[steps])
+    let fd_u = (run_f64(u0 + eps_u, 1000.0).moment[steps]
+        - run_f64(u0 - eps_u, 1000.0).moment[steps])
         / (2.0 * eps_u);
     let eps_k = 1e-3;
-    let fd_k = (run_f64(u0, 1000.0 + eps_k).moment[steps] - run_f64(u0, 1000.0 - eps_k).moment[steps])
+    let fd_k = (run_f64(u0, 1000.0 + eps_k).moment[steps]
+        - run_f64(u0, 1000.0 - eps_k).moment[steps])
         / (2.0 * eps_k);
     let (ad_u, ad_k) = (du.moment[steps].eps, dk.moment[steps].eps);
     println!("dM0/du: dual {ad_u:e}, FD {fd_u:e}; dM0/dk: dual {ad_k:e}, FD {fd_k:e}");
@@ -179,7 +197,8 @@ fn root_constant_control(node: usize) -> f64 {
     let mut u = 0.0;
     for _ in 0..50 {
         let chain = Chain::<Dual64, 2>::from_scene(&scene).unwrap();
-        let traj = simulate_chain(chain, 0.01, steps, &vec![Dual64::new(u, 1.0); steps + 1]).unwrap();
+        let traj =
+            simulate_chain(chain, 0.01, steps, &vec![Dual64::new(u, 1.0); steps + 1]).unwrap();
         let z1 = traj.q(steps)[0][zi::<2>()];
         let du = z1.re / z1.eps;
         u -= du;
@@ -206,33 +225,64 @@ fn table_3_1_roots() {
     assert!((u + 2.0).abs() < 1e-12);
 }
 
-/// Settles a dissipative scene and returns the final trajectory.
-fn settle(mut scene: Scene, t_end: f64) -> Trajectory<f64, 2> {
-    scene.time.steps = (t_end / scene.time.step).round() as usize;
-    simulate(&scene).unwrap()
+/// Runs a dissipative scene with RATTLE (without storing the trajectory) until the largest
+/// attitude rate |q̇ᵢ| = |(M⁻¹p)ᵢ| over a window of 1000 steps (10 s, several periods of the
+/// slowest mode) falls below `v_tol`, or `t_max` is reached; returns the node positions (y, z) and
+/// the time.
+fn settle(scene: &Scene, v_tol: f64, t_max: f64) -> (Vec<[f64; 2]>, f64) {
+    let chain = Chain::<f64, 2>::from_scene(scene).unwrap();
+    let n = chain.n();
+    let mut r = Rattle::new(chain.clone(), scene.time.step).unwrap();
+    let mut st = r.straight_state();
+    let max_steps = (t_max / scene.time.step) as usize;
+    let mut k = 0;
+    let mut v = vec![[0.0; 2]; n];
+    let mut window_max: f64 = 0.0;
+    while k < max_steps {
+        r.step(&mut st, k, 0.0, 0.0).unwrap();
+        k += 1;
+        chain.apply_inverse_mass(&st.p, &mut v);
+        window_max = v
+            .iter()
+            .fold(window_max, |m, v| m.max(v[0].abs()).max(v[1].abs()));
+        if k % 1000 == 0 {
+            if window_max < v_tol {
+                break;
+            }
+            window_max = 0.0;
+        }
+    }
+    let mut pos = vec![[0.0; 2]; n];
+    chain.node_positions(&st.q, &mut pos);
+    (pos, k as f64 * scene.time.step)
 }
 
 /// Thesis §2.4.4 (Fig. 2.14-2.15): with drag D = 100 the cantilever (base spring 2000),
 /// fixed-fixed and pinned-pinned beams settle at the static equilibrium of the same chain, solved
 /// directly in angle coordinates by `statics::static_equilibrium` (an independent method), to 1e-6.
-/// Then the static chain is compared with the closed forms 2.4.5-2.4.7 with EI = k·l.
+/// Then the static chain is compared with the closed forms 2.4.5-2.4.7 with EI = k·l, evaluated
+/// at the node's undeformed position y = i·l (small-deflection theory): the cantilever tip within
+/// 0.1%, the pinned-pinned centre within 3%; the fixed-fixed chain is softer (figure printed).
 #[test]
 fn dissipative_beams_settle_at_static_equilibrium() {
     let cases = [
-        ("cantilever", catalogue::dissipative_cantilever(100.0), 9),
-        ("fixed-fixed", catalogue::dissipative_fixed_fixed(100.0), 4),
-        ("pinned-pinned", catalogue::dissipative_pinned_pinned(100.0), 4),
+        ("cantilever", catalogue::dissipative_cantilever(100.0), 10),
+        ("fixed-fixed", catalogue::dissipative_fixed_fixed(100.0), 5),
+        (
+            "pinned-pinned",
+            catalogue::dissipative_pinned_pinned(100.0),
+            5,
+        ),
     ];
     for (name, scene, probe) in cases {
         let stat = static_equilibrium(&scene).unwrap();
-        let traj = settle(scene.clone(), 400.0);
-        let end = traj.positions(traj.steps());
+        let (end, t) = settle(&scene, 1e-7, 12_000.0);
         let mut dev: f64 = 0.0;
         for (r, s) in end.iter().zip(&stat.positions) {
-            dev = dev.max((r[1] - s[0]).abs()).max((r[2] - s[1]).abs());
+            dev = dev.max((r[0] - s[0]).abs()).max((r[1] - s[1]).abs());
         }
         let ei = 1000.0;
-        let (y, z) = (stat.positions[probe][0], stat.positions[probe][1]);
+        let (y, z) = (probe as f64, stat.positions[probe - 1][1]);
         let closed = match name {
             "cantilever" => static_cantilever(y, 2.0, ei, 10.0),
             "fixed-fixed" => static_fixed_fixed(y, 2.0, ei, 10.0),
@@ -240,39 +290,47 @@ fn dissipative_beams_settle_at_static_equilibrium() {
         };
         let rel = (z - closed).abs() / closed.abs();
         println!(
-            "{name}: settled vs static max deviation {dev:.2e}; node {} z = {z:.6}, closed form \
-             {closed:.6}, relative deviation {:.3}%",
-            probe + 1,
+            "{name}: settled after {t:.0} s, max deviation from the static solve {dev:.2e}; node \
+             {probe} z = {z:.6}, closed form {closed:.6}, relative deviation {:.3}%",
             100.0 * rel
         );
-        assert!(dev <= 1e-6, "{name}: not settled at the static solution ({dev:e})");
+        assert!(
+            dev <= 1e-6,
+            "{name}: not settled at the static solution ({dev:e})"
+        );
         match name {
             "cantilever" => assert!(rel <= 1e-3),
             "pinned-pinned" => assert!(rel <= 0.03),
-            _ => assert!(z.abs() > closed.abs(), "fixed-fixed chain is expected to be softer"),
+            _ => assert!(
+                z.abs() > closed.abs(),
+                "fixed-fixed chain is expected to be softer"
+            ),
         }
     }
 }
 
 /// The thesis's open question (end of §2.4.4): does the chain converge to the Euler-Bernoulli
-/// beam as n grows at fixed length, with k = EI/l and m = μ l? Static cantilever tip (base spring
-/// 2k) and pinned-pinned centre (closed forms 2.4.5, 2.4.7) for n = 10, 20, 40, 80: the deviation
-/// shrinks; the fitted rate is printed.
+/// beam as n grows at fixed length L = 10, with k = EI/l, base spring 2k and m = μ l? Static
+/// cantilever under a small tip load (F = 0.002, so that geometric nonlinearity, of relative size
+/// (FL²/EI)² ≈ 1e-8, does not mask the discretisation error): the tip deflection approaches
+/// eq. 2.4.5 as n grows, with the fitted rate printed (expected 2).
 #[test]
 fn static_chain_converges_to_euler_bernoulli() {
     let ns = [10usize, 20, 40, 80];
+    let f = 0.002;
     let mut devs = Vec::new();
     for &n in &ns {
-        let s = catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 2.0);
+        let mut s = catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 2.0);
+        s.loads.points[0].force = f;
         let stat = static_equilibrium(&s).unwrap();
-        let tip = stat.positions[n - 1];
-        let closed = static_cantilever(tip[0], 2.0, 1000.0, 10.0);
-        devs.push(((tip[1] - closed) / closed).abs());
+        let closed = static_cantilever(10.0, f, 1000.0, 10.0);
+        devs.push(((stat.positions[n - 1][1] - closed) / closed).abs());
     }
     let hs: Vec<f64> = ns.iter().map(|&n| 10.0 / n as f64).collect();
     let rate = loglog_slope(&hs, &devs);
-    println!("cantilever tip relative deviation for n = {ns:?}: {devs:.3e?}, fitted rate {rate:.2}");
+    println!("cantilever tip relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.2}");
     assert!(devs.windows(2).all(|w| w[1] < w[0]));
+    assert!(rate > 1.5);
 }
 
 /// The planar model is the spatial model restricted to the yz-plane: on a planar scene (riser,
@@ -295,7 +353,10 @@ fn planar_and_spatial_agree() {
     let mut err: f64 = 0.0;
     for k in 0..=500 {
         for (a, b) in t2.q(k).iter().zip(t3.q(k)) {
-            assert!(b[0] == 0.0 || b[0].abs() < f64::MIN_POSITIVE, "x left the plane");
+            assert!(
+                b[0] == 0.0 || b[0].abs() < f64::MIN_POSITIVE,
+                "x left the plane"
+            );
             err = err.max((a[0] - b[1]).abs()).max((a[1] - b[2]).abs());
         }
         for (a, b) in t2.p(k).iter().zip(t3.p(k)) {
@@ -326,7 +387,10 @@ fn reaction_force_variant() {
                 err = err.max((x[0] - y[0]).abs()).max((x[1] - y[1]).abs());
             }
         }
-        assert!(err <= 1e-14, "reaction variant with u = 0 differs by {err:e}");
+        assert!(
+            err <= 1e-14,
+            "reaction variant with u = 0 differs by {err:e}"
+        );
     }
     let mut s = catalogue::dissipative_pinned_pinned(10.0);
     s.loads.points.clear();
@@ -335,13 +399,23 @@ fn reaction_force_variant() {
     let u = piecewise_constant_controls(0.01, 400, &[(0.0, 1.0, 1.0), (1.0, 2.0, -1.0)]);
     let traj = simulate_with_controls(&s, &u).unwrap();
     let zeta: Vec<f64> = traj.tip_target.clone();
-    println!("tip at t = 1: {:.6}, t = 2: {:.6}, t = 4: {:.6}", zeta[100], zeta[200], zeta[400]);
-    assert!((zeta[200] + 1.0).abs() < 1e-3, "tip displacement {}", zeta[200]);
+    println!(
+        "tip at t = 1: {:.6}, t = 2: {:.6}, t = 4: {:.6}",
+        zeta[100], zeta[200], zeta[400]
+    );
+    assert!(
+        (zeta[200] + 1.0).abs() < 1e-3,
+        "tip displacement {}",
+        zeta[200]
+    );
     for k in 200..400 {
-        assert!((zeta[k + 1] - zeta[k]).abs() <= 1e-12, "tip keeps moving at step {k}");
+        assert!(
+            (zeta[k + 1] - zeta[k]).abs() <= 1e-12,
+            "tip keeps moving at step {k}"
+        );
     }
-    for k in 0..=400 {
-        assert!((traj.positions(k)[9][2] - zeta[k]).abs() <= 1e-12);
+    for (k, z) in zeta.iter().enumerate() {
+        assert!((traj.positions(k)[9][2] - z).abs() <= 1e-12);
     }
 }
 
@@ -357,7 +431,10 @@ fn spring_function_is_exact_at_zero_angle() {
         assert!((spring_s(x) - direct).abs() <= 1e-15 * direct);
     }
     // across the branch switch (w = 0.01, x = 0.98) values and slopes agree
-    let (a, b) = (spring_s(Dual64::new(0.98 + 1e-12, 1.0)), spring_s(Dual64::new(0.98 - 1e-12, 1.0)));
+    let (a, b) = (
+        spring_s(Dual64::new(0.98 + 1e-12, 1.0)),
+        spring_s(Dual64::new(0.98 - 1e-12, 1.0)),
+    );
     assert!((a.eps - b.eps).abs() < 1e-9 && (a.re - b.re).abs() < 1e-11);
     assert!(!spring_s(Dual64::new(1.0 + 1e-16, 1.0)).eps.is_nan());
 }
@@ -370,7 +447,10 @@ fn folding_is_a_typed_error() {
     s.time.steps = 200;
     let err = simulate(&s).unwrap_err();
     println!("{err}");
-    assert!(matches!(err, Error::Folded { .. } | Error::NewtonNotConverged { .. }));
+    assert!(matches!(
+        err,
+        Error::Folded { .. } | Error::NewtonNotConverged { .. }
+    ));
 }
 
 /// The step size at which the thesis's Newton solve failed (h = 0.02 on the cantilever, SPEC §4)
@@ -386,7 +466,9 @@ fn too_large_step_is_a_typed_error() {
             println!("{e}");
             assert!(matches!(
                 e,
-                Error::NewtonNotConverged { .. } | Error::Folded { .. } | Error::SingularSystem { .. }
+                Error::NewtonNotConverged { .. }
+                    | Error::Folded { .. }
+                    | Error::SingularSystem { .. }
             ));
         }
     }

@@ -1,0 +1,303 @@
+//! The thesis's scenes (SPEC §4), ready to simulate.
+//!
+//! Every constructor returns a validated [`Scene`]. The parameter-free ones cannot fail; the
+//! parametrised ones panic on parameters that cannot make a valid scene (documented under
+//! *Panics*), like slice indexing does. All of them start at rest from the straight beam along +y
+//! (SPEC §1), with loads in the thesis sign (+F z in H: F > 0 pushes toward −z). Unless stated
+//! otherwise: n = 10, lᵢ = 1 m, mᵢ = 1 kg, interior springs k = 1000 Nm/rad, no gravity, no drag,
+//! h = 0.01 s. The time grid can be changed freely afterwards (`scene.time.steps = ...`); a
+//! per-step control must then be resized to N + 1 values.
+//!
+//! [`all`] lists every scene under a stable name.
+
+use crate::scene::{ObjectiveKind, Scene, SceneBuilder, Support};
+
+/// The standard chain of the thesis: n = 10, l = 1, m = 1, k = 1000, h = 0.01.
+fn thesis_chain() -> SceneBuilder {
+    Scene::builder(10)
+        .length(1.0)
+        .mass(1.0)
+        .stiffness(1000.0)
+        .step(0.01)
+}
+
+/// Builds a catalogue scene. The parameter-free scenes are fixed data that the tests validate, and
+/// the parametrised ones check their parameters first, so a failure here is a bug in this module.
+fn known_good(builder: SceneBuilder, name: &str) -> Scene {
+    builder
+        .build()
+        .unwrap_or_else(|e| panic!("catalogue scene `{name}` is invalid: {e}"))
+}
+
+fn assert_drag(drag: f64, name: &str) {
+    assert!(
+        drag.is_finite() && drag >= 0.0,
+        "catalogue::{name}: drag must be finite and non-negative, got {drag}"
+    );
+}
+
+/// The conservative cantilever of thesis §2.2.4 (Fig. 2.5-2.8): n = 10, l = 1 m, m = 1 kg,
+/// k = 1000 Nm/rad for every spring including the base spring k₁ = 1000 (§2.2.4 uses one k), free
+/// tip, F = 2 N at node 10 (the tip), no drag, h = 0.01 s, N = 1000 (t ∈ [0, 10] s). No control,
+/// no objective. (SPEC §4: RATTLE's Newton solve fails on this beam at h = 0.02.)
+pub fn thesis_cantilever() -> Scene {
+    known_good(
+        thesis_chain()
+            .support(Support::Cantilever)
+            .base_stiffness(1000.0)
+            .point_load(10, 2.0)
+            .steps(1000),
+        "thesis_cantilever",
+    )
+}
+
+/// The riser builder shared by [`riser`], [`riser_dissipative`] and [`long_horizon`]:
+/// k₁ = k₁₁ = 2000, F = 2 at `load_node`.
+fn riser_chain(load_node: usize, name: &str) -> SceneBuilder {
+    assert!(
+        (1..=10).contains(&load_node),
+        "catalogue::{name}: load_node must be in 1..=10, got {load_node}"
+    );
+    thesis_chain()
+        .support(Support::Riser)
+        .base_stiffness(2000.0)
+        .tip_stiffness(2000.0)
+        .point_load(load_node, 2.0)
+}
+
+/// The optimal-control scene of thesis §3.3.1 (Tables 3.1-3.4, "system i" = `load_node`), as
+/// identified in SPEC §4: riser support (cantilever with a tip spring, tip free), n = 10, l = 1 m,
+/// m = 1 kg, interior k = 1000 Nm/rad, k₁ = k₁₁ = 2000 Nm/rad, **no drag** (D = 0), F = 2 N at
+/// `load_node`, control at node 10 (constant, initial value 0), objective c = M₀(t_N)²
+/// (eq. 3.3.2; set `scene.objective` to [`ObjectiveKind::Sum`] for Tables 3.2/3.4), h = 0.01 s,
+/// N = 10 (T = 0.1 s).
+///
+/// # Panics
+/// If `load_node` is not in 1..=10.
+pub fn riser(load_node: usize) -> Scene {
+    known_good(
+        riser_chain(load_node, "riser")
+            .control_constant(10, 0.0)
+            .objective(ObjectiveKind::Final)
+            .steps(10),
+        "riser",
+    )
+}
+
+/// The manually controlled riser of thesis §3.1 (Fig. 3.1-3.2): [`riser`] with drag D = 10 kg/m
+/// and N = 1000 (t ∈ [0, 10] s). The control (node 10, constant) starts at 0; the thesis's manual
+/// values are u = −[0.37 0.72 1.01 1.28 1.50 1.68 1.83 1.93 1.99 2] N for `load_node` 1..10 (with
+/// u = −1.5 and the load at node 5 the tip settles near z ≈ 0.042, SPEC §4).
+///
+/// # Panics
+/// If `load_node` is not in 1..=10.
+pub fn riser_dissipative(load_node: usize) -> Scene {
+    known_good(
+        riser_chain(load_node, "riser_dissipative")
+            .drag(10.0)
+            .control_constant(10, 0.0)
+            .objective(ObjectiveKind::Final)
+            .steps(1000),
+        "riser_dissipative",
+    )
+}
+
+/// The fixed-fixed beam of thesis §2.4.2 (Fig. 2.12-2.13 left): n = 10, l = 1 m, m = 1 kg,
+/// k = 1000 Nm/rad, end springs k₁ = k₁₁ = 2000 Nm/rad (the values that match Euler-Bernoulli),
+/// tip z locked, F = 2 N at the central node 5, no drag, h = 0.01 s, N = 1000 (t ∈ [0, 10] s).
+pub fn fixed_fixed() -> Scene {
+    known_good(fixed_fixed_builder(0.0), "fixed_fixed")
+}
+
+fn fixed_fixed_builder(drag: f64) -> SceneBuilder {
+    thesis_chain()
+        .support(Support::FixedFixed)
+        .base_stiffness(2000.0)
+        .tip_stiffness(2000.0)
+        .drag(drag)
+        .point_load(5, 2.0)
+        .steps(1000)
+}
+
+/// The pinned-pinned beam of thesis §2.4.2 (Fig. 2.13 right): as [`fixed_fixed`] without end
+/// springs (k₁ = k₁₁ = 0, stored as 0), tip z locked, F = 2 N at node 5, no drag, N = 1000.
+pub fn pinned_pinned() -> Scene {
+    known_good(pinned_pinned_builder(0.0), "pinned_pinned")
+}
+
+fn pinned_pinned_builder(drag: f64) -> SceneBuilder {
+    thesis_chain()
+        .support(Support::PinnedPinned)
+        .base_stiffness(0.0)
+        .tip_stiffness(0.0)
+        .drag(drag)
+        .point_load(5, 2.0)
+        .steps(1000)
+}
+
+/// The dissipative cantilever of thesis §2.4.4 (Fig. 2.14-2.16, D = 10 and 100 kg/m in the
+/// thesis): n = 10, l = 1 m, m = 1 kg, k = 1000 Nm/rad, base spring k₁ = 2000 Nm/rad (SPEC §4: the
+/// static formula 2.4.5 with EI = k·l matches when the base spring is 2000), F = 2 N at node 10,
+/// drag D = `drag`, h = 0.01 s, N = 1000 (lengthen `time.steps` to let it settle).
+///
+/// # Panics
+/// If `drag` is negative or not finite.
+pub fn dissipative_cantilever(drag: f64) -> Scene {
+    assert_drag(drag, "dissipative_cantilever");
+    known_good(
+        thesis_chain()
+            .support(Support::Cantilever)
+            .base_stiffness(2000.0)
+            .drag(drag)
+            .point_load(10, 2.0)
+            .steps(1000),
+        "dissipative_cantilever",
+    )
+}
+
+/// [`fixed_fixed`] with drag D = `drag` (thesis §2.4.4, Fig. 2.14-2.15, static formula 2.4.6).
+///
+/// # Panics
+/// If `drag` is negative or not finite.
+pub fn dissipative_fixed_fixed(drag: f64) -> Scene {
+    assert_drag(drag, "dissipative_fixed_fixed");
+    known_good(fixed_fixed_builder(drag), "dissipative_fixed_fixed")
+}
+
+/// [`pinned_pinned`] with drag D = `drag` (thesis §2.4.4, Fig. 2.14-2.15, static formula 2.4.7).
+///
+/// # Panics
+/// If `drag` is negative or not finite.
+pub fn dissipative_pinned_pinned(drag: f64) -> Scene {
+    assert_drag(drag, "dissipative_pinned_pinned");
+    known_good(pinned_pinned_builder(drag), "dissipative_pinned_pinned")
+}
+
+/// A cantilever of total length L, flexural rigidity EI and total mass M discretised by `n`
+/// pendulums, for convergence studies (the open question at the end of thesis §2.4.4):
+/// l = L/n, interior springs k = EI/l, base spring k₁ = `base_factor`·k (2 matches the static
+/// formula 2.4.5, SPEC §4), m = M/n, F = 2 N at the tip (node n), no drag, h = 0.01 s, N = 1000.
+/// `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`] without drag.
+///
+/// The fastest mode's frequency grows like n², so for dynamics with large n shrink `time.step`
+/// (and mind [`crate::scene::MAX_STORED_STATES`]).
+///
+/// # Panics
+/// If `n` is 0 or above [`crate::scene::MAX_PENDULUMS`], or `total_length`, `ei`, `total_mass`
+/// are not positive and finite, or `base_factor` is negative or not finite.
+pub fn scaled_cantilever(
+    n: usize,
+    total_length: f64,
+    ei: f64,
+    total_mass: f64,
+    base_factor: f64,
+) -> Scene {
+    let positive = |x: f64| x.is_finite() && x > 0.0;
+    assert!(
+        (1..=crate::scene::MAX_PENDULUMS).contains(&n),
+        "catalogue::scaled_cantilever: n must be in 1..={}, got {n}",
+        crate::scene::MAX_PENDULUMS
+    );
+    assert!(
+        positive(total_length) && positive(ei) && positive(total_mass),
+        "catalogue::scaled_cantilever: total_length, ei and total_mass must be positive and \
+         finite, got {total_length}, {ei}, {total_mass}"
+    );
+    assert!(
+        base_factor.is_finite() && base_factor >= 0.0,
+        "catalogue::scaled_cantilever: base_factor must be finite and non-negative, got \
+         {base_factor}"
+    );
+    let l = total_length / n as f64;
+    let k = ei / l;
+    known_good(
+        Scene::builder(n)
+            .length(l)
+            .mass(total_mass / n as f64)
+            .stiffness(k)
+            .base_stiffness(base_factor * k)
+            .support(Support::Cantilever)
+            .point_load(n, 2.0)
+            .step(0.01)
+            .steps(1000),
+        "scaled_cantilever",
+    )
+}
+
+/// The longer-horizon optimal-control problem the thesis leaves for future work (end of §3.3,
+/// Fig. 3.12): the riser (k₁ = k₁₁ = 2000) with drag D = 10 kg/m, F = 2 N at node 5 from t = 0,
+/// per-step control at node 10 (N + 1 = 1001 zeros as the initial guess), objective
+/// c_sum = Σ M₀(t_k)² (eq. 3.3.4), h = 0.01 s, N = 1000 (t ∈ [0, 10] s).
+pub fn long_horizon() -> Scene {
+    let steps = 1000;
+    known_good(
+        riser_chain(5, "long_horizon")
+            .drag(10.0)
+            .control_per_step(10, vec![0.0; steps + 1])
+            .objective(ObjectiveKind::Sum)
+            .steps(steps),
+        "long_horizon",
+    )
+}
+
+const RISER_NAMES: [&str; 10] = [
+    "riser_1", "riser_2", "riser_3", "riser_4", "riser_5", "riser_6", "riser_7", "riser_8",
+    "riser_9", "riser_10",
+];
+
+const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
+    "riser_dissipative_1",
+    "riser_dissipative_2",
+    "riser_dissipative_3",
+    "riser_dissipative_4",
+    "riser_dissipative_5",
+    "riser_dissipative_6",
+    "riser_dissipative_7",
+    "riser_dissipative_8",
+    "riser_dissipative_9",
+    "riser_dissipative_10",
+];
+
+/// Every catalogue scene under a stable name: `thesis_cantilever`, `riser_1`..`riser_10`,
+/// `riser_dissipative_1`..`riser_dissipative_10`, `fixed_fixed`, `pinned_pinned`,
+/// `dissipative_{cantilever,fixed_fixed,pinned_pinned}_d{10,100}` (the two drags of Fig. 2.14),
+/// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2) and `long_horizon`.
+pub fn all() -> Vec<(&'static str, Scene)> {
+    let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
+    for (i, name) in RISER_NAMES.iter().enumerate() {
+        scenes.push((name, riser(i + 1)));
+    }
+    for (i, name) in RISER_DISSIPATIVE_NAMES.iter().enumerate() {
+        scenes.push((name, riser_dissipative(i + 1)));
+    }
+    scenes.extend([
+        ("fixed_fixed", fixed_fixed()),
+        ("pinned_pinned", pinned_pinned()),
+        ("dissipative_cantilever_d10", dissipative_cantilever(10.0)),
+        ("dissipative_cantilever_d100", dissipative_cantilever(100.0)),
+        ("dissipative_fixed_fixed_d10", dissipative_fixed_fixed(10.0)),
+        (
+            "dissipative_fixed_fixed_d100",
+            dissipative_fixed_fixed(100.0),
+        ),
+        (
+            "dissipative_pinned_pinned_d10",
+            dissipative_pinned_pinned(10.0),
+        ),
+        (
+            "dissipative_pinned_pinned_d100",
+            dissipative_pinned_pinned(100.0),
+        ),
+        (
+            "scaled_cantilever_n20",
+            scaled_cantilever(20, 10.0, 1000.0, 10.0, 2.0),
+        ),
+        ("long_horizon", long_horizon()),
+    ]);
+    scenes
+}
+
+/// The catalogue scene called `name` (see [`all`]), if there is one.
+pub fn by_name(name: &str) -> Option<Scene> {
+    all().into_iter().find(|(n, _)| *n == name).map(|(_, s)| s)
+}

@@ -1,0 +1,941 @@
+//! Scene files (SPEC §5): parsing, writing, validation, the builder and the catalogue.
+
+use chainbeam::catalogue;
+use chainbeam::scene::{
+    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
+    SceneErrorKind, Support, TimeGrid, MAX_PENDULUMS, MAX_STEPS,
+};
+use proptest::prelude::*;
+
+/// The example of SPEC §5, verbatim.
+const SPEC_EXAMPLE: &str = r#"
+[beam]
+pendulums = 10            # n
+length = 1.0              # l_i: a number, or an array of n numbers
+mass = 1.0                # m_i: a number, or an array of n numbers
+stiffness = 1000.0        # interior springs k_2..k_n: a number, or an array of n-1
+support = "riser"         # "cantilever" | "riser" | "fixed-fixed" | "pinned-pinned"
+base_stiffness = 2000.0   # k_1 (default: stiffness; ignored by pinned-pinned)
+tip_stiffness = 2000.0    # k_{n+1} for riser and fixed-fixed (default: stiffness)
+
+[loads]
+gravity = 0.0             # g in m/s^2 (default 0)
+drag = 0.0                # D in kg/m (default 0)
+[[loads.point]]
+node = 5                  # 1..n
+force = 2.0               # thesis sign: +F z in H
+
+[time]
+step = 0.01               # h
+steps = 10                # N
+
+[control]                 # optional
+node = 10                 # default: n
+kind = "constant"         # "constant" | "per-step"
+values = [0.0]            # 1 value (constant) or N+1 values (per-step): applied, or the initial guess
+
+[objective]               # optional
+kind = "final"            # "final" (eq. 3.3.2) | "sum" (eq. 3.3.4)
+"#;
+
+fn spec_scene() -> Scene {
+    Scene {
+        beam: Beam {
+            lengths: vec![1.0; 10],
+            masses: vec![1.0; 10],
+            stiffness: vec![1000.0; 9],
+            base_stiffness: 2000.0,
+            tip_stiffness: 2000.0,
+            support: Support::Riser,
+            reaction_force: false,
+        },
+        loads: Loads {
+            gravity: 0.0,
+            drag: 0.0,
+            points: vec![PointLoad {
+                node: 5,
+                force: 2.0,
+                start: 0.0,
+                end: None,
+            }],
+        },
+        time: TimeGrid {
+            step: 0.01,
+            steps: 10,
+        },
+        control: Some(Control {
+            node: 10,
+            kind: ControlKind::Constant,
+            values: vec![0.0],
+        }),
+        objective: Some(ObjectiveKind::Final),
+    }
+}
+
+/// A small valid scene using every feature, as the mutation tests' seed.
+const FULL: &str = r#"
+[beam]
+pendulums = 4
+length = [1.0, 0.5, 0.25, 2]
+mass = 2
+stiffness = [100.0, 200.0, 300.0]
+support = "fixed-fixed"
+base_stiffness = 50.0
+tip_stiffness = 60.0
+reaction_force = true
+
+[loads]
+gravity = -9.81
+drag = 10
+[[loads.point]]
+node = 1
+force = -2.5
+[[loads.point]]
+node = 4
+force = 1e3
+start = 0.5
+end = 1.0
+
+[time]
+step = 0.005
+steps = 20
+
+[control]
+node = 3
+kind = "per-step"
+values = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20]
+
+[objective]
+kind = "sum"
+"#;
+
+fn parse(text: &str) -> Result<Scene, SceneError> {
+    Scene::from_toml_str(text)
+}
+
+fn round_trips(scene: &Scene) {
+    let text = scene.to_toml_string();
+    let back = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n--- text:\n{text}"));
+    assert_eq!(&back, scene, "round trip changed the scene; text:\n{text}");
+}
+
+#[test]
+fn spec_example_parses() {
+    assert_eq!(parse(SPEC_EXAMPLE).unwrap(), spec_scene());
+    // and agrees with the builder and the catalogue
+    let built = Scene::builder(10)
+        .support(Support::Riser)
+        .base_stiffness(2000.0)
+        .tip_stiffness(2000.0)
+        .point_load(5, 2.0)
+        .control_constant(10, 0.0)
+        .objective(ObjectiveKind::Final)
+        .build()
+        .unwrap();
+    assert_eq!(built, spec_scene());
+    assert_eq!(catalogue::riser(5), spec_scene());
+    assert_eq!(SPEC_EXAMPLE.parse::<Scene>().unwrap(), spec_scene());
+}
+
+#[test]
+fn full_scene_parses_and_round_trips() {
+    let s = parse(FULL).unwrap();
+    assert_eq!(s.beam.lengths, vec![1.0, 0.5, 0.25, 2.0]);
+    assert_eq!(s.beam.masses, vec![2.0; 4]);
+    assert_eq!(s.beam.stiffness, vec![100.0, 200.0, 300.0]);
+    assert!(s.beam.reaction_force);
+    assert_eq!(s.loads.points[1].start.to_bits(), 0.5f64.to_bits());
+    assert_eq!(s.loads.points[1].end, Some(1.0));
+    assert_eq!(s.control.as_ref().unwrap().values.len(), 21);
+    assert_eq!(s.objective, Some(ObjectiveKind::Sum));
+    round_trips(&s);
+    round_trips(&spec_scene());
+}
+
+#[test]
+fn defaults() {
+    let s = parse(
+        "[beam]\npendulums = 3\nlength = 2\nmass = 1\nstiffness = 7\nsupport = 'cantilever'\n\
+         [time]\nstep = 0.1\nsteps = 5\n[control]\nkind = 'constant'\nvalues = [1.5]\n",
+    )
+    .unwrap();
+    assert_eq!(s.beam.base_stiffness.to_bits(), 7f64.to_bits());
+    assert_eq!(s.beam.tip_stiffness.to_bits(), 7f64.to_bits());
+    assert_eq!(s.loads, Loads::default());
+    assert_eq!(s.control.as_ref().unwrap().node, 3);
+    assert_eq!(s.objective, None);
+    assert!(!s.beam.reaction_force);
+    // n = 1: no interior spring, the number only provides the end-spring defaults
+    let s = parse(
+        "[beam]\npendulums = 1\nlength = 1\nmass = 1\nstiffness = 5\nsupport = 'riser'\n\
+         [time]\nstep = 0.1\nsteps = 5\n",
+    )
+    .unwrap();
+    assert!(s.beam.stiffness.is_empty());
+    assert_eq!(s.beam.tip_stiffness.to_bits(), 5f64.to_bits());
+    round_trips(&s);
+    // array stiffness: an unused end spring may be omitted (stored as 0)
+    let s = parse(
+        "[beam]\npendulums = 3\nlength = 1\nmass = 1\nstiffness = [1, 2]\nsupport = 'cantilever'\n\
+         base_stiffness = 3\n[time]\nstep = 0.1\nsteps = 5\n",
+    )
+    .unwrap();
+    assert_eq!(s.beam.tip_stiffness.to_bits(), 0f64.to_bits());
+    round_trips(&s);
+}
+
+#[test]
+fn builder_defaults_and_errors() {
+    let s = SceneBuilder::new(4).build().unwrap();
+    assert_eq!(s.beam.lengths, vec![1.0; 4]);
+    assert_eq!(s.beam.masses, vec![1.0; 4]);
+    assert_eq!(s.beam.stiffness, vec![1000.0; 3]);
+    assert_eq!(s.beam.base_stiffness.to_bits(), 1000f64.to_bits());
+    assert_eq!(s.beam.tip_stiffness.to_bits(), 1000f64.to_bits());
+    assert_eq!(s.beam.support, Support::Cantilever);
+    assert_eq!(
+        s.time,
+        TimeGrid {
+            step: 0.01,
+            steps: 10
+        }
+    );
+    assert!(s.control.is_none() && s.objective.is_none() && s.loads.points.is_empty());
+
+    let err = |b: SceneBuilder| b.build().unwrap_err();
+    let e = err(SceneBuilder::new(0));
+    assert_eq!(e.key(), Some("beam.pendulums"));
+    let e = err(SceneBuilder::new(3).lengths(vec![1.0, 2.0]));
+    assert!(matches!(
+        e.kind,
+        SceneErrorKind::WrongCount { ref key, expected: 3, found: 2 } if key == "beam.length"
+    ));
+    let e = err(SceneBuilder::new(3).mass(-1.0));
+    assert_eq!(
+        e.to_string(),
+        "invalid scene: key `beam.mass`: must be positive and finite, got -1"
+    );
+    let e = err(SceneBuilder::new(3).masses(vec![1.0, f64::NAN, 1.0]));
+    assert_eq!(e.key(), Some("beam.mass[1]"));
+    let e = err(SceneBuilder::new(3).stiffnesses(vec![1.0, 2.0]));
+    assert_eq!(e.key(), Some("beam.base_stiffness"));
+    let e = err(SceneBuilder::new(3).point_load(4, 1.0));
+    assert!(matches!(
+        e.kind,
+        SceneErrorKind::NodeOutOfRange { node: 4, n: 3, .. }
+    ));
+    assert_eq!(e.key(), Some("loads.point[0].node"));
+    let e = err(SceneBuilder::new(3).point_load_window(2, 1.0, 1.0, 1.0));
+    assert_eq!(e.key(), Some("loads.point[0].end"));
+    let e = err(SceneBuilder::new(3).control_per_step(3, vec![0.0; 10]));
+    assert!(matches!(
+        e.kind,
+        SceneErrorKind::WrongCount {
+            expected: 11,
+            found: 10,
+            ..
+        }
+    ));
+    let e = err(SceneBuilder::new(3).reaction_force(true));
+    assert_eq!(e.key(), Some("beam.reaction_force"));
+    let e = err(SceneBuilder::new(3).steps(0));
+    assert_eq!(e.key(), Some("time.steps"));
+    let e = err(SceneBuilder::new(MAX_PENDULUMS + 1));
+    assert_eq!(e.key(), Some("beam.pendulums"));
+    let e = err(SceneBuilder::new(3).steps(MAX_STEPS + 1));
+    assert_eq!(e.key(), Some("time.steps"));
+    // over the stored-state limit, rejected before anything is allocated
+    let e = err(SceneBuilder::new(MAX_PENDULUMS).steps(1000));
+    assert_eq!(e.key(), Some("time.steps"));
+    let e = err(SceneBuilder::new(3).step(1e302).steps(MAX_STEPS));
+    assert_eq!(e.key(), Some("time.step"));
+    let e = err(SceneBuilder::new(1).stiffness(-1.0));
+    assert_eq!(e.key(), Some("beam.stiffness"));
+
+    // validate() on hand-edited scenes
+    let mut s = catalogue::riser(5);
+    s.beam.masses.pop();
+    assert!(matches!(
+        s.validate().unwrap_err().kind,
+        SceneErrorKind::WrongCount {
+            expected: 10,
+            found: 9,
+            ..
+        }
+    ));
+    let mut s = catalogue::riser(5);
+    s.beam.lengths.clear();
+    assert_eq!(s.validate().unwrap_err().key(), Some("beam.pendulums"));
+    let mut s = catalogue::riser(5);
+    s.control.as_mut().unwrap().values[0] = f64::INFINITY;
+    assert_eq!(s.validate().unwrap_err().key(), Some("control.values[0]"));
+}
+
+#[test]
+fn catalogue_scenes_validate_and_round_trip() {
+    let all = catalogue::all();
+    let mut names: Vec<&str> = all.iter().map(|(n, _)| *n).collect();
+    names.sort_unstable();
+    names.dedup();
+    assert_eq!(names.len(), all.len(), "duplicate names");
+    for (name, scene) in &all {
+        scene.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
+        round_trips(scene);
+        assert_eq!(catalogue::by_name(name).as_ref(), Some(scene));
+    }
+    assert_eq!(
+        catalogue::scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0),
+        catalogue::dissipative_cantilever(0.0)
+    );
+    let c = catalogue::thesis_cantilever();
+    assert_eq!(
+        (c.n(), c.time.steps, c.beam.support),
+        (10, 1000, Support::Cantilever)
+    );
+    assert_eq!(c.beam.base_stiffness.to_bits(), 1000f64.to_bits());
+    let r = catalogue::riser_dissipative(3);
+    assert_eq!((r.loads.points[0].node, r.time.steps), (3, 1000));
+    assert_eq!(r.loads.drag.to_bits(), 10f64.to_bits());
+    let l = catalogue::long_horizon();
+    assert_eq!(l.control.as_ref().unwrap().values.len(), 1001);
+    assert_eq!(l.objective, Some(ObjectiveKind::Sum));
+    let s = catalogue::scaled_cantilever(40, 10.0, 1000.0, 10.0, 2.0);
+    assert_eq!(s.beam.stiffness[0].to_bits(), 4000f64.to_bits());
+    assert_eq!(s.beam.base_stiffness.to_bits(), 8000f64.to_bits());
+    assert_eq!(s.loads.points[0].node, 40);
+}
+
+#[test]
+#[should_panic(expected = "load_node must be in 1..=10")]
+fn catalogue_rejects_bad_parameters() {
+    let _ = catalogue::riser(11);
+}
+
+/// A scene that is valid except for the line(s) substituted in.
+fn base_with(beam_extra: &str, rest: &str) -> String {
+    format!(
+        "[beam]\npendulums = 3\nlength = 1.0\nmass = 1.0\nstiffness = 100.0\nsupport = \
+         'cantilever'\n{beam_extra}\n[time]\nstep = 0.01\nsteps = 4\n{rest}"
+    )
+}
+
+/// Replaces `from` by `to` in a valid 3-pendulum scene with loads and a control.
+fn mutate(from: &str, to: &str) -> String {
+    let valid = "[beam]\npendulums = 3\nlength = 1.0\nmass = 1.0\nstiffness = 100.0\n\
+                 support = 'cantilever'\n[loads]\ndrag = 1.0\ngravity = 0.0\n[[loads.point]]\n\
+                 node = 2\nforce = 2.0\n[time]\nstep = 0.01\nsteps = 4\n[control]\nnode = 3\n\
+                 kind = 'constant'\nvalues = [0.5]\n[objective]\nkind = 'final'\n";
+    assert!(parse(valid).is_ok());
+    assert!(valid.contains(from), "{from}");
+    valid.replacen(from, to, 1)
+}
+
+/// Parses `text`, expects an error whose message contains `key` (in backticks) and whose kind
+/// satisfies `check`; prints the message.
+fn expect_err(text: &str, key: &str, check: fn(&SceneErrorKind) -> bool) {
+    let err = match parse(text) {
+        Ok(s) => panic!("expected an error naming `{key}`, parsed {s:?}\n{text}"),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    println!("{msg}");
+    assert!(
+        msg.contains(&format!("`{key}`")),
+        "message does not name `{key}`: {msg}"
+    );
+    assert!(check(&err.kind), "unexpected kind {:?}", err.kind);
+    assert!(!msg.contains('\n'), "multi-line message: {msg}");
+}
+
+fn unknown(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::UnknownKey { .. })
+}
+fn missing(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::MissingKey { .. })
+}
+fn wrong_type(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::WrongType { .. })
+}
+fn invalid(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::InvalidValue { .. })
+}
+fn node(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::NodeOutOfRange { .. })
+}
+fn count(k: &SceneErrorKind) -> bool {
+    matches!(k, SceneErrorKind::WrongCount { .. })
+}
+
+#[test]
+fn syntax_errors_have_line_and_column() {
+    let err = parse("[beam]\npendulums = 3\nlength = [1.0,\n").unwrap_err();
+    println!("{err}");
+    assert!(matches!(
+        err.kind,
+        SceneErrorKind::Syntax {
+            line: Some(_),
+            column: Some(_),
+            ..
+        }
+    ));
+    let err = parse("[beam\npendulums = 3\n").unwrap_err();
+    println!("{err}");
+    assert!(matches!(
+        err.kind,
+        SceneErrorKind::Syntax {
+            line: Some(1),
+            column: Some(6),
+            ..
+        }
+    ));
+    assert!(err
+        .to_string()
+        .starts_with("invalid scene: syntax error at line 1, column 6: "));
+    let err = parse(&mutate("steps = 4", "steps = 4\nsteps = 5")).unwrap_err();
+    println!("{err}");
+    assert!(matches!(
+        err.kind,
+        SceneErrorKind::Syntax { line: Some(16), .. }
+    ));
+    assert!(err.key().is_none());
+}
+
+#[test]
+fn unknown_keys() {
+    expect_err(&mutate("[beam]", "title = 'x'\n[beam]"), "title", unknown);
+    expect_err(
+        &mutate("[beam]", "[extra]\na = 1\n[beam]"),
+        "extra",
+        unknown,
+    );
+    expect_err(&base_with("lenght = 2", ""), "beam.lenght", unknown);
+    expect_err(
+        &mutate("drag = 1.0", "drag = 1.0\nwind = 2"),
+        "loads.wind",
+        unknown,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = 2.0\nforse = 1"),
+        "loads.point[0].forse",
+        unknown,
+    );
+    expect_err(
+        &mutate("step = 0.01", "step = 0.01\nt0 = 1"),
+        "time.t0",
+        unknown,
+    );
+    expect_err(
+        &mutate("kind = 'constant'", "kind = 'constant'\nnodes = 1"),
+        "control.nodes",
+        unknown,
+    );
+    expect_err(
+        &mutate("kind = 'final'", "kind = 'final'\nweight = 1"),
+        "objective.weight",
+        unknown,
+    );
+    expect_err(
+        &base_with("loads.point = [{node = 1, force = 2, x = 3}]", ""),
+        "beam.loads",
+        unknown,
+    );
+    expect_err(
+        &base_with(
+            "",
+            "[loads]\npoint = [{node = 1, force = 2}, {node = 1, force = 2, x = 3}]",
+        ),
+        "loads.point[1].x",
+        unknown,
+    );
+    // the message lists the allowed keys
+    let msg = parse(&base_with("lenght = 2", "")).unwrap_err().to_string();
+    assert!(
+        msg.contains("`length`") && msg.contains("`reaction_force`"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn missing_keys() {
+    expect_err(&mutate("length = 1.0\n", ""), "beam.length", missing);
+    expect_err(
+        &mutate("support = 'cantilever'\n", ""),
+        "beam.support",
+        missing,
+    );
+    expect_err(&mutate("step = 0.01\n", ""), "time.step", missing);
+    expect_err(
+        &mutate("force = 2.0\n", ""),
+        "loads.point[0].force",
+        missing,
+    );
+    expect_err(&mutate("values = [0.5]\n", ""), "control.values", missing);
+    expect_err(&mutate("kind = 'constant'\n", ""), "control.kind", missing);
+    expect_err(&mutate("kind = 'final'\n", ""), "objective.kind", missing);
+    expect_err("[time]\nstep = 0.1\nsteps = 1\n", "beam", missing);
+    expect_err(
+        &mutate("[time]\nstep = 0.01\nsteps = 4\n", ""),
+        "time",
+        missing,
+    );
+    expect_err("", "beam", missing);
+    // array stiffness needs the end springs the support uses
+    expect_err(
+        &mutate("stiffness = 100.0\n", "stiffness = [1, 2]\n"),
+        "beam.base_stiffness",
+        missing,
+    );
+    expect_err(
+        &mutate(
+            "stiffness = 100.0\nsupport = 'cantilever'",
+            "stiffness = [1, 2]\nsupport = 'riser'\nbase_stiffness = 1",
+        ),
+        "beam.tip_stiffness",
+        missing,
+    );
+}
+
+#[test]
+fn wrong_types() {
+    expect_err(
+        &mutate("length = 1.0", "length = 'long'"),
+        "beam.length",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("length = 1.0", "length = [1.0, 'x', 2]"),
+        "beam.length[1]",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("mass = 1.0", "mass = true"),
+        "beam.mass",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("pendulums = 3", "pendulums = 3.0"),
+        "beam.pendulums",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("steps = 4", "steps = '4'"),
+        "time.steps",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("node = 2", "node = 2.5"),
+        "loads.point[0].node",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = 0.5"),
+        "control.values",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = [0.5, {}]"),
+        "control.values[1]",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("support = 'cantilever'", "support = 1"),
+        "beam.support",
+        wrong_type,
+    );
+    expect_err(&mutate("[beam]", "beam = 1\n[other]"), "beam", wrong_type);
+    expect_err(
+        &mutate("[[loads.point]]", "[loads.point]"),
+        "loads.point",
+        wrong_type,
+    );
+    expect_err(
+        &base_with("reaction_force = 1", ""),
+        "beam.reaction_force",
+        wrong_type,
+    );
+    let msg = parse(&mutate("length = 1.0", "length = 'long'"))
+        .unwrap_err()
+        .to_string();
+    assert!(msg.contains("a number or an array of numbers"), "{msg}");
+}
+
+#[test]
+fn invalid_values() {
+    expect_err(
+        &mutate("pendulums = 3", "pendulums = 0"),
+        "beam.pendulums",
+        invalid,
+    );
+    expect_err(
+        &mutate("pendulums = 3", "pendulums = -2"),
+        "beam.pendulums",
+        invalid,
+    );
+    expect_err(
+        &mutate("pendulums = 3", "pendulums = 99999999999"),
+        "beam.pendulums",
+        invalid,
+    );
+    expect_err(&mutate("steps = 4", "steps = 0"), "time.steps", invalid);
+    expect_err(
+        &mutate("steps = 4", "steps = 100000000"),
+        "time.steps",
+        invalid,
+    );
+    for bad in ["0", "-1", "nan", "inf", "-inf", "+nan"] {
+        expect_err(
+            &mutate("length = 1.0", &format!("length = {bad}")),
+            "beam.length",
+            invalid,
+        );
+        expect_err(
+            &mutate("mass = 1.0", &format!("mass = {bad}")),
+            "beam.mass",
+            invalid,
+        );
+        expect_err(
+            &mutate("step = 0.01", &format!("step = {bad}")),
+            "time.step",
+            invalid,
+        );
+    }
+    expect_err(
+        &mutate("length = 1.0", "length = [1, 0, 1]"),
+        "beam.length[1]",
+        invalid,
+    );
+    expect_err(
+        &mutate("length = 1.0", "length = [1, 1, nan]"),
+        "beam.length[2]",
+        invalid,
+    );
+    expect_err(
+        &mutate("mass = 1.0", "mass = [-inf, 1, 1]"),
+        "beam.mass[0]",
+        invalid,
+    );
+    for bad in ["-1", "nan", "inf"] {
+        expect_err(
+            &mutate("stiffness = 100.0", &format!("stiffness = {bad}")),
+            "beam.stiffness",
+            invalid,
+        );
+        expect_err(
+            &mutate("drag = 1.0", &format!("drag = {bad}")),
+            "loads.drag",
+            invalid,
+        );
+        expect_err(
+            &base_with(&format!("base_stiffness = {bad}"), ""),
+            "beam.base_stiffness",
+            invalid,
+        );
+        expect_err(
+            &base_with(&format!("tip_stiffness = {bad}"), ""),
+            "beam.tip_stiffness",
+            invalid,
+        );
+    }
+    expect_err(
+        &mutate(
+            "stiffness = 100.0",
+            "stiffness = [1, -1]\nbase_stiffness = 1",
+        ),
+        "beam.stiffness[1]",
+        invalid,
+    );
+    expect_err(
+        &mutate("gravity = 0.0", "gravity = nan"),
+        "loads.gravity",
+        invalid,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = inf"),
+        "loads.point[0].force",
+        invalid,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = [nan]"),
+        "control.values[0]",
+        invalid,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = 2.0\nstart = 1.0\nend = 0.5"),
+        "loads.point[0].end",
+        invalid,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = 2.0\nend = 0.0"),
+        "loads.point[0].end",
+        invalid,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = 2.0\nstart = nan"),
+        "loads.point[0].start",
+        invalid,
+    );
+    expect_err(
+        &mutate("force = 2.0", "force = 2.0\nend = inf"),
+        "loads.point[0].end",
+        invalid,
+    );
+    expect_err(
+        &mutate("support = 'cantilever'", "support = 'free'"),
+        "beam.support",
+        invalid,
+    );
+    expect_err(
+        &mutate("kind = 'constant'", "kind = 'linear'"),
+        "control.kind",
+        invalid,
+    );
+    expect_err(
+        &mutate("kind = 'final'", "kind = 'max'"),
+        "objective.kind",
+        invalid,
+    );
+    expect_err(
+        &base_with("reaction_force = true", ""),
+        "beam.reaction_force",
+        invalid,
+    );
+    expect_err(
+        &mutate(
+            "support = 'cantilever'",
+            "support = 'riser'\nreaction_force = true",
+        ),
+        "beam.reaction_force",
+        invalid,
+    );
+    // allowed with fixed-fixed and pinned-pinned
+    for support in ["fixed-fixed", "pinned-pinned"] {
+        let text = mutate(
+            "support = 'cantilever'",
+            &format!("support = '{support}'\nreaction_force = true"),
+        );
+        assert!(parse(&text).unwrap().beam.reaction_force);
+    }
+    let msg = parse(&mutate("mass = 1.0", "mass = -1"))
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        msg,
+        "invalid scene: key `beam.mass`: must be positive and finite, got -1"
+    );
+}
+
+#[test]
+fn nodes_out_of_range() {
+    for bad in ["0", "4", "-1"] {
+        expect_err(
+            &mutate("node = 2", &format!("node = {bad}")),
+            "loads.point[0].node",
+            node,
+        );
+        expect_err(
+            &mutate("node = 3", &format!("node = {bad}")),
+            "control.node",
+            node,
+        );
+    }
+    let err = parse(&mutate("node = 2", "node = 4")).unwrap_err();
+    assert_eq!(
+        err.kind,
+        SceneErrorKind::NodeOutOfRange {
+            key: "loads.point[0].node".into(),
+            node: 4,
+            n: 3
+        }
+    );
+}
+
+#[test]
+fn wrong_counts() {
+    expect_err(
+        &mutate("length = 1.0", "length = [1, 1]"),
+        "beam.length",
+        count,
+    );
+    expect_err(
+        &mutate("mass = 1.0", "mass = [1, 1, 1, 1]"),
+        "beam.mass",
+        count,
+    );
+    expect_err(&mutate("mass = 1.0", "mass = []"), "beam.mass", count);
+    expect_err(
+        &mutate("stiffness = 100.0", "stiffness = [1, 1, 1]"),
+        "beam.stiffness",
+        count,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = [0.5, 1]"),
+        "control.values",
+        count,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = []"),
+        "control.values",
+        count,
+    );
+    expect_err(
+        &mutate("kind = 'constant'", "kind = 'per-step'"),
+        "control.values",
+        count,
+    );
+    let ok = mutate(
+        "kind = 'constant'\nvalues = [0.5]",
+        "kind = 'per-step'\nvalues = [1, 2, 3, 4, 5]",
+    );
+    assert_eq!(parse(&ok).unwrap().control.unwrap().values.len(), 5);
+    let err = parse(&mutate("values = [0.5]", "values = [0.5, 1]")).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "invalid scene: key `control.values`: expected 1 value, got 2"
+    );
+}
+
+#[test]
+fn files() {
+    let dir = std::env::temp_dir().join(format!("chainbeam_scene_files_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = dir.join("good.toml");
+    std::fs::write(&good, SPEC_EXAMPLE).unwrap();
+    assert_eq!(Scene::from_file(&good).unwrap(), spec_scene());
+    let bad = dir.join("scene.toml");
+    std::fs::write(&bad, mutate("mass = 1.0", "mass = -1")).unwrap();
+    let err = Scene::from_file(&bad).unwrap_err();
+    assert_eq!(err.file.as_deref(), Some(bad.as_path()));
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "{}: key `beam.mass`: must be positive and finite, got -1",
+            bad.display()
+        )
+    );
+    let missing = dir.join("missing.toml");
+    let err = Scene::from_file(&missing).unwrap_err();
+    println!("{err}");
+    assert!(matches!(err.kind, SceneErrorKind::Io { .. }));
+    assert!(err.to_string().contains("missing.toml"));
+    let _ = std::fs::remove_dir_all(&dir);
+    // errors convert into the crate error, transparently
+    let e: chainbeam::Error = err.clone().into();
+    assert_eq!(e.to_string(), err.to_string());
+}
+
+#[test]
+fn written_files_are_readable_toml() {
+    let text = parse(FULL).unwrap().to_toml_string();
+    println!("{text}");
+    assert!(text.contains("[beam]") && text.contains("[[loads.point]]") && text.contains("[time]"));
+    assert!(text.contains("support = \"fixed-fixed\"") && text.contains("kind = \"per-step\""));
+}
+
+/// Random finite values round-trip bit for bit.
+fn finite() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        (1e-300f64..1e300),
+        (-1e3f64..1e3),
+        Just(f64::MIN_POSITIVE),
+        Just(f64::MAX),
+        Just(5e-324),
+    ]
+}
+
+fn positive() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        (1e-300f64..1e300),
+        Just(f64::MIN_POSITIVE),
+        Just(f64::MAX),
+        Just(5e-324)
+    ]
+}
+
+proptest! {
+    // No regression files: this crate's tests directory is shared.
+    #![proptest_config(ProptestConfig {
+        cases: 1024,
+        failure_persistence: None,
+        ..ProptestConfig::default()
+    })]
+
+    #[test]
+    fn random_valid_scenes_round_trip(
+        n in 1usize..6,
+        lengths in prop::collection::vec(positive(), 6),
+        uniform in any::<bool>(),
+        k in prop::collection::vec(finite().prop_map(f64::abs), 6),
+        g in finite(),
+        force in finite(),
+        start in -1e3f64..1e3,
+        width in 1e-3f64..1e3,
+        steps in 1usize..30,
+        h in 1e-6f64..1.0,
+        per_step in any::<bool>(),
+    ) {
+        let l = if uniform { vec![lengths[0]; n] } else { lengths[..n].to_vec() };
+        let mut b = Scene::builder(n)
+            .lengths(l)
+            .masses(lengths[..n].iter().rev().copied().collect())
+            .stiffnesses(k[..n - 1].to_vec())
+            .base_stiffness(k[5])
+            .tip_stiffness(k[4])
+            .support(Support::FixedFixed)
+            .reaction_force(uniform)
+            .gravity(g)
+            .drag(k[3])
+            .point_load(n, force)
+            .point_load_window(1, -force, start, start + width)
+            .step(h)
+            .steps(steps)
+            .objective(ObjectiveKind::Sum);
+        b = if per_step {
+            b.control_per_step(1, (0..=steps).map(|i| i as f64 * start).collect())
+        } else {
+            b.control_constant(n, force)
+        };
+        let scene = b.build().unwrap();
+        let back = Scene::from_toml_str(&scene.to_toml_string()).unwrap();
+        prop_assert_eq!(back, scene);
+    }
+
+    /// Random TOML-ish edits of a valid scene never panic; whatever parses is valid and round-trips.
+    #[test]
+    fn mutations_never_panic(
+        edits in prop::collection::vec(
+            (any::<prop::sample::Index>(), 0usize..12, prop::sample::select(vec![
+                "", "0", "-1", "1e400", "nan", "inf", "-inf", "99999999999999999999", "4611686018427387904",
+                "1000000", "[", "]", "[]", "{", "}", "=", "\"", "'", ",", ".", "#", "\n", " ",
+                "[[loads.point]]\nnode = 1\nforce = 1\n", "[control]\n", "kind = 'per-step'",
+                "values = [1, 2]", "node = 0", "pendulums = 1", "steps = 1", "start = 5",
+                "end = -1", "true", "1979-05-27", "\"riser\"", "'pinned-pinned'", "x = 1\n",
+                "stiffness = []", "length = [1, 2, 3, 4]", "reaction_force = true", "ä", "\u{0}",
+            ])),
+            1..6,
+        ),
+    ) {
+        let mut text = FULL.to_string();
+        for (at, del, ins) in edits {
+            let mut pos = at.index(text.len() + 1);
+            while !text.is_char_boundary(pos) {
+                pos -= 1;
+            }
+            let mut end = (pos + del).min(text.len());
+            while !text.is_char_boundary(end) {
+                end += 1;
+            }
+            text.replace_range(pos..end, ins);
+        }
+        match Scene::from_toml_str(&text) {
+            Ok(scene) => {
+                prop_assert!(scene.validate().is_ok());
+                let back = Scene::from_toml_str(&scene.to_toml_string());
+                prop_assert_eq!(back, Ok(scene));
+            }
+            Err(e) => {
+                let msg = e.to_string();
+                prop_assert!(!msg.is_empty() && !msg.contains('\n'), "{}", msg);
+            }
+        }
+    }
+}

@@ -1,0 +1,212 @@
+//! Benchmarks of one RATTLE step and of whole simulations (SPEC §2).
+//!
+//! Groups:
+//! - `step_f64_planar`: one planar `f64` step for n = 10, 100, 1000, with
+//!   `Throughput::Elements(n)` so the report reads as time per pendulum-step;
+//! - `step_scalar`: `f64` vs `Dual64` (derivative seeded in the interior stiffness), n = 100;
+//! - `step_dim`: planar (DIM = 2) vs spatial (DIM = 3), `f64`, n = 100;
+//! - `simulate_riser`: `chainbeam::simulate` of the thesis riser scene for N = 10 and N = 1000.
+//!
+//! The step benchmarks first advance the straight beam by [`PRE_STEPS`] steps so the state is
+//! bent and the Newton predictor is the multiplier of a real previous step, then keep stepping the
+//! same state forward inside the timed closure. Without drag RATTLE conserves energy, so the
+//! oscillation stays bounded however many steps criterion runs.
+//!
+//! Run with
+//! `cargo bench --bench step -- --warm-up-time 1 --measurement-time 3`.
+
+use std::hint::black_box;
+use std::time::Duration;
+
+use chainbeam::{
+    Beam, Chain, Loads, Parameter, PointLoad, Rattle, Scalar, Scene, State, Support, TimeGrid,
+};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use num_dual::Dual64;
+
+/// Steps taken outside the timed closure to reach a representative (bent) state.
+const PRE_STEPS: usize = 50;
+
+/// Samples per benchmark (criterion's default of 100 makes the run needlessly long).
+const SAMPLES: usize = 20;
+
+/// A cantilever of n pendulums with a point load F = 2 at the tip, scaled from the n = 10 beam
+/// (l = 1, m = 1, k = 1000, base/tip 1000, h = 0.01) so that the continuum beam is the same:
+/// total length 10 and mass 10 (l = 10/n, m = 10/n), bending stiffness k·l = 1000 (k = 1000/l
+/// for every spring). The highest chain frequency grows like n², so h = 0.01·(10/n)² keeps
+/// h·ω_max (and hence the Newton convergence) the same for every n.
+fn cantilever(n: usize) -> Scene {
+    let l = 10.0 / n as f64;
+    let m = 10.0 / n as f64;
+    let k = 1000.0 / l;
+    let ratio = 10.0 / n as f64;
+    Scene {
+        beam: Beam {
+            lengths: vec![l; n],
+            masses: vec![m; n],
+            stiffness: vec![k; n - 1],
+            base_stiffness: k,
+            tip_stiffness: k,
+            support: Support::Cantilever,
+            reaction_force: false,
+        },
+        loads: Loads {
+            gravity: 0.0,
+            drag: 0.0,
+            points: vec![PointLoad {
+                node: n,
+                force: 2.0,
+                start: 0.0,
+                end: None,
+            }],
+        },
+        time: TimeGrid {
+            step: 0.01 * ratio * ratio,
+            steps: PRE_STEPS,
+        },
+        control: None,
+        objective: None,
+    }
+}
+
+/// The thesis riser (n = 10, l = 1, m = 1, k = 1000, base/tip 2000, F = 2 at node 5, D = 0,
+/// h = 0.01) with `steps` steps.
+fn riser(steps: usize) -> Scene {
+    let n = 10;
+    Scene {
+        beam: Beam {
+            lengths: vec![1.0; n],
+            masses: vec![1.0; n],
+            stiffness: vec![1000.0; n - 1],
+            base_stiffness: 2000.0,
+            tip_stiffness: 2000.0,
+            support: Support::Riser,
+            reaction_force: false,
+        },
+        loads: Loads {
+            gravity: 0.0,
+            drag: 0.0,
+            points: vec![PointLoad {
+                node: 5,
+                force: 2.0,
+                start: 0.0,
+                end: None,
+            }],
+        },
+        time: TimeGrid { step: 0.01, steps },
+        control: None,
+        objective: None,
+    }
+}
+
+/// An integrator for `chain` on `scene`'s step, with the state after [`PRE_STEPS`] steps and the
+/// index of the next step.
+fn prepared<D: Scalar, const DIM: usize>(scene: &Scene, chain: Chain<D, DIM>) -> Prepared<D, DIM> {
+    let mut rattle = Rattle::new(chain, scene.time.step).expect("valid step");
+    let mut state = rattle.straight_state();
+    let u = D::from(0.0);
+    for k in 0..PRE_STEPS {
+        rattle
+            .step(&mut state, k, u, u)
+            .unwrap_or_else(|e| panic!("n = {}: pre-step {k} failed: {e}", scene.n()));
+    }
+    (rattle, state, PRE_STEPS)
+}
+
+/// Integrator, state and next step index, as returned by [`prepared`].
+type Prepared<D, const DIM: usize> = (Rattle<D, DIM>, State<D, DIM>, usize);
+
+/// Times one step from a copy of `prep`, stepping forward (k increasing) on every iteration.
+/// Criterion calls this once per sample, so every sample starts from the same bent state.
+fn bench_steps<D: Scalar, const DIM: usize>(
+    b: &mut criterion::Bencher<'_>,
+    prep: &Prepared<D, DIM>,
+) {
+    let (mut rattle, mut state, mut k) = prep.clone();
+    let u = D::from(0.0);
+    b.iter(|| {
+        let stats = rattle
+            .step(black_box(&mut state), k, u, u)
+            .expect("RATTLE step failed");
+        k += 1;
+        black_box(stats)
+    });
+}
+
+fn planar_f64(scene: &Scene) -> Chain<f64, 2> {
+    Chain::from_scene(scene).expect("valid scene")
+}
+
+fn step_f64_planar(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step_f64_planar");
+    group.sample_size(SAMPLES);
+    for n in [10usize, 100, 1000] {
+        let scene = cantilever(n);
+        group.throughput(Throughput::Elements(n as u64));
+        let prep = prepared(&scene, planar_f64(&scene));
+        group.bench_function(BenchmarkId::from_parameter(n), |b| bench_steps(b, &prep));
+    }
+    group.finish();
+}
+
+fn step_scalar(c: &mut Criterion) {
+    let n = 100;
+    let scene = cantilever(n);
+    let mut group = c.benchmark_group("step_scalar");
+    group.sample_size(SAMPLES);
+    group.throughput(Throughput::Elements(n as u64));
+    let real = prepared(&scene, planar_f64(&scene));
+    let mut chain = Chain::<Dual64, 2>::from_scene(&scene).expect("valid scene");
+    let k = scene.beam.stiffness[0];
+    chain
+        .set_parameter(Parameter::InteriorStiffness, Dual64::new(k, 1.0))
+        .expect("interior stiffness exists");
+    let dual = prepared(&scene, chain);
+    group.bench_function(BenchmarkId::new("f64", n), |b| bench_steps(b, &real));
+    group.bench_function(BenchmarkId::new("Dual64", n), |b| bench_steps(b, &dual));
+    group.finish();
+}
+
+fn step_dim(c: &mut Criterion) {
+    let n = 100;
+    let scene = cantilever(n);
+    let mut group = c.benchmark_group("step_dim");
+    group.sample_size(SAMPLES);
+    group.throughput(Throughput::Elements(n as u64));
+    let planar = prepared(&scene, planar_f64(&scene));
+    let spatial = prepared(
+        &scene,
+        Chain::<f64, 3>::from_scene(&scene).expect("valid scene"),
+    );
+    group.bench_function(BenchmarkId::new("planar", n), |b| bench_steps(b, &planar));
+    group.bench_function(BenchmarkId::new("spatial", n), |b| bench_steps(b, &spatial));
+    group.finish();
+}
+
+fn simulate_riser(c: &mut Criterion) {
+    let mut group = c.benchmark_group("simulate_riser");
+    group.sample_size(SAMPLES);
+    for steps in [10usize, 1000] {
+        let scene = riser(steps);
+        chainbeam::simulate(&scene).expect("riser simulates");
+        group.bench_function(BenchmarkId::new("N", steps), |b| {
+            b.iter(|| chainbeam::simulate(black_box(&scene)).expect("riser simulates"))
+        });
+    }
+    group.finish();
+}
+
+/// Short defaults so a plain `cargo bench` stays quick; `--warm-up-time` / `--measurement-time` on
+/// the command line override them (the groups set only the sample size).
+fn config() -> Criterion {
+    Criterion::default()
+        .warm_up_time(Duration::from_secs(1))
+        .measurement_time(Duration::from_secs(3))
+}
+
+criterion_group! {
+    name = benches;
+    config = config();
+    targets = step_f64_planar, step_scalar, step_dim, simulate_riser
+}
+criterion_main!(benches);

@@ -253,17 +253,31 @@ pub enum Checkpointing {
     StoreAll,
     /// Every K-th state is kept, segments are recomputed (memory O(n(N/K + K))).
     Every(usize),
-    /// K = ⌈√N⌉.
+    /// K = ⌈√N⌉: memory O(n√N), one extra forward sweep.
+    Sqrt,
+    /// Store every state while the trajectory fits in [`AUTO_MEMORY_BUDGET`] bytes (no
+    /// recomputation: the gradient then costs one forward and one reverse sweep), otherwise
+    /// K = ⌈√N⌉ (memory O(n√N), one extra forward sweep).
     #[default]
     Auto,
 }
 
+/// Memory for stored states below which [`Checkpointing::Auto`] keeps every state: 256 MiB.
+pub const AUTO_MEMORY_BUDGET: usize = 256 << 20;
+
 impl Checkpointing {
-    fn interval(self, steps: usize) -> usize {
+    fn interval(self, steps: usize, state_bytes: usize) -> usize {
         match self {
             Checkpointing::StoreAll => 1,
             Checkpointing::Every(k) => k.clamp(1, steps.max(1)),
-            Checkpointing::Auto => ((steps as f64).sqrt().ceil() as usize).max(1),
+            Checkpointing::Auto
+                if (steps + 1).saturating_mul(state_bytes) <= AUTO_MEMORY_BUDGET =>
+            {
+                1
+            }
+            Checkpointing::Auto | Checkpointing::Sqrt => {
+                ((steps as f64).sqrt().ceil() as usize).max(1)
+            }
         }
     }
 }
@@ -281,10 +295,81 @@ pub struct AdjointResult<D> {
     pub state_bytes: usize,
 }
 
+/// Forward states stored flat (one allocation per array, sized once), for the reverse sweep.
+struct StateStore<D, const DIM: usize> {
+    n: usize,
+    nc: usize,
+    q: Vec<[D; DIM]>,
+    p: Vec<[D; DIM]>,
+    lambda: Vec<D>,
+    mu: Vec<D>,
+    tip: Vec<[D; 2]>,
+}
+
+/// A stored state, borrowed.
+struct StateView<'a, D, const DIM: usize> {
+    q: &'a [[D; DIM]],
+    p: &'a [[D; DIM]],
+    lambda: &'a [D],
+    mu: &'a [D],
+    tip: [D; 2],
+}
+
+impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
+    fn new(n: usize, nc: usize, capacity: usize) -> Self {
+        StateStore {
+            n,
+            nc,
+            q: Vec::with_capacity(capacity * n),
+            p: Vec::with_capacity(capacity * n),
+            lambda: Vec::with_capacity(capacity * nc),
+            mu: Vec::with_capacity(capacity * nc),
+            tip: Vec::with_capacity(capacity),
+        }
+    }
+    fn push(&mut self, s: &State<D, DIM>) {
+        self.q.extend_from_slice(&s.q);
+        self.p.extend_from_slice(&s.p);
+        self.lambda.extend_from_slice(&s.lambda);
+        self.mu.extend_from_slice(&s.mu);
+        self.tip.push(s.tip_target);
+    }
+    fn clear(&mut self) {
+        self.q.clear();
+        self.p.clear();
+        self.lambda.clear();
+        self.mu.clear();
+        self.tip.clear();
+    }
+    fn len(&self) -> usize {
+        self.tip.len()
+    }
+    fn capacity(&self) -> usize {
+        self.tip.capacity()
+    }
+    fn view(&self, i: usize) -> StateView<'_, D, DIM> {
+        let (n, nc) = (self.n, self.nc);
+        StateView {
+            q: &self.q[i * n..(i + 1) * n],
+            p: &self.p[i * n..(i + 1) * n],
+            lambda: &self.lambda[i * nc..(i + 1) * nc],
+            mu: &self.mu[i * nc..(i + 1) * nc],
+            tip: self.tip[i],
+        }
+    }
+    fn load(&self, i: usize, s: &mut State<D, DIM>) {
+        let v = self.view(i);
+        s.q.copy_from_slice(v.q);
+        s.p.copy_from_slice(v.p);
+        s.lambda.copy_from_slice(v.lambda);
+        s.mu.copy_from_slice(v.mu);
+        s.tip_target = v.tip;
+    }
+}
+
 /// Scratch memory of a reverse step (allocated once per sweep).
 struct AdjointWorkspace<D, const DIM: usize> {
     fk: Vec<[D; DIM]>,
-    f1: Vec<[D; DIM]>,
     a: Vec<[D; DIM]>,
     c: Vec<[D; DIM]>,
     phalf: Vec<[D; DIM]>,
@@ -304,7 +389,6 @@ impl<D: Scalar, const DIM: usize> AdjointWorkspace<D, DIM> {
         let v = vec![[D::zero(); DIM]; n];
         AdjointWorkspace {
             fk: v.clone(),
-            f1: v.clone(),
             a: v.clone(),
             c: v.clone(),
             phalf: v.clone(),
@@ -500,7 +584,8 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     }
     check_parameters(chain, params)?;
     let n = chain.n();
-    let kk = checkpointing.interval(steps);
+    let state_size = (2 * n * DIM + 2 * chain.n_constraints() + 2) * std::mem::size_of::<D>();
+    let kk = checkpointing.interval(steps, state_size);
     let mut stage = StageEval {
         obj: objective,
         steps,
@@ -509,21 +594,21 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
 
-    // Forward sweep with checkpoints.
+    // Forward sweep with checkpoints (flat storage: no allocation per stored state).
     let mut rattle = Rattle::new(chain.clone(), h)?;
     let mut state = rattle.straight_state();
     rattle.prepare(&mut state, 0, u[0])?;
     let mut value = stage.value(chain, 0, &state.q, u[0]);
-    let mut checkpoints: Vec<State<D, DIM>> = Vec::with_capacity(steps / kk + 2);
-    checkpoints.push(state.clone());
+    let nc = chain.n_constraints();
+    let mut checkpoints = StateStore::<D, DIM>::new(n, nc, steps / kk + 2);
+    checkpoints.push(&state);
     for k in 0..steps {
         rattle.step(&mut state, k, u[k], u[k + 1])?;
         value += stage.value(chain, k + 1, &state.q, u[k + 1]);
         if (k + 1) % kk == 0 || k + 1 == steps {
-            checkpoints.push(state.clone());
+            checkpoints.push(&state);
         }
     }
-    let state_size = (2 * n * DIM + 2 * chain.n_constraints() + 2) * std::mem::size_of::<D>();
 
     // Reverse sweep.
     let mut ws = AdjointWorkspace::new(chain);
@@ -532,45 +617,48 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     let mut tip_bar = [D::zero(); 2];
     let mut ubar = vec![D::zero(); steps + 1];
     let mut thbar = vec![D::zero(); params.len()];
-    let last = checkpoints
-        .last()
-        .expect("at least the initial state")
-        .clone();
+    let n_segments = checkpoints.len() - 1;
     stage.accumulate(
         chain,
         steps,
-        &last.q,
+        checkpoints.view(n_segments).q,
         u[steps],
         &mut qbar,
         &mut ubar,
         k1_param.map(|i| &mut thbar[i]),
     );
 
-    let mut buffer: Vec<State<D, DIM>> = Vec::with_capacity(kk + 1);
-    let n_segments = checkpoints.len() - 1;
+    // Interior states S_{a+1..b−1} of the current segment, recomputed from S_a.
+    let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1));
     for seg in (0..n_segments).rev() {
         let a = seg * kk;
         let b = (a + kk).min(steps);
-        // Recompute S_{a+1..b-1} from S_a; S_b is the next checkpoint.
         buffer.clear();
-        buffer.push(checkpoints[seg].clone());
         if b - a > 1 {
-            let mut st = checkpoints[seg].clone();
-            rattle.prepare_force(&st, a, u[a])?;
+            checkpoints.load(seg, &mut state);
+            rattle.prepare_force(&state, a, u[a])?;
             for k in a..b - 1 {
-                rattle.step(&mut st, k, u[k], u[k + 1])?;
-                buffer.push(st.clone());
+                rattle.step(&mut state, k, u[k], u[k + 1])?;
+                buffer.push(&state);
             }
         }
-        buffer.push(checkpoints[seg + 1].clone());
+        let view = |k: usize| {
+            if k == a {
+                checkpoints.view(seg)
+            } else if k == b {
+                checkpoints.view(seg + 1)
+            } else {
+                buffer.view(k - a - 1)
+            }
+        };
         for k in (a..b).rev() {
-            let (sk, sk1) = (&buffer[k - a], &buffer[k - a + 1]);
+            let (sk, sk1) = (view(k), view(k + 1));
             reverse_step(
                 chain,
                 h,
                 k,
-                sk,
-                sk1,
+                &sk,
+                &sk1,
                 u[k],
                 u[k + 1],
                 &mut ws,
@@ -584,7 +672,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
             stage.accumulate(
                 chain,
                 k,
-                &sk.q,
+                sk.q,
                 u[k],
                 &mut qbar,
                 &mut ubar,
@@ -592,7 +680,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
             );
         }
     }
-    let state_bytes = (checkpoints.len() + buffer.capacity()) * state_size;
+    let state_bytes = (checkpoints.capacity() + buffer.capacity()) * state_size;
     Ok(AdjointResult {
         value,
         control_gradient: ubar,
@@ -660,8 +748,8 @@ fn reverse_step<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     h: f64,
     k: usize,
-    sk: &State<D, DIM>,
-    sk1: &State<D, DIM>,
+    sk: &StateView<'_, D, DIM>,
+    sk1: &StateView<'_, D, DIM>,
     u_k: D,
     u_k1: D,
     ws: &mut AdjointWorkspace<D, DIM>,
@@ -676,13 +764,12 @@ fn reverse_step<D: Scalar, const DIM: usize>(
     let z = zi::<DIM>();
     let hh = 0.5 * h;
     let bordered = ch.has_tip_constraint();
-    let (q, q1, p1) = (&sk.q, &sk1.q, &sk1.p);
-    let (lam, mu) = (&sk1.lambda, &sk1.mu);
+    let (q, q1, p1) = (sk.q, sk1.q, sk1.p);
+    let (lam, mu) = (sk1.lambda, sk1.mu);
     let (tk, tk1) = (k as f64 * h, (k + 1) as f64 * h);
 
     // Recompute the step's intermediates (same arithmetic as the forward step).
     ch.potential_gradient(q, tk, u_k, k, &mut ws.fk)?;
-    ch.potential_gradient(q1, tk1, u_k1, k + 1, &mut ws.f1)?;
     for i in 0..n {
         for d in 0..DIM {
             ws.a[i][d] = sk.p[i][d] - ws.fk[i][d] * hh;
@@ -748,7 +835,7 @@ fn reverse_step<D: Scalar, const DIM: usize>(
     if reaction {
         tip_bar[1] += ws.rhs[n];
         if let Some(ip) = mass_param {
-            thbar[ip] += ws.rhs[n] * sk1.tip_target[1] * ch.inv_masses[0];
+            thbar[ip] += ws.rhs[n] * sk1.tip[1] * ch.inv_masses[0];
         }
     }
 

@@ -208,6 +208,7 @@ fn checkpointing_is_bit_for_bit() {
         .with_checkpointing(Checkpointing::StoreAll);
     let reference = base.adjoint(&theta, &[Parameter::Drag]).unwrap();
     for c in [
+        Checkpointing::Sqrt,
         Checkpointing::Every(1),
         Checkpointing::Every(5),
         Checkpointing::Every(97),
@@ -289,7 +290,9 @@ fn long_horizon_gradient_with_checkpointing() {
     let steps = 100_000;
     let s = scene(Support::Riser, 5, 10.0, steps);
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 5 });
-    let prob = ControlProblem::new(&s, map, BendingObjective::summed_moment()).unwrap();
+    let prob = ControlProblem::new(&s, map, BendingObjective::summed_moment())
+        .unwrap()
+        .with_checkpointing(Checkpointing::Sqrt);
     let theta = vec![-1.5, -1.4, -1.6, -1.5, -1.45];
     let r = prob.adjoint(&theta, &[]).unwrap();
     let mut g = vec![0.0; 5];

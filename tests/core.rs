@@ -313,7 +313,8 @@ fn dissipative_beams_settle_at_static_equilibrium() {
 /// beam as n grows at fixed length L = 10, with k = EI/l, base spring 2k and m = μ l? Static
 /// cantilever under a small tip load (F = 0.002, so that geometric nonlinearity, of relative size
 /// (FL²/EI)² ≈ 1e-8, does not mask the discretisation error): the tip deflection approaches
-/// eq. 2.4.5 as n grows, with the fitted rate printed (expected 2).
+/// eq. 2.4.5 as n grows, with the fitted rate printed (expected 2); likewise pinned-pinned and
+/// fixed-fixed centre deflections (eq. 2.4.7, 2.4.6).
 #[test]
 fn static_chain_converges_to_euler_bernoulli() {
     let ns = [10usize, 20, 40, 80];
@@ -331,6 +332,35 @@ fn static_chain_converges_to_euler_bernoulli() {
     println!("cantilever tip relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.2}");
     assert!(devs.windows(2).all(|w| w[1] < w[0]));
     assert!(rate > 1.5);
+
+    // Pinned-pinned (no end springs) and fixed-fixed (end springs 2k) with the load at the centre
+    // node, same scaling; closed forms 2.4.7 and 2.4.6 at y = L/2.
+    for (support, closed) in [
+        (
+            Support::PinnedPinned,
+            static_pinned_pinned(5.0, f, 1000.0, 10.0),
+        ),
+        (
+            Support::FixedFixed,
+            static_fixed_fixed(5.0, f, 1000.0, 10.0),
+        ),
+    ] {
+        let mut devs = Vec::new();
+        for &n in &ns {
+            let mut s = catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 2.0);
+            s.beam.support = support;
+            s.beam.tip_stiffness = s.beam.base_stiffness;
+            s.loads.points[0].node = n / 2;
+            s.loads.points[0].force = f;
+            let stat = static_equilibrium(&s).unwrap();
+            devs.push(((stat.positions[n / 2 - 1][1] - closed) / closed).abs());
+        }
+        let rate = loglog_slope(&hs, &devs);
+        println!(
+            "{support:?} centre relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.2}"
+        );
+        assert!(devs.windows(2).all(|w| w[1] < w[0]));
+    }
 }
 
 /// The planar model is the spatial model restricted to the yz-plane: on a planar scene (riser,

@@ -420,14 +420,14 @@ struct StageEval<'a, O, D> {
     steps: usize,
     h: f64,
     zbuf: Vec<Dual<D>>,
+    zpos: Vec<D>,
 }
 
 impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
     fn value<const DIM: usize>(&mut self, ch: &Chain<D, DIM>, k: usize, q: &[[D; DIM]], u: D) -> D {
         let m = ch.base_moment(q);
-        let mut z = Vec::new();
         if self.obj.uses_positions() {
-            z = positions_z(ch, q);
+            positions_z(ch, q, &mut self.zpos);
         }
         self.obj.stage(Stage {
             k,
@@ -435,7 +435,7 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             h: self.h,
             moment: m,
             control: u,
-            z: &z,
+            z: &self.zpos,
         })
     }
 
@@ -519,17 +519,15 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
     }
 }
 
-/// Node z-displacements z₁..zₙ.
-fn positions_z<D: Scalar, const DIM: usize>(ch: &Chain<D, DIM>, q: &[[D; DIM]]) -> Vec<D> {
+/// Node z-displacements z₁..zₙ into `out` (resized once to n).
+fn positions_z<D: Scalar, const DIM: usize>(ch: &Chain<D, DIM>, q: &[[D; DIM]], out: &mut Vec<D>) {
     let z = zi::<DIM>();
+    out.resize(ch.n(), D::zero());
     let mut acc = D::zero();
-    q.iter()
-        .zip(&ch.lengths)
-        .map(|(qi, l)| {
-            acc += *l * qi[z];
-            acc
-        })
-        .collect()
+    for ((o, qi), l) in out.iter_mut().zip(q).zip(&ch.lengths) {
+        acc += *l * qi[z];
+        *o = acc;
+    }
 }
 
 /// Validates the parameters requested for a gradient.
@@ -591,6 +589,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
         steps,
         h,
         zbuf: vec![Dual::from_re(D::zero()); n],
+        zpos: Vec::new(),
     };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
 
@@ -713,6 +712,7 @@ pub fn forward_value<D: Scalar, O: Objective, const DIM: usize>(
         steps,
         h,
         zbuf: Vec::new(),
+        zpos: Vec::new(),
     };
     let mut j = stage.value(chain, 0, &st.q, u[0]);
     for k in 0..steps {

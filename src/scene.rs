@@ -1214,6 +1214,16 @@ impl Scene {
         }
         if let Some(c) = &self.control {
             node_index("control.node", to_i64(c.node), n)?;
+            if b.reaction_force && c.node != n {
+                return Err(SceneError::invalid(
+                    "control.node",
+                    format!(
+                        "the reaction-force variant moves the tip: the control must act at node \
+                         {n}, not {}",
+                        c.node
+                    ),
+                ));
+            }
             let expected = match c.kind {
                 ControlKind::Constant => 1,
                 ControlKind::PerStep => self.time.steps + 1,

@@ -101,7 +101,7 @@ step = 0.005
 steps = 20
 
 [control]
-node = 3
+node = 4
 kind = "per-step"
 values = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20]
 
@@ -890,7 +890,7 @@ proptest! {
             .steps(steps)
             .objective(ObjectiveKind::Sum);
         b = if per_step {
-            b.control_per_step(1, (0..=steps).map(|i| i as f64 * start).collect())
+            b.control_per_step(n, (0..=steps).map(|i| i as f64 * start).collect())
         } else {
             b.control_constant(n, force)
         };
@@ -938,4 +938,23 @@ proptest! {
             }
         }
     }
+}
+
+/// The reaction-force variant moves the tip, so its control must act at node n (found by the CLI
+/// property test: this used to pass validation and fail later in the model).
+#[test]
+fn reaction_force_control_must_act_at_the_tip() {
+    let e = SceneBuilder::new(4)
+        .support(Support::PinnedPinned)
+        .reaction_force(true)
+        .control_constant(3, 1.0)
+        .build()
+        .unwrap_err();
+    assert_eq!(e.key(), Some("control.node"));
+    assert!(SceneBuilder::new(4)
+        .support(Support::PinnedPinned)
+        .reaction_force(true)
+        .control_constant(4, 1.0)
+        .build()
+        .is_ok());
 }

@@ -1,0 +1,467 @@
+//! A small layer over `plotters`: figures of one or more panels of line series, written as PNG
+//! and SVG with a bundled font (DejaVu Sans, no system font needed).
+
+use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use std::error::Error;
+use std::path::{Path, PathBuf};
+
+/// Result with a boxed error.
+pub type Res<T> = Result<T, Box<dyn Error>>;
+
+const FONT: &str = "sans-serif";
+
+/// Registers the bundled font with plotters' `ab_glyph` text renderer (once).
+pub fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        for style in [FontStyle::Normal, FontStyle::Bold] {
+            // The bundled TTF is valid, so this cannot fail.
+            let _ = plotters::style::register_font(FONT, style, bytes);
+        }
+    });
+}
+
+/// Line style.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dash {
+    /// Solid.
+    Solid,
+    /// Dashed.
+    Dashed,
+    /// Dotted.
+    Dotted,
+    /// Markers only.
+    Markers,
+}
+
+/// One line series.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: Option<String>,
+    pub pts: Vec<(f64, f64)>,
+    pub color: RGBColor,
+    pub dash: Dash,
+    pub width: u32,
+    pub markers: bool,
+}
+
+/// Ten distinguishable colours (matplotlib's tab10).
+pub const TAB10: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// Colour `i` of [`TAB10`] (cycled).
+pub fn color(i: usize) -> RGBColor {
+    TAB10[i % TAB10.len()]
+}
+
+/// Grey for reference lines.
+pub const GREY: RGBColor = RGBColor(110, 110, 110);
+
+impl Series {
+    /// A solid line.
+    pub fn line(name: impl Into<String>, pts: Vec<(f64, f64)>, color: RGBColor) -> Self {
+        let name = name.into();
+        Series {
+            name: (!name.is_empty()).then_some(name),
+            pts,
+            color,
+            dash: Dash::Solid,
+            width: 2,
+            markers: false,
+        }
+    }
+    /// Dashed.
+    pub fn dashed(mut self) -> Self {
+        self.dash = Dash::Dashed;
+        self
+    }
+    /// Dotted.
+    pub fn dotted(mut self) -> Self {
+        self.dash = Dash::Dotted;
+        self
+    }
+    /// With a given dash.
+    pub fn with_dash(mut self, d: Dash) -> Self {
+        self.dash = d;
+        self
+    }
+    /// Markers on the points (in addition to the line, unless the dash is [`Dash::Markers`]).
+    pub fn markers(mut self) -> Self {
+        self.markers = true;
+        self
+    }
+    /// Markers only.
+    pub fn points_only(mut self) -> Self {
+        self.dash = Dash::Markers;
+        self.markers = true;
+        self
+    }
+    /// Line width.
+    pub fn width(mut self, w: u32) -> Self {
+        self.width = w;
+        self
+    }
+}
+
+/// Where the legend goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Legend {
+    None,
+    UpperRight,
+    UpperLeft,
+    LowerRight,
+    LowerLeft,
+    /// Outside the plot, right.
+    Right,
+}
+
+/// One panel (a Cartesian chart).
+#[derive(Clone, Debug)]
+pub struct Panel {
+    pub title: String,
+    pub x: String,
+    pub y: String,
+    pub series: Vec<Series>,
+    pub logx: bool,
+    pub logy: bool,
+    pub xr: Option<(f64, f64)>,
+    pub yr: Option<(f64, f64)>,
+    pub legend: Legend,
+    /// Equal scales on both axes (beam configurations).
+    pub equal: bool,
+}
+
+impl Panel {
+    /// A linear panel.
+    pub fn new(title: impl Into<String>, x: impl Into<String>, y: impl Into<String>) -> Self {
+        Panel {
+            title: title.into(),
+            x: x.into(),
+            y: y.into(),
+            series: Vec::new(),
+            logx: false,
+            logy: false,
+            xr: None,
+            yr: None,
+            legend: Legend::UpperRight,
+            equal: false,
+        }
+    }
+    /// Log-log.
+    pub fn loglog(mut self) -> Self {
+        self.logx = true;
+        self.logy = true;
+        self
+    }
+    /// Log y.
+    pub fn logy(mut self) -> Self {
+        self.logy = true;
+        self
+    }
+    /// Legend position.
+    pub fn legend(mut self, l: Legend) -> Self {
+        self.legend = l;
+        self
+    }
+    /// Fixed x range.
+    pub fn xr(mut self, a: f64, b: f64) -> Self {
+        self.xr = Some((a, b));
+        self
+    }
+    /// Fixed y range.
+    pub fn yr(mut self, a: f64, b: f64) -> Self {
+        self.yr = Some((a, b));
+        self
+    }
+    /// Adds a series.
+    pub fn push(&mut self, s: Series) {
+        self.series.push(s);
+    }
+    /// Adds a series (builder).
+    pub fn with(mut self, s: Series) -> Self {
+        self.series.push(s);
+        self
+    }
+}
+
+/// A figure: panels on a grid.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// File stem, e.g. `fig_2_5`.
+    pub name: String,
+    pub panels: Vec<Panel>,
+    pub cols: usize,
+    /// Size of one panel in pixels at scale 1.
+    pub panel_size: (u32, u32),
+}
+
+impl Figure {
+    /// A figure with panels laid out in `cols` columns.
+    pub fn new(name: impl Into<String>, cols: usize, panels: Vec<Panel>) -> Self {
+        Figure {
+            name: name.into(),
+            panels,
+            cols: cols.max(1),
+            panel_size: (800, 560),
+        }
+    }
+    /// A one-panel figure.
+    pub fn single(name: impl Into<String>, panel: Panel) -> Self {
+        Self::new(name, 1, vec![panel])
+    }
+}
+
+fn data_range(vals: impl Iterator<Item = f64>, log: bool) -> (f64, f64) {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for v in vals {
+        if v.is_finite() && (!log || v > 0.0) {
+            lo = lo.min(v);
+            hi = hi.max(v);
+        }
+    }
+    if !lo.is_finite() {
+        return if log { (1e-3, 1.0) } else { (0.0, 1.0) };
+    }
+    if log {
+        let (a, b) = (lo.log10(), hi.log10());
+        let pad = ((b - a) * 0.05).max(0.1);
+        (10f64.powf(a - pad), 10f64.powf(b + pad))
+    } else {
+        let span = hi - lo;
+        let pad = if span > 0.0 {
+            span * 0.05
+        } else {
+            lo.abs().max(1.0) * 0.05
+        };
+        (lo - pad, hi + pad)
+    }
+}
+
+/// Number formatting for tick labels.
+pub fn fmt_tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let e = a.log10().floor() as i32;
+        let m = v / 10f64.powi(e);
+        if (m.abs() - 1.0).abs() < 1e-6 {
+            format!("{}1e{e}", if v < 0.0 { "-" } else { "" })
+        } else {
+            format!("{m:.1}e{e}")
+        }
+    } else {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.').to_string();
+        if s == "-0" {
+            "0".into()
+        } else {
+            s
+        }
+    }
+}
+
+fn panel_ranges(p: &Panel) -> ((f64, f64), (f64, f64)) {
+    let mut xr = p.xr.unwrap_or_else(|| {
+        data_range(
+            p.series.iter().flat_map(|s| s.pts.iter().map(|q| q.0)),
+            p.logx,
+        )
+    });
+    let mut yr = p.yr.unwrap_or_else(|| {
+        data_range(
+            p.series.iter().flat_map(|s| s.pts.iter().map(|q| q.1)),
+            p.logy,
+        )
+    });
+    if p.equal && !p.logx && !p.logy {
+        // widen the smaller span so both axes have the same scale (panel aspect ~ 1.43)
+        let aspect = 1.43;
+        let (sx, sy) = (xr.1 - xr.0, yr.1 - yr.0);
+        if sx / aspect > sy {
+            let c = 0.5 * (yr.0 + yr.1);
+            yr = (c - 0.5 * sx / aspect, c + 0.5 * sx / aspect);
+        } else {
+            let c = 0.5 * (xr.0 + xr.1);
+            xr = (c - 0.5 * sy * aspect, c + 0.5 * sy * aspect);
+        }
+    }
+    (xr, yr)
+}
+
+fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, p: &Panel, s: f64) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let ((x0, x1), (y0, y1)) = panel_ranges(p);
+    match (p.logx, p.logy) {
+        (false, false) => draw_cart(area, p, s, x0..x1, y0..y1),
+        (true, false) => draw_cart(area, p, s, (x0..x1).log_scale(), y0..y1),
+        (false, true) => draw_cart(area, p, s, x0..x1, (y0..y1).log_scale()),
+        (true, true) => draw_cart(area, p, s, (x0..x1).log_scale(), (y0..y1).log_scale()),
+    }
+}
+
+fn draw_cart<DB, X, Y>(area: &DrawingArea<DB, Shift>, p: &Panel, s: f64, xs: X, ys: Y) -> Res<()>
+where
+    DB: DrawingBackend,
+    DB::ErrorType: 'static,
+    X: AsRangedCoord<Value = f64>,
+    Y: AsRangedCoord<Value = f64>,
+    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let px = |v: f64| ((v * s).round() as i32).max(1);
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, (FONT, px(22.0)))
+        .margin(px(12.0))
+        .x_label_area_size(px(55.0))
+        .y_label_area_size(px(85.0))
+        .build_cartesian_2d(xs, ys)?;
+    // linear axes: print round-off around zero as 0
+    let ((xa, xb), (ya, yb)) = panel_ranges(p);
+    let (xz, yz) = (
+        if p.logx { 0.0 } else { 1e-9 * (xb - xa).abs() },
+        if p.logy { 0.0 } else { 1e-9 * (yb - ya).abs() },
+    );
+    let fx = move |v: &f64| fmt_tick(if v.abs() < xz { 0.0 } else { *v });
+    let fy = move |v: &f64| fmt_tick(if v.abs() < yz { 0.0 } else { *v });
+    chart
+        .configure_mesh()
+        .x_desc(p.x.as_str())
+        .y_desc(p.y.as_str())
+        .label_style((FONT, px(15.0)))
+        .axis_desc_style((FONT, px(17.0)))
+        .x_label_formatter(&fx)
+        .y_label_formatter(&fy)
+        .x_labels(7)
+        .y_labels(7)
+        .light_line_style(RGBColor(235, 235, 235))
+        .bold_line_style(RGBColor(215, 215, 215))
+        .draw()?;
+    let w = |s0: &Series| ((s0.width as f64 * s).round() as u32).max(1);
+    for ser in &p.series {
+        let style = ShapeStyle::from(ser.color).stroke_width(w(ser));
+        let pts: Vec<(f64, f64)> = ser
+            .pts
+            .iter()
+            .copied()
+            .filter(|q| q.0.is_finite() && q.1.is_finite())
+            .filter(|q| (!p.logx || q.0 > 0.0) && (!p.logy || q.1 > 0.0))
+            .collect();
+        let ann = match ser.dash {
+            Dash::Solid => chart.draw_series(LineSeries::new(pts.clone(), style))?,
+            Dash::Dashed => {
+                chart.draw_series(DashedLineSeries::new(pts.clone(), px(9.0), px(6.0), style))?
+            }
+            Dash::Dotted => {
+                let c = ser.color;
+                let r = (1.3 * s * (ser.width as f64).max(1.0)).max(1.0);
+                chart.draw_series(DottedLineSeries::new(pts.clone(), 0, px(6.0), move |xy| {
+                    Circle::new(xy, r, c.filled())
+                }))?
+            }
+            Dash::Markers => chart.draw_series(
+                pts.iter()
+                    .map(|&xy| Circle::new(xy, px(4.0), ser.color.filled())),
+            )?,
+        };
+        if let Some(name) = &ser.name {
+            let dash = ser.dash;
+            let c = ser.color;
+            let lw = w(ser);
+            let k = px(1.0);
+            ann.label(name.as_str()).legend(move |(x, y)| {
+                let st = ShapeStyle::from(c).stroke_width(lw);
+                // three segments (x0, y0, x1, y1) in units of k, so every style has one type
+                let segs: [(i32, i32, i32, i32); 3] = match dash {
+                    Dash::Solid => [(0, 0, 12, 0), (12, 0, 24, 0), (24, 0, 24, 0)],
+                    Dash::Dashed => [(0, 0, 8, 0), (14, 0, 22, 0), (22, 0, 22, 0)],
+                    Dash::Dotted => [(0, 0, 3, 0), (9, 0, 12, 0), (18, 0, 21, 0)],
+                    Dash::Markers => [(9, -3, 15, 3), (9, 3, 15, -3), (15, 3, 15, 3)],
+                };
+                let seg = |i: usize| {
+                    let (a, b, c2, d) = segs[i];
+                    PathElement::new(vec![(a * k, b * k), (c2 * k, d * k)], st)
+                };
+                EmptyElement::at((x, y)) + seg(0) + seg(1) + seg(2)
+            });
+        }
+        if ser.markers && ser.dash != Dash::Markers {
+            chart.draw_series(
+                pts.iter()
+                    .map(|&xy| Circle::new(xy, px(3.5), ser.color.filled())),
+            )?;
+        }
+    }
+    let pos = match p.legend {
+        Legend::None => None,
+        Legend::UpperRight => Some(SeriesLabelPosition::UpperRight),
+        Legend::UpperLeft => Some(SeriesLabelPosition::UpperLeft),
+        Legend::LowerRight => Some(SeriesLabelPosition::LowerRight),
+        Legend::LowerLeft => Some(SeriesLabelPosition::LowerLeft),
+        Legend::Right => Some(SeriesLabelPosition::UpperRight),
+    };
+    if let Some(pos) = pos {
+        if p.series.iter().any(|s| s.name.is_some()) {
+            chart
+                .configure_series_labels()
+                .position(pos)
+                .label_font((FONT, px(14.0)))
+                .background_style(WHITE.mix(0.85))
+                .border_style(RGBColor(180, 180, 180))
+                .draw()?;
+        }
+    }
+    Ok(())
+}
+
+fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, fig: &Figure, s: f64) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let rows = fig.panels.len().div_ceil(fig.cols);
+    let areas = root.split_evenly((rows, fig.cols));
+    for (a, p) in areas.iter().zip(fig.panels.iter()) {
+        draw_panel(a, p, s)?;
+    }
+    root.present()?;
+    Ok(())
+}
+
+/// Writes `out/NAME.png` and `out/NAME.svg`; `scale` scales the pixel size (1 = full size).
+pub fn save(fig: &Figure, out: &Path, scale: f64) -> Res<Vec<PathBuf>> {
+    register_font();
+    let rows = fig.panels.len().div_ceil(fig.cols) as u32;
+    let w = ((fig.panel_size.0 * fig.cols as u32) as f64 * scale).round() as u32;
+    let h = ((fig.panel_size.1 * rows) as f64 * scale).round() as u32;
+    let png = out.join(format!("{}.png", fig.name));
+    let svg = out.join(format!("{}.svg", fig.name));
+    draw_figure(
+        BitMapBackend::new(&png, (w, h)).into_drawing_area(),
+        fig,
+        scale,
+    )?;
+    draw_figure(
+        SVGBackend::new(&svg, (w, h)).into_drawing_area(),
+        fig,
+        scale,
+    )?;
+    Ok(vec![png, svg])
+}

@@ -1,0 +1,54 @@
+//! Runs the figure program reduced (`--quick`: short runs, half-size images) on two figures and
+//! checks that the PNG, SVG and index files appear. Needs no system font: the program bundles
+//! DejaVu Sans.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("paper_figures_test_{}_{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn quick_run_writes_png_svg_and_index() {
+    let out = out_dir("quick");
+    let status = Command::new(env!("CARGO_BIN_EXE_paper_figures"))
+        .args([
+            "--quick",
+            "--no-progress",
+            "--only",
+            "fig_2_5,fig_3_3",
+            "--out",
+        ])
+        .arg(&out)
+        .status()
+        .expect("run paper_figures");
+    assert!(status.success());
+    for f in ["fig_2_5.png", "fig_2_5.svg", "fig_3_3.png", "fig_3_3.svg"] {
+        let meta = std::fs::metadata(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
+        assert!(meta.len() > 1000, "{f} is too small");
+    }
+    let png = std::fs::read(out.join("fig_2_5.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let svg = std::fs::read_to_string(out.join("fig_2_5.svg")).unwrap();
+    assert!(svg.contains("<svg") && svg.contains("step size h [s]"));
+    let index = std::fs::read_to_string(out.join("index.md")).unwrap();
+    assert!(index.contains("## fig_2_5") && index.contains("## fig_3_3"));
+    assert!(index.contains("Norm of energy error"));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn unknown_figure_is_an_error() {
+    let out = out_dir("unknown");
+    let o = Command::new(env!("CARGO_BIN_EXE_paper_figures"))
+        .args(["--quick", "--no-progress", "--only", "fig_9_9", "--out"])
+        .arg(&out)
+        .output()
+        .expect("run paper_figures");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no figure matches"));
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -310,7 +310,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 }
                 extra_done = true;
             }
-            if iterations >= self.options.max_iterations {
+            // (The derivative-only update after convergence is allowed past the limit.)
+            if iterations >= self.options.max_iterations && !extra_done {
                 return Err(Error::NewtonNotConverged {
                     step: k,
                     time: k as f64 * h,

@@ -17,7 +17,9 @@
 //! ‖θ_a − θ_b‖ ≤ theta_rel · max(‖θ_a‖, ‖θ_b‖) + theta_abs,
 //! |J_a − J_b| ≤ objective_rel · max(|J_a|, |J_b|) + objective_abs,
 //! ```
-//! and otherwise starts a new one; minima are sorted by objective. Defaults
+//! and otherwise starts a new one; minima are sorted by objective. Components of θ that do not act
+//! on J at all ([`inert_components`], e.g. u_N of an unpenalised per-step control) are left out
+//! of both norms: starts differing only there end at the same minimum. Defaults
 //! ([`ClusterTolerances::default`]): theta_rel = 10⁻⁵, theta_abs = 10⁻⁶ N — far above how well
 //! converged runs pin θ down (L-BFGS and the trust region agree to 3·10⁻⁸ on the per-step thesis
 //! problem with effort penalty), far below the distance between distinct minima; objective_rel =
@@ -95,19 +97,68 @@ impl Default for ClusterTolerances {
 }
 
 impl ClusterTolerances {
-    /// Whether two results are the same minimum.
-    pub fn same(&self, theta_a: &[f64], j_a: f64, theta_b: &[f64], j_b: f64) -> bool {
+    /// Whether two results are the same minimum, measuring ‖θ_a − θ_b‖ over all components but
+    /// the `inert` ones (see [`inert_components`]).
+    pub fn same(
+        &self,
+        theta_a: &[f64],
+        j_a: f64,
+        theta_b: &[f64],
+        j_b: f64,
+        inert: &[usize],
+    ) -> bool {
+        let masked = |t: &[f64]| -> f64 {
+            t.iter()
+                .enumerate()
+                .filter(|(i, _)| !inert.contains(i))
+                .map(|(_, x)| x * x)
+                .sum::<f64>()
+                .sqrt()
+        };
         let d = theta_a
             .iter()
             .zip(theta_b)
-            .map(|(a, b)| (a - b) * (a - b))
+            .enumerate()
+            .filter(|(i, _)| !inert.contains(i))
+            .map(|(_, (a, b))| (a - b) * (a - b))
             .sum::<f64>()
             .sqrt();
-        let scale = norm(theta_a).max(norm(theta_b));
+        let scale = masked(theta_a).max(masked(theta_b));
         d <= self.theta_rel * scale + self.theta_abs
             && (j_a - j_b).abs()
                 <= self.objective_rel * j_a.abs().max(j_b.abs()) + self.objective_abs
     }
+}
+
+/// The components of θ that do not act on J at θ: ∂J/∂θᵢ is exactly 0 and so is the Hessian
+/// column H eᵢ (one exact HVP each). Structurally inert parameters pass this test bit for bit,
+/// e.g. u_N of a per-step control without effort penalty, which only reaches p_N (thesis §3.3.1):
+/// starts that differ only there reach the same minimum, and [`cluster`] must not count them as
+/// distinct. (Exact zeros, not small values: a weak but real influence is not inert.)
+///
+/// # Errors
+/// The simulation's or HVP's error.
+pub fn inert_components<P: ControlMap, O: Objective>(
+    problem: &ControlProblem<P, O>,
+    theta: &[f64],
+) -> Result<Vec<usize>> {
+    let g = problem.gradient(theta)?;
+    let mut inert = Vec::new();
+    for (i, gi) in g.iter().enumerate() {
+        if gi.abs() > 0.0 {
+            continue;
+        }
+        let mut e = vec![0.0; theta.len()];
+        e[i] = 1.0;
+        if problem
+            .hessian_vec(theta, &e)?
+            .iter()
+            .all(|h| h.abs() == 0.0)
+        {
+            inert.push(i);
+        }
+    }
+    Ok(inert)
 }
 
 /// One local minimum found by one or more starts.
@@ -159,6 +210,9 @@ pub struct StartFailure {
 pub struct MultistartReport {
     /// The distinct local minima, lowest objective first.
     pub minima: Vec<Minimum>,
+    /// Components of θ that do not act on J ([`inert_components`] at the first converged
+    /// result); distances between minima ignore them.
+    pub inert: Vec<usize>,
     /// The results of the starts that did not fail, in start order.
     pub results: Vec<OptimResult>,
     /// For each entry of `results`, its start index.
@@ -306,10 +360,6 @@ pub fn start_points(
 // Multistart
 // ---------------------------------------------------------------------------------------------
 
-fn norm(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
 fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -369,7 +419,16 @@ pub fn multistart<P: ControlMap, O: Objective>(
             Err(error) => failures.push(StartFailure { start, error }),
         }
     }
-    let minima = cluster(&results, &result_starts, &ClusterTolerances::default());
+    let inert = match results.iter().find(|r| r.converged) {
+        Some(r) => pool.install(|| inert_components(problem, &r.theta))?,
+        None => Vec::new(),
+    };
+    let minima = cluster(
+        &results,
+        &result_starts,
+        &ClusterTolerances::default(),
+        &inert,
+    );
     let certificate = match minima.as_slice() {
         [m] if problem.n_params() <= MAX_CERTIFICATE_PARAMS => {
             Some(pool.install(|| certify(problem, &m.theta, opts.bound))?)
@@ -378,6 +437,7 @@ pub fn multistart<P: ControlMap, O: Objective>(
     };
     Ok(MultistartReport {
         minima,
+        inert,
         results,
         result_starts,
         start_points: points,
@@ -393,6 +453,7 @@ pub fn cluster(
     results: &[OptimResult],
     result_starts: &[usize],
     tol: &ClusterTolerances,
+    inert: &[usize],
 ) -> Vec<Minimum> {
     let mut minima: Vec<Minimum> = Vec::new();
     for (r, &start) in results.iter().zip(result_starts) {
@@ -401,7 +462,7 @@ pub fn cluster(
         }
         let found = minima
             .iter_mut()
-            .find(|m| tol.same(&m.theta, m.objective, &r.theta, r.objective));
+            .find(|m| tol.same(&m.theta, m.objective, &r.theta, r.objective, inert));
         match found {
             Some(m) => {
                 m.count += 1;

@@ -133,7 +133,7 @@ fn table_3_2_other_methods() {
 
 /// (b) Per-step c_sum with effort ρ = 10⁻³, load at node 5, from u = 0: L-BFGS and the trust
 /// region (the reference for each other: different algorithms, one exact gradient) agree on θ to
-/// 10⁻⁶ relative and on J to 10⁻¹⁰ relative (measured: 3·10⁻⁸ and 7·10⁻¹⁵).
+/// 10⁻⁶ relative and on J to 10⁻¹⁰ relative (measured: 1.8·10⁻⁸ and 6.7·10⁻¹⁵).
 #[test]
 fn per_step_lbfgs_and_trust_region_agree() {
     let p = per_step_effort(5);
@@ -150,6 +150,11 @@ fn per_step_lbfgs_and_trust_region_agree() {
     .unwrap();
     show("per-step node 5 L-BFGS", &lb);
     show("per-step node 5 trust region", &tr);
+    println!(
+        "relative differences: theta {:.1e}, objective {:.1e}",
+        dist(&lb.theta, &tr.theta) / norm(&lb.theta),
+        (lb.objective - tr.objective).abs() / lb.objective
+    );
     assert!(lb.converged && tr.converged);
     assert!(dist(&lb.theta, &tr.theta) <= 1e-6 * norm(&lb.theta));
     assert!((lb.objective - tr.objective).abs() <= 1e-10 * lb.objective);
@@ -457,22 +462,59 @@ fn landscapes() {
     assert_eq!(row, line.iter().map(|x| x.1).collect::<Vec<_>>());
 }
 
+/// Unbounded per-step c_sum drives the forces toward 10⁴ N and the chain into folding (SPEC §4):
+/// line-search and trust-region trial points whose RATTLE solve fails are survived (L-BFGS
+/// restarts from its best point with a shorter first step; the trust region rejects them as
+/// J = +∞), counted, and named in `termination`; the result is a real, lower point, never a panic
+/// or a NaN. (Reference: J at the start, and the SPEC's description of this regime.)
 #[test]
-fn zz_stress() {
-    for node in 1..=10 {
-        for obj in [BendingObjective::summed_moment(), BendingObjective::final_moment()] {
-            let p = ControlProblem::new(&riser(node), Parametrisation::PerStep(PerStepControl { steps: 10 }), obj).unwrap();
-            for method in [Method::Lbfgs, Method::TrustRegion] {
-                for bound in [None, Some(300.0)] {
-                    let opts = OptimOptions { method, bound, max_iters: 2000, ..Default::default() };
-                    let t = std::time::Instant::now();
-                    match minimize(&p, &[0.0; 11], &opts) {
-                        Ok(r) => println!("node {node} {:?} {method} {bound:?}: J {:.4e} max|u| {:.1} g {:.1e}/{:.1e} it {} sw {} hv {} fail {} rs {} pol {} {:.3}s conv {} | {}",
-                            obj.kind, r.objective, r.controls.iter().fold(0.0f64, |a, b| a.max(b.abs())), r.projected_gradient_norm, r.initial_gradient_norm, r.iterations, r.gradient_evals, r.hvp_evals, r.failed_evals, r.restarts, r.polish_steps, r.seconds, r.converged, r.termination),
-                        Err(e) => println!("node {node} {:?} {method} {bound:?}: ERROR {e} after {:.3}s", obj.kind, t.elapsed().as_secs_f64()),
-                    }
-                }
-            }
+fn failed_trial_points_are_survived_and_reported() {
+    let p = ControlProblem::new(
+        &riser(5),
+        Parametrisation::PerStep(PerStepControl { steps: 10 }),
+        BendingObjective::summed_moment(),
+    )
+    .unwrap();
+    let theta0 = [0.0; 11];
+    let j0 = p.value(&theta0).unwrap();
+    for method in [Method::Lbfgs, Method::TrustRegion] {
+        let opts = OptimOptions {
+            method,
+            ..Default::default()
+        };
+        let r = minimize(&p, &theta0, &opts).unwrap();
+        show(&format!("unbounded per-step c_sum node 5 {method}"), &r);
+        assert!(r.objective.is_finite() && r.objective < 0.2 * j0.max(1.0));
+        assert!(r.failed_evals > 0);
+        assert_eq!(p.value(&r.theta).unwrap().to_bits(), r.objective.to_bits());
+        if !r.converged {
+            assert!(r.termination.contains("RATTLE") || r.termination.contains("no progress"));
         }
+        if method == Method::Lbfgs {
+            assert!(r.restarts >= 1);
+        } else {
+            assert_eq!(r.restarts, 0);
+        }
+        assert!(r.seconds < 1.5);
     }
+}
+
+/// u_N only reaches p_N (thesis §3.3.1), so without an effort penalty it is inert: its gradient
+/// and Hessian column are exactly zero, and the multistart clustering ignores it. With an effort
+/// penalty it acts (∂J/∂u_N = 2ρh u_N) and is not inert.
+#[test]
+fn inert_components_are_exactly_u_n() {
+    use chainbeam::multistart::inert_components;
+    let scene = chainbeam::catalogue::riser(5);
+    let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
+    let theta: Vec<f64> = (0..11).map(|k| -1.0 + 0.1 * k as f64).collect();
+    let plain = ControlProblem::new(&scene, map, BendingObjective::summed_moment()).unwrap();
+    assert_eq!(inert_components(&plain, &theta).unwrap(), vec![10]);
+    let effort = ControlProblem::new(
+        &scene,
+        map,
+        BendingObjective::summed_moment().with_effort(1e-3),
+    )
+    .unwrap();
+    assert!(inert_components(&effort, &theta).unwrap().is_empty());
 }

@@ -887,6 +887,8 @@ struct ExploreReport {
     converged_starts: usize,
     failed_starts: usize,
     seconds: f64,
+    /// Parameter indices that do not act on the objective (ignored when clustering).
+    inert: Vec<usize>,
     minima: Vec<MinimumReport>,
     results: Vec<StartReport>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -1013,6 +1015,7 @@ fn cmd_explore(
         converged_starts: report.results.iter().filter(|r| r.converged).count(),
         failed_starts: report.failures.len(),
         seconds: report.seconds,
+        inert: report.inert.clone(),
         minima,
         results,
         certificate,

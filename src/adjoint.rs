@@ -110,6 +110,21 @@ impl Objective for BendingObjective {
     }
 }
 
+/// The residual r = M₀(t_N) itself, not squared: c = r² (eq. 3.3.2), so Newton or Gauss-Newton
+/// on r with the adjoint's ∇r finds the zeros of c exactly (Tables 3.1 and 3.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FinalMomentResidual;
+
+impl Objective for FinalMomentResidual {
+    fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
+        if s.k == s.steps {
+            s.moment
+        } else {
+            D::zero()
+        }
+    }
+}
+
 /// Squared displacement of one node, Σ_k z_i(t_k)² (or its final value): an objective that also
 /// sees beams without a base spring (pinned-pinned, where M₀ ≡ 0).
 #[derive(Clone, Copy, Debug, PartialEq)]

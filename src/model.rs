@@ -79,6 +79,21 @@ pub(crate) fn cross_norm2<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DIM
 /// round-off accuracy there (c₁₀ w¹⁰ < 3·10⁻²¹).
 const S_SERIES_MAX_W: f64 = 0.01;
 
+/// Taylor coefficients of s around x = 1 in w = (1 − x)/2: c_k = 4ᵏ(k!)²/(2k+1)!, i.e.
+/// c_k = c_{k−1}·2k/(2k+1).
+const C: [f64; 10] = [
+    1.0,
+    2.0 / 3.0,
+    8.0 / 15.0,
+    16.0 / 35.0,
+    128.0 / 315.0,
+    256.0 / 693.0,
+    1024.0 / 3003.0,
+    2048.0 / 6435.0,
+    32768.0 / 109395.0,
+    65536.0 / 230945.0,
+];
+
 /// s(x) = arccos(x)/√(1 − x²) = θ/sin θ with x = cos θ (thesis eq. 2.2.1 and the line before it).
 ///
 /// s is analytic at x = 1 (θ/sin θ is even in θ, hence analytic in cos θ): near x = 1 it is
@@ -90,18 +105,6 @@ pub fn spring_s<D: Scalar>(x: D) -> D {
     let w = (-x + 1.0) * 0.5;
     if w.re() <= S_SERIES_MAX_W {
         // Horner on c_k, c_k = c_{k-1} * 2k/(2k+1).
-        const C: [f64; 10] = [
-            1.0,
-            2.0 / 3.0,
-            8.0 / 15.0,
-            16.0 / 35.0,
-            128.0 / 315.0,
-            256.0 / 693.0,
-            1024.0 / 3003.0,
-            2048.0 / 6435.0,
-            32768.0 / 109395.0,
-            65536.0 / 230945.0,
-        ];
         let mut s = D::from(C[9]);
         for &c in C[..9].iter().rev() {
             s = s * w + c;
@@ -119,18 +122,6 @@ pub fn spring_s<D: Scalar>(x: D) -> D {
 pub fn spring_s_ds<D: Scalar>(x: D) -> (D, D) {
     let w = (-x + 1.0) * 0.5;
     if w.re() <= S_SERIES_MAX_W {
-        const C: [f64; 10] = [
-            1.0,
-            2.0 / 3.0,
-            8.0 / 15.0,
-            16.0 / 35.0,
-            128.0 / 315.0,
-            256.0 / 693.0,
-            1024.0 / 3003.0,
-            2048.0 / 6435.0,
-            32768.0 / 109395.0,
-            65536.0 / 230945.0,
-        ];
         let mut s = D::from(C[9]);
         for &c in C[..9].iter().rev() {
             s = s * w + c;

@@ -1,23 +1,9 @@
 //! The thesis's per-step optimisation tables (3.3, 3.4) on a few nodes, as the `tables` example
 //! computes them. References: Nøst (2023) Tables 3.3 and 3.4 (values transcribed below).
 
-use chainbeam::adjoint::{Objective, Stage};
+use chainbeam::adjoint::FinalMomentResidual as FinalMoment;
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
-
-/// r = M₀(t_N): Gauss-Newton on it finds a zero of c = r² (eq. 3.3.2).
-#[derive(Clone, Copy)]
-struct FinalMoment;
-
-impl Objective for FinalMoment {
-    fn stage<D: chainbeam::Scalar>(&self, s: Stage<'_, D>) -> D {
-        if s.k == s.steps {
-            s.moment
-        } else {
-            D::zero()
-        }
-    }
-}
 
 /// Table 3.3 (per-step u, c = M₀(T)²): Gauss-Newton with minimum-norm steps reaches c ≤ 1e-20
 /// (round-off) for every node tried; the thesis printed 4.6e-17 (node 5) and 3.0e-17 (node 9).

@@ -21,28 +21,13 @@
 
 mod thesis;
 
-use chainbeam::adjoint::{Objective, Stage};
+use chainbeam::adjoint::FinalMomentResidual as FinalMoment;
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
     catalogue, simulate_with_controls, BendingObjective, Chain, ControlProblem, Parametrisation,
     PerStepControl, Result, Scene,
 };
 use std::time::Instant;
-
-/// The residual r = M₀(t_N) itself (not squared): Newton and Gauss-Newton on it find the zeros of
-/// c = r² (eq. 3.3.2) exactly.
-#[derive(Clone, Copy)]
-struct FinalMoment;
-
-impl Objective for FinalMoment {
-    fn stage<D: chainbeam::Scalar>(&self, s: Stage<'_, D>) -> D {
-        if s.k == s.steps {
-            s.moment
-        } else {
-            D::zero()
-        }
-    }
-}
 
 /// One row of a table.
 struct Row {

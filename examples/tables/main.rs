@@ -64,11 +64,20 @@ fn max_joint_angle_deg(scene: &Scene, u: &[f64]) -> Result<f64> {
 fn solve_residual(scene: &Scene, map: Parametrisation) -> Result<(Vec<f64>, usize)> {
     let residual = ControlProblem::new(scene, map, FinalMoment)?;
     let mut theta = vec![0.0; residual.n_params()];
+    let mut best: Option<(f64, Vec<f64>)> = None;
     let mut iters = 0;
-    for _ in 0..50 {
+    while iters < 50 {
         let (r, g) = residual.value_and_gradient(&theta)?;
+        // Stop when a step no longer reduces |r| (the round-off floor): keep the best point.
+        if let Some((rb, tb)) = &best {
+            if r.abs() >= *rb {
+                theta.clone_from(tb);
+                break;
+            }
+        }
+        best = Some((r.abs(), theta.clone()));
         let gg: f64 = g.iter().map(|x| x * x).sum();
-        if gg == 0.0 {
+        if r == 0.0 || gg == 0.0 {
             break;
         }
         let step = r / gg;
@@ -76,9 +85,6 @@ fn solve_residual(scene: &Scene, map: Parametrisation) -> Result<(Vec<f64>, usiz
             *t -= step * gi;
         }
         iters += 1;
-        if (step * gg.sqrt()).abs() <= 1e-15 * norm(&theta).max(1.0) {
-            break;
-        }
     }
     Ok((theta, iters))
 }

@@ -18,9 +18,7 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use chainbeam::{
-    Beam, Chain, Loads, Parameter, PointLoad, Rattle, Scalar, Scene, State, Support, TimeGrid,
-};
+use chainbeam::{catalogue, Chain, Parameter, Rattle, Scalar, Scene, State};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use num_dual::Dual64;
 
@@ -36,67 +34,20 @@ const SAMPLES: usize = 20;
 /// for every spring). The highest chain frequency grows like n², so h = 0.01·(10/n)² keeps
 /// h·ω_max (and hence the Newton convergence) the same for every n.
 fn cantilever(n: usize) -> Scene {
-    let l = 10.0 / n as f64;
-    let m = 10.0 / n as f64;
-    let k = 1000.0 / l;
-    let ratio = 10.0 / n as f64;
-    Scene {
-        beam: Beam {
-            lengths: vec![l; n],
-            masses: vec![m; n],
-            stiffness: vec![k; n - 1],
-            base_stiffness: k,
-            tip_stiffness: k,
-            support: Support::Cantilever,
-            reaction_force: false,
-        },
-        loads: Loads {
-            gravity: 0.0,
-            drag: 0.0,
-            points: vec![PointLoad {
-                node: n,
-                force: 2.0,
-                start: 0.0,
-                end: None,
-            }],
-        },
-        time: TimeGrid {
-            step: 0.01 * ratio * ratio,
-            steps: PRE_STEPS,
-        },
-        control: None,
-        objective: None,
-    }
+    // l = 10/n, m = 10/n, k = 1000/l for every spring, h = 0.01·(10/n)² (the catalogue's scaling)
+    let mut s = catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 1.0);
+    s.time.steps = PRE_STEPS;
+    s
 }
 
 /// The thesis riser (n = 10, l = 1, m = 1, k = 1000, base/tip 2000, F = 2 at node 5, D = 0,
 /// h = 0.01) with `steps` steps.
 fn riser(steps: usize) -> Scene {
-    let n = 10;
-    Scene {
-        beam: Beam {
-            lengths: vec![1.0; n],
-            masses: vec![1.0; n],
-            stiffness: vec![1000.0; n - 1],
-            base_stiffness: 2000.0,
-            tip_stiffness: 2000.0,
-            support: Support::Riser,
-            reaction_force: false,
-        },
-        loads: Loads {
-            gravity: 0.0,
-            drag: 0.0,
-            points: vec![PointLoad {
-                node: 5,
-                force: 2.0,
-                start: 0.0,
-                end: None,
-            }],
-        },
-        time: TimeGrid { step: 0.01, steps },
-        control: None,
-        objective: None,
-    }
+    let mut s = catalogue::riser(5);
+    s.control = None;
+    s.objective = None;
+    s.time.steps = steps;
+    s
 }
 
 /// An integrator for `chain` on `scene`'s step, with the state after [`PRE_STEPS`] steps and the

@@ -12,33 +12,7 @@ use chainbeam::*;
 /// The thesis riser of §3.3.1 as SPEC §4 identifies it: n = 10, l = m = 1, k = 1000, k₁ = k₁₁ =
 /// 2000, no drag, F = 2 N at `node`, h = 0.01 s, N = 10, control at the tip.
 fn riser(node: usize) -> Scene {
-    Scene {
-        beam: Beam {
-            lengths: vec![1.0; 10],
-            masses: vec![1.0; 10],
-            stiffness: vec![1000.0; 9],
-            base_stiffness: 2000.0,
-            tip_stiffness: 2000.0,
-            support: Support::Riser,
-            reaction_force: false,
-        },
-        loads: Loads {
-            gravity: 0.0,
-            drag: 0.0,
-            points: vec![PointLoad {
-                node,
-                force: 2.0,
-                start: 0.0,
-                end: None,
-            }],
-        },
-        time: TimeGrid {
-            step: 0.01,
-            steps: 10,
-        },
-        control: None,
-        objective: None,
-    }
+    catalogue::riser(node)
 }
 
 fn constant(node: usize, obj: BendingObjective) -> ControlProblem {

@@ -75,7 +75,9 @@
 //! progress (or by the cost-change test), [`minimize`] therefore takes up to `polish_steps`
 //! Newton steps on ∇J = 0 with the gradient norm as merit: p solves H p = −g by CG on exact HVPs
 //! (no step if CG meets non-positive curvature: then the point is not near a minimum), and φ + p
-//! is accepted if it reduces ‖g‖ and raises J by at most [`POLISH_COST_TOL`]·|J| (round-off).
+//! is accepted if it reduces ‖g‖ and raises J by at most [`POLISH_COST_TOL`]·|J| (round-off);
+//! otherwise p/2 and p/4 are tried. The polish is a refinement: if one of its HVPs fails, it
+//! stops, the point reached so far is returned and `termination` says why.
 //!
 //! # Reference
 //! J. Nocedal, S. J. Wright, *Numerical Optimization*, 2nd ed., Springer 2006: L-BFGS (Alg. 7.5),
@@ -1158,7 +1160,10 @@ pub fn minimize<P: ControlMap, O: Objective>(
             }
             RunEnd::Failed(s) => {
                 let trial_failed = adapter.counts().failures > failures_before;
-                if !trial_failed || restarts >= opts.max_restarts {
+                // The trust region has no memory to reset and already shrinks its radius at
+                // failed trial points: only the line-search methods restart.
+                let restartable = opts.method != Method::TrustRegion;
+                if !trial_failed || !restartable || restarts >= opts.max_restarts {
                     let why = match (trial_failed, adapter.shared.last_failure.borrow().as_ref()) {
                         (true, Some(e)) => format!("{s} (last failed trial point: {e})"),
                         _ => s,
@@ -1173,13 +1178,18 @@ pub fn minimize<P: ControlMap, O: Objective>(
     let mut polished = 0;
     if polish && !grad_met(norm(&point.grad_phi)) && opts.target_cost < point.value {
         let cap = opts.cg_max_iters.unwrap_or(2 * point.phi.len().max(1));
+        let mut polish_error = None;
         while polished < opts.polish_steps {
-            match polish_step(&adapter, &point, cap)? {
-                Some(next) => {
+            match polish_step(&adapter, &point, cap) {
+                Ok(Some(next)) => {
                     point = next;
                     polished += 1;
                 }
-                None => break,
+                Ok(None) => break,
+                Err(e) => {
+                    polish_error = Some(e);
+                    break;
+                }
             }
             if grad_met(norm(&point.grad_phi)) {
                 break;
@@ -1189,6 +1199,9 @@ pub fn minimize<P: ControlMap, O: Objective>(
         if polished > 0 {
             termination =
                 format!("{termination}; then {polished} polish step(s): gradient norm {gn:.3e}");
+        }
+        if let Some(e) = polish_error {
+            termination = format!("{termination}; polish stopped: {e}");
         }
         if grad_met(gn) {
             converged = true;
@@ -1234,8 +1247,10 @@ pub fn minimize<P: ControlMap, O: Objective>(
     })
 }
 
-/// One Newton step of the gradient polish (module docs): `None` if CG meets non-positive
-/// curvature first or the step does not reduce ‖g‖ within the cost allowance.
+/// One Newton step of the gradient polish (module docs), tried at lengths 1, ½, ¼: `None` if CG
+/// meets non-positive curvature first or no length reduces ‖g‖ within the cost allowance (a
+/// trial point whose simulation fails counts as no reduction); an HVP's error otherwise (the
+/// caller reports it and keeps the point it has).
 fn polish_step<P: ControlMap, O: Objective>(
     adapter: &ArgminAdapter<'_, P, O>,
     at: &Point,
@@ -1273,18 +1288,16 @@ fn polish_step<P: ControlMap, O: Objective>(
         }
         rr = rr_new;
     }
-    let phi: Vec<f64> = at.phi.iter().zip(&x).map(|(a, b)| a + b).collect();
-    let next = match adapter.evaluate(&phi) {
-        Ok(p) => p,
-        Err(_) if adapter.shared.fatal().is_none() => return Ok(None),
-        Err(e) => return Err(e),
-    };
     let allowed = at.value + POLISH_COST_TOL * at.value.abs();
-    if norm(&next.grad_phi) < gn && next.value <= allowed {
-        Ok(Some(next))
-    } else {
-        Ok(None)
+    for alpha in [1.0, 0.5, 0.25] {
+        let phi: Vec<f64> = at.phi.iter().zip(&x).map(|(a, b)| a + alpha * b).collect();
+        if let Ok(next) = adapter.evaluate(&phi) {
+            if norm(&next.grad_phi) < gn && next.value <= allowed {
+                return Ok(Some(next));
+            }
+        }
     }
+    Ok(None)
 }
 
 /// The projected gradient norm and the active bounds at θ.

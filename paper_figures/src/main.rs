@@ -12,9 +12,11 @@
 // Figure loops index several parallel tables (beam names, static formulas) by one index.
 #![allow(clippy::needless_range_loop)]
 
+mod calib;
 mod ch2;
 mod ch3;
 mod extra;
+mod optctl;
 mod plot;
 
 use clap::Parser;
@@ -78,7 +80,18 @@ pub struct Entry {
 fn entries() -> Vec<Entry> {
     let mut v = ch2::entries();
     v.extend(extra::entries());
-    v.extend(ch3::entries());
+    v.extend(calib::entries());
+    // chapter 3 in figure order: the optimiser's figures (3.7, 3.8, 3.10, 3.13) between the others
+    let mut c3 = ch3::entries();
+    c3.extend(optctl::entries());
+    let num = |id: &str| -> u32 {
+        id.rsplit('_')
+            .next()
+            .and_then(|x| x.parse().ok())
+            .unwrap_or(0)
+    };
+    c3.sort_by_key(|e| num(e.id));
+    v.extend(c3);
     v
 }
 

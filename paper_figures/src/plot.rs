@@ -142,6 +142,123 @@ pub struct Panel {
     pub legend: Legend,
     /// Equal scales on both axes (beam configurations).
     pub equal: bool,
+    /// A colour map drawn under the series, with a colour bar at the right.
+    pub heat: Option<Heat>,
+    /// Set by [`draw_panel`]: the axis holds log₁₀ values, labelled as powers of ten (plotters'
+    /// log axes drop every label below 2.2·10⁻¹⁶, so deep log ranges are drawn this way).
+    pub exp_x: bool,
+    pub exp_y: bool,
+}
+
+/// Values on a regular grid, drawn as coloured cells (viridis) under a panel's series.
+#[derive(Clone, Debug)]
+pub struct Heat {
+    /// x range of the grid (cell centres at the ends).
+    pub x: (f64, f64),
+    /// y range of the grid.
+    pub y: (f64, f64),
+    /// Points along x and y.
+    pub nx: usize,
+    pub ny: usize,
+    /// Values, x varying slowest: `values[i * ny + j]` at (x_i, y_j).
+    pub values: Vec<f64>,
+    /// Colour by log₁₀ of the value (non-positive values get the lowest colour).
+    pub log: bool,
+    /// Lower clip of the colour scale (log scale: values below it get the lowest colour).
+    pub floor: Option<f64>,
+    /// Colour bar label.
+    pub label: String,
+}
+
+/// Viridis, by linear interpolation between 9 anchors; `t` in [0, 1].
+pub fn viridis(t: f64) -> RGBColor {
+    const A: [(u8, u8, u8); 9] = [
+        (68, 1, 84),
+        (71, 44, 122),
+        (59, 81, 139),
+        (44, 113, 142),
+        (33, 144, 141),
+        (39, 173, 129),
+        (92, 200, 99),
+        (170, 220, 50),
+        (253, 231, 37),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = t * (A.len() - 1) as f64;
+    let i = (x.floor() as usize).min(A.len() - 2);
+    let f = x - i as f64;
+    let mix = |a: u8, b: u8| (a as f64 + f * (b as f64 - a as f64)).round() as u8;
+    RGBColor(
+        mix(A[i].0, A[i + 1].0),
+        mix(A[i].1, A[i + 1].1),
+        mix(A[i].2, A[i + 1].2),
+    )
+}
+
+impl Heat {
+    /// The colour-scale range (in log₁₀ units for a log scale).
+    fn range(&self) -> (f64, f64) {
+        let tr = |v: f64| self.scaled(v);
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for &v in &self.values {
+            let t = tr(v);
+            if t.is_finite() {
+                lo = lo.min(t);
+                hi = hi.max(t);
+            }
+        }
+        if let Some(f) = self.floor {
+            lo = lo.max(if self.log { f.log10() } else { f });
+        }
+        if !lo.is_finite() || hi <= lo {
+            (lo.min(0.0), lo.min(0.0) + 1.0)
+        } else {
+            (lo, hi)
+        }
+    }
+    fn scaled(&self, v: f64) -> f64 {
+        if self.log {
+            if v > 0.0 {
+                v.log10()
+            } else {
+                f64::NEG_INFINITY
+            }
+        } else {
+            v
+        }
+    }
+    fn color(&self, v: f64, (lo, hi): (f64, f64)) -> RGBColor {
+        if v.is_nan() {
+            // no value (e.g. the simulation failed there)
+            return RGBColor(225, 225, 225);
+        }
+        let t = self.scaled(v);
+        if t == f64::NEG_INFINITY {
+            return viridis(0.0);
+        }
+        viridis((t - lo) / (hi - lo))
+    }
+    /// The n + 1 cell edges around n centres spaced evenly over `r` (geometrically on a log
+    /// axis).
+    fn edges(r: (f64, f64), n: usize, log: bool) -> Vec<f64> {
+        let (a, b) = if log { (r.0.ln(), r.1.ln()) } else { r };
+        let d = if n > 1 { (b - a) / (n - 1) as f64 } else { 1.0 };
+        (0..=n)
+            .map(|i| {
+                let e = a + (i as f64 - 0.5) * d;
+                if log {
+                    e.exp()
+                } else {
+                    e
+                }
+            })
+            .collect()
+    }
 }
 
 impl Panel {
@@ -158,7 +275,15 @@ impl Panel {
             yr: None,
             legend: Legend::UpperRight,
             equal: false,
+            heat: None,
+            exp_x: false,
+            exp_y: false,
         }
+    }
+    /// With a colour map under the series.
+    pub fn heat(mut self, h: Heat) -> Self {
+        self.heat = Some(h);
+        self
     }
     /// Log-log.
     pub fn loglog(mut self) -> Self {
@@ -262,6 +387,8 @@ pub fn fmt_tick(v: f64) -> String {
         let m = v / 10f64.powi(e);
         if (m.abs() - 1.0).abs() < 1e-6 {
             format!("{}1e{e}", if v < 0.0 { "-" } else { "" })
+        } else if (m - m.round()).abs() < 1e-6 {
+            format!("{}e{e}", m.round() as i64)
         } else {
             format!("{m:.1}e{e}")
         }
@@ -277,6 +404,14 @@ pub fn fmt_tick(v: f64) -> String {
 }
 
 fn panel_ranges(p: &Panel) -> ((f64, f64), (f64, f64)) {
+    if let Some(h) = &p.heat {
+        let ex = Heat::edges(h.x, h.nx, p.logx);
+        let ey = Heat::edges(h.y, h.ny, p.logy);
+        return (
+            p.xr.unwrap_or((ex[0], ex[h.nx])),
+            p.yr.unwrap_or((ey[0], ey[h.ny])),
+        );
+    }
     let mut xr = p.xr.unwrap_or_else(|| {
         data_range(
             p.series.iter().flat_map(|s| s.pts.iter().map(|q| q.0)),
@@ -309,12 +444,169 @@ where
     DB::ErrorType: 'static,
 {
     let ((x0, x1), (y0, y1)) = panel_ranges(p);
+    // log axes reaching below 1e-15 are redrawn as linear axes of log₁₀ values
+    let deep = |log: bool, a: f64| log && a < 1e-15;
+    if deep(p.logx, x0) || deep(p.logy, y0) {
+        let (tx, ty) = (deep(p.logx, x0), deep(p.logy, y0));
+        let mut q = p.clone();
+        let f = |t: bool, v: f64| if t { v.log10() } else { v };
+        for ser in q.series.iter_mut() {
+            ser.pts = ser
+                .pts
+                .iter()
+                .filter(|r| (!tx || r.0 > 0.0) && (!ty || r.1 > 0.0))
+                .map(|r| (f(tx, r.0), f(ty, r.1)))
+                .collect();
+        }
+        q.xr = Some((f(tx, x0), f(tx, x1)));
+        q.yr = Some((f(ty, y0), f(ty, y1)));
+        q.logx &= !tx;
+        q.logy &= !ty;
+        q.exp_x = tx;
+        q.exp_y = ty;
+        return draw_panel(area, &q, s);
+    }
+    let area = &if let Some(h) = &p.heat {
+        let w = area.dim_in_pixel().0 as i32;
+        let bar = ((120.0 * s).round() as i32).min(w / 3);
+        let (main, right) = area.split_horizontally(w - bar);
+        draw_colorbar(&right, h, s)?;
+        main
+    } else {
+        area.clone()
+    };
+    let lx = || {
+        let (bold, light) = log_ticks(x0, x1);
+        (x0..x1)
+            .log_scale()
+            .with_key_points(bold)
+            .with_light_points(light)
+    };
+    let ly = || {
+        let (bold, light) = log_ticks(y0, y1);
+        (y0..y1)
+            .log_scale()
+            .with_key_points(bold)
+            .with_light_points(light)
+    };
     match (p.logx, p.logy) {
         (false, false) => draw_cart(area, p, s, x0..x1, y0..y1),
-        (true, false) => draw_cart(area, p, s, (x0..x1).log_scale(), y0..y1),
-        (false, true) => draw_cart(area, p, s, x0..x1, (y0..y1).log_scale()),
-        (true, true) => draw_cart(area, p, s, (x0..x1).log_scale(), (y0..y1).log_scale()),
+        (true, false) => draw_cart(area, p, s, lx(), y0..y1),
+        (false, true) => draw_cart(area, p, s, x0..x1, ly()),
+        (true, true) => draw_cart(area, p, s, lx(), ly()),
     }
+}
+
+/// Labelled and light tick positions of a log axis on [a, b]: mantissas 1, 2, 3, 5, 7 per decade
+/// over at most 1.5 decades, 1, 2, 5 up to 3, powers of ten up to 8, every n-th power beyond
+/// (plotters' own log ticks label nothing but powers of ten).
+fn log_ticks(a: f64, b: f64) -> (Vec<f64>, Vec<f64>) {
+    let (lo, hi) = (a.min(b), a.max(b));
+    if !(lo > 0.0 && hi.is_finite()) {
+        return (Vec::new(), Vec::new());
+    }
+    let decades = (hi / lo).log10();
+    let (e0, e1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let inside = |v: &f64| *v >= lo * (1.0 - 1e-12) && *v <= hi * (1.0 + 1e-12);
+    let with = |m: &[f64], step: i32| -> Vec<f64> {
+        (e0..=e1)
+            .filter(|e| e.rem_euclid(step) == 0)
+            .flat_map(|e| m.iter().map(move |x| x * 10f64.powi(e)))
+            .filter(inside)
+            .collect()
+    };
+    let bold = if decades <= 1.5 {
+        with(&[1.0, 2.0, 3.0, 5.0, 7.0], 1)
+    } else if decades <= 3.0 {
+        with(&[1.0, 2.0, 5.0], 1)
+    } else if decades <= 8.0 {
+        with(&[1.0], 1)
+    } else {
+        with(&[1.0], (decades / 7.0).ceil() as i32)
+    };
+    let light = if decades <= 8.0 {
+        with(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0], 1)
+    } else {
+        with(&[1.0], 1)
+    };
+    (bold, light)
+}
+
+fn draw_colorbar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, h: &Heat, s: f64) -> Res<()>
+where
+    DB::ErrorType: 'static,
+{
+    let px = |v: f64| ((v * s).round() as i32).max(1);
+    let (lo, hi) = h.range();
+    let cells = 100;
+    if h.log && 10f64.powf(lo) > 1e-15 {
+        // a real log axis with 1-2-5 labels (log_ticks)
+        let (a, b) = (10f64.powf(lo), 10f64.powf(hi));
+        let (bold, light) = log_ticks(a, b);
+        let mut chart = ChartBuilder::on(area)
+            .margin_top(px(46.0))
+            .margin_bottom(px(67.0))
+            .margin_right(px(8.0))
+            .y_label_area_size(px(62.0))
+            .build_cartesian_2d(
+                0.0..1.0,
+                (a..b)
+                    .log_scale()
+                    .with_key_points(bold)
+                    .with_light_points(light),
+            )?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .disable_y_mesh()
+            .disable_x_axis()
+            .y_desc(h.label.as_str())
+            .y_label_formatter(&|v: &f64| fmt_tick(*v))
+            .label_style((FONT, px(13.0)))
+            .axis_desc_style((FONT, px(15.0)))
+            .draw()?;
+        chart.draw_series((0..cells).map(|i| {
+            let e0 = lo + (hi - lo) * i as f64 / cells as f64;
+            let e1 = lo + (hi - lo) * (i + 1) as f64 / cells as f64;
+            let c = viridis((i as f64 + 0.5) / cells as f64);
+            Rectangle::new([(0.0, 10f64.powf(e0)), (1.0, 10f64.powf(e1))], c.filled())
+        }))?;
+        return Ok(());
+    }
+    let mut chart = ChartBuilder::on(area)
+        .margin_top(px(46.0))
+        .margin_bottom(px(67.0))
+        .margin_right(px(8.0))
+        .y_label_area_size(px(62.0))
+        .build_cartesian_2d(0.0..1.0, lo..hi)?;
+    let log = h.log;
+    let fy = move |v: &f64| {
+        if !log {
+            fmt_tick(*v)
+        } else if (v - v.round()).abs() < 1e-9 {
+            format!("1e{}", v.round() as i64)
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .disable_y_mesh()
+        .disable_x_axis()
+        .y_desc(h.label.as_str())
+        .y_label_formatter(&fy)
+        .label_style((FONT, px(13.0)))
+        .axis_desc_style((FONT, px(15.0)))
+        .y_labels(6)
+        .draw()?;
+    chart.draw_series((0..cells).map(|i| {
+        let a = lo + (hi - lo) * i as f64 / cells as f64;
+        let b = lo + (hi - lo) * (i + 1) as f64 / cells as f64;
+        let c = viridis((i as f64 + 0.5) / cells as f64);
+        Rectangle::new([(0.0, a), (1.0, b)], c.filled())
+    }))?;
+    Ok(())
 }
 
 fn draw_cart<DB, X, Y>(area: &DrawingArea<DB, Shift>, p: &Panel, s: f64, xs: X, ys: Y) -> Res<()>
@@ -339,8 +631,28 @@ where
         if p.logx { 0.0 } else { 1e-9 * (xb - xa).abs() },
         if p.logy { 0.0 } else { 1e-9 * (yb - ya).abs() },
     );
-    let fx = move |v: &f64| fmt_tick(if v.abs() < xz { 0.0 } else { *v });
-    let fy = move |v: &f64| fmt_tick(if v.abs() < yz { 0.0 } else { *v });
+    let exp_label = |v: f64| {
+        if (v - v.round()).abs() < 1e-9 {
+            format!("1e{}", v.round() as i64)
+        } else {
+            String::new()
+        }
+    };
+    let (ex, ey) = (p.exp_x, p.exp_y);
+    let fx = move |v: &f64| {
+        if ex {
+            exp_label(*v)
+        } else {
+            fmt_tick(if v.abs() < xz { 0.0 } else { *v })
+        }
+    };
+    let fy = move |v: &f64| {
+        if ey {
+            exp_label(*v)
+        } else {
+            fmt_tick(if v.abs() < yz { 0.0 } else { *v })
+        }
+    };
     chart
         .configure_mesh()
         .x_desc(p.x.as_str())
@@ -354,6 +666,18 @@ where
         .light_line_style(RGBColor(235, 235, 235))
         .bold_line_style(RGBColor(215, 215, 215))
         .draw()?;
+    if let Some(h) = &p.heat {
+        let ex = Heat::edges(h.x, h.nx, p.logx);
+        let ey = Heat::edges(h.y, h.ny, p.logy);
+        let r = h.range();
+        let (ex, ey) = (&ex, &ey);
+        chart.draw_series((0..h.nx).flat_map(|i| {
+            (0..h.ny).map(move |j| {
+                let c = h.color(h.values[i * h.ny + j], r);
+                Rectangle::new([(ex[i], ey[j]), (ex[i + 1], ey[j + 1])], c.filled())
+            })
+        }))?;
+    }
     let w = |s0: &Series| ((s0.width as f64 * s).round() as u32).max(1);
     for ser in &p.series {
         let style = ShapeStyle::from(ser.color).stroke_width(w(ser));

@@ -1,4 +1,5 @@
-//! Runs the figure program reduced (`--quick`: short runs, half-size images) on two figures and
+//! Runs the figure program reduced (`--quick`: short runs, half-size images) on a few figures
+//! (two simulations, the optimiser's constant-control landscape and the gradient calibration) and
 //! checks that the PNG, SVG and index files appear. Needs no system font: the program bundles
 //! DejaVu Sans.
 
@@ -19,14 +20,23 @@ fn quick_run_writes_png_svg_and_index() {
             "--quick",
             "--no-progress",
             "--only",
-            "fig_2_5,fig_3_3",
+            "fig_2_5,fig_3_3,fig_3_7,calibration",
             "--out",
         ])
         .arg(&out)
         .status()
         .expect("run paper_figures");
     assert!(status.success());
-    for f in ["fig_2_5.png", "fig_2_5.svg", "fig_3_3.png", "fig_3_3.svg"] {
+    for f in [
+        "fig_2_5.png",
+        "fig_2_5.svg",
+        "fig_3_3.png",
+        "fig_3_3.svg",
+        "fig_3_7.png",
+        "fig_3_7.svg",
+        "calibration.png",
+        "calibration.svg",
+    ] {
         let meta = std::fs::metadata(out.join(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         assert!(meta.len() > 1000, "{f} is too small");
     }
@@ -37,6 +47,10 @@ fn quick_run_writes_png_svg_and_index() {
     let index = std::fs::read_to_string(out.join("index.md")).unwrap();
     assert!(index.contains("## fig_2_5") && index.contains("## fig_3_3"));
     assert!(index.contains("Norm of energy error"));
+    assert!(index.contains("## fig_3_7") && index.contains("## calibration"));
+    // the optimiser finds the thesis's minimum u = −2 N, and the calibration reports its fit
+    assert!(index.contains("at u* = −2 N"));
+    assert!(index.contains("RMS residual"));
     let _ = std::fs::remove_dir_all(&out);
 }
 

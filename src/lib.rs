@@ -48,7 +48,7 @@
 //!
 //! ## Modules
 //! [`model`] (the chain, SPEC §1), [`rattle`] (the integrator, SPEC §2), [`adjoint`] (gradients,
-//! SPEC §3), [`simulate`], [`statics`], [`euler_bernoulli`], [`scene`] and [`catalogue`] (SPEC §4-5).
+//! SPEC §3), [`simulate`](mod@simulate), [`statics`], [`euler_bernoulli`], [`scene`] and [`catalogue`] (SPEC §4-5).
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 // Numerical kernels index several arrays with one loop variable; iterator zips of four or five

@@ -228,6 +228,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     ///
     /// The caller must pass the same u_k that the previous step received as its u_{k+1} (the force
     /// at q_k is cached between steps); use [`Rattle::prepare`] after changing the state by hand.
+    ///
+    /// # Errors
+    /// [`Error::NewtonNotConverged`] (with the step and the residual), [`Error::Folded`] when a
+    /// joint passes the fold limit, [`Error::SingularSystem`], [`Error::NonFinite`]. After an
+    /// error `state` is not a valid state of the trajectory (it may hold q_{k+1} with p_k): restart
+    /// from a stored state.
     pub fn step(
         &mut self,
         state: &mut State<D, DIM>,

@@ -62,7 +62,6 @@ impl Method {
 #[derive(Clone, Debug)]
 struct Work {
     force: Vec<V2>,
-    a: Vec<V2>,
     tmp: Vec<V2>,
     tmp2: Vec<V2>,
     qnew: Vec<V2>,
@@ -79,7 +78,6 @@ impl Work {
         let v = vec![[0.0; 2]; n];
         Work {
             force: v.clone(),
-            a: v.clone(),
             tmp: v.clone(),
             tmp2: v.clone(),
             qnew: v,
@@ -87,6 +85,30 @@ impl Work {
             rhs: vec![0.0; nc],
             scal: vec![0.0; n],
             tri: BorderedTridiag::new(n, ch.has_tip_constraint()),
+        }
+    }
+}
+
+/// Per-step buffers kept apart from [`Work`] (which the constrained solve borrows whole), so a
+/// step allocates nothing.
+#[derive(Clone, Debug)]
+struct Buffers {
+    a: Vec<V2>,
+    qc: Vec<V2>,
+    phalf: Vec<V2>,
+    pd: Vec<V2>,
+    lam: Vec<f64>,
+}
+
+impl Buffers {
+    fn new(ch: &Chain<f64, 2>) -> Self {
+        let v = vec![[0.0; 2]; ch.n()];
+        Buffers {
+            a: v.clone(),
+            qc: v.clone(),
+            phalf: v.clone(),
+            pd: v,
+            lam: vec![0.0; ch.n_constraints()],
         }
     }
 }
@@ -125,6 +147,7 @@ pub struct Integrator {
     newton: usize,
     options: RattleOptions,
     ws: Work,
+    buf: Buffers,
     inner: Inner,
 }
 
@@ -216,6 +239,7 @@ impl Integrator {
                 ps: p.clone(),
             },
         };
+        let buf = Buffers::new(&chain);
         let mut it = Integrator {
             method,
             chain,
@@ -226,6 +250,7 @@ impl Integrator {
             p,
             newton: 0,
             options: RattleOptions::default(),
+            buf,
             ws,
             inner,
         };
@@ -481,13 +506,12 @@ impl Integrator {
         self.chain.apply_inverse_mass(&self.p, &mut self.ws.tmp);
         self.chain
             .apply_inverse_mass(&self.ws.force, &mut self.ws.tmp2);
+        let a = &mut self.buf.a;
         for i in 0..n {
             for d in 0..2 {
-                self.ws.a[i][d] =
-                    self.q[i][d] + h * self.ws.tmp[i][d] - 0.5 * h * h * self.ws.tmp2[i][d];
+                a[i][d] = self.q[i][d] + h * self.ws.tmp[i][d] - 0.5 * h * h * self.ws.tmp2[i][d];
             }
         }
-        let a = self.ws.a.clone();
         let Inner::Shake {
             next,
             prev,
@@ -502,7 +526,7 @@ impl Integrator {
             &mut self.ws,
             &self.options,
             &self.q,
-            &a,
+            a,
             0.5 * h * h,
             lam,
             0,
@@ -535,17 +559,19 @@ impl Integrator {
             return Ok(());
         };
         // current: q_{k+1} = next; compute q_{k+2}
-        let qc = next.clone();
+        let Buffers {
+            a, qc, phalf, pd, ..
+        } = &mut self.buf;
+        qc.copy_from_slice(next);
         // p_{k+½} = M (q_{k+1} − q_k) / h
         for i in 0..n {
             for d in 0..2 {
                 self.ws.tmp[i][d] = (qc[i][d] - self.q[i][d]) / h;
             }
         }
-        let mut phalf = vec![[0.0; 2]; n];
-        Self::apply_mass(&self.chain, &self.ws.tmp, &mut phalf);
+        Self::apply_mass(&self.chain, &self.ws.tmp, phalf);
         // drag momentum at t_{k+1}: extrapolated p_{k+½} + (p_{k+½} − p_{k−½})/2
-        let mut pd = phalf.clone();
+        pd.copy_from_slice(phalf);
         if self.chain.has_drag() {
             for i in 0..n {
                 for d in 0..2 {
@@ -555,8 +581,8 @@ impl Integrator {
         }
         Self::force_into(
             &self.chain,
-            &qc,
-            &pd,
+            qc,
+            pd,
             k1 as f64 * h,
             self.u,
             k1,
@@ -566,16 +592,15 @@ impl Integrator {
             .apply_inverse_mass(&self.ws.force, &mut self.ws.tmp2);
         for i in 0..n {
             for d in 0..2 {
-                self.ws.a[i][d] = 2.0 * qc[i][d] - self.q[i][d] - h * h * self.ws.tmp2[i][d];
+                a[i][d] = 2.0 * qc[i][d] - self.q[i][d] - h * h * self.ws.tmp2[i][d];
             }
         }
-        let a = self.ws.a.clone();
         let it = Self::constrained_solve(
             &self.chain,
             &mut self.ws,
             &self.options,
-            &qc,
-            &a,
+            qc,
+            a,
             h * h,
             lam,
             k1,
@@ -590,9 +615,9 @@ impl Integrator {
         }
         Self::apply_mass(&self.chain, &self.ws.tmp, &mut self.p);
         prev.copy_from_slice(&self.q);
-        self.q.copy_from_slice(&qc);
+        self.q.copy_from_slice(qc);
         next.copy_from_slice(&self.ws.qnew);
-        phalf_prev.copy_from_slice(&phalf);
+        phalf_prev.copy_from_slice(phalf);
         Ok(())
     }
 
@@ -691,10 +716,10 @@ impl Integrator {
             return Err(Error::NonFinite { step: k + 1 });
         }
         // Project q onto ĝ = 0 along M⁻¹Ĝ(q̃)ᵀ, then p onto Ĝ M⁻¹ p = 0.
-        let mut lam = vec![0.0; ch.n_constraints()];
-        let qt = qs.clone();
-        let it =
-            Self::constrained_solve(ch, ws, &self.options, &qt, &qt, 1.0, &mut lam, k + 1, t + h)?;
+        let lam = &mut self.buf.lam;
+        lam.iter_mut().for_each(|l| *l = 0.0);
+        let qt: &[V2] = qs;
+        let it = Self::constrained_solve(ch, ws, &self.options, qt, qt, 1.0, lam, k + 1, t + h)?;
         self.newton += it;
         self.q.copy_from_slice(&ws.qnew);
         projection_solve(ch, &self.q, ps, 0.0, &mut ws.tmp, &mut ws.tri, &mut ws.rhs)

@@ -1075,16 +1075,21 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// (J(θ), ∇J(θ)) by the discrete adjoint.
     pub fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
         let u = self.controls(theta)?;
+        self.theta_gradient(&self.chain, &u)
+    }
+
+    /// J and ∇_θJ = (∂u/∂θ)ᵀ ∇_u J for controls `u` on `chain`, in any scalar type.
+    fn theta_gradient<D: Scalar>(&self, chain: &Chain<D, 2>, u: &[D]) -> Result<(D, Vec<D>)> {
         let r = adjoint_gradient(
-            &self.chain,
+            chain,
             self.h,
             self.steps,
-            &u,
+            u,
             &self.objective,
             &[],
             self.checkpointing,
         )?;
-        let mut g = vec![0.0; self.map.n_params()];
+        let mut g = vec![D::zero(); self.map.n_params()];
         self.map.transpose(&r.control_gradient, &mut g);
         Ok((r.value, g))
     }
@@ -1125,18 +1130,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
             .collect();
         let mut u = vec![Dual64::from(0.0); self.steps + 1];
         self.map.controls(&th, &mut u);
-        let chain = self.chain_as::<Dual64>();
-        let r = adjoint_gradient(
-            &chain,
-            self.h,
-            self.steps,
-            &u,
-            &self.objective,
-            &[],
-            self.checkpointing,
-        )?;
-        let mut g = vec![Dual64::from(0.0); self.map.n_params()];
-        self.map.transpose(&r.control_gradient, &mut g);
+        let (_, g) = self.theta_gradient(&self.chain_as::<Dual64>(), &u)?;
         Ok(g.iter().map(|x| x.eps).collect())
     }
 

@@ -60,6 +60,23 @@ pub enum Error {
         /// Step index.
         step: usize,
     },
+    /// The static-equilibrium Newton solve ([`crate::statics`]) did not converge.
+    #[error(
+        "static equilibrium: Newton did not converge in {iterations} iterations (residual \
+         {residual:.3e}); the loads may buckle or fold the beam"
+    )]
+    StaticNotConverged {
+        /// Iterations performed.
+        iterations: usize,
+        /// Final scaled gradient residual.
+        residual: f64,
+    },
+    /// The static Newton matrix was singular.
+    #[error("static equilibrium: singular Newton matrix at iteration {iteration}")]
+    StaticSingular {
+        /// The Newton iteration.
+        iteration: usize,
+    },
     /// An argument passed to the API is inconsistent with the scene.
     #[error("invalid argument `{name}`: {reason}")]
     InvalidArgument {

@@ -26,7 +26,8 @@
 
 use crate::error::{Error, Result};
 use crate::model::{Chain, TipCondition};
-use crate::rattle::{newton_jacobian, projection_solve, Rattle, RattleOptions, State};
+use crate::model::{Ctx, DissipativeTerm};
+use crate::rattle::{projection_solve, Rattle, RattleOptions, State};
 use crate::scene::{ControlKind, Scene};
 use crate::tridiag::{BorderedTridiag, ZeroPivot};
 
@@ -65,7 +66,6 @@ struct Work {
     tmp: Vec<V2>,
     tmp2: Vec<V2>,
     qnew: Vec<V2>,
-    ones: Vec<V2>,
     rhs: Vec<f64>,
     scal: Vec<f64>,
     tri: BorderedTridiag<f64>,
@@ -81,7 +81,6 @@ impl Work {
             tmp: v.clone(),
             tmp2: v.clone(),
             qnew: v,
-            ones: vec![[1.0; 2]; n],
             rhs: vec![0.0; nc],
             scal: vec![0.0; n],
             tri: BorderedTridiag::new(n, ch.has_tip_constraint()),
@@ -431,11 +430,9 @@ impl Integrator {
                     iterations,
                 });
             }
-            newton_jacobian(
-                ch,
-                q_base,
-                &ws.qnew,
-                &ws.ones,
+            ch.constraints().assemble_newton(
+                (q_base, &ws.qnew),
+                None,
                 h_eff,
                 &mut ws.tri,
                 &mut ws.scal,
@@ -459,10 +456,11 @@ impl Integrator {
         out: &mut [V2],
     ) -> Result<()> {
         ch.potential_gradient(q, t, u, step, out)?;
-        if let Some(d) = ch.drag {
+        if let Some(d) = ch.drag() {
+            let ctx = Ctx::new(t, u, step);
             for (o, pi) in out.iter_mut().zip(p.iter()) {
                 for c in 0..2 {
-                    o[c] += d * pi[c] * pi[c].abs();
+                    o[c] -= d.force_component(pi[c], &ctx);
                 }
             }
         }
@@ -648,12 +646,10 @@ impl Integrator {
         if bordered {
             ws.rhs[n] = -(0..n).map(|i| ch.lengths()[i] * ws.tmp[i][1]).sum::<f64>();
         }
-        // newton_jacobian with q' = q and h = √2 assembles −Ĝ M⁻¹ Ĝᵀ.
-        newton_jacobian(
-            ch,
-            q,
-            q,
-            &ws.ones,
+        // assemble_newton with q' = q and h = √2 assembles −Ĝ M⁻¹ Ĝᵀ.
+        ch.constraints().assemble_newton(
+            (q, q),
+            None,
             std::f64::consts::SQRT_2,
             &mut ws.tri,
             &mut ws.scal,

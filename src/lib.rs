@@ -57,17 +57,20 @@
 
 pub mod adjoint;
 pub mod catalogue;
+pub mod constraints;
 pub mod error;
 pub mod euler_bernoulli;
 pub mod integrators;
 pub mod model;
 pub mod multistart;
 pub mod optimize;
-pub mod rattle;
 pub mod scene;
 pub mod simulate;
 pub mod statics;
+pub mod steppers;
 pub mod tridiag;
+
+pub use steppers::rattle;
 
 pub use adjoint::{
     BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, Objective,

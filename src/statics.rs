@@ -16,10 +16,9 @@
 //! for the n ≤ a few hundred it is used with.
 
 use crate::error::{Error, Result};
-use crate::model::Chain;
+use crate::model::{dot, Chain, Ctx, DualScratch};
 use crate::scene::Scene;
 use crate::simulate::scene_controls;
-use crate::tridiag::BorderedTridiag;
 use nalgebra::{DMatrix, DVector};
 
 /// A static equilibrium of the chain.
@@ -39,48 +38,34 @@ pub struct StaticSolution {
 
 /// Solves the static equilibrium of a scene's beam under its loads, as they act at the final time
 /// t_N, with the final control u_N. Errors if Newton does not converge in 100 iterations.
+///
+/// The energy and its derivatives come from the model's force terms ([`crate::model::terms`]):
+/// with qⱼ = (cos φⱼ, sin φⱼ) and tⱼ = ∂qⱼ/∂φⱼ, the gradient is ∂U/∂φⱼ = fⱼ·tⱼ (f = ∂U/∂q,
+/// [`Chain::potential_gradient`]) and the Hessian ∂²U/∂φⱼ∂φₖ = tⱼᵀKⱼₖtₖ − δⱼₖ fⱼ·qⱼ (K = ∂²U/∂q²,
+/// [`Chain::force_jacobian_product`], block-tridiagonal, so three products seeded on every third
+/// pendulum give all of it). The tip constraint adds ν Σ lⱼ sin φⱼ.
 pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
     let chain = Chain::<f64, 2>::from_scene(scene)?;
     let u = *scene_controls(scene).last().unwrap_or(&0.0);
     let t = scene.time.step * scene.time.steps as f64;
     let n = chain.n();
     let bordered = chain.has_tip_constraint();
-    let k = chain.springs();
-    let l = chain.lengths();
-    let mut coef = vec![0.0; n];
-    chain.for_each_load_coefficient(t, u, |j, c| coef[j] = c);
+    let l = chain.lengths().to_vec();
     let mut phi = vec![0.0f64; n];
     let mut nu = 0.0f64;
-    let mut tri = BorderedTridiag::<f64>::new(n, bordered);
     let mut rhs = vec![0.0; n + usize::from(bordered)];
     let mut last = f64::INFINITY;
-    let scale = k.iter().fold(0.0f64, |a, &b| a.max(b)).max(1.0);
+    let scale = chain
+        .springs()
+        .iter()
+        .fold(0.0f64, |a, &b| a.max(b))
+        .max(1.0);
+    let mut work = Work::new(n);
     for it in 0..100 {
-        let ang = |j: usize, phi: &[f64]| if j < n { phi[j] } else { 0.0 };
-        let mut rmax: f64 = 0.0;
-        for j in 0..n {
-            let prev = if j > 0 { phi[j - 1] } else { 0.0 };
-            let (s, c) = phi[j].sin_cos();
-            let load = coef[j] + if bordered { nu } else { 0.0 };
-            let g =
-                k[j] * (phi[j] - prev) - k[j + 1] * (ang(j + 1, &phi) - phi[j]) + l[j] * load * c;
-            rhs[j] = g;
-            rmax = rmax.max(g.abs() / scale);
-            tri.diag[j] = k[j] + k[j + 1] - l[j] * load * s;
-            if j + 1 < n {
-                tri.upper[j] = -k[j + 1];
-                tri.lower[j + 1] = -k[j + 1];
-            }
-            if bordered {
-                tri.col[j] = l[j] * c;
-                tri.row[j] = l[j] * c;
-            }
-        }
+        let a = work.newton_system(&chain, (&phi, nu), (t, u), &mut rhs)?;
+        let mut rmax = rhs[..n].iter().fold(0.0f64, |m, g| m.max(g.abs() / scale));
         if bordered {
-            let tip: f64 = (0..n).map(|j| l[j] * phi[j].sin()).sum();
-            rhs[n] = tip;
-            rmax = rmax.max(tip.abs());
-            tri.corner = 0.0;
+            rmax = rmax.max(rhs[n].abs());
         }
         last = rmax;
         if !rmax.is_finite() {
@@ -102,39 +87,94 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
                 residual: rmax,
             });
         }
-        let m = rhs.len();
-        let mut a = DMatrix::<f64>::zeros(m, m);
-        for j in 0..n {
-            a[(j, j)] = tri.diag[j];
-            if j + 1 < n {
-                a[(j, j + 1)] = tri.upper[j];
-                a[(j + 1, j)] = tri.lower[j + 1];
-            }
-            if bordered {
-                a[(j, n)] = tri.col[j];
-                a[(n, j)] = tri.row[j];
-            }
-        }
         let sol = a
             .lu()
             .solve(&DVector::from_column_slice(&rhs))
-            .ok_or(Error::SingularSystem {
-                step: 0,
-                index: 0,
-                pivot: 0.0,
-            })?;
-        rhs.copy_from_slice(sol.as_slice());
+            .ok_or(Error::StaticSingular { iteration: it })?;
         for j in 0..n {
-            phi[j] -= rhs[j];
+            phi[j] -= sol[j];
         }
         if bordered {
-            nu -= rhs[n];
+            nu -= sol[n];
         }
     }
-    Err(Error::NewtonNotConverged {
-        step: 0,
-        time: t,
-        residual: last,
+    Err(Error::StaticNotConverged {
         iterations: 100,
+        residual: last,
     })
+}
+
+/// Buffers of the static Newton iteration.
+struct Work {
+    q: Vec<[f64; 2]>,
+    t: Vec<[f64; 2]>,
+    f: Vec<[f64; 2]>,
+    v: Vec<[f64; 2]>,
+    kv: Vec<[f64; 2]>,
+    scratch: DualScratch<f64, 2>,
+}
+
+impl Work {
+    fn new(n: usize) -> Self {
+        let z = vec![[0.0; 2]; n];
+        Work {
+            q: z.clone(),
+            t: z.clone(),
+            f: z.clone(),
+            v: z.clone(),
+            kv: z,
+            scratch: DualScratch::new(n),
+        }
+    }
+
+    /// The gradient (into `rhs`) and the dense Hessian, bordered by the tip constraint, at
+    /// (φ, ν) for the loads at (t, u).
+    fn newton_system(
+        &mut self,
+        chain: &Chain<f64, 2>,
+        (phi, nu): (&[f64], f64),
+        (t, u): (f64, f64),
+        rhs: &mut [f64],
+    ) -> Result<DMatrix<f64>> {
+        let n = chain.n();
+        let bordered = chain.has_tip_constraint();
+        let l = chain.lengths();
+        for j in 0..n {
+            let (s, c) = phi[j].sin_cos();
+            self.q[j] = [c, s];
+            self.t[j] = [-s, c];
+        }
+        chain.potential_gradient(&self.q, t, u, 0, &mut self.f)?;
+        let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
+        for j in 0..n {
+            let (s, c) = phi[j].sin_cos();
+            let tip = if bordered { nu } else { 0.0 };
+            rhs[j] = dot(&self.f[j], &self.t[j]) + tip * l[j] * c;
+            a[(j, j)] = -dot(&self.f[j], &self.q[j]) - tip * l[j] * s;
+            if bordered {
+                a[(j, n)] = l[j] * c;
+                a[(n, j)] = l[j] * c;
+            }
+        }
+        if bordered {
+            rhs[n] = (0..n).map(|j| l[j] * phi[j].sin()).sum();
+        }
+        let ctx = Ctx::new(t, u, 0);
+        for color in 0..3 {
+            for j in 0..n {
+                self.v[j] = if j % 3 == color { self.t[j] } else { [0.0; 2] };
+                self.kv[j] = [0.0; 2];
+            }
+            let s = &mut self.scratch;
+            chain.force_jacobian_product(&self.q, &self.v, &ctx, 1.0, &mut self.kv, s)?;
+            for j in 0..n {
+                for k in j.saturating_sub(1)..(j + 2).min(n) {
+                    if k % 3 == color {
+                        a[(j, k)] += dot(&self.t[j], &self.kv[j]);
+                    }
+                }
+            }
+        }
+        Ok(a)
+    }
 }

@@ -308,7 +308,9 @@ fn long_horizon_gradient_with_checkpointing() {
         println!("long horizon dJ/dtheta_{j}: adjoint {:e}, FD {fd:e}", g[j]);
         assert!((fd - g[j]).abs() <= 1e-6 * scale);
     }
-    let state = (2 * 10 * 2 + 2 * 10 + 2) * 8;
+    // One stored state: q, p (n × 2 each), λ, μ (n each), the tip target (2), and, because the
+    // scene has drag, the tape's record of the step into it: p_{k+1/2} and W (n × 2 each).
+    let state = (4 * 10 * 2 + 2 * 10 + 2) * 8;
     let sqrt_n = (steps as f64).sqrt();
     println!(
         "checkpointed state memory: {} bytes = {:.1} states (sqrt(N) = {sqrt_n:.0}); storing all: {} bytes",

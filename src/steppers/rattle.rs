@@ -33,9 +33,11 @@
 //! u = 0 this is exactly the locked beam. The control then needs no potential term: its force lies
 //! along Lᵀ and would be absorbed by the tip multiplier.
 
+use super::{singular, Stepper};
 use crate::error::{Error, Result};
-use crate::model::{carries_derivatives, dot, e2, zi, Chain, Scalar, TipCondition};
-use crate::tridiag::{BorderedTridiag, ZeroPivot};
+use crate::model::geometry::derivative_updates;
+use crate::model::{e2, Chain, Ctx, DissipativeTerm, Scalar, TipCondition};
+use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -184,18 +186,13 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// and, when `state` has no multipliers yet (all zero), the consistent multiplier used as the
     /// Newton predictor. Called automatically by [`Rattle::step`] when needed.
     pub fn prepare(&mut self, state: &mut State<D, DIM>, k: usize, u_k: D) -> Result<()> {
-        let t = k as f64 * self.h;
-        self.chain
-            .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
-        self.ws.force_ready = true;
+        self.prepare_force(state, k, u_k)?;
         if state.mu.iter().all(|m| m.re() == 0.0) {
-            // Consistent multiplier: Ĝ M⁻¹ (U_q + Ĝᵀλ) = Ĝ-curvature terms; at rest (and as a
-            // predictor in general) solve Ĝ M⁻¹ Ĝᵀ λ = −Ĝ M⁻¹ U_q.
+            // Consistent multiplier: at rest (and as a predictor in general) solve
+            // Ĝ M⁻¹ Ĝᵀ λ = −Ĝ M⁻¹ U_q.
             let ws = &mut self.ws;
             for (o, f) in ws.a.iter_mut().zip(ws.force.iter()) {
-                for d in 0..DIM {
-                    o[d] = -f[d];
-                }
+                *o = f.map(|x| -x);
             }
             let target = D::zero();
             projection_solve(
@@ -224,6 +221,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         Ok(())
     }
 
+    /// The half-step momentum p_{k+½} and W = ∂p_{k+½}/∂c of the last step (W = 1 without
+    /// drag): what the adjoint records from the forward step ([`crate::adjoint`]).
+    pub(crate) fn last_half_step(&self) -> (&[[D; DIM]], &[[D; DIM]]) {
+        (&self.ws.phalf, &self.ws.w)
+    }
+
     /// Advances `state` from t_k to t_{k+1} with controls u_k (at t_k) and u_{k+1} (at t_{k+1}).
     ///
     /// The caller must pass the same u_k that the previous step received as its u_{k+1} (the force
@@ -244,38 +247,44 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         if !self.ws.force_ready {
             self.prepare(state, k, u_k)?;
         }
-        let h = self.h;
-        let hh = 0.5 * h;
-        let n = self.chain.n();
-        let z = zi::<DIM>();
-        let tip = self.chain.tip_condition();
-        let bordered = self.chain.has_tip_constraint();
-        let drag = self.chain.drag;
-        let ch = &self.chain;
-        let ws = &mut self.ws;
-
+        let hh = 0.5 * self.h;
         // a = p_k − h/2 U_q(q_k; u_k)
-        for i in 0..n {
-            for d in 0..DIM {
-                ws.a[i][d] = state.p[i][d] - ws.force[i][d] * hh;
-            }
+        for (a, (p, f)) in self.ws.a.iter_mut().zip(state.p.iter().zip(&self.ws.force)) {
+            *a = std::array::from_fn(|d| p[d] - f[d] * hh);
         }
-        // Tip target of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u).
-        let inv_mn = ch.inv_masses[n - 1];
-        let (zeta_next, v_half) = if tip == TipCondition::Reaction {
-            let v_half = state.tip_target[1] - u_k * inv_mn * hh;
-            (state.tip_target[0] + v_half * h, v_half)
-        } else {
-            (D::zero(), D::zero())
-        };
-        let total_length: f64 = ch.lengths.iter().map(|l| l.re()).sum();
+        let (zeta_next, v_half) = self.tip_half_kick(state, u_k);
+        let stats = self.solve_positions(state, k, zeta_next)?;
+        self.second_half(state, k, u_k1, v_half, zeta_next)?;
+        Ok(stats)
+    }
 
-        // Newton for λ, predictor μ_{k−1}.
+    /// Tip target of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u): (ζ_{k+1},
+    /// v_{k+½}), zeros for other tips.
+    fn tip_half_kick(&self, state: &State<D, DIM>, u_k: D) -> (D, D) {
+        if self.chain.tip_condition() != TipCondition::Reaction {
+            return (D::zero(), D::zero());
+        }
+        let inv_mn = self.chain.inv_masses[self.chain.n() - 1];
+        let v_half = state.tip_target[1] - u_k * inv_mn * (0.5 * self.h);
+        (state.tip_target[0] + v_half * self.h, v_half)
+    }
+
+    /// Newton for λ (predictor μ_{k−1}) on ĝ(q_{k+1}(λ)) = 0; leaves q_{k+1} in `state.q`, λ in
+    /// `state.lambda` and p_{k+½}, W in the workspace.
+    fn solve_positions(
+        &mut self,
+        state: &mut State<D, DIM>,
+        k: usize,
+        zeta_next: D,
+    ) -> Result<StepStats> {
+        let h = self.h;
+        let ch = &self.chain;
+        let ops = ch.constraints();
+        let ws = &mut self.ws;
         ws.lam.copy_from_slice(&state.mu);
-        let want_extra = carries_derivatives::<D>();
-        let mut extra_done = false;
+        let updates = derivative_updates::<D>();
+        let mut extra_done = 0;
         let mut iterations = 0;
-        let residual;
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
             half_step_momentum(
@@ -289,35 +298,26 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 &mut ws.w,
             );
             ch.apply_inverse_mass(&ws.phalf, &mut ws.tmp);
-            for i in 0..n {
-                for d in 0..DIM {
-                    ws.qnew[i][d] = state.q[i][d] + ws.tmp[i][d] * h;
-                }
+            for i in 0..ch.n() {
+                ws.qnew[i] = std::array::from_fn(|d| state.q[i][d] + ws.tmp[i][d] * h);
             }
-            // residual
-            let mut rmax: f64 = 0.0;
-            for i in 0..n {
-                let r = (dot(&ws.qnew[i], &ws.qnew[i]) - 1.0) * 0.5;
-                rmax = rmax.max(r.re().abs());
-                ws.rhs[i] = r;
-            }
-            if bordered {
-                let r = ch.tip_z(&ws.qnew) - zeta_next;
-                rmax = rmax.max(r.re().abs() / total_length);
-                ws.rhs[n] = r;
-            }
+            let rmax = ops.residual(&ws.qnew, zeta_next, &mut ws.rhs);
             if !rmax.is_finite() {
                 return Err(Error::NonFinite { step: k });
             }
             if rmax <= self.options.tolerance {
-                if !want_extra || extra_done {
-                    residual = rmax;
-                    break;
+                if extra_done == updates {
+                    state.lambda.copy_from_slice(&ws.lam);
+                    std::mem::swap(&mut state.q, &mut ws.qnew);
+                    return Ok(StepStats {
+                        iterations,
+                        residual: rmax,
+                    });
                 }
-                extra_done = true;
+                extra_done += 1;
             }
-            // (The derivative-only update after convergence is allowed past the limit.)
-            if iterations >= self.options.max_iterations && !extra_done {
+            // (The derivative-only updates after convergence are allowed past the limit.)
+            if iterations >= self.options.max_iterations && extra_done == 0 {
                 return Err(Error::NewtonNotConverged {
                     step: k,
                     time: k as f64 * h,
@@ -325,39 +325,45 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     iterations,
                 });
             }
-            newton_jacobian(ch, &state.q, &ws.qnew, &ws.w, h, &mut ws.tri, &mut ws.scal);
-            let tri = &mut ws.tri;
-            tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
-            if extra_done {
-                // The derivative-only update: Δ − re(Δ) has a real part of exactly 0, so the real
-                // parts stay bit-for-bit those of the f64 run while the derivative parts converge.
-                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
-                    *l -= *r - r.re();
-                }
-            } else {
-                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
-                    *l -= *r;
-                }
+            let w = ch.has_drag().then_some(&ws.w[..]);
+            ops.assemble_newton((&state.q, &ws.qnew), w, h, &mut ws.tri, &mut ws.scal);
+            ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
+            for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
+                // After convergence, Δ − re(Δ): a real part of exactly 0 keeps the real parts
+                // bit-for-bit those of the f64 run while the derivative parts converge.
+                *l -= if extra_done > 0 { *r - r.re() } else { *r };
             }
             iterations += 1;
         }
-        state.lambda.copy_from_slice(&ws.lam);
-        std::mem::swap(&mut state.q, &mut ws.qnew);
+    }
 
-        // Second half: force at q_{k+1} with u_{k+1} (cached for the next step).
-        ch.potential_gradient(&state.q, (k + 1) as f64 * h, u_k1, k + 1, &mut ws.force)?;
-        for i in 0..n {
+    /// Second half-step: force at q_{k+1} with u_{k+1} (cached for the next step), then the
+    /// projection for (p_{k+1}, μ_k).
+    fn second_half(
+        &mut self,
+        state: &mut State<D, DIM>,
+        k: usize,
+        u_k1: D,
+        v_half: D,
+        zeta_next: D,
+    ) -> Result<()> {
+        let (h, hh) = (self.h, 0.5 * self.h);
+        let ch = &self.chain;
+        let ws = &mut self.ws;
+        let t1 = (k + 1) as f64 * h;
+        ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
+        let ctx = Ctx::new(t1, u_k1, k + 1);
+        for i in 0..ch.n() {
             for d in 0..DIM {
                 let mut b = ws.phalf[i][d] - ws.force[i][d] * hh;
-                if let Some(dr) = drag {
-                    let p = ws.phalf[i][d];
-                    b -= dr * p * p.abs() * hh;
+                if let Some(drag) = ch.drag() {
+                    b += drag.force_component(ws.phalf[i][d], &ctx) * hh;
                 }
                 ws.a[i][d] = b;
             }
         }
-        let v_next = if tip == TipCondition::Reaction {
-            let v = v_half - u_k1 * inv_mn * hh;
+        let v_next = if ch.tip_condition() == TipCondition::Reaction {
+            let v = v_half - u_k1 * ch.inv_masses[ch.n() - 1] * hh;
             state.tip_target = [zeta_next, v];
             v
         } else {
@@ -374,27 +380,48 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         )
         .map_err(|zp| singular(k, zp))?;
         // p_{k+1} = b − Ĝᵀ y, μ = y / (h/2)
-        for i in 0..n {
-            let y = ws.rhs[i];
-            for d in 0..DIM {
-                state.p[i][d] = ws.a[i][d] - y * state.q[i][d];
-            }
-            if bordered {
-                state.p[i][z] -= ws.rhs[n] * ch.lengths[i];
-            }
-        }
+        ch.constraints()
+            .subtract_transpose(&ws.a, &state.q, &ws.rhs, &mut state.p);
         for (m, y) in state.mu.iter_mut().zip(ws.rhs.iter()) {
             *m = *y / hh;
         }
-        Ok(StepStats {
-            iterations,
-            residual,
-        })
+        Ok(())
     }
 }
 
-/// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p + (hD/2) p ⊙ |p| = c (p = c without drag), with
-/// W = ∂p_{k+½}/∂c = 1/(1 + hD|p|) componentwise (left at 1 without drag).
+impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Rattle<D, DIM> {
+    type State = State<D, DIM>;
+
+    fn chain(&self) -> &Chain<D, DIM> {
+        &self.chain
+    }
+
+    fn h(&self) -> f64 {
+        self.h
+    }
+
+    fn initial_state(&mut self, u_0: D) -> Result<State<D, DIM>> {
+        let mut s = self.straight_state();
+        self.prepare(&mut s, 0, u_0)?;
+        Ok(s)
+    }
+
+    fn step(&mut self, state: &mut State<D, DIM>, k: usize, u_k: D, u_k1: D) -> Result<StepStats> {
+        Rattle::step(self, state, k, u_k, u_k1)
+    }
+
+    fn q<'s>(&self, state: &'s State<D, DIM>) -> &'s [[D; DIM]] {
+        &state.q
+    }
+
+    fn p<'s>(&self, state: &'s State<D, DIM>) -> &'s [[D; DIM]] {
+        &state.p
+    }
+}
+
+/// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p − (h/2) F_D(p) = c componentwise
+/// ([`DissipativeTerm::implicit_half_step`]; p = c without drag), with W = ∂p_{k+½}/∂c (left at 1
+/// without drag).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn half_step_momentum<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
@@ -406,106 +433,22 @@ pub(crate) fn half_step_momentum<D: Scalar, const DIM: usize>(
     phalf: &mut [[D; DIM]],
     w: &mut [[D; DIM]],
 ) {
-    let n = ch.n();
-    let hh = 0.5 * h;
-    let z = zi::<DIM>();
-    for i in 0..n {
-        let li = lam[i];
-        for d in 0..DIM {
-            c[i][d] = a[i][d] - li * q[i][d] * hh;
-        }
-        if ch.has_tip_constraint() {
-            c[i][z] -= lam[n] * ch.lengths[i] * hh;
-        }
-    }
-    if let Some(dr) = ch.drag {
-        let two_hd = dr * (2.0 * h);
-        for i in 0..n {
-            for d in 0..DIM {
-                let ci = c[i][d];
-                let root = (two_hd * ci.abs() + 1.0).sqrt() + 1.0;
-                let p = ci * 2.0 * root.recip();
-                phalf[i][d] = p;
-                w[i][d] = (dr * h * p.abs() + 1.0).recip();
+    c.copy_from_slice(a);
+    ch.constraints().add_transpose(q, lam, D::from(-0.5 * h), c);
+    match ch.drag() {
+        Some(drag) => {
+            let ctx = Ctx::new(0.0, D::zero(), 0);
+            for i in 0..ch.n() {
+                for d in 0..DIM {
+                    (phalf[i][d], w[i][d]) = drag.implicit_half_step(c[i][d], h, &ctx);
+                }
             }
         }
-    } else {
-        phalf.copy_from_slice(c);
+        None => phalf.copy_from_slice(c),
     }
 }
 
-/// Assembles the Newton matrix J = ∂ĝ(q_{k+1}(λ))/∂λ = −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ into the
-/// bordered tridiagonal `tri`: J_{ij} = −h²/2 M̄⁻¹_{ij} q′ᵢ·(W_j ⊙ q_j) (|i − j| ≤ 1); tip column
-/// −h²/2 q′_{i,z} (M̄⁻¹(l ⊙ W_z))ᵢ; tip row −h²/2 δ_{jn} (W_n ⊙ q_n)_z/(m_n l_n), using
-/// Σᵢ lᵢ M̄⁻¹_{ij} = δ_{jn}/(m_n l_n); corner −h²/2 W_{n,z}/m_n. `scal` is scratch of length n.
-pub(crate) fn newton_jacobian<D: Scalar, const DIM: usize>(
-    ch: &Chain<D, DIM>,
-    q: &[[D; DIM]],
-    qnew: &[[D; DIM]],
-    w: &[[D; DIM]],
-    h: f64,
-    tri: &mut BorderedTridiag<D>,
-    scal: &mut [D],
-) {
-    let n = ch.n();
-    let z = zi::<DIM>();
-    let has_drag = ch.has_drag();
-    let s = -(h * h * 0.5);
-    for i in 0..n {
-        let (dii, off) = ch.minv_entries(i);
-        let wq = wmul(&w[i], &q[i], has_drag);
-        tri.diag[i] = dot(&qnew[i], &wq) * dii * s;
-        if i + 1 < n {
-            let wq1 = wmul(&w[i + 1], &q[i + 1], has_drag);
-            tri.upper[i] = dot(&qnew[i], &wq1) * off * s;
-            tri.lower[i + 1] = dot(&qnew[i + 1], &wq) * off * s;
-        }
-    }
-    if ch.has_tip_constraint() {
-        for j in 0..n {
-            scal[j] = ch.lengths[j] * w[j][z];
-        }
-        for i in 0..n {
-            let (dii, off) = ch.minv_entries(i);
-            let mut v = dii * scal[i];
-            if i + 1 < n {
-                v += off * scal[i + 1];
-            }
-            if i > 0 {
-                let (_, offm) = ch.minv_entries(i - 1);
-                v += offm * scal[i - 1];
-            }
-            tri.col[i] = qnew[i][z] * v * s;
-            tri.row[i] = D::zero();
-        }
-        let inv_mn = ch.inv_masses[n - 1];
-        tri.row[n - 1] = w[n - 1][z] * q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1] * s;
-        tri.corner = w[n - 1][z] * inv_mn * s;
-    }
-}
-
-#[inline]
-fn wmul<D: Scalar, const DIM: usize>(w: &[D; DIM], q: &[D; DIM], has_drag: bool) -> [D; DIM] {
-    if has_drag {
-        let mut o = *q;
-        for d in 0..DIM {
-            o[d] *= w[d];
-        }
-        o
-    } else {
-        *q
-    }
-}
-
-fn singular(step: usize, zp: ZeroPivot) -> Error {
-    Error::SingularSystem {
-        step,
-        index: zp.index,
-        pivot: zp.pivot,
-    }
-}
-
-/// Solves Ĝ(q) M⁻¹ Ĝ(q)ᵀ y = Ĝ(q) M⁻¹ b − (0, …, 0, v_tip) for y (returned in `rhs`), so that
+/// Solves Ĝ(q) M⁻¹ Ĝ(q)ᵀ y = Ĝ(q) M⁻¹ b − (0, …, 0, v_tip) for y (returned in `ws.rhs`), so that
 /// p = b − Ĝ(q)ᵀ y satisfies Ĝ(q) M⁻¹ p = (0, …, 0, v_tip). O(n).
 pub(crate) fn projection_solve<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
@@ -515,33 +458,13 @@ pub(crate) fn projection_solve<D: Scalar, const DIM: usize>(
     tmp: &mut [[D; DIM]],
     tri: &mut BorderedTridiag<D>,
     rhs: &mut [D],
-) -> std::result::Result<(), ZeroPivot> {
-    let n = ch.n();
-    let z = zi::<DIM>();
+) -> std::result::Result<(), crate::tridiag::ZeroPivot> {
+    let ops = ch.constraints();
     ch.apply_inverse_mass(b, tmp);
-    for i in 0..n {
-        rhs[i] = dot(&q[i], &tmp[i]);
-        let (dii, off) = ch.minv_entries(i);
-        tri.diag[i] = dot(&q[i], &q[i]) * dii;
-        if i + 1 < n {
-            let v = dot(&q[i], &q[i + 1]) * off;
-            tri.upper[i] = v;
-            tri.lower[i + 1] = v;
-        }
+    ops.apply(q, tmp, rhs);
+    if ops.bordered() {
+        rhs[ch.n()] -= v_tip;
     }
-    if ch.has_tip_constraint() {
-        let mut lb = D::zero();
-        for i in 0..n {
-            lb += ch.lengths[i] * tmp[i][z];
-            tri.col[i] = D::zero();
-            tri.row[i] = D::zero();
-        }
-        rhs[n] = lb - v_tip;
-        let inv_mn = ch.inv_masses[n - 1];
-        let v = q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1];
-        tri.col[n - 1] = v;
-        tri.row[n - 1] = v;
-        tri.corner = inv_mn;
-    }
+    ops.assemble_projection(q, tri);
     tri.solve(rhs)
 }

@@ -1,0 +1,277 @@
+//! One reverse step k + 1 → k of the discrete adjoint: the vector-Jacobian product of the
+//! recorded RATTLE step, built from the model's operators (the terms' derived products and the
+//! constraint operator). See the module docs of [`crate::adjoint`] for the equations.
+
+use super::tape::StateView;
+use crate::error::Result;
+use crate::model::{Chain, Ctx, DissipativeTerm, DualScratch, Parameter, Scalar, TipCondition};
+use crate::steppers::singular;
+use crate::tridiag::BorderedTridiag;
+
+/// The cotangents carried backwards: q̄, p̄ and the tip target's (ζ̄, v̄) at the current step, and
+/// the accumulated ∂J/∂u_k and ∂J/∂θ.
+pub(crate) struct Cotangents<D, const DIM: usize> {
+    pub qbar: Vec<[D; DIM]>,
+    pub pbar: Vec<[D; DIM]>,
+    pub tip_bar: [D; 2],
+    pub ubar: Vec<D>,
+    pub thbar: Vec<D>,
+}
+
+/// What every reverse step of one sweep shares: the model, h, the requested parameters, and the
+/// scratch memory (allocated once per sweep).
+pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
+    ch: &'a Chain<D, DIM>,
+    h: f64,
+    params: &'a [Parameter],
+    mass_param: Option<usize>,
+    drag_param: Option<usize>,
+    tmp: Vec<[D; DIM]>,
+    tmp2: Vec<[D; DIM]>,
+    bbar: Vec<[D; DIM]>,
+    phbar: Vec<[D; DIM]>,
+    cbar: Vec<[D; DIM]>,
+    rhs: Vec<D>,
+    scal: Vec<D>,
+    tri: BorderedTridiag<D>,
+    scratch: DualScratch<D, DIM>,
+}
+
+impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
+    /// Scratch for a sweep over `ch` with step `h`, differentiating also for `params`.
+    pub fn new(ch: &'a Chain<D, DIM>, h: f64, params: &'a [Parameter]) -> Self {
+        let n = ch.n();
+        let v = vec![[D::zero(); DIM]; n];
+        ReverseSweep {
+            ch,
+            h,
+            params,
+            mass_param: params.iter().position(|p| *p == Parameter::Mass),
+            drag_param: params.iter().position(|p| *p == Parameter::Drag),
+            tmp: v.clone(),
+            tmp2: v.clone(),
+            bbar: v.clone(),
+            phbar: v.clone(),
+            cbar: v,
+            rhs: vec![D::zero(); ch.n_constraints()],
+            scal: vec![D::zero(); n],
+            tri: BorderedTridiag::new(n, ch.has_tip_constraint()),
+            scratch: DualScratch::new(n),
+        }
+    }
+
+    /// One reverse step k + 1 → k: reads the states at k and k + 1 (and the half-step record of
+    /// step k), updates the cotangents in place.
+    pub fn step(
+        &mut self,
+        k: usize,
+        (sk, sk1): (&StateView<'_, D, DIM>, &StateView<'_, D, DIM>),
+        (u_k, u_k1): (D, D),
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        self.projection(k, sk1, cot)?;
+        let ctx1 = Ctx::new((k + 1) as f64 * self.h, u_k1, k + 1);
+        self.second_half(sk1, &ctx1, cot)?;
+        self.newton(k, sk.q, sk1, cot)?;
+        let ctx0 = Ctx::new(k as f64 * self.h, u_k, k);
+        self.first_half(sk, sk1, &ctx0, cot)?;
+        if self.ch.tip_condition() == TipCondition::Reaction {
+            self.tip_target(k, (u_k, u_k1), cot);
+        }
+        Ok(())
+    }
+
+    /// Projection: A ŷ = Ĝ(q′) p̄′ (A = Ĝ M⁻¹ Ĝᵀ at q′), b̄ = p̄′ − M⁻¹ Ĝᵀ ŷ,
+    /// q̄′ += −(h/2) μᵢ b̄ᵢ − ŷᵢ (M⁻¹p′)ᵢ. Leaves ŷ in `rhs`.
+    fn projection(
+        &mut self,
+        k: usize,
+        sk1: &StateView<'_, D, DIM>,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        let (ch, ops, hh) = (self.ch, self.ch.constraints(), 0.5 * self.h);
+        ops.apply(sk1.q, &cot.pbar, &mut self.rhs);
+        ops.assemble_projection(sk1.q, &mut self.tri);
+        self.tri
+            .solve(&mut self.rhs)
+            .map_err(|zp| singular(k, zp))?;
+        self.tmp.iter_mut().for_each(|t| *t = [D::zero(); DIM]);
+        ops.add_transpose(sk1.q, &self.rhs, D::one(), &mut self.tmp);
+        ch.apply_inverse_mass(&self.tmp, &mut self.tmp2);
+        for i in 0..ch.n() {
+            self.bbar[i] = std::array::from_fn(|d| cot.pbar[i][d] - self.tmp2[i][d]);
+        }
+        ch.apply_inverse_mass(sk1.p, &mut self.tmp2);
+        for i in 0..ch.n() {
+            let y = sk1.mu[i] * hh;
+            for d in 0..DIM {
+                cot.qbar[i][d] -= y * self.bbar[i][d] + self.rhs[i] * self.tmp2[i][d];
+            }
+        }
+        if ch.tip_condition() == TipCondition::Reaction {
+            let n = ch.n();
+            cot.tip_bar[1] += self.rhs[n];
+            if let Some(ip) = self.mass_param {
+                cot.thbar[ip] += self.rhs[n] * sk1.tip[1] * ch.inv_masses[0];
+            }
+        }
+        Ok(())
+    }
+
+    /// Second half-step b = p½ − h/2 U_q(q′; u_{k+1}) + h/2 F_D(p½): p̄½ = b̄ ⊙ (1 + h/2 F_D′),
+    /// q̄′ −= h/2 K(q′) b̄, and the control and parameter contractions of b̄.
+    fn second_half(
+        &mut self,
+        sk1: &StateView<'_, D, DIM>,
+        ctx1: &Ctx<D>,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        let (ch, hh) = (self.ch, 0.5 * self.h);
+        self.phbar.copy_from_slice(&self.bbar);
+        if let Some(drag) = ch.drag() {
+            let mut dbar = D::zero();
+            for i in 0..ch.n() {
+                for d in 0..DIM {
+                    let p = sk1.phalf[i][d];
+                    let (_, slope) = drag.force_and_slope(p, ctx1);
+                    self.phbar[i][d] = self.bbar[i][d] * (slope * hh + 1.0);
+                    if self.drag_param.is_some() {
+                        dbar +=
+                            self.bbar[i][d] * drag.parameter_derivative(p, ctx1, Parameter::Drag);
+                    }
+                }
+            }
+            if let Some(ip) = self.drag_param {
+                cot.thbar[ip] += dbar * hh;
+            }
+        }
+        self.force_terms(sk1.q, ctx1, Half::Second, cot)
+    }
+
+    /// The force terms' share of a half-step's reverse: q̄ −= h/2 K(q) w, ū −= h/2 w·∂F/∂u,
+    /// θ̄ −= h/2 w·∂F/∂θ, with w = b̄ (second half) or c̄ (first half).
+    fn force_terms(
+        &mut self,
+        q: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        half: Half,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        let (ch, hh) = (self.ch, 0.5 * self.h);
+        let w = match half {
+            Half::First => &self.cbar,
+            Half::Second => &self.bbar,
+        };
+        let s = &mut self.scratch;
+        ch.force_jacobian_product(q, w, ctx, D::from(-hh), &mut cot.qbar, s)?;
+        cot.ubar[ctx.step] -= ch.control_contraction(q, w, ctx, s)? * hh;
+        for (tb, p) in cot.thbar.iter_mut().zip(self.params) {
+            *tb -= ch.force_parameter_contraction(q, w, ctx, *p, s)? * hh;
+        }
+        Ok(())
+    }
+
+    /// Newton system (implicit function theorem): λ̄ = −h/2 Ĝ(q_k)(W ⊙ S), S = p̄½ + h M⁻¹ q̄′;
+    /// Jᵀν = λ̄; q̄′ −= Ĝ(q′)ᵀν; then c̄ = W ⊙ (p̄½ + h M⁻¹ q̄′) into `cbar`.
+    fn newton(
+        &mut self,
+        k: usize,
+        q: &[[D; DIM]],
+        sk1: &StateView<'_, D, DIM>,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        let (ch, ops, h, hh) = (self.ch, self.ch.constraints(), self.h, 0.5 * self.h);
+        let w = ch.has_drag().then_some(sk1.w);
+        self.w_times_s(&cot.qbar, w);
+        ops.apply(q, &self.tmp, &mut self.rhs);
+        self.rhs.iter_mut().for_each(|r| *r = -*r * hh);
+        ops.assemble_newton((q, sk1.q), w, h, &mut self.tri, &mut self.scal);
+        self.tri
+            .solve_transpose(&mut self.rhs)
+            .map_err(|zp| singular(k, zp))?;
+        ops.add_transpose(sk1.q, &self.rhs, -D::one(), &mut cot.qbar);
+        if ch.tip_condition() == TipCondition::Reaction {
+            cot.tip_bar[0] += self.rhs[ch.n()];
+        }
+        if let Some(ip) = self.mass_param {
+            // q′ = q + h M⁻¹ p½ with M⁻¹ ∝ 1/m: ∂q′/∂m = −(q′ − q)/m.
+            let mut s = D::zero();
+            for i in 0..ch.n() {
+                for d in 0..DIM {
+                    s += cot.qbar[i][d] * (sk1.q[i][d] - q[i][d]);
+                }
+            }
+            cot.thbar[ip] -= s * ch.inv_masses[0];
+        }
+        self.w_times_s(&cot.qbar, w);
+        self.cbar.copy_from_slice(&self.tmp);
+        if let (Some(ip), Some(drag)) = (self.drag_param, ch.drag()) {
+            let ctx = Ctx::new(k as f64 * h, D::zero(), k);
+            let mut s = D::zero();
+            for i in 0..ch.n() {
+                for d in 0..DIM {
+                    let dfd = drag.parameter_derivative(sk1.phalf[i][d], &ctx, Parameter::Drag);
+                    s += self.cbar[i][d] * dfd;
+                }
+            }
+            cot.thbar[ip] += s * hh;
+        }
+        Ok(())
+    }
+
+    /// tmp = W ⊙ (p̄½ + h M⁻¹ q̄′) (W = I when `w` is None).
+    fn w_times_s(&mut self, qbar: &[[D; DIM]], w: Option<&[[D; DIM]]>) {
+        let h = self.h;
+        self.ch.apply_inverse_mass(qbar, &mut self.tmp);
+        for i in 0..self.ch.n() {
+            for d in 0..DIM {
+                let s = self.phbar[i][d] + self.tmp[i][d] * h;
+                self.tmp[i][d] = match w {
+                    Some(w) => s * w[i][d],
+                    None => s,
+                };
+            }
+        }
+    }
+
+    /// First half-step c = p_k − h/2 U_q(q_k; u_k) − h/2 Ĝ(q_k)ᵀλ: p̄_k = c̄,
+    /// q̄_k = q̄′ − h/2 λᵢ c̄ᵢ − h/2 K(q_k) c̄, and the contractions of c̄.
+    fn first_half(
+        &mut self,
+        sk: &StateView<'_, D, DIM>,
+        sk1: &StateView<'_, D, DIM>,
+        ctx0: &Ctx<D>,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<()> {
+        let hh = 0.5 * self.h;
+        for i in 0..self.ch.n() {
+            let l = sk1.lambda[i] * hh;
+            for d in 0..DIM {
+                cot.pbar[i][d] = self.cbar[i][d];
+                cot.qbar[i][d] -= l * self.cbar[i][d];
+            }
+        }
+        self.force_terms(sk.q, ctx0, Half::First, cot)
+    }
+
+    /// Tip target dynamics of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u).
+    fn tip_target(&mut self, k: usize, (u_k, u_k1): (D, D), cot: &mut Cotangents<D, DIM>) {
+        let (ch, h, hh) = (self.ch, self.h, 0.5 * self.h);
+        let inv_mn = ch.inv_masses[ch.n() - 1];
+        let tb = &mut cot.tip_bar;
+        let v_half_bar = tb[1] + tb[0] * h;
+        cot.ubar[k + 1] -= tb[1] * inv_mn * hh;
+        cot.ubar[k] -= v_half_bar * inv_mn * hh;
+        if let Some(ip) = self.mass_param {
+            cot.thbar[ip] += (tb[1] * u_k1 + v_half_bar * u_k) * inv_mn * inv_mn * hh;
+        }
+        tb[1] = v_half_bar;
+    }
+}
+
+/// Which half-step a reverse contraction belongs to.
+#[derive(Clone, Copy)]
+enum Half {
+    First,
+    Second,
+}

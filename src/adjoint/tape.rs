@@ -1,0 +1,184 @@
+//! The tape of the discrete adjoint: the forward states the reverse sweep reads, stored flat, with
+//! the checkpointing strategies (SPEC §3), and what each forward step records for its adjoint.
+//!
+//! A step k → k+1 records, besides the state (q, p, λ, μ, tip target) at k+1, the half-step
+//! momentum p_{k+½} and W = ∂p_{k+½}/∂c when the model has drag (without drag p_{k+½} does not
+//! enter the adjoint and W = I): the reverse step then reads them instead of recomputing the
+//! forward step's force and drag root.
+
+use crate::model::Scalar;
+use crate::rattle::State;
+
+/// How the reverse sweep gets the forward states.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Checkpointing {
+    /// Every state is kept (memory O(nN), no recomputation).
+    StoreAll,
+    /// Every K-th state is kept, segments are recomputed (memory O(n(N/K + K))).
+    Every(usize),
+    /// K = ⌈√N⌉: memory O(n√N), one extra forward sweep.
+    Sqrt,
+    /// Store every state while the trajectory fits in [`AUTO_MEMORY_BUDGET`] bytes (no
+    /// recomputation: the gradient then costs one forward and one reverse sweep), otherwise
+    /// K = ⌈√N⌉ (memory O(n√N), one extra forward sweep).
+    #[default]
+    Auto,
+}
+
+/// Memory for stored states below which [`Checkpointing::Auto`] keeps every state: 256 MiB.
+pub const AUTO_MEMORY_BUDGET: usize = 256 << 20;
+
+impl Checkpointing {
+    pub(crate) fn interval(self, steps: usize, state_bytes: usize) -> usize {
+        match self {
+            Checkpointing::StoreAll => 1,
+            Checkpointing::Every(k) => k.clamp(1, steps.max(1)),
+            Checkpointing::Auto
+                if (steps + 1).saturating_mul(state_bytes) <= AUTO_MEMORY_BUDGET =>
+            {
+                1
+            }
+            Checkpointing::Auto | Checkpointing::Sqrt => {
+                ((steps as f64).sqrt().ceil() as usize).max(1)
+            }
+        }
+    }
+}
+
+/// Value and gradients from one forward and one reverse sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AdjointResult<D> {
+    /// The objective.
+    pub value: D,
+    /// ∂J/∂u_k, k = 0..=N.
+    pub control_gradient: Vec<D>,
+    /// ∂J/∂θ for the requested physical parameters, in request order.
+    pub parameter_gradient: Vec<D>,
+    /// Bytes of forward states held at the peak (checkpoints plus the segment buffer).
+    pub state_bytes: usize,
+}
+
+/// Forward states stored flat (one allocation per array, sized once), for the reverse sweep.
+pub(crate) struct StateStore<D, const DIM: usize> {
+    n: usize,
+    nc: usize,
+    records_half_step: bool,
+    q: Vec<[D; DIM]>,
+    p: Vec<[D; DIM]>,
+    lambda: Vec<D>,
+    mu: Vec<D>,
+    tip: Vec<[D; 2]>,
+    phalf: Vec<[D; DIM]>,
+    w: Vec<[D; DIM]>,
+}
+
+/// A stored state, borrowed, with the half-step record of the step that produced it (empty
+/// slices when not recorded).
+pub(crate) struct StateView<'a, D, const DIM: usize> {
+    pub q: &'a [[D; DIM]],
+    pub p: &'a [[D; DIM]],
+    pub lambda: &'a [D],
+    pub mu: &'a [D],
+    pub tip: [D; 2],
+    /// p_{k−½} of the step into this state.
+    pub phalf: &'a [[D; DIM]],
+    /// W of the step into this state.
+    pub w: &'a [[D; DIM]],
+}
+
+impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
+    /// Room for `capacity` states of n pendulums with nc multipliers; `records_half_step` when
+    /// the model has drag.
+    pub fn new(n: usize, nc: usize, capacity: usize, records_half_step: bool) -> Self {
+        let half = if records_half_step { capacity * n } else { 0 };
+        StateStore {
+            n,
+            nc,
+            records_half_step,
+            q: Vec::with_capacity(capacity * n),
+            p: Vec::with_capacity(capacity * n),
+            lambda: Vec::with_capacity(capacity * nc),
+            mu: Vec::with_capacity(capacity * nc),
+            tip: Vec::with_capacity(capacity),
+            phalf: Vec::with_capacity(half),
+            w: Vec::with_capacity(half),
+        }
+    }
+
+    /// Bytes of one stored state.
+    pub fn state_bytes(n: usize, nc: usize, records_half_step: bool) -> usize {
+        let blocks = if records_half_step { 4 } else { 2 };
+        (blocks * n * DIM + 2 * nc + 2) * std::mem::size_of::<D>()
+    }
+
+    /// Appends a state and the half-step record (p_{k−½}, W) of the step that produced it (any
+    /// slices at k = 0, where there is none; ignored unless the store records half steps).
+    pub fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[[D; DIM]])) {
+        self.q.extend_from_slice(&s.q);
+        self.p.extend_from_slice(&s.p);
+        self.lambda.extend_from_slice(&s.lambda);
+        self.mu.extend_from_slice(&s.mu);
+        self.tip.push(s.tip_target);
+        if self.records_half_step {
+            if half.0.is_empty() {
+                // The initial state: no step produced it.
+                let z = [D::zero(); DIM];
+                self.phalf.extend(std::iter::repeat_n(z, self.n));
+                self.w.extend(std::iter::repeat_n(z, self.n));
+            } else {
+                self.phalf.extend_from_slice(half.0);
+                self.w.extend_from_slice(half.1);
+            }
+        }
+    }
+
+    /// Forgets every state (keeps the memory).
+    pub fn clear(&mut self) {
+        self.q.clear();
+        self.p.clear();
+        self.lambda.clear();
+        self.mu.clear();
+        self.tip.clear();
+        self.phalf.clear();
+        self.w.clear();
+    }
+
+    /// Number of stored states.
+    pub fn len(&self) -> usize {
+        self.tip.len()
+    }
+
+    /// Number of states the memory holds.
+    pub fn capacity(&self) -> usize {
+        self.tip.capacity()
+    }
+
+    /// The i-th stored state.
+    pub fn view(&self, i: usize) -> StateView<'_, D, DIM> {
+        let (n, nc) = (self.n, self.nc);
+        let r = if self.records_half_step {
+            i * n..(i + 1) * n
+        } else {
+            0..0
+        };
+        StateView {
+            q: &self.q[i * n..(i + 1) * n],
+            p: &self.p[i * n..(i + 1) * n],
+            lambda: &self.lambda[i * nc..(i + 1) * nc],
+            mu: &self.mu[i * nc..(i + 1) * nc],
+            tip: self.tip[i],
+            phalf: &self.phalf[r.clone()],
+            w: &self.w[r],
+        }
+    }
+
+    /// Loads the i-th stored state into `s` (to recompute a segment from it).
+    pub fn load(&self, i: usize, s: &mut State<D, DIM>) {
+        let v = self.view(i);
+        s.q.copy_from_slice(v.q);
+        s.p.copy_from_slice(v.p);
+        s.lambda.copy_from_slice(v.lambda);
+        s.mu.copy_from_slice(v.mu);
+        s.tip_target = v.tip;
+    }
+}

@@ -1,0 +1,174 @@
+//! The constraint operator Ĝ(q) of the chain and the O(n) assembly of its products with M⁻¹
+//! (thesis §2.4.1, eq. 2.4.1-2.4.2; SPEC §1-§2), used by every integrator and the adjoint.
+//!
+//! ĝ stacks the length constraints gᵢ = ½(‖qᵢ‖² − 1) and, for a locked or reaction-force tip,
+//! l(q) = Σ lᵢ e₃ᵀqᵢ. Its Jacobian Ĝ(q) has rows qᵢᵀ on block i and, for the tip, lᵢ e₃ᵀ on every
+//! block. Because M̄⁻¹ is tridiagonal, Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ is tridiagonal in the length constraints,
+//! bordered by the tip row and column; the tip row is sparse, since Σᵢ lᵢ M̄⁻¹ᵢⱼ = δ_{jn}/(mₙ lₙ).
+
+use crate::model::{dot, zi, Chain, Scalar};
+use crate::tridiag::BorderedTridiag;
+
+/// Ĝ(q) of a chain: apply, transposed apply, residual and the bordered-tridiagonal assemblies.
+#[derive(Clone, Copy, Debug)]
+pub struct ConstraintOperator<'a, D, const DIM: usize> {
+    ch: &'a Chain<D, DIM>,
+}
+
+impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
+    /// The constraint operator of this chain.
+    pub fn constraints(&self) -> ConstraintOperator<'_, D, DIM> {
+        ConstraintOperator { ch: self }
+    }
+}
+
+impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
+    /// Whether the tip row is present.
+    #[inline]
+    pub fn bordered(&self) -> bool {
+        self.ch.has_tip_constraint()
+    }
+
+    /// Ĝ(q) v: (qᵢ·vᵢ)ᵢ and, with the tip row, Σ lᵢ v_{i,z}. `out.len()` = n (+1).
+    pub fn apply(&self, q: &[[D; DIM]], v: &[[D; DIM]], out: &mut [D]) {
+        let n = self.ch.n();
+        for i in 0..n {
+            out[i] = dot(&q[i], &v[i]);
+        }
+        if self.bordered() {
+            out[n] = self.ch.tip_z(v);
+        }
+    }
+
+    /// out += scale · Ĝ(q)ᵀ y: blocks y_i qᵢ (+ y_tip lᵢ e₃).
+    pub fn add_transpose(&self, q: &[[D; DIM]], y: &[D], scale: D, out: &mut [[D; DIM]]) {
+        let n = self.ch.n();
+        let z = zi::<DIM>();
+        for i in 0..n {
+            for d in 0..DIM {
+                out[i][d] += y[i] * q[i][d] * scale;
+            }
+            if self.bordered() {
+                out[i][z] += y[n] * self.ch.lengths[i] * scale;
+            }
+        }
+    }
+
+    /// out = b − Ĝ(q)ᵀ y, written so that its arithmetic is that of the projection p = b − Ĝᵀy.
+    pub fn subtract_transpose(
+        &self,
+        b: &[[D; DIM]],
+        q: &[[D; DIM]],
+        y: &[D],
+        out: &mut [[D; DIM]],
+    ) {
+        let n = self.ch.n();
+        let z = zi::<DIM>();
+        for i in 0..n {
+            for d in 0..DIM {
+                out[i][d] = b[i][d] - y[i] * q[i][d];
+            }
+            if self.bordered() {
+                out[i][z] -= y[n] * self.ch.lengths[i];
+            }
+        }
+    }
+
+    /// The constraint residual ĝ(q) − (0, …, 0, ζ) into `out`, returning its max-norm with the
+    /// tip row scaled by the beam length.
+    pub fn residual(&self, q: &[[D; DIM]], tip_target: D, out: &mut [D]) -> f64 {
+        let n = self.ch.n();
+        let mut rmax: f64 = 0.0;
+        for i in 0..n {
+            let r = (dot(&q[i], &q[i]) - 1.0) * 0.5;
+            rmax = rmax.max(r.re().abs());
+            out[i] = r;
+        }
+        if self.bordered() {
+            let total: f64 = self.ch.lengths.iter().map(|l| l.re()).sum();
+            let r = self.ch.tip_z(q) - tip_target;
+            rmax = rmax.max(r.re().abs() / total);
+            out[n] = r;
+        }
+        rmax
+    }
+
+    /// Assembles the symmetric Ĝ(q) M⁻¹ Ĝ(q)ᵀ into `tri` (the projection's matrix).
+    pub fn assemble_projection(&self, q: &[[D; DIM]], tri: &mut BorderedTridiag<D>) {
+        let ch = self.ch;
+        let n = ch.n();
+        for i in 0..n {
+            let (dii, off) = ch.minv_entries(i);
+            tri.diag[i] = dot(&q[i], &q[i]) * dii;
+            if i + 1 < n {
+                let v = dot(&q[i], &q[i + 1]) * off;
+                tri.upper[i] = v;
+                tri.lower[i + 1] = v;
+            }
+        }
+        if self.bordered() {
+            tri.col.iter_mut().for_each(|c| *c = D::zero());
+            tri.row.iter_mut().for_each(|c| *c = D::zero());
+            let inv_mn = ch.inv_masses[n - 1];
+            let v = q[n - 1][zi::<DIM>()] * inv_mn * ch.inv_lengths[n - 1];
+            tri.col[n - 1] = v;
+            tri.row[n - 1] = v;
+            tri.corner = inv_mn;
+        }
+    }
+
+    /// Assembles the RATTLE Newton matrix J = ∂ĝ(q_{k+1}(λ))/∂λ = −h²/2 Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ into
+    /// `tri`: J_{ij} = −h²/2 M̄⁻¹_{ij} q′ᵢ·(W_j ⊙ q_j) (|i − j| ≤ 1); tip column
+    /// −h²/2 q′_{i,z} (M̄⁻¹(l ⊙ W_z))ᵢ; tip row −h²/2 δ_{jn} (W_n ⊙ q_n)_z/(mₙ lₙ); corner
+    /// −h²/2 W_{n,z}/mₙ. `w` = None means W = I (no drag). `scal` is scratch of length n.
+    pub fn assemble_newton(
+        &self,
+        (q, qnew): (&[[D; DIM]], &[[D; DIM]]),
+        w: Option<&[[D; DIM]]>,
+        h: f64,
+        tri: &mut BorderedTridiag<D>,
+        scal: &mut [D],
+    ) {
+        let ch = self.ch;
+        let n = ch.n();
+        let z = zi::<DIM>();
+        let s = -(h * h * 0.5);
+        let wq = |i: usize| -> [D; DIM] {
+            match w {
+                Some(w) => std::array::from_fn(|d| q[i][d] * w[i][d]),
+                None => q[i],
+            }
+        };
+        for i in 0..n {
+            let (dii, off) = ch.minv_entries(i);
+            let wqi = wq(i);
+            tri.diag[i] = dot(&qnew[i], &wqi) * dii * s;
+            if i + 1 < n {
+                tri.upper[i] = dot(&qnew[i], &wq(i + 1)) * off * s;
+                tri.lower[i + 1] = dot(&qnew[i + 1], &wqi) * off * s;
+            }
+        }
+        if !self.bordered() {
+            return;
+        }
+        let wz = |j: usize| w.map_or(D::one(), |w| w[j][z]);
+        for j in 0..n {
+            scal[j] = ch.lengths[j] * wz(j);
+        }
+        for i in 0..n {
+            let (dii, off) = ch.minv_entries(i);
+            let mut v = dii * scal[i];
+            if i + 1 < n {
+                v += off * scal[i + 1];
+            }
+            if i > 0 {
+                v += ch.minv_entries(i - 1).1 * scal[i - 1];
+            }
+            tri.col[i] = qnew[i][z] * v * s;
+            tri.row[i] = D::zero();
+        }
+        let inv_mn = ch.inv_masses[n - 1];
+        tri.row[n - 1] = wz(n - 1) * q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1] * s;
+        tri.corner = wz(n - 1) * inv_mn * s;
+    }
+}

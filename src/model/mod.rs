@@ -1,0 +1,653 @@
+//! The chain-of-pendulums model (thesis §2.2, §2.4, §3.1, §3.2; SPEC §1), written once over
+//! [`Scalar`] so that the same terms evaluate in `f64` and in dual arithmetic.
+//!
+//! The configuration is q = (q₁, …, qₙ) with qᵢ ∈ S^{DIM−1} ⊂ ℝ^DIM. `DIM = 2` is the planar model
+//! (components (y, z), qᵢ ∈ S¹ in the yz-plane) and `DIM = 3` the spatial one (components
+//! (x, y, z), qᵢ ∈ S²). Every load of the thesis acts along z and the beam starts straight along
+//! +y, so x stays exactly 0 in the spatial model; the planar model therefore reproduces it exactly
+//! (tested to 0 difference in `tests/core.rs`) while storing and computing two components instead
+//! of three. The step's cost is dominated by the per-joint scalar work (spring function, Newton
+//! and projection solves), so the measured saving is modest: 3D/2D ≈ 1.08 at n = 100
+//! (`cargo bench --bench step -- step_dim`).
+
+pub mod geometry;
+pub mod terms;
+
+pub(crate) use geometry::{dot, e2};
+pub use geometry::{joint_angle_squared, spring_s, spring_s_ds, yi, zi};
+pub use terms::{
+    ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity, PointLoad,
+    PointLoads, Springs, TermVisitor,
+};
+
+use crate::error::{Error, Result};
+use crate::scene::{Scene, Support};
+use num_dual::DualNum;
+
+/// The scalar type every model term is written over: `f64`, `Dual64`, `DualSVec64<N>`, … .
+///
+/// This is `num_dual::DualNum<Primitive = f64> + Copy` with the thread-safety bounds the
+/// multistart code needs; it is implemented for every such type.
+pub trait Scalar: DualNum<Primitive = f64> + Copy + Send + Sync + 'static {}
+impl<T: DualNum<Primitive = f64> + Copy + Send + Sync + 'static> Scalar for T {}
+
+/// What holds the tip's z coordinate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TipCondition {
+    /// The tip is free (cantilever, riser).
+    Free,
+    /// The tip's z is locked by l(q) = Σ lᵢ e₃ᵀqᵢ = 0 (fixed-fixed, pinned-pinned; eq. 2.4.1).
+    Locked,
+    /// Reaction-force variant (eq. 3.2.1/3.2.2): the reaction λ_l cancels every force on the tip's
+    /// z except the control, so m_n z̈_n = −u. Discretised as a rheonomic tip constraint
+    /// l(q_k) = ζ_k whose target ζ follows the control by Störmer–Verlet (see [`crate::rattle`]).
+    Reaction,
+}
+
+/// A physical parameter of the chain, for parameter derivatives (seeded with dual numbers or
+/// differentiated by the adjoint).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Parameter {
+    /// All interior spring constants k₂..kₙ, set to one common value.
+    InteriorStiffness,
+    /// The base spring k₁ (also the k₁ of the bending moment, eq. 3.1.3).
+    BaseStiffness,
+    /// The tip spring k_{n+1}.
+    TipStiffness,
+    /// All masses m₁..mₙ, set to one common value.
+    Mass,
+    /// The drag constant D (eq. 2.4.4).
+    Drag,
+    /// The magnitude of the `i`-th point load of the scene (0-based, in scene order).
+    LoadForce(usize),
+}
+
+/// The chain of pendulums: its mass distribution, its constraints, and one value of each force
+/// term of SPEC §1 ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,
+/// 3: spatial). Terms a scene does not have are absent and cost nothing.
+#[derive(Clone, Debug)]
+pub struct Chain<D, const DIM: usize> {
+    pub(crate) n: usize,
+    pub(crate) lengths: Vec<D>,
+    pub(crate) masses: Vec<D>,
+    pub(crate) inv_lengths: Vec<D>,
+    pub(crate) inv_masses: Vec<D>,
+    /// The base spring of the bending moment M₀ = 2 k₁ z₁ / l₁² (eq. 3.1.3).
+    pub(crate) moment_stiffness: D,
+    pub(crate) tip: TipCondition,
+    pub(crate) springs: Springs<D>,
+    pub(crate) loads: Option<PointLoads<D>>,
+    pub(crate) gravity: Option<Gravity<D>>,
+    pub(crate) control: Option<ControlForce<D>>,
+    pub(crate) drag: Option<Drag<D>>,
+}
+
+/// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
+pub const DEFAULT_FOLD_LIMIT_DEG: f64 = 179.0;
+
+/// Evaluates the generalised force of every term (see [`Chain::potential_gradient`]).
+struct ForceSum<'a, D, const DIM: usize> {
+    q: &'a [[D; DIM]],
+    ctx: Ctx<D>,
+    out: &'a mut [[D; DIM]],
+}
+
+impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for ForceSum<'_, D, DIM> {
+    fn visit<T: ForceTerm<D, DIM>>(&mut self, term: &T) -> Result<()> {
+        term.force(self.q, &self.ctx, self.out)
+    }
+}
+
+/// Sums the energy of every term (see [`Chain::potential_energy`]).
+struct EnergySum<'a, D, const DIM: usize> {
+    q: &'a [[D; DIM]],
+    ctx: Ctx<D>,
+    sum: D,
+}
+
+impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for EnergySum<'_, D, DIM> {
+    fn visit<T: ForceTerm<D, DIM>>(&mut self, term: &T) -> Result<()> {
+        self.sum += term.energy(self.q, &self.ctx);
+        Ok(())
+    }
+}
+
+/// What a [`Products`] visitor computes.
+#[derive(Clone, Copy)]
+enum Product {
+    /// K w, accumulated with a scale.
+    Jvp,
+    /// w · ∂F/∂θ.
+    Parameter(Parameter),
+    /// w · ∂F/∂u.
+    Control,
+}
+
+/// Derived products of every term (see [`Chain::force_jacobian_product`],
+/// [`Chain::force_parameter_contraction`], [`Chain::control_contraction`]).
+struct Products<'a, D, const DIM: usize> {
+    q: &'a [[D; DIM]],
+    w: &'a [[D; DIM]],
+    ctx: Ctx<D>,
+    what: Product,
+    scale: D,
+    out: Option<&'a mut [[D; DIM]]>,
+    sum: D,
+    scratch: &'a mut DualScratch<D, DIM>,
+}
+
+impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Products<'_, D, DIM> {
+    fn visit<T: ForceTerm<D, DIM>>(&mut self, term: &T) -> Result<()> {
+        let (q, w, c, s) = (self.q, self.w, &self.ctx, &mut *self.scratch);
+        match self.what {
+            Product::Jvp => {
+                if let Some(out) = self.out.as_deref_mut() {
+                    term.force_jvp(q, w, c, self.scale, out, s)?;
+                }
+            }
+            Product::Parameter(p) => self.sum += term.parameter_contraction(q, w, c, p, s)?,
+            Product::Control => self.sum += term.control_contraction(q, w, c, s)?,
+        }
+        Ok(())
+    }
+}
+
+impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
+    /// Builds the model of a scene (validating it first). The control node is taken from the
+    /// scene's `[control]` (default: none, so no control term is computed).
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        scene.validate()?;
+        let n = scene.n();
+        let b = &scene.beam;
+        let lift = |v: &[f64]| v.iter().map(|&x| D::from(x)).collect::<Vec<D>>();
+        let lengths = lift(&b.lengths);
+        let masses = lift(&b.masses);
+        let tip = match (b.support, b.reaction_force) {
+            (Support::FixedFixed | Support::PinnedPinned, false) => TipCondition::Locked,
+            (Support::FixedFixed | Support::PinnedPinned, true) => TipCondition::Reaction,
+            _ => TipCondition::Free,
+        };
+        let control_node = scene.control.as_ref().map(|c| c.node);
+        if let (TipCondition::Reaction, Some(c)) = (tip, control_node) {
+            if c != n {
+                return Err(Error::InvalidArgument {
+                    name: "control.node",
+                    reason: format!(
+                        "the reaction-force variant moves the tip: the control must act at \
+                         node {n}, not {c}"
+                    ),
+                });
+            }
+        }
+        let springs = Self::springs_of(scene);
+        let has_base = springs.present[0];
+        let loads = scene
+            .loads
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, pl)| PointLoad {
+                node: pl.node,
+                force: D::from(pl.force),
+                start: pl.start,
+                end: pl.end.unwrap_or(f64::INFINITY),
+                scene_index: i,
+            });
+        let loads: Vec<_> = loads.collect();
+        Ok(Chain {
+            n,
+            inv_lengths: lengths.iter().map(|l| l.recip()).collect(),
+            inv_masses: masses.iter().map(|m| m.recip()).collect(),
+            moment_stiffness: D::from(if has_base { b.base_stiffness } else { 0.0 }),
+            tip,
+            springs,
+            loads: (!loads.is_empty()).then(|| PointLoads::new(loads, lengths.clone())),
+            gravity: (scene.loads.gravity != 0.0).then(|| Gravity {
+                g: D::from(scene.loads.gravity),
+                lengths: lengths.clone(),
+                masses: masses.clone(),
+            }),
+            control: control_node.map(|node| ControlForce {
+                node,
+                lengths: lengths.clone(),
+            }),
+            drag: (scene.loads.drag > 0.0).then(|| Drag {
+                d: D::from(scene.loads.drag),
+            }),
+            lengths,
+            masses,
+        })
+    }
+
+    /// The springs a scene's support has (SPEC §1): interior k₂..kₙ always, k₁ except for
+    /// pinned-pinned, k_{n+1} for riser and fixed-fixed.
+    fn springs_of(scene: &Scene) -> Springs<D> {
+        let n = scene.n();
+        let b = &scene.beam;
+        let mut k = vec![D::zero(); n + 1];
+        let mut present = vec![false; n + 1];
+        for i in 1..n {
+            k[i] = D::from(b.stiffness[i - 1]);
+            present[i] = true;
+        }
+        let (base, tip) = match b.support {
+            Support::Cantilever => (true, false),
+            Support::Riser | Support::FixedFixed => (true, true),
+            Support::PinnedPinned => (false, false),
+        };
+        if base {
+            k[0] = D::from(b.base_stiffness);
+            present[0] = true;
+        }
+        if tip {
+            k[n] = D::from(b.tip_stiffness);
+            present[n] = true;
+        }
+        Springs {
+            k,
+            present,
+            fold_cos: DEFAULT_FOLD_LIMIT_DEG.to_radians().cos(),
+        }
+    }
+
+    fn refresh_inverses(&mut self) {
+        for i in 0..self.n {
+            self.inv_lengths[i] = self.lengths[i].recip();
+            self.inv_masses[i] = self.masses[i].recip();
+        }
+    }
+
+    /// The same model over another scalar type (parameters lifted with `D2::from` of their real
+    /// parts).
+    pub fn lift<D2: Scalar>(&self) -> Chain<D2, DIM> {
+        let l = |v: &[D]| v.iter().map(|x| D2::from(x.re())).collect::<Vec<D2>>();
+        Chain {
+            n: self.n,
+            lengths: l(&self.lengths),
+            masses: l(&self.masses),
+            inv_lengths: l(&self.inv_lengths),
+            inv_masses: l(&self.inv_masses),
+            moment_stiffness: D2::from(self.moment_stiffness.re()),
+            tip: self.tip,
+            springs: self.springs.lift(),
+            loads: self.loads.as_ref().map(|t| t.lift()),
+            gravity: self.gravity.as_ref().map(|t| t.lift()),
+            control: self.control.as_ref().map(|t| t.lift()),
+            drag: self.drag.as_ref().map(|t| t.lift()),
+        }
+    }
+
+    /// Visits every conservative force term the model has: **the one place that lists them**
+    /// (a new term is added here and nowhere else in the solvers).
+    pub fn visit_terms<V: TermVisitor<D, DIM>>(&self, v: &mut V) -> Result<()> {
+        v.visit(&self.springs)?;
+        if let Some(t) = &self.loads {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.gravity {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.control {
+            v.visit(t)?;
+        }
+        Ok(())
+    }
+
+    /// Number of pendulums n.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// What holds the tip.
+    pub fn tip_condition(&self) -> TipCondition {
+        self.tip
+    }
+
+    /// Whether the model has the tip constraint row (locked or reaction-force tip).
+    pub fn has_tip_constraint(&self) -> bool {
+        self.tip != TipCondition::Free
+    }
+
+    /// Number of constraint multipliers: n length constraints, plus one for the tip.
+    pub fn n_constraints(&self) -> usize {
+        self.n + usize::from(self.has_tip_constraint())
+    }
+
+    /// Whether the model computes drag.
+    pub fn has_drag(&self) -> bool {
+        self.drag.is_some()
+    }
+
+    /// The drag term, if the scene has drag.
+    pub fn drag(&self) -> Option<&Drag<D>> {
+        self.drag.as_ref()
+    }
+
+    /// Whether the model has the spring of joint i (0..=n).
+    pub fn has_spring(&self, i: usize) -> bool {
+        self.springs.present[i]
+    }
+
+    /// The control node, if the model has a control.
+    pub fn control_node(&self) -> Option<usize> {
+        self.control.as_ref().map(|c| c.node)
+    }
+
+    /// Sets (or removes) the node the control acts at (1..=n).
+    pub fn set_control_node(&mut self, node: Option<usize>) -> Result<()> {
+        if let Some(c) = node {
+            if c == 0 || c > self.n {
+                return Err(Error::InvalidArgument {
+                    name: "control node",
+                    reason: format!("must be in 1..={}, got {c}", self.n),
+                });
+            }
+        }
+        self.control = node.map(|node| ControlForce {
+            node,
+            lengths: self.lengths.clone(),
+        });
+        Ok(())
+    }
+
+    /// Sets the fold limit in degrees (default [`DEFAULT_FOLD_LIMIT_DEG`]): a joint angle beyond
+    /// it is reported as [`Error::Folded`].
+    pub fn set_fold_limit_deg(&mut self, deg: f64) -> Result<()> {
+        if !(deg > 0.0 && deg < 180.0) {
+            return Err(Error::InvalidArgument {
+                name: "fold limit",
+                reason: format!("must be in (0, 180) degrees, got {deg}"),
+            });
+        }
+        self.springs.fold_cos = deg.to_radians().cos();
+        Ok(())
+    }
+
+    /// Sets a physical parameter (see [`Parameter`]); seed it with a dual number to obtain
+    /// forward-mode derivatives of a whole simulation with respect to it.
+    pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
+        let n = self.n;
+        let missing = |name, reason: &str| Error::InvalidArgument {
+            name,
+            reason: reason.to_string(),
+        };
+        match p {
+            Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
+            Parameter::BaseStiffness => {
+                if !self.springs.present[0] {
+                    return Err(missing("base stiffness", "the support has no base spring"));
+                }
+                self.springs.k[0] = value;
+                self.moment_stiffness = value;
+            }
+            Parameter::TipStiffness => {
+                if !self.springs.present[n] {
+                    return Err(missing("tip stiffness", "the support has no tip spring"));
+                }
+                self.springs.k[n] = value;
+            }
+            Parameter::Mass => {
+                self.masses.iter_mut().for_each(|m| *m = value);
+                if let Some(g) = &mut self.gravity {
+                    g.masses.iter_mut().for_each(|m| *m = value);
+                }
+                self.refresh_inverses();
+            }
+            Parameter::Drag => match &mut self.drag {
+                Some(d) => d.d = value,
+                None => return Err(missing("drag", "the scene has no drag (D = 0)")),
+            },
+            Parameter::LoadForce(i) => {
+                let l = self
+                    .loads
+                    .as_mut()
+                    .and_then(|ls| ls.loads.iter_mut().find(|l| l.scene_index == i));
+                match l {
+                    Some(l) => l.force = value,
+                    None => return Err(missing("load force", "no such point load")),
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether `p` is a parameter of this model that gradients can be taken for (mass needs
+    /// uniform masses, drag needs D > 0, end stiffnesses need an end spring, loads need that load).
+    pub fn has_parameter(&self, p: Parameter) -> bool {
+        match p {
+            Parameter::Mass => self.has_uniform_mass(),
+            Parameter::Drag => self.has_drag(),
+            Parameter::BaseStiffness => self.springs.present[0],
+            Parameter::TipStiffness => self.springs.present[self.n],
+            Parameter::InteriorStiffness => true,
+            Parameter::LoadForce(i) => self
+                .loads
+                .as_ref()
+                .is_some_and(|ls| ls.loads.iter().any(|l| l.scene_index == i)),
+        }
+    }
+
+    /// Applies M⁻¹ = M̄⁻¹ ⊗ I in O(n): M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l) with Δ the
+    /// lower-bidiagonal difference matrix (SPEC §1). `out` may not alias `v`.
+    #[inline]
+    pub fn apply_inverse_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
+        let n = self.n;
+        // u = diag(1/m) Δᵀ diag(1/l) v, stored in out; then out = diag(1/l) Δ u.
+        let mut next = [D::zero(); DIM];
+        for i in (0..n).rev() {
+            let mut cur = v[i];
+            for c in cur.iter_mut() {
+                *c *= self.inv_lengths[i];
+            }
+            for d in 0..DIM {
+                out[i][d] = (cur[d] - next[d]) * self.inv_masses[i];
+            }
+            next = cur;
+        }
+        let mut prev = [D::zero(); DIM];
+        for i in 0..n {
+            let cur = out[i];
+            for d in 0..DIM {
+                out[i][d] = (cur[d] - prev[d]) * self.inv_lengths[i];
+            }
+            prev = cur;
+        }
+    }
+
+    /// The tridiagonal entries of M̄⁻¹ in row i (0-based): `(diag_i, off_i)` with
+    /// off_i = M̄⁻¹_{i,i+1} = −1/(lᵢ l_{i+1} mᵢ) and M̄⁻¹_{ii} = (1/lᵢ²)(1/mᵢ + 1/m_{i−1}) (no
+    /// m₀ term for the first pendulum). From M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l).
+    #[inline]
+    pub(crate) fn minv_entries(&self, i: usize) -> (D, D) {
+        let li = self.inv_lengths[i];
+        let mi = self.inv_masses[i];
+        let d = if i > 0 {
+            li * li * (mi + self.inv_masses[i - 1])
+        } else {
+            li * li * mi
+        };
+        let off = if i + 1 < self.n {
+            -(li * self.inv_lengths[i + 1] * mi)
+        } else {
+            D::zero()
+        };
+        (d, off)
+    }
+
+    /// ∂U/∂q at time t with control u: the sum of every term's force ([`ForceTerm::force`];
+    /// springs eq. 2.2.3, loads eq. 2.2.2, control eq. 3.1.1, gravity §2.2.2). A joint beyond the
+    /// fold limit gives [`Error::Folded`] (with `step` = `step`).
+    pub fn potential_gradient(
+        &self,
+        q: &[[D; DIM]],
+        t: f64,
+        u: D,
+        step: usize,
+        out: &mut [[D; DIM]],
+    ) -> Result<()> {
+        out.iter_mut().for_each(|o| *o = [D::zero(); DIM]);
+        let ctx = Ctx::new(t, u, step);
+        self.visit_terms(&mut ForceSum { q, ctx, out })
+    }
+
+    /// Accumulates `scale` · K w into `out`, K = ∂²U/∂q² (symmetric, block-tridiagonal), summed
+    /// over the terms ([`ForceTerm::force_jvp`]).
+    pub fn force_jacobian_product(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scale: D,
+        out: &mut [[D; DIM]],
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<()> {
+        let what = Product::Jvp;
+        let (ctx, sum, out) = (*ctx, D::zero(), Some(out));
+        self.visit_terms(&mut Products {
+            q,
+            w,
+            ctx,
+            what,
+            scale,
+            out,
+            sum,
+            scratch,
+        })
+    }
+
+    /// w · ∂(∂U/∂q)/∂θ for a physical parameter θ, summed over the terms
+    /// ([`ForceTerm::parameter_contraction`]). The mass matrix's dependence on the masses is the
+    /// integrator's (and the adjoint's) business, not a force term's.
+    pub fn force_parameter_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        p: Parameter,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        self.contraction(q, w, ctx, Product::Parameter(p), scratch)
+    }
+
+    /// w · ∂(∂U/∂q)/∂u, summed over the terms ([`ForceTerm::control_contraction`]).
+    pub fn control_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        self.contraction(q, w, ctx, Product::Control, scratch)
+    }
+
+    fn contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        what: Product,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        let mut v = Products {
+            q,
+            w,
+            ctx: *ctx,
+            what,
+            scale: D::one(),
+            out: None,
+            sum: D::zero(),
+            scratch,
+        };
+        self.visit_terms(&mut v)?;
+        Ok(v.sum)
+    }
+
+    /// Whether all masses are equal (parameter derivatives with respect to [`Parameter::Mass`]
+    /// are taken at a common mass).
+    pub fn has_uniform_mass(&self) -> bool {
+        let m0 = self.masses[0].re();
+        self.masses
+            .iter()
+            .all(|m| (m.re() - m0).abs() <= 1e-15 * m0.abs())
+    }
+
+    /// The largest joint angle θᵢ = ∠(q_{i−1}, qᵢ), i = 1..=n+1, in radians (including the end
+    /// joints against e₂ whether or not they carry a spring).
+    pub fn max_joint_angle(&self, q: &[[D; DIM]]) -> f64 {
+        let e = e2::<D, DIM>();
+        let mut m: f64 = 0.0;
+        for i in 0..=self.n {
+            let a = if i == 0 { &e } else { &q[i - 1] };
+            let b = if i == self.n { &e } else { &q[i] };
+            m = m.max(joint_angle_squared(a, b).re().sqrt());
+        }
+        m
+    }
+
+    /// Potential energy U(q; t, u): the sum of every term's energy ([`ForceTerm::energy`]).
+    pub fn potential_energy(&self, q: &[[D; DIM]], t: f64, u: D) -> D {
+        let ctx = Ctx::new(t, u, 0);
+        let mut v = EnergySum {
+            q,
+            ctx,
+            sum: D::zero(),
+        };
+        // Energies cannot fail (no visitor returns an error).
+        let _ = self.visit_terms(&mut v);
+        v.sum
+    }
+
+    /// Kinetic energy ½ pᵀM⁻¹p; `scratch` has length n.
+    pub fn kinetic_energy(&self, p: &[[D; DIM]], scratch: &mut [[D; DIM]]) -> D {
+        self.apply_inverse_mass(p, scratch);
+        let mut e = D::zero();
+        for (a, b) in p.iter().zip(scratch.iter()) {
+            e += dot(a, b);
+        }
+        e * 0.5
+    }
+
+    /// Base bending moment M₀ = 2 k₁ z₁ / l₁² with z₁ = l₁ e₃ᵀq₁ (eq. 3.1.3, sign and index
+    /// corrected as SPEC §4 says).
+    #[inline]
+    pub fn base_moment(&self, q: &[[D; DIM]]) -> D {
+        self.moment_stiffness * 2.0 * q[0][zi::<DIM>()] * self.inv_lengths[0]
+    }
+
+    /// Node positions rᵢ = Σ_{j≤i} l_j q_j, i = 1..=n (node 0 is the origin).
+    pub fn node_positions(&self, q: &[[D; DIM]], out: &mut [[D; DIM]]) {
+        let mut r = [D::zero(); DIM];
+        for i in 0..self.n {
+            for d in 0..DIM {
+                r[d] += self.lengths[i] * q[i][d];
+            }
+            out[i] = r;
+        }
+    }
+
+    /// Tip z: l(q) = Σ lᵢ e₃ᵀqᵢ (eq. 2.4.1).
+    #[inline]
+    pub fn tip_z(&self, q: &[[D; DIM]]) -> D {
+        let z = zi::<DIM>();
+        let mut s = D::zero();
+        for i in 0..self.n {
+            s += self.lengths[i] * q[i][z];
+        }
+        s
+    }
+
+    /// Lengths lᵢ.
+    pub fn lengths(&self) -> &[D] {
+        &self.lengths
+    }
+
+    /// Masses mᵢ.
+    pub fn masses(&self) -> &[D] {
+        &self.masses
+    }
+
+    /// Spring constants k₁..k_{n+1} (zero where the support has none).
+    pub fn springs(&self) -> &[D] {
+        &self.springs.k
+    }
+}

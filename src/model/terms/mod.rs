@@ -1,0 +1,341 @@
+//! Physical effects as types: each force term is written **once**, generically over the scalar,
+//! and every derivative the solvers need is derived from that one definition with dual numbers.
+//!
+//! A conservative term implements [`ForceTerm`]: its energy U_T(q; t, u) and its generalised force
+//! ∂U_T/∂q (SPEC §1, thesis eq. 2.2.2-2.2.3), both generic over an evaluation scalar `E` that embeds
+//! the chain's scalar `D` ([`Embed`]). The trait then provides, by evaluating the same `force` in
+//! `Dual<D>`:
+//! * [`ForceTerm::force_jvp`]: K v with K = ∂²U_T/∂q² (seed q + εv);
+//! * [`ForceTerm::force_vjp`]: Kᵀ w = K w (K is a Hessian, hence symmetric);
+//! * [`ForceTerm::parameter_contraction`]: w · ∂(∂U_T/∂q)/∂θ for a physical parameter θ (the term
+//!   reads θ through [`Ctx::param`], which seeds it);
+//! * [`ForceTerm::control_contraction`]: w · ∂(∂U_T/∂q)/∂u (seed u).
+//!
+//! A term may override a derived product with a hand-written fast path (the springs do, for K v,
+//! because the step's adjoint calls it twice per step); `tests/terms.rs` checks every override
+//! against the dual-derived default to 1e-12, and every force against the dual gradient of the
+//! energy, for every term in both dimensions and for `f64` and `Dual64` chains.
+//!
+//! A momentum-dependent (dissipative) term implements [`DissipativeTerm`] (thesis eq. 2.4.4).
+//!
+//! **Adding a term**: write one type implementing [`ForceTerm`] (or [`DissipativeTerm`]), add it as
+//! a field of [`crate::Chain`] built from its scene entry, and list it in
+//! [`crate::Chain::visit_terms`]. Every integrator, the adjoint, the statics and the Hessian-vector
+//! products then see it with all its derivatives.
+
+mod control;
+mod drag;
+mod gravity;
+mod point_load;
+mod spring;
+
+pub use control::ControlForce;
+pub use drag::Drag;
+pub use gravity::Gravity;
+pub use point_load::{PointLoad, PointLoads};
+pub use spring::Springs;
+
+use super::{Parameter, Scalar};
+use crate::error::Result;
+use num_dual::Dual;
+
+/// A scalar that embeds the chain's scalar `D`: `D` itself, or `Dual<D>` for derivatives taken
+/// on top of `D` (nested when `D` is already a dual number, as in Hessian-vector products).
+pub trait Embed<D: Scalar>: Scalar {
+    /// x as a constant.
+    fn embed(x: D) -> Self;
+    /// x seeded with derivative 1 (the identity embedding cannot seed and returns x).
+    fn seeded(x: D) -> Self;
+}
+
+impl<D: Scalar> Embed<D> for D {
+    #[inline]
+    fn embed(x: D) -> Self {
+        x
+    }
+    #[inline]
+    fn seeded(x: D) -> Self {
+        x
+    }
+}
+
+impl<D: Scalar> Embed<D> for Dual<D> {
+    #[inline]
+    fn embed(x: D) -> Self {
+        Dual::from_re(x)
+    }
+    #[inline]
+    fn seeded(x: D) -> Self {
+        Dual::new(x, D::one())
+    }
+}
+
+/// What a term is evaluated at besides q: the time t, the control u, and which physical parameter
+/// (if any) carries a derivative seed.
+#[derive(Clone, Copy, Debug)]
+pub struct Ctx<E> {
+    /// Time t \[s\].
+    pub t: f64,
+    /// The control force u at t.
+    pub u: E,
+    /// Step index (for error reports).
+    pub step: usize,
+    /// The parameter seeded by [`Ctx::param`], if any.
+    pub seed: Option<Parameter>,
+}
+
+impl<E> Ctx<E> {
+    /// A context without a seeded parameter.
+    pub fn new(t: f64, u: E, step: usize) -> Self {
+        Ctx {
+            t,
+            u,
+            step,
+            seed: None,
+        }
+    }
+
+    /// Reads a physical parameter `p` of value `v` into the evaluation scalar, seeded with
+    /// derivative 1 when `p` is the context's seed. Terms read every parameter through this, so
+    /// that parameter derivatives come from the same code.
+    #[inline]
+    pub fn param<D: Scalar>(&self, p: Parameter, v: D) -> E
+    where
+        E: Embed<D>,
+    {
+        if self.seed == Some(p) {
+            E::seeded(v)
+        } else {
+            E::embed(v)
+        }
+    }
+}
+
+/// Scratch buffers for the dual-number evaluations of the derived products (sized once, so the
+/// products do not allocate).
+#[derive(Clone, Debug)]
+pub struct DualScratch<D, const DIM: usize> {
+    q: Vec<[Dual<D>; DIM]>,
+    f: Vec<[Dual<D>; DIM]>,
+}
+
+impl<D: Scalar, const DIM: usize> DualScratch<D, DIM> {
+    /// Buffers for a chain of n pendulums.
+    pub fn new(n: usize) -> Self {
+        let z = [Dual::from_re(D::zero()); DIM];
+        DualScratch {
+            q: vec![z; n],
+            f: vec![z; n],
+        }
+    }
+
+    /// Loads q + ε v (v = None: ε-part zero) and clears the force buffer.
+    fn load(&mut self, q: &[[D; DIM]], v: Option<&[[D; DIM]]>) {
+        for (i, (s, f)) in self.q.iter_mut().zip(self.f.iter_mut()).enumerate() {
+            for d in 0..DIM {
+                let eps = v.map_or(D::zero(), |v| v[i][d]);
+                s[d] = Dual::new(q[i][d], eps);
+                f[d] = Dual::from_re(D::zero());
+            }
+        }
+    }
+
+    /// Σ w · ε-part of the force buffer.
+    fn contract(&self, w: &[[D; DIM]]) -> D {
+        let mut s = D::zero();
+        for (f, w) in self.f.iter().zip(w) {
+            for d in 0..DIM {
+                s += f[d].eps * w[d];
+            }
+        }
+        s
+    }
+}
+
+/// A conservative force term U_T(q; t, u), written once over the evaluation scalar.
+///
+/// `force` *accumulates* ∂U_T/∂q into `out` (callers zero it). The derived products have default
+/// implementations by dual numbers; see the module docs.
+pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send + Sync {
+    /// A short name for diagnostics and tests.
+    fn name(&self) -> &'static str;
+
+    /// The term's energy U_T(q; t, u).
+    fn energy<E: Embed<D>>(&self, q: &[[E; DIM]], ctx: &Ctx<E>) -> E;
+
+    /// Accumulates the generalised force ∂U_T/∂q into `out`.
+    ///
+    /// # Errors
+    /// A term may refuse a configuration outside its model ([`crate::Error::Folded`] for springs).
+    fn force<E: Embed<D>>(&self, q: &[[E; DIM]], ctx: &Ctx<E>, out: &mut [[E; DIM]]) -> Result<()>;
+
+    /// Whether ∂U_T/∂q depends on q (if not, K = 0 and [`ForceTerm::force_jvp`] is skipped).
+    fn depends_on_configuration(&self) -> bool {
+        true
+    }
+
+    /// Whether ∂U_T/∂q depends on the control u.
+    fn depends_on_control(&self) -> bool {
+        false
+    }
+
+    /// Whether the term reads the physical parameter `p`.
+    fn has_parameter(&self, p: Parameter) -> bool;
+
+    /// Accumulates `scale` · K v into `out`, K = ∂²U_T/∂q², by one `Dual<D>` evaluation of
+    /// [`ForceTerm::force`] at q + εv.
+    fn force_jvp(
+        &self,
+        q: &[[D; DIM]],
+        v: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scale: D,
+        out: &mut [[D; DIM]],
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<()> {
+        if !self.depends_on_configuration() {
+            return Ok(());
+        }
+        scratch.load(q, Some(v));
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::from_re(ctx.u),
+            step: ctx.step,
+            seed: None,
+        };
+        self.force(&scratch.q, &c, &mut scratch.f)?;
+        for (o, f) in out.iter_mut().zip(&scratch.f) {
+            for d in 0..DIM {
+                o[d] += scale * f[d].eps;
+            }
+        }
+        Ok(())
+    }
+
+    /// Accumulates `scale` · Kᵀ w into `out`. K is the Hessian of U_T, hence symmetric, so this is
+    /// [`ForceTerm::force_jvp`] (the symmetry is tested as ⟨K v, w⟩ = ⟨v, Kᵀw⟩).
+    fn force_vjp(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scale: D,
+        out: &mut [[D; DIM]],
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<()> {
+        self.force_jvp(q, w, ctx, scale, out, scratch)
+    }
+
+    /// w · ∂(∂U_T/∂q)/∂p, by one `Dual<D>` evaluation with p seeded.
+    fn parameter_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        p: Parameter,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        if !self.has_parameter(p) {
+            return Ok(D::zero());
+        }
+        scratch.load(q, None);
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::from_re(ctx.u),
+            step: ctx.step,
+            seed: Some(p),
+        };
+        self.force(&scratch.q, &c, &mut scratch.f)?;
+        Ok(scratch.contract(w))
+    }
+
+    /// w · ∂(∂U_T/∂q)/∂u, by one `Dual<D>` evaluation with u seeded.
+    fn control_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        if !self.depends_on_control() {
+            return Ok(D::zero());
+        }
+        scratch.load(q, None);
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::new(ctx.u, D::one()),
+            step: ctx.step,
+            seed: None,
+        };
+        self.force(&scratch.q, &c, &mut scratch.f)?;
+        Ok(scratch.contract(w))
+    }
+}
+
+/// A momentum-dependent force F(p) added to ṗ (thesis eq. 2.4.4), acting componentwise
+/// (Fᵢ depends on pᵢ only), written once over the evaluation scalar.
+///
+/// RATTLE evaluates it at p_{k+½} in both half-steps (SPEC §2), so the first half-step solves
+/// p − (h/2) F(p) = c per component; [`DissipativeTerm::implicit_half_step`] does so by Newton on
+/// the dual-derived derivative, and a term with a closed-form root may override it (tested equal).
+pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
+    /// A short name for diagnostics and tests.
+    fn name(&self) -> &'static str;
+
+    /// The force component Fᵢ(pᵢ) (parameters read through [`Ctx::param`]).
+    fn force_component<E: Embed<D>>(&self, p: E, ctx: &Ctx<E>) -> E;
+
+    /// Whether the term reads the physical parameter `p`.
+    fn has_parameter(&self, p: Parameter) -> bool;
+
+    /// (Fᵢ, ∂Fᵢ/∂pᵢ) by one `Dual<D>` evaluation.
+    fn force_and_slope(&self, p: D, ctx: &Ctx<D>) -> (D, D) {
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::from_re(ctx.u),
+            step: ctx.step,
+            seed: None,
+        };
+        let f = self.force_component(Dual::new(p, D::one()), &c);
+        (f.re, f.eps)
+    }
+
+    /// ∂Fᵢ/∂θ for a physical parameter θ, by one `Dual<D>` evaluation with θ seeded.
+    fn parameter_derivative(&self, p: D, ctx: &Ctx<D>, param: Parameter) -> D {
+        if !self.has_parameter(param) {
+            return D::zero();
+        }
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::from_re(ctx.u),
+            step: ctx.step,
+            seed: Some(param),
+        };
+        self.force_component(Dual::from_re(p), &c).eps
+    }
+
+    /// Solves p − (h/2) F(p) = c for one component and returns (p, W) with W = ∂p/∂c =
+    /// 1/(1 − (h/2) F′(p)). Default: Newton from p = c, to round-off, with the slope from
+    /// [`DissipativeTerm::force_and_slope`].
+    fn implicit_half_step(&self, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
+        let hh = 0.5 * h;
+        let mut p = c;
+        for _ in 0..50 {
+            let (f, df) = self.force_and_slope(p, ctx);
+            let r = p - f * hh - c;
+            let step = r * (-(df * hh) + 1.0).recip();
+            p -= step;
+            if step.re().abs() <= 1e-15 * (1.0 + p.re().abs()) {
+                break;
+            }
+        }
+        let (_, df) = self.force_and_slope(p, ctx);
+        (p, (-(df * hh) + 1.0).recip())
+    }
+}
+
+/// Visits every term of a chain (see [`crate::Chain::visit_terms`]): the one place that lists them.
+pub trait TermVisitor<D: Scalar, const DIM: usize> {
+    /// Called once per conservative term present in the model.
+    fn visit<T: ForceTerm<D, DIM>>(&mut self, term: &T) -> Result<()>;
+}

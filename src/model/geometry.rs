@@ -121,6 +121,24 @@ pub fn spring_s_ds<D: Scalar>(x: D) -> (D, D) {
     }
 }
 
+/// θ² = arccos(x)² for x = cos θ, the spring energy's angle as a function of x = a·b (so that its
+/// gradient is exactly the spring force −s(x)·b of eq. 2.2.3, also off the unit sphere, where
+/// the constraint forces absorb the normal components).
+///
+/// Near x = 1, arccos(x)² = (1 − x)(1 + x) s(x)² with the series of [`spring_s`], so that the value
+/// and its derivatives are finite and exact at θ = 0; elsewhere arccos(x)².
+#[inline]
+pub fn arccos_squared<D: Scalar>(x: D) -> D {
+    let w = (-x + 1.0) * 0.5;
+    if w.re() <= S_SERIES_MAX_W {
+        let s = spring_s(x);
+        (-x + 1.0) * (x + 1.0) * s * s
+    } else {
+        let t = x.acos();
+        t * t
+    }
+}
+
 /// The squared joint angle θ² = ∠(a, b)² of two unit vectors, accurate at small and large angles
 /// and differentiable at θ = 0 (used for the spring energy ½ k θ², eq. 2.2.2).
 ///

@@ -13,8 +13,8 @@
 pub mod geometry;
 pub mod terms;
 
+pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
-pub use geometry::{joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub use terms::{
     ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity, PointLoad,
     PointLoads, Springs, TermVisitor,

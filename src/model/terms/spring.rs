@@ -3,14 +3,14 @@
 
 use super::{Ctx, DualScratch, Embed, ForceTerm};
 use crate::error::{Error, Result};
-use crate::model::geometry::{dot, e2, joint_angle_squared, spring_s, spring_s_ds};
+use crate::model::geometry::{arccos_squared, dot, e2, spring_s, spring_s_ds};
 use crate::model::{Parameter, Scalar};
 
 /// The springs k₁..k_{n+1} (index 0..=n) with θᵢ = ∠(q_{i−1}, qᵢ), q₀ = q_{n+1} = e₂; only the
 /// springs the support has are present (k₁: cantilever, riser, fixed-fixed; k_{n+1}: riser,
 /// fixed-fixed).
 ///
-/// Energy ½ kᵢ θᵢ² ([`joint_angle_squared`]); force on the two pendulums of joint i
+/// Energy ½ kᵢ θᵢ² with θᵢ² = arccos(q_{i−1}·qᵢ)² ([`arccos_squared`]); force on the two pendulums of joint i
 /// −kᵢ s(q_{i−1}·qᵢ) (qᵢ on q_{i−1}, q_{i−1} on qᵢ) with s(x) = arccos(x)/√(1 − x²) (eq. 2.2.3).
 /// A joint beyond the fold limit is [`Error::Folded`].
 #[derive(Clone, Debug)]
@@ -78,7 +78,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for Springs<D> {
             if self.present[i] {
                 let (a, b) = Self::ends(q, i, &e);
                 let k = ctx.param(self.parameter(i), self.k[i]);
-                u += k * joint_angle_squared(a, b) * 0.5;
+                u += k * arccos_squared(dot(a, b)) * 0.5;
             }
         }
         u

@@ -73,17 +73,17 @@ pub struct SolverArgs {
     max_iters: Option<usize>,
     /// Stop when the gradient norm ‖∇c‖ falls below this, in Nm² [default: off; the relative
     /// test ‖∇c‖ ≤ 1e-8·‖∇c(start)‖ always applies].
-    #[arg(long, value_name = "TOL", allow_negative_numbers = true)]
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     gtol: Option<f64>,
     /// Force limit: every control value stays in [−U, U] N [default: unbounded].
-    #[arg(long, value_name = "U", allow_negative_numbers = true)]
+    #[arg(long, value_name = "U", allow_hyphen_values = true)]
     bound: Option<f64>,
     /// Lower force limit L [N], with --upper. Only symmetric limits (L = −U) are supported so
     /// far; they are the same as --bound U.
     #[arg(
         long,
         value_name = "L",
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         conflicts_with = "bound"
     )]
     lower: Option<f64>,
@@ -91,7 +91,7 @@ pub struct SolverArgs {
     #[arg(
         long,
         value_name = "U",
-        allow_negative_numbers = true,
+        allow_hyphen_values = true,
         conflicts_with = "bound"
     )]
     upper: Option<f64>,
@@ -176,7 +176,7 @@ impl SolverArgs {
 pub struct ParallelArgs {
     /// Worker threads for the starts, 1 to 1024; 0 means one per CPU core. Results do not depend
     /// on it.
-    #[arg(long, value_name = "N", default_value_t = 0,
+    #[arg(long, value_name = "N", default_value_t = 0, allow_hyphen_values = true,
           value_parser = clap::value_parser!(u16).range(0..=MAX_THREADS as i64))]
     threads: u16,
     /// Seed for the random start designs; the same seed gives the same starts and results.
@@ -194,14 +194,14 @@ pub struct DesignArgs {
     design: DesignArg,
     /// Lower end of the start box, in N (latin, random). The default [−600, 600] holds every
     /// constant optimum of the thesis's riser.
-    #[arg(long, value_name = "LO", default_value_t = -600.0, allow_negative_numbers = true)]
+    #[arg(long, value_name = "LO", default_value_t = -600.0, allow_hyphen_values = true)]
     lo: f64,
     /// Upper end of the start box, in N (latin, random).
     #[arg(
         long,
         value_name = "HI",
         default_value_t = 600.0,
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     hi: f64,
     /// Half-width of the perturbation, in N (perturb).
@@ -209,7 +209,7 @@ pub struct DesignArgs {
         long,
         value_name = "R",
         default_value_t = 1.0,
-        allow_negative_numbers = true
+        allow_hyphen_values = true
     )]
     radius: f64,
 }

@@ -23,7 +23,7 @@ pub struct ProblemArgs {
     pub pieces: Option<usize>,
     /// Adds the control-effort penalty ρ·h·Σ_{k=0..N} u_k² to the objective (ρ ≥ 0, in
     /// m²/s: the penalty is then in N²m² like the objective).
-    #[arg(long, value_name = "RHO", allow_negative_numbers = true)]
+    #[arg(long, value_name = "RHO", allow_hyphen_values = true)]
     pub effort: Option<f64>,
 }
 

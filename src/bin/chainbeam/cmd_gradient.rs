@@ -1,0 +1,93 @@
+//! `chainbeam gradient`: objective and exact adjoint gradient (JSON).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use serde::Serialize;
+
+use crate::output::Output;
+use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs};
+use crate::progress::Progress;
+use crate::{check_finite, controls_io, inputs, lib_error, load_scene, to_json, CliError};
+use crate::{OUTPUT_HELP, SCENE_HELP};
+
+/// `gradient --help`.
+pub const LONG_ABOUT: &str = "\
+Evaluate the objective of the scene's [objective] (default \"final\") and its exact gradient by the \
+discrete adjoint with respect to the control parameters θ, at the scene's control.values (or at \
+the values of --controls FILE).
+
+Objectives: \"final\" c = M₀(t_N)² (thesis eq. 3.3.2), \"sum\" c_sum = Σ_{k=0..N} M₀(t_k)² \
+(eq. 3.3.4), in N²m², plus ρ·h·Σ u_k² with --effort ρ. M₀ is the base bending moment in Nm; the \
+gradient is in N²m²/N = Nm².
+
+θ is laid out as control.values: one value for kind = \"constant\", N + 1 values u_0..u_N for \
+\"per-step\" (u_N only touches the final momentum, never a configuration, so its entry is 0 \
+without --effort), P values with --pieces P. With --controls FILE the file decides: 1 value is a \
+constant, N + 1 values are per-step, and the JSON of optimize says its own kind.
+
+Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, objective_kind, \
+effort, control_kind, pieces (piecewise only), control_node. The output is itself a valid \
+--controls file.
+
+Sign convention: a load F > 0 enters H as +F·z and pushes toward −z; u = −F cancels a tip load F.";
+
+/// `gradient`'s flags.
+#[derive(Args)]
+pub struct GradientArgs {
+    #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// Evaluate at these controls instead of the scene's control.values: the JSON that
+    /// `optimize` or `gradient` writes, the `control` column of a `simulate` CSV, or a single
+    /// column of numbers (1 value: constant; N + 1 values: per-step).
+    #[arg(long, value_name = "FILE", conflicts_with = "pieces")]
+    pub controls: Option<PathBuf>,
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+    #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct GradientReport {
+    objective: f64,
+    gradient: Vec<f64>,
+    controls: Vec<f64>,
+    gradient_norm: f64,
+    objective_kind: &'static str,
+    effort: f64,
+    #[serde(flatten)]
+    kind: KindReport,
+    control_node: usize,
+}
+
+/// Runs `gradient`.
+pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
+    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, a.controls.as_ref()))?;
+    problem::check_effort(a.problem.effort)?;
+    let scene = load_scene(&a.scene)?;
+    let file = a.controls.as_deref().map(controls_io::read).transpose()?;
+    let sp = problem::build(&a.scene, &scene, Some(&a.problem), file.as_ref())?;
+    let n = sp.theta0.len();
+    let spinner = progress.spinner(format!(
+        "adjoint gradient over {} steps ({n} parameter{})",
+        scene.time.steps,
+        if n == 1 { "" } else { "s" }
+    ));
+    let result = sp.problem.value_and_gradient(&sp.theta0);
+    spinner.finish_and_clear();
+    let (objective, gradient) = result.map_err(|e| lib_error(&a.scene, e))?;
+    check_finite(&a.scene, "objective", &[objective])?;
+    check_finite(&a.scene, "gradient", &gradient)?;
+    let report = GradientReport {
+        objective,
+        gradient_norm: problem::norm(&gradient),
+        gradient,
+        controls: sp.theta0,
+        objective_kind: objective_name(sp.objective.kind),
+        effort: sp.objective.effort,
+        kind: kind_report(sp.problem.map()),
+        control_node: sp.control_node,
+    };
+    out.write_all(&to_json(&report)?)
+}

@@ -1,0 +1,216 @@
+//! `chainbeam simulate`: the trajectory as CSV or NumPy `.npy`.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+
+use clap::{Args, ValueEnum};
+
+use chainbeam::{simulate, simulate_with_controls, ControlMap, Scene, Trajectory};
+
+use crate::output::{push_f64, Output};
+use crate::progress::Progress;
+use crate::{controls_io, inputs, lib_error, load_scene, npy, CliError};
+use crate::{OUTPUT_HELP, SCENE_HELP};
+
+/// `simulate --help`.
+pub const LONG_ABOUT: &str = "\
+Simulate a scene from the straight beam at rest with RATTLE (step h = time.step, N = time.steps), \
+applying the scene's [control] (u_k at node control.node; a constant control is applied at every \
+t_k) or the forces of --controls FILE, and write the trajectory.
+
+CSV (the default): a header line, then one row per time t_k = k·h, k = 0..N (N + 1 rows):
+  t        time t_k [s]
+  energy   total energy H(q_k, p_k; t_k, u_k) [J] (kinetic + springs + loads + control + gravity)
+  moment   base bending moment M₀(t_k) = 2·k₁·z₁/l₁² [Nm] (thesis eq. 3.1.3)
+  xi,yi,zi position of node i = 1..n [m]; x = 0 (planar model), the beam lies along +y
+  control  the control force u_k [N] applied at t_k (0 without a control); always the last column
+Numbers are written as the shortest decimal that reads back to the same double.
+
+NumPy (--format npy, or an --output name ending in .npy): one C-ordered float64 array of shape \
+(N + 1, 3n + 4) with the same columns in the same order (np.load(FILE); positions are \
+a[:, 3:-1].reshape(-1, n, 3)).
+
+Sign convention: a load F > 0 enters H as +F·z and pushes toward −z; u = −F cancels a tip load F.";
+
+/// `simulate`'s flags.
+#[derive(Args)]
+pub struct SimulateArgs {
+    #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// Apply these control forces instead of the scene's [control]: the JSON that `optimize` or
+    /// `gradient` writes (its `controls`), the `control` column of a `simulate` CSV, or a single
+    /// column of numbers; 1 value (constant) or N + 1 values u_0..u_N, finite. They act at
+    /// control.node (default: the tip).
+    #[arg(long, value_name = "FILE")]
+    pub controls: Option<PathBuf>,
+    /// Output format [default: npy if the --output name ends in .npy, else csv].
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub format: Option<Format>,
+    #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
+    pub output: Option<PathBuf>,
+}
+
+/// The trajectory's file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// Comma-separated text with a header line.
+    Csv,
+    /// NumPy .npy (version 1.0): one float64 array, the CSV's columns.
+    Npy,
+}
+
+impl Format {
+    fn choose(flag: Option<Format>, output: Option<&Path>) -> Format {
+        flag.unwrap_or_else(|| match output.and_then(Path::extension) {
+            Some(e) if e.eq_ignore_ascii_case("npy") => Format::Npy,
+            _ => Format::Csv,
+        })
+    }
+}
+
+/// Runs `simulate`.
+pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
+    let format = Format::choose(a.format, a.output.as_deref());
+    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, a.controls.as_ref()))?;
+    if format == Format::Npy && out.is_stdout() && std::io::stdout().is_terminal() {
+        return Err(CliError::msg(
+            "--format npy: refusing to write binary data to a terminal; give --output FILE.npy \
+             or redirect standard output",
+        ));
+    }
+    let scene = load_scene(&a.scene)?;
+    let controls = match &a.controls {
+        Some(path) => Some(controls_u(&scene, &controls_io::read(path)?)?),
+        None => None,
+    };
+    let steps = scene.time.steps;
+    let spinner = progress.spinner(format!(
+        "simulating {steps} steps of a {}-pendulum beam",
+        scene.n()
+    ));
+    let traj = match &controls {
+        Some(u) => simulate_with_controls(&scene, u),
+        None => simulate(&scene),
+    };
+    spinner.finish_and_clear();
+    let traj = traj.map_err(|e| lib_error(&a.scene, e))?;
+    check_trajectory(&a.scene, &traj)?;
+
+    let mut sink = out.open()?;
+    let bar = progress.bar(traj.steps() as u64 + 1, "writing rows");
+    let written = match format {
+        Format::Csv => write_csv(sink.writer(), &traj, &bar),
+        Format::Npy => write_npy(sink.writer(), &traj, &bar),
+    };
+    bar.finish_and_clear();
+    if let Err(e) = written {
+        return Err(sink.error(&e));
+    }
+    sink.finish()
+}
+
+/// The forces u_0..u_N of a `--controls` file on this scene.
+fn controls_u(scene: &Scene, file: &controls_io::ControlsFile) -> Result<Vec<f64>, CliError> {
+    let map = file.parametrisation(scene.time.steps)?;
+    let mut u = vec![0.0; scene.time.steps + 1];
+    map.controls(&file.values, &mut u);
+    Ok(u)
+}
+
+/// Never write NaN: every value is checked before the first byte goes out.
+fn check_trajectory(path: &Path, traj: &Trajectory<f64, 2>) -> Result<(), CliError> {
+    for k in 0..=traj.steps() {
+        let bad = |col: &str| {
+            CliError::msg(format!(
+                "{}: the simulation produced a non-finite value in column `{col}` at step {k} \
+                 (t = {}); nothing was written",
+                path.display(),
+                traj.time(k)
+            ))
+        };
+        for (col, v) in [
+            ("t", traj.time(k)),
+            ("energy", traj.energy[k]),
+            ("moment", traj.moment[k]),
+            ("control", traj.controls[k]),
+        ] {
+            if !v.is_finite() {
+                return Err(bad(col));
+            }
+        }
+        for (i, r) in traj.positions(k).iter().enumerate() {
+            for (c, v) in ["x", "y", "z"].iter().zip(r) {
+                if !v.is_finite() {
+                    return Err(bad(&format!("{c}{}", i + 1)));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The CSV header: `t,energy,moment,x1,y1,z1,...,xn,yn,zn,control`.
+pub fn csv_header(n: usize) -> String {
+    let mut h = String::from("t,energy,moment");
+    for i in 1..=n {
+        h.push_str(&format!(",x{i},y{i},z{i}"));
+    }
+    h.push_str(",control\n");
+    h
+}
+
+/// One row of the trajectory at step k, in the column order of [`csv_header`].
+fn row(traj: &Trajectory<f64, 2>, k: usize, out: &mut Vec<f64>) {
+    out.clear();
+    out.extend([traj.time(k), traj.energy[k], traj.moment[k]]);
+    for r in traj.positions(k) {
+        out.extend(r);
+    }
+    out.push(traj.controls[k]);
+}
+
+fn write_csv(
+    w: &mut dyn Write,
+    traj: &Trajectory<f64, 2>,
+    bar: &indicatif::ProgressBar,
+) -> std::io::Result<()> {
+    w.write_all(csv_header(traj.n()).as_bytes())?;
+    let mut values = Vec::with_capacity(4 + 3 * traj.n());
+    let mut line = Vec::with_capacity(24 * (4 + 3 * traj.n()));
+    let mut buf = zmij::Buffer::new();
+    for k in 0..=traj.steps() {
+        row(traj, k, &mut values);
+        line.clear();
+        for (j, v) in values.iter().enumerate() {
+            if j > 0 {
+                line.push(b',');
+            }
+            push_f64(&mut line, &mut buf, *v);
+        }
+        line.push(b'\n');
+        w.write_all(&line)?;
+        if k % 1024 == 0 {
+            bar.set_position(k as u64);
+        }
+    }
+    Ok(())
+}
+
+fn write_npy(
+    w: &mut dyn Write,
+    traj: &Trajectory<f64, 2>,
+    bar: &indicatif::ProgressBar,
+) -> std::io::Result<()> {
+    let columns = 4 + 3 * traj.n();
+    w.write_all(&npy::header(&[traj.steps() + 1, columns]))?;
+    let mut values = Vec::with_capacity(columns);
+    let mut bytes = Vec::with_capacity(8 * columns);
+    for k in 0..=traj.steps() {
+        row(traj, k, &mut values);
+        npy::write_row(w, &mut bytes, &values)?;
+        if k % 1024 == 0 {
+            bar.set_position(k as u64);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,205 @@
+//! The control problem a command works on: the scene's `[control]` and `[objective]`, changed by
+//! `--pieces`, `--effort` and `--controls`.
+
+use std::path::Path;
+
+use clap::Args;
+use serde::Serialize;
+
+use chainbeam::{
+    BendingObjective, ControlMap, ControlProblem, ObjectiveKind, Parametrisation, PiecewiseControl,
+    Scene,
+};
+
+use crate::controls_io::ControlsFile;
+use crate::{lib_error, CliError};
+
+/// Flags that change the objective or the control parametrisation (gradient, optimize, explore).
+#[derive(Args, Clone, Debug)]
+pub struct ProblemArgs {
+    /// Piecewise-constant control with P pieces (1 ≤ P ≤ N = time.steps) instead of the scene's
+    /// control kind; the start values are the scene's forces averaged over each piece.
+    #[arg(long, value_name = "P")]
+    pub pieces: Option<usize>,
+    /// Adds the control-effort penalty ρ·h·Σ_{k=0..N} u_k² to the objective (ρ ≥ 0, in
+    /// m²/s: the penalty is then in N²m² like the objective).
+    #[arg(long, value_name = "RHO", allow_hyphen_values = true)]
+    pub effort: Option<f64>,
+}
+
+/// The control problem of a scene and the parameters θ₀ to evaluate it at (or start from).
+pub struct SceneProblem {
+    /// The problem.
+    pub problem: ControlProblem,
+    /// θ₀: the scene's `control.values` (or one constant 0 at the tip without a `[control]`),
+    /// averaged over pieces with `--pieces`, or the `--controls` file's values.
+    pub theta0: Vec<f64>,
+    /// The node the control acts at.
+    pub control_node: usize,
+    /// The objective (kind and effort).
+    pub objective: BendingObjective,
+}
+
+/// How the parametrisation is reported in the JSON: `control_kind` and, for piecewise controls,
+/// `pieces`.
+#[derive(Serialize)]
+pub struct KindReport {
+    /// "constant", "per-step" or "piecewise".
+    pub control_kind: &'static str,
+    /// The number of pieces of a piecewise control.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pieces: Option<usize>,
+}
+
+/// The name of a parametrisation in the JSON.
+pub fn kind_report(p: &Parametrisation) -> KindReport {
+    match p {
+        Parametrisation::Constant => KindReport {
+            control_kind: "constant",
+            pieces: None,
+        },
+        Parametrisation::PerStep(_) => KindReport {
+            control_kind: "per-step",
+            pieces: None,
+        },
+        Parametrisation::Piecewise(pc) => KindReport {
+            control_kind: "piecewise",
+            pieces: Some(pc.pieces),
+        },
+    }
+}
+
+/// The name of an objective kind in the JSON.
+pub fn objective_name(kind: ObjectiveKind) -> &'static str {
+    match kind {
+        ObjectiveKind::Final => "final",
+        ObjectiveKind::Sum => "sum",
+    }
+}
+
+/// Checks `--effort` (finite, ≥ 0).
+pub fn check_effort(effort: Option<f64>) -> Result<f64, CliError> {
+    match effort {
+        None => Ok(0.0),
+        Some(r) if r.is_finite() && r >= 0.0 => Ok(r),
+        Some(r) => Err(CliError::msg(format!(
+            "--effort: the penalty weight ρ must be finite and non-negative, got {r}"
+        ))),
+    }
+}
+
+/// The scene's own parametrisation and θ₀.
+fn scene_parametrisation(
+    path: &Path,
+    scene: &Scene,
+) -> Result<(Parametrisation, Vec<f64>), CliError> {
+    let base = ControlProblem::from_scene(scene).map_err(|e| lib_error(path, e))?;
+    let map = *base.map();
+    let theta0 = match &scene.control {
+        Some(c) => c.values.clone(),
+        None => vec![0.0],
+    };
+    if theta0.len() != map.n_params() {
+        return Err(CliError::msg(format!(
+            "{}: key `control.values`: expected {} values, got {}",
+            path.display(),
+            map.n_params(),
+            theta0.len()
+        )));
+    }
+    Ok((map, theta0))
+}
+
+/// θ of a piecewise control whose pieces hold the means of `u` over them.
+fn piece_means(pc: PiecewiseControl, u: &[f64]) -> Vec<f64> {
+    let mut sum = vec![0.0; pc.pieces];
+    let mut count = vec![0.0; pc.pieces];
+    pc.transpose(u, &mut sum);
+    pc.transpose(&vec![1.0; u.len()], &mut count);
+    sum.iter()
+        .zip(&count)
+        .map(|(s, c)| if *c > 0.0 { s / c } else { 0.0 })
+        .collect()
+}
+
+/// Builds the problem: the scene's control and objective, `args`' changes, and (if given) the
+/// parametrisation and values of a `--controls` file.
+pub fn build(
+    path: &Path,
+    scene: &Scene,
+    args: Option<&ProblemArgs>,
+    controls: Option<&ControlsFile>,
+) -> Result<SceneProblem, CliError> {
+    let effort = check_effort(args.and_then(|a| a.effort))?;
+    let steps = scene.time.steps;
+    let (mut map, mut theta0) = scene_parametrisation(path, scene)?;
+    if let Some(p) = args.and_then(|a| a.pieces) {
+        if p == 0 || p > steps {
+            return Err(CliError::msg(format!(
+                "--pieces: the number of pieces must be between 1 and N = {steps} (time.steps \
+                 of {}), got {p}",
+                path.display()
+            )));
+        }
+        let u = ControlProblem::new(scene, map, BendingObjective::final_moment())
+            .and_then(|pr| pr.controls(&theta0))
+            .map_err(|e| lib_error(path, e))?;
+        let pc = PiecewiseControl { steps, pieces: p };
+        theta0 = piece_means(pc, &u);
+        map = Parametrisation::Piecewise(pc);
+    }
+    if let Some(c) = controls {
+        map = c.parametrisation(steps)?;
+        theta0 = c.values.clone();
+    }
+    let objective = BendingObjective {
+        kind: scene.objective.unwrap_or(ObjectiveKind::Final),
+        effort,
+    };
+    let problem = ControlProblem::new(scene, map, objective).map_err(|e| lib_error(path, e))?;
+    let control_node = scene.control.as_ref().map_or(scene.n(), |c| c.node);
+    Ok(SceneProblem {
+        problem,
+        theta0,
+        control_node,
+        objective,
+    })
+}
+
+/// Euclidean norm.
+pub fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Piece means of a ramp u_k = k: each piece's mean is the mean of the k it covers, whatever
+    /// the library's convention (computed here from the same map's u).
+    #[test]
+    fn piece_means_average_each_piece() {
+        let pc = PiecewiseControl {
+            steps: 9,
+            pieces: 3,
+        };
+        let u: Vec<f64> = (0..10).map(f64::from).collect();
+        let theta = piece_means(pc, &u);
+        for (j, t) in theta.iter().enumerate() {
+            // The steps piece j covers: where the unit vector e_j maps to 1.
+            let mut e = vec![0.0; 3];
+            e[j] = 1.0;
+            let mut back = vec![0.0; 10];
+            pc.controls(&e, &mut back);
+            let ks: Vec<f64> = (0..10)
+                .filter(|&k| back[k] > 0.5)
+                .map(|k| k as f64)
+                .collect();
+            let mean = ks.iter().sum::<f64>() / ks.len() as f64;
+            assert!((t - mean).abs() < 1e-12, "{theta:?}");
+        }
+        // A constant is kept exactly.
+        let theta = piece_means(pc, &[2.5; 10]);
+        assert_eq!(theta, [2.5, 2.5, 2.5]);
+    }
+}

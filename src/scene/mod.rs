@@ -1,0 +1,264 @@
+//! Scenes: the beam, its support, loads, time grid, control and objective (SPEC §5).
+//!
+//! A [`Scene`] is plain data. It is built in code with [`SceneBuilder`] ([`Scene::builder`]), read
+//! from the TOML format of SPEC §5 with [`Scene::from_toml_str`] / [`Scene::from_file`] (or
+//! `str::parse`), written with [`Scene::to_toml_string`], and checked by [`Scene::validate`], which
+//! rejects bad values with a [`SceneError`] naming the offending key. Ready-made thesis scenes are
+//! in [`crate::catalogue`].
+//!
+//! # The TOML format (SPEC §5)
+//! ```toml
+//! [beam]
+//! pendulums = 10            # n ≥ 1
+//! length = 1.0              # l_i: a number, or an array of n numbers
+//! mass = 1.0                # m_i: a number, or an array of n numbers
+//! stiffness = 1000.0        # interior springs k_2..k_n: a number, or an array of n-1
+//! support = "riser"         # "cantilever" | "riser" | "fixed-fixed" | "pinned-pinned"
+//! base_stiffness = 2000.0   # k_1 (optional)
+//! tip_stiffness = 2000.0    # k_{n+1} (optional)
+//! reaction_force = false    # optional, extension (see below)
+//!
+//! [loads]                   # optional
+//! gravity = 0.0             # g in m/s^2 (default 0)
+//! drag = 0.0                # D in kg/m (default 0)
+//! [[loads.point]]           # zero or more
+//! node = 5                  # 1..n
+//! force = 2.0               # thesis sign: +F z in H
+//! start = 0.0               # optional, extension (see below)
+//! end = 5.0                 # optional, extension (see below)
+//!
+//! [time]
+//! step = 0.01               # h > 0
+//! steps = 10                # N ≥ 1
+//!
+//! [control]                 # optional
+//! node = 10                 # default: n
+//! kind = "constant"         # "constant" | "per-step"
+//! values = [0.0]            # 1 value (constant) or N+1 values (per-step)
+//!
+//! [objective]               # optional
+//! kind = "final"            # "final" (eq. 3.3.2) | "sum" (eq. 3.3.4)
+//! ```
+//! Required: `[beam]` with `pendulums`, `length`, `mass`, `stiffness`, `support`; `[time]` with
+//! `step`, `steps`; inside an optional `[control]`, `kind` and `values`; inside an optional
+//! `[objective]`, `kind`. Integers are accepted wherever a number is expected (`length = 1`), but
+//! counts and nodes (`pendulums`, `steps`, `node`) must be integers. Every other key, at any level,
+//! is an error naming it.
+//!
+//! **Defaults.** `base_stiffness` and `tip_stiffness` default to `stiffness` when `stiffness` is a
+//! number. When `stiffness` is an array there is no single value to copy, so `base_stiffness` is
+//! then *required* if the support has a base spring (all but pinned-pinned) and `tip_stiffness` is
+//! required if it has a tip spring (riser, fixed-fixed); an unused end spring that is not given is
+//! stored as 0. `gravity` and `drag` default to 0, `[loads]` to no loads, `control.node` to n.
+//!
+//! **Extensions beyond SPEC §5** (both optional, so every SPEC file reads unchanged):
+//! - `beam.reaction_force = true` selects the reaction-force variant of thesis §3.2
+//!   (eq. 3.2.1/3.2.2, [`Beam::reaction_force`]); only allowed with `fixed-fixed` or
+//!   `pinned-pinned`. Default `false`.
+//! - `start` and `end` on a point load \[s\]: the load acts at the times t_k with
+//!   `start ≤ t_k < end` (default `start = 0`, no end). Both must be finite and `start < end`.
+//!
+//! # Validation
+//! [`Scene::validate`] (run by every constructor here) requires: n ≥ 1; every length, mass and the
+//! step h positive and finite; spring constants (interior, base, tip) and the drag D finite and
+//! ≥ 0; gravity finite; array lengths n (length, mass) and n − 1 (stiffness); N ≥ 1 and t_N = N h
+//! finite; point-load and control nodes in 1..=n; load forces and times finite with start < end;
+//! 1 control value for `constant`, N + 1 for `per-step`, all finite; `reaction_force` only for
+//! fixed-fixed and pinned-pinned.
+//!
+//! **Size limits**, so that a mistyped file fails with a clear error instead of exhausting memory:
+//! n ≤ [`MAX_PENDULUMS`] (10⁶), N ≤ [`MAX_STEPS`] (10⁷) and (N + 1)·n ≤ [`MAX_STORED_STATES`]
+//! (2·10⁸ stored node states; a trajectory stores q, p, λ and μ per node and step, about 48 bytes
+//! per node state in planar `f64`, so the limit is ≈ 10 GB; dual numbers need more).
+//!
+//! # Errors
+//! A [`SceneError`] carries the file (when read with [`Scene::from_file`]) and a
+//! [`SceneErrorKind`] naming the key in TOML notation, with array indices where they matter
+//! (`beam.length[3]`, `loads.point[0].node`, `control.values`). A number given as a scalar is
+//! named without index (`beam.mass`); so is an array whose entries are all equal. For example:
+//! ``scene.toml: key `beam.mass`: must be positive and finite, got -1``.
+
+mod builder;
+mod error;
+mod raw;
+mod validate;
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+pub use builder::SceneBuilder;
+pub use error::{SceneError, SceneErrorKind};
+pub use validate::{MAX_PENDULUMS, MAX_STEPS, MAX_STORED_STATES};
+
+use raw::RawScene;
+
+/// How the beam is held at its two ends (thesis §2.4.1, §3.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Support {
+    /// Base spring k₁, free tip (k_{n+1} = 0), eq. 2.2.3.
+    Cantilever,
+    /// Cantilever plus a tip spring k_{n+1}; the tip stays free (§3.1, the marine riser).
+    Riser,
+    /// Base and tip springs, tip z locked by the constraint l(q) = 0 (eq. 2.4.1/2.4.2).
+    FixedFixed,
+    /// No end springs, tip z locked by l(q) = 0 (eq. 2.4.3).
+    PinnedPinned,
+}
+
+/// The chain of pendulums: geometry, masses and spring constants (thesis §2.2.2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Beam {
+    /// Pendulum lengths l₁..lₙ \[m\]; `lengths.len()` is n.
+    pub lengths: Vec<f64>,
+    /// Point masses m₁..mₙ \[kg\] at the pendulum ends.
+    pub masses: Vec<f64>,
+    /// Interior spring constants k₂..kₙ \[Nm/rad\] (n − 1 values).
+    pub stiffness: Vec<f64>,
+    /// Base spring k₁ \[Nm/rad\] (ignored by pinned-pinned).
+    pub base_stiffness: f64,
+    /// Tip spring k_{n+1} \[Nm/rad\] (used by riser and fixed-fixed only).
+    pub tip_stiffness: f64,
+    /// End conditions.
+    pub support: Support,
+    /// Reaction-force variant (thesis §3.2, eq. 3.2.1/3.2.2): the tip constraint of a fixed-fixed or
+    /// pinned-pinned beam is replaced by the reaction force, so a control at the tip can move it.
+    pub reaction_force: bool,
+}
+
+/// A point load F at node `node` (eq. 2.2.2); thesis sign: it enters H as +F z, so F > 0 pushes
+/// toward −z.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointLoad {
+    /// Node index 1..=n.
+    pub node: usize,
+    /// Force F \[N\].
+    pub force: f64,
+    /// The load acts for t_k ≥ `start` (default 0).
+    pub start: f64,
+    /// The load acts for t_k < `end` (default: forever).
+    pub end: Option<f64>,
+}
+
+/// External loads.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Loads {
+    /// Gravitational acceleration g \[m/s²\] (§2.2.2); 0 means no gravity term is computed.
+    pub gravity: f64,
+    /// Drag constant D \[kg/m\] of F_D(p) = −D p ⊙ |p| (eq. 2.4.4); 0 means no drag is computed.
+    pub drag: f64,
+    /// Point loads.
+    pub points: Vec<PointLoad>,
+}
+
+/// The time grid t_k = k h, k = 0..=N.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeGrid {
+    /// Step h \[s\].
+    pub step: f64,
+    /// Number of steps N.
+    pub steps: usize,
+}
+
+/// How the control force is parametrised in a scene file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ControlKind {
+    /// One value u for all k.
+    Constant,
+    /// One value u_k per time t_k, k = 0..=N.
+    PerStep,
+}
+
+/// The control force u at node `node` (eq. 3.1.1 with eq. 2.2.2's load form; thesis sign).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Control {
+    /// Node index 1..=n (default n, the tip).
+    pub node: usize,
+    /// Constant or per-step.
+    pub kind: ControlKind,
+    /// 1 value (constant) or N + 1 values (per-step) \[N\]: applied, or an optimiser's initial guess.
+    pub values: Vec<f64>,
+}
+
+/// Which bending-moment objective a scene asks for (thesis §3.3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObjectiveKind {
+    /// c = M₀(t_N)² (eq. 3.3.2).
+    Final,
+    /// c_sum = Σ_{k=0}^{N} M₀(t_k)² (eq. 3.3.4).
+    Sum,
+}
+
+/// A complete simulation / optimal-control scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The beam.
+    pub beam: Beam,
+    /// External loads.
+    pub loads: Loads,
+    /// Time grid.
+    pub time: TimeGrid,
+    /// Optional control.
+    pub control: Option<Control>,
+    /// Optional objective.
+    pub objective: Option<ObjectiveKind>,
+}
+
+impl Scene {
+    /// Number of pendulums n.
+    pub fn n(&self) -> usize {
+        self.beam.lengths.len()
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene: reading and writing
+// ---------------------------------------------------------------------------------------------
+
+impl Scene {
+    /// A [`SceneBuilder`] for `n` pendulums with the builder's defaults.
+    pub fn builder(n: usize) -> SceneBuilder {
+        SceneBuilder::new(n)
+    }
+
+    /// Parses and validates a scene in the TOML format of SPEC §5 (see the
+    /// [module documentation](self) for defaults, extensions and limits).
+    pub fn from_toml_str(text: &str) -> Result<Scene, SceneError> {
+        let raw = raw::parse(text)?;
+        let scene = raw.into_scene()?;
+        scene.validate()?;
+        Ok(scene)
+    }
+
+    /// Reads, parses and validates a scene file; errors name the file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SceneError::new(SceneErrorKind::Io {
+                message: e.to_string(),
+            })
+            .with_file(path)
+        })?;
+        Self::from_toml_str(&text).map_err(|e| e.with_file(path))
+    }
+
+    /// The scene in the TOML format of SPEC §5, with every value explicit (end springs, loads,
+    /// control node). Per-pendulum values are written as one number when they are all equal.
+    /// For a valid scene, `Scene::from_toml_str(&s.to_toml_string()) == Ok(s)`.
+    pub fn to_toml_string(&self) -> String {
+        toml::to_string(&RawScene::from_scene(self))
+            .expect("serialising plain tables of numbers, strings and arrays cannot fail")
+    }
+}
+
+impl std::str::FromStr for Scene {
+    type Err = SceneError;
+
+    /// Same as [`Scene::from_toml_str`].
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::from_toml_str(s)
+    }
+}

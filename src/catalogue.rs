@@ -179,18 +179,50 @@ pub fn dissipative_pinned_pinned(drag: f64) -> Scene {
 /// formula 2.4.5, SPEC §4), m = M/n, F = 2 N at the tip (node n), no drag, t ∈ [0, 10] s with
 /// h = 0.01 s · min(1, (10/n)²): the fastest mode's frequency grows like n² and RATTLE's Newton
 /// solve needs h·ω_max bounded (thesis: it fails at h = 0.02 for n = 10). The time grid is thus
-/// N = 1000 for n ≤ 10 and grows like n² beyond (mind [`crate::scene::MAX_STORED_STATES`]).
-/// `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`] without drag.
+/// N = 1000 for n ≤ 10 and grows like n² beyond; the trajectory then exceeds
+/// [`crate::scene::MAX_TRAJECTORY_BYTES`] from n ≈ 260 on: use [`scaled_cantilever_steps`] for a
+/// shorter horizon. `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`]
+/// without drag.
 ///
 /// # Panics
 /// If `n` is 0 or above [`crate::scene::MAX_PENDULUMS`], or `total_length`, `ei`, `total_mass`
-/// are not positive and finite, or `base_factor` is negative or not finite.
+/// are not positive and finite, or `base_factor` is negative or not finite, or the scene is
+/// invalid (over the memory budget, or outside the valid ranges of docs/scene-format.md).
 pub fn scaled_cantilever(
     n: usize,
     total_length: f64,
     ei: f64,
     total_mass: f64,
     base_factor: f64,
+) -> Scene {
+    let h = scaled_step(n);
+    scaled_cantilever_steps(
+        n,
+        total_length,
+        ei,
+        total_mass,
+        base_factor,
+        (10.0 / h).round() as usize,
+    )
+}
+
+/// h = 0.01 s · min(1, (10/n)²), the step of [`scaled_cantilever`].
+fn scaled_step(n: usize) -> f64 {
+    0.01 * (10.0 / n as f64).powi(2).min(1.0)
+}
+
+/// [`scaled_cantilever`] with `steps` steps of the same h (t ∈ [0, steps·h]), for large n
+/// (benchmarks: n = 1000 with 100 steps).
+///
+/// # Panics
+/// As [`scaled_cantilever`], and if `steps` is 0.
+pub fn scaled_cantilever_steps(
+    n: usize,
+    total_length: f64,
+    ei: f64,
+    total_mass: f64,
+    base_factor: f64,
+    steps: usize,
 ) -> Scene {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     assert!(
@@ -210,7 +242,7 @@ pub fn scaled_cantilever(
     );
     let l = total_length / n as f64;
     let k = ei / l;
-    let h = 0.01 * (10.0 / n as f64).powi(2).min(1.0);
+    let h = scaled_step(n);
     known_good(
         Scene::builder(n)
             .length(l)
@@ -220,7 +252,7 @@ pub fn scaled_cantilever(
             .support(Support::Cantilever)
             .point_load(n, 2.0)
             .step(h)
-            .steps((10.0 / h).round() as usize),
+            .steps(steps),
         "scaled_cantilever",
     )
 }

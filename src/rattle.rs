@@ -307,7 +307,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 ws.rhs[n] = r;
             }
             if !rmax.is_finite() {
-                return Err(Error::NonFinite { step: k });
+                return Err(Error::NonFinite {
+                    step: k,
+                    quantity: "the positions q_{k+1} of the Newton iterate",
+                });
             }
             if rmax <= self.options.tolerance {
                 if !want_extra || extra_done {
@@ -323,6 +326,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     time: k as f64 * h,
                     residual: rmax,
                     iterations,
+                    tolerance: self.options.tolerance,
+                    h: Some(h),
                 });
             }
             newton_jacobian(ch, &state.q, &ws.qnew, &ws.w, h, &mut ws.tri, &mut ws.scal);

@@ -136,5 +136,7 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
         time: t,
         residual: last,
         iterations: 100,
+        tolerance: 1e-14,
+        h: None,
     })
 }

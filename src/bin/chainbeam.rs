@@ -507,6 +507,7 @@ fn kind_name(kind: ControlKind) -> &'static str {
     match kind {
         ControlKind::Constant => "constant",
         ControlKind::PerStep => "per-step",
+        ControlKind::Piecewise => "piecewise",
     }
 }
 

@@ -191,6 +191,17 @@ impl SceneBuilder {
         self
     }
 
+    /// A piecewise-constant control at `node` with P = `values.len()` pieces (1 ≤ P ≤ N): piece j
+    /// acts on the steps k with ⌊k·P/N⌋ = j ([`crate::simulate::piece_index`]).
+    pub fn control_piecewise(mut self, node: usize, values: Vec<f64>) -> Self {
+        self.control = Some(Control {
+            node,
+            kind: ControlKind::Piecewise,
+            values,
+        });
+        self
+    }
+
     /// The objective.
     pub fn objective(mut self, kind: ObjectiveKind) -> Self {
         self.objective = Some(kind);
@@ -199,7 +210,7 @@ impl SceneBuilder {
 
     /// The validated scene.
     pub fn build(self) -> Result<Scene, SceneError> {
-        check_size(self.n, self.time.steps)?;
+        check_size(self.n, self.time.steps, self.support)?;
         let beam = assemble_beam(
             self.n,
             self.length,

@@ -67,6 +67,17 @@ pub enum SceneErrorKind {
         /// The number of values given.
         found: usize,
     },
+    /// A key given twice (TOML allows each key once per table).
+    DuplicateKey {
+        /// The full key, e.g. `time.steps`.
+        key: String,
+        /// 1-based line of the second occurrence.
+        line: usize,
+        /// 1-based column (in characters) of the second occurrence.
+        column: usize,
+        /// 1-based line of the first occurrence, when found.
+        first_line: Option<usize>,
+    },
     /// The scene file could not be read.
     Io {
         /// The operating system's message.
@@ -83,7 +94,8 @@ impl SceneErrorKind {
             | Self::WrongType { key, .. }
             | Self::InvalidValue { key, .. }
             | Self::NodeOutOfRange { key, .. }
-            | Self::WrongCount { key, .. } => Some(key),
+            | Self::WrongCount { key, .. }
+            | Self::DuplicateKey { key, .. } => Some(key),
             Self::Syntax { .. } | Self::Io { .. } => None,
         }
     }
@@ -150,6 +162,22 @@ impl fmt::Display for SceneErrorKind {
                 show_key(key),
                 if *expected == 1 { "" } else { "s" }
             ),
+            Self::DuplicateKey {
+                key,
+                line,
+                column,
+                first_line,
+            } => {
+                write!(
+                    f,
+                    "key `{}`: given twice, again at line {line}, column {column}",
+                    show_key(key)
+                )?;
+                if let Some(first) = first_line {
+                    write!(f, " (first at line {first})")?;
+                }
+                write!(f, "; each key may appear once")
+            }
             Self::Io { message } => write!(f, "cannot read scene file: {message}"),
         }
     }

@@ -89,7 +89,10 @@ use serde::{Deserialize, Serialize};
 
 pub use builder::SceneBuilder;
 pub use error::{SceneError, SceneErrorKind};
-pub use validate::{MAX_PENDULUMS, MAX_STEPS, MAX_STORED_STATES};
+pub use validate::{
+    human_bytes, ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE,
+    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, STEP_RANGE, STIFFNESS_RANGE,
+};
 
 use raw::RawScene;
 
@@ -169,6 +172,10 @@ pub enum ControlKind {
     Constant,
     /// One value u_k per time t_k, k = 0..=N.
     PerStep,
+    /// P values, piece j acting on the steps k with ⌊k·P/N⌋ = j (k = 0..N−1; u_N takes the last
+    /// piece): the N steps split evenly, longer pieces first
+    /// ([`crate::simulate::piece_index`], docs/conventions.md). 1 ≤ P ≤ N.
+    Piecewise,
 }
 
 /// The control force u at node `node` (eq. 3.1.1 with eq. 2.2.2's load form; thesis sign).
@@ -178,7 +185,8 @@ pub struct Control {
     pub node: usize,
     /// Constant or per-step.
     pub kind: ControlKind,
-    /// 1 value (constant) or N + 1 values (per-step) \[N\]: applied, or an optimiser's initial guess.
+    /// 1 value (constant), N + 1 values (per-step) or P values (piecewise, 1 ≤ P ≤ N) \[N\]:
+    /// applied, or an optimiser's initial guess.
     pub values: Vec<f64>,
 }
 

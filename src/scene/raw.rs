@@ -19,7 +19,7 @@ use super::{
 /// Parses TOML text into the raw structures; errors name the key.
 pub(super) fn parse(text: &str) -> Result<RawScene, SceneError> {
     let doc = DeTable::parse(text).map_err(|e| syntax_error(text, &e))?;
-    toml::from_str(text).map_err(|e| classify(&e, &doc))
+    toml::from_str(text).map_err(|e| classify(text, &e, &doc))
 }
 
 /// A number, or an array of numbers (`length`, `mass`, `stiffness`).
@@ -220,7 +220,7 @@ impl RawScene {
     pub(super) fn into_scene(self) -> Result<Scene, SceneError> {
         let n = positive_count("beam.pendulums", self.beam.pendulums)?;
         let steps = positive_count("time.steps", self.time.steps)?;
-        check_size(n, steps)?;
+        check_size(n, steps, self.beam.support)?;
         let b = self.beam;
         let beam = assemble_beam(
             n,
@@ -291,6 +291,11 @@ fn one_line(message: &str) -> String {
 }
 
 fn syntax_error(text: &str, err: &toml::de::Error) -> SceneError {
+    if err.message() == "duplicate key" {
+        if let Some(span) = err.span() {
+            return duplicate_key(text, span);
+        }
+    }
     let (line, column) = match err.span() {
         Some(span) => {
             let (l, c) = line_column(text, span.start);
@@ -304,6 +309,70 @@ fn syntax_error(text: &str, err: &toml::de::Error) -> SceneError {
         message: one_line(err.message()),
     }
     .into()
+}
+
+/// A key given twice (toml's message is just "duplicate key"): the full key of the second
+/// occurrence at `span`, from the document parsed up to the error, and where it was first given.
+fn duplicate_key(text: &str, span: Range<usize>) -> SceneError {
+    let (line, column) = line_column(text, span.start);
+    let written = text.get(span.clone()).unwrap_or("").trim();
+    let name = written
+        .strip_prefix('"')
+        .and_then(|s| s.strip_suffix('"'))
+        .or_else(|| {
+            written
+                .strip_prefix('\'')
+                .and_then(|s| s.strip_suffix('\''))
+        })
+        .unwrap_or(written);
+    // The recovered document keeps the first occurrence: the latest key of that name before the
+    // second one is the one it repeats.
+    let (doc, _) = DeTable::parse_recoverable(text);
+    let mut best: Option<(usize, String)> = None;
+    find_key(doc.get_ref(), "", name, span.start, &mut best);
+    let (key, first_line) = match best {
+        Some((start, path)) => (
+            path,
+            (start < span.start).then(|| line_column(text, start).0),
+        ),
+        None => (segment(name), None),
+    };
+    SceneErrorKind::DuplicateKey {
+        key,
+        line,
+        column,
+        first_line,
+    }
+    .into()
+}
+
+/// The key named `name` with the largest span start before `before`, as (start, full path).
+fn find_key(
+    table: &DeTable<'_>,
+    prefix: &str,
+    name: &str,
+    before: usize,
+    best: &mut Option<(usize, String)>,
+) {
+    for (key, value) in table.iter() {
+        let path = join(prefix, &segment(key.get_ref()));
+        let start = key.span().start;
+        // `<=`: a repeated table header is re-inserted at its second occurrence.
+        if key.get_ref() == name && start <= before && best.as_ref().is_none_or(|b| start > b.0) {
+            *best = Some((start, path.clone()));
+        }
+        match value.get_ref() {
+            DeValue::Table(t) => find_key(t, &path, name, before, best),
+            DeValue::Array(a) => {
+                for (i, item) in a.iter().enumerate() {
+                    if let DeValue::Table(t) = item.get_ref() {
+                        find_key(t, &format!("{path}[{i}]"), name, before, best);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
 }
 
 /// A key as a path segment: bare if it may be written bare in TOML, else quoted.
@@ -451,7 +520,7 @@ fn pretty_found(s: &str) -> String {
 }
 
 /// Turns a serde error of the raw structures into a keyed [`SceneError`].
-fn classify(err: &toml::de::Error, doc: &Spanned<DeTable<'_>>) -> SceneError {
+fn classify(text: &str, err: &toml::de::Error, doc: &Spanned<DeTable<'_>>) -> SceneError {
     let message = one_line(err.message());
     // A missing field points at its table (a header, or the document start): only an exact match
     // is that table, anything merely containing the span is not.
@@ -462,6 +531,18 @@ fn classify(err: &toml::de::Error, doc: &Spanned<DeTable<'_>>) -> SceneError {
             (at.path, at.type_name)
         }
         None => (String::new(), None),
+    };
+    // What the value is, in words: toml hands a date-time to serde as a table, so serde's own
+    // description ("a table") would mislead.
+    let describe = |serde_found: &str| match type_name {
+        Some("datetime") => {
+            let written = err
+                .span()
+                .and_then(|s| text.get(s))
+                .map_or(String::new(), one_line);
+            format!("a date-time `{written}`")
+        }
+        _ => pretty_found(serde_found),
     };
     let kind = if let Some(rest) = message.strip_prefix("unknown field ") {
         let names = backticked(rest);
@@ -484,10 +565,26 @@ fn classify(err: &toml::de::Error, doc: &Spanned<DeTable<'_>>) -> SceneError {
         }
     } else if let Some(rest) = message.strip_prefix("invalid type: ") {
         let (found, expected) = rest.rsplit_once(", expected ").unwrap_or((rest, "?"));
-        SceneErrorKind::WrongType {
-            key: path,
-            expected: pretty_expected(expected),
-            found: pretty_found(found),
+        if let Some(digits) = found
+            .strip_suffix(" as i128")
+            .and_then(|f| backticked(f).pop())
+        {
+            // toml reads integers beyond 64 bits as i128, which serde cannot narrow.
+            SceneErrorKind::InvalidValue {
+                key: path,
+                reason: format!(
+                    "the integer {digits} does not fit in 64 bits (TOML integers lie within \
+                     ±{}); expected {}",
+                    i64::MAX,
+                    pretty_expected(expected)
+                ),
+            }
+        } else {
+            SceneErrorKind::WrongType {
+                key: path,
+                expected: pretty_expected(expected),
+                found: describe(found),
+            }
         }
     } else if let Some(rest) = message.strip_prefix("invalid value: ") {
         let (found, expected) = rest.rsplit_once(", expected ").unwrap_or((rest, "?"));
@@ -509,7 +606,7 @@ fn classify(err: &toml::de::Error, doc: &Spanned<DeTable<'_>>) -> SceneError {
         SceneErrorKind::WrongType {
             key: path,
             expected: "a string".to_string(),
-            found: type_name.unwrap_or("another type").to_string(),
+            found: describe(type_name.unwrap_or("another type")),
         }
     } else {
         SceneErrorKind::InvalidValue {

@@ -1204,3 +1204,161 @@ fn valid_scenes_at_the_range_limits_do_not_overflow() {
     println!("rejected {rejected}, simulated {simulated}, Newton/fold failures {failed}");
     assert!(simulated > 1000 && failed > 100 && rejected > 100);
 }
+
+// ---------------------------------------------------------------------------------------------
+// Piecewise controls (docs/conventions.md, "Piecewise controls")
+// ---------------------------------------------------------------------------------------------
+
+/// Lengths (in steps k = 0..N−1) of the P pieces, and the piece u_N takes.
+fn piece_lengths(steps: usize, pieces: usize) -> (Vec<usize>, usize) {
+    use chainbeam::simulate::piece_index;
+    let mut len = vec![0; pieces];
+    for k in 0..steps {
+        len[piece_index(k, steps, pieces)] += 1;
+    }
+    (len, piece_index(steps, steps, pieces))
+}
+
+/// The convention's defining cases: P = N is one piece per step, P = 1 a constant, and N = 10,
+/// P = 3 gives pieces of 4, 3, 3 steps: piece j starts at the first step k ≥ jN/P (k = 0, 4, 7),
+/// so the rounding puts the longer pieces first. u_N always takes the last piece.
+#[test]
+fn piecewise_convention_splits_the_steps_evenly() {
+    use chainbeam::simulate::piece_index;
+    for steps in [1, 2, 7, 10, 1000] {
+        for k in 0..steps {
+            assert_eq!(piece_index(k, steps, steps), k);
+            assert_eq!(piece_index(k, steps, 1), 0);
+        }
+        assert_eq!(piece_index(steps, steps, steps), steps - 1);
+        assert_eq!(piece_index(steps, steps, 1), 0);
+    }
+    assert_eq!(piece_lengths(10, 3), (vec![4, 3, 3], 2));
+    assert_eq!(piece_lengths(10, 4), (vec![3, 2, 3, 2], 3));
+    assert_eq!(piece_lengths(1000, 50), (vec![20; 50], 49));
+    // In general: every piece non-empty, lengths ⌊N/P⌋ or ⌈N/P⌉, piece j starting at ⌈jN/P⌉.
+    for steps in 1..60 {
+        for pieces in 1..=steps {
+            let (len, last) = piece_lengths(steps, pieces);
+            assert_eq!(last, pieces - 1);
+            let mut start = 0;
+            for (j, &l) in len.iter().enumerate() {
+                assert!(
+                    l == steps / pieces || l == steps.div_ceil(pieces),
+                    "{len:?}"
+                );
+                assert_eq!(
+                    start,
+                    (j * steps).div_ceil(pieces),
+                    "N = {steps}, P = {pieces}"
+                );
+                start += l;
+            }
+        }
+    }
+}
+
+#[test]
+fn piecewise_scene_files() {
+    use chainbeam::scene_controls;
+    let text = mutate(
+        "kind = 'constant'\nvalues = [0.5]",
+        "kind = 'piecewise'\nvalues = [1.0, -2.0, 3.0]",
+    )
+    .replace("steps = 4", "steps = 10");
+    let s = parse(&text).unwrap();
+    let c = s.control.as_ref().unwrap();
+    assert_eq!((c.kind, c.values.len()), (ControlKind::Piecewise, 3));
+    round_trips(&s);
+    assert!(s.to_toml_string().contains("kind = \"piecewise\""));
+    // pieces of 4, 3, 3 steps; u_10 takes the last piece
+    assert_eq!(
+        scene_controls(&s),
+        [1.0, 1.0, 1.0, 1.0, -2.0, -2.0, -2.0, 3.0, 3.0, 3.0, 3.0]
+    );
+    let built = Scene::builder(3)
+        .stiffness(100.0)
+        .drag(1.0)
+        .point_load(2, 2.0)
+        .steps(10)
+        .control_piecewise(3, vec![1.0, -2.0, 3.0])
+        .objective(ObjectiveKind::Final)
+        .build()
+        .unwrap();
+    assert_eq!(built, s);
+    // 1 ≤ P ≤ N
+    expect_err(
+        &text.replace("[1.0, -2.0, 3.0]", "[]"),
+        "control.values",
+        invalid,
+    );
+    let eleven = format!("[{}]", vec!["1.0"; 11].join(", "));
+    expect_err(
+        &text.replace("[1.0, -2.0, 3.0]", &eleven),
+        "control.values",
+        invalid,
+    );
+    let ten = format!("[{}]", vec!["1.0"; 10].join(", "));
+    assert!(parse(&text.replace("[1.0, -2.0, 3.0]", &ten)).is_ok());
+}
+
+/// A piecewise scene simulates with its expanded controls, and its control problem is the
+/// per-step problem seen through the pieces: same objective, gradient = per-step gradient summed
+/// over each piece's steps (the chain rule of u_k = θ_piece(k); an independent path through the
+/// per-step parametrisation), and both agree with central finite differences.
+#[test]
+fn piecewise_scenes_simulate_and_differentiate() {
+    use chainbeam::{
+        scene_controls, simulate, simulate_with_controls, BendingObjective, ControlProblem,
+        Parametrisation, PerStepControl,
+    };
+    let steps = 10;
+    let theta = [-20.0, -35.0, -30.0];
+    let scene = catalogue::riser(5);
+    let mut pw = scene.clone();
+    pw.control = Some(Control {
+        node: 10,
+        kind: ControlKind::Piecewise,
+        values: theta.to_vec(),
+    });
+    pw.objective = Some(ObjectiveKind::Sum);
+    pw.validate().unwrap();
+    let u = scene_controls(&pw);
+    let a = simulate(&pw).unwrap();
+    let b = simulate_with_controls(&scene, &u).unwrap();
+    assert_eq!(a.moment, b.moment);
+    assert_eq!(a.controls, u);
+
+    let problem = ControlProblem::from_scene(&pw).unwrap();
+    assert_eq!(problem.n_params(), 3);
+    let (c, g) = problem.value_and_gradient(&theta).unwrap();
+    let per_step = ControlProblem::new(
+        &pw,
+        Parametrisation::PerStep(PerStepControl { steps }),
+        BendingObjective::summed_moment(),
+    )
+    .unwrap();
+    let (c_ps, g_ps) = per_step.value_and_gradient(&u).unwrap();
+    assert_eq!(c.to_bits(), c_ps.to_bits());
+    let mut summed = [0.0; 3];
+    for (k, gk) in g_ps.iter().enumerate() {
+        summed[chainbeam::simulate::piece_index(k, steps, 3)] += gk;
+    }
+    let scale = summed.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    for j in 0..3 {
+        assert!(
+            (g[j] - summed[j]).abs() <= 1e-12 * scale,
+            "{g:?} {summed:?}"
+        );
+        let eps = 1e-4;
+        let (mut tp, mut tm) = (theta, theta);
+        tp[j] += eps;
+        tm[j] -= eps;
+        let fd = (problem.value(&tp).unwrap() - problem.value(&tm).unwrap()) / (2.0 * eps);
+        println!(
+            "piece {j}: adjoint {:e}, summed per-step {:e}, FD {fd:e}",
+            g[j], summed[j]
+        );
+        assert!((fd - g[j]).abs() <= 1e-6 * scale);
+    }
+}

@@ -1292,13 +1292,13 @@ fn piecewise_scene_files() {
         "control.values",
         invalid,
     );
-    let eleven = format!("[{}]", vec!["1.0"; 11].join(", "));
+    let eleven = format!("[{}]", ["1.0"; 11].join(", "));
     expect_err(
         &text.replace("[1.0, -2.0, 3.0]", &eleven),
         "control.values",
         invalid,
     );
-    let ten = format!("[{}]", vec!["1.0"; 10].join(", "));
+    let ten = format!("[{}]", ["1.0"; 10].join(", "));
     assert!(parse(&text.replace("[1.0, -2.0, 3.0]", &ten)).is_ok());
 }
 

@@ -197,7 +197,7 @@ fn file_prefix(file: &Option<PathBuf>) -> String {
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{}{kind}", file_prefix(.file))]
 pub struct SceneError {
-    /// The scene file, when the scene was read with [`Scene::from_file`].
+    /// The scene file, when the scene was read with [`Scene::from_file`](super::Scene::from_file).
     pub file: Option<PathBuf>,
     /// What is wrong.
     pub kind: SceneErrorKind,

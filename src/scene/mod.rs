@@ -1,82 +1,19 @@
-//! Scenes: the beam, its support, loads, time grid, control and objective (SPEC §5).
+//! Scenes: the beam, its support, loads, time grid, control and objective.
 //!
 //! A [`Scene`] is plain data. It is built in code with [`SceneBuilder`] ([`Scene::builder`]), read
-//! from the TOML format of SPEC §5 with [`Scene::from_toml_str`] / [`Scene::from_file`] (or
-//! `str::parse`), written with [`Scene::to_toml_string`], and checked by [`Scene::validate`], which
-//! rejects bad values with a [`SceneError`] naming the offending key. Ready-made thesis scenes are
-//! in [`crate::catalogue`].
+//! from a TOML scene file with [`Scene::from_file`] / [`Scene::from_toml_str`] (or `str::parse`),
+//! written with [`Scene::to_toml_string`], and checked by [`Scene::validate`], which rejects bad
+//! values with a [`SceneError`] naming the offending key. Ready-made thesis scenes are in
+//! [`crate::catalogue`]. The valid ranges are the constants [`LENGTH_RANGE`], [`MASS_RANGE`],
+//! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`] and
+//! [`MAX_STEP_NUMBER`]; the size limits are [`MAX_PENDULUMS`], [`MAX_STEPS`] and
+//! [`MAX_TRAJECTORY_BYTES`].
 //!
-//! # The TOML format (SPEC §5)
-//! ```toml
-//! [beam]
-//! pendulums = 10            # n ≥ 1
-//! length = 1.0              # l_i: a number, or an array of n numbers
-//! mass = 1.0                # m_i: a number, or an array of n numbers
-//! stiffness = 1000.0        # interior springs k_2..k_n: a number, or an array of n-1
-//! support = "riser"         # "cantilever" | "riser" | "fixed-fixed" | "pinned-pinned"
-//! base_stiffness = 2000.0   # k_1 (optional)
-//! tip_stiffness = 2000.0    # k_{n+1} (optional)
-//! reaction_force = false    # optional, extension (see below)
+//! The rest of this page is the repository's `docs/scene-format.md`; the conventions it refers to
+//! (coordinates, signs, M₀, time grid) are in `docs/conventions.md`, also the
+//! [crate documentation](crate#conventions).
 //!
-//! [loads]                   # optional
-//! gravity = 0.0             # g in m/s^2 (default 0)
-//! drag = 0.0                # D in kg/m (default 0)
-//! [[loads.point]]           # zero or more
-//! node = 5                  # 1..n
-//! force = 2.0               # thesis sign: +F z in H
-//! start = 0.0               # optional, extension (see below)
-//! end = 5.0                 # optional, extension (see below)
-//!
-//! [time]
-//! step = 0.01               # h > 0
-//! steps = 10                # N ≥ 1
-//!
-//! [control]                 # optional
-//! node = 10                 # default: n
-//! kind = "constant"         # "constant" | "per-step"
-//! values = [0.0]            # 1 value (constant) or N+1 values (per-step)
-//!
-//! [objective]               # optional
-//! kind = "final"            # "final" (eq. 3.3.2) | "sum" (eq. 3.3.4)
-//! ```
-//! Required: `[beam]` with `pendulums`, `length`, `mass`, `stiffness`, `support`; `[time]` with
-//! `step`, `steps`; inside an optional `[control]`, `kind` and `values`; inside an optional
-//! `[objective]`, `kind`. Integers are accepted wherever a number is expected (`length = 1`), but
-//! counts and nodes (`pendulums`, `steps`, `node`) must be integers. Every other key, at any level,
-//! is an error naming it.
-//!
-//! **Defaults.** `base_stiffness` and `tip_stiffness` default to `stiffness` when `stiffness` is a
-//! number. When `stiffness` is an array there is no single value to copy, so `base_stiffness` is
-//! then *required* if the support has a base spring (all but pinned-pinned) and `tip_stiffness` is
-//! required if it has a tip spring (riser, fixed-fixed); an unused end spring that is not given is
-//! stored as 0. `gravity` and `drag` default to 0, `[loads]` to no loads, `control.node` to n.
-//!
-//! **Extensions beyond SPEC §5** (both optional, so every SPEC file reads unchanged):
-//! - `beam.reaction_force = true` selects the reaction-force variant of thesis §3.2
-//!   (eq. 3.2.1/3.2.2, [`Beam::reaction_force`]); only allowed with `fixed-fixed` or
-//!   `pinned-pinned`. Default `false`.
-//! - `start` and `end` on a point load \[s\]: the load acts at the times t_k with
-//!   `start ≤ t_k < end` (default `start = 0`, no end). Both must be finite and `start < end`.
-//!
-//! # Validation
-//! [`Scene::validate`] (run by every constructor here) requires: n ≥ 1; every length, mass and the
-//! step h positive and finite; spring constants (interior, base, tip) and the drag D finite and
-//! ≥ 0; gravity finite; array lengths n (length, mass) and n − 1 (stiffness); N ≥ 1 and t_N = N h
-//! finite; point-load and control nodes in 1..=n; load forces and times finite with start < end;
-//! 1 control value for `constant`, N + 1 for `per-step`, all finite; `reaction_force` only for
-//! fixed-fixed and pinned-pinned.
-//!
-//! **Size limits**, so that a mistyped file fails with a clear error instead of exhausting memory:
-//! n ≤ [`MAX_PENDULUMS`] (10⁶), N ≤ [`MAX_STEPS`] (10⁷) and (N + 1)·n ≤ [`MAX_STORED_STATES`]
-//! (2·10⁸ stored node states; a trajectory stores q, p, λ and μ per node and step, about 48 bytes
-//! per node state in planar `f64`, so the limit is ≈ 10 GB; dual numbers need more).
-//!
-//! # Errors
-//! A [`SceneError`] carries the file (when read with [`Scene::from_file`]) and a
-//! [`SceneErrorKind`] naming the key in TOML notation, with array indices where they matter
-//! (`beam.length[3]`, `loads.point[0].node`, `control.values`). A number given as a scalar is
-//! named without index (`beam.mass`); so is an array whose entries are all equal. For example:
-//! ``scene.toml: key `beam.mass`: must be positive and finite, got -1``.
+#![doc = include_str!("../../docs/scene-format.md")]
 
 mod builder;
 mod error;
@@ -232,8 +169,8 @@ impl Scene {
         SceneBuilder::new(n)
     }
 
-    /// Parses and validates a scene in the TOML format of SPEC §5 (see the
-    /// [module documentation](self) for defaults, extensions and limits).
+    /// Parses and validates a scene file's text (the format, defaults and limits are in the
+    /// [module documentation](self)).
     pub fn from_toml_str(text: &str) -> Result<Scene, SceneError> {
         let raw = raw::parse(text)?;
         let scene = raw.into_scene()?;
@@ -253,7 +190,7 @@ impl Scene {
         Self::from_toml_str(&text).map_err(|e| e.with_file(path))
     }
 
-    /// The scene in the TOML format of SPEC §5, with every value explicit (end springs, loads,
+    /// The scene as a scene file, with every value explicit (end springs, loads,
     /// control node). Per-pendulum values are written as one number when they are all equal.
     /// For a valid scene, `Scene::from_toml_str(&s.to_toml_string()) == Ok(s)`.
     pub fn to_toml_string(&self) -> String {

@@ -89,7 +89,7 @@ pub enum Error {
             "and the allocator refused it (out of memory)".to_string()
         } else {
             format!(
-                "over the memory budget of {}",
+                "over the memory limit of {}",
                 crate::scene::human_bytes(crate::scene::MAX_TRAJECTORY_BYTES)
             )
         }

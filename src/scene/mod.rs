@@ -10,7 +10,7 @@
 //! [`MAX_TRAJECTORY_BYTES`].
 //!
 //! The rest of this page is the repository's `docs/scene-format.md`; the conventions it refers to
-//! (coordinates, signs, M₀, time grid) are in `docs/conventions.md`, also the
+//! (coordinates, signs, M₀, time grid) are in `docs/conventions.md`, which is also part of the
 //! [crate documentation](crate#conventions).
 //!
 #![doc = include_str!("../../docs/scene-format.md")]

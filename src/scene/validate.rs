@@ -90,7 +90,7 @@ pub const STEP_RANGE: ValueRange = ValueRange {
     why: "h² multiplies every force in the step and 2/h gives the multipliers μ",
 };
 
-/// `bytes` for people: `9.0 GiB (9663676416 bytes)` style, binary units.
+/// `bytes` for people, in binary units: `512 bytes`, `8.0 GiB`, `894.1 GiB`.
 pub fn human_bytes(bytes: u64) -> String {
     const UNITS: [&str; 7] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
     let mut x = bytes as f64;
@@ -109,7 +109,7 @@ pub fn human_bytes(bytes: u64) -> String {
 /// Number of constraints of a planar chain with this support: one length constraint per pendulum,
 /// plus the tip constraint of fixed-fixed and pinned-pinned beams (also in the reaction-force
 /// variant, where it is the moving target).
-pub(crate) fn n_constraints(n: usize, support: Support) -> usize {
+fn n_constraints(n: usize, support: Support) -> usize {
     match support {
         Support::FixedFixed | Support::PinnedPinned => n + 1,
         Support::Cantilever | Support::Riser => n,
@@ -378,7 +378,7 @@ pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(),
             "time.steps",
             format!(
                 "the trajectory of N = {steps} steps of n = {n} pendulums needs {} (q, p, λ, μ \
-                 per node and time), over the memory budget of {}; reduce `time.steps` (at most \
+                 per node and time), over the memory limit of {}; reduce `time.steps` (at most \
                  {max_steps} for this beam) or `beam.pendulums`",
                 human_bytes(bytes),
                 human_bytes(MAX_TRAJECTORY_BYTES)

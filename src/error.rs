@@ -17,7 +17,7 @@ pub enum Error {
     /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at
     /// h = 0.02 s, thesis §2.2.4), or the beam is folding: the message says so and names `time.step`.
     #[error(
-        "the Newton solve for the constraint multipliers failed at step {step} (t = {time} s): \
+        "the RATTLE Newton solve for the constraint multipliers failed at step {step} (t = {time} s): \
          the constraint residual {residual:.2e} did not reach the tolerance {tolerance:.0e} in \
          {iterations} iterations; {}",
         newton_advice(*h)

@@ -1,5 +1,10 @@
 //! Simulation of a scene into a [`Trajectory`] (q, p, λ, μ per step, node positions, energy,
 //! base bending moment M₀(t_k) and solver statistics).
+//!
+//! A trajectory stores every state, so its size ([`trajectory_bytes`]) is checked against
+//! [`MAX_TRAJECTORY_BYTES`] before anything of size N is allocated, and its buffers are reserved
+//! fallibly: a trajectory that does not fit is [`Error::TrajectoryTooLarge`], naming the bytes and
+//! the scene keys to change, never an allocation abort.
 
 use crate::error::{Error, Result};
 use crate::model::{Chain, Scalar};
@@ -172,6 +177,11 @@ pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<Traject
 /// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls
 /// u_0..u_N, generic over the scalar (dual numbers give forward-mode derivatives of the whole
 /// trajectory) and the dimension.
+///
+/// # Errors
+/// [`Error::InvalidArgument`] for controls of the wrong length or not finite;
+/// [`Error::TrajectoryTooLarge`] when the trajectory exceeds [`MAX_TRAJECTORY_BYTES`] or the
+/// allocator refuses it; the step's errors ([`Rattle::step`]).
 pub fn simulate_chain<D: Scalar, const DIM: usize>(
     chain: Chain<D, DIM>,
     h: f64,

@@ -1,4 +1,4 @@
-//! Scene files (SPEC §5): parsing, writing, validation, the builder and the catalogue.
+//! Scene files (docs/scene-format.md): parsing, writing, validation, the builder and the catalogue.
 
 use chainbeam::catalogue;
 use chainbeam::scene::{
@@ -7,7 +7,8 @@ use chainbeam::scene::{
 };
 use proptest::prelude::*;
 
-/// The example of SPEC §5, verbatim.
+/// The original example of the scene format (the design record that docs/scene-format.md grew
+/// from), verbatim: files written against it keep reading unchanged.
 const SPEC_EXAMPLE: &str = r#"
 [beam]
 pendulums = 10            # n

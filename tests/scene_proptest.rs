@@ -1,4 +1,4 @@
-//! Property tests on random scene files (SPEC §5), valid and invalid.
+//! Property tests on random scene files (docs/scene-format.md), valid and invalid.
 //!
 //! - A valid file parses to the scene it describes, round-trips through `Scene::to_toml_string`,
 //!   and simulates without panic: either the constraints |qᵢ| = 1 hold to 1e-10 at every step with

@@ -1,9 +1,9 @@
-//! The thesis's scenes (SPEC §4), ready to simulate.
+//! The thesis's scenes, ready to simulate (their identification: docs/conventions.md).
 //!
 //! Every constructor returns a validated [`Scene`]. The parameter-free ones cannot fail; the
 //! parametrised ones panic on parameters that cannot make a valid scene (documented under
 //! *Panics*), like slice indexing does. All of them start at rest from the straight beam along +y
-//! (SPEC §1), with loads in the thesis sign (+F z in H: F > 0 pushes toward −z). Unless stated
+//! (docs/conventions.md), with loads in the thesis sign (+F z in H: F > 0 pushes toward −z). Unless stated
 //! otherwise: n = 10, lᵢ = 1 m, mᵢ = 1 kg, interior springs k = 1000 Nm/rad, no gravity, no drag,
 //! h = 0.01 s. The time grid can be changed freely afterwards (`scene.time.steps = ...`); a
 //! per-step control must then be resized to N + 1 values.
@@ -39,7 +39,7 @@ fn assert_drag(drag: f64, name: &str) {
 /// The conservative cantilever of thesis §2.2.4 (Fig. 2.5-2.8): n = 10, l = 1 m, m = 1 kg,
 /// k = 1000 Nm/rad for every spring including the base spring k₁ = 1000 (§2.2.4 uses one k), free
 /// tip, F = 2 N at node 10 (the tip), no drag, h = 0.01 s, N = 1000 (t ∈ [0, 10] s). No control,
-/// no objective. (SPEC §4: RATTLE's Newton solve fails on this beam at h = 0.02.)
+/// no objective. (RATTLE's Newton solve fails on this beam at h = 0.02, as the thesis's did.)
 pub fn thesis_cantilever() -> Scene {
     known_good(
         thesis_chain()
@@ -66,8 +66,9 @@ fn riser_chain(load_node: usize, name: &str) -> SceneBuilder {
 }
 
 /// The optimal-control scene of thesis §3.3.1 (Tables 3.1-3.4, "system i" = `load_node`), as
-/// identified in SPEC §4: riser support (cantilever with a tip spring, tip free), n = 10, l = 1 m,
-/// m = 1 kg, interior k = 1000 Nm/rad, k₁ = k₁₁ = 2000 Nm/rad, **no drag** (D = 0), F = 2 N at
+/// identified by re-computing the tables (docs/conventions.md, "Thesis errata corrected"): riser
+/// support (cantilever with a tip spring, tip free), n = 10, l = 1 m, m = 1 kg, interior
+/// k = 1000 Nm/rad, k₁ = k₁₁ = 2000 Nm/rad, **no drag** (D = 0), F = 2 N at
 /// `load_node`, control at node 10 (constant, initial value 0), objective c = M₀(t_N)²
 /// (eq. 3.3.2; set `scene.objective` to [`ObjectiveKind::Sum`] for Tables 3.2/3.4), h = 0.01 s,
 /// N = 10 (T = 0.1 s).
@@ -87,7 +88,7 @@ pub fn riser(load_node: usize) -> Scene {
 /// The manually controlled riser of thesis §3.1 (Fig. 3.1-3.2): [`riser`] with drag D = 10 kg/m
 /// and N = 1000 (t ∈ [0, 10] s). The control (node 10, constant) starts at 0; the thesis's manual
 /// values are u = −[0.37 0.72 1.01 1.28 1.50 1.68 1.83 1.93 1.99 2] N for `load_node` 1..10 (with
-/// u = −1.5 and the load at node 5 the tip settles near z ≈ 0.042, SPEC §4).
+/// u = −1.5 and the load at node 5 the tip settles near z ≈ 0.042, thesis §3.2).
 ///
 /// # Panics
 /// If `load_node` is not in 1..=10.
@@ -136,7 +137,7 @@ fn pinned_pinned_builder(drag: f64) -> SceneBuilder {
 }
 
 /// The dissipative cantilever of thesis §2.4.4 (Fig. 2.14-2.16, D = 10 and 100 kg/m in the
-/// thesis): n = 10, l = 1 m, m = 1 kg, k = 1000 Nm/rad, base spring k₁ = 2000 Nm/rad (SPEC §4: the
+/// thesis): n = 10, l = 1 m, m = 1 kg, k = 1000 Nm/rad, base spring k₁ = 2000 Nm/rad (the
 /// static formula 2.4.5 with EI = k·l matches when the base spring is 2000), F = 2 N at node 10,
 /// drag D = `drag`, h = 0.01 s, N = 1000 (lengthen `time.steps` to let it settle).
 ///
@@ -176,21 +177,53 @@ pub fn dissipative_pinned_pinned(drag: f64) -> Scene {
 /// A cantilever of total length L, flexural rigidity EI and total mass M discretised by `n`
 /// pendulums, for convergence studies (the open question at the end of thesis §2.4.4):
 /// l = L/n, interior springs k = EI/l, base spring k₁ = `base_factor`·k (2 matches the static
-/// formula 2.4.5, SPEC §4), m = M/n, F = 2 N at the tip (node n), no drag, t ∈ [0, 10] s with
+/// formula 2.4.5), m = M/n, F = 2 N at the tip (node n), no drag, t ∈ [0, 10] s with
 /// h = 0.01 s · min(1, (10/n)²): the fastest mode's frequency grows like n² and RATTLE's Newton
 /// solve needs h·ω_max bounded (thesis: it fails at h = 0.02 for n = 10). The time grid is thus
-/// N = 1000 for n ≤ 10 and grows like n² beyond (mind [`crate::scene::MAX_STORED_STATES`]).
-/// `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`] without drag.
+/// N = 1000 for n ≤ 10 and grows like n² beyond; the trajectory then exceeds
+/// [`crate::scene::MAX_TRAJECTORY_BYTES`] from n ≈ 260 on: use [`scaled_cantilever_steps`] for a
+/// shorter horizon. `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`]
+/// without drag.
 ///
 /// # Panics
 /// If `n` is 0 or above [`crate::scene::MAX_PENDULUMS`], or `total_length`, `ei`, `total_mass`
-/// are not positive and finite, or `base_factor` is negative or not finite.
+/// are not positive and finite, or `base_factor` is negative or not finite, or the scene is
+/// invalid (over the memory budget, or outside the valid ranges of docs/scene-format.md).
 pub fn scaled_cantilever(
     n: usize,
     total_length: f64,
     ei: f64,
     total_mass: f64,
     base_factor: f64,
+) -> Scene {
+    let h = scaled_step(n);
+    scaled_cantilever_steps(
+        n,
+        total_length,
+        ei,
+        total_mass,
+        base_factor,
+        (10.0 / h).round() as usize,
+    )
+}
+
+/// h = 0.01 s · min(1, (10/n)²), the step of [`scaled_cantilever`].
+fn scaled_step(n: usize) -> f64 {
+    0.01 * (10.0 / n as f64).powi(2).min(1.0)
+}
+
+/// [`scaled_cantilever`] with `steps` steps of the same h (t ∈ [0, steps·h]), for large n
+/// (benchmarks: n = 1000 with 100 steps).
+///
+/// # Panics
+/// As [`scaled_cantilever`], and if `steps` is 0.
+pub fn scaled_cantilever_steps(
+    n: usize,
+    total_length: f64,
+    ei: f64,
+    total_mass: f64,
+    base_factor: f64,
+    steps: usize,
 ) -> Scene {
     let positive = |x: f64| x.is_finite() && x > 0.0;
     assert!(
@@ -210,7 +243,7 @@ pub fn scaled_cantilever(
     );
     let l = total_length / n as f64;
     let k = ei / l;
-    let h = 0.01 * (10.0 / n as f64).powi(2).min(1.0);
+    let h = scaled_step(n);
     known_good(
         Scene::builder(n)
             .length(l)
@@ -220,7 +253,7 @@ pub fn scaled_cantilever(
             .support(Support::Cantilever)
             .point_load(n, 2.0)
             .step(h)
-            .steps((10.0 / h).round() as usize),
+            .steps(steps),
         "scaled_cantilever",
     )
 }

@@ -12,11 +12,15 @@ pub enum Error {
     /// The scene is invalid (names the key and the reason).
     #[error(transparent)]
     Scene(#[from] SceneError),
-    /// The Newton iteration for the RATTLE multipliers λ did not converge.
+    /// The Newton iteration for the constraint multipliers λ of one step (RATTLE's implicit first
+    /// half step, eq. 1.6.1; SHAKE's position step) did not reach its tolerance. Almost always the
+    /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at
+    /// h = 0.02 s, thesis §2.2.4), or the beam is folding: the message says so and names `time.step`.
     #[error(
-        "RATTLE Newton solve did not converge at step {step} (t = {time} s): constraint residual \
-         {residual:.3e} after {iterations} iterations (the step size may be too large for the \
-         stiffness, or the beam is folding)"
+        "the RATTLE Newton solve for the constraint multipliers failed at step {step} (t = {time} s): \
+         the constraint residual {residual:.2e} did not reach the tolerance {tolerance:.0e} in \
+         {iterations} iterations; {}",
+        newton_advice(*h)
     )]
     NewtonNotConverged {
         /// Step index k of the step q_k → q_{k+1}.
@@ -27,6 +31,10 @@ pub enum Error {
         residual: f64,
         /// Newton iterations performed.
         iterations: usize,
+        /// The tolerance the residual had to reach ([`crate::rattle::RattleOptions::tolerance`]).
+        tolerance: f64,
+        /// The time step h \[s\] of the failing step (`None` for a solve without a time step).
+        h: Option<f64>,
     },
     /// A joint angle reached the fold limit (θ → π): the chain has folded over itself and the
     /// spring force θ/sin θ is unbounded (thesis §2.2.2, after eq. 2.2.1).
@@ -44,8 +52,14 @@ pub enum Error {
         /// The configured fold limit in degrees.
         limit_deg: f64,
     },
-    /// A pivot of a tridiagonal constraint system vanished.
-    #[error("singular constraint system at step {step} (pivot {index} is {pivot:.3e})")]
+    /// A pivot of a tridiagonal constraint system vanished (or overflowed): the constraint
+    /// gradients of a pendulum before and after the step are (nearly) perpendicular.
+    #[error(
+        "singular constraint system at step {step} (pivot {index} is {pivot:.3e}): the \
+         constraint directions of pendulum {} before and after the step are (nearly) \
+         perpendicular, usually because the time step is too large (`time.step`)",
+        index + 1
+    )]
     SingularSystem {
         /// Step index.
         step: usize,
@@ -54,11 +68,43 @@ pub enum Error {
         /// The pivot value.
         pivot: f64,
     },
-    /// The state became non-finite (NaN or infinity).
-    #[error("non-finite state at step {step}")]
+    /// A value became non-finite (NaN or infinity). Valid scenes keep every quantity the step
+    /// forms finite (docs/scene-format.md, "Valid ranges"), so this means a divergent iteration
+    /// or values set past the scene's validation (parameters, controls).
+    #[error("non-finite value at step {step}: {quantity} overflowed (NaN or infinity)")]
     NonFinite {
         /// Step index.
         step: usize,
+        /// What became non-finite, e.g. `the positions q_{k+1} of the Newton iterate`.
+        quantity: &'static str,
+    },
+    /// A simulation's stored trajectory does not fit in memory: it exceeds the budget
+    /// [`crate::scene::MAX_TRAJECTORY_BYTES`], or the allocator refused it.
+    #[error(
+        "cannot store the trajectory of {steps} steps of {n} pendulums: it needs {} ({bytes} \
+         bytes), {}; reduce `time.steps` (at most {max_steps} fit the budget for this beam) or \
+         `beam.pendulums`",
+        crate::scene::human_bytes(*bytes),
+        if *refused {
+            "and the allocator refused it (out of memory)".to_string()
+        } else {
+            format!(
+                "over the memory limit of {}",
+                crate::scene::human_bytes(crate::scene::MAX_TRAJECTORY_BYTES)
+            )
+        }
+    )]
+    TrajectoryTooLarge {
+        /// Number of pendulums n.
+        n: usize,
+        /// Number of steps N.
+        steps: usize,
+        /// Bytes the trajectory needs.
+        bytes: u64,
+        /// The largest N whose trajectory fits the budget for this n.
+        max_steps: usize,
+        /// `true` when under the budget but the allocator refused the memory.
+        refused: bool,
     },
     /// The static-equilibrium Newton solve ([`crate::statics`]) did not converge.
     #[error(
@@ -85,6 +131,17 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+}
+
+/// The advice of [`Error::NewtonNotConverged`].
+fn newton_advice(h: Option<f64>) -> String {
+    match h {
+        Some(h) => format!(
+            "try a smaller time step (`time.step` = {h} s now; the step may be too large for the \
+             stiffness or the loads), or the beam is folding"
+        ),
+        None => "the loads may be too large for an equilibrium, or the beam is folding".to_string(),
+    }
 }
 
 /// Result alias for chainbeam.

@@ -341,7 +341,10 @@ impl Integrator {
             .chain(self.p.iter())
             .any(|v| !(v[0].is_finite() && v[1].is_finite()))
         {
-            return Err(Error::NonFinite { step: self.k });
+            return Err(Error::NonFinite {
+                step: self.k,
+                quantity: "the state (q, p)",
+            });
         }
         Ok(())
     }
@@ -417,7 +420,10 @@ impl Integrator {
                 ws.rhs[n] = r;
             }
             if !rmax.is_finite() {
-                return Err(Error::NonFinite { step });
+                return Err(Error::NonFinite {
+                    step,
+                    quantity: "the positions of the Newton iterate",
+                });
             }
             if rmax <= options.tolerance {
                 return Ok(iterations);
@@ -428,6 +434,8 @@ impl Integrator {
                     time,
                     residual: rmax,
                     iterations,
+                    tolerance: options.tolerance,
+                    h: None,
                 });
             }
             ch.constraints().assemble_newton(
@@ -709,7 +717,10 @@ impl Integrator {
             .chain(ps.iter())
             .any(|v| !(v[0].is_finite() && v[1].is_finite()))
         {
-            return Err(Error::NonFinite { step: k + 1 });
+            return Err(Error::NonFinite {
+                step: k + 1,
+                quantity: "the RK4 stage (q, p)",
+            });
         }
         // Project q onto ĝ = 0 along M⁻¹Ĝ(q̃)ᵀ, then p onto Ĝ M⁻¹ p = 0.
         let lam = &mut self.buf.lam;

@@ -2,8 +2,14 @@
 //!
 //! A differentiable simulator of slender beams modelled as a chain of rigid pendulums joined by
 //! torsional springs (Nøst, *Optimal Control of Multibody Dynamics with Applications*, NTNU 2023),
-//! integrated with RATTLE and written once over [`num_dual::DualNum`] so the same code runs in
-//! `f64` and in dual arithmetic, with a discrete adjoint for exact gradients.
+//! integrated with RATTLE and written once over the scalar trait
+//! [`num_dual::DualNum<f64>`](https://docs.rs/num-dual/latest/num_dual/trait.DualNum.html), so the
+//! same code runs in `f64` and in dual arithmetic, with a discrete adjoint for exact gradients and
+//! argmin-based optimal control of a force on the beam.
+//!
+//! Scenes are TOML files; their format is the [`scene`] module's documentation (in the
+//! repository: `docs/scene-format.md`), and the coordinates, sign convention, bending moment and
+//! time grid are under [Conventions](#conventions) below (`docs/conventions.md`).
 //!
 //! ## Simulate a scene
 //! ```
@@ -23,7 +29,7 @@
 //! ```
 //! use chainbeam::{catalogue, simulate_chain, BendingObjective, Chain, ControlProblem, Parametrisation};
 //! use num_dual::Dual64;
-//! let scene = catalogue::riser(5); // SPEC §4: the thesis's optimal-control scene
+//! let scene = catalogue::riser(5); // the thesis's optimal-control scene (Table 3.1, system 5)
 //! let problem = ControlProblem::new(&scene, Parametrisation::Constant, BendingObjective::final_moment())?;
 //! let (c, g) = problem.value_and_gradient(&[-33.4])?;
 //!
@@ -39,16 +45,47 @@
 //! # Ok::<(), chainbeam::Error>(())
 //! ```
 //!
-//! ## Bad input is a typed error, not a panic
+//! ## Optimise a control
+//! The constant tip force that minimises c_sum = Σ M₀(t_k)² on the thesis's riser with the load at
+//! node 5: thesis Table 3.2 prints c_sum = 2.0774 (reproduced to its last printed digit).
 //! ```
-//! use chainbeam::{Error, Scene};
-//! let err = Scene::from_toml_str("[beam]\npendulums = 0").unwrap_err();
-//! assert!(err.to_string().contains("beam"));
+//! use chainbeam::optimize::{minimize, OptimOptions};
+//! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
+//! let scene = catalogue::riser(5);
+//! let problem = ControlProblem::new(&scene, Parametrisation::Constant, BendingObjective::summed_moment())?;
+//! let best = minimize(&problem, &[0.0], &OptimOptions::default())?;
+//! assert!((best.objective - 2.0774).abs() <= 5e-5, "c_sum = {}", best.objective);
+//! assert!(best.gradient_norm <= 1e-6 * best.initial_gradient_norm);
+//! println!("u* = {:.5} N, c_sum = {:.5}", best.theta[0], best.objective);
+//! # Ok::<(), chainbeam::Error>(())
+//! ```
+//!
+//! ## Bad input is a typed error that names the key, not a panic
+//! ```
+//! use chainbeam::Scene;
+//! let text = "[beam]\npendulums = 3\nlength = 1.0\nmass = -1.0\nstiffness = 100.0\n\
+//!             support = \"cantilever\"\n[time]\nstep = 0.01\nsteps = 10\n";
+//! let err = Scene::from_toml_str(text).unwrap_err();
+//! assert_eq!(err.key(), Some("beam.mass"));
+//! assert_eq!(err.to_string(), "invalid scene: key `beam.mass`: must be positive and finite, got -1");
 //! ```
 //!
 //! ## Modules
-//! [`model`] (the chain, SPEC §1), [`rattle`] (the integrator, SPEC §2), [`adjoint`] (gradients,
-//! SPEC §3), [`simulate`](mod@simulate), [`statics`], [`euler_bernoulli`], [`scene`] and [`catalogue`] (SPEC §4-5).
+//! - [`model`]: the chain, its energy and forces, the O(n) inverse mass matrix.
+//! - [`rattle`]: the RATTLE step (thesis eq. 1.6.1) and its Newton solve.
+//! - [`tridiag`]: the bordered tridiagonal solves every step uses.
+//! - [`simulate`](mod@simulate): trajectories of a scene (q, p, λ, μ, energy, M₀, node positions).
+//! - [`adjoint`]: objectives, control parametrisations, the discrete adjoint, checkpointing,
+//!   Hessian-vector products.
+//! - [`optimize`]: local minimisation with argmin (L-BFGS, trust region, Newton-CG), force bounds.
+//! - [`multistart`]: multistart, clustering of minima, second-order certificates, landscapes.
+//! - [`integrators`]: SHAKE and projected RK4, for comparisons with RATTLE.
+//! - [`statics`]: static equilibrium, solved directly.
+//! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
+//! - [`scene`]: scene data, the scene file format, validation; [`catalogue`]: the thesis's scenes.
+//! - [`error`]: the typed errors.
+//!
+#![doc = include_str!("../docs/conventions.md")]
 #![warn(missing_docs)]
 #![deny(clippy::float_cmp)]
 // Numerical kernels index several arrays with one loop variable; iterator zips of four or five

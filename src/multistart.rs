@@ -523,6 +523,7 @@ pub fn certify<P: ControlMap, O: Objective>(
     if columns.iter().flatten().any(|x| !x.is_finite()) {
         return Err(Error::NonFinite {
             step: problem.steps(),
+            quantity: "the Hessian",
         });
     }
     let h = DMatrix::from_fn(n, n, |i, j| columns[j][i]);

@@ -545,6 +545,7 @@ impl<'a, P: ControlMap, O: Objective> ArgminAdapter<'a, P, O> {
         if !value.is_finite() || grad_theta.iter().any(|g| !g.is_finite()) {
             return Err(Error::NonFinite {
                 step: self.problem.steps(),
+                quantity: "the objective or its gradient",
             });
         }
         let grad_phi = match self.bound {
@@ -722,6 +723,7 @@ impl<P: ControlMap, O: Objective> HessianOperator<'_, P, O> {
         if out.iter().any(|x| !x.is_finite()) {
             return Err(Error::NonFinite {
                 step: self.problem.steps(),
+                quantity: "the Hessian-vector product",
             });
         }
         Ok(out)

@@ -1,10 +1,15 @@
 //! Simulation of a scene into a [`Trajectory`] (q, p, λ, μ per step, node positions, energy,
 //! base bending moment M₀(t_k) and solver statistics).
+//!
+//! A trajectory stores every state, so its size ([`trajectory_bytes`]) is checked against
+//! [`MAX_TRAJECTORY_BYTES`] before anything of size N is allocated, and its buffers are reserved
+//! fallibly: a trajectory that does not fit is [`Error::TrajectoryTooLarge`], naming the bytes and
+//! the scene keys to change, never an allocation abort.
 
 use crate::error::{Error, Result};
 use crate::model::{Chain, Scalar};
 use crate::rattle::{Rattle, State, StepStats};
-use crate::scene::{ControlKind, Scene};
+use crate::scene::{ControlKind, Scene, MAX_TRAJECTORY_BYTES};
 
 /// A simulated trajectory on the grid t_k = k h, k = 0..=N.
 #[derive(Clone, Debug)]
@@ -83,17 +88,73 @@ impl<D: Scalar, const DIM: usize> Trajectory<D, DIM> {
     }
 }
 
+/// The piece of step k in a piecewise-constant control with `pieces` = P pieces over N = `steps`
+/// steps (docs/conventions.md, "Piecewise controls"): the N effective steps k = 0..N−1 are split
+/// evenly, piece j covering the k with ⌊k·P/N⌋ = j, i.e. k ∈ [⌈jN/P⌉, ⌈(j+1)N/P⌉); u_N, which
+/// reaches no configuration, takes the last piece. Piece lengths differ by at most one and the
+/// longer pieces come first (N = 10, P = 3: 4, 3, 3 steps), because piece j starts at the first
+/// grid time at or after j·T/P. P = N gives one piece per step, P = 1 a constant.
+pub fn piece_index(k: usize, steps: usize, pieces: usize) -> usize {
+    if k >= steps {
+        pieces.saturating_sub(1)
+    } else {
+        // k < N ≤ 10⁷ and P ≤ N in a valid scene: k·P < 10¹⁴ cannot overflow (u128 for any P).
+        ((k as u128 * pieces as u128) / steps as u128) as usize
+    }
+}
+
 /// The per-step controls u_0..u_N of a scene: its `[control]` values expanded (constant → N + 1
-/// copies), or zeros without a control.
+/// copies, piecewise → [`piece_index`]), or zeros without a control.
 pub fn scene_controls(scene: &Scene) -> Vec<f64> {
-    let n1 = scene.time.steps + 1;
+    let steps = scene.time.steps;
+    let n1 = steps + 1;
     match &scene.control {
         None => vec![0.0; n1],
         Some(c) => match c.kind {
             ControlKind::Constant => vec![c.values[0]; n1],
             ControlKind::PerStep => c.values.clone(),
+            ControlKind::Piecewise => (0..n1)
+                .map(|k| c.values[piece_index(k, steps, c.values.len())])
+                .collect(),
         },
     }
+}
+
+/// Bytes [`simulate_chain`] stores for a trajectory of N = `steps` steps of n pendulums with
+/// `n_constraints` multipliers in scalar `D` and dimension `DIM`: per time t_k (N + 1 of them) q
+/// and p (2·n·DIM scalars), λ and μ (2·n_c scalars), energy, moment, control and tip target
+/// (4 scalars); per step its [`StepStats`]; plus the n lengths. Saturates at `u64::MAX`.
+pub fn trajectory_bytes<D, const DIM: usize>(n: usize, n_constraints: usize, steps: usize) -> u64 {
+    let per_time = per_time_bytes::<D, DIM>(n, n_constraints);
+    let total = (steps as u128 + 1) * per_time
+        + steps as u128 * std::mem::size_of::<StepStats>() as u128
+        + n as u128 * std::mem::size_of::<f64>() as u128;
+    u64::try_from(total).unwrap_or(u64::MAX)
+}
+
+fn per_time_bytes<D, const DIM: usize>(n: usize, n_constraints: usize) -> u128 {
+    let d = std::mem::size_of::<D>() as u128;
+    (2 * n as u128 * DIM as u128 + 2 * n_constraints as u128 + 4) * d
+}
+
+/// The largest N whose trajectory ([`trajectory_bytes`]) fits [`MAX_TRAJECTORY_BYTES`].
+pub fn max_trajectory_steps<D, const DIM: usize>(n: usize, n_constraints: usize) -> usize {
+    let per_step =
+        per_time_bytes::<D, DIM>(n, n_constraints) + std::mem::size_of::<StepStats>() as u128;
+    let fixed = per_time_bytes::<D, DIM>(n, n_constraints) + 8 * n as u128;
+    let budget = MAX_TRAJECTORY_BYTES as u128;
+    if budget < fixed {
+        return 0;
+    }
+    usize::try_from((budget - fixed) / per_step).unwrap_or(usize::MAX)
+}
+
+/// An empty vector with room for `len` values, or [`Error::TrajectoryTooLarge`] if the allocator
+/// refuses.
+fn try_with_capacity<T>(len: usize, too_large: &Error) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| too_large.clone())?;
+    Ok(v)
 }
 
 /// Simulates a scene in `f64` with the planar model (every thesis scene is planar: the loads act
@@ -116,6 +177,11 @@ pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<Traject
 /// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls
 /// u_0..u_N, generic over the scalar (dual numbers give forward-mode derivatives of the whole
 /// trajectory) and the dimension.
+///
+/// # Errors
+/// [`Error::InvalidArgument`] for controls of the wrong length or not finite;
+/// [`Error::TrajectoryTooLarge`] when the trajectory exceeds [`MAX_TRAJECTORY_BYTES`] or the
+/// allocator refuses it; the step's errors ([`Rattle::step`]).
 pub fn simulate_chain<D: Scalar, const DIM: usize>(
     chain: Chain<D, DIM>,
     h: f64,
@@ -140,26 +206,40 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     }
     let n = chain.n();
     let nc = chain.n_constraints();
-    let lengths = chain.lengths().iter().map(|l| l.re()).collect();
-    let mut rattle = Rattle::new(chain, h)?;
-    let mut state: State<D, DIM> = rattle.straight_state();
-    rattle.prepare(&mut state, 0, controls[0])?;
+    // The size check and the fallible allocation come before anything of size N is allocated.
+    let bytes = trajectory_bytes::<D, DIM>(n, nc, steps);
+    let too_large = |refused| Error::TrajectoryTooLarge {
+        n,
+        steps,
+        bytes,
+        max_steps: max_trajectory_steps::<D, DIM>(n, nc),
+        refused,
+    };
+    if bytes > MAX_TRAJECTORY_BYTES {
+        return Err(too_large(false));
+    }
+    let e = &too_large(true);
+    let (states, multipliers) = ((steps + 1) * n, (steps + 1) * nc);
     let mut traj = Trajectory {
         n,
         n_constraints: nc,
         h,
         steps,
-        q: Vec::with_capacity((steps + 1) * n),
-        p: Vec::with_capacity((steps + 1) * n),
-        lambda: Vec::with_capacity((steps + 1) * nc),
-        mu: Vec::with_capacity((steps + 1) * nc),
-        energy: Vec::with_capacity(steps + 1),
-        moment: Vec::with_capacity(steps + 1),
-        controls: controls.to_vec(),
-        tip_target: Vec::with_capacity(steps + 1),
-        stats: Vec::with_capacity(steps),
-        lengths,
+        q: try_with_capacity(states, e)?,
+        p: try_with_capacity(states, e)?,
+        lambda: try_with_capacity(multipliers, e)?,
+        mu: try_with_capacity(multipliers, e)?,
+        energy: try_with_capacity(steps + 1, e)?,
+        moment: try_with_capacity(steps + 1, e)?,
+        controls: try_with_capacity(steps + 1, e)?,
+        tip_target: try_with_capacity(steps + 1, e)?,
+        stats: try_with_capacity(steps, e)?,
+        lengths: chain.lengths().iter().map(|l| l.re()).collect(),
     };
+    traj.controls.extend_from_slice(controls);
+    let mut rattle = Rattle::new(chain, h)?;
+    let mut state: State<D, DIM> = rattle.straight_state();
+    rattle.prepare(&mut state, 0, controls[0])?;
     let mut scratch = vec![[D::zero(); DIM]; n];
     let record = |traj: &mut Trajectory<D, DIM>,
                   st: &State<D, DIM>,
@@ -192,6 +272,10 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
 /// t_0 and t_N). With these values the discrete impulse h/2 Σ (u_k + u_{k+1}) equals the exact
 /// impulse ∫ u dt, and a push followed by an equal and opposite push stops the tip exactly
 /// (thesis Fig. 3.4, right).
+///
+/// This is not the scene file's `kind = "piecewise"`, which splits the N steps into equal pieces
+/// on the grid ([`piece_index`]); here the pieces are arbitrary time intervals, averaged over the
+/// half cells each u_k acts on, so that the impulse is exact.
 pub fn piecewise_constant_controls(h: f64, steps: usize, pieces: &[(f64, f64, f64)]) -> Vec<f64> {
     let t_end = steps as f64 * h;
     (0..=steps)

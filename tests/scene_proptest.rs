@@ -1,4 +1,4 @@
-//! Property tests on random scene files (SPEC §5), valid and invalid.
+//! Property tests on random scene files (docs/scene-format.md), valid and invalid.
 //!
 //! - A valid file parses to the scene it describes, round-trips through `Scene::to_toml_string`,
 //!   and simulates without panic: either the constraints |qᵢ| = 1 hold to 1e-10 at every step with
@@ -104,7 +104,10 @@ struct Loads {
 #[derive(Clone, Debug)]
 struct ControlSpec {
     node: Option<usize>,
-    per_step: bool,
+    /// 0: constant, 1: per-step, 2: piecewise.
+    kind: usize,
+    /// Number of pieces of a piecewise control (1..=N).
+    pieces: usize,
     values: Vec<f64>,
 }
 
@@ -142,12 +145,13 @@ fn valid_scene() -> impl Strategy<Value = SceneFile> {
         let control = prop::option::of(
             (
                 prop::option::of(1usize..=n),
-                any::<bool>(),
+                (0usize..3, 1usize..=steps),
                 vec(-5.0f64..5.0, steps + 1),
             )
-                .prop_map(|(node, per_step, values)| ControlSpec {
+                .prop_map(|(node, (kind, pieces), values)| ControlSpec {
                     node,
-                    per_step,
+                    kind,
+                    pieces,
                     values,
                 }),
         );
@@ -239,10 +243,10 @@ fn valid_scene() -> impl Strategy<Value = SceneFile> {
                     if let Some(node) = c.node.map(|k| if tip_only { n } else { k }) {
                         e.push(entry("node", node.to_string(), false, false, true));
                     }
-                    let (kind, values) = if c.per_step {
-                        ("per-step", &c.values[..])
-                    } else {
-                        ("constant", &c.values[..1])
+                    let (kind, values) = match c.kind {
+                        0 => ("constant", &c.values[..1]),
+                        1 => ("per-step", &c.values[..]),
+                        _ => ("piecewise", &c.values[..c.pieces]),
                     };
                     e.push(entry("kind", format!("\"{kind}\""), true, false, false));
                     e.push(entry(
@@ -388,7 +392,11 @@ fn apply(file: &mut SceneFile, defect: &Defect, pick: usize) -> String {
             let n = file.n;
             if let Some(c) = file.section_mut("[control]") {
                 let per_step = c.entries.iter().any(|e| e.value == "\"per-step\"");
-                let count = if per_step {
+                let piecewise = c.entries.iter().any(|e| e.value == "\"piecewise\"");
+                let count = if piecewise {
+                    // more pieces than steps
+                    steps + 1 + pick % 2
+                } else if per_step {
                     steps + 2 + pick % 2
                 } else {
                     2 + pick % 3

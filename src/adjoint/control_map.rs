@@ -49,19 +49,21 @@ impl ControlMap for PerStepControl {
     }
 }
 
-/// Piecewise-constant control on a coarser grid: `pieces` values, piece j covering the steps
-/// k with ⌊k · pieces / (N + 1)⌋ = j (so long horizons are optimised with few parameters).
+/// Piecewise-constant control on a coarser grid (so long horizons are optimised with few
+/// parameters): P = `pieces` values splitting the N effective steps evenly, piece j covering the
+/// steps k = 0..N−1 with ⌊k·P/N⌋ = j, and u_N (which has no effect) taking the last piece
+/// ([`crate::simulate::piece_index`]; the scene file's `kind = "piecewise"`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PiecewiseControl {
     /// N.
     pub steps: usize,
-    /// Number of pieces (1..=N + 1).
+    /// Number of pieces P (1..=N; P = N is one piece per step).
     pub pieces: usize,
 }
 
 impl PiecewiseControl {
     fn piece(&self, k: usize) -> usize {
-        k * self.pieces / (self.steps + 1)
+        crate::simulate::piece_index(k, self.steps, self.pieces)
     }
 }
 

@@ -3,7 +3,7 @@
 
 use super::{
     adjoint_gradient, forward_value, AdjointResult, BendingObjective, Checkpointing, ControlMap,
-    Objective, Parametrisation, PerStepControl,
+    Objective, Parametrisation, PerStepControl, PiecewiseControl,
 };
 use crate::error::{Error, Result};
 use crate::model::{Chain, Parameter, Scalar};
@@ -30,6 +30,10 @@ impl ControlProblem<Parametrisation, BendingObjective> {
         let map = match scene.control.as_ref().map(|c| c.kind) {
             Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
                 steps: scene.time.steps,
+            }),
+            Some(ControlKind::Piecewise) => Parametrisation::Piecewise(PiecewiseControl {
+                steps: scene.time.steps,
+                pieces: scene.control.as_ref().map_or(1, |c| c.values.len()),
             }),
             _ => Parametrisation::Constant,
         };

@@ -303,7 +303,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             let rmax = ops.residual(&ws.qnew, zeta_next, &mut ws.rhs);
             if !rmax.is_finite() {
-                return Err(Error::NonFinite { step: k });
+                return Err(Error::NonFinite {
+                    step: k,
+                    quantity: "the positions q_{k+1} of the Newton iterate",
+                });
             }
             if rmax <= self.options.tolerance {
                 if extra_done == updates {
@@ -323,6 +326,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     time: k as f64 * h,
                     residual: rmax,
                     iterations,
+                    tolerance: self.options.tolerance,
+                    h: Some(h),
                 });
             }
             let w = ch.has_drag().then_some(&ws.w[..]);

@@ -1,0 +1,484 @@
+//! Validation of a [`Scene`]: value ranges, counts, nodes, the step numbers and the size limits
+//! (docs/scene-format.md, "Valid ranges" and "Size limits").
+
+use super::raw::{to_i64, NumOrArray};
+use super::{ControlKind, Scene, SceneError, SceneErrorKind, Support};
+
+/// Largest number of pendulums n a scene may have.
+pub const MAX_PENDULUMS: usize = 1_000_000;
+/// Largest number of time steps N a scene may have.
+pub const MAX_STEPS: usize = 10_000_000;
+/// Memory budget of a stored trajectory: 8 GiB, a third of a 24 GiB machine (the rest is left
+/// for the operating system, the optimiser's vectors and the output). A scene whose planar `f64`
+/// trajectory ([`crate::simulate::trajectory_bytes`]) needs more is rejected by
+/// [`Scene::validate`] naming `time.steps`; [`crate::simulate::simulate_chain`] checks every
+/// scalar type and dimension against the same budget and allocates fallibly.
+pub const MAX_TRAJECTORY_BYTES: u64 = 8 << 30;
+/// Largest step number h²·k/(m·l²) (springs) and h²·F·l/(m·l²) (loads) a scene may have: the
+/// dimensionless angle one step turns a pendulum through. RATTLE resolves the motion only when
+/// it is well below 1 (its Newton solve fails long before 10¹²); the limit keeps every quantity
+/// the step forms far inside the `f64` range, so a valid scene cannot overflow.
+pub const MAX_STEP_NUMBER: f64 = 1e12;
+
+/// A supported closed range of a physical value, with its unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ValueRange {
+    /// Smallest allowed value.
+    pub min: f64,
+    /// Largest allowed value.
+    pub max: f64,
+    /// SI unit, for messages.
+    pub unit: &'static str,
+    /// What goes wrong outside the range, for messages.
+    why: &'static str,
+}
+
+impl ValueRange {
+    /// Whether `x` lies in [min, max] (NaN does not).
+    pub fn contains(&self, x: f64) -> bool {
+        self.min <= x && x <= self.max
+    }
+}
+
+/// Pendulum lengths lᵢ \[m\]: 10⁻⁶ to 10⁶ m.
+pub const LENGTH_RANGE: ValueRange = ValueRange {
+    min: 1e-6,
+    max: 1e6,
+    unit: "m",
+    why: "1/(m·l²) enters the inverse mass matrix and F·l the generalised force",
+};
+/// Point masses mᵢ \[kg\]: 10⁻¹² to 10¹² kg.
+pub const MASS_RANGE: ValueRange = ValueRange {
+    min: 1e-12,
+    max: 1e12,
+    unit: "kg",
+    why: "1/(m·l²) enters the inverse mass matrix",
+};
+/// Spring constants kᵢ (interior, base, tip) \[N·m/rad\]: 0 to 10¹⁵.
+pub const STIFFNESS_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e15,
+    unit: "N·m/rad",
+    why: "h²·k/(m·l²) is the step's spring number",
+};
+/// Point loads F and control forces u \[N\]: |F| ≤ 10¹² N.
+pub const FORCE_RANGE: ValueRange = ValueRange {
+    min: -1e12,
+    max: 1e12,
+    unit: "N",
+    why: "F·l enters the generalised force",
+};
+/// Gravitational acceleration g \[m/s²\]: |g| ≤ 10⁴ m/s² (a thousand times Earth's).
+pub const GRAVITY_RANGE: ValueRange = ValueRange {
+    min: -1e4,
+    max: 1e4,
+    unit: "m/s²",
+    why: "g·m·l enters the generalised force",
+};
+/// Drag constant D \[kg/m\]: 0 to 10¹².
+pub const DRAG_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e12,
+    unit: "kg/m",
+    why: "h·D·|p| enters the implicit half step",
+};
+/// Time step h \[s\]: 10⁻¹² to 10⁴ s.
+pub const STEP_RANGE: ValueRange = ValueRange {
+    min: 1e-12,
+    max: 1e4,
+    unit: "s",
+    why: "h² multiplies every force in the step and 2/h gives the multipliers μ",
+};
+
+/// `bytes` for people, in binary units: `512 bytes`, `8.0 GiB`, `894.1 GiB`.
+pub fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 7] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut x = bytes as f64;
+    let mut unit = 0;
+    while x >= 1024.0 && unit + 1 < UNITS.len() {
+        x /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{x:.1} {}", UNITS[unit])
+    }
+}
+
+/// Number of constraints of a planar chain with this support: one length constraint per pendulum,
+/// plus the tip constraint of fixed-fixed and pinned-pinned beams (also in the reaction-force
+/// variant, where it is the moving target).
+fn n_constraints(n: usize, support: Support) -> usize {
+    match support {
+        Support::FixedFixed | Support::PinnedPinned => n + 1,
+        Support::Cantilever | Support::Riser => n,
+    }
+}
+
+impl Scene {
+    /// Checks the rules of docs/scene-format.md: counts and nodes, the value ranges
+    /// ([`LENGTH_RANGE`], [`MASS_RANGE`], ...), the step numbers ([`MAX_STEP_NUMBER`]) and the size
+    /// limits ([`MAX_PENDULUMS`], [`MAX_STEPS`], [`MAX_TRAJECTORY_BYTES`]). The error names the
+    /// first offending key.
+    pub fn validate(&self) -> Result<(), SceneError> {
+        let n = self.n();
+        check_size(n, self.time.steps, self.beam.support)?;
+        let b = &self.beam;
+        if b.masses.len() != n {
+            return Err(SceneError::count("beam.mass", n, b.masses.len()));
+        }
+        if b.stiffness.len() != n - 1 {
+            return Err(SceneError::count(
+                "beam.stiffness",
+                n - 1,
+                b.stiffness.len(),
+            ));
+        }
+        check_all("beam.length", &b.lengths, check_positive)?;
+        check_all("beam.length", &b.lengths, |k, x| {
+            check_range(k, x, &LENGTH_RANGE)
+        })?;
+        check_all("beam.mass", &b.masses, check_positive)?;
+        check_all("beam.mass", &b.masses, |k, x| {
+            check_range(k, x, &MASS_RANGE)
+        })?;
+        check_all("beam.stiffness", &b.stiffness, check_spring)?;
+        check_spring("beam.base_stiffness", b.base_stiffness)?;
+        check_spring("beam.tip_stiffness", b.tip_stiffness)?;
+        if b.reaction_force && !matches!(b.support, Support::FixedFixed | Support::PinnedPinned) {
+            return Err(SceneError::invalid(
+                "beam.reaction_force",
+                format!(
+                    "the reaction-force variant needs support `fixed-fixed` or `pinned-pinned`, \
+                     not `{}`",
+                    support_name(b.support)
+                ),
+            ));
+        }
+        check_finite("loads.gravity", self.loads.gravity)?;
+        check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
+        check_nonnegative("loads.drag", self.loads.drag)?;
+        check_range("loads.drag", self.loads.drag, &DRAG_RANGE)?;
+        for (i, p) in self.loads.points.iter().enumerate() {
+            let key = |k: &str| format!("loads.point[{i}].{k}");
+            node_index(&key("node"), to_i64(p.node), n)?;
+            check_finite(&key("force"), p.force)?;
+            check_range(&key("force"), p.force, &FORCE_RANGE)?;
+            check_finite(&key("start"), p.start)?;
+            if let Some(end) = p.end {
+                check_finite(&key("end"), end)?;
+                if end <= p.start {
+                    return Err(SceneError::invalid(
+                        key("end"),
+                        format!("must be greater than start = {}, got {end}", p.start),
+                    ));
+                }
+            }
+        }
+        check_positive("time.step", self.time.step)?;
+        check_range("time.step", self.time.step, &STEP_RANGE)?;
+        if let Some(c) = &self.control {
+            node_index("control.node", to_i64(c.node), n)?;
+            if b.reaction_force && c.node != n {
+                return Err(SceneError::invalid(
+                    "control.node",
+                    format!(
+                        "the reaction-force variant moves the tip: the control must act at node \
+                         {n}, not {}",
+                        c.node
+                    ),
+                ));
+            }
+            check_control_count(c.kind, c.values.len(), self.time.steps)?;
+            for (i, &u) in c.values.iter().enumerate() {
+                let key = format!("control.values[{i}]");
+                check_finite(&key, u)?;
+                check_range(&key, u, &FORCE_RANGE)?;
+            }
+        }
+        self.check_step_numbers()
+    }
+
+    /// The step numbers of [`MAX_STEP_NUMBER`], with M̄⁻¹ᵢᵢ = (1/lᵢ²)(1/mᵢ + 1/mᵢ₋₁) the diagonal
+    /// of the inverse mass matrix (docs/conventions.md): the spring number
+    /// h²·(kᵢ + kᵢ₊₁)·M̄⁻¹ᵢᵢ ≈ (ω h)², ω the fastest local angular frequency, and the load number
+    /// h²·C·lᵢ·M̄⁻¹ᵢᵢ with C = Σ|F| + |g|·Σm + max|u| the largest generalised load, an upper bound
+    /// of the angle one step from rest turns pendulum i through. Every factor is inside its
+    /// range, so both are finite.
+    fn check_step_numbers(&self) -> Result<(), SceneError> {
+        let b = &self.beam;
+        let n = self.n();
+        let h = self.time.step;
+        let (has_base, has_tip) = super::builder::end_springs(b.support);
+        let spring = |j: usize| -> f64 {
+            // spring j = 0..=n couples pendulums j and j + 1 (1-based), k₁ = base, k_{n+1} = tip
+            if j == 0 {
+                if has_base {
+                    b.base_stiffness
+                } else {
+                    0.0
+                }
+            } else if j == n {
+                if has_tip {
+                    b.tip_stiffness
+                } else {
+                    0.0
+                }
+            } else {
+                b.stiffness[j - 1]
+            }
+        };
+        let loads = &self.loads;
+        let total_mass: f64 = b.masses.iter().sum();
+        let max_u = self
+            .control
+            .as_ref()
+            .map_or(0.0, |c| c.values.iter().fold(0.0f64, |a, u| a.max(u.abs())));
+        let load: f64 = loads.points.iter().map(|p| p.force.abs()).sum::<f64>()
+            + loads.gravity.abs() * total_mass
+            + max_u;
+        let (mut worst_spring, mut at_spring) = (0.0f64, 0);
+        let (mut worst_load, mut at_load) = (0.0f64, 0);
+        for i in 0..n {
+            let inv_l = 1.0 / b.lengths[i];
+            let inv_m = 1.0 / b.masses[i] + if i > 0 { 1.0 / b.masses[i - 1] } else { 0.0 };
+            let minv = inv_l * inv_l * inv_m;
+            let s = h * h * (spring(i) + spring(i + 1)) * minv;
+            if s > worst_spring {
+                (worst_spring, at_spring) = (s, i + 1);
+            }
+            let f = h * h * load * b.lengths[i] * minv;
+            if f > worst_load {
+                (worst_load, at_load) = (f, i + 1);
+            }
+        }
+        let advice = |number: f64| {
+            format!(
+                "use a smaller `time.step` (below {:.3e} s)",
+                h * (MAX_STEP_NUMBER / number).sqrt()
+            )
+        };
+        if worst_spring > MAX_STEP_NUMBER {
+            return Err(SceneError::invalid(
+                "time.step",
+                format!(
+                    "the spring number h²·k/(m·l²) = {worst_spring:.3e} at pendulum {at_spring} \
+                     exceeds {MAX_STEP_NUMBER:e}: one step of h = {h} s spans {:.1e} rad of its \
+                     fastest oscillation; {} or check `beam.stiffness`, `beam.mass` and \
+                     `beam.length`",
+                    worst_spring.sqrt(),
+                    advice(worst_spring)
+                ),
+            ));
+        }
+        if worst_load > MAX_STEP_NUMBER {
+            return Err(SceneError::invalid(
+                "time.step",
+                format!(
+                    "the load number h²·F·l/(m·l²) = {worst_load:.3e} at pendulum {at_load} \
+                     exceeds {MAX_STEP_NUMBER:e}: one step of h = {h} s would turn it through \
+                     {worst_load:.1e} rad; {} or check the forces (`loads`, `control.values`), \
+                     `beam.mass` and `beam.length`",
+                    advice(worst_load)
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The number of `control.values` a control kind needs with N steps.
+pub(super) fn check_control_count(
+    kind: ControlKind,
+    count: usize,
+    steps: usize,
+) -> Result<(), SceneError> {
+    let expected = match kind {
+        ControlKind::Constant => 1,
+        ControlKind::PerStep => steps + 1,
+        ControlKind::Piecewise if (1..=steps).contains(&count) => return Ok(()),
+        ControlKind::Piecewise => {
+            return Err(SceneError::invalid(
+                "control.values",
+                format!(
+                    "a piecewise control has 1 to N = {steps} pieces (one value each), got {count} \
+                     values{}",
+                    if count > steps {
+                        "; use kind = \"per-step\" for one value per time t_k"
+                    } else {
+                        ""
+                    }
+                ),
+            ))
+        }
+    };
+    if count != expected {
+        return Err(SceneError::count("control.values", expected, count));
+    }
+    Ok(())
+}
+
+/// A count that must be ≥ 1 (the upper limits are checked by [`check_size`]).
+pub(super) fn positive_count(key: &str, v: i64) -> Result<usize, SceneError> {
+    match usize::try_from(v) {
+        Ok(x) if x >= 1 => Ok(x),
+        _ => Err(SceneError::invalid(
+            key,
+            format!("must be at least 1, got {v}"),
+        )),
+    }
+}
+
+/// A node index in 1..=n.
+pub(super) fn node_index(key: &str, node: i64, n: usize) -> Result<usize, SceneError> {
+    match usize::try_from(node) {
+        Ok(x) if (1..=n).contains(&x) => Ok(x),
+        _ => Err(SceneErrorKind::NodeOutOfRange {
+            key: key.to_string(),
+            node,
+            n,
+        }
+        .into()),
+    }
+}
+
+/// The size limits ([`MAX_PENDULUMS`], [`MAX_STEPS`], [`MAX_TRAJECTORY_BYTES`]), checked before
+/// anything of size n or N is allocated.
+pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(), SceneError> {
+    if n == 0 {
+        return Err(SceneError::invalid(
+            "beam.pendulums",
+            "must be at least 1, got 0",
+        ));
+    }
+    if n > MAX_PENDULUMS {
+        return Err(SceneError::invalid(
+            "beam.pendulums",
+            format!("at most {MAX_PENDULUMS} pendulums are supported, got {n}"),
+        ));
+    }
+    if steps == 0 {
+        return Err(SceneError::invalid(
+            "time.steps",
+            "must be at least 1, got 0",
+        ));
+    }
+    if steps > MAX_STEPS {
+        return Err(SceneError::invalid(
+            "time.steps",
+            format!("at most {MAX_STEPS} steps are supported, got {steps}"),
+        ));
+    }
+    let nc = n_constraints(n, support);
+    let bytes = crate::simulate::trajectory_bytes::<f64, 2>(n, nc, steps);
+    if bytes > MAX_TRAJECTORY_BYTES {
+        let max_steps = crate::simulate::max_trajectory_steps::<f64, 2>(n, nc);
+        return Err(SceneError::invalid(
+            "time.steps",
+            format!(
+                "the trajectory of N = {steps} steps of n = {n} pendulums needs {} (q, p, λ, μ \
+                 per node and time), over the memory limit of {}; reduce `time.steps` (at most \
+                 {max_steps} for this beam) or `beam.pendulums`",
+                human_bytes(bytes),
+                human_bytes(MAX_TRAJECTORY_BYTES)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+pub(super) fn support_name(support: Support) -> &'static str {
+    match support {
+        Support::Cantilever => "cantilever",
+        Support::Riser => "riser",
+        Support::FixedFixed => "fixed-fixed",
+        Support::PinnedPinned => "pinned-pinned",
+    }
+}
+
+pub(super) fn check_positive(key: &str, x: f64) -> Result<(), SceneError> {
+    if x.is_finite() && x > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("must be positive and finite, got {x}"),
+        ))
+    }
+}
+
+fn check_nonnegative(key: &str, x: f64) -> Result<(), SceneError> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!("must be finite and non-negative, got {x}"),
+        ))
+    }
+}
+
+pub(super) fn check_spring(key: &str, x: f64) -> Result<(), SceneError> {
+    check_nonnegative(key, x)?;
+    check_range(key, x, &STIFFNESS_RANGE)
+}
+
+pub(super) fn check_finite(key: &str, x: f64) -> Result<(), SceneError> {
+    if x.is_finite() {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(key, format!("must be finite, got {x}")))
+    }
+}
+
+/// `x` inside `range` (x is already known to be finite and of the right sign).
+fn check_range(key: &str, x: f64, range: &ValueRange) -> Result<(), SceneError> {
+    if range.contains(x) {
+        return Ok(());
+    }
+    let unit = range.unit;
+    let (lo, hi) = (short(range.min), short(range.max));
+    let bound = if x < range.min {
+        format!("at least {lo} {unit}")
+    } else {
+        format!("at most {hi} {unit}")
+    };
+    Err(SceneError::invalid(
+        key,
+        format!(
+            "must be {bound}, got {} (the supported range is [{lo}, {hi}] {unit}: {})",
+            short(x),
+            range.why
+        ),
+    ))
+}
+
+/// `x` as written in a file: `0`, `2.5`, `1e-300`, `-1e12` (the shorter of the two forms).
+fn short(x: f64) -> String {
+    let plain = format!("{x}");
+    let sci = format!("{x:e}");
+    if plain.len() <= sci.len() {
+        plain
+    } else {
+        sci
+    }
+}
+
+/// Checks every value of a per-pendulum array; the key has an index unless all values are equal
+/// (then the file form is a single number, see [`NumOrArray::compact`]).
+fn check_all(
+    key: &str,
+    values: &[f64],
+    check: impl Fn(&str, f64) -> Result<(), SceneError>,
+) -> Result<(), SceneError> {
+    let uniform = matches!(NumOrArray::compact(values), NumOrArray::Number(_));
+    for (i, &x) in values.iter().enumerate() {
+        if uniform {
+            check(key, x)?;
+        } else {
+            check(&format!("{key}[{i}]"), x)?;
+        }
+    }
+    Ok(())
+}

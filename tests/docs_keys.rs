@@ -1,0 +1,278 @@
+//! The documentation of the scene format (docs/scene-format.md) and the parser agree:
+//!
+//! - every key documented in the key tables is accepted by the parser (a file setting every
+//!   documented key parses, and each key changes the scene it sets);
+//! - every key the parser accepts is documented. The accepted keys are not listed by hand: they
+//!   are read from the parser's own "unknown key" error, which lists the fields of the serde
+//!   structure of each table (`expected one of ...`);
+//! - the valid ranges in the tables are those the validation enforces (the library's constants);
+//! - every `toml` example in the document is a valid scene;
+//! - README.md and docs/ do not send readers outside the repository (`../shared`, SPEC.md).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use chainbeam::scene::{
+    ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS,
+    MAX_STEPS, STEP_RANGE, STIFFNESS_RANGE,
+};
+use chainbeam::{Scene, SceneErrorKind};
+
+fn read(rel: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel))
+        .unwrap_or_else(|e| panic!("{rel}: {e}"))
+}
+
+/// The key tables of the document: table path (`beam`, `loads.point`) → key → the row's cells.
+fn documented() -> BTreeMap<String, BTreeMap<String, Vec<String>>> {
+    let doc = read("docs/scene-format.md");
+    let mut tables: BTreeMap<String, BTreeMap<String, Vec<String>>> = BTreeMap::new();
+    let mut current: Option<String> = None;
+    for line in doc.lines() {
+        if line.starts_with('#') {
+            // "### `[beam]`" or "### `[[loads.point]]`" opens a table; any other heading closes it
+            current = line
+                .strip_prefix("### `[")
+                .and_then(|s| s.split_once("]`"))
+                .map(|(name, _)| {
+                    name.trim_start_matches('[')
+                        .trim_end_matches(']')
+                        .to_string()
+                });
+            if let Some(t) = &current {
+                assert!(
+                    tables.insert(t.clone(), BTreeMap::new()).is_none(),
+                    "{t} twice"
+                );
+            }
+            continue;
+        }
+        let (Some(table), Some(row)) = (&current, line.strip_prefix("| `")) else {
+            continue;
+        };
+        let cells: Vec<String> = line
+            .trim_matches('|')
+            .split(" | ")
+            .map(|c| c.trim().to_string())
+            .collect();
+        let key = row.split('`').next().unwrap().to_string();
+        let rows = tables.get_mut(table).unwrap();
+        assert!(
+            rows.insert(key.clone(), cells).is_none(),
+            "{table}.{key} twice"
+        );
+    }
+    tables
+}
+
+/// A valid scene with every table, as (table, [(key, value)]).
+const SECTIONS: &[(&str, &[(&str, &str)])] = &[
+    (
+        "beam",
+        &[
+            ("pendulums", "4"),
+            ("length", "1.0"),
+            ("mass", "1.0"),
+            ("stiffness", "100.0"),
+            ("support", "\"fixed-fixed\""),
+        ],
+    ),
+    ("loads", &[("gravity", "1.0")]),
+    ("loads.point", &[("node", "2"), ("force", "1.0")]),
+    ("time", &[("step", "0.01"), ("steps", "5")]),
+    ("control", &[("kind", "\"constant\""), ("values", "[0.0]")]),
+    ("objective", &[("kind", "\"final\"")]),
+];
+
+/// The scene of [`SECTIONS`] with `set` = (table, key, value): the key's value replaced, or the
+/// key added to its table (the document root for table "").
+fn render(set: Option<(&str, &str, &str)>) -> String {
+    let mut text = String::new();
+    if let Some(("", key, value)) = set {
+        text.push_str(&format!("{key} = {value}\n"));
+    }
+    for (table, entries) in SECTIONS {
+        if *table == "loads.point" {
+            text.push_str("[[loads.point]]\n");
+        } else {
+            text.push_str(&format!("[{table}]\n"));
+        }
+        let mut done = false;
+        for (key, value) in *entries {
+            match set {
+                Some((t, k, v)) if t == *table && k == *key => {
+                    text.push_str(&format!("{key} = {v}\n"));
+                    done = true;
+                }
+                _ => text.push_str(&format!("{key} = {value}\n")),
+            }
+        }
+        if let Some((t, k, v)) = set {
+            if t == *table && !done {
+                text.push_str(&format!("{k} = {v}\n"));
+            }
+        }
+        text.push('\n');
+    }
+    text
+}
+
+/// The keys the parser accepts in `table`, from its unknown-key error.
+fn accepted(table: &str) -> BTreeSet<String> {
+    let text = render(Some((table, "not_a_key", "1")));
+    let err = Scene::from_toml_str(&text).unwrap_err();
+    match err.kind {
+        SceneErrorKind::UnknownKey { key, expected } => {
+            let want = if table.is_empty() {
+                "not_a_key".to_string()
+            } else {
+                format!(
+                    "{}.not_a_key",
+                    table.replace("loads.point", "loads.point[0]")
+                )
+            };
+            assert_eq!(key, want);
+            assert!(!expected.is_empty(), "{table}: no list of keys");
+            expected.into_iter().collect()
+        }
+        other => panic!("{table}: {other:?}"),
+    }
+}
+
+#[test]
+fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
+    let doc = documented();
+    // The document's tables are exactly the parser's: the root's keys are the top-level tables,
+    // and `point` is the only table inside `[loads]`.
+    let roots = accepted("");
+    let doc_roots: BTreeSet<String> = doc.keys().filter(|t| !t.contains('.')).cloned().collect();
+    assert_eq!(doc_roots, roots, "top-level tables");
+    let mut checked = 0;
+    for (table, rows) in &doc {
+        let mut keys: BTreeSet<String> = rows.keys().cloned().collect();
+        // sub-tables documented under their own heading
+        for sub in doc.keys() {
+            if let Some(rest) = sub.strip_prefix(&format!("{table}.")) {
+                keys.insert(rest.to_string());
+            }
+        }
+        assert_eq!(keys, accepted(table), "keys of [{table}]");
+        checked += keys.len();
+    }
+    assert_eq!(checked, 21, "number of documented keys");
+}
+
+/// Each documented key, set to a value other than its default, is read: the scene changes.
+#[test]
+fn every_documented_key_is_read() {
+    let base = Scene::from_toml_str(&render(None)).unwrap();
+    let settings: &[(&str, &str, &str)] = &[
+        ("beam", "pendulums", "5"),
+        ("beam", "length", "2.0"),
+        ("beam", "mass", "2.0"),
+        ("beam", "stiffness", "200.0"),
+        ("beam", "support", "\"pinned-pinned\""),
+        ("beam", "base_stiffness", "5.0"),
+        ("beam", "tip_stiffness", "5.0"),
+        ("beam", "reaction_force", "true"),
+        ("loads", "gravity", "2.0"),
+        ("loads", "drag", "3.0"),
+        ("loads.point", "node", "3"),
+        ("loads.point", "force", "4.0"),
+        ("loads.point", "start", "0.5"),
+        ("loads.point", "end", "0.75"),
+        ("time", "step", "0.02"),
+        ("time", "steps", "6"),
+        ("control", "node", "3"),
+        ("control", "kind", "\"piecewise\""),
+        ("control", "values", "[1.0]"),
+        ("objective", "kind", "\"sum\""),
+    ];
+    let doc = documented();
+    let mut seen = BTreeSet::new();
+    for &(table, key, value) in settings {
+        assert!(doc[table].contains_key(key), "{table}.{key} not documented");
+        seen.insert(format!("{table}.{key}"));
+        let text = render(Some((table, key, value)));
+        let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_ne!(scene, base, "{table}.{key} = {value} changed nothing");
+    }
+    let all: BTreeSet<String> = doc
+        .iter()
+        .flat_map(|(t, rows)| rows.keys().map(move |k| format!("{t}.{k}")))
+        .collect();
+    assert_eq!(seen, all);
+}
+
+/// The "valid values" column agrees with the ranges the validation enforces.
+#[test]
+fn documented_ranges_are_the_enforced_ones() {
+    fn short(x: f64) -> String {
+        if x == 0.0 {
+            "0".into()
+        } else {
+            format!("{x:e}")
+        }
+    }
+    let doc = documented();
+    let cell = |table: &str, key: &str| doc[table][key][4].clone();
+    let range = |r: &ValueRange| format!("{} to {}", short(r.min), short(r.max));
+    assert_eq!(cell("beam", "length"), range(&LENGTH_RANGE));
+    assert_eq!(cell("beam", "mass"), range(&MASS_RANGE));
+    for key in ["stiffness", "base_stiffness", "tip_stiffness"] {
+        assert_eq!(cell("beam", key), range(&STIFFNESS_RANGE));
+    }
+    assert_eq!(cell("loads", "gravity"), range(&GRAVITY_RANGE));
+    assert_eq!(cell("loads", "drag"), range(&DRAG_RANGE));
+    assert_eq!(cell("loads.point", "force"), range(&FORCE_RANGE));
+    assert!(cell("control", "values").starts_with(&range(&FORCE_RANGE)));
+    assert_eq!(cell("time", "step"), range(&STEP_RANGE));
+    assert_eq!(cell("beam", "pendulums"), format!("1 to {MAX_PENDULUMS}"));
+    assert!(cell("time", "steps").starts_with(&format!("1 to {MAX_STEPS}")));
+    // and the same numbers in the summary table of "Valid ranges"
+    let text = read("docs/scene-format.md");
+    for (name, r) in [
+        ("length l", &LENGTH_RANGE),
+        ("mass m", &MASS_RANGE),
+        ("spring k (interior, base, tip)", &STIFFNESS_RANGE),
+        ("force F, control u", &FORCE_RANGE),
+        ("gravity g", &GRAVITY_RANGE),
+        ("drag D", &DRAG_RANGE),
+        ("time step h", &STEP_RANGE),
+    ] {
+        let row = format!("| {name} | {} | {} |", range(r), r.unit);
+        assert!(text.contains(&row), "missing row {row}");
+    }
+}
+
+/// Every `toml` block of the document is a valid scene (the first one is the thesis's riser
+/// scene, catalogue::riser(5)).
+#[test]
+fn documented_examples_are_valid_scenes() {
+    let text = read("docs/scene-format.md");
+    let blocks: Vec<&str> = text
+        .split("```toml\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap())
+        .collect();
+    assert_eq!(blocks.len(), 4);
+    for b in &blocks {
+        let scene = Scene::from_toml_str(b).unwrap_or_else(|e| panic!("{e}\n{b}"));
+        chainbeam::simulate(&scene).unwrap();
+    }
+    assert_eq!(
+        Scene::from_toml_str(blocks[0]).unwrap(),
+        chainbeam::catalogue::riser(5)
+    );
+}
+
+/// A clone of the repository has no ../shared: nothing the user reads points there.
+#[test]
+fn docs_stay_inside_the_repository() {
+    for file in ["README.md", "docs/scene-format.md", "docs/conventions.md"] {
+        let text = read(file);
+        for bad in ["../shared", "SPEC.md", "SPEC §"] {
+            assert!(!text.contains(bad), "{file} mentions {bad}");
+        }
+    }
+}

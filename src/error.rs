@@ -123,6 +123,38 @@ pub enum Error {
         /// The Newton iteration.
         iteration: usize,
     },
+    /// An input has the wrong number of values.
+    #[error("`{name}`: expected {expected} values, got {got}")]
+    WrongLength {
+        /// The input's name.
+        name: &'static str,
+        /// The number of values expected.
+        expected: usize,
+        /// The number given.
+        got: usize,
+    },
+    /// An input value is NaN or infinite.
+    #[error("`{name}`: entry {index} is not finite")]
+    NotFinite {
+        /// The input's name.
+        name: &'static str,
+        /// Zero-based index of the first non-finite entry.
+        index: usize,
+    },
+    /// A derivative was requested with respect to a parameter the model does not have.
+    #[error("{parameter:?} is not a parameter of this scene: {reason}")]
+    NoSuchParameter {
+        /// The parameter.
+        parameter: crate::model::Parameter,
+        /// Why (e.g. "the support has no base spring").
+        reason: &'static str,
+    },
+    /// The time step is not positive and finite.
+    #[error("the time step must be positive and finite, got h = {h}")]
+    InvalidStep {
+        /// The step given.
+        h: f64,
+    },
     /// An argument passed to the API is inconsistent with the scene.
     #[error("invalid argument `{name}`: {reason}")]
     InvalidArgument {

@@ -203,7 +203,11 @@ fn invalid_starts_and_options_are_typed_errors() {
         ..Default::default()
     };
     let name = |r: Result<OptimResult>| match r {
-        Err(Error::InvalidArgument { name, .. }) => name,
+        Err(
+            Error::InvalidArgument { name, .. }
+            | Error::WrongLength { name, .. }
+            | Error::NotFinite { name, .. },
+        ) => name,
         other => panic!("expected InvalidArgument, got {other:?}"),
     };
     assert_eq!(name(minimize(&p, &[11.0], &bounded)), "theta0");

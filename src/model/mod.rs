@@ -367,22 +367,19 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// forward-mode derivatives of a whole simulation with respect to it.
     pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
         let n = self.n;
-        let missing = |name, reason: &str| Error::InvalidArgument {
-            name,
-            reason: reason.to_string(),
-        };
+        let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
         match p {
             Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
             Parameter::BaseStiffness => {
                 if !self.springs.present[0] {
-                    return Err(missing("base stiffness", "the support has no base spring"));
+                    return Err(missing(p, "the support has no base spring"));
                 }
                 self.springs.k[0] = value;
                 self.moment_stiffness = value;
             }
             Parameter::TipStiffness => {
                 if !self.springs.present[n] {
-                    return Err(missing("tip stiffness", "the support has no tip spring"));
+                    return Err(missing(p, "the support has no tip spring"));
                 }
                 self.springs.k[n] = value;
             }
@@ -395,7 +392,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }
             Parameter::Drag => match &mut self.drag {
                 Some(d) => d.d = value,
-                None => return Err(missing("drag", "the scene has no drag (D = 0)")),
+                None => return Err(missing(p, "the scene has no drag (D = 0)")),
             },
             Parameter::LoadForce(i) => {
                 let l = self
@@ -404,7 +401,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     .and_then(|ls| ls.loads.iter_mut().find(|l| l.scene_index == i));
                 match l {
                     Some(l) => l.force = value,
-                    None => return Err(missing("load force", "no such point load")),
+                    None => return Err(missing(p, "no such point load")),
                 }
             }
         }

@@ -1117,6 +1117,15 @@ pub fn minimize<P: ControlMap, O: Objective>(
             name: "theta0",
             reason,
         },
+        Error::WrongLength { expected, got, .. } => Error::WrongLength {
+            name: "theta0",
+            expected,
+            got,
+        },
+        Error::NotFinite { index, .. } => Error::NotFinite {
+            name: "theta0",
+            index,
+        },
         e => e,
     })?;
     let adapter = ArgminAdapter::new(problem, opts.bound)?;

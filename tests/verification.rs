@@ -1,0 +1,443 @@
+//! Verification of every derivative away from the small angles of `tests/adjoint.rs` (issue 10,
+//! "What must be shown"): the discrete adjoint and its Hessian-vector products at large deflection
+//! across both branches of the spring function s(x) and past 90° joints; the spatial model's
+//! adjoint; gravity, time-windowed loads and non-uniform lengths and masses; symplecticity of the
+//! RATTLE step asserted directly (JᵀΩJ = Ω on the constraint manifold) and its reversibility; the
+//! work a step and a gradient cost.
+//!
+//! References, each test says which: forward-mode dual numbers through the same simulation
+//! (`Dual64`; `HyperDual64` for second derivatives) — the adjoint must agree to round-off, 1e-12
+//! relative; central finite differences of whole simulations (to 1e-6, the difference quotient's
+//! own error); the symplectic form Ω(a, b) = a_q·b_p − a_p·b_q of the embedding (RATTLE is a
+//! symplectic, symmetric map of T*Q, Hairer-Lubich-Wanner, *Geometric Numerical Integration*,
+//! §VII.1.4, Theorem 1.3 and 1.4; thesis §1.6).
+//!
+//! Every case is small (n ≤ 6, N ≤ 80) so the whole file runs in a few seconds.
+
+use chainbeam::adjoint::{
+    adjoint_gradient, forward_value, AdjointResult, NodeDisplacementObjective, Stage,
+};
+use chainbeam::model::{yi, zi};
+use chainbeam::*;
+use nalgebra::{DMatrix, DVector};
+use num_dual::{Dual64, HyperDual64};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+// ---------------------------------------------------------------------------------------------
+// Shared helpers
+// ---------------------------------------------------------------------------------------------
+
+/// A deterministic pseudo-random sequence in [−1, 1] (xorshift64*), so every run checks the same
+/// vectors.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+    fn vec(&mut self, len: usize) -> Vec<f64> {
+        (0..len).map(|_| self.next()).collect()
+    }
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |a, b| a.max(b.abs()))
+}
+
+/// The soft, strongly loaded riser the large-deflection checks run on: n = 5, l = 1 m, m = 1 kg,
+/// interior k = 10 Nm/rad, end springs 20 Nm/rad, F = +50 N at node 3 and −50 N at node 5 (the
+/// tip), control at the tip, h = 0.01 s. The opposite loads fold the beam at node 3: from the
+/// straight start (every joint in the series branch of s) its joints pass 90° within 0.6 s.
+fn folding_scene(steps: usize) -> Scene {
+    Scene::builder(5)
+        .stiffness(10.0)
+        .base_stiffness(20.0)
+        .tip_stiffness(20.0)
+        .support(Support::Riser)
+        .point_load(3, 50.0)
+        .point_load(5, -50.0)
+        .control_constant(5, 0.0)
+        .step(0.01)
+        .steps(steps)
+        .build()
+        .unwrap()
+}
+
+/// The cosines x = q_{i−1}·qᵢ of the joints i = 0..=n that carry a spring (q₀ = q_{n+1} = e₂).
+fn spring_cosines<const DIM: usize>(chain: &Chain<f64, DIM>, q: &[[f64; DIM]]) -> Vec<f64> {
+    let n = q.len();
+    let mut e = [0.0; DIM];
+    e[yi::<DIM>()] = 1.0;
+    (0..=n)
+        .filter(|&i| chain.has_spring(i))
+        .map(|i| {
+            let a = if i == 0 { e } else { q[i - 1] };
+            let b = if i == n { e } else { q[i] };
+            (0..DIM).map(|d| a[d] * b[d]).sum()
+        })
+        .collect()
+}
+
+/// Which branches the spring terms took along a trajectory, steps 1..=N: spring evaluations in the
+/// series branch of s(x) at a non-zero angle (w = (1 − x)/2 ≤ 0.01, `src/model/geometry.rs`), in
+/// the closed form, and with x ≤ 0 (the a·b ≤ 0 branch of `joint_angle_squared`); and the largest
+/// joint angle by [`Chain::max_joint_angle`], in degrees.
+#[derive(Debug)]
+struct Census {
+    series: usize,
+    closed: usize,
+    obtuse: usize,
+    max_angle_deg: f64,
+}
+
+fn census<const DIM: usize>(chain: &Chain<f64, DIM>, traj: &Trajectory<f64, DIM>) -> Census {
+    let mut c = Census {
+        series: 0,
+        closed: 0,
+        obtuse: 0,
+        max_angle_deg: 0.0,
+    };
+    for k in 1..=traj.steps() {
+        for x in spring_cosines(chain, traj.q(k)) {
+            if (1.0 - x) / 2.0 <= 0.01 {
+                c.series += usize::from(x < 1.0 - 1e-12);
+            } else {
+                c.closed += 1;
+            }
+            c.obtuse += usize::from(x <= 0.0);
+        }
+        c.max_angle_deg = c
+            .max_angle_deg
+            .max(chain.max_joint_angle(traj.q(k)).to_degrees());
+    }
+    c
+}
+
+/// J(θ) by forward simulation in any scalar (dual numbers seeded in θ give forward-mode
+/// derivatives).
+fn value_of<D: Scalar, O: Objective>(
+    prob: &ControlProblem<Parametrisation, O>,
+    h: f64,
+    theta: &[D],
+    obj: &O,
+) -> D {
+    let mut u = vec![D::zero(); prob.steps() + 1];
+    prob.map().controls(theta, &mut u);
+    forward_value(&prob.chain_as::<D>(), h, prob.steps(), &u, obj).unwrap()
+}
+
+/// The nominal value of a parameter in a scene.
+fn nominal(s: &Scene, p: Parameter) -> f64 {
+    match p {
+        Parameter::InteriorStiffness => s.beam.stiffness[0],
+        Parameter::BaseStiffness => s.beam.base_stiffness,
+        Parameter::TipStiffness => s.beam.tip_stiffness,
+        Parameter::Mass => s.beam.masses[0],
+        Parameter::Drag => s.loads.drag,
+        Parameter::LoadForce(i) => s.loads.points[i].force,
+    }
+}
+
+/// Worst errors of one gradient check, relative to the scales stated at the check.
+#[derive(Debug, Default)]
+struct Worst {
+    control_fwd: f64,
+    control_fd: f64,
+    param_fwd: f64,
+    param_fd: f64,
+}
+
+/// Checks the physical-parameter gradients of an adjoint result against `Dual64` forward mode
+/// (1e-12 relative to the derivative itself) and central finite differences (1e-6 relative, step
+/// 1e-5 of the parameter).
+fn check_parameters<O: Objective, const DIM: usize>(
+    label: &str,
+    scene: &Scene,
+    chain: &Chain<f64, DIM>,
+    (u, obj): (&[f64], &O),
+    params: &[Parameter],
+    adj: &AdjointResult<f64>,
+    worst: &mut Worst,
+) {
+    let (h, steps) = (scene.time.step, scene.time.steps);
+    let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
+    for (&p, &a) in params.iter().zip(&adj.parameter_gradient) {
+        let v = nominal(scene, p);
+        let mut cd = chain.lift::<Dual64>();
+        cd.set_parameter(p, Dual64::new(v, 1.0)).unwrap();
+        let fwd = forward_value(&cd, h, steps, &ud, obj).unwrap().eps;
+        let e = (a - fwd).abs() / fwd.abs();
+        assert!(
+            e <= 1e-12,
+            "{label}: dJ/d{p:?}: adjoint {a:e} vs forward {fwd:e} (rel {e:.1e})"
+        );
+        worst.param_fwd = worst.param_fwd.max(e);
+        let eps = 1e-5 * v.abs();
+        let at = |x: f64| {
+            let mut c = chain.clone();
+            c.set_parameter(p, x).unwrap();
+            forward_value(&c, h, steps, u, obj).unwrap()
+        };
+        let fd = (at(v + eps) - at(v - eps)) / (2.0 * eps);
+        let e = (fd - fwd).abs() / fwd.abs();
+        assert!(
+            e <= 1e-6,
+            "{label}: dJ/d{p:?}: FD {fd:e} vs forward {fwd:e}"
+        );
+        worst.param_fd = worst.param_fd.max(e);
+    }
+}
+
+/// Checks ∂J/∂u_k of an adjoint result, every k, against `Dual64` forward mode (1e-12 relative to
+/// max_k |∂J/∂u_k|) and central finite differences (1e-6 of the same scale).
+fn check_controls<O: Objective, const DIM: usize>(
+    label: &str,
+    chain: &Chain<f64, DIM>,
+    (h, steps): (f64, usize),
+    (u, obj): (&[f64], &O),
+    adj: &AdjointResult<f64>,
+    worst: &mut Worst,
+) {
+    let g = &adj.control_gradient;
+    let scale = max_abs(g);
+    assert!(scale > 0.0, "{label}: zero gradient checks nothing");
+    let cd = chain.lift::<Dual64>();
+    for k in 0..=steps {
+        let ud: Vec<Dual64> = u
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| Dual64::new(x, f64::from(u8::from(i == k))))
+            .collect();
+        let fwd = forward_value(&cd, h, steps, &ud, obj).unwrap().eps;
+        let e = (g[k] - fwd).abs() / scale;
+        assert!(
+            e <= 1e-12,
+            "{label}: dJ/du_{k}: adjoint {:e} vs forward {fwd:e}",
+            g[k]
+        );
+        worst.control_fwd = worst.control_fwd.max(e);
+        let eps = 1e-5 * u[k].abs().max(1.0);
+        let at = |d: f64| {
+            let mut v = u.to_vec();
+            v[k] += d;
+            forward_value(chain, h, steps, &v, obj).unwrap()
+        };
+        let fd = (at(eps) - at(-eps)) / (2.0 * eps);
+        let e = (fd - fwd).abs() / scale;
+        assert!(
+            e <= 1e-6,
+            "{label}: dJ/du_{k}: FD {fd:e} vs forward {fwd:e}"
+        );
+        worst.control_fd = worst.control_fd.max(e);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1. Adjoint gradient and Hessian-vector product at large deflection
+// ---------------------------------------------------------------------------------------------
+
+/// At large deflection (joints from 0 to past 90°, both branches of s(x), the a·b ≤ 0 branch of
+/// the joint angle), the adjoint gradient (`ControlProblem::gradient`) equals `Dual64` forward
+/// mode to 1e-12 of max|∇J| and central differences to 1e-6; the Hessian-vector product
+/// (`ControlProblem::hessian_vec`, forward-over-adjoint) equals `HyperDual64` forward mode
+/// (ε₁ along v, ε₂ along e_j: the ε₁ε₂ part is e_jᵀ∇²J v) to 1e-12 of max|∇²J v| and central
+/// differences of adjoint gradients to 1e-6; the parameter gradients (`adjoint_gradient`) equal
+/// `Dual64` forward mode to 1e-12 relative and central differences to 1e-6.
+#[test]
+fn adjoint_and_hessian_at_large_deflection() {
+    let steps = 80;
+    let scene = folding_scene(steps);
+    let h = scene.time.step;
+    let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 4 });
+    let obj = BendingObjective::summed_moment().with_effort(0.01);
+    let prob = ControlProblem::new(&scene, map, obj).unwrap();
+    let theta = [3.0, -2.0, 4.0, -1.0];
+
+    // The trajectory the derivatives are taken along visits every branch.
+    let traj = simulate_with_controls(&scene, &prob.controls(&theta).unwrap()).unwrap();
+    let c = census(prob.chain(), &traj);
+    println!("branches along the trajectory: {c:?}");
+    assert!(c.max_angle_deg > 90.0 && c.obtuse > 0, "{c:?}");
+    assert!(c.series > 0 && c.closed > 0, "{c:?}");
+
+    // Gradient: adjoint vs forward mode vs finite differences.
+    let g = prob.gradient(&theta).unwrap();
+    let scale = max_abs(&g);
+    let (mut w_fwd, mut w_fd): (f64, f64) = (0.0, 0.0);
+    for j in 0..theta.len() {
+        let th: Vec<Dual64> = theta
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Dual64::new(t, f64::from(u8::from(i == j))))
+            .collect();
+        let fwd = value_of(&prob, h, &th, &obj).eps;
+        let e = (g[j] - fwd).abs() / scale;
+        assert!(
+            e <= 1e-12,
+            "dJ/dθ_{j}: adjoint {:e} vs forward {fwd:e}",
+            g[j]
+        );
+        w_fwd = w_fwd.max(e);
+        let eps = 1e-5;
+        let (mut tp, mut tm) = (theta.to_vec(), theta.to_vec());
+        tp[j] += eps;
+        tm[j] -= eps;
+        let fd = (prob.value(&tp).unwrap() - prob.value(&tm).unwrap()) / (2.0 * eps);
+        let e = (fd - fwd).abs() / scale;
+        assert!(e <= 1e-6, "dJ/dθ_{j}: FD {fd:e} vs forward {fwd:e}");
+        w_fd = w_fd.max(e);
+    }
+    println!(
+        "gradient (max |g| {scale:.3e}): |adjoint - Dual64| {w_fwd:.1e}, |FD - Dual64| {w_fd:.1e}"
+    );
+
+    // Hessian-vector product: forward-over-adjoint vs HyperDual64 vs finite differences.
+    let v = [0.7, -0.4, 0.2, 1.0];
+    let hv = prob.hessian_vec(&theta, &v).unwrap();
+    let hscale = max_abs(&hv);
+    let gp = prob
+        .gradient(
+            &theta
+                .iter()
+                .zip(&v)
+                .map(|(t, x)| t + 1e-5 * x)
+                .collect::<Vec<_>>(),
+        )
+        .unwrap();
+    let gm = prob
+        .gradient(
+            &theta
+                .iter()
+                .zip(&v)
+                .map(|(t, x)| t - 1e-5 * x)
+                .collect::<Vec<_>>(),
+        )
+        .unwrap();
+    let (mut w_hfwd, mut w_hfd): (f64, f64) = (0.0, 0.0);
+    for j in 0..theta.len() {
+        let th: Vec<HyperDual64> = theta
+            .iter()
+            .zip(&v)
+            .enumerate()
+            .map(|(i, (&t, &vi))| HyperDual64::new(t, vi, f64::from(u8::from(i == j)), 0.0))
+            .collect();
+        let fwd = value_of(&prob, h, &th, &obj).eps1eps2;
+        let e = (hv[j] - fwd).abs() / hscale;
+        assert!(
+            e <= 1e-12,
+            "(Hv)_{j}: adjoint {:e} vs hyper-dual {fwd:e}",
+            hv[j]
+        );
+        w_hfwd = w_hfwd.max(e);
+        let fd = (gp[j] - gm[j]) / 2e-5;
+        let e = (fd - fwd).abs() / hscale;
+        assert!(e <= 1e-6, "(Hv)_{j}: FD {fd:e} vs hyper-dual {fwd:e}");
+        w_hfd = w_hfd.max(e);
+    }
+    println!(
+        "Hessian-vector product (max |Hv| {hscale:.3e}): |adjoint - HyperDual64| {w_hfwd:.1e}, \
+         |FD - HyperDual64| {w_hfd:.1e}"
+    );
+
+    // Physical parameters along the same trajectory.
+    let params = [
+        Parameter::InteriorStiffness,
+        Parameter::BaseStiffness,
+        Parameter::TipStiffness,
+        Parameter::Mass,
+        Parameter::LoadForce(0),
+        Parameter::LoadForce(1),
+    ];
+    let u = prob.controls(&theta).unwrap();
+    let adj = adjoint_gradient(
+        prob.chain(),
+        h,
+        steps,
+        &u,
+        &obj,
+        &params,
+        Checkpointing::Every(9),
+    )
+    .unwrap();
+    let mut worst = Worst::default();
+    check_parameters(
+        "large deflection",
+        &scene,
+        prob.chain(),
+        (&u, &obj),
+        &params,
+        &adj,
+        &mut worst,
+    );
+    println!("parameters: {worst:?}");
+}
+
+/// The a·b ≤ 0 branch of `joint_angle_squared` enters only the spring energy. Reference: the
+/// generalised force ∂U/∂q (written with s(x), eq. 2.2.3) is the gradient of the energy ½kθ²
+/// (eq. 2.2.2), so along any tangent direction v (vᵢ ⊥ qᵢ) the `Dual64` derivative of U equals
+/// ⟨∂U/∂q, v⟩, to 1e-12, at configurations of the folding trajectory with joints past 90°, in the
+/// plane and (tangent directions out of the plane) in space.
+#[test]
+fn energy_gradient_past_ninety_degrees() {
+    let steps = 80;
+    let scene = folding_scene(steps);
+    let traj = simulate(&scene).unwrap();
+    let chain2 = Chain::<f64, 2>::from_scene(&scene).unwrap();
+    let chain3 = Chain::<f64, 3>::from_scene(&scene).unwrap();
+    let mut rng = Rng(0x5eed_0001);
+    let (mut checked, mut worst): (usize, f64) = (0, 0.0);
+    for k in 0..=steps {
+        let q2 = traj.q(k);
+        if spring_cosines(&chain2, q2).iter().all(|&x| x > 0.0) {
+            continue;
+        }
+        let t = traj.time(k);
+        let q3: Vec<[f64; 3]> = q2.iter().map(|q| [0.0, q[0], q[1]]).collect();
+        worst = worst.max(energy_vs_force(&chain2, q2, t, &mut rng));
+        worst = worst.max(energy_vs_force(&chain3, &q3, t, &mut rng));
+        checked += 1;
+    }
+    println!("{checked} states with a joint past 90°: worst |dU·v - F·v| / (|F||v|) = {worst:.1e}");
+    assert!(checked > 0);
+    assert!(worst <= 1e-12);
+}
+
+/// |d/dε U(q + εv) − ⟨∂U/∂q, v⟩| / (|∂U/∂q| |v|) for a random tangent v.
+fn energy_vs_force<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    q: &[[f64; DIM]],
+    t: f64,
+    rng: &mut Rng,
+) -> f64 {
+    let v: Vec<[f64; DIM]> = q
+        .iter()
+        .map(|qi| {
+            let r: [f64; DIM] = std::array::from_fn(|_| rng.next());
+            let a: f64 = (0..DIM).map(|d| r[d] * qi[d]).sum();
+            std::array::from_fn(|d| r[d] - a * qi[d])
+        })
+        .collect();
+    let qd: Vec<[Dual64; DIM]> = q
+        .iter()
+        .zip(&v)
+        .map(|(a, b)| std::array::from_fn(|d| Dual64::new(a[d], b[d])))
+        .collect();
+    let du = chain
+        .lift::<Dual64>()
+        .potential_energy(&qd, t, Dual64::from(0.0))
+        .eps;
+    let mut f = vec![[0.0; DIM]; q.len()];
+    chain.potential_gradient(q, t, 0.0, 0, &mut f).unwrap();
+    let fv: f64 = f
+        .iter()
+        .zip(&v)
+        .flat_map(|(a, b)| (0..DIM).map(move |d| a[d] * b[d]))
+        .sum();
+    let nf = f.iter().flatten().map(|x| x * x).sum::<f64>().sqrt();
+    let nv = v.iter().flatten().map(|x| x * x).sum::<f64>().sqrt();
+    (du - fv).abs() / (nf * nv)
+}

@@ -636,3 +636,393 @@ fn gravity_windowed_loads_and_non_uniform_chains() {
         ],
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// 4. Symplecticity and reversibility of the RATTLE step
+// ---------------------------------------------------------------------------------------------
+
+fn flat<const DIM: usize>(v: &[[f64; DIM]]) -> DVector<f64> {
+    DVector::from_iterator(v.len() * DIM, v.iter().flatten().copied())
+}
+
+/// Dense Ĝ(q) (rows qᵢᵀ on block i and, with a tip constraint, lᵢ e₃ᵀ on every block) and M⁻¹
+/// (columns by [`Chain::apply_inverse_mass`]) of a chain at q.
+fn dense_operators<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    q: &[[f64; DIM]],
+) -> (DMatrix<f64>, DMatrix<f64>) {
+    let (n, nc) = (chain.n(), chain.n_constraints());
+    let nd = n * DIM;
+    let mut g = DMatrix::zeros(nc, nd);
+    for i in 0..n {
+        for d in 0..DIM {
+            g[(i, i * DIM + d)] = q[i][d];
+        }
+        if chain.has_tip_constraint() {
+            g[(n, i * DIM + zi::<DIM>())] = chain.lengths()[i];
+        }
+    }
+    let mut minv = DMatrix::zeros(nd, nd);
+    let (mut e, mut out) = (vec![[0.0; DIM]; n], vec![[0.0; DIM]; n]);
+    for c in 0..nd {
+        e.iter_mut().for_each(|x| *x = [0.0; DIM]);
+        e[c / DIM][c % DIM] = 1.0;
+        chain.apply_inverse_mass(&e, &mut out);
+        for r in 0..nd {
+            minv[(r, c)] = out[r / DIM][r % DIM];
+        }
+    }
+    (g, minv)
+}
+
+/// A tangent vector ξ = (δq, δp) of T*Q = {ĝ(q) = 0, Ĝ(q) M⁻¹ p = 0} at (q, p): a random δq
+/// projected orthogonally onto ker Ĝ(q) (δqᵢ ⊥ qᵢ, and Σ lᵢ δq_{i,z} = 0 for a locked tip), and a
+/// random δp projected onto the linearised hidden constraint Ĝ(q) M⁻¹ δp = −(δqᵢ·(M⁻¹p)ᵢ)ᵢ
+/// (the tip row is linear in q, so its right-hand side is 0).
+type Tangent = (DVector<f64>, DVector<f64>);
+
+fn tangent<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    (q, p): (&[[f64; DIM]], &[[f64; DIM]]),
+    rng: &mut Rng,
+) -> Tangent {
+    let (g, minv) = dense_operators(chain, q);
+    let nd = chain.n() * DIM;
+    let r = DVector::from_vec(rng.vec(nd));
+    let y = (&g * g.transpose()).lu().solve(&(&g * &r)).unwrap();
+    let dq = &r - g.transpose() * y;
+    let c = hidden_constraint_rhs(chain, &minv, p, &dq);
+    let r2 = DVector::from_vec(rng.vec(nd));
+    let a = &g * &minv * g.transpose();
+    let y = a.lu().solve(&(&g * &minv * &r2 + c)).unwrap();
+    let dp = r2 - g.transpose() * y;
+    (dq, dp)
+}
+
+/// (δqᵢ·(M⁻¹p)ᵢ)ᵢ, 0 in the tip row: the change of Ĝ(q) M⁻¹ p along δq.
+fn hidden_constraint_rhs<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    minv: &DMatrix<f64>,
+    p: &[[f64; DIM]],
+    dq: &DVector<f64>,
+) -> DVector<f64> {
+    let v = minv * flat(p);
+    let mut c = DVector::zeros(chain.n_constraints());
+    for i in 0..chain.n() {
+        c[i] = (0..DIM).map(|d| dq[i * DIM + d] * v[i * DIM + d]).sum();
+    }
+    c
+}
+
+/// How far ξ is from T_{(q,p)}T*Q: max(|Ĝ δq|, |Ĝ M⁻¹ δp + (δqᵢ·(M⁻¹p)ᵢ)|) over |ξ|.
+fn tangency_defect<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    (q, p): (&[[f64; DIM]], &[[f64; DIM]]),
+    xi: &Tangent,
+) -> f64 {
+    let (g, minv) = dense_operators(chain, q);
+    let a = (&g * &xi.0).amax();
+    let b = (&g * &minv * &xi.1 + hidden_constraint_rhs(chain, &minv, p, &xi.0)).amax();
+    a.max(b) / xi.0.amax().max(xi.1.amax())
+}
+
+/// One RATTLE step from `st` in `Dual64` with the state seeded along ξ: the real parts are the
+/// step, the dual parts J ξ (the step's Jacobian applied to ξ, exact by the derivative-only Newton
+/// update of the step).
+fn step_jacobian<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    (h, k, u): (f64, usize, (f64, f64)),
+    st: &State<f64, DIM>,
+    xi: &Tangent,
+) -> (Tangent, State<f64, DIM>) {
+    let seed = |a: &[[f64; DIM]], e: &DVector<f64>| -> Vec<[Dual64; DIM]> {
+        a.iter()
+            .enumerate()
+            .map(|(i, x)| std::array::from_fn(|d| Dual64::new(x[d], e[i * DIM + d])))
+            .collect()
+    };
+    let lift = |v: &[f64]| v.iter().map(|&x| Dual64::from(x)).collect::<Vec<_>>();
+    let mut s = State {
+        q: seed(&st.q, &xi.0),
+        p: seed(&st.p, &xi.1),
+        lambda: lift(&st.lambda),
+        mu: lift(&st.mu),
+        tip_target: [
+            Dual64::from(st.tip_target[0]),
+            Dual64::from(st.tip_target[1]),
+        ],
+    };
+    let mut r = Rattle::new(chain.lift::<Dual64>(), h).unwrap();
+    r.step(&mut s, k, Dual64::from(u.0), Dual64::from(u.1))
+        .unwrap();
+    let eps = |a: &[[Dual64; DIM]]| {
+        DVector::from_iterator(a.len() * DIM, a.iter().flatten().map(|x| x.eps))
+    };
+    let re = |a: &[[Dual64; DIM]]| -> Vec<[f64; DIM]> {
+        a.iter().map(|x| std::array::from_fn(|d| x[d].re)).collect()
+    };
+    let next = State {
+        q: re(&s.q),
+        p: re(&s.p),
+        lambda: s.lambda.iter().map(|x| x.re).collect(),
+        mu: s.mu.iter().map(|x| x.re).collect(),
+        tip_target: [s.tip_target[0].re, s.tip_target[1].re],
+    };
+    ((eps(&s.q), eps(&s.p)), next)
+}
+
+/// Ω(a, b) = a_q·b_p − a_p·b_q.
+fn omega(a: &Tangent, b: &Tangent) -> f64 {
+    a.0.dot(&b.1) - a.1.dot(&b.0)
+}
+
+/// What one step does to the symplectic form on T*Q.
+#[derive(Debug)]
+struct Symplectic {
+    /// max |Ω(Jξᵢ, Jξⱼ) − Ω(ξᵢ, ξⱼ)| / max |Ω(ξᵢ, ξⱼ)| over a basis ξ₁..ξ_{2m} of T(T*Q).
+    defect: f64,
+    /// (det[Ω(Jξᵢ, Jξⱼ)] / det[Ω(ξᵢ, ξⱼ)])^½: the factor by which the step scales the Liouville
+    /// volume of T*Q (1 for a symplectic map, whatever the basis).
+    volume: f64,
+    /// The largest [`tangency_defect`] of the images Jξᵢ at the new state.
+    tangency: f64,
+}
+
+/// Ω on a random basis ξ₁..ξ_{2m} of T(T*Q) at `st` (m = n(DIM − 1) − [locked tip], the
+/// dimension of Q), before and after one step: JᵀΩJ against Ω.
+fn symplectic_check<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    step: (f64, usize, (f64, f64)),
+    st: &State<f64, DIM>,
+    rng: &mut Rng,
+) -> Symplectic {
+    let m = chain.n() * (DIM - 1) - usize::from(chain.has_tip_constraint());
+    let basis: Vec<Tangent> = (0..2 * m)
+        .map(|_| tangent(chain, (&st.q, &st.p), rng))
+        .collect();
+    let mut next = None;
+    let images: Vec<Tangent> = basis
+        .iter()
+        .map(|xi| {
+            let (jxi, s) = step_jacobian(chain, step, st, xi);
+            next = Some(s);
+            jxi
+        })
+        .collect();
+    let next = next.unwrap();
+    let gram = |v: &[Tangent]| DMatrix::from_fn(2 * m, 2 * m, |i, j| omega(&v[i], &v[j]));
+    let (before, after) = (gram(&basis), gram(&images));
+    let tangency = images
+        .iter()
+        .map(|x| tangency_defect(chain, (&next.q, &next.p), x))
+        .fold(0.0, f64::max);
+    Symplectic {
+        defect: (&after - &before).amax() / before.amax(),
+        volume: (after.determinant() / before.determinant()).sqrt(),
+        tangency,
+    }
+}
+
+/// A non-trivial state: `steps` RATTLE steps with constant control `u` from the straight beam
+/// with momentum `p0` (projected onto Ĝ M⁻¹ p = 0; zero: at rest).
+fn evolve<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    h: f64,
+    p0: &[[f64; DIM]],
+    (steps, u): (usize, f64),
+) -> State<f64, DIM> {
+    let mut r = Rattle::new(chain.clone(), h).unwrap();
+    let mut st = r.straight_state();
+    let (g, minv) = dense_operators(chain, &st.q);
+    let raw = flat(p0);
+    let y = (&g * &minv * g.transpose())
+        .lu()
+        .solve(&(&g * &minv * &raw))
+        .unwrap();
+    let p = raw - g.transpose() * y;
+    for (i, pi) in st.p.iter_mut().enumerate() {
+        *pi = std::array::from_fn(|d| p[i * DIM + d]);
+    }
+    for k in 0..steps {
+        r.step(&mut st, k, u, u).unwrap();
+    }
+    st
+}
+
+/// A soft fixed-fixed beam (n = 5, k = 10, end springs 20, F = 30 N at node 2 and −20 N at node
+/// 4, control at node 3) for the locked-tip cases.
+fn soft_fixed_fixed(drag: f64) -> Scene {
+    Scene::builder(5)
+        .stiffness(10.0)
+        .base_stiffness(20.0)
+        .tip_stiffness(20.0)
+        .support(Support::FixedFixed)
+        .drag(drag)
+        .point_load(2, 30.0)
+        .point_load(4, -20.0)
+        .control_constant(3, 0.0)
+        .build()
+        .unwrap()
+}
+
+/// The four cases of the symplecticity and reversibility checks, with drag `drag`: planar and
+/// spatial, free tip (the folding riser) and locked tip (the soft fixed-fixed beam). The spatial
+/// states start with a random out-of-plane momentum, so their motion leaves the yz-plane.
+fn cases(drag: f64) -> (Vec<(String, Chain<f64, 2>)>, Vec<(String, Chain<f64, 3>)>) {
+    let mut free = folding_scene(10);
+    free.loads.drag = drag;
+    let locked = soft_fixed_fixed(drag);
+    let planar = vec![
+        ("planar free".to_string(), Chain::from_scene(&free).unwrap()),
+        (
+            "planar locked".to_string(),
+            Chain::from_scene(&locked).unwrap(),
+        ),
+    ];
+    let spatial = vec![
+        (
+            "spatial free".to_string(),
+            Chain::from_scene(&free).unwrap(),
+        ),
+        (
+            "spatial locked".to_string(),
+            Chain::from_scene(&locked).unwrap(),
+        ),
+    ];
+    (planar, spatial)
+}
+
+/// Evolves each case 50 steps (h = 0.01, u = 3 N; spatial cases from an out-of-plane kick) and
+/// runs [`symplectic_check`] on the step 50 → 51 with u₅₀ = 3, u₅₁ = 3.5 N (a time-dependent
+/// Hamiltonian: each step is still a symplectic map).
+fn symplectic_cases(drag: f64) -> Vec<(String, Symplectic, f64)> {
+    let (h, steps, u) = (0.01, 50, 3.0);
+    let mut rng = Rng(0x5eed_0004);
+    let (planar, spatial) = cases(drag);
+    let mut out = Vec::new();
+    for (label, chain) in planar {
+        let st = evolve(&chain, h, &vec![[0.0; 2]; chain.n()], (steps, u));
+        let out_of_plane = 0.0;
+        out.push((
+            label,
+            symplectic_check(&chain, (h, steps, (u, 3.5)), &st, &mut rng),
+            out_of_plane,
+        ));
+    }
+    for (label, chain) in spatial {
+        let kick: Vec<[f64; 3]> = (0..chain.n())
+            .map(|_| [3.0 * rng.next(), rng.next(), rng.next()])
+            .collect();
+        let st = evolve(&chain, h, &kick, (steps, u));
+        let out_of_plane = st.q.iter().fold(0.0f64, |a, q| a.max(q[0].abs()));
+        out.push((
+            label,
+            symplectic_check(&chain, (h, steps, (u, 3.5)), &st, &mut rng),
+            out_of_plane,
+        ));
+    }
+    out
+}
+
+/// Symplecticity asserted directly (thesis §1.6; Hairer-Lubich-Wanner Theorem VII.1.3): without
+/// drag, the `Dual64` Jacobian J of one RATTLE step, on a basis of the tangent space of the
+/// constraint manifold T*Q at a non-trivial state (50 steps into a large-deflection motion; in
+/// space, out of the plane), satisfies Ω(Jξᵢ, Jξⱼ) = Ω(ξᵢ, ξⱼ), i.e. JᵀΩJ = Ω, to 1e-12 of
+/// max|Ω(ξᵢ, ξⱼ)|, for free and locked tips in the plane and in space. J maps the tangent space
+/// into the tangent space at the new state (to 1e-12).
+#[test]
+fn rattle_step_is_symplectic_on_the_constraint_manifold() {
+    for (label, s, oop) in symplectic_cases(0.0) {
+        println!("{label}: {s:?}, max |x-component of q| {oop:.2}");
+        assert!(s.defect <= 1e-12, "{label}: {s:?}");
+        assert!((s.volume - 1.0).abs() <= 1e-12, "{label}: {s:?}");
+        assert!(s.tangency <= 1e-12, "{label}: {s:?}");
+        if label.starts_with("spatial") {
+            assert!(oop > 0.1, "{label}: the state did not leave the plane");
+        }
+    }
+}
+
+/// With drag (D = 5 kg/m) the step is not symplectic: the drag force −D p ⊙ |p| has divergence
+/// −2D Σ|p| < 0 in momentum space, so the step contracts the Liouville volume of T*Q (volume
+/// factor < 1) and Ω is not preserved.
+#[test]
+fn rattle_step_with_drag_contracts_the_symplectic_form() {
+    for (label, s, _) in symplectic_cases(5.0) {
+        println!("{label}, D = 5: {s:?}");
+        assert!(s.volume < 1.0 - 1e-3, "{label}: {s:?}");
+        assert!(s.defect > 1e-6, "{label}: {s:?}");
+        assert!(s.tangency <= 1e-12, "{label}: {s:?}");
+    }
+}
+
+/// Steps `steps` times with constant control u, flips p, steps `steps` times again, flips p:
+/// returns max(|q − q₀|, |p − p₀| / max|p₀|).
+fn reversal_error<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    h: f64,
+    st0: &State<f64, DIM>,
+    (steps, u): (usize, f64),
+) -> f64 {
+    let mut st = st0.clone();
+    let flip = |st: &mut State<f64, DIM>| {
+        st.p.iter_mut()
+            .for_each(|p| p.iter_mut().for_each(|x| *x = -*x));
+    };
+    for pass in 0..2 {
+        // A fresh integrator: the force at the flipped state is evaluated anew; the multiplier
+        // μ of the last projection stays as the Newton predictor.
+        let mut r = Rattle::new(chain.clone(), h).unwrap();
+        for k in 0..steps {
+            r.step(&mut st, k, u, u).unwrap();
+        }
+        flip(&mut st);
+        if pass == 0 {
+            assert!(st.q != st0.q);
+        }
+    }
+    let pscale = st0.p.iter().flatten().fold(0.0f64, |a, b| a.max(b.abs()));
+    let mut err: f64 = 0.0;
+    for i in 0..chain.n() {
+        for d in 0..DIM {
+            err = err
+                .max((st.q[i][d] - st0.q[i][d]).abs())
+                .max((st.p[i][d] - st0.p[i][d]).abs() / pscale);
+        }
+    }
+    err
+}
+
+/// RATTLE is symmetric (thesis §1.6; Hairer-Lubich-Wanner Theorem VII.1.4): from states built as
+/// in the symplecticity check (50 steps into a large-deflection motion; in space out of the
+/// plane), one step, p ↦ −p, one step, p ↦ −p returns to the start to 1e-13 (relative to max|p₀|
+/// for p), and so do 50 steps there and back (largest seen: 2e-16 and 6e-15).
+#[test]
+fn rattle_is_reversible_at_large_deflection_and_out_of_plane() {
+    let (h, u) = (0.01, 3.0);
+    let mut rng = Rng(0x5eed_0005);
+    let (planar, spatial) = cases(0.0);
+    let mut report = |label: &str, e1: f64, e50: f64| {
+        println!("{label}: one step there and back {e1:.1e}, 50 steps {e50:.1e}");
+        assert!(e1 <= 1e-13 && e50 <= 1e-13, "{label}: {e1:e}, {e50:e}");
+    };
+    for (label, chain) in planar {
+        let st = evolve(&chain, h, &vec![[0.0; 2]; chain.n()], (50, u));
+        report(
+            &label,
+            reversal_error(&chain, h, &st, (1, u)),
+            reversal_error(&chain, h, &st, (50, u)),
+        );
+    }
+    for (label, chain) in spatial {
+        let kick: Vec<[f64; 3]> = (0..chain.n())
+            .map(|_| [3.0 * rng.next(), rng.next(), rng.next()])
+            .collect();
+        let st = evolve(&chain, h, &kick, (50, u));
+        report(
+            &label,
+            reversal_error(&chain, h, &st, (1, u)),
+            reversal_error(&chain, h, &st, (50, u)),
+        );
+    }
+}

@@ -799,7 +799,7 @@ fn cmd_optimize(
         iterations: best.iterations,
         seconds: clock.elapsed().as_secs_f64(),
         converged: best.converged,
-        termination: best.termination.clone(),
+        termination: best.termination.to_string(),
         method: best.method.name(),
         starts,
         seed: (starts > 1).then_some(seed),
@@ -953,7 +953,7 @@ fn cmd_explore(
             e.gradient_norm = Some(r.gradient_norm);
             e.iterations = Some(r.iterations);
             e.converged = Some(r.converged);
-            e.termination = Some(r.termination.clone());
+            e.termination = Some(r.termination.to_string());
         }
     }
     for f in &report.failures {

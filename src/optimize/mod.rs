@@ -154,6 +154,8 @@ use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
 
+/// The argmin crate this module is built on (to write observers against the same version).
+pub use argmin;
 use argmin::core::observers::Observers;
 pub use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::KV;

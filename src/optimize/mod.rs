@@ -50,11 +50,13 @@
 //! [`Gradient`]: argmin::core::Gradient
 //! [`Hessian`]: argmin::core::Hessian
 //!
-//! **Scaling.** [`minimize`] hands argmin s·J with s = 1/‖∇J(θ₀)‖: the first L-BFGS trial step
-//! −s g₀ is then 1 N long whatever the objective's size (the thesis's objectives span 10⁻¹⁶ to
-//! 10² N²m²), and argmin's Steihaug, whose tolerance (10⁻⁹) is also an *absolute* test (it returns
-//! a zero step once ‖g‖ < 10⁻⁹, and the trust region then stalls on ρ = 0/0), acts relative to
-//! ‖g₀‖. Results, tolerances, termination and observers are in J's own units.
+//! **Scaling.** [`minimize`] hands argmin s·J with s = 1/‖∇J(θ₀)‖ (L-BFGS: s =
+//! [`first_step`](OptimOptions::first_step)/‖∇J(θ₀)‖): the first L-BFGS trial step −s g₀ is then
+//! 1 N (`first_step`) long whatever the objective's size (the thesis's objectives span 10⁻¹⁶ to
+//! 10² N²m²); L-BFGS's later steps do not depend on s (its curvature pairs scale with it); and
+//! argmin's Steihaug, whose tolerance (10⁻⁹) is also an *absolute* test (it returns a zero step
+//! once ‖g‖ < 10⁻⁹, and the trust region then stalls on ρ = 0/0), acts relative to ‖g₀‖.
+//! Results, tolerances, termination and observers are in J's own units.
 //!
 //! # Checks at the start
 //! - θ₀ has n finite entries, lies within the force bound, and passes
@@ -256,6 +258,11 @@ pub struct OptimOptions {
     pub bound: Option<f64>,
     /// L-BFGS memory m. Default 10 (more pairs than the thesis problems have parameters).
     pub lbfgs_memory: usize,
+    /// L-BFGS: the length of the first trial step −first_step·g₀/‖g₀‖, in the units of θ
+    /// (module docs, "Scaling"). Default 1: 1 N for forces, a small fraction of the thesis's
+    /// optimal forces (1-300 N). Shorten it for parameters where a unit step is large, e.g. 0.1
+    /// for log-parameters (a factor e^0.1).
+    pub first_step: f64,
     /// Initial trust radius, in the units of θ (N). Default 10 N: the thesis's optimal forces are
     /// 1-300 N, so the radius reaches them in a few doublings.
     pub trust_radius: f64,
@@ -285,6 +292,7 @@ impl Default for OptimOptions {
             target_cost: f64::NEG_INFINITY,
             bound: None,
             lbfgs_memory: 10,
+            first_step: 1.0,
             trust_radius: 10.0,
             max_trust_radius: 1e4,
             cg_max_iters: None,
@@ -328,6 +336,12 @@ impl OptimOptions {
         }
         if self.lbfgs_memory == 0 {
             return bad("lbfgs_memory", "must be at least 1".into());
+        }
+        if !(self.first_step.is_finite() && self.first_step > 0.0) {
+            return bad(
+                "first_step",
+                format!("must be positive and finite, got {}", self.first_step),
+            );
         }
         if !(self.trust_radius.is_finite() && self.trust_radius > 0.0) {
             return bad(
@@ -487,7 +501,14 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         }
         let initial_gradient_norm = norm(&start.grad_theta);
         let gnorm0 = norm(&start.grad_phi);
-        let scale = if gnorm0 > 0.0 { 1.0 / gnorm0 } else { 1.0 };
+        // L-BFGS's first step is −s g₀; its later steps do not depend on s (the curvature
+        // pairs scale with it), so `first_step` sets exactly the first step.
+        let first = if opts.method == Method::Lbfgs {
+            opts.first_step
+        } else {
+            1.0
+        };
+        let scale = if gnorm0 > 0.0 { first / gnorm0 } else { 1.0 };
         let adapter = adapter.with_scale(scale);
         let observers = observers::observers_with_progress(&self.observers, opts.progress);
         if !observers.is_empty() {

@@ -181,7 +181,11 @@ impl fmt::Display for Termination {
                 restarts,
                 last,
             } => {
-                let stop = stop.to_string();
+                // argmin's line-search message repeats the failure given below.
+                let stop = match stop.as_ref() {
+                    Termination::LineSearchFailed { .. } => "the line search failed".to_string(),
+                    t => t.to_string(),
+                };
                 let stop = stop.strip_prefix("not converged: ").unwrap_or(&stop);
                 write!(
                     f,

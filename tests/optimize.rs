@@ -603,10 +603,12 @@ fn observer_modes_errors_and_final() {
     use chainbeam::optimize::{Observe, ObservedState};
     use std::sync::{Arc, Mutex};
 
+    /// θ and "converged" as `observe_final` saw them.
+    type Final = Arc<Mutex<Option<(Vec<f64>, bool)>>>;
     #[derive(Clone, Default)]
     struct Spy {
         iters: Arc<Mutex<Vec<u64>>>,
-        last: Arc<Mutex<Option<(Vec<f64>, bool)>>>,
+        last: Final,
         stop_at: Option<u64>,
     }
     impl Observe<ObservedState> for Spy {

@@ -20,7 +20,7 @@
 //!   reason of a converged run and `SolverExit(why)` otherwise.
 //!
 //! An observer that returns an error stops the run: [`minimize`](super::minimize) returns the
-//! point reached with [`Termination::Observer`](super::Termination::Observer).
+//! point reached with [`Termination::Observer`].
 
 use std::sync::{Arc, Mutex};
 
@@ -56,7 +56,7 @@ impl Relay {
         let mut s = self
             .state
             .take()
-            .unwrap_or_else(ObservedState::new)
+            .unwrap_or_default()
             .param(p.theta.clone())
             .cost(p.value)
             .gradient(p.grad_theta.clone());
@@ -200,7 +200,7 @@ pub struct Record {
 /// let h = history.records();
 /// assert_eq!(h[0].theta, vec![0.0]); // the start
 /// assert_eq!(h.last().unwrap().theta, r.theta); // the result
-/// assert_eq!(h.len() as usize, 1 + r.iterations + r.polish_steps);
+/// assert_eq!(h.len(), 1 + r.iterations + r.polish_steps);
 /// # Ok::<(), chainbeam::Error>(())
 /// ```
 #[derive(Clone, Debug, Default)]

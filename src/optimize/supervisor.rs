@@ -1,7 +1,6 @@
-//! Our stopping rules around any argmin solver ([`Supervised`]), one executor run
-//! ([`execute`]), the choice of solver ([`run_method`]), the restarts after failed line searches
-//! ([`supervise`]), and how a run ended ([`Termination`]). Module docs of
-//! [`optimize`](super), "Stopping".
+//! Our stopping rules wrapped around any argmin solver, one executor run, the choice of solver,
+//! the restarts after failed line searches, and how a run ended ([`Termination`]). Module docs
+//! of [`optimize`](super), "Stopping".
 
 use std::fmt;
 use std::rc::Rc;

@@ -228,6 +228,11 @@ fn invalid_starts_and_options_are_typed_errors() {
         ..Default::default()
     };
     assert_eq!(name(minimize(&p, &[0.0], &bad)), "rel_grad_tol");
+    let bad = OptimOptions {
+        first_step: 0.0,
+        ..Default::default()
+    };
+    assert_eq!(name(minimize(&p, &[0.0], &bad)), "first_step");
     assert_eq!(
         "trust-region".parse::<Method>().unwrap(),
         Method::TrustRegion

@@ -79,6 +79,11 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         self.steps
     }
 
+    /// The time step h.
+    pub fn time_step(&self) -> f64 {
+        self.h
+    }
+
     /// The model (f64).
     pub fn chain(&self) -> &Chain<f64, 2> {
         &self.chain

@@ -5,7 +5,13 @@
 //!   `Throughput::Elements(n)` so the report reads as time per pendulum-step;
 //! - `step_scalar`: `f64` vs `Dual64` (derivative seeded in the interior stiffness), n = 100;
 //! - `step_dim`: planar (DIM = 2) vs spatial (DIM = 3), `f64`, n = 100;
-//! - `simulate_riser`: `chainbeam::simulate` of the thesis riser scene for N = 10 and N = 1000.
+//! - `simulate_riser`: `chainbeam::simulate` of the thesis riser scene for N = 10 and N = 1000;
+//! - `force_jvp`: the springs' stiffness product K·v (K = ∂²U/∂q², planar `f64`, at the bent state)
+//!   for n = 10, 100, 1000: `override` is the hand-written [`ForceTerm::force_jvp`] of
+//!   [`Springs`](chainbeam::model::Springs), `dual_default` the trait's dual-number default
+//!   (one `Dual64` evaluation of the springs' force at q + εv) through a wrapper that delegates
+//!   everything else to the springs. The ratio is what the override saves the adjoint, which
+//!   calls K·v twice per reverse step.
 //!
 //! The step benchmarks first advance the straight beam by [`PRE_STEPS`] steps so the state is
 //! bent and the Newton predictor is the multiplier of a real previous step, then keep stepping the
@@ -18,8 +24,12 @@
 use std::hint::black_box;
 use std::time::Duration;
 
-use chainbeam::{catalogue, Chain, Parameter, Rattle, Scalar, Scene, State};
-use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use chainbeam::model::{Ctx, DualScratch, Embed, ForceTerm, TermVisitor};
+use chainbeam::{catalogue, Chain, Parameter, Rattle, Scalar, Scene, State, Support};
+use criterion::measurement::WallTime;
+use criterion::{
+    criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
+};
 use num_dual::Dual64;
 
 /// Steps taken outside the timed closure to reach a representative (bent) state.
@@ -29,15 +39,28 @@ const PRE_STEPS: usize = 50;
 const SAMPLES: usize = 20;
 
 /// A cantilever of n pendulums with a point load F = 2 at the tip, scaled from the n = 10 beam
-/// (l = 1, m = 1, k = 1000, base/tip 1000, h = 0.01) so that the continuum beam is the same:
+/// (l = 1, m = 1, k = 1000, base 1000, h = 0.01) so that the continuum beam is the same:
 /// total length 10 and mass 10 (l = 10/n, m = 10/n), bending stiffness k·l = 1000 (k = 1000/l
-/// for every spring). The highest chain frequency grows like n², so h = 0.01·(10/n)² keeps
-/// h·ω_max (and hence the Newton convergence) the same for every n.
+/// for every spring, the base spring included). The highest chain frequency grows like n², so
+/// h = 0.01·(10/n)² keeps h·ω_max (and hence the Newton convergence) the same for every n.
+///
+/// These are the parameters of `catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 1.0)`, built
+/// here with only the [`PRE_STEPS`] steps the bench takes: the catalogue scene keeps t ∈ [0, 10] s,
+/// which at n = 1000 is N = 10⁷ steps, (N + 1)·n over the stored-state limit, so it is refused.
 fn cantilever(n: usize) -> Scene {
-    // l = 10/n, m = 10/n, k = 1000/l for every spring, h = 0.01·(10/n)² (the catalogue's scaling)
-    let mut s = catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 1.0);
-    s.time.steps = PRE_STEPS;
-    s
+    let l = 10.0 / n as f64;
+    let k = 1000.0 / l;
+    Scene::builder(n)
+        .length(l)
+        .mass(10.0 / n as f64)
+        .stiffness(k)
+        .base_stiffness(k)
+        .support(Support::Cantilever)
+        .point_load(n, 2.0)
+        .step(0.01 * (10.0 / n as f64).powi(2).min(1.0))
+        .steps(PRE_STEPS)
+        .build()
+        .unwrap_or_else(|e| panic!("bench cantilever n = {n} is invalid: {e}"))
 }
 
 /// The thesis riser (n = 10, l = 1, m = 1, k = 1000, base/tip 2000, F = 2 at node 5, D = 0,
@@ -147,6 +170,134 @@ fn simulate_riser(c: &mut Criterion) {
     group.finish();
 }
 
+/// A force term with the dual-number default K·v: energy, force and parameters are the wrapped
+/// term's, and [`ForceTerm::force_jvp`] is *not* overridden, so it differentiates the term's
+/// `force` in `Dual<D>`.
+#[derive(Clone, Debug)]
+struct DualDefault<T>(T);
+
+impl<D: Scalar, const DIM: usize, T: ForceTerm<D, DIM>> ForceTerm<D, DIM> for DualDefault<T> {
+    fn name(&self) -> &'static str {
+        "dual default"
+    }
+
+    fn energy<E: Embed<D>>(&self, q: &[[E; DIM]], ctx: &Ctx<E>) -> E {
+        self.0.energy(q, ctx)
+    }
+
+    fn force<E: Embed<D>>(
+        &self,
+        q: &[[E; DIM]],
+        ctx: &Ctx<E>,
+        out: &mut [[E; DIM]],
+    ) -> chainbeam::Result<()> {
+        self.0.force(q, ctx, out)
+    }
+
+    fn depends_on_configuration(&self) -> bool {
+        self.0.depends_on_configuration()
+    }
+
+    fn depends_on_control(&self) -> bool {
+        self.0.depends_on_control()
+    }
+
+    fn has_parameter(&self, p: Parameter) -> bool {
+        self.0.has_parameter(p)
+    }
+}
+
+/// Times `term`'s K·v into `out` (zeroed on every iteration, as the solvers accumulate into a
+/// cleared buffer).
+fn bench_jvp<T: ForceTerm<f64, 2>>(
+    b: &mut criterion::Bencher<'_>,
+    term: &T,
+    (q, v): (&[[f64; 2]], &[[f64; 2]]),
+) {
+    let ctx = Ctx::new(0.0, 0.0, 0);
+    let mut out = vec![[0.0; 2]; q.len()];
+    let mut scratch = DualScratch::new(q.len());
+    b.iter(|| {
+        out.iter_mut().for_each(|o| *o = [0.0; 2]);
+        term.force_jvp(
+            black_box(q),
+            black_box(v),
+            &ctx,
+            1.0,
+            &mut out,
+            &mut scratch,
+        )
+        .expect("K v");
+        black_box(&out);
+    });
+}
+
+/// Finds the springs among the chain's terms and benches their K·v, hand-written against the
+/// dual default (after checking the two agree).
+struct SpringsJvp<'a, 'g> {
+    group: &'a mut BenchmarkGroup<'g, WallTime>,
+    q: &'a [[f64; 2]],
+    v: &'a [[f64; 2]],
+    found: bool,
+}
+
+impl TermVisitor<f64, 2> for SpringsJvp<'_, '_> {
+    fn visit<T: ForceTerm<f64, 2>>(&mut self, term: &T) -> chainbeam::Result<()> {
+        if term.name() != "springs" {
+            return Ok(());
+        }
+        self.found = true;
+        let n = self.q.len();
+        let dual = DualDefault(term.clone());
+        let ctx = Ctx::new(0.0, 0.0, 0);
+        let mut scratch = DualScratch::new(n);
+        let (mut hand, mut derived) = (vec![[0.0; 2]; n], vec![[0.0; 2]; n]);
+        term.force_jvp(self.q, self.v, &ctx, 1.0, &mut hand, &mut scratch)?;
+        dual.force_jvp(self.q, self.v, &ctx, 1.0, &mut derived, &mut scratch)?;
+        let scale = hand.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        for (h, d) in hand.iter().flatten().zip(derived.iter().flatten()) {
+            assert!(
+                (h - d).abs() <= 1e-12 * scale,
+                "n = {n}: override {h} vs dual default {d}"
+            );
+        }
+        let qv = (self.q, self.v);
+        self.group
+            .bench_function(BenchmarkId::new("override", n), |b| bench_jvp(b, term, qv));
+        self.group
+            .bench_function(BenchmarkId::new("dual_default", n), |b| {
+                bench_jvp(b, &dual, qv)
+            });
+        Ok(())
+    }
+}
+
+fn force_jvp(c: &mut Criterion) {
+    let mut group = c.benchmark_group("force_jvp");
+    group.sample_size(SAMPLES);
+    for n in [10usize, 100, 1000] {
+        let scene = cantilever(n);
+        let (rattle, state, _) = prepared(&scene, planar_f64(&scene));
+        // A direction with every component non-zero, of unit size.
+        let v: Vec<[f64; 2]> = (0..n)
+            .map(|i| [(0.7 * i as f64).sin(), (0.3 * i as f64 + 0.5).cos()])
+            .collect();
+        group.throughput(Throughput::Elements(n as u64));
+        let mut visitor = SpringsJvp {
+            group: &mut group,
+            q: &state.q,
+            v: &v,
+            found: false,
+        };
+        rattle
+            .chain()
+            .visit_terms(&mut visitor)
+            .expect("springs K v");
+        assert!(visitor.found, "the chain has no springs term");
+    }
+    group.finish();
+}
+
 /// Short defaults so a plain `cargo bench` stays quick; `--warm-up-time` / `--measurement-time` on
 /// the command line override them (the groups set only the sample size).
 fn config() -> Criterion {
@@ -158,6 +309,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = step_f64_planar, step_scalar, step_dim, simulate_riser
+    targets = step_f64_planar, step_scalar, step_dim, simulate_riser, force_jvp
 }
 criterion_main!(benches);

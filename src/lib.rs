@@ -71,19 +71,28 @@
 //! ```
 //!
 //! ## Modules
-//! - [`model`]: the chain, its energy and forces, the O(n) inverse mass matrix.
-//! - [`rattle`]: the RATTLE step (thesis eq. 1.6.1) and its Newton solve.
-//! - [`tridiag`]: the bordered tridiagonal solves every step uses.
+//! In the order a scene flows through them:
+//! - [`scene`]: scene data, the scene file format, validation, [`SceneBuilder`];
+//!   [`catalogue`]: the thesis's scenes by name.
+//! - [`model`]: the chain ([`Chain`]): masses, lengths, the O(n) inverse mass matrix, M₀, and its
+//!   force terms ([`model::terms`]), each written once over the scalar with every derivative
+//!   derived from it by dual numbers.
+//! - [`constraints`]: the constraint operator Ĝ and the bordered tridiagonal assembly of
+//!   Ĝ M⁻¹ Ĝᵀ (thesis eq. 2.4.1-2.4.2); [`tridiag`]: the O(n) bordered tridiagonal solves.
+//! - [`steppers`]: the [`Stepper`](steppers::Stepper) trait; RATTLE (thesis eq. 1.6.1), the
+//!   library's integrator, re-exported as [`rattle`] (its types also at the crate root:
+//!   [`Rattle`], [`State`], [`StepStats`]); SHAKE and projected RK4 for comparisons.
 //! - [`simulate`](mod@simulate): trajectories of a scene (q, p, λ, μ, energy, M₀, node positions).
-//! - [`adjoint`]: objectives, control parametrisations, the discrete adjoint, checkpointing,
-//!   Hessian-vector products.
-//! - [`optimize`]: local minimisation with argmin (L-BFGS, trust region, Newton-CG), force bounds.
+//! - [`integrators`]: RATTLE, SHAKE and projected RK4 side by side, for comparisons.
+//! - [`adjoint`]: objectives, control parametrisations, the discrete adjoint read from a tape,
+//!   checkpointing, Hessian-vector products; [`ControlProblem`] (thesis §3.3).
+//! - [`optimize`]: the [`OptimProblem`](optimize::OptimProblem) trait and local minimisation with
+//!   argmin (L-BFGS, trust region, Newton-CG), force bounds, observers, and how a run ended
+//!   ([`Termination`](optimize::Termination)).
 //! - [`multistart`]: multistart, clustering of minima, second-order certificates, landscapes.
-//! - [`integrators`]: SHAKE and projected RK4, for comparisons with RATTLE.
 //! - [`statics`]: static equilibrium, solved directly.
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
-//! - [`scene`]: scene data, the scene file format, validation; [`catalogue`]: the thesis's scenes.
-//! - [`error`]: the typed errors.
+//! - [`error`]: the typed errors ([`Error`], [`Result`]).
 //!
 #![doc = include_str!("../docs/conventions.md")]
 #![warn(missing_docs)]

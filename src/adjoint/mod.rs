@@ -22,10 +22,10 @@
 //! ```
 //! with K = ∂²U/∂q² (block-tridiagonal, [`crate::Chain::force_jacobian_product`]) and J the
 //! Newton matrix of the step ([`crate::constraints::ConstraintOperator::assemble_newton`]). The
-//! reverse step ([`reverse`]) is a vector-Jacobian product of the recorded step ([`tape`]) built
-//! from the terms' derived products and the constraint operator; it recomputes nothing of the
-//! forward step. Every product is O(n), so a gradient costs a small constant times one simulation,
-//! whatever the number of controls. Controls and parameters collect −h/2 c̄ · ∂U_q/∂θ and
+//! reverse step (`src/adjoint/reverse.rs`) is a vector-Jacobian product of the recorded step
+//! (`src/adjoint/tape.rs`) built from the terms' derived products and the constraint operator; it
+//! recomputes nothing of the forward step. Every product is O(n), so a gradient costs a small
+//! constant times one simulation, whatever the number of controls. Controls and parameters collect −h/2 c̄ · ∂U_q/∂θ and
 //! −h/2 b̄ · ∂U_q/∂θ per step, plus the mass-matrix and drag terms.
 //!
 //! # Checkpointing

@@ -200,15 +200,15 @@ impl<D: Scalar, const DIM: usize, S: Stepper<D, DIM>> Run<D, DIM, S> {
 }
 
 /// One of the three methods on the planar `f64` model, each variant holding its stepper and its
-/// own state.
+/// own state (boxed: the runs differ in size).
 #[derive(Clone, Debug)]
 pub enum Integrator {
     /// RATTLE.
-    Rattle(Run<f64, 2, Rattle<f64, 2>>),
+    Rattle(Box<Run<f64, 2, Rattle<f64, 2>>>),
     /// SHAKE.
-    Shake(Run<f64, 2, Shake<f64, 2>>),
+    Shake(Box<Run<f64, 2, Shake<f64, 2>>>),
     /// Projected RK4.
-    ProjectedRk4(Run<f64, 2, ProjectedRk4<f64, 2>>),
+    ProjectedRk4(Box<Run<f64, 2, ProjectedRk4<f64, 2>>>),
 }
 
 /// Evaluates `$e` with `$r` bound to the variant's [`Run`] (each arm its own stepper type).
@@ -258,10 +258,10 @@ impl Integrator {
     /// As [`Integrator::new`], and [`Error::InvalidArgument`] for a non-finite `u`.
     pub fn from_chain(chain: Chain<f64, 2>, method: Method, h: f64, u: f64) -> Result<Self> {
         Ok(match method {
-            Method::Rattle => Integrator::Rattle(Run::new(Rattle::new(chain, h)?, u)?),
-            Method::Shake => Integrator::Shake(Run::new(Shake::new(chain, h)?, u)?),
+            Method::Rattle => Integrator::Rattle(Box::new(Run::new(Rattle::new(chain, h)?, u)?)),
+            Method::Shake => Integrator::Shake(Box::new(Run::new(Shake::new(chain, h)?, u)?)),
             Method::ProjectedRk4 => {
-                Integrator::ProjectedRk4(Run::new(ProjectedRk4::new(chain, h)?, u)?)
+                Integrator::ProjectedRk4(Box::new(Run::new(ProjectedRk4::new(chain, h)?, u)?))
             }
         })
     }

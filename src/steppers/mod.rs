@@ -5,7 +5,34 @@
 //! * [`rattle`]: RATTLE (thesis §1.6, eq. 1.6.1), symmetric, symplectic, order 2: the library's
 //!   integrator, with the discrete adjoint of [`crate::adjoint`].
 //! * [`shake`] and [`rk4`]: SHAKE and projected RK4, for speed-against-accuracy and stability
-//!   comparisons.
+//!   comparisons ([`crate::integrators`]). They share the Newton solve of their implicit position
+//!   stage and take every force from the model ([`Chain::potential_gradient`], the drag term).
+//!
+//! ```
+//! use chainbeam::steppers::{Shake, Stepper};
+//! use chainbeam::{catalogue, Chain};
+//! // The spatial model of the thesis cantilever (F = 2 N at the tip), 10 SHAKE steps.
+//! let chain = Chain::<f64, 3>::from_scene(&catalogue::thesis_cantilever())?;
+//! let mut shake = Shake::new(chain, 0.01)?;
+//! let mut state = shake.initial_state(0.0)?;
+//! for k in 0..10 {
+//!     shake.step(&mut state, k, 0.0, 0.0)?;
+//! }
+//! assert!(shake.q(&state)[9][2] < 0.0); // the tip load pushes toward −z
+//! # Ok::<(), chainbeam::Error>(())
+//! ```
+//! A state of one method cannot be handed to another; this does not compile:
+//! ```compile_fail,E0308
+//! use chainbeam::steppers::{ProjectedRk4, Shake, Stepper};
+//! use chainbeam::{catalogue, Chain};
+//! let chain = Chain::<f64, 3>::from_scene(&catalogue::thesis_cantilever())?;
+//! let mut shake = Shake::new(chain.clone(), 0.01)?;
+//! let mut state = ProjectedRk4::new(chain, 0.01)?.initial_state(0.0)?;
+//! for k in 0..10 {
+//!     shake.step(&mut state, k, 0.0, 0.0)?;
+//! }
+//! # Ok::<(), chainbeam::Error>(())
+//! ```
 
 pub mod rattle;
 pub mod rk4;

@@ -7,9 +7,9 @@
 //! q̇ = v = M⁻¹ p,    ṗ = −f(q, p) − Ĝ(q)ᵀ λ,
 //! Ĝ M⁻¹ Ĝᵀ λ = −Ĝ M⁻¹ f + (‖vᵢ‖²)ᵢ        (tip row: −L M⁻¹ f),
 //! ```
-//! f = U_q − F_D ([`super::total_force`]), the control at the stage times t_k, t_k + h/2,
-//! t_k + h taken as u_k, (u_k + u_{k+1})/2, u_{k+1}. After every step q is projected onto
-//! ĝ(q) = 0 along M⁻¹Ĝ(q̃)ᵀ (Newton, [`super::PositionSolve`], from λ = 0) and p onto
+//! f = U_q − F_D ([`Chain::potential_gradient`] and the drag term, eq. 2.4.4), the control at the
+//! stage times t_k, t_k + h/2, t_k + h taken as u_k, (u_k + u_{k+1})/2, u_{k+1}. After every step
+//! q is projected onto ĝ(q) = 0 along M⁻¹Ĝ(q̃)ᵀ (Newton from λ = 0, shared with SHAKE) and p onto
 //! Ĝ M⁻¹ p = 0 (the linear projection of RATTLE). Neither symplectic nor symmetric: its energy
 //! error drifts, and it is only conditionally stable (h ω ≲ 2.8). A step that blows up is
 //! [`crate::Error::NonFinite`]; a folded joint at the new configuration is

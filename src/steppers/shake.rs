@@ -5,9 +5,9 @@
 //! ```text
 //! q_{k+1} − 2 q_k + q_{k−1} = −h² M⁻¹ (f(q_k, p̃_k) + Ĝ(q_k)ᵀ λ_k),      ĝ(q_{k+1}) = 0,
 //! ```
-//! with f = U_q − F_D ([`super::total_force`]) and the momentum recovered by central differences,
-//! p_k = M (q_{k+1} − q_{k−1}) / 2h (not projected onto the hidden constraint Ĝ M⁻¹ p = 0). It is
-//! started by one RATTLE-type half step from the straight beam at rest,
+//! with f = U_q − F_D ([`Chain::potential_gradient`] and the drag term, eq. 2.4.4) and the
+//! momentum recovered by central differences, p_k = M (q_{k+1} − q_{k−1}) / 2h (not projected onto
+//! the hidden constraint Ĝ M⁻¹ p = 0). It is started by one RATTLE-type half step from the straight beam at rest,
 //! q_1 = q_0 + h M⁻¹ p_0 − h²/2 M⁻¹ (f(q_0, p_0) + Ĝ(q_0)ᵀ λ), ĝ(q_1) = 0.
 //!
 //! Without drag its positions are those of RATTLE up to round-off (the two methods are equivalent
@@ -16,9 +16,8 @@
 //! p̃_k = p_{k−½} + (p_{k−½} − p_{k−3/2})/2 with p_{k−½} = M (q_k − q_{k−1}) / h (second order,
 //! explicit).
 //!
-//! Each step solves ĝ(q_{k+1}(λ)) = 0 by the Newton routine shared with projected RK4
-//! ([`super::PositionSolve`]), predictor λ of the previous step. The reaction-force tip is refused
-//! at construction.
+//! Each step solves ĝ(q_{k+1}(λ)) = 0 by the Newton routine shared with projected RK4, predictor
+//! λ of the previous step. The reaction-force tip is refused at construction.
 
 use super::{
     check_finite, check_len, check_step, refuse_reaction_tip, total_force, PositionSolve,

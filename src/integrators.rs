@@ -1,47 +1,34 @@
-//! Alternative integrators for the constrained chain, for speed-against-accuracy and stability
-//! comparisons with RATTLE (thesis §1.6; issue "paper_figures").
+//! A thin comparison layer over the [`crate::steppers`] (RATTLE, SHAKE, projected RK4), for
+//! speed-against-accuracy and stability comparisons (`paper_figures`, `tests/integrators.rs`).
 //!
-//! Three methods share one stepping interface, [`Integrator`], over the planar `f64` model
-//! ([`Chain<f64, 2>`]); every force, mass and constraint term comes from [`Chain`] and the linear
-//! algebra of [`crate::rattle`] (nothing physical is re-implemented here):
+//! The methods themselves live in [`crate::steppers`], one file each, generic over the scalar and
+//! the dimension; see their module docs for the maths. This module adds:
+//! * [`Run`]: any [`Stepper`] together with **its own** state, a constant control and a step
+//!   counter, with the quantities the comparisons read (energy, node positions, constraint
+//!   residual, Newton work);
+//! * [`Integrator`]: one [`Run`] per [`Method`], for picking a method at run time over the planar
+//!   `f64` model. Each variant holds its stepper and that stepper's state together, so no method
+//!   can be handed another method's state.
 //!
-//! * [`Method::Rattle`]: the library's RATTLE ([`Rattle`]), symmetric, symplectic, order 2.
-//! * [`Method::Shake`]: SHAKE (thesis §1.6), the two-step recursion
-//!   `q_{k+1} − 2q_k + q_{k−1} = −h² M⁻¹ (U_q(q_k) + Ĝ(q_k)ᵀλ_k)`, `ĝ(q_{k+1}) = 0`, with the
-//!   momentum recovered as `p_k = M (q_{k+1} − q_{k−1}) / 2h` (not projected onto the hidden
-//!   constraint Ĝ M⁻¹ p = 0). Started by one RATTLE-type half step. Without drag its positions
-//!   are those of RATTLE up to round-off (the two methods are equivalent in q); its momenta are
-//!   not, so its energy error is larger. With drag, the drag force at t_k is evaluated at the
-//!   momentum extrapolated from the two previous half-step momenta (second order, explicit).
-//! * [`Method::ProjectedRk4`]: the classical explicit Runge–Kutta method of order 4 on the
-//!   index-1 formulation (the constraints differentiated twice, λ(q, p) from
-//!   Ĝ M⁻¹ Ĝᵀ λ = Ĝ M⁻¹ f + (‖vᵢ‖²)ᵢ), followed after every step by a projection of q onto
-//!   ĝ(q) = 0 (along M⁻¹Ĝᵀ, Newton) and of p onto Ĝ M⁻¹ p = 0. Neither symplectic nor
-//!   symmetric: its energy error drifts, and it is only conditionally stable (h ω ≲ 2.8).
-//!
-//! Failures are typed [`Error`]s: a Newton solve that does not converge
-//! ([`Error::NewtonNotConverged`]), a folded joint ([`Error::Folded`], θ → π), a singular
-//! constraint system, or a non-finite state ([`Error::NonFinite`], the explicit method blowing up).
-//! The reaction-force tip ([`TipCondition::Reaction`]) is only supported by RATTLE.
+//! Failures are the steppers' typed [`crate::Error`]s: a Newton solve that does not converge, a
+//! folded joint, a singular constraint system, a non-finite state. The reaction-force tip
+//! ([`crate::TipCondition::Reaction`]) is only supported by RATTLE; SHAKE and projected RK4
+//! refuse it at construction.
 
 use crate::error::{Error, Result};
-use crate::model::{Chain, TipCondition};
-use crate::model::{Ctx, DissipativeTerm};
-use crate::rattle::{projection_solve, Rattle, RattleOptions, State};
+use crate::model::{Chain, Scalar};
 use crate::scene::{ControlKind, Scene};
-use crate::tridiag::{BorderedTridiag, ZeroPivot};
-
-/// The planar attitude/momentum block.
-type V2 = [f64; 2];
+use crate::steppers::{check_finite, ProjectedRk4, Rattle, Shake, StepStats, Stepper};
 
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Method {
     /// RATTLE (the library's integrator, [`Rattle`]).
     Rattle,
-    /// SHAKE (thesis §1.6) with central-difference momenta.
+    /// SHAKE (thesis §1.6) with central-difference momenta ([`Shake`]).
     Shake,
-    /// Explicit RK4 on the index-1 equations with projection onto the constraints.
+    /// Explicit RK4 on the index-1 equations with projection onto the constraints
+    /// ([`ProjectedRk4`]).
     ProjectedRk4,
 }
 
@@ -59,103 +46,180 @@ impl Method {
     }
 }
 
-/// Scratch memory shared by the methods.
-#[derive(Clone, Debug)]
-struct Work {
-    force: Vec<V2>,
-    tmp: Vec<V2>,
-    tmp2: Vec<V2>,
-    qnew: Vec<V2>,
-    rhs: Vec<f64>,
-    scal: Vec<f64>,
-    tri: BorderedTridiag<f64>,
-}
-
-impl Work {
-    fn new(ch: &Chain<f64, 2>) -> Self {
-        let n = ch.n();
-        let nc = ch.n_constraints();
-        let v = vec![[0.0; 2]; n];
-        Work {
-            force: v.clone(),
-            tmp: v.clone(),
-            tmp2: v.clone(),
-            qnew: v,
-            rhs: vec![0.0; nc],
-            scal: vec![0.0; n],
-            tri: BorderedTridiag::new(n, ch.has_tip_constraint()),
-        }
-    }
-}
-
-/// Per-step buffers kept apart from [`Work`] (which the constrained solve borrows whole), so a
-/// step allocates nothing.
-#[derive(Clone, Debug)]
-struct Buffers {
-    a: Vec<V2>,
-    qc: Vec<V2>,
-    phalf: Vec<V2>,
-    pd: Vec<V2>,
-    lam: Vec<f64>,
-}
-
-impl Buffers {
-    fn new(ch: &Chain<f64, 2>) -> Self {
-        let v = vec![[0.0; 2]; ch.n()];
-        Buffers {
-            a: v.clone(),
-            qc: v.clone(),
-            phalf: v.clone(),
-            pd: v,
-            lam: vec![0.0; ch.n_constraints()],
-        }
-    }
-}
-
-/// Method-specific state.
-#[derive(Clone, Debug)]
-enum Inner {
-    Rattle(Box<Rattle<f64, 2>>, State<f64, 2>),
-    Shake {
-        /// q_{k+1} (SHAKE runs one configuration ahead of the reported state).
-        next: Vec<V2>,
-        /// q_{k−1}.
-        prev: Vec<V2>,
-        /// The half-step momentum p_{k−½} = M (q_k − q_{k−1}) / h before the last one.
-        phalf_prev: Vec<V2>,
-        /// λ of the last solve (Newton predictor).
-        lam: Vec<f64>,
-    },
-    Rk4 {
-        k: [Vec<V2>; 8],
-        qs: Vec<V2>,
-        ps: Vec<V2>,
-    },
-}
-
-/// One integrator advancing the chain from the straight beam at rest with a constant control.
-#[derive(Clone, Debug)]
-pub struct Integrator {
-    method: Method,
-    chain: Chain<f64, 2>,
-    h: f64,
-    u: f64,
+/// A stepper `S` with its own state, advancing from the straight beam at rest with a constant
+/// control u.
+pub struct Run<D: Scalar, const DIM: usize, S: Stepper<D, DIM>> {
+    stepper: S,
+    state: S::State,
+    u: D,
     k: usize,
-    q: Vec<V2>,
-    p: Vec<V2>,
     newton: usize,
-    options: RattleOptions,
-    ws: Work,
-    buf: Buffers,
-    inner: Inner,
 }
 
-fn singular(step: usize, zp: ZeroPivot) -> Error {
-    Error::SingularSystem {
-        step,
-        index: zp.index,
-        pivot: zp.pivot,
+impl<D: Scalar, const DIM: usize, S> Clone for Run<D, DIM, S>
+where
+    S: Stepper<D, DIM> + Clone,
+    S::State: Clone,
+{
+    fn clone(&self) -> Self {
+        Run {
+            stepper: self.stepper.clone(),
+            state: self.state.clone(),
+            u: self.u,
+            k: self.k,
+            newton: self.newton,
+        }
     }
+}
+
+impl<D: Scalar, const DIM: usize, S> std::fmt::Debug for Run<D, DIM, S>
+where
+    S: Stepper<D, DIM> + std::fmt::Debug,
+    S::State: std::fmt::Debug,
+{
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Run")
+            .field("stepper", &self.stepper)
+            .field("state", &self.state)
+            .field("u", &self.u)
+            .field("k", &self.k)
+            .field("newton", &self.newton)
+            .finish()
+    }
+}
+
+impl<D: Scalar, const DIM: usize, S: Stepper<D, DIM>> Run<D, DIM, S> {
+    /// The stepper's initial state ([`Stepper::initial_state`]) with the constant control `u`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] if `u` is not finite; the errors of the initial state's set-up
+    /// (SHAKE's starter).
+    pub fn new(mut stepper: S, u: D) -> Result<Self> {
+        if !u.re().is_finite() {
+            return Err(Error::InvalidArgument {
+                name: "u",
+                reason: format!("the control must be finite, got {}", u.re()),
+            });
+        }
+        let state = stepper.initial_state(u)?;
+        Ok(Run {
+            stepper,
+            state,
+            u,
+            k: 0,
+            newton: 0,
+        })
+    }
+
+    /// The stepper.
+    pub fn stepper(&self) -> &S {
+        &self.stepper
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &S::State {
+        &self.state
+    }
+
+    /// The model.
+    pub fn chain(&self) -> &Chain<D, DIM> {
+        self.stepper.chain()
+    }
+
+    /// Step index k of the current state.
+    pub fn step_index(&self) -> usize {
+        self.k
+    }
+
+    /// Time t_k = k h of the current state.
+    pub fn time(&self) -> f64 {
+        self.k as f64 * self.stepper.h()
+    }
+
+    /// Attitudes q_k.
+    pub fn q(&self) -> &[[D; DIM]] {
+        self.stepper.q(&self.state)
+    }
+
+    /// Momenta p_k.
+    pub fn p(&self) -> &[[D; DIM]] {
+        self.stepper.p(&self.state)
+    }
+
+    /// Total Newton iterations (linear solves) so far, including SHAKE's starter (projected RK4
+    /// counts its projection iterations).
+    pub fn newton_iterations(&self) -> usize {
+        self.newton
+    }
+
+    /// Total energy H(q_k, p_k; t_k, u) = ½ pᵀM⁻¹p + U.
+    pub fn energy(&self) -> D {
+        let ch = self.chain();
+        let mut scratch = vec![[D::zero(); DIM]; ch.n()];
+        ch.kinetic_energy(self.p(), &mut scratch)
+            + ch.potential_energy(self.q(), self.time(), self.u)
+    }
+
+    /// Node positions rᵢ of nodes 1..=n.
+    pub fn positions(&self) -> Vec<[D; DIM]> {
+        let mut out = vec![[D::zero(); DIM]; self.chain().n()];
+        self.chain().node_positions(self.q(), &mut out);
+        out
+    }
+
+    /// The largest constraint violation max(|½(‖qᵢ‖² − 1)|, |tip z| / L) of the current state.
+    pub fn constraint_residual(&self) -> f64 {
+        let ch = self.chain();
+        let mut r = vec![D::zero(); ch.n_constraints()];
+        ch.constraints().residual(self.q(), D::zero(), &mut r)
+    }
+
+    /// Advances the state by one step.
+    ///
+    /// # Errors
+    /// The stepper's typed errors (naming the step), and [`Error::NonFinite`] for a non-finite
+    /// new state.
+    pub fn step(&mut self) -> Result<StepStats> {
+        let s = self.stepper.step(&mut self.state, self.k, self.u, self.u)?;
+        self.k += 1;
+        self.newton += s.iterations;
+        check_finite(self.q(), self.p(), self.k)?;
+        Ok(s)
+    }
+
+    /// Advances `steps` steps.
+    ///
+    /// # Errors
+    /// The first error of [`Run::step`].
+    pub fn advance(&mut self, steps: usize) -> Result<()> {
+        for _ in 0..steps {
+            self.step()?;
+        }
+        Ok(())
+    }
+}
+
+/// One of the three methods on the planar `f64` model, each variant holding its stepper and its
+/// own state (boxed: the runs differ in size).
+#[derive(Clone, Debug)]
+pub enum Integrator {
+    /// RATTLE.
+    Rattle(Box<Run<f64, 2, Rattle<f64, 2>>>),
+    /// SHAKE.
+    Shake(Box<Run<f64, 2, Shake<f64, 2>>>),
+    /// Projected RK4.
+    ProjectedRk4(Box<Run<f64, 2, ProjectedRk4<f64, 2>>>),
+}
+
+/// Evaluates `$e` with `$r` bound to the variant's [`Run`] (each arm its own stepper type).
+macro_rules! each {
+    ($self:expr, $r:ident => $e:expr) => {
+        match $self {
+            Integrator::Rattle($r) => $e,
+            Integrator::Shake($r) => $e,
+            Integrator::ProjectedRk4($r) => $e,
+        }
+    };
 }
 
 /// The constant control of a scene (0 without one).
@@ -165,7 +229,7 @@ fn constant_control(scene: &Scene) -> Result<f64> {
         Some(c) if c.kind == ControlKind::Constant => Ok(c.values[0]),
         Some(_) => Err(Error::InvalidArgument {
             name: "control",
-            reason: "the alternative integrators support a constant control only".into(),
+            reason: "the comparison integrators support a constant control only".into(),
         }),
     }
 }
@@ -191,136 +255,69 @@ impl Integrator {
     /// As [`Integrator::new`], from a chain and a constant control `u`.
     ///
     /// # Errors
-    /// As [`Integrator::new`].
+    /// As [`Integrator::new`], and [`Error::InvalidArgument`] for a non-finite `u`.
     pub fn from_chain(chain: Chain<f64, 2>, method: Method, h: f64, u: f64) -> Result<Self> {
-        if !(h > 0.0 && h.is_finite()) {
-            return Err(Error::InvalidArgument {
-                name: "h",
-                reason: format!("the step must be positive and finite, got {h}"),
-            });
-        }
-        if !u.is_finite() {
-            return Err(Error::InvalidArgument {
-                name: "u",
-                reason: format!("the control must be finite, got {u}"),
-            });
-        }
-        if method != Method::Rattle && chain.tip_condition() == TipCondition::Reaction {
-            return Err(Error::InvalidArgument {
-                name: "method",
-                reason: format!(
-                    "{} does not support the reaction-force tip; use RATTLE",
-                    method.name()
-                ),
-            });
-        }
-        let n = chain.n();
-        let ws = Work::new(&chain);
-        let straight = State::<f64, 2>::straight(n, chain.n_constraints());
-        let q = straight.q.clone();
-        let p = straight.p.clone();
-        let inner = match method {
-            Method::Rattle => {
-                let mut r = Rattle::new(chain.clone(), h)?;
-                let mut st = straight;
-                r.prepare(&mut st, 0, u)?;
-                Inner::Rattle(Box::new(r), st)
+        Ok(match method {
+            Method::Rattle => Integrator::Rattle(Box::new(Run::new(Rattle::new(chain, h)?, u)?)),
+            Method::Shake => Integrator::Shake(Box::new(Run::new(Shake::new(chain, h)?, u)?)),
+            Method::ProjectedRk4 => {
+                Integrator::ProjectedRk4(Box::new(Run::new(ProjectedRk4::new(chain, h)?, u)?))
             }
-            Method::Shake => Inner::Shake {
-                next: q.clone(),
-                prev: q.clone(),
-                phalf_prev: p.clone(),
-                lam: vec![0.0; chain.n_constraints()],
-            },
-            Method::ProjectedRk4 => Inner::Rk4 {
-                k: std::array::from_fn(|_| vec![[0.0; 2]; n]),
-                qs: q.clone(),
-                ps: p.clone(),
-            },
-        };
-        let buf = Buffers::new(&chain);
-        let mut it = Integrator {
-            method,
-            chain,
-            h,
-            u,
-            k: 0,
-            q,
-            p,
-            newton: 0,
-            options: RattleOptions::default(),
-            buf,
-            ws,
-            inner,
-        };
-        if method == Method::Shake {
-            it.shake_start()?;
-        }
-        Ok(it)
+        })
     }
 
     /// The method.
     pub fn method(&self) -> Method {
-        self.method
+        match self {
+            Integrator::Rattle(_) => Method::Rattle,
+            Integrator::Shake(_) => Method::Shake,
+            Integrator::ProjectedRk4(_) => Method::ProjectedRk4,
+        }
     }
 
     /// The model.
     pub fn chain(&self) -> &Chain<f64, 2> {
-        &self.chain
+        each!(self, r => r.chain())
     }
 
     /// Step index k of the current state.
     pub fn step_index(&self) -> usize {
-        self.k
+        each!(self, r => r.step_index())
     }
 
     /// Time t_k = k h of the current state.
     pub fn time(&self) -> f64 {
-        self.k as f64 * self.h
+        each!(self, r => r.time())
     }
 
     /// Attitudes q_k.
-    pub fn q(&self) -> &[V2] {
-        &self.q
+    pub fn q(&self) -> &[[f64; 2]] {
+        each!(self, r => r.q())
     }
 
     /// Momenta p_k.
-    pub fn p(&self) -> &[V2] {
-        &self.p
+    pub fn p(&self) -> &[[f64; 2]] {
+        each!(self, r => r.p())
     }
 
-    /// Total Newton iterations so far (0 for the explicit method's dynamics; it counts its
-    /// projection iterations).
+    /// Total Newton iterations so far ([`Run::newton_iterations`]).
     pub fn newton_iterations(&self) -> usize {
-        self.newton
+        each!(self, r => r.newton_iterations())
     }
 
     /// Total energy H(q_k, p_k; t_k, u) = ½ pᵀM⁻¹p + U.
     pub fn energy(&self) -> f64 {
-        let mut scratch = vec![[0.0; 2]; self.chain.n()];
-        self.chain.kinetic_energy(&self.p, &mut scratch)
-            + self.chain.potential_energy(&self.q, self.time(), self.u)
+        each!(self, r => r.energy())
     }
 
     /// Node positions (y, z) of nodes 1..=n.
-    pub fn positions(&self) -> Vec<V2> {
-        let mut out = vec![[0.0; 2]; self.chain.n()];
-        self.chain.node_positions(&self.q, &mut out);
-        out
+    pub fn positions(&self) -> Vec<[f64; 2]> {
+        each!(self, r => r.positions())
     }
 
     /// The largest constraint violation max(|½(‖qᵢ‖² − 1)|, |tip z| / L) of the current state.
     pub fn constraint_residual(&self) -> f64 {
-        let mut r = self
-            .q
-            .iter()
-            .map(|q| (0.5 * (q[0] * q[0] + q[1] * q[1] - 1.0)).abs())
-            .fold(0.0, f64::max);
-        if self.chain.has_tip_constraint() {
-            let total: f64 = self.chain.lengths().iter().sum();
-            r = r.max(self.chain.tip_z(&self.q).abs() / total);
-        }
-        r
+        each!(self, r => r.constraint_residual())
     }
 
     /// Advances the state by one step.
@@ -328,25 +325,8 @@ impl Integrator {
     /// # Errors
     /// A typed [`Error`] naming the step: Newton not converged, folded joint, singular system,
     /// or a non-finite state.
-    pub fn step(&mut self) -> Result<()> {
-        match self.method {
-            Method::Rattle => self.rattle_step(),
-            Method::Shake => self.shake_step(),
-            Method::ProjectedRk4 => self.rk4_step(),
-        }?;
-        self.k += 1;
-        if self
-            .q
-            .iter()
-            .chain(self.p.iter())
-            .any(|v| !(v[0].is_finite() && v[1].is_finite()))
-        {
-            return Err(Error::NonFinite {
-                step: self.k,
-                quantity: "the state (q, p)",
-            });
-        }
-        Ok(())
+    pub fn step(&mut self) -> Result<StepStats> {
+        each!(self, r => r.step())
     }
 
     /// Advances `steps` steps.
@@ -354,396 +334,7 @@ impl Integrator {
     /// # Errors
     /// The first error of [`Integrator::step`].
     pub fn advance(&mut self, steps: usize) -> Result<()> {
-        for _ in 0..steps {
-            self.step()?;
-        }
-        Ok(())
-    }
-
-    fn rattle_step(&mut self) -> Result<()> {
-        let k = self.k;
-        let u = self.u;
-        if let Inner::Rattle(r, st) = &mut self.inner {
-            let s = r.step(st, k, u, u)?;
-            self.newton += s.iterations;
-            self.q.copy_from_slice(&st.q);
-            self.p.copy_from_slice(&st.p);
-        }
-        Ok(())
-    }
-
-    /// Solves ĝ(a − c M⁻¹ Ĝ(q_base)ᵀ λ) = 0 for λ (predictor in `lam`) by Newton; the solution
-    /// configuration is left in `ws.qnew`. Returns the iterations.
-    #[allow(clippy::too_many_arguments)]
-    fn constrained_solve(
-        ch: &Chain<f64, 2>,
-        ws: &mut Work,
-        options: &RattleOptions,
-        q_base: &[V2],
-        a: &[V2],
-        c: f64,
-        lam: &mut [f64],
-        step: usize,
-        time: f64,
-    ) -> Result<usize> {
-        let n = ch.n();
-        let bordered = ch.has_tip_constraint();
-        let total: f64 = ch.lengths().iter().sum();
-        let h_eff = (2.0 * c).sqrt();
-        let mut iterations = 0;
-        loop {
-            // tmp = Ĝ(q_base)ᵀ λ, qnew = a − c M⁻¹ tmp
-            for i in 0..n {
-                for d in 0..2 {
-                    ws.tmp[i][d] = lam[i] * q_base[i][d];
-                }
-                if bordered {
-                    ws.tmp[i][1] += lam[n] * ch.lengths()[i];
-                }
-            }
-            ch.apply_inverse_mass(&ws.tmp, &mut ws.tmp2);
-            for i in 0..n {
-                for d in 0..2 {
-                    ws.qnew[i][d] = a[i][d] - c * ws.tmp2[i][d];
-                }
-            }
-            let mut rmax: f64 = 0.0;
-            for i in 0..n {
-                let qi = ws.qnew[i];
-                let r = 0.5 * (qi[0] * qi[0] + qi[1] * qi[1] - 1.0);
-                rmax = rmax.max(r.abs());
-                ws.rhs[i] = r;
-            }
-            if bordered {
-                let r = ch.tip_z(&ws.qnew);
-                rmax = rmax.max(r.abs() / total);
-                ws.rhs[n] = r;
-            }
-            if !rmax.is_finite() {
-                return Err(Error::NonFinite {
-                    step,
-                    quantity: "the positions of the Newton iterate",
-                });
-            }
-            if rmax <= options.tolerance {
-                return Ok(iterations);
-            }
-            if iterations >= options.max_iterations {
-                return Err(Error::NewtonNotConverged {
-                    step,
-                    time,
-                    residual: rmax,
-                    iterations,
-                    tolerance: options.tolerance,
-                    h: None,
-                });
-            }
-            ch.constraints().assemble_newton(
-                (q_base, &ws.qnew),
-                None,
-                h_eff,
-                &mut ws.tri,
-                &mut ws.scal,
-            );
-            ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(step, zp))?;
-            for (l, r) in lam.iter_mut().zip(ws.rhs.iter()) {
-                *l -= *r;
-            }
-            iterations += 1;
-        }
-    }
-
-    /// f = U_q(q; t, u) + D p ⊙ |p| (the force with the sign of U_q) into `ws.force`.
-    fn force_into(
-        ch: &Chain<f64, 2>,
-        q: &[V2],
-        p: &[V2],
-        t: f64,
-        u: f64,
-        step: usize,
-        out: &mut [V2],
-    ) -> Result<()> {
-        ch.potential_gradient(q, t, u, step, out)?;
-        if let Some(d) = ch.drag() {
-            let ctx = Ctx::new(t, u, step);
-            for (o, pi) in out.iter_mut().zip(p.iter()) {
-                for c in 0..2 {
-                    o[c] -= d.force_component(pi[c], &ctx);
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// M v (M = M̄ ⊗ I, M̄ = diag(l) Tᵀ diag(m) T diag(l), T lower-triangular ones).
-    fn apply_mass(ch: &Chain<f64, 2>, v: &[V2], out: &mut [V2]) {
-        let n = ch.n();
-        let l = ch.lengths();
-        let m = ch.masses();
-        let mut acc = [0.0; 2];
-        for i in 0..n {
-            for d in 0..2 {
-                acc[d] += l[i] * v[i][d];
-                out[i][d] = m[i] * acc[d];
-            }
-        }
-        let mut rev = [0.0; 2];
-        for i in (0..n).rev() {
-            for d in 0..2 {
-                rev[d] += out[i][d];
-                out[i][d] = l[i] * rev[d];
-            }
-        }
-    }
-
-    /// SHAKE's starter: q_1 = q_0 + h M⁻¹ p_0 − h²/2 M⁻¹ (f_0 + Ĝᵀλ), ĝ(q_1) = 0.
-    fn shake_start(&mut self) -> Result<()> {
-        let h = self.h;
-        let n = self.chain.n();
-        Self::force_into(
-            &self.chain,
-            &self.q,
-            &self.p,
-            0.0,
-            self.u,
-            0,
-            &mut self.ws.force,
-        )?;
-        self.chain.apply_inverse_mass(&self.p, &mut self.ws.tmp);
-        self.chain
-            .apply_inverse_mass(&self.ws.force, &mut self.ws.tmp2);
-        let a = &mut self.buf.a;
-        for i in 0..n {
-            for d in 0..2 {
-                a[i][d] = self.q[i][d] + h * self.ws.tmp[i][d] - 0.5 * h * h * self.ws.tmp2[i][d];
-            }
-        }
-        let Inner::Shake {
-            next,
-            prev,
-            phalf_prev,
-            lam,
-        } = &mut self.inner
-        else {
-            return Ok(());
-        };
-        let it = Self::constrained_solve(
-            &self.chain,
-            &mut self.ws,
-            &self.options,
-            &self.q,
-            a,
-            0.5 * h * h,
-            lam,
-            0,
-            0.0,
-        )?;
-        self.newton += it;
-        next.copy_from_slice(&self.ws.qnew);
-        prev.copy_from_slice(&self.q);
-        // p_{½} for the drag extrapolation
-        for i in 0..n {
-            for d in 0..2 {
-                self.ws.tmp[i][d] = (next[i][d] - self.q[i][d]) / h;
-            }
-        }
-        Self::apply_mass(&self.chain, &self.ws.tmp, phalf_prev);
-        Ok(())
-    }
-
-    fn shake_step(&mut self) -> Result<()> {
-        let h = self.h;
-        let n = self.chain.n();
-        let k1 = self.k + 1;
-        let Inner::Shake {
-            next,
-            prev,
-            phalf_prev,
-            lam,
-        } = &mut self.inner
-        else {
-            return Ok(());
-        };
-        // current: q_{k+1} = next; compute q_{k+2}
-        let Buffers {
-            a, qc, phalf, pd, ..
-        } = &mut self.buf;
-        qc.copy_from_slice(next);
-        // p_{k+½} = M (q_{k+1} − q_k) / h
-        for i in 0..n {
-            for d in 0..2 {
-                self.ws.tmp[i][d] = (qc[i][d] - self.q[i][d]) / h;
-            }
-        }
-        Self::apply_mass(&self.chain, &self.ws.tmp, phalf);
-        // drag momentum at t_{k+1}: extrapolated p_{k+½} + (p_{k+½} − p_{k−½})/2
-        pd.copy_from_slice(phalf);
-        if self.chain.has_drag() {
-            for i in 0..n {
-                for d in 0..2 {
-                    pd[i][d] += 0.5 * (phalf[i][d] - phalf_prev[i][d]);
-                }
-            }
-        }
-        Self::force_into(
-            &self.chain,
-            qc,
-            pd,
-            k1 as f64 * h,
-            self.u,
-            k1,
-            &mut self.ws.force,
-        )?;
-        self.chain
-            .apply_inverse_mass(&self.ws.force, &mut self.ws.tmp2);
-        for i in 0..n {
-            for d in 0..2 {
-                a[i][d] = 2.0 * qc[i][d] - self.q[i][d] - h * h * self.ws.tmp2[i][d];
-            }
-        }
-        let it = Self::constrained_solve(
-            &self.chain,
-            &mut self.ws,
-            &self.options,
-            qc,
-            a,
-            h * h,
-            lam,
-            k1,
-            k1 as f64 * h,
-        )?;
-        self.newton += it;
-        // p_{k+1} = M (q_{k+2} − q_k) / 2h
-        for i in 0..n {
-            for d in 0..2 {
-                self.ws.tmp[i][d] = (self.ws.qnew[i][d] - self.q[i][d]) / (2.0 * h);
-            }
-        }
-        Self::apply_mass(&self.chain, &self.ws.tmp, &mut self.p);
-        prev.copy_from_slice(&self.q);
-        self.q.copy_from_slice(qc);
-        next.copy_from_slice(&self.ws.qnew);
-        phalf_prev.copy_from_slice(phalf);
-        Ok(())
-    }
-
-    /// (q̇, ṗ) of the index-1 equations at (q, p, t): q̇ = M⁻¹p, ṗ = −f − Ĝᵀλ with
-    /// Ĝ M⁻¹ Ĝᵀ λ = −Ĝ M⁻¹ f + (‖vᵢ‖²)ᵢ (tip row: −L M⁻¹ f).
-    #[allow(clippy::too_many_arguments)]
-    fn rhs(
-        ch: &Chain<f64, 2>,
-        ws: &mut Work,
-        q: &[V2],
-        p: &[V2],
-        t: f64,
-        u: f64,
-        step: usize,
-        qdot: &mut [V2],
-        pdot: &mut [V2],
-    ) -> Result<()> {
-        let n = ch.n();
-        let bordered = ch.has_tip_constraint();
-        Self::force_into(ch, q, p, t, u, step, &mut ws.force)?;
-        ch.apply_inverse_mass(p, qdot);
-        ch.apply_inverse_mass(&ws.force, &mut ws.tmp);
-        for i in 0..n {
-            let v = qdot[i];
-            ws.rhs[i] =
-                -(q[i][0] * ws.tmp[i][0] + q[i][1] * ws.tmp[i][1]) + v[0] * v[0] + v[1] * v[1];
-        }
-        if bordered {
-            ws.rhs[n] = -(0..n).map(|i| ch.lengths()[i] * ws.tmp[i][1]).sum::<f64>();
-        }
-        // assemble_newton with q' = q and h = √2 assembles −Ĝ M⁻¹ Ĝᵀ.
-        ch.constraints().assemble_newton(
-            (q, q),
-            None,
-            std::f64::consts::SQRT_2,
-            &mut ws.tri,
-            &mut ws.scal,
-        );
-        ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(step, zp))?;
-        // λ = −solution
-        for i in 0..n {
-            let lam = -ws.rhs[i];
-            for d in 0..2 {
-                pdot[i][d] = -ws.force[i][d] - lam * q[i][d];
-            }
-            if bordered {
-                pdot[i][1] += ws.rhs[n] * ch.lengths()[i];
-            }
-        }
-        Ok(())
-    }
-
-    fn rk4_step(&mut self) -> Result<()> {
-        let h = self.h;
-        let n = self.chain.n();
-        let k = self.k;
-        let t = k as f64 * h;
-        let u = self.u;
-        let Inner::Rk4 { k: kk, qs, ps } = &mut self.inner else {
-            return Ok(());
-        };
-        let [kq1, kp1, kq2, kp2, kq3, kp3, kq4, kp4] = kk;
-        let ch = &self.chain;
-        let ws = &mut self.ws;
-        Self::rhs(ch, ws, &self.q, &self.p, t, u, k, kq1, kp1)?;
-        let stage =
-            |qs: &mut [V2], ps: &mut [V2], dq: &[V2], dp: &[V2], c: f64, q: &[V2], p: &[V2]| {
-                for i in 0..n {
-                    for d in 0..2 {
-                        qs[i][d] = q[i][d] + c * dq[i][d];
-                        ps[i][d] = p[i][d] + c * dp[i][d];
-                    }
-                }
-            };
-        stage(qs, ps, kq1, kp1, 0.5 * h, &self.q, &self.p);
-        Self::rhs(ch, ws, qs, ps, t + 0.5 * h, u, k, kq2, kp2)?;
-        stage(qs, ps, kq2, kp2, 0.5 * h, &self.q, &self.p);
-        Self::rhs(ch, ws, qs, ps, t + 0.5 * h, u, k, kq3, kp3)?;
-        stage(qs, ps, kq3, kp3, h, &self.q, &self.p);
-        Self::rhs(ch, ws, qs, ps, t + h, u, k, kq4, kp4)?;
-        for i in 0..n {
-            for d in 0..2 {
-                qs[i][d] = self.q[i][d]
-                    + h / 6.0 * (kq1[i][d] + 2.0 * kq2[i][d] + 2.0 * kq3[i][d] + kq4[i][d]);
-                ps[i][d] = self.p[i][d]
-                    + h / 6.0 * (kp1[i][d] + 2.0 * kp2[i][d] + 2.0 * kp3[i][d] + kp4[i][d]);
-            }
-        }
-        if qs
-            .iter()
-            .chain(ps.iter())
-            .any(|v| !(v[0].is_finite() && v[1].is_finite()))
-        {
-            return Err(Error::NonFinite {
-                step: k + 1,
-                quantity: "the RK4 stage (q, p)",
-            });
-        }
-        // Project q onto ĝ = 0 along M⁻¹Ĝ(q̃)ᵀ, then p onto Ĝ M⁻¹ p = 0.
-        let lam = &mut self.buf.lam;
-        lam.iter_mut().for_each(|l| *l = 0.0);
-        let qt: &[V2] = qs;
-        let it = Self::constrained_solve(ch, ws, &self.options, qt, qt, 1.0, lam, k + 1, t + h)?;
-        self.newton += it;
-        self.q.copy_from_slice(&ws.qnew);
-        projection_solve(ch, &self.q, ps, 0.0, &mut ws.tmp, &mut ws.tri, &mut ws.rhs)
-            .map_err(|zp| singular(k + 1, zp))?;
-        let bordered = ch.has_tip_constraint();
-        for i in 0..n {
-            let y = ws.rhs[i];
-            for d in 0..2 {
-                self.p[i][d] = ps[i][d] - y * self.q[i][d];
-            }
-            if bordered {
-                self.p[i][1] -= ws.rhs[n] * ch.lengths()[i];
-            }
-        }
-        // A fold is an error, not garbage: check the joint angles of the new configuration.
-        ch.potential_gradient(&self.q, t + h, u, k + 1, &mut ws.force)?;
-        Ok(())
+        each!(self, r => r.advance(steps))
     }
 }
 

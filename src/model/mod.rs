@@ -451,6 +451,28 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         }
     }
 
+    /// Applies M = M̄ ⊗ I in O(n): M̄ = diag(l) Tᵀ diag(m) T diag(l) with T the lower-triangular
+    /// matrix of ones (SPEC §1; the inverse of [`Chain::apply_inverse_mass`]): a forward prefix sum
+    /// of lᵢvᵢ weighted by mᵢ, then a backward suffix sum weighted by lᵢ. `out` may not alias `v`.
+    #[inline]
+    pub fn apply_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
+        let n = self.n;
+        let mut acc = [D::zero(); DIM];
+        for i in 0..n {
+            for d in 0..DIM {
+                acc[d] += self.lengths[i] * v[i][d];
+                out[i][d] = self.masses[i] * acc[d];
+            }
+        }
+        let mut rev = [D::zero(); DIM];
+        for i in (0..n).rev() {
+            for d in 0..DIM {
+                rev[d] += out[i][d];
+                out[i][d] = self.lengths[i] * rev[d];
+            }
+        }
+    }
+
     /// The tridiagonal entries of M̄⁻¹ in row i (0-based): `(diag_i, off_i)` with
     /// off_i = M̄⁻¹_{i,i+1} = −1/(lᵢ l_{i+1} mᵢ) and M̄⁻¹_{ii} = (1/lᵢ²)(1/mᵢ + 1/m_{i−1}) (no
     /// m₀ term for the first pendulum). From M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l).

@@ -19,7 +19,7 @@
 //! let traj = simulate(&scene)?;
 //! let tip = traj.positions(traj.steps())[9];
 //! assert!(tip[2] < 0.0); // a positive load pushes toward −z (the thesis's sign convention)
-//! let drift = (traj.energy[traj.steps()] - traj.energy[0]).abs();
+//! let drift = (traj.energy()[traj.steps()] - traj.energy()[0]).abs();
 //! assert!(drift < 1e-3); // RATTLE is symplectic: no energy drift
 //! # Ok::<(), chainbeam::Error>(())
 //! ```
@@ -117,12 +117,12 @@ pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Rattle, RattleOptions, State, StepStats};
 pub use scene::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
-    SceneErrorKind, Support, TimeGrid,
+    Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
+    SceneBuilder, SceneError, SceneErrorKind, Support, TimeGrid,
 };
 pub use simulate::{
     piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls,
-    Trajectory,
+    SceneTrajectory, Trajectory,
 };
 
 /// The README's code runs as a doctest.

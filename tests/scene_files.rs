@@ -53,12 +53,7 @@ fn spec_scene() -> Scene {
         loads: Loads {
             gravity: 0.0,
             drag: 0.0,
-            points: vec![PointLoad {
-                node: 5,
-                force: 2.0,
-                start: 0.0,
-                end: None,
-            }],
+            points: vec![PointLoad::new(5, 2.0)],
         },
         time: TimeGrid {
             step: 0.01,
@@ -1192,7 +1187,7 @@ fn valid_scenes_at_the_range_limits_do_not_overflow() {
         };
         match simulate(&scene) {
             Ok(t) => {
-                assert!(t.energy.iter().chain(&t.moment).all(|x| x.is_finite()));
+                assert!(t.energy().iter().chain(t.moment()).all(|x| x.is_finite()));
                 let p = ControlProblem::from_scene(&scene).unwrap();
                 let (c, g) = p.value_and_gradient(&[-0.5 * f]).unwrap();
                 assert!(c.is_finite() && g[0].is_finite(), "{scene:?}");
@@ -1327,8 +1322,8 @@ fn piecewise_scenes_simulate_and_differentiate() {
     let u = scene_controls(&pw);
     let a = simulate(&pw).unwrap();
     let b = simulate_with_controls(&scene, &u).unwrap();
-    assert_eq!(a.moment, b.moment);
-    assert_eq!(a.controls, u);
+    assert_eq!(a.moment(), b.moment());
+    assert_eq!(a.controls(), u);
 
     let problem = ControlProblem::from_scene(&pw).unwrap();
     assert_eq!(problem.n_params(), 3);

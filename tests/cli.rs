@@ -763,6 +763,19 @@ fn describe(name: &str) -> String {
              EI = 1000 Nm^2, mass 10 kg, discretised by n = 20 pendulums, base spring 2k, F = 2 N at \
              the tip."
             .into(),
+        "oblique_riser" => "Issue 13 (out-of-plane loads): the thesis riser with F = 2 N at node 5 at \
+             45 degrees between x and z (force = [fx, fz] = [sqrt 2, sqrt 2]), no drag, t in [0, 10] s. \
+             Spatial: simulate runs the spatial model and fills in the x columns."
+            .into(),
+        "wave_riser" => "Issue 13 (waves): the riser with drag D = 10 kg/m and a harmonic load \
+             2 N sin(2 pi t / 8 s) at node 5, ramped in over 8 s, t in [0, 32] s; piecewise control at \
+             node 10 (32 pieces of 1 s), objective c_sum = sum of M0(t_k)^2 (chainbeam optimize \
+             counters the wave)."
+            .into(),
+        "wave_series" => "Issue 13 (load histories): the riser with drag D = 10 kg/m and the load at \
+             node 5 read from the time series wave_series.csv (t, fx, fz; an oblique sea of two wave \
+             components, linearly interpolated), ramped in over 8 s, t in [0, 32] s. Spatial."
+            .into(),
         "long_horizon" => "Future work of thesis §3.3 (Fig. 3.12): riser with drag D = 10 kg/m, F = 2 N \
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \
              c_sum = sum of M0(t_k)^2, t in [0, 10] s."
@@ -843,6 +856,10 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
                 scene_file_text(name, scene),
             )
             .unwrap();
+            // a load's time series goes to its file, named relative to the scene file
+            for series in scene.loads.points.iter().filter_map(|p| p.series.as_ref()) {
+                fs::write(dir.join(&series.file), series.to_csv()).unwrap();
+            }
         }
     }
     for (name, scene) in &all {

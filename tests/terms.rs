@@ -215,10 +215,34 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
             (Parameter::LoadForce(0), 2.0),
             (Parameter::LoadForceX(0), 0.5),
             (Parameter::LoadForce(1), -1.5),
-            (Parameter::LoadAmplitude { load: 2, harmonic: 0 }, 0.8),
-            (Parameter::LoadAmplitude { load: 2, harmonic: 1 }, 0.3),
-            (Parameter::LoadPhase { load: 2, harmonic: 0 }, 0.3),
-            (Parameter::LoadPhase { load: 2, harmonic: 1 }, -1.1),
+            (
+                Parameter::LoadAmplitude {
+                    load: 2,
+                    harmonic: 0,
+                },
+                0.8,
+            ),
+            (
+                Parameter::LoadAmplitude {
+                    load: 2,
+                    harmonic: 1,
+                },
+                0.3,
+            ),
+            (
+                Parameter::LoadPhase {
+                    load: 2,
+                    harmonic: 0,
+                },
+                0.3,
+            ),
+            (
+                Parameter::LoadPhase {
+                    load: 2,
+                    harmonic: 1,
+                },
+                -1.1,
+            ),
         ];
         let mut tested = 0;
         for (p, value) in params {
@@ -241,7 +265,11 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
         }
         if term.name() == "point loads" {
             // F_z, F_x (spatial only), F_z of the windowed load, two amplitudes, two phases
-            assert_eq!(tested, if DIM == 3 { 7 } else { 6 }, "load parameters checked");
+            assert_eq!(
+                tested,
+                if DIM == 3 { 7 } else { 6 },
+                "load parameters checked"
+            );
         }
         let got = term
             .control_contraction(&self.q, &self.w, &ctx, &mut scratch)

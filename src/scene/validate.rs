@@ -345,7 +345,9 @@ fn check_series_coverage(i: usize, p: &PointLoad, t_end: f64) -> Result<(), Scen
                 file: series.file.clone(),
                 line: None,
                 reason: format!(
-                    "its rows cover t ∈ [{a}, {b}] s but the load acts for t ∈ [{from}, {to}] s                      (the grid ends at t_N = N·h = {t_end} s); extend the series, or set `start`/`end`                      or `time.steps`"
+                    "its rows cover t ∈ [{a}, {b}] s but the load acts for t ∈ [{from}, {to}] s \
+                     (the grid ends at t_N = N·h = {t_end} s); extend the series, or set `start`/`end` \
+                     or `time.steps`"
                 ),
             }
             .into());

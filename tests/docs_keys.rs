@@ -14,7 +14,7 @@ use std::path::Path;
 
 use chainbeam::scene::{
     ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS,
-    MAX_STEPS, STEP_RANGE, STIFFNESS_RANGE,
+    MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 use chainbeam::{Scene, SceneErrorKind};
 
@@ -249,6 +249,7 @@ fn documented_ranges_are_the_enforced_ones() {
         cell("loads.point.harmonic", "amplitude"),
         range(&FORCE_RANGE)
     );
+    assert_eq!(cell("loads.point.harmonic", "period"), range(&PERIOD_RANGE));
     assert!(cell("control", "values").starts_with(&range(&FORCE_RANGE)));
     assert_eq!(cell("time", "step"), range(&STEP_RANGE));
     assert_eq!(cell("beam", "pendulums"), format!("1 to {MAX_PENDULUMS}"));
@@ -261,6 +262,7 @@ fn documented_ranges_are_the_enforced_ones() {
         ("spring k (interior, base, tip)", &STIFFNESS_RANGE),
         ("force F, control u", &FORCE_RANGE),
         ("harmonic amplitude A, series forces", &FORCE_RANGE),
+        ("harmonic period T", &PERIOD_RANGE),
         ("gravity g", &GRAVITY_RANGE),
         ("drag D", &DRAG_RANGE),
         ("time step h", &STEP_RANGE),

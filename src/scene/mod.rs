@@ -5,7 +5,8 @@
 //! written with [`Scene::to_toml_string`], and checked by [`Scene::validate`], which rejects bad
 //! values with a [`SceneError`] naming the offending key. Ready-made thesis scenes are in
 //! [`crate::catalogue`]. The valid ranges are the constants [`LENGTH_RANGE`], [`MASS_RANGE`],
-//! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`] and
+//! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`],
+//! [`PERIOD_RANGE`] and
 //! [`MAX_STEP_NUMBER`]; the size limits are [`MAX_PENDULUMS`], [`MAX_STEPS`] and
 //! [`MAX_TRAJECTORY_BYTES`].
 //!
@@ -30,7 +31,8 @@ pub use error::{SceneError, SceneErrorKind};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
     human_bytes, ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE,
-    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, STEP_RANGE, STIFFNESS_RANGE,
+    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE,
+    STIFFNESS_RANGE,
 };
 
 use raw::RawScene;

@@ -1,6 +1,7 @@
 //! Time series of a point load, (t, F_x, F_z) rows read from a CSV file and linearly interpolated
 //! (docs/scene-format.md, "Time series files").
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::validate::FORCE_RANGE;
@@ -64,22 +65,32 @@ impl LoadSeries {
             row_error(
                 None,
                 format!(
-                    "the file has {} bytes, more than the {} a series may have",
+                    "the file has {} bytes or more, over the {} a series may have",
                     len,
                     super::human_bytes(MAX_SERIES_BYTES)
                 ),
             )
         };
-        let meta = std::fs::metadata(resolved)
-            .map_err(|e| fail(row_error(None, format!("cannot read it: {e}"))))?;
-        if meta.is_dir() {
-            return Err(fail(row_error(None, "is a directory, not a CSV file")));
+        let cannot = |e: std::io::Error| fail(row_error(None, format!("cannot read it: {e}")));
+        let meta = std::fs::metadata(resolved).map_err(cannot)?;
+        if !meta.is_file() {
+            // a directory, a FIFO or a device (/dev/zero) would never end or never parse
+            return Err(fail(row_error(
+                None,
+                "is not a regular file (a directory, pipe or device); give a CSV file",
+            )));
         }
         if meta.len() > MAX_SERIES_BYTES {
             return Err(fail(too_big(meta.len())));
         }
-        let text = std::fs::read_to_string(resolved)
-            .map_err(|e| fail(row_error(None, format!("cannot read it: {e}"))))?;
+        // Bounded even if the file grows while it is read.
+        let mut text = String::new();
+        std::fs::File::open(resolved)
+            .and_then(|f| f.take(MAX_SERIES_BYTES + 1).read_to_string(&mut text))
+            .map_err(cannot)?;
+        if text.len() as u64 > MAX_SERIES_BYTES {
+            return Err(fail(too_big(text.len() as u64)));
+        }
         Self::parse_at(key, written, &text)
     }
 

@@ -82,6 +82,13 @@ pub const DRAG_RANGE: ValueRange = ValueRange {
     unit: "kg/m",
     why: "h·D·|p| enters the implicit half step",
 };
+/// Period T of a harmonic load \[s\]: 10⁻¹² to 10¹² s.
+pub const PERIOD_RANGE: ValueRange = ValueRange {
+    min: 1e-12,
+    max: 1e12,
+    unit: "s",
+    why: "2π·t/T is the harmonic's phase, and must stay finite",
+};
 /// Time step h \[s\]: 10⁻¹² to 10⁴ s.
 pub const STEP_RANGE: ValueRange = ValueRange {
     min: 1e-12,
@@ -322,6 +329,7 @@ fn check_point_load(i: usize, p: &PointLoad, n: usize) -> Result<(), SceneError>
         check_finite(&hkey("amplitude"), h.amplitude)?;
         check_range(&hkey("amplitude"), h.amplitude, &FORCE_RANGE)?;
         check_positive(&hkey("period"), h.period)?;
+        check_range(&hkey("period"), h.period, &PERIOD_RANGE)?;
         check_finite(&hkey("phase"), h.phase)?;
     }
     if let Some(series) = &p.series {

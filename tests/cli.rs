@@ -970,3 +970,38 @@ fn cli_simulates_spatial_scenes() {
     assert_success(&o);
     assert_eq!(numbers(&json(&o), "gradient").len(), 32);
 }
+
+/// A load's series file is an input too: the output may not overwrite it.
+#[test]
+fn output_onto_a_series_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    let series = dir.path().join("f.csv");
+    let csv = "t,fx,fz\n0,0,1\n1,0,2\n";
+    fs::write(&series, csv).unwrap();
+    fs::write(
+        &scene,
+        "[beam]\npendulums = 3\nlength = 1.0\nmass = 1.0\nstiffness = 100.0\n\
+         support = \"cantilever\"\n[[loads.point]]\nnode = 3\nseries = \"f.csv\"\n\
+         [time]\nstep = 0.01\nsteps = 10\n",
+    )
+    .unwrap();
+    let out = series.to_str().unwrap();
+    for sub in ["simulate", "gradient"] {
+        let o = run_on(sub, &scene, &["--output", out]);
+        assert_one_error(&o, &["f.csv", "refusing", "input"]);
+        assert_eq!(fs::read_to_string(&series).unwrap(), csv, "{sub}");
+    }
+    let o = run_on(
+        "simulate",
+        &scene,
+        &["--output", dir.path().join("r.csv").to_str().unwrap()],
+    );
+    assert_success(&o);
+    // no temporary file left beside the refused outputs
+    let names: Vec<_> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+}

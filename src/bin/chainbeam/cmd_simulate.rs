@@ -9,7 +9,7 @@ use chainbeam::{simulate, simulate_with_controls, ControlMap, Scene, SceneTrajec
 
 use crate::output::{push_f64, Output};
 use crate::progress::Progress;
-use crate::{controls_io, inputs, lib_error, load_scene, npy, CliError};
+use crate::{controls_io, inputs, lib_error, load_scene, npy, series_files, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `simulate --help`.
@@ -82,6 +82,7 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         ));
     }
     let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let controls = match &a.controls {
         Some(path) => Some(controls_u(&scene, &controls_io::read(path)?)?),
         None => None,

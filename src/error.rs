@@ -134,6 +134,78 @@ pub enum Error {
         /// The first key with an x component, e.g. `loads.point[0].force`.
         key: String,
     },
+    /// An input has the wrong number of values.
+    #[error("`{name}`: expected {expected} values, got {got}")]
+    WrongLength {
+        /// The input's name.
+        name: &'static str,
+        /// The number of values expected.
+        expected: usize,
+        /// The number given.
+        got: usize,
+    },
+    /// An input value is NaN or infinite.
+    #[error("`{name}`: entry {index} is not finite")]
+    NotFinite {
+        /// The input's name.
+        name: &'static str,
+        /// Zero-based index of the first non-finite entry.
+        index: usize,
+    },
+    /// A derivative was requested with respect to a parameter the model does not have.
+    #[error("{parameter:?} is not a parameter of this scene: {reason}")]
+    NoSuchParameter {
+        /// The parameter.
+        parameter: crate::model::Parameter,
+        /// Why (e.g. "the support has no base spring").
+        reason: &'static str,
+    },
+    /// The time step is not positive and finite.
+    #[error("the time step must be positive and finite, got h = {h}")]
+    InvalidStep {
+        /// The step given.
+        h: f64,
+    },
+    /// Optimisation parameters that cannot act on the objective (e.g. a control force at a node
+    /// the supports lock): moving them across their whole range changes J by round-off only, so
+    /// an optimiser would chase round-off to absurd values (see
+    /// `optimize::problem::ineffective_params`).
+    #[error(
+        "parameter(s) {params:?} have no effect on the objective J = {objective:.6e}: across the \
+         resolved range they change J by at most {relative_change:.1e} of itself (round-off); is \
+         the control at a node the supports lock (e.g. the tip of a fixed-fixed beam)?"
+    )]
+    NoEffect {
+        /// Indices of the parameters without effect.
+        params: Vec<usize>,
+        /// J at the start point.
+        objective: f64,
+        /// The largest first- plus second-order relative change of J they predict.
+        relative_change: f64,
+    },
+    /// A control force beyond what the time grid resolves (see
+    /// `optimize::problem::resolved_control_limit`: π m l / h², the force that turns the control
+    /// node's link half a turn per step).
+    #[error(
+        "control u_{index} = {value:.6e} N is outside the range the time step resolves, \
+         |u| <= {limit:.4e} N (pi m l / h^2 at the control node); use smaller forces or a \
+         smaller step"
+    )]
+    ControlOutOfRange {
+        /// Step index k of the force u_k.
+        index: usize,
+        /// The force.
+        value: f64,
+        /// The resolved limit.
+        limit: f64,
+    },
+    /// An objective, gradient or Hessian-vector product handed to the optimiser is NaN or
+    /// infinite.
+    #[error("the optimiser was handed a non-finite {quantity} (NaN or infinity)")]
+    NonFiniteObjective {
+        /// Which quantity: "objective", "gradient" or "Hessian-vector product".
+        quantity: &'static str,
+    },
     /// An argument passed to the API is inconsistent with the scene.
     #[error("invalid argument `{name}`: {reason}")]
     InvalidArgument {

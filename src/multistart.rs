@@ -1,12 +1,24 @@
 //! Deterministic parallel multistart, clustering of local minima, a second-order certificate,
 //! and objective landscapes along 1-D and 2-D slices (thesis §3.3.1, Fig. 3.7-3.13).
 //!
-//! # Determinism
+//! Everything here takes any [`OptimProblem`] (a [`ControlProblem`](crate::ControlProblem) or
+//! another differentiable objective); the certificate and the inert-parameter test need its
+//! Hessian-vector products ([`OptimProblem::hessian`]).
+//!
+//! # Determinism and the `parallel` feature
 //! Start points come from a SplitMix64 generator seeded from (seed, start index) (and, for the
 //! Latin hypercube's permutations, from (seed, dimension)), all drawn before any solver runs.
 //! Each start is then minimised by [`minimize`] on one thread from beginning to end, and the
 //! results are collected in start order, so a report is bit-for-bit the same for every thread
-//! count (except the wall-clock `seconds`).
+//! count (except the wall-clock `seconds`). With the `parallel` feature (default) the starts, the
+//! certificate's Hessian columns and the landscape points run on a rayon pool; without it they
+//! run one after the other in the same order, with bit-for-bit the same results, and `threads`
+//! is checked but otherwise ignored.
+//!
+//! # Parameters without effect
+//! A start whose parameters cannot act on J ([`ineffective_params`](crate::optimize::ineffective_params))
+//! fails with [`Error::NoEffect`] and is listed among the failures, never as a minimum; when every
+//! start fails that way, [`multistart`] returns the error itself.
 //!
 //! # Clustering
 //! Converged results only (a result stopped by the iteration limit or for lack of progress is not
@@ -34,11 +46,11 @@
 //! minimum (with the active bounds, under strict complementarity).
 
 use nalgebra::DMatrix;
+#[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
-use crate::optimize::{minimize, OptimOptions, OptimResult, ACTIVE_BOUND_TOL};
+use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult, ACTIVE_BOUND_TOL};
 
 /// Largest number of parameters for which a certificate is computed (n HVPs and a dense n × n
 /// eigenproblem).
@@ -136,12 +148,17 @@ impl ClusterTolerances {
 /// starts that differ only there reach the same minimum, and [`cluster`] must not count them as
 /// distinct. (Exact zeros, not small values: a weak but real influence is not inert.)
 ///
+/// Without Hessian-vector products ([`OptimProblem::hessian`]) no component is reported.
+///
 /// # Errors
 /// The simulation's or HVP's error.
-pub fn inert_components<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+pub fn inert_components<Q: OptimProblem + ?Sized>(
+    problem: &Q,
     theta: &[f64],
 ) -> Result<Vec<usize>> {
+    let Some(hvp) = problem.hessian() else {
+        return Ok(Vec::new());
+    };
     let g = problem.gradient(theta)?;
     let mut inert = Vec::new();
     for (i, gi) in g.iter().enumerate() {
@@ -150,11 +167,7 @@ pub fn inert_components<P: ControlMap, O: Objective>(
         }
         let mut e = vec![0.0; theta.len()];
         e[i] = 1.0;
-        if problem
-            .hessian_vec(theta, &e)?
-            .iter()
-            .all(|h| h.abs() == 0.0)
-        {
+        if hvp.hessian_vec(theta, &e)?.iter().all(|h| h.abs() == 0.0) {
             inert.push(i);
         }
     }
@@ -221,7 +234,9 @@ pub struct MultistartReport {
     pub start_points: Vec<Vec<f64>>,
     /// The starts that failed.
     pub failures: Vec<StartFailure>,
-    /// Given when at least one start converged and all converged starts reached one minimum.
+    /// Given when at least one start converged, all converged starts reached one minimum, and
+    /// the problem has Hessian-vector products and at most [`MAX_CERTIFICATE_PARAMS`]
+    /// parameters.
     pub certificate: Option<Certificate>,
     /// Wall-clock time in seconds.
     pub seconds: f64,
@@ -360,26 +375,70 @@ pub fn start_points(
 // Multistart
 // ---------------------------------------------------------------------------------------------
 
-fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::InvalidArgument {
+/// The largest thread count [`multistart`] accepts: far above any machine's cores, far below
+/// the count whose thread creation alone takes minutes (10⁵).
+pub const MAX_THREADS: usize = 1024;
+
+/// Runs `f` for 0..n, in order of index in the result: on a rayon pool of `threads` threads (0:
+/// rayon's default) with the `parallel` feature, one after the other without it.
+fn map_indexed<T, F>(threads: usize, n: usize, f: F) -> Result<Vec<T>>
+where
+    T: Send,
+    F: Fn(usize) -> T + Sync + Send,
+{
+    if threads > MAX_THREADS {
+        return Err(Error::InvalidArgument {
             name: "threads",
-            reason: e.to_string(),
-        })
+            reason: format!("at most {MAX_THREADS} threads, got {threads}"),
+        });
+    }
+    #[cfg(feature = "parallel")]
+    {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| Error::InvalidArgument {
+                name: "threads",
+                reason: e.to_string(),
+            })?;
+        Ok(pool.install(|| (0..n).into_par_iter().map(f).collect()))
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        Ok((0..n).map(f).collect())
+    }
+}
+
+/// `f` over `items` in order: on rayon's current pool with the `parallel` feature, one after the
+/// other without it.
+fn map_items<I, T, F>(items: &[I], f: F) -> Vec<T>
+where
+    I: Sync,
+    T: Send,
+    F: Fn(&I) -> T + Sync + Send,
+{
+    #[cfg(feature = "parallel")]
+    {
+        items.par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.iter().map(f).collect()
+    }
 }
 
 /// Minimises `problem` from `starts` points of `design` on a pool of `threads` threads (0:
-/// rayon's default, the number of cores), clusters the converged results into local minima and,
-/// when they all reached one, certifies it ([`certify`]). Deterministic: see the module docs.
+/// rayon's default, the number of cores; at most [`MAX_THREADS`]), clusters the converged
+/// results into local minima and, when they all reached one, certifies it ([`certify`]).
+/// Deterministic: see the module docs.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for an invalid design, options, `starts = 0`, or a thread pool that
-/// cannot be built; the certificate's HVP error. A failing start does not fail the run: it is
-/// listed in [`MultistartReport::failures`].
-pub fn multistart<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+/// [`Error::InvalidArgument`] for an invalid design, options, `starts = 0`, more than
+/// [`MAX_THREADS`] threads, or a thread pool that cannot be built; [`Error::NoEffect`] when every
+/// start failed with it; the certificate's HVP error. Any other failing start does not fail the
+/// run: it is listed in [`MultistartReport::failures`].
+pub fn multistart<Q: OptimProblem + Sync + ?Sized>(
+    problem: &Q,
     design: &StartDesign,
     starts: usize,
     seed: u64,
@@ -400,13 +459,9 @@ pub fn multistart<P: ControlMap, O: Objective>(
             *x = x.clamp(-b, b);
         }
     }
-    let pool = pool(threads)?;
-    let outcomes: Vec<Result<OptimResult>> = pool.install(|| {
-        points
-            .par_iter()
-            .map(|theta0| minimize(problem, theta0, opts))
-            .collect()
-    });
+    let outcomes: Vec<Result<OptimResult>> = map_indexed(threads, points.len(), |i| {
+        minimize(problem, &points[i], opts)
+    })?;
     let mut results = Vec::new();
     let mut result_starts = Vec::new();
     let mut failures = Vec::new();
@@ -419,8 +474,17 @@ pub fn multistart<P: ControlMap, O: Objective>(
             Err(error) => failures.push(StartFailure { start, error }),
         }
     }
+    if results.is_empty()
+        && failures
+            .iter()
+            .all(|f| matches!(f.error, Error::NoEffect { .. }))
+    {
+        if let Some(f) = failures.first() {
+            return Err(f.error.clone());
+        }
+    }
     let inert = match results.iter().find(|r| r.converged) {
-        Some(r) => pool.install(|| inert_components(problem, &r.theta))?,
+        Some(r) => inert_components(problem, &r.theta)?,
         None => Vec::new(),
     };
     let minima = cluster(
@@ -430,8 +494,10 @@ pub fn multistart<P: ControlMap, O: Objective>(
         &inert,
     );
     let certificate = match minima.as_slice() {
-        [m] if problem.n_params() <= MAX_CERTIFICATE_PARAMS => {
-            Some(pool.install(|| certify(problem, &m.theta, opts.bound))?)
+        [m] if problem.n_params() <= MAX_CERTIFICATE_PARAMS && problem.hessian().is_some() => {
+            let m = &m.theta;
+            let mut c = map_indexed(threads, 1, |_| certify(problem, m, opts.bound))?;
+            Some(c.pop().expect("one certificate")?)
         }
         _ => None,
     };
@@ -490,18 +556,24 @@ pub fn cluster(
     minima
 }
 
-/// The second-order certificate at θ (module docs): n HVPs (run on the current rayon pool),
-/// symmetrised, restricted to the components not on the force bound.
+/// The second-order certificate at θ (module docs): n HVPs (on the current rayon pool with the
+/// `parallel` feature), symmetrised, restricted to the components not on the force bound.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] if n exceeds [`MAX_CERTIFICATE_PARAMS`] or θ is invalid; the
-/// simulation's or HVP's error.
-pub fn certify<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+/// [`Error::InvalidArgument`] if n exceeds [`MAX_CERTIFICATE_PARAMS`], θ is invalid, or the
+/// problem has no Hessian-vector products; the simulation's or HVP's error.
+pub fn certify<Q: OptimProblem + Sync + ?Sized>(
+    problem: &Q,
     theta: &[f64],
     bound: Option<f64>,
 ) -> Result<Certificate> {
     let n = problem.n_params();
+    if problem.hessian().is_none() {
+        return Err(Error::InvalidArgument {
+            name: "problem",
+            reason: "a certificate needs Hessian-vector products (OptimProblem::hessian)".into(),
+        });
+    }
     if n > MAX_CERTIFICATE_PARAMS {
         return Err(Error::InvalidArgument {
             name: "theta",
@@ -512,18 +584,20 @@ pub fn certify<P: ControlMap, O: Objective>(
         });
     }
     let objective = problem.value(theta)?;
-    let columns: Vec<Vec<f64>> = (0..n)
-        .into_par_iter()
-        .map(|j| {
-            let mut e = vec![0.0; n];
-            e[j] = 1.0;
-            problem.hessian_vec(theta, &e)
-        })
-        .collect::<Result<_>>()?;
+    let indices: Vec<usize> = (0..n).collect();
+    let columns: Vec<Vec<f64>> = map_items(&indices, |&j| {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        match problem.hessian() {
+            Some(h) => h.hessian_vec(theta, &e),
+            None => Err(crate::optimize::adapter::no_hessian()),
+        }
+    })
+    .into_iter()
+    .collect::<Result<_>>()?;
     if columns.iter().flatten().any(|x| !x.is_finite()) {
-        return Err(Error::NonFinite {
-            step: problem.steps(),
-            quantity: "the Hessian",
+        return Err(Error::NonFiniteObjective {
+            quantity: "Hessian-vector product",
         });
     }
     let h = DMatrix::from_fn(n, n, |i, j| columns[j][i]);
@@ -599,14 +673,14 @@ fn check_dir(n: usize, d: &[f64], name: &'static str) -> Result<()> {
 }
 
 /// J(center + t·direction) at `points` equally spaced t in `range` (ends included), as (t, J)
-/// pairs in order; evaluated in parallel on rayon's current pool. With `direction = axis(n, i)`
+/// pairs in order; evaluated in parallel on rayon's current pool (with the `parallel` feature). With `direction = axis(n, i)`
 /// this is the landscape along parameter i (Fig. 3.7, 3.10: J against a constant u).
 ///
 /// # Errors
 /// [`Error::InvalidArgument`] for mismatched lengths, a non-finite range or no points; the first
 /// simulation error along the slice.
-pub fn landscape_1d<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+pub fn landscape_1d<Q: OptimProblem + Sync + ?Sized>(
+    problem: &Q,
     center: &[f64],
     direction: &[f64],
     range: (f64, f64),
@@ -616,25 +690,26 @@ pub fn landscape_1d<P: ControlMap, O: Objective>(
     check_dir(n, center, "center")?;
     check_dir(n, direction, "direction")?;
     let ts = grid(range, points, "range")?;
-    ts.par_iter()
-        .map(|&t| {
-            let th: Vec<f64> = center
-                .iter()
-                .zip(direction)
-                .map(|(c, d)| c + t * d)
-                .collect();
-            problem.value(&th).map(|j| (t, j))
-        })
-        .collect()
+    map_items(&ts, |&t| {
+        let th: Vec<f64> = center
+            .iter()
+            .zip(direction)
+            .map(|(c, d)| c + t * d)
+            .collect();
+        problem.value(&th).map(|j| (t, j))
+    })
+    .into_iter()
+    .collect()
 }
 
 /// J(center + s·d₁ + t·d₂) on a `points[0]` × `points[1]` grid over `ranges`, as [s, t, J] rows
-/// with t varying fastest; evaluated in parallel on rayon's current pool.
+/// with t varying fastest; evaluated in parallel on rayon's current pool (with the `parallel`
+/// feature).
 ///
 /// # Errors
 /// As [`landscape_1d`].
-pub fn landscape_2d<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+pub fn landscape_2d<Q: OptimProblem + Sync + ?Sized>(
+    problem: &Q,
     center: &[f64],
     directions: [&[f64]; 2],
     ranges: [(f64, f64); 2],
@@ -650,13 +725,12 @@ pub fn landscape_2d<P: ControlMap, O: Objective>(
         .iter()
         .flat_map(|&s| ts.iter().map(move |&t| (s, t)))
         .collect();
-    pairs
-        .par_iter()
-        .map(|&(s, t)| {
-            let th: Vec<f64> = (0..n)
-                .map(|i| center[i] + s * directions[0][i] + t * directions[1][i])
-                .collect();
-            problem.value(&th).map(|j| [s, t, j])
-        })
-        .collect()
+    map_items(&pairs, |&(s, t)| {
+        let th: Vec<f64> = (0..n)
+            .map(|i| center[i] + s * directions[0][i] + t * directions[1][i])
+            .collect();
+        problem.value(&th).map(|j| [s, t, j])
+    })
+    .into_iter()
+    .collect()
 }

@@ -306,7 +306,8 @@ fn simulate_with_controls_at(
 /// trajectory) and the dimension.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for controls of the wrong length or not finite;
+/// [`Error::WrongLength`] or [`Error::NotFinite`] for controls of the wrong length or not
+/// finite;
 /// [`Error::TrajectoryTooLarge`] when the trajectory exceeds [`MAX_TRAJECTORY_BYTES`] or the
 /// allocator refuses it; the step's errors ([`Rattle::step`]).
 pub fn simulate_chain<D: Scalar, const DIM: usize>(
@@ -315,22 +316,7 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     steps: usize,
     controls: &[D],
 ) -> Result<Trajectory<D, DIM>> {
-    if controls.len() != steps + 1 {
-        return Err(Error::InvalidArgument {
-            name: "controls",
-            reason: format!(
-                "expected N + 1 = {} values, got {}",
-                steps + 1,
-                controls.len()
-            ),
-        });
-    }
-    if let Some(i) = controls.iter().position(|u| !u.re().is_finite()) {
-        return Err(Error::InvalidArgument {
-            name: "controls",
-            reason: format!("u_{i} is not finite"),
-        });
-    }
+    crate::adjoint::check_controls(controls, steps)?;
     let n = chain.n();
     let nc = chain.n_constraints();
     // The size check and the fallible allocation come before anything of size N is allocated.

@@ -334,15 +334,25 @@ fn bad_arguments_are_errors() {
     .unwrap();
     assert!(matches!(
         prob.gradient(&[1.0, 2.0]),
-        Err(Error::InvalidArgument { .. })
+        Err(Error::WrongLength {
+            name: "theta",
+            expected: 1,
+            got: 2
+        })
     ));
     assert!(matches!(
         prob.gradient(&[f64::NAN]),
-        Err(Error::InvalidArgument { .. })
+        Err(Error::NotFinite {
+            name: "theta",
+            index: 0
+        })
     ));
     assert!(matches!(
         prob.parameter_gradient(&[0.0], &[Parameter::Drag]),
-        Err(Error::InvalidArgument { .. })
+        Err(Error::NoSuchParameter {
+            parameter: Parameter::Drag,
+            ..
+        })
     ));
     let ch = prob.chain().clone();
     let r = adjoint_gradient(
@@ -354,5 +364,12 @@ fn bad_arguments_are_errors() {
         &[],
         Checkpointing::Auto,
     );
-    assert!(matches!(r, Err(Error::InvalidArgument { .. })));
+    assert!(matches!(
+        r,
+        Err(Error::WrongLength {
+            name: "controls",
+            expected: 11,
+            got: 3
+        })
+    ));
 }

@@ -91,11 +91,16 @@ fn energy_bounded_and_constraints_hold_over_1e5_steps() {
     }
     println!("max | |q_i| - 1 | = {worst_len:e}, max |G M^-1 p| = {worst_vel:e}");
     assert!(worst_len <= 1e-12 && worst_vel <= 1e-12);
+    // Work per step (measured: 1.004 Newton iterations per step, every step 1 or 2): the
+    // predictor μ_{k−1} leaves one update per step; allow 1% of the steps a second one (the
+    // measured 0.4% plus round-off flips at the tolerance). Without the predictor every step
+    // takes about 4 (tests/verification.rs).
     let iters = traj.newton_iterations() as f64 / traj.steps() as f64;
-    println!("mean Newton iterations per step: {iters:.3}");
+    let most = traj.stats.iter().map(|s| s.iterations).max().unwrap();
+    println!("mean Newton iterations per step: {iters:.4}, at most {most}");
     assert!(
-        iters <= 2.0,
-        "predictor too weak: {iters} iterations per step"
+        iters <= 1.01 && most <= 2,
+        "predictor too weak: {iters} iterations per step, up to {most}"
     );
 }
 
@@ -319,8 +324,8 @@ fn dissipative_beams_settle_at_static_equilibrium() {
 /// beam as n grows at fixed length L = 10, with k = EI/l, base spring 2k and m = μ l? Static
 /// cantilever under a small tip load (F = 0.002, so that geometric nonlinearity, of relative size
 /// (FL²/EI)² ≈ 1e-8, does not mask the discretisation error): the tip deflection approaches
-/// eq. 2.4.5 as n grows, with the fitted rate printed (expected 2); likewise pinned-pinned and
-/// fixed-fixed centre deflections (eq. 2.4.7, 2.4.6).
+/// eq. 2.4.5 as n grows with rate 2 (asserted to ±0.05); likewise pinned-pinned and fixed-fixed
+/// centre deflections (eq. 2.4.7, 2.4.6).
 #[test]
 fn static_chain_converges_to_euler_bernoulli() {
     let ns = [10usize, 20, 40, 80];
@@ -335,9 +340,10 @@ fn static_chain_converges_to_euler_bernoulli() {
     }
     let hs: Vec<f64> = ns.iter().map(|&n| 10.0 / n as f64).collect();
     let rate = loglog_slope(&hs, &devs);
-    println!("cantilever tip relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.2}");
+    println!("cantilever tip relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.4}");
     assert!(devs.windows(2).all(|w| w[1] < w[0]));
-    assert!(rate > 1.5);
+    // Measured 2.00 (the deviation is 0.5/n² to 4 digits); the expected rate is 2.
+    assert!((rate - 2.0).abs() <= 0.05, "rate {rate}");
 
     // Pinned-pinned (no end springs) and fixed-fixed (end springs 2k) with the load at the centre
     // node, same scaling; closed forms 2.4.7 and 2.4.6 at y = L/2.
@@ -363,9 +369,11 @@ fn static_chain_converges_to_euler_bernoulli() {
         }
         let rate = loglog_slope(&hs, &devs);
         println!(
-            "{support:?} centre relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.2}"
+            "{support:?} centre relative deviation for n = {ns:?}: {devs:?}, fitted rate {rate:.4}"
         );
         assert!(devs.windows(2).all(|w| w[1] < w[0]));
+        // Measured 2.00 for both (2/n² and 8/n² to 4 digits).
+        assert!((rate - 2.0).abs() <= 0.05, "{support:?}: rate {rate}");
     }
 }
 

@@ -6,286 +6,30 @@
 //! cargo run --release --example tables                 # all four tables, side by side
 //! cargo run --release --example tables -- --table 3.2  # one table
 //! cargo run --release --example tables -- --json       # machine-readable (SPEC §5)
+//! cargo run --release --example tables -- --help
 //! ```
 //!
-//! How each table is solved (single shooting, exact adjoint gradients):
-//! - 3.1 (constant u, c = M₀(T)²): the root of M₀(T; u) = 0 by Newton's method, dM₀/du from the
-//!   adjoint. c is convex in u with a single root (SPEC §4), so this is the exact minimiser.
-//! - 3.2 (constant u, c_sum): L-BFGS (argmin) to ‖g‖ ≈ 0: the true minimum of a flat valley.
-//! - 3.3 (per-step u, c): Gauss-Newton on the residual M₀(T; u) from u = 0 (minimum-norm steps):
-//!   the zeros of c form a manifold of dimension N; we reach the nearest one, at round-off level.
-//! - 3.4 (per-step u, c_sum): L-BFGS with the force bounded by the largest |u_k| the thesis itself
-//!   used in that column (a fair comparison), and the unbounded local optimum from u = 0 with the
-//!   largest joint angle, flagged when the chain folds (joint angle > 45°: far outside any beam
-//!   model).
+//! How each table is solved and what each row is checked against: see `compute.rs` (shared
+//! with `tests/tables.rs`, which asserts every row).
 
+mod compute;
 mod thesis;
 
-use chainbeam::adjoint::FinalMomentResidual as FinalMoment;
-use chainbeam::optimize::{minimize, Method, OptimOptions};
-use chainbeam::{
-    catalogue, simulate_with_controls, BendingObjective, Chain, ControlProblem, Parametrisation,
-    PerStepControl, Result, Scene,
-};
+use compute::{Row, NAMES};
 use std::time::Instant;
 
-/// One row of a table.
-struct Row {
-    node: usize,
-    controls: Vec<f64>,
-    objective: f64,
-    thesis_controls: Vec<f64>,
-    thesis_objective: f64,
-    gradient_norm: f64,
-    seconds: f64,
-    iterations: usize,
-    bound: Option<f64>,
-    max_joint_angle_deg: Option<f64>,
-    note: String,
-    /// 3.4 only: the unbounded local optimum from u = 0.
-    unbounded: Option<Box<Row>>,
-}
+const USAGE: &str = "\
+Regenerates Tables 3.1-3.4 of Nøst (2023) on the thesis's riser scene and prints them beside
+the thesis's values.
 
-fn norm(g: &[f64]) -> f64 {
-    g.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
+usage: tables [--table 3.1|3.2|3.3|3.4] [--json]
 
-/// Largest joint angle (degrees) over the trajectory driven by per-step controls `u`.
-fn max_joint_angle_deg(scene: &Scene, u: &[f64]) -> Result<f64> {
-    let traj = simulate_with_controls(scene, u)?.into_planar()?;
-    let chain = Chain::<f64, 2>::from_scene(scene)?;
-    Ok((0..=traj.steps())
-        .map(|k| chain.max_joint_angle(traj.q(k)))
-        .fold(0.0, f64::max)
-        .to_degrees())
-}
-
-/// Newton (one parameter) or Gauss-Newton with minimum-norm steps (several) on r(θ) = M₀(t_N).
-fn solve_residual(scene: &Scene, map: Parametrisation) -> Result<(Vec<f64>, usize)> {
-    let residual = ControlProblem::new(scene, map, FinalMoment)?;
-    let mut theta = vec![0.0; residual.n_params()];
-    let mut best: Option<(f64, Vec<f64>)> = None;
-    let mut iters = 0;
-    while iters < 50 {
-        let (r, g) = residual.value_and_gradient(&theta)?;
-        // Stop when a step no longer reduces |r| (the round-off floor): keep the best point.
-        if let Some((rb, tb)) = &best {
-            if r.abs() >= *rb {
-                theta.clone_from(tb);
-                break;
-            }
-        }
-        best = Some((r.abs(), theta.clone()));
-        let gg: f64 = g.iter().map(|x| x * x).sum();
-        if r == 0.0 || gg == 0.0 {
-            break;
-        }
-        let step = r / gg;
-        for (t, gi) in theta.iter_mut().zip(&g) {
-            *t -= step * gi;
-        }
-        iters += 1;
-    }
-    Ok((theta, iters))
-}
-
-fn table_3_1() -> Result<Vec<Row>> {
-    (1..=10)
-        .map(|node| {
-            let scene = catalogue::riser(node);
-            let t0 = Instant::now();
-            let (theta, iterations) = solve_residual(&scene, Parametrisation::Constant)?;
-            let seconds = t0.elapsed().as_secs_f64();
-            let c = ControlProblem::new(
-                &scene,
-                Parametrisation::Constant,
-                BendingObjective::final_moment(),
-            )?;
-            let (objective, g) = c.value_and_gradient(&theta)?;
-            let (tu, tc) = thesis::TABLE_3_1[node - 1];
-            let rel = (theta[0] - tu).abs() / tu.abs();
-            Ok(Row {
-                node,
-                controls: theta,
-                objective,
-                thesis_controls: vec![tu],
-                thesis_objective: tc,
-                gradient_norm: norm(&g),
-                seconds,
-                iterations,
-                bound: None,
-                max_joint_angle_deg: None,
-                note: format!("u agrees to {:.1} digits", -rel.log10()),
-                unbounded: None,
-            })
-        })
-        .collect()
-}
-
-fn lbfgs_options(bound: Option<f64>) -> OptimOptions {
-    OptimOptions {
-        method: Method::Lbfgs,
-        bound,
-        max_iters: 2000,
-        ..OptimOptions::default()
-    }
-}
-
-fn table_3_2() -> Result<Vec<Row>> {
-    (1..=10)
-        .map(|node| {
-            let scene = catalogue::riser(node);
-            let p = ControlProblem::new(&scene, Parametrisation::Constant, BendingObjective::summed_moment())?;
-            let (tu, tc) = thesis::TABLE_3_2[node - 1];
-            let t0 = Instant::now();
-            let r = minimize(&p, &[0.0], &lbfgs_options(None))?;
-            let seconds = t0.elapsed().as_secs_f64();
-            let at_thesis = p.value(&[tu])?;
-            let note = match node {
-                9 => format!("thesis prints 5.5586e-5 (exponent misprint, SPEC §4): its u gives {at_thesis:.4e}"),
-                4 => format!("thesis's 1.1853 is below the exact minimum (misprint, SPEC §4); its u gives {at_thesis:.5}"),
-                _ => format!(
-                    "{} thesis; thesis u gives {at_thesis:.5e} (flat valley: compare objectives)",
-                    if r.objective <= tc * (1.0 + 5e-5) { "<=" } else { "ABOVE" }
-                ),
-            };
-            Ok(Row {
-                node,
-                controls: r.theta.clone(),
-                objective: r.objective,
-                thesis_controls: vec![tu],
-                thesis_objective: tc,
-                gradient_norm: r.gradient_norm,
-                seconds,
-                iterations: r.iterations,
-                bound: None,
-                max_joint_angle_deg: None,
-                note,
-                unbounded: None,
-            })
-        })
-        .collect()
-}
-
-fn per_step(scene: &Scene) -> Parametrisation {
-    Parametrisation::PerStep(PerStepControl {
-        steps: scene.time.steps,
-    })
-}
-
-fn table_3_3() -> Result<Vec<Row>> {
-    (1..=10)
-        .map(|node| {
-            let scene = catalogue::riser(node);
-            let map = per_step(&scene);
-            let t0 = Instant::now();
-            let (theta, iterations) = solve_residual(&scene, map)?;
-            let seconds = t0.elapsed().as_secs_f64();
-            let c = ControlProblem::new(&scene, map, BendingObjective::final_moment())?;
-            let (objective, g) = c.value_and_gradient(&theta)?;
-            let (tu, tc) = thesis::TABLE_3_3[node - 1];
-            let (replay, replay_g) = c.value_and_gradient(&tu)?;
-            Ok(Row {
-                node,
-                controls: theta.clone(),
-                objective,
-                thesis_controls: tu.to_vec(),
-                thesis_objective: tc,
-                gradient_norm: norm(&g),
-                seconds,
-                iterations,
-                bound: None,
-                max_joint_angle_deg: Some(max_joint_angle_deg(&scene, &theta)?),
-                note: format!(
-                    "replaying the thesis's controls gives c = {replay:.4e}, ‖g‖ = {:.1e}",
-                    norm(&replay_g)
-                ),
-                unbounded: None,
-            })
-        })
-        .collect()
-}
-
-fn table_3_4() -> Result<Vec<Row>> {
-    (1..=10)
-        .map(|node| {
-            let scene = catalogue::riser(node);
-            let map = per_step(&scene);
-            let p = ControlProblem::new(&scene, map, BendingObjective::summed_moment())?;
-            let (tu, tc) = thesis::TABLE_3_4[node - 1];
-            let bound = tu.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-            let t0 = Instant::now();
-            // From u = 0 and from the thesis's own (feasible) controls; keep the better.
-            let a = minimize(&p, &[0.0; 11], &lbfgs_options(Some(bound)))?;
-            let b = minimize(&p, &tu, &lbfgs_options(Some(bound)))?;
-            let best = if a.objective <= b.objective { a } else { b };
-            let seconds = t0.elapsed().as_secs_f64();
-            let t1 = Instant::now();
-            let unbounded = match minimize(&p, &[0.0; 11], &lbfgs_options(None)) {
-                Ok(r) => {
-                    let angle = max_joint_angle_deg(&scene, &r.controls)?;
-                    Some(Box::new(Row {
-                        node,
-                        controls: r.controls.clone(),
-                        objective: r.objective,
-                        thesis_controls: tu.to_vec(),
-                        thesis_objective: tc,
-                        gradient_norm: r.gradient_norm,
-                        seconds: t1.elapsed().as_secs_f64(),
-                        iterations: r.iterations,
-                        bound: None,
-                        max_joint_angle_deg: Some(angle),
-                        note: if angle > 45.0 {
-                            format!(
-                                "FOLDED: joint angle {angle:.0}° (> 45°), outside any beam model"
-                            )
-                        } else {
-                            String::new()
-                        },
-                        unbounded: None,
-                    }))
-                }
-                Err(e) => Some(Box::new(Row {
-                    node,
-                    controls: vec![],
-                    objective: f64::INFINITY,
-                    thesis_controls: tu.to_vec(),
-                    thesis_objective: tc,
-                    gradient_norm: f64::INFINITY,
-                    seconds: t1.elapsed().as_secs_f64(),
-                    iterations: 0,
-                    bound: None,
-                    max_joint_angle_deg: None,
-                    note: format!("unbounded run stopped: {e}"),
-                    unbounded: None,
-                })),
-            };
-            let replay = p.value(&tu)?;
-            Ok(Row {
-                node,
-                controls: best.controls.clone(),
-                objective: best.objective,
-                thesis_controls: tu.to_vec(),
-                thesis_objective: tc,
-                gradient_norm: best.projected_gradient_norm,
-                seconds,
-                iterations: best.iterations,
-                bound: Some(bound),
-                max_joint_angle_deg: Some(max_joint_angle_deg(&scene, &best.controls)?),
-                note: format!(
-                    "{} thesis by a factor {:.3e}; thesis controls replayed: c_sum = {replay:.5e}",
-                    if best.objective <= tc {
-                        "below"
-                    } else {
-                        "ABOVE"
-                    },
-                    tc / best.objective
-                ),
-                unbounded,
-            })
-        })
-        .collect()
-}
+options:
+  --table T   only table T (3.1, 3.2, 3.3 or 3.4)
+  --json      machine-readable output on stdout:
+              {\"tables\": [{\"table\": \"3.1\", \"rows\": [{\"node\": 1, \"controls\": [...], ...}]}]}
+  -h, --help  this help
+";
 
 fn print_table(name: &str, rows: &[Row]) {
     println!("\nTable {name}");
@@ -388,10 +132,18 @@ fn json_row(r: &Row, extra: bool) -> String {
     );
     if extra {
         s += &format!(
-            ", \"bound\": {}, \"max_joint_angle_deg\": {}",
+            ", \"bound\": {}, \"max_joint_angle_deg\": {}, \"folded\": {}",
             r.bound.map_or("null".into(), json_num),
-            r.max_joint_angle_deg.map_or("null".into(), json_num)
+            r.max_joint_angle_deg.map_or("null".into(), json_num),
+            r.folded()
         );
+        if let (Some(start), Some(objs)) = (r.start, r.start_objectives) {
+            s += &format!(
+                ", \"start\": \"{}\", \"start_objectives\": {}",
+                start.label(),
+                json_vec(&objs)
+            );
+        }
         if let Some(u) = &r.unbounded {
             s += &format!(", \"unbounded\": {}", json_row(u, true));
         }
@@ -399,46 +151,53 @@ fn json_row(r: &Row, extra: bool) -> String {
     s + "}"
 }
 
-fn run() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let json = args.iter().any(|a| a == "--json");
-    let only = args
-        .iter()
-        .position(|a| a == "--table")
-        .and_then(|i| args.get(i + 1))
-        .cloned();
-    if let Some(a) = args
-        .iter()
-        .find(|a| a.starts_with("--") && *a != "--json" && *a != "--table")
-    {
-        eprintln!("unknown option {a}; usage: tables [--table 3.1|3.2|3.3|3.4] [--json]");
-        std::process::exit(2);
-    }
-    let names = ["3.1", "3.2", "3.3", "3.4"];
-    if let Some(o) = &only {
-        if !names.contains(&o.as_str()) {
-            eprintln!("unknown table {o}: expected one of 3.1, 3.2, 3.3, 3.4");
-            std::process::exit(2);
+/// The command line: `--table T`, `--json`, `--help`.
+struct Args {
+    json: bool,
+    only: Option<String>,
+}
+
+fn parse_args() -> std::result::Result<Option<Args>, String> {
+    let mut args = Args {
+        json: false,
+        only: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "-h" | "--help" => return Ok(None),
+            "--json" => args.json = true,
+            "--table" => {
+                let t = it
+                    .next()
+                    .ok_or("--table needs a value: 3.1, 3.2, 3.3 or 3.4")?;
+                if !NAMES.contains(&t.as_str()) {
+                    return Err(format!(
+                        "unknown table {t}: expected one of 3.1, 3.2, 3.3, 3.4"
+                    ));
+                }
+                args.only = Some(t);
+            }
+            _ => return Err(format!("unknown argument {a}")),
         }
     }
+    Ok(Some(args))
+}
+
+fn run(args: &Args) -> chainbeam::Result<()> {
     let mut out = Vec::new();
     let t0 = Instant::now();
-    for name in names {
-        if only.as_deref().is_some_and(|o| o != name) {
+    for name in NAMES {
+        if args.only.as_deref().is_some_and(|o| o != name) {
             continue;
         }
-        let rows = match name {
-            "3.1" => table_3_1()?,
-            "3.2" => table_3_2()?,
-            "3.3" => table_3_3()?,
-            _ => table_3_4()?,
-        };
-        if !json {
+        let rows = compute::table(name)?;
+        if !args.json {
             print_table(name, &rows);
         }
         out.push((name, rows));
     }
-    if json {
+    if args.json {
         let tables: Vec<String> = out
             .iter()
             .map(|(name, rows)| {
@@ -458,7 +217,18 @@ fn run() -> Result<()> {
 }
 
 fn main() {
-    if let Err(e) = run() {
+    let args = match parse_args() {
+        Ok(Some(a)) => a,
+        Ok(None) => {
+            print!("{USAGE}");
+            return;
+        }
+        Err(e) => {
+            eprintln!("error: {e}\nusage: tables [--table 3.1|3.2|3.3|3.4] [--json] (see --help)");
+            std::process::exit(2);
+        }
+    };
+    if let Err(e) = run(&args) {
         eprintln!("error: {e}");
         std::process::exit(1);
     }

@@ -2,13 +2,17 @@
 //! k = 1.16e3 Nm/rad and m = 2.4 kg by trial and error to match its Euler-Bernoulli beam (Fig.
 //! 2.10). Here the chain's parameters are fitted to the (correct free end) finite-difference
 //! Euler-Bernoulli trajectory by least squares on the node displacements over time, with the
-//! discrete adjoint's parameter gradients (`chainbeam::adjoint::adjoint_gradient`) and a small
-//! L-BFGS in log-parameters.
+//! discrete adjoint's parameter gradients (`chainbeam::adjoint::adjoint_gradient`), posed as a
+//! `chainbeam::optimize::OptimProblem` in log-parameters and minimised by the library's L-BFGS
+//! (`Minimizer`, with a `History` observer for the iterates).
 
 use crate::plot::{color, Dash, Figure, Heat, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
 use chainbeam::adjoint::{adjoint_gradient, forward_value, Objective, Stage};
 use chainbeam::euler_bernoulli::{EbSupport, EulerBernoulli};
+use chainbeam::optimize::{
+    History, Minimizer, ObserverMode, OptimOptions, OptimProblem, Termination,
+};
 use chainbeam::{catalogue, Chain, Checkpointing, Parameter, Scalar, Scene};
 use plotters::style::RGBColor;
 use std::time::Instant;
@@ -112,7 +116,7 @@ impl Calib {
         })
     }
 
-    fn chain(&self, k: f64, k1: f64, m: f64) -> Res<Chain<f64, 2>> {
+    fn chain(&self, k: f64, k1: f64, m: f64) -> chainbeam::Result<Chain<f64, 2>> {
         let mut ch = Chain::<f64, 2>::from_scene(&self.scene)?;
         ch.set_parameter(Parameter::InteriorStiffness, k)?;
         ch.set_parameter(Parameter::BaseStiffness, k1)?;
@@ -121,7 +125,7 @@ impl Calib {
     }
 
     /// J and (∂J/∂k, ∂J/∂k₁, ∂J/∂m) by one adjoint sweep.
-    fn eval(&self, k: f64, k1: f64, m: f64) -> Res<(f64, [f64; 3])> {
+    fn eval(&self, k: f64, k1: f64, m: f64) -> chainbeam::Result<(f64, [f64; 3])> {
         let ch = self.chain(k, k1, m)?;
         let steps = self.scene.time.steps;
         let r = adjoint_gradient(
@@ -142,20 +146,20 @@ impl Calib {
     }
 
     /// J alone (one forward simulation, no adjoint).
-    fn value(&self, k: f64, k1: f64, m: f64) -> Res<f64> {
+    fn value(&self, k: f64, k1: f64, m: f64) -> chainbeam::Result<f64> {
         let ch = self.chain(k, k1, m)?;
         let steps = self.scene.time.steps;
-        Ok(forward_value(
+        forward_value(
             &ch,
             self.scene.time.step,
             steps,
             &vec![0.0; steps + 1],
             &self.objective,
-        )?)
+        )
     }
 
     /// J and its gradient in the log-parameters of `fit`.
-    fn eval_log(&self, fit: Fit, x: &[f64]) -> Res<(f64, Vec<f64>)> {
+    fn eval_log(&self, fit: Fit, x: &[f64]) -> chainbeam::Result<(f64, Vec<f64>)> {
         let (k, k1, m) = fit.params(x);
         let (j, g) = self.eval(k, k1, m)?;
         Ok((
@@ -208,6 +212,27 @@ impl Calib {
     }
 }
 
+/// The calibration as an optimisation problem: J of the log-parameters x of `fit` (k = eˣ…),
+/// with ∇_x J = (∂J/∂k·k, …) from one adjoint sweep. No Hessian-vector products: L-BFGS only.
+struct CalibProblem<'a> {
+    cal: &'a Calib,
+    fit: Fit,
+}
+
+impl OptimProblem for CalibProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.fit.start().len()
+    }
+    /// One forward simulation.
+    fn value(&self, x: &[f64]) -> chainbeam::Result<f64> {
+        let (k, k1, m) = self.fit.params(x);
+        self.cal.value(k, k1, m)
+    }
+    fn value_and_gradient(&self, x: &[f64]) -> chainbeam::Result<(f64, Vec<f64>)> {
+        self.cal.eval_log(self.fit, x)
+    }
+}
+
 /// The outcome of [`lbfgs`].
 struct LbfgsRun {
     x: Vec<f64>,
@@ -218,103 +243,45 @@ struct LbfgsRun {
     history: Vec<f64>,
     /// x after each iteration (index 0: the start).
     path: Vec<Vec<f64>>,
+    /// Adjoint sweeps.
     evals: usize,
-    why: &'static str,
+    why: String,
 }
 
-/// L-BFGS (Nocedal-Wright Alg. 7.4/7.5, memory 5) with an Armijo backtracking line search; a
-/// trial point whose simulation fails counts as J = +∞ (the step is halved).
-fn lbfgs(
-    f: impl Fn(&[f64]) -> Res<(f64, Vec<f64>)>,
-    x0: &[f64],
-    max_iters: usize,
-) -> Res<LbfgsRun> {
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let mem = 5;
-    let mut x = x0.to_vec();
-    let (mut fx, mut g) = f(&x)?;
-    let mut evals = 1;
-    let g0 = dot(&g, &g).sqrt();
-    let mut history = vec![fx];
-    let mut path = vec![x.clone()];
-    let mut pairs: Vec<(Vec<f64>, Vec<f64>, f64)> = Vec::new();
-    let mut why = "iteration limit";
-    let mut small = 0;
-    for _ in 0..max_iters {
-        let gn = dot(&g, &g).sqrt();
-        if gn <= 1e-9 * g0 {
-            why = "‖∇J‖ ≤ 1e-9 ‖∇J₀‖";
-            break;
-        }
-        // two-loop recursion
-        let mut q = g.clone();
-        let mut alphas = Vec::with_capacity(pairs.len());
-        for (s, y, rho) in pairs.iter().rev() {
-            let a = rho * dot(s, &q);
-            q.iter_mut().zip(y).for_each(|(qi, yi)| *qi -= a * yi);
-            alphas.push(a);
-        }
-        let gamma = pairs
-            .last()
-            .map_or(0.1 / gn, |(s, y, _)| dot(s, y) / dot(y, y));
-        q.iter_mut().for_each(|v| *v *= gamma);
-        for ((s, y, rho), a) in pairs.iter().zip(alphas.iter().rev()) {
-            let b = rho * dot(y, &q);
-            q.iter_mut().zip(s).for_each(|(qi, si)| *qi += (a - b) * si);
-        }
-        let mut d: Vec<f64> = q.iter().map(|v| -v).collect();
-        if dot(&d, &g) >= 0.0 {
-            // not a descent direction: reset to steepest descent
-            pairs.clear();
-            d = g.iter().map(|v| -0.1 * v / gn).collect();
-        }
-        let slope = dot(&d, &g);
-        let mut t = 1.0;
-        let mut accepted = None;
-        for _ in 0..40 {
-            let xt: Vec<f64> = x.iter().zip(&d).map(|(a, b)| a + t * b).collect();
-            evals += 1;
-            if let Ok((ft, gt)) = f(&xt) {
-                if ft.is_finite() && ft <= fx + 1e-4 * t * slope {
-                    accepted = Some((xt, ft, gt));
-                    break;
-                }
-            }
-            t *= 0.5;
-        }
-        let Some((xn, fnew, gnew)) = accepted else {
-            why = "line search found no decrease";
-            break;
-        };
-        let s: Vec<f64> = xn.iter().zip(&x).map(|(a, b)| a - b).collect();
-        let y: Vec<f64> = gnew.iter().zip(&g).map(|(a, b)| a - b).collect();
-        let sy = dot(&s, &y);
-        if sy > 1e-12 * dot(&s, &s).sqrt() * dot(&y, &y).sqrt() {
-            pairs.push((s, y, 1.0 / sy));
-            if pairs.len() > mem {
-                pairs.remove(0);
-            }
-        }
-        let rel = (fx - fnew) / fx.abs().max(f64::MIN_POSITIVE);
-        x = xn;
-        fx = fnew;
-        g = gnew;
-        history.push(fx);
-        path.push(x.clone());
-        small = if rel < 1e-13 { small + 1 } else { 0 };
-        if small >= 3 {
-            why = "objective stalled at round-off";
-            break;
-        }
-    }
+/// The library's L-BFGS (argmin's, memory 5, More-Thuente line search; a trial point whose
+/// simulation fails ends the line search and the run restarts from its best point with a
+/// shorter step) on the calibration in log-parameters, from `x0`, with a first step of 0.1 (a
+/// factor e^0.1 ≈ 1.1 on k and m: a unit step, a factor e, reaches chains too stiff and light
+/// for RATTLE at h = 0.01 s), to ‖∇J‖ ≤ 10⁻⁹‖∇J₀‖ or a relative change of J at round-off
+/// (4ε); the iterates come from a `History` observer.
+fn lbfgs(cal: &Calib, fit: Fit, x0: &[f64], max_iters: usize) -> Res<LbfgsRun> {
+    let problem = CalibProblem { cal, fit };
+    let opts = OptimOptions {
+        max_iters,
+        lbfgs_memory: 5,
+        first_step: 0.1,
+        rel_grad_tol: 1e-9,
+        ..OptimOptions::default()
+    };
+    let history = History::default();
+    let r = Minimizer::new(&problem, opts)
+        .add_observer(history.clone(), ObserverMode::Always)
+        .run(x0)?;
+    let records = history.records();
+    let why = match &r.termination {
+        Termination::RelativeGradientTolerance { .. } => "‖∇J‖ ≤ 1e-9 ‖∇J₀‖".to_string(),
+        Termination::CostChange { .. } => "objective stalled at round-off".to_string(),
+        Termination::MaxIterations { .. } => "iteration limit".to_string(),
+        t => t.to_string(),
+    };
     Ok(LbfgsRun {
-        grad_norm: dot(&g, &g).sqrt(),
-        grad_norm0: g0,
-        x,
-        value: fx,
-        history,
-        path,
-        evals,
+        x: r.theta.clone(),
+        value: r.objective,
+        grad_norm: r.gradient_norm,
+        grad_norm0: r.initial_gradient_norm,
+        history: records.iter().map(|x| x.objective).collect(),
+        path: records.into_iter().map(|x| x.theta).collect(),
+        evals: r.gradient_evals,
         why,
     })
 }
@@ -368,7 +335,7 @@ fn calibration(ctx: &Ctx) -> Res<Made> {
         let mut fits = Vec::new();
         for fit in [Fit::Tied, Fit::Free] {
             let t0 = Instant::now();
-            let run = lbfgs(|x| cal.eval_log(fit, x), &fit.start(), max_iters)?;
+            let run = lbfgs(&cal, fit, &fit.start(), max_iters)?;
             let (k, k1, m) = fit.params(&run.x);
             fits.push(FitResult {
                 fit,
@@ -525,11 +492,7 @@ fn calibration(ctx: &Ctx) -> Res<Made> {
         let mut other_paths = Vec::new();
         let mut ends = Vec::new();
         for (k0, m0) in others {
-            let run = lbfgs(
-                |x| cal.eval_log(Fit::Tied, x),
-                &[k0.ln(), m0.ln()],
-                max_iters,
-            )?;
+            let run = lbfgs(&cal, Fit::Tied, &[k0.ln(), m0.ln()], max_iters)?;
             let (k, _, m) = Fit::Tied.params(&run.x);
             ends.push(format!(
                 "({k0}, {m0}) → ({k:.1}, {m:.3}), {:.3e} m (stopped: {})",
@@ -634,8 +597,10 @@ fn calibration(ctx: &Ctx) -> Res<Made> {
              at the chain's steps) by least squares on all ten node displacements at every step, \
              J = Σ_k Σ_i (z_i − z_i^EB)² / ((N + 1) n). Gradients: one discrete-adjoint sweep \
              (`adjoint_gradient` with a custom `Objective` on `Stage::z`) gives ∂J/∂k (interior \
-             springs), ∂J/∂k₁ (base spring) and ∂J/∂m; L-BFGS (memory 5, Armijo backtracking) in \
-             log-parameters, started from the thesis's trial-and-error k = 1.16e3, m = 2.4. Two \
+             springs), ∂J/∂k₁ (base spring) and ∂J/∂m; the library's L-BFGS (`minimize` on an \
+             `OptimProblem`: argmin's L-BFGS, memory 5, More-Thuente line search, iterates \
+             recorded by a `History` observer) in log-parameters, started from the thesis's \
+             trial-and-error k = 1.16e3, m = 2.4. Two \
              fits: the thesis's model with one k for all springs (k = k₁), and k, k₁ free. {} \
              {} Top: tip trajectories (black: Euler-Bernoulli; grey dashed: the thesis's \
              values; colours: the fits). Middle: the RMS misfit over the thesis's family \

@@ -15,7 +15,9 @@ use chainbeam::adjoint::{Objective, Stage};
 use chainbeam::multistart::{
     axis, certify, landscape_1d, landscape_2d, multistart, MultistartReport, StartDesign,
 };
-use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};
+use chainbeam::optimize::{
+    minimize, History, Method, Minimizer, ObserverMode, OptimOptions, OptimResult,
+};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scalar, Scene,
 };
@@ -414,33 +416,25 @@ fn constant_landscape(ctx: &Ctx, name: &str, obj: BendingObjective) -> Res<Made>
 // Fig. 3.8: optimisation history
 // ---------------------------------------------------------------------------------------------
 
-/// The iterates θ_0, θ_1, … of one deterministic run, from runs stopped after 0, 1, 2, …
-/// iterations (the solvers are deterministic, so run j's end point is iterate j of the full run),
-/// ending with the full run's result (after its polish, if any).
+/// The iterates θ_0, θ_1, … of one run, recorded by a `History` observer (the start, every
+/// solver iteration and every polish step), ending at the run's result.
 fn history(p: &ControlProblem, theta0: &[f64], method: Method) -> Res<Vec<(Vec<f64>, f64)>> {
-    let full = minimize(
-        p,
-        theta0,
-        &OptimOptions {
-            method,
-            ..Default::default()
-        },
-    )?;
-    let mut out = vec![(theta0.to_vec(), p.value(theta0)?)];
-    for j in 1..full.iterations {
-        let r = minimize(
-            p,
-            theta0,
-            &OptimOptions {
-                method,
-                max_iters: j,
-                polish_steps: 0,
-                ..Default::default()
-            },
-        )?;
+    let recorder = History::default();
+    let opts = OptimOptions {
+        method,
+        ..Default::default()
+    };
+    let r = Minimizer::new(p, opts)
+        .add_observer(recorder.clone(), ObserverMode::Always)
+        .run(theta0)?;
+    let mut out: Vec<(Vec<f64>, f64)> = recorder
+        .records()
+        .into_iter()
+        .map(|x| (x.theta, x.objective))
+        .collect();
+    if out.last().is_none_or(|x| x.0 != r.theta) {
         out.push((r.theta, r.objective));
     }
-    out.push((full.theta.clone(), full.objective));
     Ok(out)
 }
 
@@ -549,8 +543,8 @@ fn fig_3_8(ctx: &Ctx) -> Res<Made> {
         note: format!(
             "Riser of §3.3.1 with F = 2 N at node 10, constant control, c = M₀(T)², from u = 0 \
              (c = {} N²m²). The library's solvers on exact adjoint gradients (and exact \
-             Hessian-vector products for the trust region and Newton-CG; iterate j is the end \
-             point of the same deterministic run stopped after j iterations), and for \
+             Hessian-vector products for the trust region and Newton-CG; the iterates recorded \
+             by a `History` observer on one run), and for \
              comparison the thesis's own stepping rule (eq. 3.3.3: a backward-difference slope \
              and a fixed step α, here α = {alpha} N²/(N²m²) — the thesis does not give its α — \
              from u = 0 and the perturbed u = −0.1 N, stopping when |Δc| < 1e-20) run on the \

@@ -63,28 +63,27 @@ fn check_parameters<D: Scalar, const DIM: usize>(
 ) -> Result<()> {
     match params.iter().find(|p| !ch.has_parameter(**p)) {
         None => Ok(()),
-        Some(p) => Err(Error::InvalidArgument {
-            name: "parameter",
-            reason: format!(
-                "{p:?} is not a parameter of this scene (mass needs uniform masses, drag needs \
-                 D > 0, end stiffnesses need an end spring, loads need that load)"
-            ),
+        Some(&parameter) => Err(Error::NoSuchParameter {
+            parameter,
+            reason: "mass needs uniform masses, drag needs D > 0, end stiffnesses need an end \
+                     spring, loads need that load",
         }),
     }
 }
 
 /// Checks that `u` has N + 1 finite values.
-fn check_controls<D: Scalar>(u: &[D], steps: usize) -> Result<()> {
+pub(crate) fn check_controls<D: Scalar>(u: &[D], steps: usize) -> Result<()> {
     if u.len() != steps + 1 {
-        return Err(Error::InvalidArgument {
+        return Err(Error::WrongLength {
             name: "controls",
-            reason: format!("expected N + 1 = {} values, got {}", steps + 1, u.len()),
+            expected: steps + 1,
+            got: u.len(),
         });
     }
     match u.iter().position(|x| !x.re().is_finite()) {
-        Some(i) => Err(Error::InvalidArgument {
+        Some(index) => Err(Error::NotFinite {
             name: "controls",
-            reason: format!("u_{i} is not finite"),
+            index,
         }),
         None => Ok(()),
     }
@@ -187,16 +186,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     };
     let n_segments = checkpoints.len() - 1;
     let last = checkpoints.view(n_segments).q;
-    let kb = k1_param.map(|i| &mut cot.thbar[i]);
-    stage.accumulate(
-        chain,
-        steps,
-        last,
-        u[steps],
-        &mut cot.qbar,
-        &mut cot.ubar,
-        kb,
-    );
+    stage.accumulate(chain, (steps, last, u[steps]), &mut cot, k1_param);
     let mut sweep = ReverseSweep::new(chain, h, params);
     let half = chain.has_drag();
     let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
@@ -211,8 +201,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
         for k in (a..b).rev() {
             let (sk, sk1) = (view(k), view(k + 1));
             sweep.step(k, (&sk, &sk1), (u[k], u[k + 1]), &mut cot)?;
-            let kb = k1_param.map(|i| &mut cot.thbar[i]);
-            stage.accumulate(chain, k, sk.q, u[k], &mut cot.qbar, &mut cot.ubar, kb);
+            stage.accumulate(chain, (k, sk.q, u[k]), &mut cot, k1_param);
         }
     }
     Ok(AdjointResult {

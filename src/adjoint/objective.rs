@@ -1,6 +1,7 @@
 //! Objectives: sums of stage costs ℓ_k(M₀(t_k), u_k, z(t_k)) written once over [`Scalar`], and
 //! their evaluation with partial derivatives by nested dual numbers (thesis §3.3, eq. 3.3.2/3.3.4).
 
+use super::reverse::Cotangents;
 use crate::model::{zi, Chain, Scalar};
 use crate::scene::ObjectiveKind;
 use num_dual::Dual;
@@ -148,17 +149,18 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Adds ∂ℓ_k/∂q_k to q̄, ∂ℓ_k/∂u_k to ū_k and, when k₁ is a requested parameter (index
+    /// `k1_param`), ∂ℓ_k/∂k₁ through M₀ = 2k₁z₁/l₁².
     pub(crate) fn accumulate<const DIM: usize>(
         &mut self,
         ch: &Chain<D, DIM>,
-        k: usize,
-        q: &[[D; DIM]],
-        u: D,
-        qbar: &mut [[D; DIM]],
-        ubar: &mut [D],
-        k1bar: Option<&mut D>,
+        (k, q, u): (usize, &[[D; DIM]], D),
+        cot: &mut Cotangents<D, DIM>,
+        k1_param: Option<usize>,
     ) {
+        let qbar = &mut cot.qbar;
+        let ubar = &mut cot.ubar;
+        let k1bar = k1_param.map(|i| &mut cot.thbar[i]);
         let zi_ = zi::<DIM>();
         let scale = ch.moment_stiffness * 2.0 * ch.inv_lengths[0];
         let m = scale * q[0][zi_];

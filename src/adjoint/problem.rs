@@ -79,6 +79,11 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         self.steps
     }
 
+    /// The time step h.
+    pub fn time_step(&self) -> f64 {
+        self.h
+    }
+
     /// The model (f64).
     pub fn chain(&self) -> &Chain<f64, 2> {
         &self.chain
@@ -91,22 +96,16 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
 
     fn check_theta(&self, theta: &[f64], name: &'static str) -> Result<()> {
         if theta.len() != self.map.n_params() {
-            return Err(Error::InvalidArgument {
+            return Err(Error::WrongLength {
                 name,
-                reason: format!(
-                    "expected {} values, got {}",
-                    self.map.n_params(),
-                    theta.len()
-                ),
+                expected: self.map.n_params(),
+                got: theta.len(),
             });
         }
-        if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-            return Err(Error::InvalidArgument {
-                name,
-                reason: format!("entry {i} is not finite"),
-            });
+        match theta.iter().position(|x| !x.is_finite()) {
+            Some(index) => Err(Error::NotFinite { name, index }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// The per-step controls u_0..u_N of θ.

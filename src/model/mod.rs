@@ -406,22 +406,19 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// forward-mode derivatives of a whole simulation with respect to it.
     pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
         let n = self.n;
-        let missing = |name, reason: &str| Error::InvalidArgument {
-            name,
-            reason: reason.to_string(),
-        };
+        let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
         match p {
             Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
             Parameter::BaseStiffness => {
                 if !self.springs.present[0] {
-                    return Err(missing("base stiffness", "the support has no base spring"));
+                    return Err(missing(p, "the support has no base spring"));
                 }
                 self.springs.k[0] = value;
                 self.moment_stiffness = value;
             }
             Parameter::TipStiffness => {
                 if !self.springs.present[n] {
-                    return Err(missing("tip stiffness", "the support has no tip spring"));
+                    return Err(missing(p, "the support has no tip spring"));
                 }
                 self.springs.k[n] = value;
             }
@@ -434,7 +431,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }
             Parameter::Drag => match &mut self.drag {
                 Some(d) => d.d = value,
-                None => return Err(missing("drag", "the scene has no drag (D = 0)")),
+                None => return Err(missing(p, "the scene has no drag (D = 0)")),
             },
             Parameter::LoadForce(i)
             | Parameter::LoadForceX(i)
@@ -442,8 +439,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             | Parameter::LoadPhase { load: i, .. } => {
                 if !self.has_parameter(p) {
                     return Err(missing(
-                        "load parameter",
-                        &format!("{p:?}: no such point load, harmonic or component in this model"),
+                        p,
+                        "no such point load or harmonic (F_x: only in the spatial model)",
                     ));
                 }
                 let l = self.loads.as_mut().and_then(|ls| ls.by_scene_index(i));

@@ -100,9 +100,7 @@ pub struct StepStats {
 struct Workspace<D, const DIM: usize> {
     force: Vec<[D; DIM]>,
     a: Vec<[D; DIM]>,
-    c: Vec<[D; DIM]>,
-    phalf: Vec<[D; DIM]>,
-    w: Vec<[D; DIM]>,
+    half: HalfStep<D, DIM>,
     qnew: Vec<[D; DIM]>,
     tmp: Vec<[D; DIM]>,
     lam: Vec<D>,
@@ -125,10 +123,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// An integrator with step `h` (must be positive and finite).
     pub fn new(chain: Chain<D, DIM>, h: f64) -> Result<Self> {
         if !(h > 0.0 && h.is_finite()) {
-            return Err(Error::InvalidArgument {
-                name: "h",
-                reason: format!("the step must be positive and finite, got {h}"),
-            });
+            return Err(Error::InvalidStep { h });
         }
         let n = chain.n();
         let nc = chain.n_constraints();
@@ -136,9 +131,11 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let ws = Workspace {
             force: v.clone(),
             a: v.clone(),
-            c: v.clone(),
-            phalf: v.clone(),
-            w: vec![[D::one(); DIM]; n],
+            half: HalfStep {
+                c: v.clone(),
+                phalf: v.clone(),
+                w: vec![[D::one(); DIM]; n],
+            },
             qnew: v.clone(),
             tmp: v,
             lam: vec![D::zero(); nc],
@@ -224,7 +221,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// The half-step momentum p_{k+½} and W = ∂p_{k+½}/∂c of the last step (W = 1 without
     /// drag): what the adjoint records from the forward step ([`crate::adjoint`]).
     pub(crate) fn last_half_step(&self) -> (&[[D; DIM]], &[[D; DIM]]) {
-        (&self.ws.phalf, &self.ws.w)
+        (&self.ws.half.phalf, &self.ws.half.w)
     }
 
     /// Advances `state` from t_k to t_{k+1} with controls u_k (at t_k) and u_{k+1} (at t_{k+1}).
@@ -287,17 +284,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let mut iterations = 0;
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
-            half_step_momentum(
-                ch,
-                &state.q,
-                &ws.a,
-                &ws.lam,
-                h,
-                &mut ws.c,
-                &mut ws.phalf,
-                &mut ws.w,
-            );
-            ch.apply_inverse_mass(&ws.phalf, &mut ws.tmp);
+            half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), h, &mut ws.half);
+            ch.apply_inverse_mass(&ws.half.phalf, &mut ws.tmp);
             for i in 0..ch.n() {
                 ws.qnew[i] = std::array::from_fn(|d| state.q[i][d] + ws.tmp[i][d] * h);
             }
@@ -330,7 +318,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     h: Some(h),
                 });
             }
-            let w = ch.has_drag().then_some(&ws.w[..]);
+            let w = ch.has_drag().then_some(&ws.half.w[..]);
             ops.assemble_newton((&state.q, &ws.qnew), w, h, &mut ws.tri, &mut ws.scal);
             ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
             for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
@@ -360,9 +348,9 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let ctx = Ctx::new(t1, u_k1, k + 1);
         for i in 0..ch.n() {
             for d in 0..DIM {
-                let mut b = ws.phalf[i][d] - ws.force[i][d] * hh;
+                let mut b = ws.half.phalf[i][d] - ws.force[i][d] * hh;
                 if let Some(drag) = ch.drag() {
-                    b += drag.force_component(ws.phalf[i][d], &ctx) * hh;
+                    b += drag.force_component(ws.half.phalf[i][d], &ctx) * hh;
                 }
                 ws.a[i][d] = b;
             }
@@ -424,32 +412,37 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Rattle<D, DIM> {
     }
 }
 
+/// The first half-step's momenta: c = a − h/2 Ĝ(q_k)ᵀλ, p_{k+½} and W = ∂p_{k+½}/∂c.
+#[derive(Clone, Debug)]
+struct HalfStep<D, const DIM: usize> {
+    c: Vec<[D; DIM]>,
+    phalf: Vec<[D; DIM]>,
+    w: Vec<[D; DIM]>,
+}
+
 /// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p − (h/2) F_D(p) = c componentwise
 /// ([`DissipativeTerm::implicit_half_step`]; p = c without drag), with W = ∂p_{k+½}/∂c (left at 1
 /// without drag).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn half_step_momentum<D: Scalar, const DIM: usize>(
+fn half_step_momentum<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     q: &[[D; DIM]],
-    a: &[[D; DIM]],
-    lam: &[D],
+    (a, lam): (&[[D; DIM]], &[D]),
     h: f64,
-    c: &mut [[D; DIM]],
-    phalf: &mut [[D; DIM]],
-    w: &mut [[D; DIM]],
+    out: &mut HalfStep<D, DIM>,
 ) {
-    c.copy_from_slice(a);
-    ch.constraints().add_transpose(q, lam, D::from(-0.5 * h), c);
+    out.c.copy_from_slice(a);
+    ch.constraints()
+        .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
     match ch.drag() {
         Some(drag) => {
             let ctx = Ctx::new(0.0, D::zero(), 0);
-            for i in 0..ch.n() {
+            for (c, (p, w)) in out.c.iter().zip(out.phalf.iter_mut().zip(&mut out.w)) {
                 for d in 0..DIM {
-                    (phalf[i][d], w[i][d]) = drag.implicit_half_step(c[i][d], h, &ctx);
+                    (p[d], w[d]) = drag.implicit_half_step(c[d], h, &ctx);
                 }
             }
         }
-        None => phalf.copy_from_slice(c),
+        None => out.phalf.copy_from_slice(&out.c),
     }
 }
 

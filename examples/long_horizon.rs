@@ -22,8 +22,8 @@ use chainbeam::{
 
 fn moments(scene: &Scene, u: &[f64]) -> Result<(f64, f64)> {
     let t = simulate_with_controls(scene, u)?;
-    let sum: f64 = t.moment.iter().map(|m| m * m).sum();
-    let max = t.moment.iter().fold(0.0f64, |a, m| a.max(m.abs()));
+    let sum: f64 = t.moment().iter().map(|m| m * m).sum();
+    let max = t.moment().iter().fold(0.0f64, |a, m| a.max(m.abs()));
     Ok((sum, max))
 }
 

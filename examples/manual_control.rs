@@ -24,7 +24,7 @@ const THESIS: [f64; 10] = [
 fn mean_abs_moment(scene: &Scene, u: f64) -> Result<f64> {
     let n = scene.time.steps;
     let traj = simulate_with_controls(scene, &vec![u; n + 1])?;
-    Ok(traj.moment.iter().map(|m| m.abs()).sum::<f64>() / n as f64)
+    Ok(traj.moment().iter().map(|m| m.abs()).sum::<f64>() / n as f64)
 }
 
 /// Golden-section search for a minimiser of `f` on [a, b], until the bracket is 4 ulps of u

@@ -9,7 +9,7 @@ fn run() -> chainbeam::Result<()> {
     let mut scene = catalogue::thesis_cantilever();
     scene.time.steps = 500; // t ∈ [0, 5] s with h = 0.01 s
     let traj = simulate(&scene)?;
-    let e0 = traj.energy[0];
+    let e0 = traj.energy()[0];
     println!(
         "{:>6} {:>12} {:>12} {:>14} {:>12}",
         "t [s]", "tip y [m]", "tip z [m]", "energy [J]", "H - H0"
@@ -21,12 +21,12 @@ fn run() -> chainbeam::Result<()> {
             traj.time(k),
             tip[1],
             tip[2],
-            traj.energy[k],
-            traj.energy[k] - e0
+            traj.energy()[k],
+            traj.energy()[k] - e0
         );
     }
     let max_err = traj
-        .energy
+        .energy()
         .iter()
         .map(|e| (e - e0).abs())
         .fold(0.0, f64::max);

@@ -10,7 +10,7 @@
 //!
 //! [`all`] lists every scene under a stable name.
 
-use crate::scene::{ObjectiveKind, Scene, SceneBuilder, Support};
+use crate::scene::{Harmonic, LoadSeries, ObjectiveKind, PointLoad, Scene, SceneBuilder, Support};
 
 /// The standard chain of the thesis: n = 10, l = 1, m = 1, k = 1000, h = 0.01.
 fn thesis_chain() -> SceneBuilder {
@@ -58,11 +58,7 @@ fn riser_chain(load_node: usize, name: &str) -> SceneBuilder {
         (1..=10).contains(&load_node),
         "catalogue::{name}: load_node must be in 1..=10, got {load_node}"
     );
-    thesis_chain()
-        .support(Support::Riser)
-        .base_stiffness(2000.0)
-        .tip_stiffness(2000.0)
-        .point_load(load_node, 2.0)
+    riser_chain_without_load().point_load(load_node, 2.0)
 }
 
 /// The optimal-control scene of thesis §3.3.1 (Tables 3.1-3.4, "system i" = `load_node`), as
@@ -274,6 +270,91 @@ pub fn long_horizon() -> Scene {
     )
 }
 
+/// A load out of the yz-plane (SPEC §6, issue 13): the thesis riser (k₁ = k₁₁ = 2000, no drag)
+/// with F = 2 N at node 5 at 45° between x and z, `force = [√2, √2]`, h = 0.01 s, N = 1000
+/// (t ∈ [0, 10] s). Spatial: [`crate::simulate()`] runs the spatial model, and by the model's
+/// rotational symmetry about y the deflection is the in-plane one of [`riser`]`(5)`'s load turned
+/// by 45° (tests/loads.rs). No control (controls act along z only for now).
+pub fn oblique_riser() -> Scene {
+    let f = std::f64::consts::SQRT_2;
+    known_good(
+        riser_chain_without_load()
+            .point_load_vector(5, [f, f])
+            .steps(1000),
+        "oblique_riser",
+    )
+}
+
+/// Period of the waves of [`wave_riser`] and [`wave_series`] \[s\].
+pub const WAVE_PERIOD: f64 = 8.0;
+
+/// A regular wave's force on the riser (issue 13): the thesis riser (k₁ = k₁₁ = 2000) with drag
+/// D = 10 kg/m and a harmonic load F_z(t) = 2 N · sin(2π t/8 s) at node 5, ramped in over the
+/// first period (8 s), h = 0.01 s, N = 3200 (t ∈ [0, 32] s, four periods). Piecewise control at
+/// node 10 with 32 pieces of 1 s (initial guess 0), objective c_sum = Σ M₀(t_k)²: planar, so
+/// `chainbeam optimize` computes the control that counters the wave.
+pub fn wave_riser() -> Scene {
+    let wave = Harmonic {
+        amplitude: 2.0,
+        period: WAVE_PERIOD,
+        phase: 0.0,
+    };
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .load(PointLoad::harmonic(5, [0.0, 1.0], vec![wave]).ramped(WAVE_PERIOD))
+            .control_piecewise(10, vec![0.0; 32])
+            .objective(ObjectiveKind::Sum)
+            .steps(3200),
+        "wave_riser",
+    )
+}
+
+/// The rows of [`wave_series`]'s file `wave_series.csv`: every 0.1 s over [0, 32] s, an oblique
+/// sea with F_x = 0.8 sin(2π t/8) and F_z = 2 sin(2π t/8 + 0.5) + 0.5 sin(2π t/5.3) \[N\].
+pub fn wave_series_rows() -> Vec<[f64; 3]> {
+    use std::f64::consts::TAU;
+    (0..=320)
+        .map(|i| {
+            let t = i as f64 / 10.0;
+            let w = TAU * t / WAVE_PERIOD;
+            [
+                t,
+                0.8 * w.sin(),
+                2.0 * (w + 0.5).sin() + 0.5 * (TAU * t / 5.3).sin(),
+            ]
+        })
+        .collect()
+}
+
+/// A measured-style load history (issue 13): [`wave_riser`]'s riser and drag with the load at
+/// node 5 read from the time series `wave_series.csv` ([`wave_series_rows`]: an oblique sea of two
+/// wave components, so the scene is spatial), ramped in over 8 s, N = 3200 (t ∈ [0, 32] s). No
+/// control (controls act along z only for now).
+///
+/// The series' file name is relative to the scene file (examples/scenes/wave_series.csv).
+pub fn wave_series() -> Scene {
+    let series = LoadSeries {
+        file: "wave_series.csv".into(),
+        samples: wave_series_rows(),
+    };
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .load(PointLoad::series(5, series).ramped(WAVE_PERIOD))
+            .steps(3200),
+        "wave_series",
+    )
+}
+
+/// The riser's beam (k₁ = k₁₁ = 2000) without its load.
+fn riser_chain_without_load() -> SceneBuilder {
+    thesis_chain()
+        .support(Support::Riser)
+        .base_stiffness(2000.0)
+        .tip_stiffness(2000.0)
+}
+
 const RISER_NAMES: [&str; 10] = [
     "riser_1", "riser_2", "riser_3", "riser_4", "riser_5", "riser_6", "riser_7", "riser_8",
     "riser_9", "riser_10",
@@ -295,7 +376,8 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// Every catalogue scene under a stable name: `thesis_cantilever`, `riser_1`..`riser_10`,
 /// `riser_dissipative_1`..`riser_dissipative_10`, `fixed_fixed`, `pinned_pinned`,
 /// `dissipative_{cantilever,fixed_fixed,pinned_pinned}_d{10,100}` (the two drags of Fig. 2.14),
-/// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2) and `long_horizon`.
+/// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
+/// and the scenes of the new loads: `oblique_riser`, `wave_riser`, `wave_series`.
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -327,6 +409,9 @@ pub fn all() -> Vec<(&'static str, Scene)> {
             scaled_cantilever(20, 10.0, 1000.0, 10.0, 2.0),
         ),
         ("long_horizon", long_horizon()),
+        ("oblique_riser", oblique_riser()),
+        ("wave_riser", wave_riser()),
+        ("wave_series", wave_series()),
     ]);
     scenes
 }

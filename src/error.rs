@@ -123,6 +123,17 @@ pub enum Error {
         /// The Newton iteration.
         iteration: usize,
     },
+    /// The planar model (`Chain<_, 2>`) was asked for a scene with a load out of the yz-plane,
+    /// which needs the spatial model (`Chain<_, 3>`; [`crate::simulate()`] chooses it itself).
+    #[error(
+        "`{key}` has an x component, so the scene needs the spatial model (qᵢ ∈ S², \
+         Chain<_, 3>), but this operation uses the planar model: gradients, optimisation and \
+         statics are planar for now (`simulate` runs spatial scenes)"
+    )]
+    NeedsSpatialModel {
+        /// The first key with an x component, e.g. `loads.point[0].force`.
+        key: String,
+    },
     /// An input has the wrong number of values.
     #[error("`{name}`: expected {expected} values, got {got}")]
     WrongLength {

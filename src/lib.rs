@@ -19,10 +19,32 @@
 //! let traj = simulate(&scene)?;
 //! let tip = traj.positions(traj.steps())[9];
 //! assert!(tip[2] < 0.0); // a positive load pushes toward −z (the thesis's sign convention)
-//! let drift = (traj.energy[traj.steps()] - traj.energy[0]).abs();
+//! let drift = (traj.energy()[traj.steps()] - traj.energy()[0]).abs();
 //! assert!(drift < 1e-3); // RATTLE is symplectic: no energy drift
 //! # Ok::<(), chainbeam::Error>(())
 //! ```
+//!
+//! ## Loads in any transverse direction, waves and load histories
+//! A load with an x component makes the scene spatial and `simulate` runs the spatial model; a
+//! load at 45° between x and z deflects the riser as far as the same load along z, at 45°
+//! (the model is symmetric about the beam's axis y).
+//! ```
+//! use chainbeam::{catalogue, simulate};
+//! let oblique = simulate(&catalogue::oblique_riser())?; // F = 2 N at node 5, force = [√2, √2]
+//! assert!(oblique.is_spatial());
+//! let mut in_plane = catalogue::oblique_riser();
+//! in_plane.loads.points[0].force_x = 0.0;
+//! in_plane.loads.points[0].force = 2.0;
+//! let in_plane = simulate(&in_plane)?;
+//! assert!(!in_plane.is_spatial());
+//! let (r, r0) = (oblique.positions(200)[9], in_plane.positions(200)[9]); // the tip at t = 2 s
+//! assert!((r[0].hypot(r[2]) - r0[2].abs()).abs() < 1e-12 && (r[0] - r[2]).abs() < 1e-12);
+//! # Ok::<(), chainbeam::Error>(())
+//! ```
+//! Harmonic loads (`catalogue::wave_riser`) and load histories read from CSV files
+//! (`catalogue::wave_series`) are point loads too, and the gradients with respect to their
+//! amplitudes and phases come from the same model ([`Parameter::LoadAmplitude`],
+//! [`Parameter::LoadPhase`]).
 //!
 //! ## Differentiate it: dual numbers and the adjoint agree
 //! The same simulation runs in `Dual64`; the adjoint gives the whole gradient in one reverse sweep.
@@ -126,12 +148,12 @@ pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Rattle, RattleOptions, State, StepStats};
 pub use scene::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
-    SceneErrorKind, Support, TimeGrid,
+    Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
+    SceneBuilder, SceneError, SceneErrorKind, Support, TimeGrid,
 };
 pub use simulate::{
     piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls,
-    Trajectory,
+    SceneTrajectory, Trajectory,
 };
 
 /// The README's code runs as a doctest.

@@ -157,21 +157,148 @@ fn try_with_capacity<T>(len: usize, too_large: &Error) -> Result<Vec<T>> {
     Ok(v)
 }
 
-/// Simulates a scene in `f64` with the planar model (every thesis scene is planar: the loads act
-/// along z on a beam along y), using the scene's own controls.
-pub fn simulate(scene: &Scene) -> Result<Trajectory<f64, 2>> {
-    let chain = Chain::<f64, 2>::from_scene(scene)?;
-    let u = scene_controls(scene);
-    simulate_chain(chain, scene.time.step, scene.time.steps, &u)
+/// The trajectory of a scene in the model it needs: planar (`DIM = 2`) when every load lies in
+/// the yz-plane, spatial (`DIM = 3`) when some load has an x component ([`Scene::is_spatial`]).
+/// What does not depend on the model (time grid, energy, M₀, controls, node positions as
+/// (x, y, z)) is read through the methods; [`SceneTrajectory::as_planar`] and
+/// [`SceneTrajectory::as_spatial`] give the attitudes and momenta.
+#[derive(Clone, Debug)]
+pub enum SceneTrajectory {
+    /// The planar model's trajectory (qᵢ ∈ S¹ in the yz-plane; x = 0).
+    Planar(Trajectory<f64, 2>),
+    /// The spatial model's trajectory (qᵢ ∈ S²).
+    Spatial(Trajectory<f64, 3>),
 }
 
-/// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1).
-pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<Trajectory<f64, 2>> {
-    let mut chain = Chain::<f64, 2>::from_scene(scene)?;
-    if chain.control_node().is_none() {
-        chain.set_control_node(Some(scene.n()))?;
+/// Calls `$body` on the trajectory inside a [`SceneTrajectory`], whatever its dimension.
+macro_rules! either {
+    ($s:expr, $t:ident => $body:expr) => {
+        match $s {
+            SceneTrajectory::Planar($t) => $body,
+            SceneTrajectory::Spatial($t) => $body,
+        }
+    };
+}
+
+impl SceneTrajectory {
+    /// Whether the spatial model ran.
+    pub fn is_spatial(&self) -> bool {
+        matches!(self, SceneTrajectory::Spatial(_))
     }
-    simulate_chain(chain, scene.time.step, scene.time.steps, controls)
+    /// The dimension of the model: 2 (planar) or 3 (spatial).
+    pub fn dim(&self) -> usize {
+        if self.is_spatial() {
+            3
+        } else {
+            2
+        }
+    }
+    /// Number of pendulums.
+    pub fn n(&self) -> usize {
+        either!(self, t => t.n())
+    }
+    /// Number of steps N (there are N + 1 states).
+    pub fn steps(&self) -> usize {
+        either!(self, t => t.steps())
+    }
+    /// Step h.
+    pub fn h(&self) -> f64 {
+        either!(self, t => t.h())
+    }
+    /// Time t_k = k h.
+    pub fn time(&self, k: usize) -> f64 {
+        either!(self, t => t.time(k))
+    }
+    /// Node positions r₁..rₙ at step k as (x, y, z) (x = 0 in the planar model).
+    pub fn positions(&self, k: usize) -> Vec<[f64; 3]> {
+        either!(self, t => t.positions(k))
+    }
+    /// Total energy H(q_k, p_k; t_k, u_k), k = 0..=N.
+    pub fn energy(&self) -> &[f64] {
+        either!(self, t => &t.energy)
+    }
+    /// Base bending moment M₀(t_k) = 2 k₁ z₁ / l₁² (eq. 3.1.3), k = 0..=N.
+    pub fn moment(&self) -> &[f64] {
+        either!(self, t => &t.moment)
+    }
+    /// Controls u_k used, k = 0..=N.
+    pub fn controls(&self) -> &[f64] {
+        either!(self, t => &t.controls)
+    }
+    /// Reaction-force variant: tip target ζ_k (zero otherwise).
+    pub fn tip_target(&self) -> &[f64] {
+        either!(self, t => &t.tip_target)
+    }
+    /// Per-step Newton statistics, k = 0..N−1.
+    pub fn stats(&self) -> &[StepStats] {
+        either!(self, t => &t.stats)
+    }
+    /// Total Newton iterations.
+    pub fn newton_iterations(&self) -> usize {
+        either!(self, t => t.newton_iterations())
+    }
+    /// The planar trajectory, if the planar model ran.
+    pub fn as_planar(&self) -> Option<&Trajectory<f64, 2>> {
+        match self {
+            SceneTrajectory::Planar(t) => Some(t),
+            SceneTrajectory::Spatial(_) => None,
+        }
+    }
+    /// The spatial trajectory, if the spatial model ran.
+    pub fn as_spatial(&self) -> Option<&Trajectory<f64, 3>> {
+        match self {
+            SceneTrajectory::Spatial(t) => Some(t),
+            SceneTrajectory::Planar(_) => None,
+        }
+    }
+    /// The planar trajectory, for code written for the planar model.
+    ///
+    /// # Errors
+    /// [`Error::NeedsSpatialModel`] if the scene was spatial.
+    pub fn into_planar(self) -> Result<Trajectory<f64, 2>> {
+        match self {
+            SceneTrajectory::Planar(t) => Ok(t),
+            SceneTrajectory::Spatial(_) => Err(Error::NeedsSpatialModel {
+                key: "loads.point".to_string(),
+            }),
+        }
+    }
+}
+
+/// Simulates a scene in `f64` with its own controls, in the model it needs: the planar one when
+/// all loads lie in the yz-plane (every thesis scene), the spatial one otherwise
+/// ([`Scene::is_spatial`]; SPEC §6 "model no more than a scene needs").
+pub fn simulate(scene: &Scene) -> Result<SceneTrajectory> {
+    simulate_with_controls_at(scene, &scene_controls(scene), false)
+}
+
+/// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1) at the
+/// scene's control node (default: the tip), in the model it needs (see [`simulate()`]).
+pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<SceneTrajectory> {
+    simulate_with_controls_at(scene, controls, true)
+}
+
+fn simulate_with_controls_at(
+    scene: &Scene,
+    controls: &[f64],
+    tip_default: bool,
+) -> Result<SceneTrajectory> {
+    fn run<const DIM: usize>(
+        scene: &Scene,
+        controls: &[f64],
+        tip_default: bool,
+    ) -> Result<Trajectory<f64, DIM>> {
+        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+        if tip_default && chain.control_node().is_none() {
+            chain.set_control_node(Some(scene.n()))?;
+        }
+        simulate_chain(chain, scene.time.step, scene.time.steps, controls)
+    }
+    Ok(if scene.is_spatial() {
+        SceneTrajectory::Spatial(run::<3>(scene, controls, tip_default)?)
+    } else {
+        SceneTrajectory::Planar(run::<2>(scene, controls, tip_default)?)
+    })
 }
 
 /// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls

@@ -105,6 +105,7 @@ fn check<O: Objective + Clone>(
         Parameter::Mass => 1.0,
         Parameter::Drag => s.loads.drag,
         Parameter::LoadForce(_) => 2.0,
+        other => panic!("no nominal value for {other:?} (not among the parameters tested here)"),
     };
     let u: Vec<Dual64> = prob
         .controls(&theta)

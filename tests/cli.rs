@@ -215,8 +215,8 @@ fn simulate_csv_header_and_rows_follow_spec() {
     for (k, row) in rows.iter().enumerate() {
         assert_eq!(row.len(), 3 + 3 * 10 + 1);
         assert_eq!(row[0].to_bits(), traj.time(k).to_bits());
-        assert_eq!(row[1].to_bits(), traj.energy[k].to_bits());
-        assert_eq!(row[2].to_bits(), traj.moment[k].to_bits());
+        assert_eq!(row[1].to_bits(), traj.energy()[k].to_bits());
+        assert_eq!(row[2].to_bits(), traj.moment()[k].to_bits());
         for (i, r) in traj.positions(k).iter().enumerate() {
             for d in 0..3 {
                 assert_eq!(row[3 + 3 * i + d].to_bits(), r[d].to_bits());
@@ -763,6 +763,19 @@ fn describe(name: &str) -> String {
              EI = 1000 Nm^2, mass 10 kg, discretised by n = 20 pendulums, base spring 2k, F = 2 N at \
              the tip."
             .into(),
+        "oblique_riser" => "Issue 13 (out-of-plane loads): the thesis riser with F = 2 N at node 5 at \
+             45 degrees between x and z (force = [fx, fz] = [sqrt 2, sqrt 2]), no drag, t in [0, 10] s. \
+             Spatial: simulate runs the spatial model and fills in the x columns."
+            .into(),
+        "wave_riser" => "Issue 13 (waves): the riser with drag D = 10 kg/m and a harmonic load \
+             2 N sin(2 pi t / 8 s) at node 5, ramped in over 8 s, t in [0, 32] s; piecewise control at \
+             node 10 (32 pieces of 1 s), objective c_sum = sum of M0(t_k)^2 (chainbeam optimize \
+             counters the wave)."
+            .into(),
+        "wave_series" => "Issue 13 (load histories): the riser with drag D = 10 kg/m and the load at \
+             node 5 read from the time series wave_series.csv (t, fx, fz; an oblique sea of two wave \
+             components, linearly interpolated), ramped in over 8 s, t in [0, 32] s. Spatial."
+            .into(),
         "long_horizon" => "Future work of thesis §3.3 (Fig. 3.12): riser with drag D = 10 kg/m, F = 2 N \
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \
              c_sum = sum of M0(t_k)^2, t in [0, 10] s."
@@ -843,6 +856,10 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
                 scene_file_text(name, scene),
             )
             .unwrap();
+            // a load's time series goes to its file, named relative to the scene file
+            for series in scene.loads.points.iter().filter_map(|p| p.series.as_ref()) {
+                fs::write(dir.join(&series.file), series.to_csv()).unwrap();
+            }
         }
     }
     for (name, scene) in &all {
@@ -858,15 +875,24 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
         );
         read.validate().unwrap();
         let traj = simulate(&read).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(
+            traj.is_spatial(),
+            read.is_spatial(),
+            "{name}: the model it needs"
+        );
         for k in [0, traj.steps()] {
-            for q in traj.q(k) {
-                let norm = (q[0] * q[0] + q[1] * q[1]).sqrt();
+            // |rᵢ − rᵢ₋₁| = lᵢ: the pendulums keep their lengths (in either model)
+            let mut prev = [0.0; 3];
+            for (r, l) in traj.positions(k).iter().zip(&read.beam.lengths) {
+                let d: f64 = (0..3).map(|c| (r[c] - prev[c]).powi(2)).sum::<f64>().sqrt();
                 assert!(
-                    (norm - 1.0).abs() < 1e-10,
-                    "{name}: |q| = {norm} at step {k}"
+                    (d / l - 1.0).abs() < 1e-10,
+                    "{name}: |q| = {} at step {k}",
+                    d / l
                 );
+                prev = *r;
             }
-            assert!(traj.energy[k].is_finite() && traj.moment[k].is_finite());
+            assert!(traj.energy()[k].is_finite() && traj.moment()[k].is_finite());
         }
     }
     // Every shipped file is a catalogue scene.
@@ -905,4 +931,77 @@ fn cli_reads_shipped_scenes() {
     let o = run_on("gradient", &dir.join("long_horizon.toml"), &[]);
     assert_success(&o);
     assert_eq!(numbers(&json(&o), "gradient").len(), 1001);
+}
+
+/// A spatial scene (a load with an x component, SPEC §6): `simulate` keeps the CSV header and
+/// fills in the x columns with the library's spatial trajectory; the planar `gradient` refuses it
+/// with one message naming the key. The series scene reads its CSV beside the scene file.
+#[test]
+fn cli_simulates_spatial_scenes() {
+    let dir = scenes_dir();
+    for name in ["oblique_riser", "wave_series"] {
+        let path = dir.join(format!("{name}.toml"));
+        let o = run_on("simulate", &path, &[]);
+        assert_success(&o);
+        let out = stdout(&o);
+        assert_eq!(out.lines().next(), Some(header(10).as_str()));
+        let rows = parse_rows(&out);
+        let traj = simulate(&Scene::from_file(&path).unwrap()).unwrap();
+        assert!(traj.is_spatial());
+        assert_eq!(rows.len(), traj.steps() + 1);
+        for (k, row) in rows.iter().enumerate() {
+            for (i, r) in traj.positions(k).iter().enumerate() {
+                for d in 0..3 {
+                    assert_eq!(row[3 + 3 * i + d].to_bits(), r[d].to_bits());
+                }
+            }
+        }
+        // the x of the tip moves: toward −x, as the x components of the loads push it
+        let tip_x = rows.iter().map(|r| r[3 + 27]).fold(0.0f64, f64::min);
+        assert!(tip_x < -1e-3, "{name}: tip x {tip_x}");
+    }
+    let o = run_on("gradient", &dir.join("oblique_riser.toml"), &[]);
+    assert_one_error(
+        &o,
+        &["`loads.point[0].force` has an x component", "spatial model"],
+    );
+    // the planar wave scene optimises like the thesis scenes: its gradient has one entry per piece
+    let o = run_on("gradient", &dir.join("wave_riser.toml"), &[]);
+    assert_success(&o);
+    assert_eq!(numbers(&json(&o), "gradient").len(), 32);
+}
+
+/// A load's series file is an input too: the output may not overwrite it.
+#[test]
+fn output_onto_a_series_file_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    let series = dir.path().join("f.csv");
+    let csv = "t,fx,fz\n0,0,1\n1,0,2\n";
+    fs::write(&series, csv).unwrap();
+    fs::write(
+        &scene,
+        "[beam]\npendulums = 3\nlength = 1.0\nmass = 1.0\nstiffness = 100.0\n\
+         support = \"cantilever\"\n[[loads.point]]\nnode = 3\nseries = \"f.csv\"\n\
+         [time]\nstep = 0.01\nsteps = 10\n",
+    )
+    .unwrap();
+    let out = series.to_str().unwrap();
+    for sub in ["simulate", "gradient"] {
+        let o = run_on(sub, &scene, &["--output", out]);
+        assert_one_error(&o, &["f.csv", "refusing", "input"]);
+        assert_eq!(fs::read_to_string(&series).unwrap(), csv, "{sub}");
+    }
+    let o = run_on(
+        "simulate",
+        &scene,
+        &["--output", dir.path().join("r.csv").to_str().unwrap()],
+    );
+    assert_success(&o);
+    // no temporary file left beside the refused outputs
+    let names: Vec<_> = fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 3, "{names:?}");
 }

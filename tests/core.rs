@@ -21,6 +21,12 @@ fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
     sxy / sxx
 }
 
+/// The thesis scenes are planar: `chainbeam::simulate` runs them in the planar model, whose
+/// attitudes these tests read.
+fn simulate(scene: &Scene) -> Result<Trajectory<f64, 2>> {
+    chainbeam::simulate(scene)?.into_planar()
+}
+
 fn max_energy_error(traj: &Trajectory<f64, 2>) -> f64 {
     let e0 = traj.energy[0];
     traj.energy
@@ -436,7 +442,7 @@ fn reaction_force_variant() {
     s.time.steps = 400;
     let u = piecewise_constant_controls(0.01, 400, &[(0.0, 1.0, 1.0), (1.0, 2.0, -1.0)]);
     let traj = simulate_with_controls(&s, &u).unwrap();
-    let zeta: Vec<f64> = traj.tip_target.clone();
+    let zeta: Vec<f64> = traj.tip_target().to_vec();
     println!(
         "tip at t = 1: {:.6}, t = 2: {:.6}, t = 4: {:.6}",
         zeta[100], zeta[200], zeta[400]

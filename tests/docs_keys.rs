@@ -14,7 +14,7 @@ use std::path::Path;
 
 use chainbeam::scene::{
     ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS,
-    MAX_STEPS, STEP_RANGE, STIFFNESS_RANGE,
+    MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 use chainbeam::{Scene, SceneErrorKind};
 
@@ -79,6 +79,10 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
     ),
     ("loads", &[("gravity", "1.0")]),
     ("loads.point", &[("node", "2"), ("force", "1.0")]),
+    (
+        "loads.point.harmonic",
+        &[("amplitude", "1.0"), ("period", "2.0")],
+    ),
     ("time", &[("step", "0.01"), ("steps", "5")]),
     ("control", &[("kind", "\"constant\""), ("values", "[0.0]")]),
     ("objective", &[("kind", "\"final\"")]),
@@ -92,8 +96,8 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
         text.push_str(&format!("{key} = {value}\n"));
     }
     for (table, entries) in SECTIONS {
-        if *table == "loads.point" {
-            text.push_str("[[loads.point]]\n");
+        if table.starts_with("loads.point") {
+            text.push_str(&format!("[[{table}]]\n"));
         } else {
             text.push_str(&format!("[{table}]\n"));
         }
@@ -128,7 +132,10 @@ fn accepted(table: &str) -> BTreeSet<String> {
             } else {
                 format!(
                     "{}.not_a_key",
-                    table.replace("loads.point", "loads.point[0]")
+                    match table {
+                        "loads.point.harmonic" => "loads.point[0].harmonic[0]".to_string(),
+                        _ => table.replace("loads.point", "loads.point[0]"),
+                    }
                 )
             };
             assert_eq!(key, want);
@@ -150,16 +157,18 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
     let mut checked = 0;
     for (table, rows) in &doc {
         let mut keys: BTreeSet<String> = rows.keys().cloned().collect();
-        // sub-tables documented under their own heading
+        // direct sub-tables documented under their own heading
         for sub in doc.keys() {
             if let Some(rest) = sub.strip_prefix(&format!("{table}.")) {
-                keys.insert(rest.to_string());
+                if !rest.contains('.') {
+                    keys.insert(rest.to_string());
+                }
             }
         }
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 21, "number of documented keys");
+    assert_eq!(checked, 28, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -181,6 +190,17 @@ fn every_documented_key_is_read() {
         ("loads.point", "force", "4.0"),
         ("loads.point", "start", "0.5"),
         ("loads.point", "end", "0.75"),
+        ("loads.point", "ramp", "0.02"),
+        ("loads.point", "direction", "[1.0, 0.0]"),
+        // the shipped series (relative to the current directory, the package root under cargo)
+        (
+            "loads.point",
+            "series",
+            "\"examples/scenes/wave_series.csv\"",
+        ),
+        ("loads.point.harmonic", "amplitude", "3.0"),
+        ("loads.point.harmonic", "period", "0.5"),
+        ("loads.point.harmonic", "phase", "0.25"),
         ("time", "step", "0.02"),
         ("time", "steps", "6"),
         ("control", "node", "3"),
@@ -225,6 +245,11 @@ fn documented_ranges_are_the_enforced_ones() {
     assert_eq!(cell("loads", "gravity"), range(&GRAVITY_RANGE));
     assert_eq!(cell("loads", "drag"), range(&DRAG_RANGE));
     assert_eq!(cell("loads.point", "force"), range(&FORCE_RANGE));
+    assert_eq!(
+        cell("loads.point.harmonic", "amplitude"),
+        range(&FORCE_RANGE)
+    );
+    assert_eq!(cell("loads.point.harmonic", "period"), range(&PERIOD_RANGE));
     assert!(cell("control", "values").starts_with(&range(&FORCE_RANGE)));
     assert_eq!(cell("time", "step"), range(&STEP_RANGE));
     assert_eq!(cell("beam", "pendulums"), format!("1 to {MAX_PENDULUMS}"));
@@ -236,6 +261,8 @@ fn documented_ranges_are_the_enforced_ones() {
         ("mass m", &MASS_RANGE),
         ("spring k (interior, base, tip)", &STIFFNESS_RANGE),
         ("force F, control u", &FORCE_RANGE),
+        ("harmonic amplitude A, series forces", &FORCE_RANGE),
+        ("harmonic period T", &PERIOD_RANGE),
         ("gravity g", &GRAVITY_RANGE),
         ("drag D", &DRAG_RANGE),
         ("time step h", &STEP_RANGE),
@@ -246,7 +273,8 @@ fn documented_ranges_are_the_enforced_ones() {
 }
 
 /// Every `toml` block of the document is a valid scene (the first one is the thesis's riser
-/// scene, catalogue::riser(5)).
+/// scene, catalogue::riser(5); the wave example is catalogue::wave_riser()). Series files are
+/// named relative to examples/scenes/, where the shipped one is.
 #[test]
 fn documented_examples_are_valid_scenes() {
     let text = read("docs/scene-format.md");
@@ -255,11 +283,16 @@ fn documented_examples_are_valid_scenes() {
         .skip(1)
         .map(|b| b.split("```").next().unwrap())
         .collect();
-    assert_eq!(blocks.len(), 4);
+    assert_eq!(blocks.len(), 6);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
+    let mut scenes = Vec::new();
     for b in &blocks {
-        let scene = Scene::from_toml_str(b).unwrap_or_else(|e| panic!("{e}\n{b}"));
+        let scene = Scene::from_toml_str_in_dir(b, &dir).unwrap_or_else(|e| panic!("{e}\n{b}"));
         chainbeam::simulate(&scene).unwrap();
+        scenes.push(scene);
     }
+    assert_eq!(scenes[4], chainbeam::catalogue::wave_riser());
+    assert!(scenes[5].is_spatial() && !scenes[4].is_spatial());
     assert_eq!(
         Scene::from_toml_str(blocks[0]).unwrap(),
         chainbeam::catalogue::riser(5)

@@ -439,7 +439,7 @@ fn check_valid(file: &SceneFile) -> Result<(), TestCaseError> {
     prop_assert_eq!(scene.time.steps, file.steps);
     let again = Scene::from_toml_str(&scene.to_toml_string());
     prop_assert_eq!(again.as_ref(), Ok(&scene));
-    match simulate(&scene) {
+    match simulate(&scene).and_then(|t| t.into_planar()) {
         Ok(traj) => {
             prop_assert_eq!(traj.steps(), file.steps);
             let err = constraint_error(&traj);

@@ -6,18 +6,46 @@
 //!   the force along v (1e-12);
 //! * ⟨K v, w⟩ = ⟨v, Kᵀ w⟩ (the transposed product is consistent, 1e-12);
 //! * w·∂F/∂θ and w·∂F/∂u (dual-derived defaults and overrides) = central finite differences of
-//!   w·F in θ (set on the model) and in u (1e-7: the FD error, step 1e-5 relative).
+//!   w·F in θ (set on the model) and in u (1e-7: the FD error; step 1e-4·max(|θ|, 1) in θ, where
+//!   w·F is linear except in the phases of the harmonic loads, so the rounding of the whole
+//!   model's w·F (~1e-16·|w·F|/step) dominates, and 1e-5 in u).
 //!
 //! The configurations are away from the straight beam and cover both branches of the spring
 //! function (the series for θ ≲ 11.5° and the closed form beyond) and joint angles above 90°.
 
 use chainbeam::model::{Ctx, DissipativeTerm, DualScratch, Embed, ForceTerm, TermVisitor};
-use chainbeam::{catalogue, Chain, Parameter, Scalar, Scene, SceneBuilder, Support};
+use chainbeam::{
+    catalogue, Chain, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene, SceneBuilder,
+    Support,
+};
 use num_dual::{Dual, Dual64};
 
-/// A scene with every conservative term: springs (base, interior, tip), two point loads (one
-/// time-windowed), gravity, a control at node 4, and drag.
-fn all_terms_scene() -> Scene {
+/// A scene with every conservative term: springs (base, interior, tip), point loads of every
+/// kind (constant, time-windowed, a ramped sum of two harmonics, a time series), gravity, a
+/// control at node 4, and drag. `spatial`: the loads get x components (a vector force, a
+/// direction out of the yz-plane, an F_x column), so the spatial model's x terms are checked too;
+/// otherwise the same loads lie in the yz-plane and the planar model can run the scene.
+fn all_terms_scene(spatial: bool) -> Scene {
+    let x = if spatial { 1.0 } else { 0.0 };
+    let harmonics = vec![
+        Harmonic {
+            amplitude: 0.8,
+            period: 2.0,
+            phase: 0.3,
+        },
+        Harmonic {
+            amplitude: 0.3,
+            period: 0.7,
+            phase: -1.1,
+        },
+    ];
+    // t = 1 (where the terms are evaluated) lies between rows, inside the ramp of the harmonics
+    let rows = vec![
+        [0.0, 0.0, 0.2],
+        [0.5, 0.4 * x, -0.3],
+        [1.3, -0.7 * x, 0.9],
+        [10.0, 0.1 * x, 0.0],
+    ];
     SceneBuilder::new(6)
         .support(Support::Riser)
         .lengths(vec![1.0, 0.8, 1.2, 0.9, 1.1, 1.0])
@@ -27,8 +55,17 @@ fn all_terms_scene() -> Scene {
         .tip_stiffness(1700.0)
         .gravity(9.81)
         .drag(10.0)
-        .point_load(3, 2.0)
+        .point_load_vector(3, [0.5 * x, 2.0])
         .point_load_window(6, -1.5, 0.0, 5.0)
+        .load(
+            PointLoad::harmonic(5, [0.6 * x, 0.8], harmonics)
+                .window(0.2, None)
+                .ramped(1.5),
+        )
+        .load(PointLoad::series(
+            2,
+            LoadSeries::new("in code", rows).expect("valid rows"),
+        ))
         .control_constant(4, -0.7)
         .build()
         .expect("valid scene")
@@ -176,8 +213,38 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
             (Parameter::TipStiffness, 1700.0),
             (Parameter::Mass, 1.0),
             (Parameter::LoadForce(0), 2.0),
+            (Parameter::LoadForceX(0), 0.5),
             (Parameter::LoadForce(1), -1.5),
+            (
+                Parameter::LoadAmplitude {
+                    load: 2,
+                    harmonic: 0,
+                },
+                0.8,
+            ),
+            (
+                Parameter::LoadAmplitude {
+                    load: 2,
+                    harmonic: 1,
+                },
+                0.3,
+            ),
+            (
+                Parameter::LoadPhase {
+                    load: 2,
+                    harmonic: 0,
+                },
+                0.3,
+            ),
+            (
+                Parameter::LoadPhase {
+                    load: 2,
+                    harmonic: 1,
+                },
+                -1.1,
+            ),
         ];
+        let mut tested = 0;
         for (p, value) in params {
             if !term.has_parameter(p) {
                 continue;
@@ -186,13 +253,23 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
                 .parameter_contraction(&self.q, &self.w, &ctx, p, &mut scratch)
                 .unwrap();
             // FD on the whole model: only this term reads p (mass: only gravity among the terms).
-            let hstep = 1e-5 * value;
+            let hstep = 1e-4 * f64::abs(value).max(1.0);
             let (mut cp, mut cm) = (self.chain.clone(), self.chain.clone());
             cp.set_parameter(p, D::from(value + hstep)).unwrap();
             cm.set_parameter(p, D::from(value - hstep)).unwrap();
             let fd = (wf(&cp, self.u) - wf(&cm, self.u)) / (2.0 * hstep);
             let label = format!("{} w.dF/d{p:?}", term.name());
             close(&label, got.re(), fd, fd.abs().max(1.0), 1e-7);
+            assert!(got.re().abs() > 1e-6, "{label} = {got:?} is not exercised");
+            tested += 1;
+        }
+        if term.name() == "point loads" {
+            // F_z, F_x (spatial only), F_z of the windowed load, two amplitudes, two phases
+            assert_eq!(
+                tested,
+                if DIM == 3 { 7 } else { 6 },
+                "load parameters checked"
+            );
         }
         let got = term
             .control_contraction(&self.q, &self.w, &ctx, &mut scratch)
@@ -219,7 +296,8 @@ impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Check<D, DIM> {
 }
 
 fn check_all_terms<D: Scalar, const DIM: usize>() {
-    let scene = all_terms_scene();
+    let scene = all_terms_scene(DIM == 3);
+    assert_eq!(scene.is_spatial(), DIM == 3);
     let chain = Chain::<D, DIM>::from_scene(&scene).unwrap();
     let n = chain.n();
     let mut check = Check {
@@ -266,7 +344,7 @@ fn every_force_term_spatial_dual64() {
 /// default Newton solve (to round-off) with W = 1/(1 − (h/2)F′(p)).
 #[test]
 fn drag_term_derivatives_and_implicit_half_step() {
-    let chain = Chain::<f64, 2>::from_scene(&all_terms_scene()).unwrap();
+    let chain = Chain::<f64, 2>::from_scene(&all_terms_scene(false)).unwrap();
     let drag = chain.drag().expect("scene has drag").clone();
     let ctx = Ctx::new(0.0, 0.0, 0);
     let d = 10.0;

@@ -140,6 +140,11 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::Mass => s.beam.masses[0],
         Parameter::Drag => s.loads.drag,
         Parameter::LoadForce(i) => s.loads.points[i].force,
+        Parameter::LoadForceX(i) => s.loads.points[i].force_x,
+        Parameter::LoadAmplitude { load, harmonic } => {
+            s.loads.points[load].harmonics[harmonic].amplitude
+        }
+        Parameter::LoadPhase { load, harmonic } => s.loads.points[load].harmonics[harmonic].phase,
     }
 }
 
@@ -259,7 +264,10 @@ fn adjoint_and_hessian_at_large_deflection() {
     let theta = [3.0, -2.0, 4.0, -1.0];
 
     // The trajectory the derivatives are taken along visits every branch.
-    let traj = simulate_with_controls(&scene, &prob.controls(&theta).unwrap()).unwrap();
+    let traj = simulate_with_controls(&scene, &prob.controls(&theta).unwrap())
+        .unwrap()
+        .into_planar()
+        .unwrap();
     let c = census(prob.chain(), &traj);
     println!("branches along the trajectory: {c:?}");
     assert!(c.max_angle_deg > 90.0 && c.obtuse > 0, "{c:?}");
@@ -389,7 +397,7 @@ fn adjoint_and_hessian_at_large_deflection() {
 fn energy_gradient_past_ninety_degrees() {
     let steps = 80;
     let scene = folding_scene(steps);
-    let traj = simulate(&scene).unwrap();
+    let traj = simulate(&scene).unwrap().into_planar().unwrap();
     let chain2 = Chain::<f64, 2>::from_scene(&scene).unwrap();
     let chain3 = Chain::<f64, 3>::from_scene(&scene).unwrap();
     let mut rng = Rng(0x5eed_0001);
@@ -1034,7 +1042,7 @@ fn rattle_is_reversible_at_large_deflection_and_out_of_plane() {
 /// control), as measured on this code: (scene, N, total iterations). Every step took 1 or 2
 /// iterations; the extra iterations are the steps where the predictor μ_{k−1} left a residual
 /// above the tolerance 1e-14 after one update.
-const NEWTON_TOTALS: [(&str, usize, usize); 31] = [
+const NEWTON_TOTALS: [(&str, usize, usize); 34] = [
     ("thesis_cantilever", 1000, 1003),
     ("riser_1", 10, 10),
     ("riser_2", 10, 10),
@@ -1066,6 +1074,9 @@ const NEWTON_TOTALS: [(&str, usize, usize); 31] = [
     ("dissipative_pinned_pinned_d100", 1000, 1015),
     ("scaled_cantilever_n20", 4000, 4000),
     ("long_horizon", 1000, 1006),
+    ("oblique_riser", 1000, 1000),
+    ("wave_riser", 3200, 3158),
+    ("wave_series", 3200, 3173),
 ];
 
 /// Newton iterations per step on the thesis scenes (`Trajectory::stats`), asserted tightly so
@@ -1087,13 +1098,16 @@ fn newton_iterations_per_step_on_the_thesis_scenes() {
         assert_eq!(*name, ref_name);
         let t = simulate(scene).unwrap();
         assert_eq!(t.steps(), steps);
-        let (lo, hi) = t.stats.iter().fold((usize::MAX, 0), |(lo, hi), s| {
+        let (lo, hi) = t.stats().iter().fold((usize::MAX, 0), |(lo, hi), s| {
             (lo.min(s.iterations), hi.max(s.iterations))
         });
         let measured = t.newton_iterations();
         println!("{name}: {measured} iterations in {steps} steps (per step {lo}..={hi})");
+        // A load ramped in from 0 moves the beam so little in its first steps that the predicted
+        // state already meets the tolerance 1e-14 there: no update (0 iterations).
+        let ramped = scene.loads.points.iter().any(|p| p.ramp > 0.0);
         assert!(
-            lo >= 1 && hi <= 2,
+            (lo >= 1 || ramped) && hi <= 2,
             "{name}: {lo}..={hi} iterations per step"
         );
         assert!(

@@ -105,7 +105,7 @@ fn fold_note(angle: f64) -> String {
 
 /// Largest joint angle (degrees) over the trajectory driven by per-step controls `u`.
 fn max_joint_angle_deg(scene: &Scene, u: &[f64]) -> Result<f64> {
-    let traj = simulate_with_controls(scene, u)?;
+    let traj = simulate_with_controls(scene, u)?.into_planar()?;
     let chain = Chain::<f64, 2>::from_scene(scene)?;
     Ok((0..=traj.steps())
         .map(|k| chain.max_joint_angle(traj.q(k)))

@@ -181,7 +181,7 @@ impl Calib {
         for x in s.beam.masses.iter_mut() {
             *x = m;
         }
-        let tr = chainbeam::simulate(&s)?;
+        let tr = crate::planar::simulate(&s)?;
         let n = s.n();
         Ok((0..=tr.steps())
             .map(|j| (tr.time(j), tr.positions(j)[n - 1][2]))
@@ -198,7 +198,7 @@ impl Calib {
         for x in s.beam.masses.iter_mut() {
             *x = m;
         }
-        let tr = chainbeam::simulate(&s)?;
+        let tr = crate::planar::simulate(&s)?;
         let n = s.n();
         let mut e = vec![0.0; n];
         for (j, r) in self.objective.reference.iter().enumerate() {

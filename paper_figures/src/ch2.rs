@@ -1,13 +1,14 @@
 //! Chapter 2: the conservative cantilever (Fig. 2.5-2.8), the comparison with Euler-Bernoulli
 //! (Fig. 2.9-2.10, 2.12-2.13) and dissipation (Fig. 2.14-2.16).
 
+use crate::planar::simulate;
 use crate::plot::{color, Dash, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
 use chainbeam::catalogue;
 use chainbeam::euler_bernoulli::{
     static_cantilever, static_fixed_fixed, static_pinned_pinned, EbSupport, EulerBernoulli,
 };
-use chainbeam::{simulate, Chain, Scene, Trajectory};
+use chainbeam::{Chain, Scene, Trajectory};
 
 /// (t, z) of node `i` (1-based; 0 is the origin) every `every` steps.
 pub fn node_z(traj: &Trajectory<f64, 2>, i: usize, every: usize) -> Vec<(f64, f64)> {

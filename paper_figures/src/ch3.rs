@@ -2,11 +2,12 @@
 //! (Fig. 3.3-3.6) and the optimal-control figures that need no optimiser (Fig. 3.9, 3.11, 3.12).
 
 use crate::ch2::{node_z, retime};
+use crate::planar::{simulate, simulate_with_controls};
 use crate::plot::{color, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
 use chainbeam::{
-    catalogue, piecewise_constant_controls, simulate, simulate_with_controls, ControlProblem,
-    ObjectiveKind, Scene, Support, Trajectory,
+    catalogue, piecewise_constant_controls, ControlProblem, ObjectiveKind, Scene, Support,
+    Trajectory,
 };
 
 const THESIS_U: [f64; 10] = [

@@ -2,13 +2,14 @@
 //! stability limits, convergence of the chain to Euler-Bernoulli, calibration by gradients.
 
 use crate::ch2::{fit_slope, retime};
+use crate::planar::simulate;
 use crate::plot::{color, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
 use chainbeam::catalogue;
 use chainbeam::euler_bernoulli::{static_cantilever, EbSupport, EulerBernoulli};
 use chainbeam::integrators::{integrate, Integrator, Method};
 use chainbeam::statics::static_equilibrium;
-use chainbeam::{simulate, Scene};
+use chainbeam::Scene;
 use std::time::Instant;
 
 pub fn entries() -> Vec<Entry> {

@@ -17,6 +17,7 @@ mod ch2;
 mod ch3;
 mod extra;
 mod optctl;
+mod planar;
 mod plot;
 
 use clap::Parser;

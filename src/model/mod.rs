@@ -5,8 +5,10 @@
 //! (components (y, z), qᵢ ∈ S¹ in the yz-plane) and `DIM = 3` the spatial one (components
 //! (x, y, z), qᵢ ∈ S²). Every load of the thesis acts along z and the beam starts straight along
 //! +y, so x stays exactly 0 in the spatial model; the planar model therefore reproduces it exactly
-//! (tested to 0 difference in `tests/core.rs`) while storing and computing two components instead
-//! of three. The step's cost is dominated by the per-joint scalar work (spring function, Newton
+//! (tested to 0 difference in `tests/core.rs` and, with every kind of point load, in
+//! `tests/loads.rs`) while storing and computing two components instead of three. A point load
+//! with an x component (SPEC §6) needs the spatial model: [`Chain::from_scene`] refuses such a
+//! scene for `DIM = 2` ([`Error::NeedsSpatialModel`]), and [`crate::simulate()`] picks the model. The step's cost is dominated by the per-joint scalar work (spring function, Newton
 //! and projection solves), so the measured saving is modest: 3D/2D ≈ 1.08 at n = 100
 //! (`cargo bench --bench step -- step_dim`).
 
@@ -16,8 +18,8 @@ pub mod terms;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity, PointLoad,
-    PointLoads, Springs, TermVisitor,
+    ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity,
+    HarmonicForce, PointLoad, PointLoads, Springs, TermVisitor,
 };
 
 use crate::error::{Error, Result};
@@ -58,8 +60,25 @@ pub enum Parameter {
     Mass,
     /// The drag constant D (eq. 2.4.4).
     Drag,
-    /// The magnitude of the `i`-th point load of the scene (0-based, in scene order).
+    /// The z component F_z of the constant force of the `i`-th point load of the scene (0-based,
+    /// in scene order): the thesis's F.
     LoadForce(usize),
+    /// The x component F_x of the constant force of the `i`-th point load (spatial model only).
+    LoadForceX(usize),
+    /// The amplitude Aⱼ of harmonic `harmonic` of point load `load` (0-based, in scene order).
+    LoadAmplitude {
+        /// The load's index in the scene.
+        load: usize,
+        /// The harmonic's index in the load.
+        harmonic: usize,
+    },
+    /// The phase φⱼ \[rad\] of harmonic `harmonic` of point load `load`.
+    LoadPhase {
+        /// The load's index in the scene.
+        load: usize,
+        /// The harmonic's index in the load.
+        harmonic: usize,
+    },
 }
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
@@ -155,8 +174,17 @@ impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Products<'_, D, DIM> {
 impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// Builds the model of a scene (validating it first). The control node is taken from the
     /// scene's `[control]` (default: none, so no control term is computed).
+    ///
+    /// # Errors
+    /// The scene's validation errors; [`Error::NeedsSpatialModel`] for the planar model
+    /// (`DIM = 2`) of a scene with out-of-plane loads ([`Scene::is_spatial`]).
     pub fn from_scene(scene: &Scene) -> Result<Self> {
         scene.validate()?;
+        if DIM == 2 {
+            if let Some(key) = scene.spatial_key() {
+                return Err(Error::NeedsSpatialModel { key });
+            }
+        }
         let n = scene.n();
         let b = &scene.beam;
         let lift = |v: &[f64]| v.iter().map(|&x| D::from(x)).collect::<Vec<D>>();
@@ -181,18 +209,29 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         }
         let springs = Self::springs_of(scene);
         let has_base = springs.present[0];
-        let loads = scene
-            .loads
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, pl)| PointLoad {
+        let loads = scene.loads.points.iter().enumerate().map(|(i, pl)| {
+            let norm = pl.direction[0].hypot(pl.direction[1]);
+            PointLoad {
                 node: pl.node,
                 force: D::from(pl.force),
+                force_x: D::from(pl.force_x),
                 start: pl.start,
                 end: pl.end.unwrap_or(f64::INFINITY),
+                ramp: pl.ramp,
+                direction: [pl.direction[0] / norm, pl.direction[1] / norm],
+                harmonics: pl
+                    .harmonics
+                    .iter()
+                    .map(|h| HarmonicForce {
+                        amplitude: D::from(h.amplitude),
+                        period: h.period,
+                        phase: D::from(h.phase),
+                    })
+                    .collect(),
+                series: pl.series.as_ref().map(|s| s.samples.as_slice().into()),
                 scene_index: i,
-            });
+            }
+        });
         let loads: Vec<_> = loads.collect();
         Ok(Chain {
             n,
@@ -394,14 +433,29 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 Some(d) => d.d = value,
                 None => return Err(missing(p, "the scene has no drag (D = 0)")),
             },
-            Parameter::LoadForce(i) => {
-                let l = self
-                    .loads
-                    .as_mut()
-                    .and_then(|ls| ls.loads.iter_mut().find(|l| l.scene_index == i));
-                match l {
-                    Some(l) => l.force = value,
-                    None => return Err(missing(p, "no such point load")),
+            Parameter::LoadForce(i)
+            | Parameter::LoadForceX(i)
+            | Parameter::LoadAmplitude { load: i, .. }
+            | Parameter::LoadPhase { load: i, .. } => {
+                if !self.has_parameter(p) {
+                    return Err(missing(
+                        p,
+                        "no such point load or harmonic (F_x: only in the spatial model)",
+                    ));
+                }
+                let l = self.loads.as_mut().and_then(|ls| ls.by_scene_index(i));
+                if let Some(l) = l {
+                    match p {
+                        Parameter::LoadForce(_) => l.force = value,
+                        Parameter::LoadForceX(_) => l.force_x = value,
+                        Parameter::LoadAmplitude { harmonic, .. } => {
+                            l.harmonics[harmonic].amplitude = value;
+                        }
+                        Parameter::LoadPhase { harmonic, .. } => {
+                            l.harmonics[harmonic].phase = value;
+                        }
+                        _ => {}
+                    }
                 }
             }
         }
@@ -409,7 +463,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     /// Whether `p` is a parameter of this model that gradients can be taken for (mass needs
-    /// uniform masses, drag needs D > 0, end stiffnesses need an end spring, loads need that load).
+    /// uniform masses, drag needs D > 0, end stiffnesses need an end spring, loads need that load,
+    /// harmonic parameters that harmonic, F_x the spatial model).
     pub fn has_parameter(&self, p: Parameter) -> bool {
         match p {
             Parameter::Mass => self.has_uniform_mass(),
@@ -417,10 +472,12 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::BaseStiffness => self.springs.present[0],
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,
-            Parameter::LoadForce(i) => self
-                .loads
-                .as_ref()
-                .is_some_and(|ls| ls.loads.iter().any(|l| l.scene_index == i)),
+            Parameter::LoadForce(_)
+            | Parameter::LoadForceX(_)
+            | Parameter::LoadAmplitude { .. }
+            | Parameter::LoadPhase { .. } => {
+                self.loads.as_ref().is_some_and(|ls| ls.reads(p, DIM == 3))
+            }
         }
     }
 

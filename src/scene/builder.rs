@@ -137,25 +137,25 @@ impl SceneBuilder {
         self
     }
 
-    /// Adds a point load `force` \[N\] at `node` (1..=n), acting for all t.
-    pub fn point_load(mut self, node: usize, force: f64) -> Self {
-        self.loads.points.push(PointLoad {
-            node,
-            force,
-            start: 0.0,
-            end: None,
-        });
-        self
+    /// Adds a point load `force` \[N\] along z at `node` (1..=n), acting for all t.
+    pub fn point_load(self, node: usize, force: f64) -> Self {
+        self.load(PointLoad::new(node, force))
     }
 
     /// Adds a point load `force` at `node` acting for `start ≤ t_k < end` \[s\].
-    pub fn point_load_window(mut self, node: usize, force: f64, start: f64, end: f64) -> Self {
-        self.loads.points.push(PointLoad {
-            node,
-            force,
-            start,
-            end: Some(end),
-        });
+    pub fn point_load_window(self, node: usize, force: f64, start: f64, end: f64) -> Self {
+        self.load(PointLoad::new(node, force).window(start, Some(end)))
+    }
+
+    /// Adds a constant point load (F_x, F_z) \[N\] at `node` (an x component makes the scene
+    /// spatial).
+    pub fn point_load_vector(self, node: usize, force: [f64; 2]) -> Self {
+        self.load(PointLoad::vector(node, force))
+    }
+
+    /// Adds any point load (constant, vector, harmonic, time series; see [`PointLoad`]).
+    pub fn load(mut self, load: PointLoad) -> Self {
+        self.loads.points.push(load);
         self
     }
 

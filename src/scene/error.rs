@@ -78,6 +78,17 @@ pub enum SceneErrorKind {
         /// 1-based line of the first occurrence, when found.
         first_line: Option<usize>,
     },
+    /// A load's time-series file (`loads.point[i].series`) is missing, unreadable or invalid.
+    SeriesFile {
+        /// The full key, e.g. `loads.point[0].series`.
+        key: String,
+        /// The series file, as named in the scene.
+        file: PathBuf,
+        /// 1-based line of the file, when the problem is on one line.
+        line: Option<usize>,
+        /// What is wrong, e.g. `times must increase strictly: t = 0.5 after t = 0.6 (line 4)`.
+        reason: String,
+    },
     /// The scene file could not be read.
     Io {
         /// The operating system's message.
@@ -95,7 +106,8 @@ impl SceneErrorKind {
             | Self::InvalidValue { key, .. }
             | Self::NodeOutOfRange { key, .. }
             | Self::WrongCount { key, .. }
-            | Self::DuplicateKey { key, .. } => Some(key),
+            | Self::DuplicateKey { key, .. }
+            | Self::SeriesFile { key, .. } => Some(key),
             Self::Syntax { .. } | Self::Io { .. } => None,
         }
     }
@@ -177,6 +189,23 @@ impl fmt::Display for SceneErrorKind {
                     write!(f, " (first at line {first})")?;
                 }
                 write!(f, "; each key may appear once")
+            }
+            Self::SeriesFile {
+                key,
+                file,
+                line,
+                reason,
+            } => {
+                write!(
+                    f,
+                    "key `{}`: series file `{}`",
+                    show_key(key),
+                    file.display()
+                )?;
+                if let Some(l) = line {
+                    write!(f, ", line {l}")?;
+                }
+                write!(f, ": {reason}")
             }
             Self::Io { message } => write!(f, "cannot read scene file: {message}"),
         }

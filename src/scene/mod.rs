@@ -5,7 +5,8 @@
 //! written with [`Scene::to_toml_string`], and checked by [`Scene::validate`], which rejects bad
 //! values with a [`SceneError`] naming the offending key. Ready-made thesis scenes are in
 //! [`crate::catalogue`]. The valid ranges are the constants [`LENGTH_RANGE`], [`MASS_RANGE`],
-//! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`] and
+//! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`],
+//! [`PERIOD_RANGE`] and
 //! [`MAX_STEP_NUMBER`]; the size limits are [`MAX_PENDULUMS`], [`MAX_STEPS`] and
 //! [`MAX_TRAJECTORY_BYTES`].
 //!
@@ -18,6 +19,7 @@
 mod builder;
 mod error;
 mod raw;
+pub(crate) mod series;
 mod validate;
 
 use std::path::Path;
@@ -26,9 +28,11 @@ use serde::{Deserialize, Serialize};
 
 pub use builder::SceneBuilder;
 pub use error::{SceneError, SceneErrorKind};
+pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
     human_bytes, ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE,
-    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, STEP_RANGE, STIFFNESS_RANGE,
+    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE,
+    STIFFNESS_RANGE,
 };
 
 use raw::RawScene;
@@ -67,18 +71,130 @@ pub struct Beam {
     pub reaction_force: bool,
 }
 
-/// A point load F at node `node` (eq. 2.2.2); thesis sign: it enters H as +F z, so F > 0 pushes
-/// toward −z.
+/// A point load at node `node` (eq. 2.2.2, extended to the transverse plane and to time-varying
+/// forces): at time t it is the vector F(t) = (F_x, F_z)(t) with
+///
+/// F(t) = w(t) · ρ(t) · [ (`force_x`, `force`) + d · Σⱼ Aⱼ sin(2π t/Tⱼ + φⱼ) + S(t) ],
+///
+/// w the window [`start`, `end`), ρ the ramp-in ([`PointLoad::ramp`]), d the unit
+/// [`direction`](PointLoad::direction) of the [`harmonics`](PointLoad::harmonics) and S the
+/// linearly interpolated [`series`](PointLoad::series). Thesis sign, for x as for z: the load
+/// enters H as +F·r (F_x·x + F_z·z of the node), so F_z > 0 pushes toward −z and F_x > 0 toward
+/// −x. A scene with any x component is spatial ([`Scene::is_spatial`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PointLoad {
     /// Node index 1..=n.
     pub node: usize,
-    /// Force F \[N\].
+    /// The constant force's z component F_z \[N\] (the thesis's F; `force = F` in a file).
     pub force: f64,
+    /// The constant force's x component F_x \[N\] (`force = [F_x, F_z]` in a file; default 0).
+    pub force_x: f64,
     /// The load acts for t_k ≥ `start` (default 0).
     pub start: f64,
     /// The load acts for t_k < `end` (default: forever).
     pub end: Option<f64>,
+    /// Ramp-in time T_r \[s\] (0: none): the whole load is multiplied by
+    /// ρ = ½(1 − cos(π (t − start)/T_r)) for start ≤ t < start + T_r, so it rises smoothly from 0.
+    pub ramp: f64,
+    /// Direction (d_x, d_z) of the harmonics in the transverse plane, normalised by the model
+    /// (default (0, 1): along z; must not have zero length).
+    pub direction: [f64; 2],
+    /// Harmonic components Aⱼ sin(2π t/Tⱼ + φⱼ) along `direction` (a sum of harmonics).
+    pub harmonics: Vec<Harmonic>,
+    /// A time series (t, F_x, F_z) read from a CSV file, linearly interpolated.
+    pub series: Option<LoadSeries>,
+}
+
+impl PointLoad {
+    /// A constant load F along z at `node` (thesis eq. 2.2.2), acting for all t.
+    pub fn new(node: usize, force: f64) -> Self {
+        PointLoad {
+            node,
+            force,
+            force_x: 0.0,
+            start: 0.0,
+            end: None,
+            ramp: 0.0,
+            direction: [0.0, 1.0],
+            harmonics: Vec::new(),
+            series: None,
+        }
+    }
+
+    /// A constant load (F_x, F_z) at `node`.
+    pub fn vector(node: usize, force: [f64; 2]) -> Self {
+        PointLoad {
+            force_x: force[0],
+            ..PointLoad::new(node, force[1])
+        }
+    }
+
+    /// A sum of harmonics along `direction` (d_x, d_z) at `node`, with no constant part.
+    pub fn harmonic(node: usize, direction: [f64; 2], harmonics: Vec<Harmonic>) -> Self {
+        PointLoad {
+            direction,
+            harmonics,
+            ..PointLoad::new(node, 0.0)
+        }
+    }
+
+    /// A time series at `node`, with no constant part.
+    pub fn series(node: usize, series: LoadSeries) -> Self {
+        PointLoad {
+            series: Some(series),
+            ..PointLoad::new(node, 0.0)
+        }
+    }
+
+    /// The same load acting for `start` ≤ t_k < `end`.
+    pub fn window(mut self, start: f64, end: Option<f64>) -> Self {
+        self.start = start;
+        self.end = end;
+        self
+    }
+
+    /// The same load with a ramp-in time T_r (see [`PointLoad::ramp`]).
+    pub fn ramped(mut self, ramp: f64) -> Self {
+        self.ramp = ramp;
+        self
+    }
+
+    /// Whether the load has a component along x at any time (it then needs the spatial model).
+    pub fn is_spatial(&self) -> bool {
+        self.force_x != 0.0
+            || (!self.harmonics.is_empty() && self.direction[0] != 0.0)
+            || self
+                .series
+                .as_ref()
+                .is_some_and(|s| s.samples.iter().any(|r| r[1] != 0.0))
+    }
+
+    /// An upper bound of |F(t)| over all t: |(F_x, F_z)| + Σ|Aⱼ| + max |S| (for the load number of
+    /// the step check, docs/scene-format.md).
+    pub fn max_magnitude(&self) -> f64 {
+        self.force_x.hypot(self.force)
+            + self
+                .harmonics
+                .iter()
+                .map(|h| h.amplitude.abs())
+                .sum::<f64>()
+            + self.series.as_ref().map_or(0.0, |s| {
+                s.samples
+                    .iter()
+                    .fold(0.0f64, |m, r| m.max(r[1].hypot(r[2])))
+            })
+    }
+}
+
+/// One harmonic component A sin(2π t/T + φ) of a point load (a regular wave's force at a node).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Harmonic {
+    /// Amplitude A \[N\] (thesis sign along the load's direction).
+    pub amplitude: f64,
+    /// Period T \[s\] (> 0).
+    pub period: f64,
+    /// Phase φ \[rad\] at t = 0.
+    pub phase: f64,
 }
 
 /// External loads.
@@ -157,6 +273,29 @@ impl Scene {
     pub fn n(&self) -> usize {
         self.beam.lengths.len()
     }
+
+    /// Whether the scene needs the spatial model (qᵢ ∈ S², `Chain<_, 3>`): some load has a
+    /// component along x ([`PointLoad::is_spatial`]). Otherwise every force lies in the yz-plane
+    /// and the planar model (`Chain<_, 2>`) computes the same motion with fewer components.
+    pub fn is_spatial(&self) -> bool {
+        self.loads.points.iter().any(PointLoad::is_spatial)
+    }
+
+    /// The first key that makes the scene spatial (for messages), e.g. `loads.point[1].force`.
+    pub fn spatial_key(&self) -> Option<String> {
+        self.loads.points.iter().enumerate().find_map(|(i, p)| {
+            let key = if p.force_x != 0.0 {
+                "force"
+            } else if !p.harmonics.is_empty() && p.direction[0] != 0.0 {
+                "direction"
+            } else if p.is_spatial() {
+                "series"
+            } else {
+                return None;
+            };
+            Some(format!("loads.point[{i}].{key}"))
+        })
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -171,14 +310,29 @@ impl Scene {
 
     /// Parses and validates a scene file's text (the format, defaults and limits are in the
     /// [module documentation](self)).
+    ///
+    /// A load's `series` file is read relative to the current directory; use
+    /// [`Scene::from_toml_str_in_dir`] or [`Scene::from_file`] to read it relative to a scene's
+    /// directory.
     pub fn from_toml_str(text: &str) -> Result<Scene, SceneError> {
+        Self::parse_in(text, None)
+    }
+
+    /// As [`Scene::from_toml_str`], with relative `series` file names taken relative to `dir`
+    /// (what [`Scene::from_file`] does with the scene file's directory).
+    pub fn from_toml_str_in_dir(text: &str, dir: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        Self::parse_in(text, Some(dir.as_ref()))
+    }
+
+    fn parse_in(text: &str, dir: Option<&Path>) -> Result<Scene, SceneError> {
         let raw = raw::parse(text)?;
-        let scene = raw.into_scene()?;
+        let scene = raw.into_scene(dir)?;
         scene.validate()?;
         Ok(scene)
     }
 
-    /// Reads, parses and validates a scene file; errors name the file.
+    /// Reads, parses and validates a scene file; errors name the file. A load's `series` file
+    /// name is relative to the scene file's directory.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path).map_err(|e| {
@@ -187,12 +341,16 @@ impl Scene {
             })
             .with_file(path)
         })?;
-        Self::from_toml_str(&text).map_err(|e| e.with_file(path))
+        let dir = path.parent().unwrap_or(Path::new(""));
+        Self::parse_in(&text, Some(dir)).map_err(|e| e.with_file(path))
     }
 
     /// The scene as a scene file, with every value explicit (end springs, loads,
     /// control node). Per-pendulum values are written as one number when they are all equal.
-    /// For a valid scene, `Scene::from_toml_str(&s.to_toml_string()) == Ok(s)`.
+    /// For a valid scene, `Scene::from_toml_str(&s.to_toml_string()) == Ok(s)`; a scene with a
+    /// load `series` refers to its file by the name it was given
+    /// ([`LoadSeries::file`]), so the text reads back from the directory that name is relative to
+    /// ([`Scene::from_toml_str_in_dir`]).
     pub fn to_toml_string(&self) -> String {
         toml::to_string(&RawScene::from_scene(self))
             .expect("serialising plain tables of numbers, strings and arrays cannot fail")

@@ -3,6 +3,7 @@
 
 use std::fmt;
 use std::ops::Range;
+use std::path::{Path, PathBuf};
 
 use serde::de::{SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
@@ -12,8 +13,8 @@ use toml::Spanned;
 use super::builder::assemble_beam;
 use super::validate::{check_size, node_index, positive_count};
 use super::{
-    Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneError, SceneErrorKind,
-    Support, TimeGrid,
+    Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
+    SceneErrorKind, Support, TimeGrid,
 };
 
 /// Parses TOML text into the raw structures; errors name the key.
@@ -142,11 +143,152 @@ struct RawLoads {
 #[serde(deny_unknown_fields)]
 struct RawPoint {
     node: i64,
-    force: f64,
+    /// F (along z) or [F_x, F_z]; optional when the load has harmonics or a series.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    force: Option<NumOrArray>,
     #[serde(default, skip_serializing_if = "is_positive_zero")]
     start: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     end: Option<f64>,
+    #[serde(default, skip_serializing_if = "is_positive_zero")]
+    ramp: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    direction: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    series: Option<String>,
+    // Tables last: TOML writes plain values before sub-tables.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    harmonic: Vec<RawHarmonic>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawHarmonic {
+    amplitude: f64,
+    period: f64,
+    #[serde(default, skip_serializing_if = "is_positive_zero")]
+    phase: f64,
+}
+
+impl RawPoint {
+    fn from_load(p: &PointLoad) -> Self {
+        let varying = !p.harmonics.is_empty() || p.series.is_some();
+        let force = if p.force_x.to_bits() != 0 {
+            Some(NumOrArray::Array(vec![p.force_x, p.force]))
+        } else if p.force.to_bits() != 0 || !varying {
+            Some(NumOrArray::Number(p.force))
+        } else {
+            None
+        };
+        let default_direction =
+            p.direction[0].to_bits() == 0 && p.direction[1].to_bits() == 1f64.to_bits();
+        RawPoint {
+            node: to_i64(p.node),
+            force,
+            start: p.start,
+            end: p.end,
+            ramp: p.ramp,
+            direction: (!p.harmonics.is_empty() && !default_direction)
+                .then(|| p.direction.to_vec()),
+            series: p
+                .series
+                .as_ref()
+                .map(|s| s.file.to_string_lossy().into_owned()),
+            harmonic: p
+                .harmonics
+                .iter()
+                .map(|h| RawHarmonic {
+                    amplitude: h.amplitude,
+                    period: h.period,
+                    phase: h.phase,
+                })
+                .collect(),
+        }
+    }
+
+    /// The load of `loads.point[i]`; a `series` file is read relative to `dir` (if given).
+    fn into_load(self, i: usize, n: usize, dir: Option<&Path>) -> Result<PointLoad, SceneError> {
+        let key = |k: &str| format!("loads.point[{i}].{k}");
+        let node = node_index(&key("node"), self.node, n)?;
+        let varying = !self.harmonic.is_empty() || self.series.is_some();
+        let [force_x, force] = match self.force {
+            Some(NumOrArray::Number(f)) => [0.0, f],
+            Some(NumOrArray::Array(v)) => match v[..] {
+                [fx, fz] => [fx, fz],
+                _ => {
+                    return Err(SceneError::invalid(
+                        key("force"),
+                        format!(
+                            "a vector force has 2 components [fx, fz] (transverse to the beam, \
+                             which lies along y), got {} values",
+                            v.len()
+                        ),
+                    ))
+                }
+            },
+            None if varying => [0.0, 0.0],
+            None => {
+                return Err(SceneErrorKind::MissingKey {
+                    key: key("force"),
+                    note: Some("required unless the load has a `harmonic` or a `series`".into()),
+                }
+                .into())
+            }
+        };
+        let direction = match self.direction {
+            None => [0.0, 1.0],
+            Some(_) if self.harmonic.is_empty() => {
+                return Err(SceneError::invalid(
+                    key("direction"),
+                    "the direction applies to the load's harmonics, and it has none: add \
+                     [[loads.point.harmonic]] tables, or give a constant force as `force = [fx, fz]`",
+                ))
+            }
+            Some(v) => match v[..] {
+                [dx, dz] => [dx, dz],
+                _ => {
+                    return Err(SceneError::invalid(
+                        key("direction"),
+                        format!(
+                            "a direction has 2 components [dx, dz] (transverse to the beam), got \
+                             {} values",
+                            v.len()
+                        ),
+                    ))
+                }
+            },
+        };
+        let series = match self.series {
+            None => None,
+            Some(name) => {
+                let written = PathBuf::from(&name);
+                let resolved = match dir {
+                    Some(d) if written.is_relative() => d.join(&written),
+                    _ => written.clone(),
+                };
+                Some(LoadSeries::read_at(&key("series"), &written, &resolved)?)
+            }
+        };
+        Ok(PointLoad {
+            node,
+            force,
+            force_x,
+            start: self.start,
+            end: self.end,
+            ramp: self.ramp,
+            direction,
+            harmonics: self
+                .harmonic
+                .into_iter()
+                .map(|h| Harmonic {
+                    amplitude: h.amplitude,
+                    period: h.period,
+                    phase: h.phase,
+                })
+                .collect(),
+            series,
+        })
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -192,17 +334,7 @@ impl RawScene {
             loads: Some(RawLoads {
                 gravity: s.loads.gravity,
                 drag: s.loads.drag,
-                point: s
-                    .loads
-                    .points
-                    .iter()
-                    .map(|p| RawPoint {
-                        node: to_i64(p.node),
-                        force: p.force,
-                        start: p.start,
-                        end: p.end,
-                    })
-                    .collect(),
+                point: s.loads.points.iter().map(RawPoint::from_load).collect(),
             }),
             time: RawTime {
                 step: s.time.step,
@@ -217,7 +349,8 @@ impl RawScene {
         }
     }
 
-    pub(super) fn into_scene(self) -> Result<Scene, SceneError> {
+    /// The scene; `series` files are read relative to `dir` (the current directory if `None`).
+    pub(super) fn into_scene(self, dir: Option<&Path>) -> Result<Scene, SceneError> {
         let n = positive_count("beam.pendulums", self.beam.pendulums)?;
         let steps = positive_count("time.steps", self.time.steps)?;
         check_size(n, steps, self.beam.support)?;
@@ -235,12 +368,7 @@ impl RawScene {
         let raw_loads = self.loads.unwrap_or_default();
         let mut points = Vec::with_capacity(raw_loads.point.len());
         for (i, p) in raw_loads.point.into_iter().enumerate() {
-            points.push(PointLoad {
-                node: node_index(&format!("loads.point[{i}].node"), p.node, n)?,
-                force: p.force,
-                start: p.start,
-                end: p.end,
-            });
+            points.push(p.into_load(i, n, dir)?);
         }
         let control = match self.control {
             None => None,

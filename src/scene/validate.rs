@@ -2,7 +2,7 @@
 //! (docs/scene-format.md, "Valid ranges" and "Size limits").
 
 use super::raw::{to_i64, NumOrArray};
-use super::{ControlKind, Scene, SceneError, SceneErrorKind, Support};
+use super::{ControlKind, PointLoad, Scene, SceneError, SceneErrorKind, Support};
 
 /// Largest number of pendulums n a scene may have.
 pub const MAX_PENDULUMS: usize = 1_000_000;
@@ -81,6 +81,13 @@ pub const DRAG_RANGE: ValueRange = ValueRange {
     max: 1e12,
     unit: "kg/m",
     why: "h·D·|p| enters the implicit half step",
+};
+/// Period T of a harmonic load \[s\]: 10⁻¹² to 10¹² s.
+pub const PERIOD_RANGE: ValueRange = ValueRange {
+    min: 1e-12,
+    max: 1e12,
+    unit: "s",
+    why: "2π·t/T is the harmonic's phase, and must stay finite",
 };
 /// Time step h \[s\]: 10⁻¹² to 10⁴ s.
 pub const STEP_RANGE: ValueRange = ValueRange {
@@ -161,23 +168,14 @@ impl Scene {
         check_nonnegative("loads.drag", self.loads.drag)?;
         check_range("loads.drag", self.loads.drag, &DRAG_RANGE)?;
         for (i, p) in self.loads.points.iter().enumerate() {
-            let key = |k: &str| format!("loads.point[{i}].{k}");
-            node_index(&key("node"), to_i64(p.node), n)?;
-            check_finite(&key("force"), p.force)?;
-            check_range(&key("force"), p.force, &FORCE_RANGE)?;
-            check_finite(&key("start"), p.start)?;
-            if let Some(end) = p.end {
-                check_finite(&key("end"), end)?;
-                if end <= p.start {
-                    return Err(SceneError::invalid(
-                        key("end"),
-                        format!("must be greater than start = {}, got {end}", p.start),
-                    ));
-                }
-            }
+            check_point_load(i, p, n)?;
         }
         check_positive("time.step", self.time.step)?;
         check_range("time.step", self.time.step, &STEP_RANGE)?;
+        let t_end = self.time.steps as f64 * self.time.step;
+        for (i, p) in self.loads.points.iter().enumerate() {
+            check_series_coverage(i, p, t_end)?;
+        }
         if let Some(c) = &self.control {
             node_index("control.node", to_i64(c.node), n)?;
             if b.reaction_force && c.node != n {
@@ -235,7 +233,11 @@ impl Scene {
             .control
             .as_ref()
             .map_or(0.0, |c| c.values.iter().fold(0.0f64, |a, u| a.max(u.abs())));
-        let load: f64 = loads.points.iter().map(|p| p.force.abs()).sum::<f64>()
+        let load: f64 = loads
+            .points
+            .iter()
+            .map(PointLoad::max_magnitude)
+            .sum::<f64>()
             + loads.gravity.abs() * total_mass
             + max_u;
         let (mut worst_spring, mut at_spring) = (0.0f64, 0);
@@ -286,6 +288,80 @@ impl Scene {
         }
         Ok(())
     }
+}
+
+/// The rules of one point load `loads.point[i]` (docs/scene-format.md, `[[loads.point]]`).
+fn check_point_load(i: usize, p: &PointLoad, n: usize) -> Result<(), SceneError> {
+    let key = |k: &str| format!("loads.point[{i}].{k}");
+    node_index(&key("node"), to_i64(p.node), n)?;
+    for f in [p.force_x, p.force] {
+        check_finite(&key("force"), f)?;
+        check_range(&key("force"), f, &FORCE_RANGE)?;
+    }
+    check_finite(&key("start"), p.start)?;
+    if let Some(end) = p.end {
+        check_finite(&key("end"), end)?;
+        if end <= p.start {
+            return Err(SceneError::invalid(
+                key("end"),
+                format!("must be greater than start = {}, got {end}", p.start),
+            ));
+        }
+    }
+    check_nonnegative(&key("ramp"), p.ramp)?;
+    let [dx, dz] = p.direction;
+    let norm = dx.hypot(dz);
+    if !(dx.is_finite() && dz.is_finite() && norm > 0.0 && norm.is_finite()) {
+        return Err(SceneError::invalid(
+            key("direction"),
+            format!(
+                "must be a finite vector [dx, dz] of non-zero length, got [{dx}, {dz}]{}",
+                if norm == 0.0 {
+                    " (zero length: no direction)"
+                } else {
+                    ""
+                }
+            ),
+        ));
+    }
+    for (j, h) in p.harmonics.iter().enumerate() {
+        let hkey = |k: &str| format!("loads.point[{i}].harmonic[{j}].{k}");
+        check_finite(&hkey("amplitude"), h.amplitude)?;
+        check_range(&hkey("amplitude"), h.amplitude, &FORCE_RANGE)?;
+        check_positive(&hkey("period"), h.period)?;
+        check_range(&hkey("period"), h.period, &PERIOD_RANGE)?;
+        check_finite(&hkey("phase"), h.phase)?;
+    }
+    if let Some(series) = &p.series {
+        series.check(&key("series"))?;
+    }
+    Ok(())
+}
+
+/// A time series must cover the times t_k ∈ [0, t_N] at which its load acts (t_N = `t_end`).
+fn check_series_coverage(i: usize, p: &PointLoad, t_end: f64) -> Result<(), SceneError> {
+    let key = |k: &str| format!("loads.point[{i}].{k}");
+    if let Some(series) = &p.series {
+        // The rows must cover the times t_k ∈ [0, t_N] at which the load acts.
+        let from = p.start.max(0.0);
+        let to = p.end.map_or(t_end, |e| e.min(t_end));
+        let (a, b) = series.span();
+        let tol = 1e-9 * t_end.max(1.0);
+        if from <= to && (a > from + tol || b < to - tol) {
+            return Err(SceneErrorKind::SeriesFile {
+                key: key("series"),
+                file: series.file.clone(),
+                line: None,
+                reason: format!(
+                    "its rows cover t ∈ [{a}, {b}] s but the load acts for t ∈ [{from}, {to}] s \
+                     (the grid ends at t_N = N·h = {t_end} s); extend the series, or set `start`/`end` \
+                     or `time.steps`"
+                ),
+            }
+            .into());
+        }
+    }
+    Ok(())
 }
 
 /// The number of `control.values` a control kind needs with N steps.

@@ -8,7 +8,9 @@ use serde::Serialize;
 use crate::output::Output;
 use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs};
 use crate::progress::Progress;
-use crate::{check_finite, controls_io, inputs, lib_error, load_scene, to_json, CliError};
+use crate::{
+    check_finite, controls_io, inputs, lib_error, load_scene, series_files, to_json, CliError,
+};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `gradient --help`.
@@ -66,6 +68,7 @@ pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
     let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, a.controls.as_ref()))?;
     problem::check_effort(a.problem.effort)?;
     let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let file = a.controls.as_deref().map(controls_io::read).transpose()?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), file.as_ref())?;
     let n = sp.theta0.len();

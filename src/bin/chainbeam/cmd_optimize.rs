@@ -12,7 +12,7 @@ use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};
 use crate::output::Output;
 use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, SceneProblem};
 use crate::progress::Progress;
-use crate::{check_finite, inputs, lib_error, load_scene, to_json, CliError};
+use crate::{check_finite, inputs, lib_error, load_scene, series_files, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `optimize --help`.
@@ -426,6 +426,7 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
     }
     opts.progress = a.progress;
     let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     let design = a.design.design(&sp.theta0)?;
     check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), opts.bound)?;
@@ -613,6 +614,7 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
     let opts = a.solver.options()?;
     problem::check_effort(a.problem.effort)?;
     let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     let design = a.design.design(&sp.theta0)?;
     let starts = a.starts as usize;

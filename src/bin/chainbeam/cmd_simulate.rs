@@ -5,11 +5,11 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
-use chainbeam::{simulate, simulate_with_controls, ControlMap, Scene, Trajectory};
+use chainbeam::{simulate, simulate_with_controls, ControlMap, Scene, SceneTrajectory};
 
 use crate::output::{push_f64, Output};
 use crate::progress::Progress;
-use crate::{controls_io, inputs, lib_error, load_scene, npy, CliError};
+use crate::{controls_io, inputs, lib_error, load_scene, npy, series_files, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `simulate --help`.
@@ -22,7 +22,8 @@ CSV (the default): a header line, then one row per time t_k = k·h, k = 0..N (N 
   t        time t_k [s]
   energy   total energy H(q_k, p_k; t_k, u_k) [J] (kinetic + springs + loads + control + gravity)
   moment   base bending moment M₀(t_k) = 2·k₁·z₁/l₁² [Nm] (thesis eq. 3.1.3)
-  xi,yi,zi position of node i = 1..n [m]; x = 0 (planar model), the beam lies along +y
+  xi,yi,zi position of node i = 1..n [m]; the beam lies along +y. x = 0 for a planar scene;
+           a scene with a load along x runs the spatial model and fills x in
   control  the control force u_k [N] applied at t_k (0 without a control); always the last column
 Numbers are written as the shortest decimal that reads back to the same double.
 
@@ -30,7 +31,9 @@ NumPy (--format npy, or an --output name ending in .npy): one C-ordered float64 
 (N + 1, 3n + 4) with the same columns in the same order (np.load(FILE); positions are \
 a[:, 3:-1].reshape(-1, n, 3)).
 
-Sign convention: a load F > 0 enters H as +F·z and pushes toward −z; u = −F cancels a tip load F.";
+Sign convention: a load F > 0 enters H as +F·z and pushes toward −z (and F_x > 0 of a vector load \
+[F_x, F_z] toward −x); u = −F cancels a tip load F. In a spatial scene `moment` is still the \
+moment of z₁ (the bending in the yz-plane).";
 
 /// `simulate`'s flags.
 #[derive(Args)]
@@ -79,6 +82,7 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         ));
     }
     let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let controls = match &a.controls {
         Some(path) => Some(controls_u(&scene, &controls_io::read(path)?)?),
         None => None,
@@ -118,7 +122,7 @@ fn controls_u(scene: &Scene, file: &controls_io::ControlsFile) -> Result<Vec<f64
 }
 
 /// Never write NaN: every value is checked before the first byte goes out.
-fn check_trajectory(path: &Path, traj: &Trajectory<f64, 2>) -> Result<(), CliError> {
+fn check_trajectory(path: &Path, traj: &SceneTrajectory) -> Result<(), CliError> {
     for k in 0..=traj.steps() {
         let bad = |col: &str| {
             CliError::msg(format!(
@@ -130,9 +134,9 @@ fn check_trajectory(path: &Path, traj: &Trajectory<f64, 2>) -> Result<(), CliErr
         };
         for (col, v) in [
             ("t", traj.time(k)),
-            ("energy", traj.energy[k]),
-            ("moment", traj.moment[k]),
-            ("control", traj.controls[k]),
+            ("energy", traj.energy()[k]),
+            ("moment", traj.moment()[k]),
+            ("control", traj.controls()[k]),
         ] {
             if !v.is_finite() {
                 return Err(bad(col));
@@ -160,18 +164,18 @@ pub fn csv_header(n: usize) -> String {
 }
 
 /// One row of the trajectory at step k, in the column order of [`csv_header`].
-fn row(traj: &Trajectory<f64, 2>, k: usize, out: &mut Vec<f64>) {
+fn row(traj: &SceneTrajectory, k: usize, out: &mut Vec<f64>) {
     out.clear();
-    out.extend([traj.time(k), traj.energy[k], traj.moment[k]]);
+    out.extend([traj.time(k), traj.energy()[k], traj.moment()[k]]);
     for r in traj.positions(k) {
         out.extend(r);
     }
-    out.push(traj.controls[k]);
+    out.push(traj.controls()[k]);
 }
 
 fn write_csv(
     w: &mut dyn Write,
-    traj: &Trajectory<f64, 2>,
+    traj: &SceneTrajectory,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
     w.write_all(csv_header(traj.n()).as_bytes())?;
@@ -198,7 +202,7 @@ fn write_csv(
 
 fn write_npy(
     w: &mut dyn Write,
-    traj: &Trajectory<f64, 2>,
+    traj: &SceneTrajectory,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
     let columns = 4 + 3 * traj.n();

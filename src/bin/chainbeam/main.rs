@@ -182,6 +182,18 @@ pub fn load_scene(path: &Path) -> Result<Scene, CliError> {
     Scene::from_file(path).map_err(|e| CliError::msg(e.to_string()))
 }
 
+/// The time-series files a scene read from `path` loads (inputs the output must not overwrite).
+pub fn series_files(path: &Path, scene: &Scene) -> Vec<PathBuf> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    scene
+        .loads
+        .points
+        .iter()
+        .filter_map(|p| p.series.as_ref())
+        .map(|s| dir.join(&s.file))
+        .collect()
+}
+
 /// Checks that every number about to be written is finite; the error names the output key.
 pub fn check_finite(path: &Path, key: &str, values: &[f64]) -> Result<(), CliError> {
     match values.iter().position(|v| !v.is_finite()) {

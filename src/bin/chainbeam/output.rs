@@ -176,6 +176,35 @@ fn write_error(target: &Path, e: &io::Error) -> CliError {
     ))
 }
 
+/// The error for an output `target` (metadata `meta`, named `shown`) that is one of `inputs`.
+fn refuse_clash(
+    shown: &Path,
+    target: &Path,
+    meta: &fs::Metadata,
+    inputs: &[&Path],
+) -> Result<(), CliError> {
+    // Unix compares device and inode (`meta`), elsewhere canonical paths (`target`).
+    let _ = (target, meta);
+    for input in inputs {
+        let clash = match fs::metadata(input) {
+            #[cfg(unix)]
+            Ok(im) => same_file(&im, meta),
+            #[cfg(not(unix))]
+            Ok(_) => fs::canonicalize(input).is_ok_and(|p| p == target),
+            Err(_) => false,
+        };
+        if clash {
+            return Err(CliError::msg(format!(
+                "{}: refusing to write the output onto the input file {}; choose another \
+                 --output",
+                shown.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(unix)]
 fn same_file(a: &fs::Metadata, b: &fs::Metadata) -> bool {
     use std::os::unix::fs::MetadataExt;
@@ -243,23 +272,7 @@ impl Output {
                 shown.display()
             )));
         }
-        for input in inputs {
-            let clash = match fs::metadata(input) {
-                #[cfg(unix)]
-                Ok(im) => same_file(&im, &meta),
-                #[cfg(not(unix))]
-                Ok(_) => fs::canonicalize(input).is_ok_and(|p| p == target),
-                Err(_) => false,
-            };
-            if clash {
-                return Err(CliError::msg(format!(
-                    "{}: refusing to write the output onto the input file {}; choose another \
-                     --output",
-                    shown.display(),
-                    input.display()
-                )));
-            }
-        }
+        refuse_clash(shown, &target, &meta, inputs)?;
         if !meta.is_file() {
             // FIFO, character or block device, socket: never replaced by a regular file.
             return in_place(target, false);
@@ -305,6 +318,23 @@ impl Output {
             target,
             shown: shown.to_path_buf(),
         })
+    }
+
+    /// Refuses an output that is one of `inputs`, for inputs known only once the scene is read
+    /// (a load's time-series file); [`Output::prepare`] checked the others.
+    pub fn refuse_inputs<P: AsRef<Path>>(&self, inputs: &[P]) -> Result<(), CliError> {
+        let (target, shown) = match self {
+            Output::Stdout => return Ok(()),
+            Output::InPlace { target, shown, .. } | Output::Replace { target, shown, .. } => {
+                (target, shown)
+            }
+        };
+        // A target that does not exist yet is no input.
+        let Ok(meta) = fs::metadata(target) else {
+            return Ok(());
+        };
+        let inputs: Vec<&Path> = inputs.iter().map(AsRef::as_ref).collect();
+        refuse_clash(shown, target, &meta, &inputs)
     }
 
     /// Whether the output is standard output.

@@ -32,7 +32,7 @@ mod spring;
 pub use control::ControlForce;
 pub use drag::Drag;
 pub use gravity::Gravity;
-pub use point_load::{PointLoad, PointLoads};
+pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use spring::Springs;
 
 use super::{Parameter, Scalar};

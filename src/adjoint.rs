@@ -1038,6 +1038,16 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         &self.map
     }
 
+    /// The step h.
+    pub fn h(&self) -> f64 {
+        self.h
+    }
+
+    /// The objective.
+    pub fn objective(&self) -> &O {
+        &self.objective
+    }
+
     fn check_theta(&self, theta: &[f64], name: &'static str) -> Result<()> {
         if theta.len() != self.map.n_params() {
             return Err(Error::InvalidArgument {

@@ -62,6 +62,7 @@ pub mod euler_bernoulli;
 pub mod integrators;
 pub mod model;
 pub mod multistart;
+pub mod ocp;
 pub mod optimize;
 pub mod rattle;
 pub mod scene;

@@ -1,0 +1,904 @@
+//! A structure-exploiting second-order optimal-control solver for per-step and piecewise-constant
+//! controls: box-constrained iLQR (Gauss-Newton DDP) on the RATTLE map, with a Riccati backward
+//! pass in faer. One iteration costs O(N) (a rollout, the stage Jacobians, one backward pass),
+//! whatever the number of controls, where a Hessian-vector product of a trust-region method costs
+//! a whole forward-over-adjoint sweep and a Newton step needs many of them.
+//!
+//! # The problem
+//! J(θ) = Σ_{k=0}^{N} [c_k M₀(t_k)² + ρh u_k²] + (σ/h) Σ_{k=1}^{N} (u_k − u_{k−1})²
+//! over the RATTLE trajectory from the straight beam at rest, with c_k = 1 (c_sum, eq. 3.3.4) or
+//! c_k = [k = N] (c, eq. 3.3.2), ρ the effort weight of [`BendingObjective::effort`], σ ≥ 0 the
+//! optional rate penalty [`OcpOptions::rate_penalty`] (σh Σ ((u_k − u_{k−1})/h)²: real thrusters
+//! cannot jump), u_k = θ_{piece(k)} (per-step: θ = u; piecewise: the pieces of
+//! [`PiecewiseControl`](crate::PiecewiseControl)), and the box lower ≤ θ ≤ upper. The costs are
+//! those of [`ControlProblem::value`]; without the rate penalty J is exactly that function.
+//!
+//! # The method (choices, measured on the long-horizon scene)
+//! - **Stage structure** ([`stage`]): one control per stage through the shifted state
+//!   x̂_k = (q_k, p̂_k), tangent coordinates ξ = (φ, ω) (2n per stage instead of 4n), Jacobians
+//!   A_k, B_k by `DualSVec64<8>` through the one generic RATTLE step (its derivative-only Newton
+//!   update is the implicit function theorem, exact to round-off), computed in parallel
+//!   (rayon, one workspace per thread: stages are independent given the trajectory).
+//! - **Gauss-Newton model**: the bending residual r_k = M₀(q_k) is linearised (l_xx = 2∇r∇rᵀ),
+//!   second derivatives of the dynamics are dropped (iLQR rather than full DDP: no second-order
+//!   pass; with ρ > 0 the model is positive definite, so the recursion cannot break down).
+//! - **Backward pass** ([`riccati`]): the Riccati recursion of Tassa, Erez, Todorov (2012) on
+//!   faer matrices, with the exact costate sweep beside it: the gradient g it returns equals the
+//!   discrete adjoint [`ControlProblem::gradient`] to round-off (tested to 1e-12).
+//! - **Bounds, exactly** ([`boxqp`]): each stage's QP is solved on its box (a clamp for one
+//!   control; clamped controls get no feedback), and the forward pass clamps: no iterate leaves
+//!   the box, no reparametrisation.
+//! - **Rate penalty and pieces**: the state is augmented with w_k = u_{k−1}; inside a piece the
+//!   control is held (u_k = w_k, no decision), so one recursion serves per-step, piecewise and
+//!   rate-penalised problems.
+//! - **Globalisation** ([`line_search`]): closed-loop rollouts u_k = clamp(ū_k + α k_k + K_k δz_k)
+//!   from u = θ₀, α = 1, ½, …, accepted when J̄ − J(α) ≥ c·(−ΔJ(α)) (c =
+//!   [`OcpOptions::armijo`]); if no α passes, the Levenberg regularisation μ (added to Q_uu, scaled
+//!   by the mean Q_uu) grows tenfold and the backward pass is redone; it shrinks after full steps.
+//! - **Convergence**: the projected gradient ‖θ − Π_box(θ − g)‖₂ (the first-order KKT measure;
+//!   equal to ‖g‖ without active bounds) at most `max(grad_tol, rel_grad_tol·‖g₀‖)`. Otherwise
+//!   the run ends *not converged* with the reason: the iteration limit, μ beyond its limit (no
+//!   descent found), or steps whose predicted decrease stays below J's round-off.
+//! - **Memory** O(N (n + nz)) for the trajectory, gains and costates; the stage Jacobians
+//!   (8(2n)² bytes per stage) are kept for the whole horizon while they fit in
+//!   [`OcpOptions::jacobian_memory`], otherwise recomputed block-wise just ahead of the backward
+//!   sweep. No sweep allocates: every buffer is sized when the [`Solver`] is built.
+//!
+//! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
+//! [`BendingObjective`] (c or c_sum, with effort), controls that are per-step or piecewise
+//! constant in time. Locked and reaction-force tips are refused with
+//! [`Error::InvalidArgument`] (their tip constraint removes a dimension of the state manifold that
+//! the tangent coordinates do not).
+//!
+//! # Example
+//! ```
+//! use chainbeam::ocp::{solve, OcpOptions};
+//! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
+//! let scene = catalogue::riser(5); // thesis Table 3.4 scene, N = 10
+//! let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
+//! let problem = ControlProblem::new(&scene, map, BendingObjective::summed_moment().with_effort(0.01))?;
+//! let r = solve(&problem, &[0.0; 11], &OcpOptions::default().with_bound(100.0))?;
+//! assert!(r.converged);
+//! assert!(r.projected_gradient_norm <= 1e-8 * r.initial_gradient_norm);
+//! assert!(r.theta.iter().all(|u| u.abs() <= 100.0));
+//! # Ok::<(), chainbeam::Error>(())
+//! ```
+//!
+//! # References
+//! 1. Y. Tassa, T. Erez, E. Todorov, Synthesis and stabilization of complex behaviors through
+//!    online trajectory optimization, IROS 2012 (iLQR/DDP, regularisation, line search).
+//! 2. Y. Tassa, N. Mansard, E. Todorov, Control-limited differential dynamic programming,
+//!    ICRA 2014 (box-QP, clamped gains).
+//! 3. C. Mastalli et al., Crocoddyl, ICRA 2020 (acceptance test, regularisation schedule).
+//! 4. C. V. Rao, S. J. Wright, J. B. Rawlings, Application of interior-point methods to model
+//!    predictive control, JOTA 1998 (the Riccati recursion as a structured KKT solve).
+
+pub mod boxqp;
+pub mod line_search;
+pub mod riccati;
+pub mod stage;
+
+use std::time::Instant;
+
+use faer::Mat;
+use rayon::prelude::*;
+
+use crate::adjoint::{BendingObjective, ControlMap, ControlProblem};
+use crate::error::{Error, Result};
+use crate::scene::ObjectiveKind;
+use line_search::{rollout, Feedback, Traj};
+use riccati::{Riccati, StageCost, StageInput};
+use stage::{tangent, JacobianWorkspace, StageModel, Stepper};
+
+/// Options of [`solve`]. Build with struct update syntax or [`OcpOptions::with_bound`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct OcpOptions {
+    /// Lower bound on every θ (force, N). Default −∞.
+    pub lower: f64,
+    /// Upper bound on every θ. Default +∞.
+    pub upper: f64,
+    /// σ ≥ 0 of the rate penalty (σ/h) Σ (u_k − u_{k−1})² = σh Σ ((u_k − u_{k−1})/h)². Default 0.
+    pub rate_penalty: f64,
+    /// Iterations (accepted steps). Default 200.
+    pub max_iters: usize,
+    /// Stop when the projected gradient ≤ `rel_grad_tol`·‖g₀‖. Default 10⁻⁸.
+    pub rel_grad_tol: f64,
+    /// Stop when the projected gradient ≤ `grad_tol`. Default 0 (off).
+    pub grad_tol: f64,
+    /// c of the acceptance test J̄ − J(α) ≥ c·(−ΔJ(α)). Default 0.1.
+    pub armijo: f64,
+    /// Step lengths tried per backward pass: α = 1, ½, …, 2^{1−backtracks}. Default 10.
+    pub backtracks: usize,
+    /// Largest relative regularisation μ/mean(Q_uu) before giving up. Default 10¹⁰.
+    pub max_regularisation: f64,
+    /// Bytes the stage Jacobians may occupy; beyond it they are recomputed per block in every
+    /// backward pass. Default 1 GiB.
+    pub jacobian_memory: usize,
+    /// Threads for the stage Jacobians; 0 = rayon's pool size. Default 0.
+    pub threads: usize,
+}
+
+impl Default for OcpOptions {
+    fn default() -> Self {
+        OcpOptions {
+            lower: f64::NEG_INFINITY,
+            upper: f64::INFINITY,
+            rate_penalty: 0.0,
+            max_iters: 200,
+            rel_grad_tol: 1e-8,
+            grad_tol: 0.0,
+            armijo: 0.1,
+            backtracks: 10,
+            max_regularisation: 1e10,
+            jacobian_memory: 1 << 30,
+            threads: 0,
+        }
+    }
+}
+
+impl OcpOptions {
+    /// The symmetric box |θ| ≤ `b`.
+    pub fn with_bound(mut self, b: f64) -> Self {
+        self.lower = -b;
+        self.upper = b;
+        self
+    }
+
+    /// Checks every field ([`Error::InvalidArgument`] naming it).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &'static str, reason: String| Err(Error::InvalidArgument { name, reason });
+        if self.lower.is_nan() || self.upper.is_nan() || self.lower >= self.upper {
+            return bad(
+                "bounds",
+                format!(
+                    "need lower < upper (not NaN), got [{}, {}]",
+                    self.lower, self.upper
+                ),
+            );
+        }
+        if self.lower == f64::INFINITY || self.upper == f64::NEG_INFINITY {
+            return bad("bounds", "the box is empty".into());
+        }
+        if !(self.rate_penalty.is_finite() && self.rate_penalty >= 0.0) {
+            return bad(
+                "rate_penalty",
+                format!("must be finite and >= 0, got {}", self.rate_penalty),
+            );
+        }
+        for (name, v) in [
+            ("rel_grad_tol", self.rel_grad_tol),
+            ("grad_tol", self.grad_tol),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, format!("must be finite and >= 0, got {v}"));
+            }
+        }
+        if !(self.armijo > 0.0 && self.armijo < 1.0) {
+            return bad("armijo", format!("must be in (0, 1), got {}", self.armijo));
+        }
+        if self.backtracks == 0 {
+            return bad("backtracks", "must be at least 1".into());
+        }
+        if !(self.max_regularisation.is_finite() && self.max_regularisation > 0.0) {
+            return bad(
+                "max_regularisation",
+                format!(
+                    "must be positive and finite, got {}",
+                    self.max_regularisation
+                ),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Why a run stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    /// The projected gradient met the tolerance.
+    Converged,
+    /// [`OcpOptions::max_iters`] accepted steps without convergence.
+    MaxIterations,
+    /// No step length was accepted even with the regularisation at its limit.
+    RegularisationLimit,
+    /// Several steps in a row predicted a decrease below J's round-off while the gradient
+    /// stayed above the tolerance.
+    RoundOff,
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Termination::Converged => "converged (projected gradient below the tolerance)",
+            Termination::MaxIterations => "iteration limit reached",
+            Termination::RegularisationLimit => {
+                "no descent step found with the regularisation at its limit"
+            }
+            Termination::RoundOff => "predicted decrease below the round-off of J",
+        })
+    }
+}
+
+/// One accepted iteration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IterationRecord {
+    /// J after the step.
+    pub objective: f64,
+    /// Projected gradient before the step.
+    pub projected_gradient_norm: f64,
+    /// The accepted step length.
+    pub alpha: f64,
+    /// Relative regularisation μ/mean(Q_uu) of the accepted backward pass.
+    pub regularisation: f64,
+}
+
+/// The outcome of [`solve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct OcpResult {
+    /// J at the result (including the rate penalty, if any).
+    pub objective: f64,
+    /// J at the (projected) start.
+    pub initial_objective: f64,
+    /// The parameters θ.
+    pub theta: Vec<f64>,
+    /// The forces u_0..u_N.
+    pub controls: Vec<f64>,
+    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds).
+    pub gradient_norm: f64,
+    /// ‖θ − Π_box(θ − ∇J)‖₂ at the result: the first-order optimality measure.
+    pub projected_gradient_norm: f64,
+    /// ‖∇J(θ₀)‖₂ at the start.
+    pub initial_gradient_norm: f64,
+    /// Indices of θ on a bound.
+    pub active_bounds: Vec<usize>,
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// Rollouts (forward simulations of the whole horizon, line-search trials included).
+    pub rollouts: usize,
+    /// Passes computing the stage Jacobians of the whole horizon.
+    pub jacobian_passes: usize,
+    /// Backward (Riccati) passes.
+    pub backward_passes: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Whether the projected-gradient test stopped the run.
+    pub converged: bool,
+    /// Why the run stopped.
+    pub termination: Termination,
+    /// One record per accepted iteration.
+    pub history: Vec<IterationRecord>,
+}
+
+/// Consecutive round-off steps after which the run stops ([`Termination::RoundOff`]).
+const MAX_ROUNDOFF_STEPS: usize = 5;
+/// Relative size of J's round-off (measured 2·10⁻¹³ on the thesis riser, see
+/// [`crate::optimize`]): decreases below this fraction of |J| are not resolved.
+const ROUNDOFF: f64 = 1e-12;
+/// Smallest nonzero relative regularisation.
+const MU_MIN: f64 = 1e-6;
+
+/// Minimises J of a [`ControlProblem`] with per-step or piecewise-constant controls from θ₀
+/// (projected onto the box) by box-constrained iLQR (module docs).
+pub fn solve<P: ControlMap>(
+    problem: &ControlProblem<P, BendingObjective>,
+    theta0: &[f64],
+    options: &OcpOptions,
+) -> Result<OcpResult> {
+    Solver::new(problem, options)?.solve(theta0)
+}
+
+/// The solver with all its buffers, reusable for several starts (and the linearisation
+/// diagnostics the tests use).
+#[derive(Clone, Debug)]
+pub struct Solver {
+    model: StageModel,
+    cost: StageCost,
+    opts: OcpOptions,
+    steps: usize,
+    n: usize,
+    nxi: usize,
+    nz: usize,
+    n_params: usize,
+    /// Whether stage k has a decision (first step of a piece).
+    free: Vec<bool>,
+    /// θ index of stage k.
+    piece: Vec<usize>,
+    /// Stage of θ_j.
+    theta_stage: Vec<usize>,
+    nominal: Traj,
+    trial: Traj,
+    stepper: Stepper<f64>,
+    scratch: Vec<[f64; 2]>,
+    jws: Vec<JacobianWorkspace>,
+    a_store: Vec<f64>,
+    b_store: Vec<f64>,
+    block: usize,
+    /// Stages [lo, hi) whose Jacobians at the nominal are in the store.
+    jac_range: Option<(usize, usize)>,
+    riccati: Riccati,
+    quu_scale: f64,
+    counts: (usize, usize, usize),
+}
+
+impl Solver {
+    /// Builds the solver for `problem` (validates the options, the model and the control map).
+    pub fn new<P: ControlMap>(
+        problem: &ControlProblem<P, BendingObjective>,
+        options: &OcpOptions,
+    ) -> Result<Self> {
+        options.validate()?;
+        let steps = problem.steps();
+        let model = StageModel::new(problem.chain(), problem.h())?;
+        let obj = problem.objective();
+        let h = problem.h();
+        let cost = StageCost {
+            effort: obj.effort * h,
+            rate: options.rate_penalty / h,
+            final_only: obj.kind == ObjectiveKind::Final,
+            steps,
+        };
+        // The control structure: u_k = θ_{piece(k)} with contiguous pieces.
+        let n_params = problem.n_params();
+        let ids: Vec<f64> = (0..n_params).map(|j| j as f64).collect();
+        let u = problem.controls(&ids)?;
+        let mut piece = Vec::with_capacity(steps + 1);
+        let mut free = Vec::with_capacity(steps + 1);
+        let not_piecewise = || Error::InvalidArgument {
+            name: "control map",
+            reason: "the Riccati solver needs controls that are per-step or piecewise constant \
+                     in time (u_k = θ_j on consecutive pieces j = 0, 1, …)"
+                .into(),
+        };
+        for (k, &x) in u.iter().enumerate() {
+            let j = x as usize;
+            if (j as f64 - x).abs() > 0.0 {
+                return Err(not_piecewise());
+            }
+            let prev = if k > 0 { piece[k - 1] } else { 0 };
+            let ok = if k == 0 {
+                j == 0
+            } else {
+                j == prev || j == prev + 1
+            };
+            if !ok {
+                return Err(not_piecewise());
+            }
+            free.push(k == 0 || j != prev);
+            piece.push(j);
+        }
+        if piece[steps] + 1 != n_params {
+            return Err(not_piecewise());
+        }
+        let theta_stage: Vec<usize> = (0..=steps).filter(|&k| free[k]).collect();
+        let n = model.n;
+        let nxi = model.nx();
+        let aug = usize::from(options.rate_penalty > 0.0 || free.iter().any(|f| !f));
+        let nz = nxi + aug;
+        let threads = if options.threads == 0 {
+            rayon::current_num_threads()
+        } else {
+            options.threads
+        }
+        .clamp(1, steps.max(1));
+        let jws = (0..threads)
+            .map(|_| JacobianWorkspace::new(&model))
+            .collect::<Result<Vec<_>>>()?;
+        let stage_bytes = 8 * (nxi * nxi + nxi);
+        let block = (options.jacobian_memory / stage_bytes).clamp(1, steps.max(1));
+        Ok(Solver {
+            stepper: Stepper::new(&model)?,
+            scratch: vec![[0.0; 2]; n],
+            nominal: Traj::new(n, steps),
+            trial: Traj::new(n, steps),
+            a_store: vec![0.0; block * nxi * nxi],
+            b_store: vec![0.0; block * nxi],
+            riccati: Riccati::new(nxi, aug, steps),
+            model,
+            cost,
+            opts: options.clone(),
+            steps,
+            n,
+            nxi,
+            nz,
+            n_params,
+            free,
+            piece,
+            theta_stage,
+            jws,
+            block,
+            jac_range: None,
+            quu_scale: 1.0,
+            counts: (0, 0, 0),
+        })
+    }
+
+    /// Number of parameters θ.
+    pub fn n_params(&self) -> usize {
+        self.n_params
+    }
+
+    fn check_theta(&self, theta: &[f64]) -> Result<()> {
+        if theta.len() != self.n_params {
+            return Err(Error::InvalidArgument {
+                name: "theta",
+                reason: format!("expected {} values, got {}", self.n_params, theta.len()),
+            });
+        }
+        if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
+            return Err(Error::InvalidArgument {
+                name: "theta",
+                reason: format!("entry {i} is not finite"),
+            });
+        }
+        Ok(())
+    }
+
+    /// Simulates θ (projected onto the box) as the new nominal trajectory and returns J.
+    pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+        self.check_theta(theta)?;
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        for k in 0..=self.steps {
+            self.nominal.u[k] = theta[self.piece[k]].clamp(lo, hi);
+        }
+        self.jac_range = None;
+        self.counts.0 += 1;
+        rollout(
+            &self.model,
+            &mut self.stepper,
+            &self.cost,
+            &self.free,
+            lo,
+            hi,
+            None,
+            &mut self.nominal,
+            &mut self.scratch,
+        )?;
+        Ok(self.nominal.cost)
+    }
+
+    /// θ of the nominal trajectory.
+    pub fn theta(&self) -> Vec<f64> {
+        self.theta_stage
+            .iter()
+            .map(|&k| self.nominal.u[k])
+            .collect()
+    }
+
+    /// J of the nominal trajectory.
+    pub fn objective(&self) -> f64 {
+        self.nominal.cost
+    }
+
+    /// The stage Jacobians of stages [lo, hi) at the nominal into the store, in parallel.
+    fn jacobians(&mut self, lo: usize, hi: usize) -> Result<()> {
+        if self.jac_range == Some((lo, hi)) {
+            return Ok(());
+        }
+        let (nxi, count) = (self.nxi, hi - lo);
+        let per_a = nxi * nxi;
+        let chunk = count.div_ceil(self.jws.len()).max(1);
+        let (model, nom) = (&self.model, &self.nominal);
+        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut JacobianWorkspace| {
+            for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(nxi)).enumerate() {
+                let k = lo + c * chunk + i;
+                ws.jacobians(
+                    model,
+                    k,
+                    nom.q(k),
+                    nom.p(k),
+                    nom.omega(k),
+                    nom.mu(k),
+                    nom.u[k],
+                    ai,
+                    bi,
+                )?;
+            }
+            Ok::<(), Error>(())
+        };
+        let a = &mut self.a_store[..count * per_a];
+        let b = &mut self.b_store[..count * nxi];
+        if self.jws.len() == 1 {
+            work(0, a, b, &mut self.jws[0])?;
+        } else {
+            a.par_chunks_mut(chunk * per_a)
+                .zip(b.par_chunks_mut(chunk * nxi))
+                .zip(self.jws.par_iter_mut())
+                .enumerate()
+                .try_for_each(|(c, ((a, b), ws))| work(c, a, b, ws))?;
+        }
+        self.jac_range = Some((lo, hi));
+        self.counts.1 += 1;
+        Ok(())
+    }
+
+    /// One backward pass at the nominal with the absolute regularisation `mu`. Returns `false`
+    /// when a stage's box-QP is unbounded (raise `mu`).
+    fn backward(&mut self, mu: f64) -> Result<bool> {
+        let (steps, nxi) = (self.steps, self.nxi);
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let scale = self.model.moment_scale;
+        self.counts.2 += 1;
+        self.riccati.begin();
+        let input = |nom: &Traj, free: &[bool], k: usize| StageInput {
+            k,
+            free: free[k],
+            moment: nom.moment[k],
+            dmoment: nom.dmoment(k, scale),
+            u: nom.u[k],
+            w: if k > 0 { nom.u[k - 1] } else { 0.0 },
+            lo: lo - nom.u[k],
+            hi: hi - nom.u[k],
+            a: None,
+            b: None,
+        };
+        let mut bounded =
+            self.riccati
+                .stage(&input(&self.nominal, &self.free, steps), &self.cost, mu);
+        let mut top = steps;
+        while top > 0 {
+            let bottom = top.saturating_sub(self.block);
+            self.jacobians(bottom, top)?;
+            for k in (bottom..top).rev() {
+                let i = k - bottom;
+                let mut inp = input(&self.nominal, &self.free, k);
+                inp.a = Some(&self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi]);
+                inp.b = Some(&self.b_store[i * nxi..(i + 1) * nxi]);
+                bounded &= self.riccati.stage(&inp, &self.cost, mu);
+            }
+            top = bottom;
+        }
+        if self.riccati.quu_count > 0 {
+            let m = self.riccati.quu_sum / self.riccati.quu_count as f64;
+            self.quu_scale = if m > 0.0 && m.is_finite() { m } else { 1.0 };
+        }
+        Ok(bounded)
+    }
+
+    fn theta_gradient(&self) -> Vec<f64> {
+        self.theta_stage
+            .iter()
+            .map(|&k| self.riccati.grad[k])
+            .collect()
+    }
+
+    fn projected_norm(&self) -> f64 {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        self.theta_stage
+            .iter()
+            .map(|&k| {
+                let (t, g) = (self.nominal.u[k], self.riccati.grad[k]);
+                let d = t - (t - g).clamp(lo, hi);
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
+    /// adjoint in tangent coordinates).
+    pub fn gradient(&mut self) -> Result<Vec<f64>> {
+        self.backward(0.0)?;
+        Ok(self.theta_gradient())
+    }
+
+    /// A_k (2n × 2n) and B_k (2n) at the nominal, in the tangent coordinates ξ = (φ, ω).
+    pub fn stage_jacobians(&mut self, k: usize) -> Result<(Mat<f64>, Vec<f64>)> {
+        self.check_stage(k)?;
+        let nxi = self.nxi;
+        let mut a = vec![0.0; nxi * nxi];
+        let mut b = vec![0.0; nxi];
+        let nom = &self.nominal;
+        self.jws[0].jacobians(
+            &self.model,
+            k,
+            nom.q(k),
+            nom.p(k),
+            nom.omega(k),
+            nom.mu(k),
+            nom.u[k],
+            &mut a,
+            &mut b,
+        )?;
+        Ok((Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]), b))
+    }
+
+    fn check_stage(&self, k: usize) -> Result<()> {
+        if k >= self.steps {
+            return Err(Error::InvalidArgument {
+                name: "stage",
+                reason: format!("must be below N = {}, got {k}", self.steps),
+            });
+        }
+        Ok(())
+    }
+
+    /// The tangent coordinates ξ = (φ₁..φₙ, ω₁..ωₙ) of the nominal x̂_k (absolute angles from e₂
+    /// and angular rates).
+    pub fn coordinates(&self, k: usize) -> Vec<f64> {
+        let q = self.nominal.q(k);
+        let mut x: Vec<f64> = q.iter().map(|q| q[1].atan2(q[0])).collect();
+        x.extend_from_slice(self.nominal.omega(k));
+        x
+    }
+
+    /// The stage map F_k in tangent coordinates: x̂_k built from ξ (qᵢ = (cos φᵢ, sin φᵢ),
+    /// p = M(ωᵢ tᵢ)), one stage with control u, and the coordinates of x̂_{k+1}. The Newton
+    /// predictor is the nominal's. (For finite-difference checks of [`Solver::stage_jacobians`].)
+    pub fn stage_map(&mut self, k: usize, xi: &[f64], u: f64) -> Result<Vec<f64>> {
+        self.check_stage(k)?;
+        let n = self.n;
+        if xi.len() != 2 * n {
+            return Err(Error::InvalidArgument {
+                name: "xi",
+                reason: format!("expected 2n = {} values, got {}", 2 * n, xi.len()),
+            });
+        }
+        let q: Vec<[f64; 2]> = xi[..n].iter().map(|f| [f.cos(), f.sin()]).collect();
+        let v: Vec<[f64; 2]> = (0..n)
+            .map(|i| {
+                let t = tangent(&q[i]);
+                [xi[n + i] * t[0], xi[n + i] * t[1]]
+            })
+            .collect();
+        let st = &mut self.stepper.state;
+        self.model.apply_mass(&v, &mut st.p);
+        st.q.copy_from_slice(&q);
+        st.mu.copy_from_slice(self.nominal.mu(k));
+        st.lambda.copy_from_slice(self.nominal.mu(k));
+        self.stepper.advance(k, u)?;
+        let st = &self.stepper.state;
+        let mut out: Vec<f64> = st.q.iter().map(|q| q[1].atan2(q[0])).collect();
+        let mut w = vec![0.0; n];
+        self.model.rates(&st.q, &st.p, &mut self.scratch, &mut w);
+        out.extend_from_slice(&w);
+        Ok(out)
+    }
+
+    /// The Gauss-Newton step δθ at the nominal with regularisation `mu` (added to every Q_uu):
+    /// the backward pass and a rollout of the *linearised* dynamics δz_{k+1} = Ã_k δz_k + B̃_k δv_k
+    /// (so, without active bounds and with μ = 0, the minimiser of the Gauss-Newton model).
+    /// Needs the Jacobians of the whole horizon in memory.
+    pub fn gauss_newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
+        if self.block < self.steps {
+            return Err(Error::InvalidArgument {
+                name: "jacobian_memory",
+                reason: "the linearised rollout needs every stage Jacobian in memory".into(),
+            });
+        }
+        if !self.backward(mu)? {
+            return Err(Error::InvalidArgument {
+                name: "mu",
+                reason: format!("a stage QP is unbounded below with mu = {mu}"),
+            });
+        }
+        let (n, nxi, nz) = (self.n, self.nxi, self.nz);
+        let _ = n;
+        let mut dz = vec![0.0; nz];
+        let mut next = vec![0.0; nz];
+        let mut du = vec![0.0; self.steps + 1];
+        for k in 0..=self.steps {
+            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+            let d = if self.free[k] {
+                self.riccati.ff[k] + g.iter().zip(&dz).map(|(a, b)| a * b).sum::<f64>()
+            } else {
+                dz[nxi]
+            };
+            du[k] = d;
+            if k < self.steps {
+                let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
+                let b = &self.b_store[k * nxi..(k + 1) * nxi];
+                for i in 0..nxi {
+                    next[i] = b[i] * d + (0..nxi).map(|j| a[j * nxi + i] * dz[j]).sum::<f64>();
+                }
+                if nz > nxi {
+                    next[nxi] = d;
+                }
+                std::mem::swap(&mut dz, &mut next);
+            }
+        }
+        Ok(self.theta_stage.iter().map(|&k| du[k]).collect())
+    }
+
+    /// The Gauss-Newton Hessian and the gradient of J(θ) at the nominal, assembled densely
+    /// from the stage Jacobians: H = Σ_k 2c_k ∇r_k∇r_kᵀ + 2ρh PᵀP + rate terms, with
+    /// ∇_u r_k = ∂M₀/∂φ₁ · e₁ᵀ A_{k−1}⋯A_{j+1} B_j (r_k = M₀(t_k)) and P = ∂u/∂θ. O(N² n²):
+    /// for checking [`Solver::gauss_newton_step`] on small horizons.
+    pub fn dense_gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
+        let (steps, nxi) = (self.steps, self.nxi);
+        let m = steps + 1;
+        let mut x = Mat::<f64>::zeros(nxi, m);
+        let mut hu = Mat::<f64>::zeros(m, m);
+        let mut gu = vec![0.0; m];
+        let scale = self.model.moment_scale;
+        for k in 0..=steps {
+            if k > 0 {
+                self.jacobians(k - 1, k)?;
+                let (a, b) = (&self.a_store[..nxi * nxi], &self.b_store[..nxi]);
+                let xa = Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]) * &x;
+                x = xa;
+                for i in 0..nxi {
+                    x[(i, k - 1)] += b[i];
+                }
+            }
+            let c = self.cost.weight(k);
+            let d = self.nominal.dmoment(k, scale);
+            let mk = self.nominal.moment[k];
+            for i in 0..m {
+                let ri = d * x[(0, i)];
+                gu[i] += 2.0 * c * mk * ri;
+                for j in 0..m {
+                    hu[(i, j)] += 2.0 * c * ri * d * x[(0, j)];
+                }
+            }
+            let u = self.nominal.u[k];
+            gu[k] += 2.0 * self.cost.effort * u;
+            hu[(k, k)] += 2.0 * self.cost.effort;
+            if k > 0 && self.cost.rate > 0.0 {
+                let r = self.cost.rate;
+                let du = u - self.nominal.u[k - 1];
+                gu[k] += 2.0 * r * du;
+                gu[k - 1] -= 2.0 * r * du;
+                hu[(k, k)] += 2.0 * r;
+                hu[(k - 1, k - 1)] += 2.0 * r;
+                hu[(k, k - 1)] -= 2.0 * r;
+                hu[(k - 1, k)] -= 2.0 * r;
+            }
+        }
+        self.jac_range = None;
+        let p = self.n_params;
+        let mut h = Mat::<f64>::zeros(p, p);
+        let mut g = vec![0.0; p];
+        for k in 0..m {
+            g[self.piece[k]] += gu[k];
+            for l in 0..m {
+                h[(self.piece[k], self.piece[l])] += hu[(k, l)];
+            }
+        }
+        Ok((h, g))
+    }
+
+    /// Runs box-constrained iLQR from θ₀ (projected onto the box).
+    pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
+        let t0 = Instant::now();
+        self.counts = (0, 0, 0);
+        let j0 = self.set_point(theta0)?;
+        let opts = self.opts.clone();
+        let (lo, hi) = (opts.lower, opts.upper);
+        let mut mu = 0.0;
+        let mut iterations = 0;
+        let mut roundoff_steps = 0;
+        let mut history = Vec::new();
+        let mut g0 = None;
+        let termination = loop {
+            // Backward pass; its costate sweep gives the exact gradient at the nominal.
+            let bounded = self.backward(mu * self.quu_scale)?;
+            let pg = self.projected_norm();
+            let gref = *g0
+                .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
+            if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
+                break Termination::Converged;
+            }
+            if !bounded {
+                // Some stage QP is unbounded below: regularise and redo the pass.
+                mu = (mu * 10.0).max(MU_MIN);
+                if mu > opts.max_regularisation {
+                    break Termination::RegularisationLimit;
+                }
+                continue;
+            }
+            if iterations >= opts.max_iters {
+                break Termination::MaxIterations;
+            }
+            // Line search on closed-loop rollouts.
+            let jbar = self.nominal.cost;
+            let (d1, d2) = (self.riccati.d1, self.riccati.d2);
+            let tiny = ROUNDOFF * jbar.abs();
+            let mut accepted = None;
+            let mut alpha = 1.0;
+            for _ in 0..opts.backtracks {
+                let dj = alpha * d1 + alpha * alpha * d2;
+                let fb = Feedback {
+                    nominal: &self.nominal,
+                    gain: &self.riccati.gain,
+                    ff: &self.riccati.ff,
+                    alpha,
+                    nz: self.nz,
+                };
+                self.counts.0 += 1;
+                let ok = rollout(
+                    &self.model,
+                    &mut self.stepper,
+                    &self.cost,
+                    &self.free,
+                    lo,
+                    hi,
+                    Some(&fb),
+                    &mut self.trial,
+                    &mut self.scratch,
+                )
+                .is_ok();
+                if ok {
+                    let jt = self.trial.cost;
+                    if -dj <= tiny {
+                        // Round-off regime: the model's decrease is not resolvable in J; take
+                        // the full step unless J rises beyond its round-off.
+                        if jt <= jbar + tiny {
+                            accepted = Some((alpha, true));
+                            break;
+                        }
+                    } else if jbar - jt >= opts.armijo * (-dj) {
+                        accepted = Some((alpha, false));
+                        break;
+                    }
+                }
+                alpha *= 0.5;
+            }
+            match accepted {
+                Some((alpha, roundoff)) => {
+                    std::mem::swap(&mut self.nominal, &mut self.trial);
+                    self.jac_range = None;
+                    iterations += 1;
+                    history.push(IterationRecord {
+                        objective: self.nominal.cost,
+                        projected_gradient_norm: pg,
+                        alpha,
+                        regularisation: mu,
+                    });
+                    if roundoff {
+                        roundoff_steps += 1;
+                        if roundoff_steps >= MAX_ROUNDOFF_STEPS {
+                            // One more backward pass to report the gradient at this point.
+                            self.backward(mu * self.quu_scale)?;
+                            let pg = self.projected_norm();
+                            if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
+                                break Termination::Converged;
+                            }
+                            break Termination::RoundOff;
+                        }
+                    } else {
+                        roundoff_steps = 0;
+                    }
+                    if alpha >= 0.5 {
+                        mu = if mu * 0.1 < MU_MIN { 0.0 } else { mu * 0.1 };
+                    } else if alpha < 0.1 {
+                        mu = (mu * 10.0).max(MU_MIN);
+                    }
+                }
+                None => {
+                    mu = (mu * 10.0).max(MU_MIN);
+                    if mu > opts.max_regularisation {
+                        break Termination::RegularisationLimit;
+                    }
+                }
+            }
+        };
+        let theta = self.theta();
+        let g = self.theta_gradient();
+        let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let pg = self.projected_norm();
+        let active_bounds = theta
+            .iter()
+            .enumerate()
+            .filter(|(_, &t)| t <= lo || t >= hi)
+            .map(|(i, _)| i)
+            .collect();
+        Ok(OcpResult {
+            objective: self.nominal.cost,
+            initial_objective: j0,
+            controls: self.nominal.u.clone(),
+            theta,
+            gradient_norm: gn,
+            projected_gradient_norm: pg,
+            initial_gradient_norm: g0.unwrap_or(gn),
+            active_bounds,
+            iterations,
+            rollouts: self.counts.0,
+            jacobian_passes: self.counts.1,
+            backward_passes: self.counts.2,
+            seconds: t0.elapsed().as_secs_f64(),
+            converged: termination == Termination::Converged,
+            termination,
+            history,
+        })
+    }
+}

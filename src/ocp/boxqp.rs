@@ -19,8 +19,16 @@ pub(crate) struct BoxQpStep {
 
 /// Solves min ½ a δ² + g δ on [lo, hi]. Returns `None` when the problem is unbounded below
 /// (a ≤ 0 with g pushing toward an infinite bound): the caller then raises the regularisation.
-/// An inert control (a ≤ 0 and g = 0, e.g. u_N without effort penalty) stays where it is.
+/// An inert control (a ≤ 0 and g = 0, e.g. u_N without effort penalty) stays where it is. With
+/// lo = hi (a control the active set fixes) the step is lo, clamped.
 pub(crate) fn solve_scalar(a: f64, g: f64, lo: f64, hi: f64) -> Option<BoxQpStep> {
+    if hi <= lo {
+        // A control fixed by the active set: it moves to the given point, without feedback.
+        return Some(BoxQpStep {
+            step: lo,
+            clamped: true,
+        });
+    }
     if a > 0.0 {
         let d = -g / a;
         return Some(if d <= lo {
@@ -89,5 +97,14 @@ mod tests {
         assert_eq!(solve_scalar(0.0, 0.0, -1.0, 1.0).unwrap().step, 0.0);
         assert!(solve_scalar(0.0, 1.0, f64::NEG_INFINITY, 1.0).is_none());
         assert_eq!(solve_scalar(-1.0, 1.0, -3.0, 1.0).unwrap().step, -3.0);
+        // fixed by the active set
+        let s = solve_scalar(2.0, -4.0, 0.25, 0.25).unwrap();
+        assert_eq!(
+            s,
+            BoxQpStep {
+                step: 0.25,
+                clamped: true
+            }
+        );
     }
 }

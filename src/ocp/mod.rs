@@ -276,6 +276,19 @@ const MAX_ROUNDOFF_STEPS: usize = 5;
 const ROUNDOFF: f64 = 1e-12;
 /// Smallest nonzero relative regularisation.
 const MU_MIN: f64 = 1e-6;
+/// How [`Solver::linear_rollout`] moves the controls.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Arc {
+    /// Closed loop with the Riccati gains, clamped to the box.
+    ClosedLoop,
+    /// Closed loop, unclamped, recording the direction Δv in `dir`.
+    Direction,
+    /// Open loop along the projection arc Π(u + α dir) (Bertsekas).
+    Projected,
+}
+
+/// Projected-Newton iterations of one QP solve.
+const MAX_QP_ITERS: usize = 50;
 
 /// Minimises J of a [`ControlProblem`] with per-step or piecewise-constant controls from θ₀
 /// (projected onto the box) by box-constrained iLQR (module docs).
@@ -316,6 +329,24 @@ pub struct Solver {
     /// Stages [lo, hi) whose Jacobians at the nominal are in the store.
     jac_range: Option<(usize, usize)>,
     riccati: Riccati,
+    /// The ε-active set of the current iteration: stage k's control moves to its bound
+    /// (step `fixed[k]`) without feedback.
+    active: Vec<bool>,
+    fixed: Vec<f64>,
+    /// The model point δ of the QP iterations (δv per stage, δz per stage) and its trial.
+    dv: Vec<f64>,
+    dz: Vec<f64>,
+    dv_t: Vec<f64>,
+    dz_t: Vec<f64>,
+    lin_dz: Vec<f64>,
+    lin_next: Vec<f64>,
+    dir: Vec<f64>,
+    /// The exact gradient at the nominal (per stage).
+    gtrue: Vec<f64>,
+    /// Feedforward of the closed-loop rollout about the nominal.
+    ff_out: Vec<f64>,
+    /// Proximal weight μ (absolute) of the current model.
+    prox: f64,
     quu_scale: f64,
     counts: (usize, usize, usize),
 }
@@ -393,6 +424,18 @@ impl Solver {
             a_store: vec![0.0; block * nxi * nxi],
             b_store: vec![0.0; block * nxi],
             riccati: Riccati::new(nxi, aug, steps),
+            active: vec![false; steps + 1],
+            fixed: vec![0.0; steps + 1],
+            dv: vec![0.0; steps + 1],
+            dz: vec![0.0; (steps + 1) * nz],
+            dv_t: vec![0.0; steps + 1],
+            dz_t: vec![0.0; (steps + 1) * nz],
+            lin_dz: vec![0.0; nz],
+            dir: vec![0.0; steps + 1],
+            lin_next: vec![0.0; nz],
+            gtrue: vec![0.0; steps + 1],
+            ff_out: vec![0.0; steps + 1],
+            prox: 0.0,
             model,
             cost,
             opts: options.clone(),
@@ -511,47 +554,108 @@ impl Solver {
         Ok(())
     }
 
-    /// One backward pass at the nominal with the absolute regularisation `mu`. Returns `false`
-    /// when a stage's box-QP is unbounded (raise `mu`).
-    fn backward(&mut self, mu: f64) -> Result<bool> {
-        let (steps, nxi) = (self.steps, self.nxi);
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let scale = self.model.moment_scale;
-        self.counts.2 += 1;
-        self.riccati.begin();
-        let input = |nom: &Traj, free: &[bool], k: usize| StageInput {
+    /// What the backward pass needs of stage k at the model point δ (the current inner
+    /// iterate: `dv`, `dz`; δ = 0 is the nominal) without its Jacobians: the linearised moment
+    /// M₀ + ∂M₀/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
+    /// gradient. With `with_active`, a control of the ε-active set gets its fixed step.
+    fn stage_input(&self, k: usize, with_active: bool) -> StageInput<'static> {
+        let nom = &self.nominal;
+        let d = nom.dmoment(k, self.model.moment_scale);
+        let u = nom.u[k] + self.dv[k];
+        let (lo, hi) = if with_active && self.active[k] {
+            (self.fixed[k], self.fixed[k])
+        } else {
+            (self.opts.lower - u, self.opts.upper - u)
+        };
+        StageInput {
             k,
-            free: free[k],
-            moment: nom.moment[k],
-            dmoment: nom.dmoment(k, scale),
-            u: nom.u[k],
-            w: if k > 0 { nom.u[k - 1] } else { 0.0 },
-            lo: lo - nom.u[k],
-            hi: hi - nom.u[k],
+            free: self.free[k],
+            moment: nom.moment[k] + d * self.dz[k * self.nz],
+            dmoment: d,
+            u,
+            w: if k > 0 {
+                nom.u[k - 1] + self.dv[k - 1]
+            } else {
+                0.0
+            },
+            lo,
+            hi,
+            lu_shift: if self.free[k] {
+                self.prox * self.dv[k]
+            } else {
+                0.0
+            },
             a: None,
             b: None,
+        }
+    }
+
+    /// One sweep k = N … 0 over the stages, with the Jacobians computed block by block ahead
+    /// of it: the Riccati recursion (`riccati = true`, proximal weight `self.prox`; returns
+    /// whether every stage QP was bounded) or the costate sweep alone (the gradient into
+    /// `riccati.grad`).
+    fn sweep(&mut self, riccati: bool) -> Result<bool> {
+        let (steps, nxi, mu) = (self.steps, self.nxi, self.prox);
+        self.riccati.begin();
+        let last = self.stage_input(steps, true);
+        let mut bounded = if riccati {
+            self.counts.2 += 1;
+            self.riccati.stage(&last, &self.cost, mu)
+        } else {
+            self.riccati.costate(&last, &self.cost);
+            true
         };
-        let mut bounded =
-            self.riccati
-                .stage(&input(&self.nominal, &self.free, steps), &self.cost, mu);
         let mut top = steps;
         while top > 0 {
             let bottom = top.saturating_sub(self.block);
             self.jacobians(bottom, top)?;
             for k in (bottom..top).rev() {
                 let i = k - bottom;
-                let mut inp = input(&self.nominal, &self.free, k);
+                let mut inp = self.stage_input(k, true);
                 inp.a = Some(&self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi]);
                 inp.b = Some(&self.b_store[i * nxi..(i + 1) * nxi]);
-                bounded &= self.riccati.stage(&inp, &self.cost, mu);
+                if riccati {
+                    bounded &= self.riccati.stage(&inp, &self.cost, mu);
+                } else {
+                    self.riccati.costate(&inp, &self.cost);
+                }
             }
             top = bottom;
         }
-        if self.riccati.quu_count > 0 {
+        if riccati && self.riccati.quu_count > 0 {
             let m = self.riccati.quu_sum / self.riccati.quu_count as f64;
             self.quu_scale = if m > 0.0 && m.is_finite() { m } else { 1.0 };
         }
         Ok(bounded)
+    }
+
+    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep.
+    fn costate(&mut self) -> Result<()> {
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        self.active.fill(false);
+        self.sweep(false).map(|_| ())
+    }
+
+    /// Bertsekas's ε-active set at the model point from the gradient of the last costate
+    /// sweep: a control within ε of a bound whose gradient pushes it outward moves to that
+    /// bound and is fixed there (no feedback); every other control is free in the Newton step.
+    fn set_active(&mut self, eps: f64) {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        for k in 0..=self.steps {
+            let (u, g) = (self.nominal.u[k] + self.dv[k], self.riccati.grad[k]);
+            self.active[k] = false;
+            if !self.free[k] {
+                continue;
+            }
+            if u <= lo + eps && g > 0.0 {
+                self.active[k] = true;
+                self.fixed[k] = lo - u;
+            } else if u >= hi - eps && g < 0.0 {
+                self.active[k] = true;
+                self.fixed[k] = hi - u;
+            }
+        }
     }
 
     fn theta_gradient(&self) -> Vec<f64> {
@@ -561,12 +665,13 @@ impl Solver {
             .collect()
     }
 
+    /// ‖θ − Π_box(θ − g)‖₂ at the model point with the gradient of the last costate sweep.
     fn projected_norm(&self) -> f64 {
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         self.theta_stage
             .iter()
             .map(|&k| {
-                let (t, g) = (self.nominal.u[k], self.riccati.grad[k]);
+                let (t, g) = (self.nominal.u[k] + self.dv[k], self.riccati.grad[k]);
                 let d = t - (t - g).clamp(lo, hi);
                 d * d
             })
@@ -574,10 +679,154 @@ impl Solver {
             .sqrt()
     }
 
+    /// A closed-loop rollout of the *linearised* dynamics from the model point δ with the gains
+    /// of the last Riccati pass and step length α: Δv_k = clamp(α k_k + K_k Δz_k) (clamped to
+    /// the box about the model point), Δz_{k+1} = Ã_k Δz_k + B̃_k Δv_k, written to `dv_t`,
+    /// `dz_t` as δ + Δ. Returns the Gauss-Newton model of J at δ + Δ with and without the
+    /// proximal term: Σ ℓ_k(M₀ + ∂M₀/∂φ₁ δφ₁, u + δu, w + δw) (+ ½ μ Σ δv²). Needs every stage
+    /// Jacobian in memory.
+    fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> (f64, f64) {
+        let (nz, nxi, steps) = (self.nz, self.nxi, self.steps);
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let nom = &self.nominal;
+        let scale = self.model.moment_scale;
+        let (dz, next) = (&mut self.lin_dz, &mut self.lin_next);
+        dz.fill(0.0);
+        let (mut q, mut prox) = (0.0, 0.0);
+        for k in 0..=steps {
+            let u0 = nom.u[k] + self.dv[k];
+            let d = if self.free[k] {
+                match mode {
+                    Arc::Projected => (u0 + alpha * self.dir[k]).clamp(lo, hi) - u0,
+                    _ => {
+                        let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+                        let x = alpha * self.riccati.ff[k]
+                            + g.iter().zip(dz.iter()).map(|(a, b)| a * b).sum::<f64>();
+                        if mode == Arc::Direction {
+                            self.dir[k] = x;
+                            x
+                        } else {
+                            (u0 + x).clamp(lo, hi) - u0
+                        }
+                    }
+                }
+            } else {
+                dz[nxi]
+            };
+            self.dv_t[k] = self.dv[k] + d;
+            for i in 0..nz {
+                self.dz_t[k * nz + i] = self.dz[k * nz + i] + dz[i];
+            }
+            let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
+            let u = nom.u[k] + self.dv_t[k];
+            let w = if k > 0 {
+                nom.u[k - 1] + self.dv_t[k - 1]
+            } else {
+                0.0
+            };
+            q += self.cost.value(k, m, u, w);
+            if self.free[k] {
+                prox += 0.5 * self.prox * self.dv_t[k] * self.dv_t[k];
+            }
+            if k < steps {
+                let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
+                let b = &self.b_store[k * nxi..(k + 1) * nxi];
+                for i in 0..nxi {
+                    next[i] = b[i] * d;
+                }
+                for j in 0..nxi {
+                    let (col, x) = (&a[j * nxi..(j + 1) * nxi], dz[j]);
+                    for i in 0..nxi {
+                        next[i] += col[i] * x;
+                    }
+                }
+                if nz > nxi {
+                    next[nxi] = d;
+                }
+                std::mem::swap(dz, next);
+            }
+        }
+        (q + prox, q)
+    }
+
+    /// Solves the box-constrained Gauss-Newton QP of the nominal (with the proximal weight
+    /// `self.prox`) by projected Newton (Bertsekas 1982): each iteration takes the exact Newton
+    /// step on the free controls of the ε-active set (one Riccati pass about the current model
+    /// point) and searches along the projection arc with Armijo's rule on the model, until the
+    /// model's projected gradient is at most `tol`. The solution is left in `dv`, `dz`; returns
+    /// the model value without the proximal term, or `None` when a stage QP is unbounded (raise
+    /// μ). Each iteration costs one costate sweep, one Riccati pass and linear rollouts: no
+    /// simulation.
+    fn solve_qp(&mut self, tol: f64) -> Result<Option<f64>> {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        let mut q = self.nominal.cost;
+        let mut q_plain = q;
+        for it in 0..MAX_QP_ITERS {
+            self.active.fill(false);
+            self.sweep(false)?;
+            let pg = self.projected_norm();
+            if it > 0 && pg <= tol {
+                break;
+            }
+            self.set_active((1e-3 * width).min(pg));
+            if !self.sweep(true)? {
+                return Ok(None);
+            }
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            let mode = if std::env::var_os("OCP_OPEN").is_some() {
+                self.linear_rollout(1.0, Arc::Direction);
+                Arc::Projected
+            } else {
+                Arc::ClosedLoop
+            };
+            for _ in 0..30 {
+                let (qt, qt_plain) = self.linear_rollout(alpha, mode);
+                // Armijo along the arc: q(δ(α)) ≤ q(δ) + σ ∇q·(δ(α) − δ).
+                let slope: f64 = (0..=self.steps)
+                    .filter(|&k| self.free[k])
+                    .map(|k| self.riccati.grad[k] * (self.dv_t[k] - self.dv[k]))
+                    .sum();
+                if qt <= q + 1e-4 * slope {
+                    std::mem::swap(&mut self.dv, &mut self.dv_t);
+                    std::mem::swap(&mut self.dz, &mut self.dz_t);
+                    (q, q_plain) = (qt, qt_plain);
+                    accepted = true;
+                    break;
+                }
+                alpha *= 0.5;
+            }
+            if std::env::var_os("OCP_DEBUG").is_some() {
+                let na = self.active.iter().filter(|a| **a).count();
+                eprintln!(
+                    "  qp it {it}: pg {pg:.3e} tol {tol:.3e} active {na} alpha {alpha} q {q:.12}"
+                );
+            }
+            if !accepted {
+                break;
+            }
+        }
+        // Feedforward about the nominal: u = ū + α (δv* − K δz*) + K δz, which reproduces
+        // δv* for α = 1 on the linear model.
+        let nz = self.nz;
+        for k in 0..=self.steps {
+            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+            self.ff_out[k] = self.dv[k]
+                - g.iter()
+                    .zip(&self.dz[k * nz..(k + 1) * nz])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+        }
+        Ok(Some(q_plain))
+    }
+
     /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
     /// adjoint in tangent coordinates).
     pub fn gradient(&mut self) -> Result<Vec<f64>> {
-        self.backward(0.0)?;
+        self.costate()?;
         Ok(self.theta_gradient())
     }
 
@@ -654,49 +903,37 @@ impl Solver {
         Ok(out)
     }
 
-    /// The Gauss-Newton step δθ at the nominal with regularisation `mu` (added to every Q_uu):
-    /// the backward pass and a rollout of the *linearised* dynamics δz_{k+1} = Ã_k δz_k + B̃_k δv_k
-    /// (so, without active bounds and with μ = 0, the minimiser of the Gauss-Newton model).
-    /// Needs the Jacobians of the whole horizon in memory.
+    /// The Gauss-Newton step δθ at the nominal with a proximal weight `mu` (added to every
+    /// Q_uu): one Riccati pass and a closed-loop rollout of the *linearised* dynamics
+    /// δz_{k+1} = Ã_k δz_k + B̃_k δv_k (without active bounds and with μ = 0, the minimiser of the
+    /// Gauss-Newton model). Needs the Jacobians of the whole horizon in memory.
     pub fn gauss_newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
-        if self.block < self.steps {
-            return Err(Error::InvalidArgument {
-                name: "jacobian_memory",
-                reason: "the linearised rollout needs every stage Jacobian in memory".into(),
-            });
-        }
-        if !self.backward(mu)? {
+        self.check_in_memory()?;
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        self.active.fill(false);
+        self.prox = mu;
+        if !self.sweep(true)? {
             return Err(Error::InvalidArgument {
                 name: "mu",
                 reason: format!("a stage QP is unbounded below with mu = {mu}"),
             });
         }
-        let (n, nxi, nz) = (self.n, self.nxi, self.nz);
-        let _ = n;
-        let mut dz = vec![0.0; nz];
-        let mut next = vec![0.0; nz];
-        let mut du = vec![0.0; self.steps + 1];
-        for k in 0..=self.steps {
-            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-            let d = if self.free[k] {
-                self.riccati.ff[k] + g.iter().zip(&dz).map(|(a, b)| a * b).sum::<f64>()
-            } else {
-                dz[nxi]
-            };
-            du[k] = d;
-            if k < self.steps {
-                let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
-                let b = &self.b_store[k * nxi..(k + 1) * nxi];
-                for i in 0..nxi {
-                    next[i] = b[i] * d + (0..nxi).map(|j| a[j * nxi + i] * dz[j]).sum::<f64>();
-                }
-                if nz > nxi {
-                    next[nxi] = d;
-                }
-                std::mem::swap(&mut dz, &mut next);
-            }
+        self.linear_rollout(1.0, Arc::ClosedLoop);
+        Ok(self.theta_stage.iter().map(|&k| self.dv_t[k]).collect())
+    }
+
+    fn check_in_memory(&self) -> Result<()> {
+        if self.block < self.steps {
+            return Err(Error::InvalidArgument {
+                name: "jacobian_memory",
+                reason: format!(
+                    "the linearised rollout needs every stage Jacobian in memory ({} bytes)",
+                    self.steps * 8 * (self.nxi * self.nxi + self.nxi)
+                ),
+            });
         }
-        Ok(self.theta_stage.iter().map(|&k| du[k]).collect())
+        Ok(())
     }
 
     /// The Gauss-Newton Hessian and the gradient of J(θ) at the nominal, assembled densely
@@ -757,41 +994,63 @@ impl Solver {
         Ok((h, g))
     }
 
-    /// Runs box-constrained iLQR from θ₀ (projected onto the box).
+    /// Runs the solver from θ₀ (projected onto the box): Gauss-Newton SQP iterations whose
+    /// box-constrained QP is solved by Riccati-based projected Newton, globalised by closed-loop
+    /// rollouts with backtracking and a proximal (Levenberg) weight (module docs).
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0, 0);
         let j0 = self.set_point(theta0)?;
         let opts = self.opts.clone();
         let (lo, hi) = (opts.lower, opts.upper);
+        let in_memory = self.block >= self.steps;
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let mut mu = 0.0;
         let mut iterations = 0;
         let mut roundoff_steps = 0;
         let mut history = Vec::new();
         let mut g0 = None;
-        let termination = loop {
-            // Backward pass; its costate sweep gives the exact gradient at the nominal.
-            let bounded = self.backward(mu * self.quu_scale)?;
+        let termination = 'outer: loop {
+            // The exact gradient at the nominal (costate sweep) and the convergence test.
+            self.costate()?;
             let pg = self.projected_norm();
             let gref = *g0
                 .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
             if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
                 break Termination::Converged;
             }
-            if !bounded {
-                // Some stage QP is unbounded below: regularise and redo the pass.
-                mu = (mu * 10.0).max(MU_MIN);
-                if mu > opts.max_regularisation {
-                    break Termination::RegularisationLimit;
-                }
-                continue;
-            }
             if iterations >= opts.max_iters {
                 break Termination::MaxIterations;
             }
-            // Line search on closed-loop rollouts.
+            self.gtrue.copy_from_slice(&self.riccati.grad);
+            // The step: the box-constrained QP of the Gauss-Newton model, solved to a relative
+            // accuracy η = min(0.1, √(‖pg‖/‖g₀‖)) (inexact Newton with a vanishing forcing
+            // term); without every Jacobian in memory, one Riccati pass on the ε-active set.
             let jbar = self.nominal.cost;
-            let (d1, d2) = (self.riccati.d1, self.riccati.d2);
+            let (d1, d2) = loop {
+                self.prox = mu * self.quu_scale;
+                if in_memory {
+                    let eta = (pg / gref).sqrt().min(0.1);
+                    if let Some(q) = self.solve_qp(eta * pg)? {
+                        let a: f64 = (0..=self.steps)
+                            .filter(|&k| self.free[k])
+                            .map(|k| self.gtrue[k] * self.dv[k])
+                            .sum();
+                        break (a, (q - jbar) - a);
+                    }
+                } else {
+                    self.set_active((1e-3 * width).min(pg));
+                    if self.sweep(true)? {
+                        self.ff_out.copy_from_slice(&self.riccati.ff);
+                        break (self.riccati.d1, self.riccati.d2);
+                    }
+                }
+                mu = (mu * 10.0).max(MU_MIN);
+                if mu > opts.max_regularisation {
+                    break 'outer Termination::RegularisationLimit;
+                }
+            };
+            // Line search on closed-loop rollouts of the simulator.
             let tiny = ROUNDOFF * jbar.abs();
             let mut accepted = None;
             let mut alpha = 1.0;
@@ -800,7 +1059,7 @@ impl Solver {
                 let fb = Feedback {
                     nominal: &self.nominal,
                     gain: &self.riccati.gain,
-                    ff: &self.riccati.ff,
+                    ff: &self.ff_out,
                     alpha,
                     nz: self.nz,
                 };
@@ -821,7 +1080,7 @@ impl Solver {
                     let jt = self.trial.cost;
                     if -dj <= tiny {
                         // Round-off regime: the model's decrease is not resolvable in J; take
-                        // the full step unless J rises beyond its round-off.
+                        // the step unless J rises beyond its round-off.
                         if jt <= jbar + tiny {
                             accepted = Some((alpha, true));
                             break;
@@ -847,8 +1106,7 @@ impl Solver {
                     if roundoff {
                         roundoff_steps += 1;
                         if roundoff_steps >= MAX_ROUNDOFF_STEPS {
-                            // One more backward pass to report the gradient at this point.
-                            self.backward(mu * self.quu_scale)?;
+                            self.costate()?;
                             let pg = self.projected_norm();
                             if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
                                 break Termination::Converged;
@@ -872,6 +1130,7 @@ impl Solver {
                 }
             }
         };
+        // The last costate sweep was at the final nominal.
         let theta = self.theta();
         let g = self.theta_gradient();
         let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();

@@ -16,10 +16,12 @@
 //! ```text
 //! Q_x = l_x + Ãᵀs′   Q_u = l_u + B̃ᵀs′   Q_xx = l_xx + ÃᵀS′Ã   Q_uu = l_uu + B̃ᵀS′B̃
 //! Q_ux = l_ux + B̃ᵀS′Ã
-//! k = argmin_{lo ≤ δ ≤ hi} ½(Q_uu + μ)δ² + Q_u δ,  K = −Q_ux/(Q_uu + μ) (0 if clamped)
+//! k = argmin_{lo ≤ δ ≤ hi} ½ Q_uu δ² + Q_u δ,  K = −Q_ux/Q_uu (0 if clamped)
 //! s = Q_x + KᵀQ_uu k + KᵀQ_u + Q_uxᵀk     S = Q_xx + KᵀQ_uu K + KᵀQ_ux + Q_uxᵀK  (symmetrised)
 //! ΔJ(α) = α Σ k Q_u + ½ α² Σ k² Q_uu
 //! ```
+//! A regularisation μ enters as a proximal term ½ μ δv² of the model (Q_uu += μ, l_u += μ δv
+//! about a shifted point), so K, k and S stay those of one consistent quadratic model.
 //! The costate sweep ν_k = l_x + Ãᵀν_{k+1}, g_k = l_u + B̃ᵀν_{k+1} (ν after the last stage 0) is
 //! the discrete adjoint in tangent coordinates: g is the exact gradient of J with respect to
 //! the decisions (Q_u is not, away from the optimum: s carries the feedback terms).
@@ -82,6 +84,8 @@ pub(crate) struct StageInput<'a> {
     /// Bounds of the step δv_k (lo ≤ 0 ≤ hi).
     pub lo: f64,
     pub hi: f64,
+    /// Added to l_u at a free stage (the gradient μ δv of a proximal term ½ μ δv²).
+    pub lu_shift: f64,
     /// A_k (column-major 2n × 2n) and B_k (2n); `None` at the last stage.
     pub a: Option<&'a [f64]>,
     pub b: Option<&'a [f64]>,
@@ -163,6 +167,57 @@ impl Riccati {
         self.quu_count = 0;
     }
 
+    /// The costate sweep alone for stage k (called for k = N, …, 0 after [`Riccati::begin`]):
+    /// ν_k = l_x + Ãᵀν_{k+1} and the gradient g_k = l_u + B̃ᵀν_{k+1} into `grad` (O(n_z²) per
+    /// stage, no Riccati matrices).
+    pub fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
+        let (nxi, k) = (self.nxi, inp.k);
+        let wi = nxi;
+        let c = cost.weight(k);
+        let rate = if k > 0 { cost.rate } else { 0.0 };
+        self.lx.fill(0.0);
+        self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
+        let mut lu = 0.0;
+        if inp.free {
+            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
+            if self.aug == 1 {
+                self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
+            }
+        } else {
+            self.lx[wi] = 2.0 * cost.effort * inp.w;
+        }
+        match (inp.a, inp.b) {
+            (Some(a), Some(b)) => {
+                let nu1 = &self.nu_next;
+                for j in 0..nxi {
+                    let col = &a[j * nxi..(j + 1) * nxi];
+                    self.nu[j] =
+                        self.lx[j] + col.iter().zip(&nu1[..nxi]).map(|(x, y)| x * y).sum::<f64>();
+                }
+                let bnu = b[..nxi]
+                    .iter()
+                    .zip(&nu1[..nxi])
+                    .map(|(x, y)| x * y)
+                    .sum::<f64>();
+                let nuw = if self.aug == 1 { nu1[wi] } else { 0.0 };
+                if inp.free {
+                    self.grad[k] = lu + bnu + nuw;
+                    if self.aug == 1 {
+                        self.nu[wi] = self.lx[wi];
+                    }
+                } else {
+                    self.grad[k] = 0.0;
+                    self.nu[wi] = self.lx[wi] + bnu + nuw;
+                }
+            }
+            _ => {
+                self.nu.copy_from_slice(&self.lx);
+                self.grad[k] = if inp.free { lu } else { 0.0 };
+            }
+        }
+        std::mem::swap(&mut self.nu, &mut self.nu_next);
+    }
+
     /// Processes stage k (called for k = N, N − 1, …, 0) with the absolute regularisation `mu`.
     /// Returns `false` if the stage's box-QP is unbounded below (its step is then 0; raise
     /// `mu`). The costate and the gradient are computed either way.
@@ -178,7 +233,7 @@ impl Riccati {
         let mut lxx_ww = 0.0;
         let (mut lu, mut luu, mut lux_w) = (0.0, 0.0, 0.0);
         if inp.free {
-            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w);
+            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
             luu = 2.0 * (cost.effort + rate);
             if self.aug == 1 {
                 self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
@@ -285,7 +340,11 @@ impl Riccati {
         self.s_cur.copy_from(&self.qxx);
         self.sv.copy_from_slice(&self.qx);
         if inp.free {
-            let qt = quu + mu;
+            // The regularisation is a proximal term ½ μ δv² of the model: in K, k and S alike.
+            self.quu_sum += quu.abs();
+            self.quu_count += 1;
+            quu += mu;
+            let qt = quu;
             // An unbounded stage QP takes no step; the costate sweep goes on (the gradient
             // does not depend on the model) and the caller raises μ.
             let sol = solve_scalar(qt, qu, inp.lo, inp.hi).unwrap_or_else(|| {
@@ -314,8 +373,6 @@ impl Riccati {
             self.grad[k] = g;
             self.d1 += kk * qu;
             self.d2 += 0.5 * kk * kk * quu;
-            self.quu_sum += quu.abs();
-            self.quu_count += 1;
         } else {
             gain.fill(0.0);
             self.ff[k] = 0.0;

@@ -94,9 +94,23 @@ mod tests {
             }
         );
         // inert and unbounded
-        assert_eq!(solve_scalar(0.0, 0.0, -1.0, 1.0).unwrap().step, 0.0);
+        let inert = solve_scalar(0.0, 0.0, -1.0, 1.0).unwrap();
+        assert_eq!(
+            inert,
+            BoxQpStep {
+                step: 0.0,
+                clamped: true
+            }
+        );
         assert!(solve_scalar(0.0, 1.0, f64::NEG_INFINITY, 1.0).is_none());
-        assert_eq!(solve_scalar(-1.0, 1.0, -3.0, 1.0).unwrap().step, -3.0);
+        let concave = solve_scalar(-1.0, 1.0, -3.0, 1.0).unwrap();
+        assert_eq!(
+            concave,
+            BoxQpStep {
+                step: -3.0,
+                clamped: true
+            }
+        );
         // fixed by the active set
         let s = solve_scalar(2.0, -4.0, 0.25, 0.25).unwrap();
         assert_eq!(

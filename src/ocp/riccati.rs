@@ -86,6 +86,8 @@ pub(crate) struct StageInput<'a> {
     pub hi: f64,
     /// Added to l_u at a free stage (the gradient μ δv of a proximal term ½ μ δv²).
     pub lu_shift: f64,
+    /// Added to Q_uu at a free stage (interior-point barrier curvature z/s).
+    pub quu_shift: f64,
     /// A_k (column-major 2n × 2n) and B_k (2n); `None` at the last stage.
     pub a: Option<&'a [f64]>,
     pub b: Option<&'a [f64]>,
@@ -343,7 +345,7 @@ impl Riccati {
             // The regularisation is a proximal term ½ μ δv² of the model: in K, k and S alike.
             self.quu_sum += quu.abs();
             self.quu_count += 1;
-            quu += mu;
+            quu += mu + inp.quu_shift;
             let qt = quu;
             // An unbounded stage QP takes no step; the costate sweep goes on (the gradient
             // does not depend on the model) and the caller raises μ.

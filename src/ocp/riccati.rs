@@ -34,6 +34,11 @@ use super::boxqp::{solve_scalar, BoxQpStep};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
 /// The cost weights of the stage cost.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageCost {
@@ -262,10 +267,7 @@ impl Riccati {
                 // Ã and B̃.
                 self.at.fill(0.0);
                 for j in 0..nxi {
-                    let col = &a[j * nxi..(j + 1) * nxi];
-                    for i in 0..nxi {
-                        self.at[(i, j)] = col[i];
-                    }
+                    self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
                 }
                 if inp.free {
                     self.bt[..nxi].copy_from_slice(&b[..nxi]);
@@ -297,23 +299,16 @@ impl Riccati {
                 );
                 // Q_x = l_x + Ãᵀs′, ν = l_x + Ãᵀν′.
                 for j in 0..nz {
-                    let (mut x, mut y) = (0.0, 0.0);
-                    for i in 0..nz {
-                        let aij = self.at[(i, j)];
-                        x += aij * self.sv_next[i];
-                        y += aij * self.nu_next[i];
-                    }
-                    self.qx[j] = self.lx[j] + x;
-                    self.nu[j] = self.lx[j] + y;
+                    let col = self.at.col_as_slice(j);
+                    self.qx[j] = self.lx[j] + dot(col, &self.sv_next);
+                    self.nu[j] = self.lx[j] + dot(col, &self.nu_next);
                 }
                 if inp.free {
                     // SB = S′B̃, Q_uu, Q_ux = l_ux + ÃᵀSB, Q_u, g.
                     let (mut bsb, mut bs, mut bnu) = (0.0, 0.0, 0.0);
                     for i in 0..nz {
-                        let mut x = 0.0;
-                        for j in 0..nz {
-                            x += self.s_next[(i, j)] * self.bt[j];
-                        }
+                        // S′ is symmetric: row i = column i.
+                        let x = dot(self.s_next.col_as_slice(i), &self.bt);
                         self.sb[i] = x;
                         bsb += self.bt[i] * x;
                         bs += self.bt[i] * self.sv_next[i];
@@ -323,11 +318,7 @@ impl Riccati {
                     qu += bs;
                     g += bnu;
                     for j in 0..nz {
-                        let mut x = 0.0;
-                        for i in 0..nz {
-                            x += self.at[(i, j)] * self.sb[i];
-                        }
-                        self.qux[j] += x;
+                        self.qux[j] += dot(self.at.col_as_slice(j), &self.sb);
                     }
                 }
             }
@@ -366,9 +357,14 @@ impl Riccati {
             }
             for i in 0..nz {
                 self.sv[i] += gain[i] * (quu * kk + qu) + self.qux[i] * kk;
+            }
+            if !sol.clamped {
                 for j in 0..nz {
-                    self.s_cur[(i, j)] +=
-                        quu * gain[i] * gain[j] + gain[i] * self.qux[j] + self.qux[i] * gain[j];
+                    let (gj, qj) = (gain[j], self.qux[j]);
+                    let col = self.s_cur.col_as_slice_mut(j);
+                    for i in 0..nz {
+                        col[i] += quu * gain[i] * gj + gain[i] * qj + self.qux[i] * gj;
+                    }
                 }
             }
             self.ff[k] = kk;

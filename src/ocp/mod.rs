@@ -55,7 +55,25 @@
 //! - **Where it is slow**: with drag (D = 10) the Gauss-Newton model misses the curvature of the
 //!   quadratic drag p|p| weighted by the costates, so the tail converges linearly (about 30
 //!   iterations to 10⁻⁸ on the long-horizon scene, against 3 without drag). Second-order stage
-//!   terms (full DDP by forward-over-reverse of the stage map) are the next step.
+//!   terms (full DDP by forward-over-reverse of the stage map) are the next step; so are
+//!   cheaper Jacobians (one dual pass with the multipliers frozen, or a hand-written tangent
+//!   step): the dual-number Jacobians cost about 45 forward simulations per iteration.
+//!
+//! # Measured (2-core shared machine, `cargo bench --bench ocp`, `examples/long_horizon.rs`)
+//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖:
+//!
+//! | N | method | time | iterations | J | note |
+//! |---|---|---|---|---|---|
+//! | 10³ | this solver | 3.5 s | 31 | 1507.471209383 | converged |
+//! | 10³ | trust region (exact HVPs) | 247.5 s | 113 | 1507.481361068 | converged, a higher local minimum |
+//! | 10³ | L-BFGS | 13.3 s | 5000 (limit) | Σ M₀² = 1507.2437 | not converged (‖g‖/‖g₀‖ = 8.4·10⁻⁴) |
+//! | 10⁴ | this solver | 22.7 s | 20 | 1509.506391855 | converged |
+//!
+//! One iteration at N = 10³ costs ≈ 110 ms ≈ 150 forward simulations (0.72 ms): the rollout,
+//! stage Jacobians and costate sweep 32 ms (45 simulations), and about 8 Riccati passes of
+//! 4.7 ms (the interior-point QP); the cost per iteration is linear in N (1.1 s at N = 10⁴).
+//! Table 3.4 rows 5 and 7 (N = 10): 6.6 and 8.8 ms, against L-BFGS 19.9 and 28.9 ms and the
+//! trust region 19.2 and 11.7 ms, at equal objectives.
 //! - **Memory** O(N n_ξ²): the stage Jacobians (8(2n)² bytes per stage, 3.4 KB at n = 10) are
 //!   kept for the whole horizon while they fit in [`OcpOptions::jacobian_memory`] (default
 //!   1 GiB: N = 3·10⁵ at n = 10); beyond it they are recomputed block-wise just ahead of each
@@ -799,6 +817,50 @@ impl Solver {
         (q + prox, q)
     }
 
+    /// The QP's solution on a guessed face: the controls of the nominal that sit exactly on a
+    /// bound stay there, the others take the exact Newton step of the model with them fixed
+    /// (one Riccati pass). Accepted when the model's projected gradient at the result is at
+    /// most `tol`, i.e. when the face was the right one (the usual case once the active set
+    /// has settled: 1 pass instead of the interior point's 5–15). Returns the model value
+    /// without the proximal term, or `None` (then [`Solver::solve_qp`] runs).
+    fn warm_qp(&mut self, tol: f64) -> Result<Option<f64>> {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        if !(lo.is_finite() || hi.is_finite()) {
+            return Ok(None);
+        }
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        let mut any = false;
+        for k in 0..=self.steps {
+            let u = self.nominal.u[k];
+            self.active[k] = self.free[k] && (u <= lo || u >= hi);
+            self.fixed[k] = 0.0;
+            any |= self.active[k];
+        }
+        if !any || !self.sweep(true)? {
+            return Ok(None);
+        }
+        let (_, q_plain) = self.linear_rollout(1.0, Arc::ClosedLoop);
+        std::mem::swap(&mut self.dv, &mut self.dv_t);
+        std::mem::swap(&mut self.dz, &mut self.dz_t);
+        // The model gradient at the new point (the gains of the Riccati pass are kept).
+        self.active.fill(false);
+        self.sweep(false)?;
+        if !(q_plain.is_finite() && self.projected_norm() <= tol) {
+            return Ok(None);
+        }
+        let nz = self.nz;
+        for k in 0..=self.steps {
+            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+            self.ff_out[k] = self.dv[k]
+                - g.iter()
+                    .zip(&self.dz[k * nz..(k + 1) * nz])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+        }
+        Ok(Some(q_plain))
+    }
+
     /// Solves the box-constrained Gauss-Newton QP of the nominal (with the proximal weight
     /// `self.prox`) by a primal-dual interior-point method whose Newton systems are Riccati
     /// passes (Rao, Wright, Rawlings 1998; the scheme of HPIPM): with slacks s = v − lo,
@@ -1195,7 +1257,12 @@ impl Solver {
                 if in_memory {
                     let eta = (pg / gref).sqrt().min(0.1);
                     let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
-                    if let Some(q) = self.solve_qp((eta * pg).max(0.1 * target))? {
+                    let tol = (eta * pg).max(0.1 * target);
+                    let q = match self.warm_qp(tol)? {
+                        Some(q) => Some(q),
+                        None => self.solve_qp(tol)?,
+                    };
+                    if let Some(q) = q {
                         let a: f64 = (0..=self.steps)
                             .filter(|&k| self.free[k])
                             .map(|k| self.gtrue[k] * self.dv[k])

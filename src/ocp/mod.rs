@@ -64,21 +64,19 @@
 //!
 //! | N | method | time | iterations | J | note |
 //! |---|---|---|---|---|---|
-//! | 10³ | this solver | 3.5 s | 31 | 1507.471209383 | converged |
+//! | 10³ | this solver | 2.2 s | 31 | 1507.471209304 | converged |
 //! | 10³ | trust region (exact HVPs) | 247.5 s | 113 | 1507.481361068 | converged, a higher local minimum |
 //! | 10³ | L-BFGS | 13.3 s | 5000 (limit) | Σ M₀² = 1507.2437 | not converged (‖g‖/‖g₀‖ = 8.4·10⁻⁴) |
-//! | 10⁴ | this solver | 22.7 s | 20 | 1509.506391855 | converged |
+//! | 10⁴ | this solver | 17.5 s | 20 | 1509.506391033 | converged |
+//! | 10⁴ | L-BFGS | 151.5 s | 5000 (limit) | 1509.700293452 | not converged (3.2·10⁻⁵) |
+//! | 10⁵ | this solver | 198 s | 15 | 1529.756918830 | converged, 493 MB peak |
 //!
-//! One iteration at N = 10³ costs ≈ 110 ms ≈ 150 forward simulations (0.72 ms): the rollout,
-//! stage Jacobians and costate sweep 32 ms (45 simulations), and about 8 Riccati passes of
-//! 4.7 ms (the interior-point QP); the cost per iteration is linear in N (1.1 s at N = 10⁴).
-//! Table 3.4 rows 5 and 7 (N = 10): 6.6 and 8.8 ms, against L-BFGS 19.9 and 28.9 ms and the
-//! trust region 19.2 and 11.7 ms, at equal objectives.
-//! - **Memory** O(N n_ξ²): the stage Jacobians (8(2n)² bytes per stage, 3.4 KB at n = 10) are
-//!   kept for the whole horizon while they fit in [`OcpOptions::jacobian_memory`] (default
-//!   1 GiB: N = 3·10⁵ at n = 10); beyond it they are recomputed block-wise just ahead of each
-//!   sweep and the step falls back to one box-clamped Riccati pass (box-DDP). No sweep
-//!   allocates: every buffer is sized when the [`Solver`] is built.
+//! One iteration at N = 10³ costs ≈ 72 ms ≈ 100 forward simulations (0.72 ms): the rollout,
+//! stage Jacobians and costate sweep 32 ms (45 simulations), and on average 4 Riccati passes
+//! of 4.7 ms (the warm face, or the interior point when the active set changes). Table 3.4
+//! rows 5 and 7 (N = 10): 6.6 and 8.8 ms, against L-BFGS 19.9 and 28.9 ms and the trust
+//! region 19.2 and 11.7 ms, at equal objectives. The issue's targets (N = 10³ in 0.3 s, one
+//! iteration ≤ 20 simulations) are not met: see "Where it is slow".
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`] (c or c_sum, with effort), controls that are per-step or piecewise

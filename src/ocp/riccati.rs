@@ -21,7 +21,10 @@
 //! ΔJ(α) = α Σ k Q_u + ½ α² Σ k² Q_uu
 //! ```
 //! A regularisation μ enters as a proximal term ½ μ δv² of the model (Q_uu += μ, l_u += μ δv
-//! about a shifted point), so K, k and S stay those of one consistent quadratic model.
+//! about a shifted point), so K, k and S stay those of one consistent quadratic model. The
+//! interior-point QP of [`super::Solver`] uses the same pass with its barrier terms
+//! (Q_uu += z/s, l_u += ±τ/s, bounds at ±∞); the fallback without stored Jacobians and the warm
+//! start use the stage box-QP (clamped controls: K = 0).
 //! The costate sweep ν_k = l_x + Ãᵀν_{k+1}, g_k = l_u + B̃ᵀν_{k+1} (ν after the last stage 0) is
 //! the discrete adjoint in tangent coordinates: g is the exact gradient of J with respect to
 //! the decisions (Q_u is not, away from the optimum: s carries the feedback terms).

@@ -1,22 +1,39 @@
 //! What the thesis left for future work (end of §3.3, Fig. 3.12): optimal control over a long
 //! horizon. The riser with drag (D = 10 kg/m), F = 2 N at node 5 from t = 0, h = 0.01 s,
-//! N = 1000 (t ∈ [0, 10] s), per-step control at the tip (1001 parameters), minimising
-//! c_sum + ρ h Σ u_k² with a small effort penalty ρ and a force limit |u_k| ≤ u_max.
+//! N = 1000 (t ∈ [0, 10] s), per-step control at the tip (N + 1 = 1001 parameters), minimising
+//! J = c_sum + ρ h Σ u_k² with a small effort penalty ρ and a force limit |u_k| ≤ u_max.
 //!
-//! Prints the reduction of Σ M₀² and of max |M₀| against no control and against the best constant
-//! control (same objective and limit), and the time it took. Gradients are exact (discrete
-//! adjoint), so L-BFGS converges to ‖g‖ ≤ 1e-8 ‖g₀‖.
+//! By default the true per-step problem is solved by the structure-exploiting Riccati solver
+//! ([`chainbeam::ocp`]: box-constrained iLQR, O(N) per iteration, bounds handled exactly), from
+//! u = 0 to a projected gradient ≤ 10⁻⁸ ‖g₀‖. For comparison:
+//! - `--method lbfgs` or `--method trust-region` solve the same per-step problem with the
+//!   general-purpose solvers of [`chainbeam::optimize`] (L-BFGS stalls on this badly conditioned
+//!   1001-dimensional problem; the trust region converges but each Hessian-vector product costs a
+//!   forward-over-adjoint sweep of the whole horizon);
+//! - `--pieces P` replaces the per-step control by P piecewise-constant pieces: a *different,
+//!   coarser* problem (fewer parameters, a higher optimum), solvable by any method.
 //!
-//! By default the control is piecewise constant on 50 pieces of 0.2 s (L-BFGS converges to the
-//! round-off floor of the cost in under a second); `--pieces 0` optimises all 1001 per-step
-//! values (ill-conditioned: the high-frequency components barely move M₀, and L-BFGS needs
-//! thousands of iterations), `--trust-region` uses exact Hessian-vector products instead.
+//! Prints Σ M₀², max |M₀| and J against no control and against the best constant control (same
+//! objective and limit), the iterations, the first-order optimality reached and the time.
 //!
-//! `cargo run --release --example long_horizon [-- --rho 0.01 --umax 5 --pieces 50 --trust-region]`
+//! Measured on a shared 2-core machine (N = 1000, all from u = 0): the Riccati solver converges
+//! in 31 iterations and about 2.2 s to J = 1507.4712093; the trust region converges in about
+//! 250 s to a higher local minimum, J = 1507.4813611; L-BFGS stops at its 5000-iteration limit
+//! (13 s, ‖g‖/‖g₀‖ = 8.4·10⁻⁴). N = 10⁴: Riccati 17.5 s, 20 iterations; L-BFGS 151 s, not
+//! converged. See the module docs of `chainbeam::ocp` for the method and the limits.
+//!
+//! ```text
+//! cargo run --release --example long_horizon
+//! cargo run --release --example long_horizon -- --steps 10000
+//! cargo run --release --example long_horizon -- --method trust-region
+//! cargo run --release --example long_horizon -- --pieces 50 [--method lbfgs]
+//! cargo run --release --example long_horizon -- --rho 0.01 --umax 5 --rate 0.001 --history
+//! ```
 
+use chainbeam::ocp::{self, OcpOptions};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
-    catalogue, simulate_with_controls, BendingObjective, ControlProblem, Parametrisation,
+    catalogue, simulate_with_controls, BendingObjective, ControlProblem, Error, Parametrisation,
     PerStepControl, PiecewiseControl, Result, Scene,
 };
 
@@ -27,108 +44,192 @@ fn moments(scene: &Scene, u: &[f64]) -> Result<(f64, f64)> {
     Ok((sum, max))
 }
 
-fn arg(args: &[String], name: &str, default: f64) -> f64 {
+fn value<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
     args.iter()
         .position(|a| a == name)
         .and_then(|i| args.get(i + 1))
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
+        .map(String::as_str)
+}
+
+fn arg(args: &[String], name: &'static str, default: f64) -> Result<f64> {
+    match value(args, name) {
+        None => Ok(default),
+        Some(v) => v.parse().map_err(|_| Error::InvalidArgument {
+            name,
+            reason: format!("expected a number, got {v:?}"),
+        }),
+    }
+}
+
+/// What a run produced, whichever solver.
+struct Outcome {
+    controls: Vec<f64>,
+    objective: f64,
+    iterations: usize,
+    seconds: f64,
+    ratio: f64,
+    converged: bool,
+    note: String,
 }
 
 fn run() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let rho = arg(&args, "--rho", 0.01);
-    let umax = arg(&args, "--umax", 5.0);
-    let scene = catalogue::long_horizon();
-    let steps = scene.time.steps;
+    let rho = arg(&args, "--rho", 0.01)?;
+    let umax = arg(&args, "--umax", 5.0)?;
+    let rate = arg(&args, "--rate", 0.0)?;
+    let steps = arg(&args, "--steps", 1000.0)? as usize;
+    let pieces = arg(&args, "--pieces", 0.0)? as usize;
+    let history = args.iter().any(|a| a == "--history");
+    let method = value(&args, "--method").unwrap_or("riccati");
+    if !["riccati", "lbfgs", "trust-region"].contains(&method) {
+        return Err(Error::InvalidArgument {
+            name: "--method",
+            reason: format!("expected riccati, lbfgs or trust-region, got {method:?}"),
+        });
+    }
+    if rate > 0.0 && method != "riccati" {
+        return Err(Error::InvalidArgument {
+            name: "--rate",
+            reason: "the rate penalty is a term of the Riccati solver's objective only".into(),
+        });
+    }
+    let mut scene = catalogue::long_horizon();
+    scene.time.steps = steps;
+    if let Some(c) = scene.control.as_mut() {
+        c.values = vec![0.0; steps + 1];
+    }
     let objective = BendingObjective::summed_moment().with_effort(rho);
-    let opts = OptimOptions {
+
+    // Best constant control (1 parameter, L-BFGS) as the baseline.
+    let lbfgs = OptimOptions {
         method: Method::Lbfgs,
         bound: Some(umax),
         max_iters: 5000,
         ..OptimOptions::default()
     };
-
     let constant = ControlProblem::new(&scene, Parametrisation::Constant, objective)?;
-    let c = minimize(&constant, &[0.0], &opts)?;
+    let c = minimize(&constant, &[0.0], &lbfgs)?;
 
-    let pieces = arg(&args, "--pieces", 50.0) as usize;
     let map = if pieces == 0 {
         Parametrisation::PerStep(PerStepControl { steps })
     } else {
         Parametrisation::Piecewise(PiecewiseControl { steps, pieces })
     };
-    let method = if args.iter().any(|a| a == "--trust-region") {
-        Method::TrustRegion
-    } else {
-        Method::Lbfgs
-    };
-    let per_step = ControlProblem::new(&scene, map, objective)?;
+    let problem = ControlProblem::new(&scene, map, objective)?;
+    let theta0 = vec![0.0; problem.n_params()];
     let label = if pieces == 0 {
-        format!("per-step ({} values, {method})", steps + 1)
+        format!("per-step ({} values), {method}", steps + 1)
     } else {
         format!(
-            "{pieces} pieces of {:.2} s ({method})",
+            "{pieces} pieces of {:.2} s (coarser problem), {method}",
             scene.time.step * (steps + 1) as f64 / pieces as f64
         )
     };
-    let r = minimize(
-        &per_step,
-        &vec![c.theta[0]; per_step.n_params()],
-        &OptimOptions {
-            method,
-            ..opts.clone()
-        },
-    )?;
+    let out = if method == "riccati" {
+        let opts = OcpOptions {
+            rate_penalty: rate,
+            ..OcpOptions::default().with_bound(umax)
+        };
+        let r = ocp::solve(&problem, &theta0, &opts)?;
+        if history {
+            for (i, h) in r.history.iter().enumerate() {
+                eprintln!(
+                    "iter {:>3}: J = {:.12}, |pg| before = {:.3e}, alpha = {}, mu = {:.1e}",
+                    i + 1,
+                    h.objective,
+                    h.projected_gradient_norm,
+                    h.alpha,
+                    h.regularisation
+                );
+            }
+        }
+        Outcome {
+            controls: r.controls.clone(),
+            objective: r.objective,
+            iterations: r.iterations,
+            seconds: r.seconds,
+            ratio: r.projected_gradient_norm / r.initial_gradient_norm,
+            converged: r.converged,
+            note: format!(
+                "{} rollouts, {} Jacobian passes, {} backward passes, {} active bounds; {}",
+                r.rollouts,
+                r.jacobian_passes,
+                r.backward_passes,
+                r.active_bounds.len(),
+                r.termination
+            ),
+        }
+    } else {
+        let m = if method == "lbfgs" {
+            Method::Lbfgs
+        } else {
+            Method::TrustRegion
+        };
+        let r = minimize(
+            &problem,
+            &theta0,
+            &OptimOptions {
+                method: m,
+                progress: history,
+                ..lbfgs.clone()
+            },
+        )?;
+        Outcome {
+            controls: r.controls.clone(),
+            objective: r.objective,
+            iterations: r.iterations,
+            seconds: r.seconds,
+            ratio: r.projected_gradient_norm / r.initial_gradient_norm,
+            converged: r.converged,
+            note: format!(
+                "{} adjoint sweeps, {} HVPs; {}",
+                r.gradient_evals, r.hvp_evals, r.termination
+            ),
+        }
+    };
 
     let (s0, m0) = moments(&scene, &vec![0.0; steps + 1])?;
     let (sc, mc) = moments(&scene, &c.controls)?;
-    let (sp, mp) = moments(&scene, &r.controls)?;
-    println!("riser, D = 10 kg/m, F = 2 N at node 5, N = {steps}, h = 0.01 s; rho = {rho}, |u| <= {umax} N\n");
+    let (sp, mp) = moments(&scene, &out.controls)?;
     println!(
-        "{:<28} {:>14} {:>12} {:>12} {:>10}",
-        "control", "sum M0^2", "max |M0|", "max |u| [N]", "time [s]"
+        "riser, D = 10 kg/m, F = 2 N at node 5, N = {steps}, h = 0.01 s; rho = {rho}, \
+         |u| <= {umax} N{}\n",
+        if rate > 0.0 {
+            format!(", rate penalty sigma = {rate}")
+        } else {
+            String::new()
+        }
     );
     println!(
-        "{:<28} {:>14.4} {:>12.4} {:>12} {:>10}",
-        "none", s0, m0, "-", "-"
+        "{:<48} {:>14} {:>10} {:>16} {:>9} {:>6} {:>9}",
+        "control", "sum M0^2", "max |M0|", "J", "max |u|", "iters", "time [s]"
     );
+    println!("{:<48} {:>14.4} {:>10.4}", "none", s0, m0);
     println!(
-        "{:<28} {:>14.4} {:>12.4} {:>12.3} {:>10.3}",
-        format!("best constant u = {:.3} N", c.theta[0]),
+        "{:<48} {:>14.4} {:>10.4} {:>16.9} {:>9.3} {:>6} {:>9.3}",
+        format!("best constant u = {:.3} N (lbfgs)", c.theta[0]),
         sc,
         mc,
+        c.objective,
         c.theta[0].abs(),
+        c.iterations,
         c.seconds
     );
-    let umax_used = r.controls.iter().fold(0.0f64, |a, u| a.max(u.abs()));
+    let umax_used = out.controls.iter().fold(0.0f64, |a, u| a.max(u.abs()));
     println!(
-        "{:<28} {:>14.4} {:>12.4} {:>12.3} {:>10.3}",
-        label.as_str(),
-        sp,
-        mp,
-        umax_used,
-        r.seconds
+        "{:<48} {:>14.4} {:>10.4} {:>16.9} {:>9.3} {:>6} {:>9.3}",
+        label, sp, mp, out.objective, umax_used, out.iterations, out.seconds
     );
     println!(
-        "\nper-step vs none: sum M0^2 reduced {:.1}x, max |M0| reduced {:.1}x",
+        "\nvs none: sum M0^2 reduced {:.1}x, max |M0| {:.2}x; vs best constant: {:.2}x, {:.2}x",
         s0 / sp,
-        m0 / mp
-    );
-    println!(
-        "per-step vs best constant: sum M0^2 reduced {:.1}x, max |M0| reduced {:.1}x",
+        m0 / mp,
         sc / sp,
         mc / mp
     );
     println!(
-        "{method}: {} iterations, {} adjoint sweeps, |g| = {:.2e} (|g0| = {:.2e}, ratio {:.1e}; projected {:.2e}), {}",
-        r.iterations,
-        r.gradient_evals,
-        r.gradient_norm,
-        r.initial_gradient_norm,
-        r.projected_gradient_norm / r.initial_gradient_norm,
-        r.projected_gradient_norm,
-        r.termination
+        "{method}: converged = {}, projected gradient / |g0| = {:.1e}; {}",
+        out.converged, out.ratio, out.note
     );
     Ok(())
 }

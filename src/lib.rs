@@ -131,6 +131,7 @@ pub mod euler_bernoulli;
 pub mod integrators;
 pub mod model;
 pub mod multistart;
+pub mod ocp;
 pub mod optimize;
 pub mod scene;
 pub mod simulate;

@@ -84,6 +84,11 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         self.h
     }
 
+    /// The objective.
+    pub fn objective(&self) -> &O {
+        &self.objective
+    }
+
     /// The model (f64).
     pub fn chain(&self) -> &Chain<f64, 2> {
         &self.chain

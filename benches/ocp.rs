@@ -1,0 +1,169 @@
+//! The Riccati solver of `chainbeam::ocp` (issue: long horizons) on the long-horizon scene
+//! (riser, D = 10, F = 2 N at node 5, h = 0.01 s, per-step tip control, c_sum + ρh Σu²,
+//! ρ = 0.01, |u| ≤ 5 N) and on Table 3.4 rows, against L-BFGS and the trust region.
+//!
+//! - `ocp_parts/*/N`: the parts of one iteration at N = 10³ and 10⁴ — one forward simulation
+//!   (`ControlProblem::value`, the unit), a rollout plus the stage Jacobians plus the costate
+//!   sweep (`set_point` + `gradient`), and one Riccati pass with a linearised rollout
+//!   (`gauss_newton_step`). An iteration is one Jacobian pass plus 5–15 Riccati passes
+//!   (the interior-point QP) plus 1–3 rollouts; the ratios to `forward` are machine-independent.
+//! - `ocp_solve/riccati/1000`: time to the optimum (projected gradient ≤ 10⁻⁸‖g₀‖) from u = 0.
+//!   With `OCP_BENCH_LONG=1` also N = 10⁴ (and 10⁵ with `OCP_BENCH_LONG=2`), and L-BFGS and the
+//!   trust region at N = 10³ (minutes: L-BFGS stops at 5000 iterations, the trust region
+//!   converges after about 225-375 s; `examples/long_horizon.rs` prints the same comparison).
+//! - `ocp_table_3_4/{riccati,lbfgs,trust_region}/node`: Table 3.4 rows 5 and 7 (per-step, N = 10,
+//!   c_sum, the thesis's force bound) from u = 0.
+//!
+//! Run with `cargo bench --bench ocp -- --warm-up-time 1 --measurement-time 5`.
+
+use std::hint::black_box;
+
+use chainbeam::ocp::{solve, OcpOptions, Solver};
+use chainbeam::optimize::{minimize, Method, OptimOptions};
+use chainbeam::{
+    catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
+};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
+
+fn long_horizon(steps: usize) -> Scene {
+    let mut s = catalogue::long_horizon();
+    s.time.steps = steps;
+    if let Some(c) = s.control.as_mut() {
+        c.values = vec![0.0; steps + 1];
+    }
+    s
+}
+
+fn problem(steps: usize) -> ControlProblem {
+    ControlProblem::new(
+        &long_horizon(steps),
+        Parametrisation::PerStep(PerStepControl { steps }),
+        BendingObjective::summed_moment().with_effort(0.01),
+    )
+    .expect("valid scene")
+}
+
+fn long_level() -> u32 {
+    std::env::var("OCP_BENCH_LONG")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0)
+}
+
+fn bench_parts(c: &mut Criterion) {
+    let mut g = c.benchmark_group("ocp_parts");
+    g.sample_size(10);
+    for steps in [1000usize, 10_000] {
+        let p = problem(steps);
+        let theta: Vec<f64> = (0..=steps).map(|k| 2.0 * (0.01 * k as f64).sin()).collect();
+        let opts = OcpOptions::default().with_bound(5.0);
+        let mut s = Solver::new(&p, &opts).expect("solver");
+        g.bench_with_input(BenchmarkId::new("forward", steps), &steps, |b, _| {
+            b.iter(|| black_box(p.value(black_box(&theta)).unwrap()))
+        });
+        g.bench_with_input(
+            BenchmarkId::new("rollout_jacobians_costate", steps),
+            &steps,
+            |b, _| {
+                b.iter(|| {
+                    s.set_point(black_box(&theta)).unwrap();
+                    black_box(s.gradient().unwrap())
+                })
+            },
+        );
+        s.set_point(&theta).unwrap();
+        s.gradient().unwrap();
+        g.bench_with_input(BenchmarkId::new("riccati_pass", steps), &steps, |b, _| {
+            b.iter(|| black_box(s.gauss_newton_step(black_box(1e-3)).unwrap()))
+        });
+    }
+    g.finish();
+}
+
+fn bench_solve(c: &mut Criterion) {
+    let mut g = c.benchmark_group("ocp_solve");
+    g.sample_size(10);
+    g.sampling_mode(SamplingMode::Flat);
+    let level = long_level();
+    let mut sizes = vec![1000usize];
+    if level >= 1 {
+        sizes.push(10_000);
+    }
+    if level >= 2 {
+        sizes.push(100_000);
+    }
+    for steps in sizes {
+        let p = problem(steps);
+        let theta0 = vec![0.0; steps + 1];
+        let opts = OcpOptions::default().with_bound(5.0);
+        g.bench_with_input(BenchmarkId::new("riccati", steps), &steps, |b, _| {
+            b.iter(|| {
+                let r = solve(&p, black_box(&theta0), &opts).unwrap();
+                assert!(r.converged, "{}", r.termination);
+                black_box(r.objective)
+            })
+        });
+    }
+    if level >= 1 {
+        let p = problem(1000);
+        let theta0 = vec![0.0; 1001];
+        for (name, method) in [
+            ("lbfgs", Method::Lbfgs),
+            ("trust_region", Method::TrustRegion),
+        ] {
+            let opts = OptimOptions {
+                method,
+                bound: Some(5.0),
+                max_iters: 5000,
+                ..OptimOptions::default()
+            };
+            g.bench_with_input(BenchmarkId::new(name, 1000), &1000, |b, _| {
+                b.iter(|| black_box(minimize(&p, black_box(&theta0), &opts).unwrap().objective))
+            });
+        }
+    }
+    g.finish();
+}
+
+fn bench_table_3_4(c: &mut Criterion) {
+    let mut g = c.benchmark_group("ocp_table_3_4");
+    g.sample_size(20);
+    // The thesis's largest |u_k| of the row (examples/tables/thesis.rs): node 5: 374.15 N,
+    // node 7: 4.63 N.
+    for (node, bound) in [(5usize, 374.15217067), (7, 4.62758511)] {
+        let p = ControlProblem::new(
+            &catalogue::riser(node),
+            Parametrisation::PerStep(PerStepControl { steps: 10 }),
+            BendingObjective::summed_moment(),
+        )
+        .expect("valid scene");
+        let ocp = OcpOptions::default().with_bound(bound);
+        g.bench_with_input(BenchmarkId::new("riccati", node), &node, |b, _| {
+            b.iter(|| black_box(solve(&p, black_box(&[0.0; 11]), &ocp).unwrap().objective))
+        });
+        for (name, method) in [
+            ("lbfgs", Method::Lbfgs),
+            ("trust_region", Method::TrustRegion),
+        ] {
+            let opts = OptimOptions {
+                method,
+                bound: Some(bound),
+                max_iters: 2000,
+                ..OptimOptions::default()
+            };
+            g.bench_with_input(BenchmarkId::new(name, node), &node, |b, _| {
+                b.iter(|| {
+                    black_box(
+                        minimize(&p, black_box(&[0.0; 11]), &opts)
+                            .unwrap()
+                            .objective,
+                    )
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_parts, bench_solve, bench_table_3_4);
+criterion_main!(benches);

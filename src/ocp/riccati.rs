@@ -1,0 +1,395 @@
+//! The backward pass: the Gauss-Newton Riccati recursion with box-clamped controls, and beside
+//! it the exact costate sweep that gives the gradient.
+//!
+//! State z_k = (ξ_k, w_k): the tangent coordinates ξ (2n) and, when the problem needs it
+//! (a rate penalty or controls held over several steps), w_k = u_{k−1}, copied forward by the
+//! dynamics. At a *free* stage the decision is v_k = u_k; at a *held* stage (inside a piece of a
+//! piecewise-constant control) there is no decision and u_k = w_k:
+//! ```text
+//! free:  Ã = [A 0; 0 0],  B̃ = [B; 1]          held:  Ã = [A B; 0 1],  no B̃
+//! ```
+//! Stage cost (Gauss-Newton model of the bending term r_k = M₀(q_k), linear in ∂ξ):
+//! ℓ_k = c_k M₀² + ρh u_k² + (σ/h)(u_k − w_k)² (the rate term for k ≥ 1), so
+//! l_x = 2c_k M₀ ∇M₀ (+ w terms), l_xx = 2c_k ∇M₀∇M₀ᵀ (rank 1; ∇M₀ has one entry, at φ₁).
+//!
+//! Recursion (k = N … 0; s′ = 0, S′ = 0 after the last stage), Tassa, Erez, Todorov (IROS 2012):
+//! ```text
+//! Q_x = l_x + Ãᵀs′   Q_u = l_u + B̃ᵀs′   Q_xx = l_xx + ÃᵀS′Ã   Q_uu = l_uu + B̃ᵀS′B̃
+//! Q_ux = l_ux + B̃ᵀS′Ã
+//! k = argmin_{lo ≤ δ ≤ hi} ½ Q_uu δ² + Q_u δ,  K = −Q_ux/Q_uu (0 if clamped)
+//! s = Q_x + KᵀQ_uu k + KᵀQ_u + Q_uxᵀk     S = Q_xx + KᵀQ_uu K + KᵀQ_ux + Q_uxᵀK  (symmetrised)
+//! ΔJ(α) = α Σ k Q_u + ½ α² Σ k² Q_uu
+//! ```
+//! A regularisation μ enters as a proximal term ½ μ δv² of the model (Q_uu += μ, l_u += μ δv
+//! about a shifted point), so K, k and S stay those of one consistent quadratic model. The
+//! interior-point QP of [`super::Solver`] uses the same pass with its barrier terms
+//! (Q_uu += z/s, l_u += ±τ/s, bounds at ±∞); the fallback without stored Jacobians and the warm
+//! start use the stage box-QP (clamped controls: K = 0).
+//! The costate sweep ν_k = l_x + Ãᵀν_{k+1}, g_k = l_u + B̃ᵀν_{k+1} (ν after the last stage 0) is
+//! the discrete adjoint in tangent coordinates: g is the exact gradient of J with respect to
+//! the decisions (Q_u is not, away from the optimum: s carries the feedback terms).
+//!
+//! The products ÃᵀS′Ã are faer matrix products on preallocated matrices (the O(n_z³) part);
+//! with one control per stage Q_uu is a scalar, so no factorisation is needed: the box-QP is a
+//! clamp ([`super::boxqp`]) and the feedback is a scaled row. Nothing allocates per stage.
+
+use super::boxqp::{solve_scalar, BoxQpStep};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// The cost weights of the stage cost.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StageCost {
+    /// ρh: the coefficient of u_k².
+    pub effort: f64,
+    /// σ/h: the coefficient of (u_k − u_{k−1})².
+    pub rate: f64,
+    /// Only the final bending moment counts (c = M₀(t_N)², eq. 3.3.2); else the sum (eq. 3.3.4).
+    pub final_only: bool,
+    /// N.
+    pub steps: usize,
+}
+
+impl StageCost {
+    /// The bending weight c_k.
+    #[inline]
+    pub fn weight(&self, k: usize) -> f64 {
+        if self.final_only && k != self.steps {
+            0.0
+        } else {
+            1.0
+        }
+    }
+
+    /// ℓ_k for bending moment `m`, control `u` and previous control `w`.
+    #[inline]
+    pub fn value(&self, k: usize, m: f64, u: f64, w: f64) -> f64 {
+        let mut l = self.weight(k) * m * m + self.effort * u * u;
+        if k > 0 && self.rate > 0.0 {
+            l += self.rate * (u - w) * (u - w);
+        }
+        l
+    }
+}
+
+/// What the backward pass needs of stage k.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StageInput<'a> {
+    pub k: usize,
+    pub free: bool,
+    /// M₀(q_k).
+    pub moment: f64,
+    /// ∂M₀/∂φ₁ at q_k.
+    pub dmoment: f64,
+    /// u_k and w_k = u_{k−1} (0 at k = 0).
+    pub u: f64,
+    pub w: f64,
+    /// Bounds of the step δv_k (lo ≤ 0 ≤ hi).
+    pub lo: f64,
+    pub hi: f64,
+    /// Added to l_u at a free stage (the gradient μ δv of a proximal term ½ μ δv²).
+    pub lu_shift: f64,
+    /// Added to Q_uu at a free stage (interior-point barrier curvature z/s).
+    pub quu_shift: f64,
+    /// A_k (column-major 2n × 2n) and B_k (2n); `None` at the last stage.
+    pub a: Option<&'a [f64]>,
+    pub b: Option<&'a [f64]>,
+}
+
+/// The backward pass's workspace and results (sized once per problem).
+#[derive(Clone, Debug)]
+pub(crate) struct Riccati {
+    nxi: usize,
+    aug: usize,
+    nz: usize,
+    s_next: Mat<f64>,
+    s_cur: Mat<f64>,
+    t: Mat<f64>,
+    at: Mat<f64>,
+    qxx: Mat<f64>,
+    sv_next: Vec<f64>,
+    sv: Vec<f64>,
+    nu_next: Vec<f64>,
+    nu: Vec<f64>,
+    lx: Vec<f64>,
+    qx: Vec<f64>,
+    bt: Vec<f64>,
+    sb: Vec<f64>,
+    qux: Vec<f64>,
+    /// Feedback gains K_k (n_z per stage).
+    pub gain: Vec<f64>,
+    /// Feedforward steps k_k.
+    pub ff: Vec<f64>,
+    /// Exact gradient of J with respect to the decision of each free stage (0 when held).
+    pub grad: Vec<f64>,
+    /// Σ k Q_u and Σ ½ k² Q_uu (ΔJ(α) = α d1 + α² d2).
+    pub d1: f64,
+    pub d2: f64,
+    /// Σ Q_uu over the free stages and their count (the scale of the regularisation).
+    pub quu_sum: f64,
+    pub quu_count: usize,
+}
+
+impl Riccati {
+    pub fn new(nxi: usize, aug: usize, steps: usize) -> Self {
+        let nz = nxi + aug;
+        Riccati {
+            nxi,
+            aug,
+            nz,
+            s_next: Mat::zeros(nz, nz),
+            s_cur: Mat::zeros(nz, nz),
+            t: Mat::zeros(nz, nz),
+            at: Mat::zeros(nz, nz),
+            qxx: Mat::zeros(nz, nz),
+            sv_next: vec![0.0; nz],
+            sv: vec![0.0; nz],
+            nu_next: vec![0.0; nz],
+            nu: vec![0.0; nz],
+            lx: vec![0.0; nz],
+            qx: vec![0.0; nz],
+            bt: vec![0.0; nz],
+            sb: vec![0.0; nz],
+            qux: vec![0.0; nz],
+            gain: vec![0.0; (steps + 1) * nz],
+            ff: vec![0.0; steps + 1],
+            grad: vec![0.0; steps + 1],
+            d1: 0.0,
+            d2: 0.0,
+            quu_sum: 0.0,
+            quu_count: 0,
+        }
+    }
+
+    /// Starts a backward pass (after the last stage: s′ = 0, S′ = 0, ν′ = 0).
+    pub fn begin(&mut self) {
+        self.s_next.fill(0.0);
+        self.sv_next.fill(0.0);
+        self.nu_next.fill(0.0);
+        self.d1 = 0.0;
+        self.d2 = 0.0;
+        self.quu_sum = 0.0;
+        self.quu_count = 0;
+    }
+
+    /// The costate sweep alone for stage k (called for k = N, …, 0 after [`Riccati::begin`]):
+    /// ν_k = l_x + Ãᵀν_{k+1} and the gradient g_k = l_u + B̃ᵀν_{k+1} into `grad` (O(n_z²) per
+    /// stage, no Riccati matrices).
+    pub fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
+        let (nxi, k) = (self.nxi, inp.k);
+        let wi = nxi;
+        let c = cost.weight(k);
+        let rate = if k > 0 { cost.rate } else { 0.0 };
+        self.lx.fill(0.0);
+        self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
+        let mut lu = 0.0;
+        if inp.free {
+            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
+            if self.aug == 1 {
+                self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
+            }
+        } else {
+            self.lx[wi] = 2.0 * cost.effort * inp.w;
+        }
+        match (inp.a, inp.b) {
+            (Some(a), Some(b)) => {
+                let nu1 = &self.nu_next;
+                for j in 0..nxi {
+                    let col = &a[j * nxi..(j + 1) * nxi];
+                    self.nu[j] =
+                        self.lx[j] + col.iter().zip(&nu1[..nxi]).map(|(x, y)| x * y).sum::<f64>();
+                }
+                let bnu = b[..nxi]
+                    .iter()
+                    .zip(&nu1[..nxi])
+                    .map(|(x, y)| x * y)
+                    .sum::<f64>();
+                let nuw = if self.aug == 1 { nu1[wi] } else { 0.0 };
+                if inp.free {
+                    self.grad[k] = lu + bnu + nuw;
+                    if self.aug == 1 {
+                        self.nu[wi] = self.lx[wi];
+                    }
+                } else {
+                    self.grad[k] = 0.0;
+                    self.nu[wi] = self.lx[wi] + bnu + nuw;
+                }
+            }
+            _ => {
+                self.nu.copy_from_slice(&self.lx);
+                self.grad[k] = if inp.free { lu } else { 0.0 };
+            }
+        }
+        std::mem::swap(&mut self.nu, &mut self.nu_next);
+    }
+
+    /// Processes stage k (called for k = N, N − 1, …, 0) with the absolute regularisation `mu`.
+    /// Returns `false` if the stage's box-QP is unbounded below (its step is then 0; raise
+    /// `mu`). The costate and the gradient are computed either way.
+    pub fn stage(&mut self, inp: &StageInput<'_>, cost: &StageCost, mu: f64) -> bool {
+        let (nxi, nz, k) = (self.nxi, self.nz, inp.k);
+        let wi = nxi; // index of w when aug = 1
+        let c = cost.weight(k);
+        let rate = if k > 0 { cost.rate } else { 0.0 };
+        // Stage-cost derivatives.
+        self.lx.fill(0.0);
+        self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
+        let lxx00 = 2.0 * c * inp.dmoment * inp.dmoment;
+        let mut lxx_ww = 0.0;
+        let (mut lu, mut luu, mut lux_w) = (0.0, 0.0, 0.0);
+        if inp.free {
+            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
+            luu = 2.0 * (cost.effort + rate);
+            if self.aug == 1 {
+                self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
+                lxx_ww = 2.0 * rate;
+                lux_w = -2.0 * rate;
+            }
+        } else {
+            // held: u = w; the rate term vanishes inside a piece.
+            self.lx[wi] = 2.0 * cost.effort * inp.w;
+            lxx_ww = 2.0 * cost.effort;
+        }
+        self.qxx.fill(0.0);
+        self.qxx[(0, 0)] = lxx00;
+        if self.aug == 1 {
+            self.qxx[(wi, wi)] += lxx_ww;
+        }
+        self.qux.fill(0.0);
+        if self.aug == 1 {
+            self.qux[wi] = lux_w;
+        }
+        let (mut qu, mut quu, mut g) = (lu, luu, lu);
+        match (inp.a, inp.b) {
+            (Some(a), Some(b)) => {
+                // Ã and B̃.
+                self.at.fill(0.0);
+                for j in 0..nxi {
+                    self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
+                }
+                if inp.free {
+                    self.bt[..nxi].copy_from_slice(&b[..nxi]);
+                    if self.aug == 1 {
+                        self.bt[wi] = 1.0;
+                    }
+                } else {
+                    for i in 0..nxi {
+                        self.at[(i, wi)] = b[i];
+                    }
+                    self.at[(wi, wi)] = 1.0;
+                }
+                // T = S′Ã;  Q_xx += Ãᵀ T.
+                matmul(
+                    self.t.as_mut(),
+                    Accum::Replace,
+                    self.s_next.as_ref(),
+                    self.at.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                matmul(
+                    self.qxx.as_mut(),
+                    Accum::Add,
+                    self.at.as_ref().transpose(),
+                    self.t.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                // Q_x = l_x + Ãᵀs′, ν = l_x + Ãᵀν′.
+                for j in 0..nz {
+                    let col = self.at.col_as_slice(j);
+                    self.qx[j] = self.lx[j] + dot(col, &self.sv_next);
+                    self.nu[j] = self.lx[j] + dot(col, &self.nu_next);
+                }
+                if inp.free {
+                    // SB = S′B̃, Q_uu, Q_ux = l_ux + ÃᵀSB, Q_u, g.
+                    let (mut bsb, mut bs, mut bnu) = (0.0, 0.0, 0.0);
+                    for i in 0..nz {
+                        // S′ is symmetric: row i = column i.
+                        let x = dot(self.s_next.col_as_slice(i), &self.bt);
+                        self.sb[i] = x;
+                        bsb += self.bt[i] * x;
+                        bs += self.bt[i] * self.sv_next[i];
+                        bnu += self.bt[i] * self.nu_next[i];
+                    }
+                    quu += bsb;
+                    qu += bs;
+                    g += bnu;
+                    for j in 0..nz {
+                        self.qux[j] += dot(self.at.col_as_slice(j), &self.sb);
+                    }
+                }
+            }
+            _ => {
+                self.qx.copy_from_slice(&self.lx);
+                self.nu.copy_from_slice(&self.lx);
+            }
+        }
+        // Box-QP, gains, value function.
+        let mut bounded = true;
+        let gain = &mut self.gain[k * nz..(k + 1) * nz];
+        self.s_cur.copy_from(&self.qxx);
+        self.sv.copy_from_slice(&self.qx);
+        if inp.free {
+            // The regularisation is a proximal term ½ μ δv² of the model: in K, k and S alike.
+            self.quu_sum += quu.abs();
+            self.quu_count += 1;
+            quu += mu + inp.quu_shift;
+            let qt = quu;
+            // An unbounded stage QP takes no step; the costate sweep goes on (the gradient
+            // does not depend on the model) and the caller raises μ.
+            let sol = solve_scalar(qt, qu, inp.lo, inp.hi).unwrap_or_else(|| {
+                bounded = false;
+                BoxQpStep {
+                    step: 0.0,
+                    clamped: true,
+                }
+            });
+            let kk = sol.step;
+            if sol.clamped {
+                gain.fill(0.0);
+            } else {
+                for (g_, q) in gain.iter_mut().zip(&self.qux) {
+                    *g_ = -q / qt;
+                }
+            }
+            for i in 0..nz {
+                self.sv[i] += gain[i] * (quu * kk + qu) + self.qux[i] * kk;
+            }
+            if !sol.clamped {
+                for j in 0..nz {
+                    let (gj, qj) = (gain[j], self.qux[j]);
+                    let col = self.s_cur.col_as_slice_mut(j);
+                    for i in 0..nz {
+                        col[i] += quu * gain[i] * gj + gain[i] * qj + self.qux[i] * gj;
+                    }
+                }
+            }
+            self.ff[k] = kk;
+            self.grad[k] = g;
+            self.d1 += kk * qu;
+            self.d2 += 0.5 * kk * kk * quu;
+        } else {
+            gain.fill(0.0);
+            self.ff[k] = 0.0;
+            self.grad[k] = 0.0;
+        }
+        // Symmetrise S and hand it to stage k − 1.
+        for i in 0..nz {
+            for j in 0..i {
+                let v = 0.5 * (self.s_cur[(i, j)] + self.s_cur[(j, i)]);
+                self.s_cur[(i, j)] = v;
+                self.s_cur[(j, i)] = v;
+            }
+        }
+        std::mem::swap(&mut self.s_cur, &mut self.s_next);
+        std::mem::swap(&mut self.sv, &mut self.sv_next);
+        std::mem::swap(&mut self.nu, &mut self.nu_next);
+        bounded
+    }
+}

@@ -1,0 +1,414 @@
+//! One stage of the optimal-control problem: the DDP state x̂_k, the tangent coordinates
+//! ξ = (φ, ω), the stage map F_k(x̂_k, u_k) and its Jacobians A_k = ∂ξ_{k+1}/∂ξ_k,
+//! B_k = ∂ξ_{k+1}/∂u_k by dual numbers through the one generic RATTLE step.
+//!
+//! # One control per stage: the shifted state x̂_k
+//! A RATTLE step (q_k, p_k) → (q_{k+1}, p_{k+1}) uses u_k in its first half-kick and u_{k+1} in
+//! its second. After the projection onto the hidden constraint the second half-kick is affine in
+//! u_{k+1}: since U_q(q; u) = U_q(q; 0) + u b with b = ∂U_q/∂u (block j: l_j e₃ for j below the
+//! control node, eq. 3.1.1), and the projection p = P(q) a,
+//! P(q) = I − Gᵀ(G M⁻¹ Gᵀ)⁻¹ G M⁻¹, is linear in a,
+//! ```text
+//! p_{k+1} = p̂_{k+1} − (h/2) u_{k+1} P(q_{k+1}) b,
+//! ```
+//! where p̂_{k+1} is the momentum of the same step taken with u_{k+1} = 0. The DDP state is
+//! x̂_k = (q_k, p̂_k) and the stage map is
+//! ```text
+//! F_k(x̂_k, u_k):  p_k = p̂_k − (h/2) u_k P(q_k) b   (k ≥ 1; p_0 is the initial momentum),
+//!                 (q_{k+1}, p̂_{k+1}) = RATTLE step from (q_k, p_k) with controls (u_k, 0).
+//! ```
+//! It lies on the same manifold as (q, p), and the costs (M₀ depends on q only) are unchanged,
+//! so the trajectory and the objective are exactly those of [`crate::rattle`]. Without the shift
+//! B_k would depend on u_{k+1} and the Riccati recursion would be wrong, not only slow.
+//!
+//! # Coordinates: simulate maximal, linearise minimal
+//! The planar state (q, p) ∈ ℝ^{4n} is constrained to a 2n-dimensional manifold (qᵢ ∈ S¹ and
+//! qᵢ·(M⁻¹p)ᵢ = 0). We keep simulating in the maximal coordinates the project validates, but
+//! linearise in the tangent coordinates ξ = (φ₁..φₙ, ω₁..ωₙ): φᵢ the absolute angle of
+//! pendulum i from e₂ (qᵢ = (cos φᵢ, sin φᵢ) in (y, z)) and ωᵢ = tᵢ·vᵢ its angular rate, with
+//! tᵢ = qᵢ rotated by +90° and v = M⁻¹p. In the planar model these are global coordinates of the
+//! manifold, so the Riccati matrices are 2n × 2n instead of 4n × 4n (8× fewer flops) and the
+//! feedback never acts on directions off the manifold. The maps between tangent and ambient
+//! perturbations are
+//! ```text
+//! E (ξ → x):  δqᵢ = tᵢ δφᵢ,   δp = M δv,   δvᵢ = tᵢ δωᵢ − qᵢ ωᵢ δφᵢ
+//! L (x → ξ):  δφᵢ = tᵢ·δqᵢ,   δωᵢ = tᵢ·(M⁻¹ δp)ᵢ              (L E = I)
+//! ```
+//! and A_k = L_{k+1} ∂F_k/∂x̂ E_k, B_k = L_{k+1} ∂F_k/∂u. Only free tips are supported: a locked
+//! or reaction-force tip adds a constraint (the manifold loses dimensions) that these
+//! coordinates do not remove ([`Error::InvalidArgument`] naming the tip).
+//!
+//! # Jacobians by dual numbers
+//! The 2n + 1 directions (E e_j on x̂_k, and u_k) are seeded in chunks of [`CHUNK`] into
+//! `DualSVec64<CHUNK>` and pushed through the stage map above: the generic RATTLE step with its
+//! derivative-only Newton update after convergence, which is the implicit function theorem on
+//! the step residual, ∂λ/∂θ = −R_λ⁻¹ R_θ (the derivative parts are exact, not iterated). The
+//! real parts are those of the `f64` stage map bit for bit.
+
+use crate::error::{Error, Result};
+use crate::model::{Chain, Scalar, TipCondition};
+use crate::rattle::{Rattle, State};
+use crate::tridiag::BorderedTridiag;
+use nalgebra::SVector;
+use num_dual::{Derivative, DualSVec64};
+
+/// Directions per dual-number chunk (`DualSVec64<8>`: measured 11 f64-steps per dual step, the
+/// best cost per direction of the sizes 8, 10, 12, 16; RICCATI.md §7).
+pub const CHUNK: usize = 8;
+pub(crate) type Dv = DualSVec64<CHUNK>;
+
+/// The tangent tᵢ = qᵢ rotated by +90° in the (y, z) plane: ∂q/∂φ for q = (cos φ, sin φ).
+#[inline]
+pub(crate) fn tangent<D: Scalar>(q: &[D; 2]) -> [D; 2] {
+    [-q[1], q[0]]
+}
+
+#[inline]
+fn dot2<D: Scalar>(a: &[D; 2], b: &[D; 2]) -> D {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+/// The f64 data of the stage map that the Riccati solver needs beside the chain.
+#[derive(Clone, Debug)]
+pub(crate) struct StageModel {
+    pub n: usize,
+    pub h: f64,
+    pub chain: Chain<f64, 2>,
+    /// M̄ (n × n, row-major): M̄_ij = lᵢ l_j Σ_{k ≥ max(i,j)} m_k (kinetic energy ½ Σ m_k |ṙ_k|²).
+    pub mass: Vec<f64>,
+    /// b = ∂U_q/∂u (block j: l_j e₃ for j below the control node).
+    pub control: Vec<[f64; 2]>,
+    /// ∂M₀/∂z-component of q₁: M₀ = scale · q₁,z (eq. 3.1.3).
+    pub moment_scale: f64,
+}
+
+impl StageModel {
+    /// Checks the scene's model (planar, free tip, a control node) and precomputes M̄ and b.
+    pub fn new(chain: &Chain<f64, 2>, h: f64) -> Result<Self> {
+        if chain.tip_condition() != TipCondition::Free {
+            return Err(Error::InvalidArgument {
+                name: "tip",
+                reason: format!(
+                    "the Riccati solver supports free tips (cantilever, riser) only, got {:?}: \
+                     a locked or reaction-force tip removes a dimension from the state manifold \
+                     that its tangent coordinates do not",
+                    chain.tip_condition()
+                ),
+            });
+        }
+        let Some(node) = chain.control_node() else {
+            return Err(Error::InvalidArgument {
+                name: "control node",
+                reason: "the problem has no control node".into(),
+            });
+        };
+        let n = chain.n();
+        let (l, m) = (chain.lengths(), chain.masses());
+        // tail_k = Σ_{k' ≥ k} m_k'
+        let mut tail = vec![0.0; n + 1];
+        for k in (0..n).rev() {
+            tail[k] = tail[k + 1] + m[k];
+        }
+        let mut mass = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..n {
+                mass[i * n + j] = l[i] * l[j] * tail[i.max(j)];
+            }
+        }
+        let control = (0..n)
+            .map(|j| if j < node { [0.0, l[j]] } else { [0.0, 0.0] })
+            .collect();
+        let mut unit = vec![[1.0, 0.0]; n];
+        unit[0] = [0.0, 1.0];
+        let moment_scale = chain.base_moment(&unit);
+        Ok(StageModel {
+            n,
+            h,
+            chain: chain.clone(),
+            mass,
+            control,
+            moment_scale,
+        })
+    }
+
+    /// Tangent dimension 2n.
+    pub fn nx(&self) -> usize {
+        2 * self.n
+    }
+
+    /// out = M v (v = velocities, out = momenta), O(n): (M̄x)ᵢ = lᵢ Σ_{k≥i} m_k Σ_{j≤k} l_j x_j.
+    pub fn apply_mass(&self, v: &[[f64; 2]], out: &mut [[f64; 2]]) {
+        let (l, m) = (self.chain.lengths(), self.chain.masses());
+        let mut c = [0.0; 2];
+        for j in 0..self.n {
+            for d in 0..2 {
+                c[d] += l[j] * v[j][d];
+                out[j][d] = m[j] * c[d];
+            }
+        }
+        let mut acc = [0.0; 2];
+        for i in (0..self.n).rev() {
+            for d in 0..2 {
+                acc[d] += out[i][d];
+                out[i][d] = l[i] * acc[d];
+            }
+        }
+    }
+
+    /// Angular rates ωᵢ = tᵢ·(M⁻¹p)ᵢ; `scratch` has length n.
+    pub fn rates(&self, q: &[[f64; 2]], p: &[[f64; 2]], scratch: &mut [[f64; 2]], out: &mut [f64]) {
+        self.chain.apply_inverse_mass(p, scratch);
+        for i in 0..self.n {
+            out[i] = dot2(&tangent(&q[i]), &scratch[i]);
+        }
+    }
+}
+
+/// P(q) b = b − Gᵀy with (G M⁻¹ Gᵀ) y = G M⁻¹ b (free tip: G M⁻¹ Gᵀ is tridiagonal,
+/// (G M⁻¹ Gᵀ)_ij = (qᵢ·q_j) M̄⁻¹_ij), O(n), for any scalar.
+#[derive(Clone, Debug)]
+pub(crate) struct Projector<D> {
+    lifted: Vec<[D; 2]>,
+    tmp: Vec<[D; 2]>,
+    tri: BorderedTridiag<D>,
+    rhs: Vec<D>,
+}
+
+impl<D: Scalar> Projector<D> {
+    pub fn new(n: usize) -> Self {
+        Projector {
+            lifted: vec![[D::zero(); 2]; n],
+            tmp: vec![[D::zero(); 2]; n],
+            tri: BorderedTridiag::new(n, false),
+            rhs: vec![D::zero(); n],
+        }
+    }
+
+    /// out = P(q) b.
+    pub fn apply(
+        &mut self,
+        ch: &Chain<D, 2>,
+        q: &[[D; 2]],
+        b: &[[f64; 2]],
+        step: usize,
+        out: &mut [[D; 2]],
+    ) -> Result<()> {
+        let n = ch.n();
+        for (o, bi) in self.lifted.iter_mut().zip(b) {
+            *o = [D::from(bi[0]), D::from(bi[1])];
+        }
+        ch.apply_inverse_mass(&self.lifted, &mut self.tmp);
+        let (l, m) = (ch.lengths(), ch.masses());
+        for i in 0..n {
+            self.rhs[i] = dot2(&q[i], &self.tmp[i]);
+            let li = l[i].recip();
+            let mi = m[i].recip();
+            let dii = if i > 0 {
+                li * li * (mi + m[i - 1].recip())
+            } else {
+                li * li * mi
+            };
+            self.tri.diag[i] = dot2(&q[i], &q[i]) * dii;
+            if i + 1 < n {
+                let off = -(li * l[i + 1].recip() * mi);
+                let v = dot2(&q[i], &q[i + 1]) * off;
+                self.tri.upper[i] = v;
+                self.tri.lower[i + 1] = v;
+            }
+        }
+        self.tri
+            .solve(&mut self.rhs)
+            .map_err(|zp| Error::SingularSystem {
+                step,
+                index: zp.index,
+                pivot: zp.pivot,
+            })?;
+        for i in 0..n {
+            for d in 0..2 {
+                out[i][d] = D::from(b[i][d]) - self.rhs[i] * q[i][d];
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The stage map F_k on a state held in `state`, for any scalar (module docs).
+#[derive(Clone, Debug)]
+pub(crate) struct Stepper<D> {
+    pub rattle: Rattle<D, 2>,
+    pub state: State<D, 2>,
+    proj: Projector<D>,
+    pb: Vec<[D; 2]>,
+    b: Vec<[f64; 2]>,
+    hh: f64,
+}
+
+impl<D: Scalar> Stepper<D> {
+    pub fn new(model: &StageModel) -> Result<Self> {
+        let rattle = Rattle::new(model.chain.lift::<D>(), model.h)?;
+        let state = rattle.straight_state();
+        Ok(Stepper {
+            rattle,
+            state,
+            proj: Projector::new(model.n),
+            pb: vec![[D::zero(); 2]; model.n],
+            b: model.control.clone(),
+            hh: 0.5 * model.h,
+        })
+    }
+
+    /// Resets `state` to the initial state (straight, at rest) and computes its consistent
+    /// multiplier for the control u₀ (the Newton predictor of step 0).
+    pub fn reset(&mut self, u0: D) -> Result<()> {
+        let st = &mut self.state;
+        for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
+            *q = [D::one(), D::zero()];
+            *p = [D::zero(); 2];
+        }
+        st.lambda.iter_mut().for_each(|x| *x = D::zero());
+        st.mu.iter_mut().for_each(|x| *x = D::zero());
+        st.tip_target = [D::zero(); 2];
+        self.rattle.prepare(st, 0, u0)
+    }
+
+    /// x̂_k → x̂_{k+1} = F_k(x̂_k, u_k).
+    pub fn advance(&mut self, k: usize, u: D) -> Result<()> {
+        if k > 0 {
+            self.proj
+                .apply(self.rattle.chain(), &self.state.q, &self.b, k, &mut self.pb)?;
+            for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {
+                for d in 0..2 {
+                    p[d] -= pb[d] * u * self.hh;
+                }
+            }
+        }
+        self.rattle.prepare_force(&self.state, k, u)?;
+        self.rattle.step(&mut self.state, k, u, D::zero())?;
+        Ok(())
+    }
+}
+
+/// Per-thread scratch of the dual-number stage Jacobians.
+#[derive(Clone, Debug)]
+pub(crate) struct JacobianWorkspace {
+    stepper: Stepper<Dv>,
+    seed_q: Vec<[[f64; CHUNK]; 2]>,
+    seed_p: Vec<[[f64; CHUNK]; 2]>,
+    dv: Vec<[f64; 2]>,
+    dp: Vec<[f64; 2]>,
+    minv: Vec<[f64; 2]>,
+    tang: Vec<[f64; 2]>,
+}
+
+impl JacobianWorkspace {
+    pub fn new(model: &StageModel) -> Result<Self> {
+        let n = model.n;
+        Ok(JacobianWorkspace {
+            stepper: Stepper::new(model)?,
+            seed_q: vec![[[0.0; CHUNK]; 2]; n],
+            seed_p: vec![[[0.0; CHUNK]; 2]; n],
+            dv: vec![[0.0; 2]; n],
+            dp: vec![[0.0; 2]; n],
+            minv: vec![[0.0; 2]; n],
+            tang: vec![[0.0; 2]; n],
+        })
+    }
+
+    /// A_k (column-major 2n × 2n, into `a`) and B_k (into `b`) at x̂_k = (q, p) with rates
+    /// `omega`, Newton predictor `mu` and control u.
+    #[allow(clippy::too_many_arguments)]
+    pub fn jacobians(
+        &mut self,
+        model: &StageModel,
+        k: usize,
+        q: &[[f64; 2]],
+        p: &[[f64; 2]],
+        omega: &[f64],
+        mu: &[f64],
+        u: f64,
+        a: &mut [f64],
+        b: &mut [f64],
+    ) -> Result<()> {
+        let n = model.n;
+        let nx = 2 * n;
+        let ndir = nx + 1;
+        let mut start = 0;
+        while start < ndir {
+            let end = (start + CHUNK).min(ndir);
+            // Seeds: direction j in slot j − start.
+            for s in self.seed_q.iter_mut().chain(self.seed_p.iter_mut()) {
+                *s = [[0.0; CHUNK]; 2];
+            }
+            let mut u_seed = [0.0; CHUNK];
+            for j in start..end {
+                let slot = j - start;
+                if j == nx {
+                    u_seed[slot] = 1.0;
+                    continue;
+                }
+                let i = j % n;
+                let t = tangent(&q[i]);
+                // δv_i (only pendulum i moves): φ: −qᵢ ωᵢ, ω: tᵢ; δp = M δv = column i of M̄ ⊗ δvᵢ.
+                let dvi = if j < n {
+                    self.seed_q[i][0][slot] = t[0];
+                    self.seed_q[i][1][slot] = t[1];
+                    [-q[i][0] * omega[i], -q[i][1] * omega[i]]
+                } else {
+                    t
+                };
+                for r in 0..n {
+                    let mri = model.mass[r * n + i];
+                    self.seed_p[r][0][slot] = mri * dvi[0];
+                    self.seed_p[r][1][slot] = mri * dvi[1];
+                }
+            }
+            let st = &mut self.stepper.state;
+            for i in 0..n {
+                for d in 0..2 {
+                    st.q[i][d] =
+                        Dv::new(q[i][d], Derivative::some(SVector::from(self.seed_q[i][d])));
+                    st.p[i][d] =
+                        Dv::new(p[i][d], Derivative::some(SVector::from(self.seed_p[i][d])));
+                }
+            }
+            for (m, &v) in st.mu.iter_mut().zip(mu) {
+                *m = Dv::from_re(v);
+            }
+            for (l, &v) in st.lambda.iter_mut().zip(mu) {
+                *l = Dv::from_re(v);
+            }
+            st.tip_target = [Dv::from_re(0.0); 2];
+            let ud = if end == ndir {
+                Dv::new(u, Derivative::some(SVector::from(u_seed)))
+            } else {
+                Dv::from_re(u)
+            };
+            self.stepper.advance(k, ud)?;
+            // Read out and map by L_{k+1}.
+            let st = &self.stepper.state;
+            for i in 0..n {
+                self.tang[i] = tangent(&[st.q[i][0].re, st.q[i][1].re]);
+            }
+            for j in start..end {
+                let slot = j - start;
+                let eps = |x: &Dv| x.eps.0.as_ref().map_or(0.0, |v| v[slot]);
+                for i in 0..n {
+                    self.dv[i] = [eps(&st.q[i][0]), eps(&st.q[i][1])];
+                    self.dp[i] = [eps(&st.p[i][0]), eps(&st.p[i][1])];
+                }
+                model.chain.apply_inverse_mass(&self.dp, &mut self.minv);
+                let col: &mut [f64] = if j < nx {
+                    &mut a[j * nx..(j + 1) * nx]
+                } else {
+                    &mut b[..nx]
+                };
+                for i in 0..n {
+                    col[i] = dot2(&self.tang[i], &self.dv[i]);
+                    col[n + i] = dot2(&self.tang[i], &self.minv[i]);
+                }
+            }
+            start = end;
+        }
+        Ok(())
+    }
+}

@@ -1,4 +1,4 @@
-//! Cost of exact gradients relative to one simulation (SPEC §3, issue "discrete adjoint").
+//! Cost of exact gradients relative to one simulation (docs/conventions.md, issue "discrete adjoint").
 //!
 //! Groups (all on the thesis riser, F = 2 N at node 5, per-step controls u_0..u_N):
 //! - `adjoint_n10`: for N = 10 and N = 1000: the forward simulation (`value`), the adjoint

@@ -1,4 +1,4 @@
-//! Benchmarks of one RATTLE step and of whole simulations (SPEC §2).
+//! Benchmarks of one RATTLE step and of whole simulations (docs/conventions.md).
 //!
 //! Groups:
 //! - `step_f64_planar`: one planar `f64` step for n = 10, 100, 1000, with

@@ -1,5 +1,5 @@
 //! Time to regenerate the thesis's optimisation tables (issue: optimal control), on the riser
-//! scene (SPEC §4): single rows of Table 3.2 (constant u, c_sum, L-BFGS) and Table 3.4 (per-step
+//! scene (docs/conventions.md): single rows of Table 3.2 (constant u, c_sum, L-BFGS) and Table 3.4 (per-step
 //! u, c_sum, L-BFGS with the thesis's own force bound) for the load at nodes 5 and 9, and each
 //! whole table exactly as the `tables` example computes it (its `compute.rs`, included here).
 //!

@@ -1,6 +1,6 @@
 //! Is the optimal-control landscape "highly nonconvex", as the thesis concluded from SLSQP over
 //! 800 transcribed variables (§3.3.1, Fig. 3.13)? With exact gradients in single shooting on the
-//! thesis's riser scene (SPEC §4), multistart from 64 random starts per case (seeded, parallel)
+//! thesis's riser scene (docs/conventions.md), multistart from 64 random starts per case (seeded, parallel)
 //! and clustering of the local minima found answers it:
 //!
 //! 1. Constant control (Tables 3.1/3.2): one minimum, certified by a positive Hessian.

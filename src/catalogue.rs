@@ -270,7 +270,7 @@ pub fn long_horizon() -> Scene {
     )
 }
 
-/// A load out of the yz-plane (SPEC §6, issue 13): the thesis riser (k₁ = k₁₁ = 2000, no drag)
+/// A load out of the yz-plane (docs/scene-format.md, issue 13): the thesis riser (k₁ = k₁₁ = 2000, no drag)
 /// with F = 2 N at node 5 at 45° between x and z, `force = [√2, √2]`, h = 0.01 s, N = 1000
 /// (t ∈ [0, 10] s). Spatial: [`crate::simulate()`] runs the spatial model, and by the model's
 /// rotational symmetry about y the deflection is the in-plane one of [`riser`]`(5)`'s load turned

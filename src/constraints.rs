@@ -1,5 +1,5 @@
 //! The constraint operator Ĝ(q) of the chain and the O(n) assembly of its products with M⁻¹
-//! (thesis §2.4.1, eq. 2.4.1-2.4.2; SPEC §1-§2), used by every integrator and the adjoint.
+//! (thesis §2.4.1, eq. 2.4.1-2.4.2; docs/conventions.md), used by every integrator and the adjoint.
 //!
 //! ĝ stacks the length constraints gᵢ = ½(‖qᵢ‖² − 1) and, for a locked or reaction-force tip,
 //! l(q) = Σ lᵢ e₃ᵀqᵢ. Its Jacobian Ĝ(q) has rows qᵢᵀ on block i and, for the tip, lᵢ e₃ᵀ on every

@@ -3,10 +3,10 @@
 //!
 //! # Conventions
 //! The undeformed beam has length L and lies along +y from y = 0; deflections z are along the z-axis.
-//! Loads follow the thesis sign (SPEC §1): a point load F enters the energy as +F z, so a **positive
+//! Loads follow the thesis sign (docs/conventions.md): a point load F enters the energy as +F z, so a **positive
 //! F deflects the beam toward −z** and its nodal force is −F.
 //!
-//! # Closed forms (eq. 2.4.5-2.4.7, with the SPEC §4 errata applied)
+//! # Closed forms (eq. 2.4.5-2.4.7, with the docs/conventions.md errata applied)
 //! [`static_cantilever`], [`static_fixed_fixed`] and [`static_pinned_pinned`]. The thesis prints
 //! eq. 2.4.6/2.4.7 split at "y ≤ L" and the pinned-pinned formula with a + sign; the forms here split
 //! at y ≤ L/2 and deflect toward −z for positive F in all three cases.
@@ -72,7 +72,7 @@ pub fn static_cantilever(y: f64, force: f64, ei: f64, length: f64) -> f64 {
 }
 
 /// Static fixed-fixed (clamped-clamped) beam under a central load F (thesis eq. 2.4.6, corrected per
-/// SPEC §4 to split at L/2):
+/// docs/conventions.md to split at L/2):
 ///
 /// z(y) = −F y² (3L − 4y) / (48 EI)   for y ≤ L/2,  mirrored z(y) = z(L − y) for y > L/2,
 ///
@@ -87,7 +87,7 @@ pub fn static_fixed_fixed(y: f64, force: f64, ei: f64, length: f64) -> f64 {
 }
 
 /// Static pinned-pinned (simply supported) beam under a central load F (thesis eq. 2.4.7, corrected
-/// per SPEC §4: split at L/2 and the sign made the same as eq. 2.4.5/2.4.6):
+/// per docs/conventions.md: split at L/2 and the sign made the same as eq. 2.4.5/2.4.6):
 ///
 /// z(y) = −F y (3L² − 4y²) / (48 EI)   for y ≤ L/2,  mirrored z(y) = z(L − y) for y > L/2,
 ///

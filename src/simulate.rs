@@ -267,7 +267,7 @@ impl SceneTrajectory {
 
 /// Simulates a scene in `f64` with its own controls, in the model it needs: the planar one when
 /// all loads lie in the yz-plane (every thesis scene), the spatial one otherwise
-/// ([`Scene::is_spatial`]; SPEC §6 "model no more than a scene needs").
+/// ([`Scene::is_spatial`]; docs/scene-format.md "model no more than a scene needs").
 pub fn simulate(scene: &Scene) -> Result<SceneTrajectory> {
     simulate_with_controls_at(scene, &scene_controls(scene), false)
 }

@@ -1,6 +1,6 @@
 //! O(n) solves with tridiagonal matrices bordered by one extra row and column.
 //!
-//! Every linear system of the RATTLE step and of its adjoint has this form (SPEC §2): the
+//! Every linear system of the RATTLE step and of its adjoint has this form (docs/conventions.md): the
 //! length-constraint block G(q′) M⁻¹ G(q)ᵀ is tridiagonal because M̄⁻¹ is, and the tip constraint
 //! of fixed-fixed and pinned-pinned beams adds one row and column. The border is eliminated by a
 //! Schur complement on the Thomas factorisation (two triangular sweeps, no pivoting: the matrices

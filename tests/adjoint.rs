@@ -9,7 +9,7 @@ use chainbeam::catalogue;
 use chainbeam::*;
 use num_dual::Dual64;
 
-/// A thesis riser scene (SPEC §4) with another support, drag and horizon.
+/// A thesis riser scene (docs/conventions.md) with another support, drag and horizon.
 fn scene(support: Support, load_node: usize, drag: f64, steps: usize) -> Scene {
     let mut s = catalogue::riser(load_node);
     s.beam.support = support;

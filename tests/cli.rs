@@ -1,4 +1,4 @@
-//! The `chainbeam` command line (SPEC §5) and the shipped scene files.
+//! The `chainbeam` command line (docs/scene-format.md) and the shipped scene files.
 //!
 //! Runs the binary on good and bad scene files and checks exit codes, the one-line error messages
 //! (file, key, reason), the CSV header and row count, the JSON keys and the atomic `--output`.
@@ -18,7 +18,7 @@ use chainbeam::{catalogue, simulate, ControlProblem, Scene};
 // Helpers
 // ---------------------------------------------------------------------------------------------
 
-/// SPEC §5's example scene with N = `steps` (riser, load at node 5, constant control −1 at the tip,
+/// docs/scene-format.md's example scene with N = `steps` (riser, load at node 5, constant control −1 at the tip,
 /// objective "sum").
 fn riser_scene(steps: usize) -> String {
     format!(
@@ -278,7 +278,7 @@ fn unwritable_output_is_one_error() {
 
 #[test]
 fn failed_simulation_names_step_and_residual() {
-    // SPEC §4: RATTLE's Newton solve fails at large steps; a stiff, heavily loaded beam at h = 0.05.
+    // docs/conventions.md: RATTLE's Newton solve fails at large steps; a stiff, heavily loaded beam at h = 0.05.
     let dir = Dir::new();
     let text = riser_scene(50)
         .replace("step = 0.01", "step = 0.05")
@@ -329,7 +329,7 @@ fn gradient_per_step_has_n_plus_one_entries() {
     let g = numbers(&v, "gradient");
     assert_eq!(g.len(), 5);
     assert_eq!(numbers(&v, "controls"), [0.1, -0.2, 0.3, -0.4, 0.5]);
-    // u_N only touches p_N, never a configuration (SPEC §2): its gradient entry is 0.
+    // u_N only touches p_N, never a configuration (docs/conventions.md): its gradient entry is 0.
     assert!(g[4].abs() < 1e-12 * g[0].abs().max(1e-300), "{g:?}");
     assert!(v["objective"].as_f64().unwrap() > 0.0);
     assert_eq!(dir.files(), ["g.json", "per_step.toml"]);
@@ -370,7 +370,7 @@ fn assert_optimize_keys(v: &serde_json::Value) {
 #[test]
 fn optimize_reproduces_table_3_1() {
     let scenes = scenes_dir();
-    // SPEC §4: Table 3.1, system 5: the root of M₀(T; u) = 0 is u ≈ −33.40696 N (thesis −33.4070).
+    // docs/conventions.md: Table 3.1, system 5: the root of M₀(T; u) = 0 is u ≈ −33.40696 N (thesis −33.4070).
     let o = run_on("optimize", &scenes.join("riser_5.toml"), &[]);
     assert_success(&o);
     let v = json(&o);
@@ -479,7 +479,7 @@ fn optimize_with_starts_is_never_worse_and_deterministic() {
 fn explore_maps_every_start_and_the_minima() {
     let dir = Dir::new();
     let out = dir.path().join("map.json");
-    // Table 3.1, system 5: c = M₀(T)² is convex in u with one root (SPEC §4).
+    // Table 3.1, system 5: c = M₀(T)² is convex in u with one root (docs/conventions.md).
     let o = run_on(
         "explore",
         &scenes_dir().join("riser_5.toml"),
@@ -744,7 +744,7 @@ fn describe(name: &str) -> String {
     }
     if let Some(i) = riser_i("riser_") {
         return format!(
-            "Thesis §3.3.1 (Tables 3.1-3.4, system {i}), SPEC §4: riser (k1 = k11 = 2000 Nm/rad), no \
+            "Thesis §3.3.1 (Tables 3.1-3.4, system {i}), docs/conventions.md: riser (k1 = k11 = 2000 Nm/rad), no \
              drag, F = 2 N at node {i}, constant control at node 10 (initial guess 0), objective \
              c = M0(t_N)^2 (set objective.kind = \"sum\" for Tables 3.2/3.4), h = 0.01 s, N = 10."
         );
@@ -925,7 +925,7 @@ fn cli_reads_shipped_scenes() {
     assert_success(&o);
     let v = json(&o);
     assert_eq!(numbers(&v, "controls"), [0.0]);
-    // u = −F = −2 cancels the tip load (SPEC §4: the Table 3.1 root for node 10 is −2), so at
+    // u = −F = −2 cancels the tip load (docs/conventions.md: the Table 3.1 root for node 10 is −2), so at
     // u = 0 the objective decreases toward negative u: dc/du > 0.
     assert!(numbers(&v, "gradient")[0] > 0.0);
     let o = run_on("gradient", &dir.join("long_horizon.toml"), &[]);
@@ -933,7 +933,7 @@ fn cli_reads_shipped_scenes() {
     assert_eq!(numbers(&json(&o), "gradient").len(), 1001);
 }
 
-/// A spatial scene (a load with an x component, SPEC §6): `simulate` keeps the CSV header and
+/// A spatial scene (a load with an x component, docs/scene-format.md): `simulate` keeps the CSV header and
 /// fills in the x columns with the library's spatial trajectory; the planar `gradient` refuses it
 /// with one message naming the key. The series scene reads its CSV beside the scene file.
 #[test]

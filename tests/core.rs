@@ -220,7 +220,7 @@ fn root_constant_control(node: usize) -> f64 {
     u
 }
 
-/// Thesis Table 3.1 (riser, D = 0, h = 0.01, N = 10; SPEC §4): the constant control that makes
+/// Thesis Table 3.1 (riser, D = 0, h = 0.01, N = 10; docs/conventions.md): the constant control that makes
 /// z₁(T) = 0 matches the printed u to ≥ 6 significant digits (the thesis's solver tolerance is
 /// ~1e-6 N); for the load at the tip the exact answer is u = −2.
 #[test]
@@ -497,7 +497,7 @@ fn folding_is_a_typed_error() {
     ));
 }
 
-/// The step size at which the thesis's Newton solve failed (h = 0.02 on the cantilever, SPEC §4)
+/// The step size at which the thesis's Newton solve failed (h = 0.02 on the cantilever, docs/conventions.md)
 /// gives a typed error naming the step, not a panic or NaN.
 #[test]
 fn too_large_step_is_a_typed_error() {

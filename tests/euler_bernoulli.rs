@@ -1,5 +1,5 @@
 //! Tests of the Euler-Bernoulli reference beam (`chainbeam::euler_bernoulli`): the closed-form
-//! static deflections (thesis eq. 2.4.5-2.4.7, SPEC §4 corrected), the finite-difference beam
+//! static deflections (thesis eq. 2.4.5-2.4.7, docs/conventions.md corrected), the finite-difference beam
 //! (eq. 2.3.1) with ghost-node end conditions, its convergence to the closed forms, its Störmer–Verlet
 //! time integration, and argument validation.
 
@@ -60,7 +60,7 @@ fn beam(support: EbSupport, n: usize, mass: f64) -> EulerBernoulli {
 
 /// Reference: textbook (Gere & Timoshenko, *Mechanics of Materials*, App. G; thesis ref. [21]):
 /// cantilever tip δ = P L³/(3EI), fixed-fixed centre δ = P L³/(192 EI), simply supported centre
-/// δ = P L³/(48 EI), all toward −z for positive F (thesis sign, SPEC §4).
+/// δ = P L³/(48 EI), all toward −z for positive F (thesis sign, docs/conventions.md).
 #[test]
 fn closed_forms_reference_deflections() {
     let tip = static_cantilever(L, F, EI, L);
@@ -75,7 +75,7 @@ fn closed_forms_reference_deflections() {
     }
     assert!(static_fixed_fixed(L, F, EI, L).abs() < 1e-15);
     assert!(static_pinned_pinned(L, F, EI, L).abs() < 1e-15);
-    // all three deflect toward −z for positive F (SPEC §4 sign erratum of eq. 2.4.7)
+    // all three deflect toward −z for positive F (docs/conventions.md sign erratum of eq. 2.4.7)
     for f in [static_cantilever, static_fixed_fixed, static_pinned_pinned] {
         for k in 1..10 {
             assert!(f(k as f64, F, EI, L) < 0.0);
@@ -83,7 +83,7 @@ fn closed_forms_reference_deflections() {
     }
 }
 
-/// Reference: the split at L/2 of eq. 2.4.6/2.4.7 (SPEC §4): the beams are symmetric about the
+/// Reference: the split at L/2 of eq. 2.4.6/2.4.7 (docs/conventions.md): the beams are symmetric about the
 /// centre, and z, z′ are continuous there (z′(L/2) = 0 by symmetry); the slopes at the supports are
 /// the textbook ones (clamped: 0; simply supported: −F L²/(16 EI)).
 #[test]
@@ -219,7 +219,7 @@ fn static_error(support: EbSupport, n: usize) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Reference: closed forms eq. 2.4.5-2.4.7 (SPEC §4 corrected) with L = 10, EI = 1000, F = 2. None
+/// Reference: closed forms eq. 2.4.5-2.4.7 (docs/conventions.md corrected) with L = 10, EI = 1000, F = 2. None
 /// of the three is reproduced exactly: the clamped ghost z₋₁ = z₁ is a central difference for z′ = 0
 /// and misses the cubic's z‴ d³/3 (cantilever, fixed-fixed), and a point load at a node sits on the
 /// kink of z‴, which the central stencil smears (fixed-fixed, pinned-pinned; the pinned ghost
@@ -484,7 +484,7 @@ fn arg_name(r: Result<EulerBernoulli, Error>) -> &'static str {
     }
 }
 
-/// Reference: the API contract (SPEC §5, "never a panic"): bad arguments are typed errors naming
+/// Reference: the API contract (docs/scene-format.md, "never a panic"): bad arguments are typed errors naming
 /// the argument.
 #[test]
 fn bad_inputs_are_errors() {

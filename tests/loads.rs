@@ -127,7 +127,7 @@ fn scalar_force_is_the_z_component_and_planar() {
     );
     let traj = simulate(&c).unwrap();
     assert!(traj.is_spatial() && traj.dim() == 3);
-    // F_x > 0 pushes toward −x, as F_z > 0 pushes toward −z (SPEC §6)
+    // F_x > 0 pushes toward −x, as F_z > 0 pushes toward −z (docs/scene-format.md)
     let tip = traj.positions(5)[2];
     assert!(tip[0] < 0.0 && tip[2] < 0.0, "tip {tip:?}");
 }

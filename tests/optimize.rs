@@ -1,4 +1,4 @@
-//! Local and multistart minimisation of the thesis's optimal-control problems (SPEC §3-§4,
+//! Local and multistart minimisation of the thesis's optimal-control problems (docs/conventions.md,
 //! thesis §3.3.1). Every reference number names its source: a thesis table, a closed form, or a
 //! second solver on the same problem.
 
@@ -12,7 +12,7 @@ use chainbeam::optimize::{
 };
 use chainbeam::*;
 
-/// The thesis riser of §3.3.1 as SPEC §4 identifies it: n = 10, l = m = 1, k = 1000, k₁ = k₁₁ =
+/// The thesis riser of §3.3.1 as docs/conventions.md identifies it: n = 10, l = m = 1, k = 1000, k₁ = k₁₁ =
 /// 2000, no drag, F = 2 N at `node`, h = 0.01 s, N = 10, control at the tip.
 fn riser(node: usize) -> Scene {
     catalogue::riser(node)
@@ -65,7 +65,7 @@ fn show(label: &str, r: &OptimResult) {
 /// (a) Table 3.2 (constant control, c_sum, eq. 3.3.4), loads at nodes 5 and 7: L-BFGS from u = 0
 /// reaches ‖g‖ ≤ 10⁻⁸‖g₀‖ and the thesis's printed c_sum (2.0774 and 4.9376×10⁻², five digits)
 /// to half a unit of its last digit, never above it by more than 5·10⁻⁵ relative. Controls are
-/// not compared (SPEC §4: c_sum is too flat; the thesis's u agree to 1-6 digits only).
+/// not compared (docs/conventions.md: c_sum is too flat; the thesis's u agree to 1-6 digits only).
 #[test]
 fn table_3_2_constant_summed_lbfgs() {
     for (node, thesis) in [(5, 2.0774), (7, 4.9376e-2)] {
@@ -197,7 +197,7 @@ fn bound_on_constant_control_lands_on_the_bound() {
     }
 }
 
-/// Typed errors for infeasible or invalid starts and options (SPEC §5: never a panic).
+/// Typed errors for infeasible or invalid starts and options (docs/scene-format.md: never a panic).
 #[test]
 fn invalid_starts_and_options_are_typed_errors() {
     let p = constant(7, BendingObjective::summed_moment());
@@ -369,9 +369,9 @@ fn start_designs() {
 }
 
 /// (e) Constant control, final objective c (eq. 3.3.2), load at node 5: c(u) is convex in u with
-/// one root in [−600, 600] (SPEC §4), so a Latin hypercube of starts over that range reaches one
+/// one root in [−600, 600] (docs/conventions.md), so a Latin hypercube of starts over that range reaches one
 /// minimum, certified by a positive Hessian eigenvalue; its u is Table 3.1's −33.40695642 N (to
-/// the thesis's solver tolerance, about 10⁻⁶ N, SPEC §4).
+/// the thesis's solver tolerance, about 10⁻⁶ N, docs/conventions.md).
 #[test]
 fn certificate_on_convex_constant_control() {
     let p = constant(5, BendingObjective::final_moment());
@@ -452,7 +452,7 @@ fn landscapes() {
     assert_eq!(row, line.iter().map(|x| x.1).collect::<Vec<_>>());
 }
 
-/// Unbounded per-step c_sum drives the forces toward 10⁴ N and the chain into folding (SPEC §4):
+/// Unbounded per-step c_sum drives the forces toward 10⁴ N and the chain into folding (docs/conventions.md):
 /// line-search and trust-region trial points whose RATTLE solve fails are survived (L-BFGS
 /// restarts from its best point with a shorter first step; the trust region rejects them as
 /// J = +∞), counted, and named in `termination`; the result is a real, lower point, never a panic
@@ -868,7 +868,7 @@ fn controls_without_effect_are_refused() {
 /// The resolved force range of a control problem is π m l / h² at the control node (closed
 /// form; 3.14·10⁴ N on the thesis riser): a start beyond it is refused with
 /// `Error::ControlOutOfRange`, and the unbounded per-step c_sum runs, which drive the forces to
-/// 10⁴ N (SPEC §4), end inside it.
+/// 10⁴ N (docs/conventions.md), end inside it.
 #[test]
 fn controls_beyond_the_resolved_range_are_refused() {
     let p = constant(5, BendingObjective::summed_moment());

@@ -1,4 +1,4 @@
-//! Every row of the `tables` example (Nøst 2023, Tables 3.1-3.4 on the riser scene of SPEC §4)
+//! Every row of the `tables` example (Nøst 2023, Tables 3.1-3.4 on the riser scene of docs/conventions.md)
 //! against the thesis, as the example's notes (`examples/tables/compute.rs`) describe. The
 //! example's own computation is included here, so the test checks exactly what it prints.
 //! References: the thesis's printed values (transcribed in `examples/tables/thesis.rs`) and, for

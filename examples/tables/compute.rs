@@ -5,12 +5,12 @@
 //! How each table is solved (single shooting, exact adjoint gradients), and what each row is
 //! checked against:
 //! - 3.1 (constant u, c = M₀(T)²): the root of M₀(T; u) = 0 by Newton's method, dM₀/du from the
-//!   adjoint. c is convex in u with a single root (SPEC §4), so this is the exact minimiser: c
+//!   adjoint. c is convex in u with a single root (docs/conventions.md), so this is the exact minimiser: c
 //!   falls to round-off (≤ 10⁻²⁰, below every printed thesis value), and u agrees with the
 //!   thesis's to at least 6 significant digits (the thesis's solver tolerance, about 10⁻⁶ N).
 //! - 3.2 (constant u, c_sum): L-BFGS (argmin) to ‖g‖ ≈ 0: the true minimum of a flat valley, at
 //!   most the thesis's printed c_sum (to half a unit of its fifth digit) and at most c_sum at the
-//!   thesis's own u. Two documented misprints (SPEC §4): node 9's exponent (5.5586e-4, not e-5),
+//!   thesis's own u. Two documented misprints (docs/conventions.md): node 9's exponent (5.5586e-4, not e-5),
 //!   and node 4's 1.1853, which lies below the exact minimum (≈ 1.18575; its own u gives more).
 //! - 3.3 (per-step u, c): Gauss-Newton on the residual M₀(T; u) from u = 0 (minimum-norm steps):
 //!   the zeros of c form a manifold of dimension N; we reach the nearest one, c ≤ 10⁻²⁰.
@@ -206,11 +206,11 @@ pub fn table_3_2() -> Result<Vec<Row>> {
             let at_thesis = p.value(&[tu])?;
             let note = match node {
                 9 => format!(
-                    "thesis prints 5.5586e-5 (exponent misprint, SPEC §4): its u gives \
+                    "thesis prints 5.5586e-5 (exponent misprint, docs/conventions.md): its u gives \
                      {at_thesis:.4e}"
                 ),
                 4 => format!(
-                    "thesis's 1.1853 is below the exact minimum (misprint, SPEC §4); its u gives \
+                    "thesis's 1.1853 is below the exact minimum (misprint, docs/conventions.md); its u gives \
                      {at_thesis:.5}"
                 ),
                 _ => format!(

@@ -1,11 +1,11 @@
 //! Regenerates the optimisation tables 3.1-3.4 of Nøst (2023) on the thesis's riser scene
-//! (SPEC §4: n = 10, l = 1 m, m = 1 kg, k = 1000 Nm/rad, k₁ = k₁₁ = 2000 Nm/rad, D = 0,
+//! (docs/conventions.md: n = 10, l = 1 m, m = 1 kg, k = 1000 Nm/rad, k₁ = k₁₁ = 2000 Nm/rad, D = 0,
 //! F = 2 N at node i, control at node 10, h = 0.01 s, N = 10), printing ours beside the thesis's.
 //!
 //! ```text
 //! cargo run --release --example tables                 # all four tables, side by side
 //! cargo run --release --example tables -- --table 3.2  # one table
-//! cargo run --release --example tables -- --json       # machine-readable (SPEC §5)
+//! cargo run --release --example tables -- --json       # machine-readable (docs/scene-format.md)
 //! cargo run --release --example tables -- --help
 //! ```
 //!

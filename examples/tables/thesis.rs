@@ -15,7 +15,7 @@ pub const TABLE_3_1: [(f64, f64); 10] = [
     (-2.00000082, 8.140000e-16),
 ];
 
-/// Table 3.2: constant u \[N\] and c_sum as printed (node 9's exponent is a misprint, SPEC §4).
+/// Table 3.2: constant u \[N\] and c_sum as printed (node 9's exponent is a misprint, docs/conventions.md).
 pub const TABLE_3_2: [(f64, f64); 10] = [
     (246.22516042, 4.871800e+01),
     (333.8191005, 5.425200e+01),

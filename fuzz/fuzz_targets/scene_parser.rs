@@ -1,4 +1,4 @@
-//! Fuzz target for the scene parser (`Scene::from_toml_str`, SPEC §5).
+//! Fuzz target for the scene parser (`Scene::from_toml_str`, docs/scene-format.md).
 //!
 //! Properties checked on every input:
 //! - parsing never panics; an error has a non-empty one-line message;

@@ -193,7 +193,7 @@ fn fig_2_5(ctx: &Ctx) -> Res<Made> {
         note: format!(
             "RMS over t ∈ [0, {t}] s of H(t_k) − H(0) against h for the thesis cantilever (n = 10, \
              k = 1000, F = 2 N at the tip); fitted slope {slope:.2}, the O(h²) of the thesis. \
-             h = 0.02 is left out: RATTLE's Newton solve fails there (typed error, SPEC §4)."
+             h = 0.02 is left out: RATTLE's Newton solve fails there (typed error, docs/conventions.md)."
         ),
     })
 }
@@ -646,7 +646,7 @@ fn fig_2_14(ctx: &Ctx) -> Res<Made> {
         note: format!(
             "Node trajectories with drag D = 10 (left) and 100 kg/m (right) over t ∈ [0, {t}] s \
              (the thesis's 10 s extended so D = 10 settles), against the static formulas \
-             2.4.5-2.4.7 with EI = k l (grey dashed; the errata of SPEC §4 applied: split at L/2, \
+             2.4.5-2.4.7 with EI = k l (grey dashed; the errata of docs/conventions.md applied: split at L/2, \
              all deflections toward −z). Base/end springs 2000 Nm/rad for clamped ends. Extra \
              deflection of the most deflected node beyond the formula at the end, D = 10 / 100: cantilever \
              {:+.1}% / {:+.1}% (D = 100 is still creeping down: quadratic drag), fixed-fixed \

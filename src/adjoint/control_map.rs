@@ -1,4 +1,4 @@
-//! Control parametrisations θ ↦ (u_0, …, u_N) with their transposes (SPEC §3).
+//! Control parametrisations θ ↦ (u_0, …, u_N) with their transposes (docs/conventions.md).
 
 use crate::model::Scalar;
 

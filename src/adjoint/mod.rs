@@ -1,6 +1,6 @@
 //! Discrete adjoint of the RATTLE map: exact gradients (to round-off) of bending-moment objectives
 //! with respect to the controls and the physical parameters, checkpointing, and Hessian-vector
-//! products by forward-over-adjoint (SPEC §2-§3, thesis §3.3).
+//! products by forward-over-adjoint (docs/conventions.md, thesis §3.3).
 //!
 //! # Objectives and controls
 //! An [`Objective`] is a sum of stage costs ℓ_k(M₀(q_k), u_k), k = 0..=N, written once over

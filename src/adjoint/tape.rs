@@ -1,5 +1,5 @@
 //! The tape of the discrete adjoint: the forward states the reverse sweep reads, stored flat, with
-//! the checkpointing strategies (SPEC §3), and what each forward step records for its adjoint.
+//! the checkpointing strategies (docs/conventions.md), and what each forward step records for its adjoint.
 //!
 //! A step k → k+1 records, besides the state (q, p, λ, μ, tip target) at k+1, the half-step
 //! momentum p_{k+½} and W = ∂p_{k+½}/∂c when the model has drag (without drag p_{k+½} does not

@@ -1,4 +1,4 @@
-//! The chain-of-pendulums model (thesis §2.2, §2.4, §3.1, §3.2; SPEC §1), written once over
+//! The chain-of-pendulums model (thesis §2.2, §2.4, §3.1, §3.2; docs/conventions.md), written once over
 //! [`Scalar`] so that the same terms evaluate in `f64` and in dual arithmetic.
 //!
 //! The configuration is q = (q₁, …, qₙ) with qᵢ ∈ S^{DIM−1} ⊂ ℝ^DIM. `DIM = 2` is the planar model
@@ -7,7 +7,7 @@
 //! +y, so x stays exactly 0 in the spatial model; the planar model therefore reproduces it exactly
 //! (tested to 0 difference in `tests/core.rs` and, with every kind of point load, in
 //! `tests/loads.rs`) while storing and computing two components instead of three. A point load
-//! with an x component (SPEC §6) needs the spatial model: [`Chain::from_scene`] refuses such a
+//! with an x component (docs/scene-format.md) needs the spatial model: [`Chain::from_scene`] refuses such a
 //! scene for `DIM = 2` ([`Error::NeedsSpatialModel`]), and [`crate::simulate()`] picks the model. The step's cost is dominated by the per-joint scalar work (spring function, Newton
 //! and projection solves), so the measured saving is modest: 3D/2D ≈ 1.08 at n = 100
 //! (`cargo bench --bench step -- step_dim`).
@@ -82,7 +82,7 @@ pub enum Parameter {
 }
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
-/// term of SPEC §1 ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,
+/// term of docs/conventions.md ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,
 /// 3: spatial). Terms a scene does not have are absent and cost nothing.
 #[derive(Clone, Debug)]
 pub struct Chain<D, const DIM: usize> {
@@ -258,7 +258,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         })
     }
 
-    /// The springs a scene's support has (SPEC §1): interior k₂..kₙ always, k₁ except for
+    /// The springs a scene's support has (docs/conventions.md): interior k₂..kₙ always, k₁ except for
     /// pinned-pinned, k_{n+1} for riser and fixed-fixed.
     fn springs_of(scene: &Scene) -> Springs<D> {
         let n = scene.n();
@@ -482,7 +482,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     /// Applies M⁻¹ = M̄⁻¹ ⊗ I in O(n): M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l) with Δ the
-    /// lower-bidiagonal difference matrix (SPEC §1). `out` may not alias `v`.
+    /// lower-bidiagonal difference matrix (docs/conventions.md). `out` may not alias `v`.
     #[inline]
     pub fn apply_inverse_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
         let n = self.n;
@@ -509,7 +509,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     /// Applies M = M̄ ⊗ I in O(n): M̄ = diag(l) Tᵀ diag(m) T diag(l) with T the lower-triangular
-    /// matrix of ones (SPEC §1; the inverse of [`Chain::apply_inverse_mass`]): a forward prefix sum
+    /// matrix of ones (docs/conventions.md; the inverse of [`Chain::apply_inverse_mass`]): a forward prefix sum
     /// of lᵢvᵢ weighted by mᵢ, then a backward suffix sum weighted by lᵢ. `out` may not alias `v`.
     #[inline]
     pub fn apply_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
@@ -684,7 +684,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     /// Base bending moment M₀ = 2 k₁ z₁ / l₁² with z₁ = l₁ e₃ᵀq₁ (eq. 3.1.3, sign and index
-    /// corrected as SPEC §4 says).
+    /// corrected as docs/conventions.md says).
     #[inline]
     pub fn base_moment(&self, q: &[[D; DIM]]) -> D {
         self.moment_stiffness * 2.0 * q[0][zi::<DIM>()] * self.inv_lengths[0]

@@ -250,7 +250,7 @@ pub struct OptimOptions {
     /// Relative cost-change tolerance: stop when an accepted step changed J by at most
     /// `cost_rel_tol`·max(|J_old|, |J_new|). Default 4ε ≈ 8.9·10⁻¹⁶: steps below that only move
     /// round-off, so this ends runs whose gradient tolerance cannot be reached, without cutting
-    /// short the slow phase of a flat landscape (SPEC §4: c_sum is very flat near its minimum).
+    /// short the slow phase of a flat landscape (docs/conventions.md: c_sum is very flat near its minimum).
     pub cost_rel_tol: f64,
     /// argmin's target: stop when J ≤ `target_cost`. Default −∞ (off).
     pub target_cost: f64,

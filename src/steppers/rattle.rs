@@ -1,4 +1,4 @@
-//! The RATTLE integrator (thesis §1.6, eq. 1.6.1; SPEC §2) for the constrained chain, generic over
+//! The RATTLE integrator (thesis §1.6, eq. 1.6.1; docs/conventions.md) for the constrained chain, generic over
 //! the scalar [`Scalar`] and the dimension.
 //!
 //! One step (q_k, p_k) → (q_{k+1}, p_{k+1}) with controls u_k, u_{k+1}:
@@ -9,7 +9,7 @@
 //! 0       = Ĝ(q_{k+1}) M⁻¹ p_{k+1}
 //! ```
 //! ĝ stacks the length constraints gᵢ = ½(‖qᵢ‖² − 1) and, for locked tips, l(q) = Σ lᵢ e₃ᵀqᵢ.
-//! The drag term is evaluated at p_{k+½} in both halves (SPEC §2); in the first half it is
+//! The drag term is evaluated at p_{k+½} in both halves (docs/conventions.md); in the first half it is
 //! implicit, and each component solves p + (hD/2) p|p| = c in closed form,
 //! p = 2c / (1 + √(1 + 2hD|c|)).
 //!

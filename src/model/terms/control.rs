@@ -1,4 +1,4 @@
-//! The control force u at node c (thesis eq. 3.1.1 in eq. 2.2.2's form, SPEC §1 and §4 errata).
+//! The control force u at node c (thesis eq. 3.1.1 in eq. 2.2.2's form, docs/conventions.md and §4 errata).
 
 use super::{Ctx, DualScratch, Embed, ForceTerm};
 use crate::error::Result;

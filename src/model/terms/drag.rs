@@ -1,4 +1,4 @@
-//! Still-water drag on the conjugate momenta (thesis eq. 2.4.4, SPEC §1-§2).
+//! Still-water drag on the conjugate momenta (thesis eq. 2.4.4, docs/conventions.md).
 
 use super::{Ctx, DissipativeTerm, Embed};
 use crate::model::{Parameter, Scalar};

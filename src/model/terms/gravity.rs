@@ -1,4 +1,4 @@
-//! Gravity on the point masses (thesis §2.2.2, SPEC §1).
+//! Gravity on the point masses (thesis §2.2.2, docs/conventions.md).
 
 use super::{Ctx, Embed, ForceTerm};
 use crate::error::Result;

@@ -2,7 +2,7 @@
 //! and every derivative the solvers need is derived from that one definition with dual numbers.
 //!
 //! A conservative term implements [`ForceTerm`]: its energy U_T(q; t, u) and its generalised force
-//! ∂U_T/∂q (SPEC §1, thesis eq. 2.2.2-2.2.3), both generic over an evaluation scalar `E` that embeds
+//! ∂U_T/∂q (docs/conventions.md, thesis eq. 2.2.2-2.2.3), both generic over an evaluation scalar `E` that embeds
 //! the chain's scalar `D` ([`Embed`]). The trait then provides, by evaluating the same `force` in
 //! `Dual<D>`:
 //! * [`ForceTerm::force_jvp`]: K v with K = ∂²U_T/∂q² (seed q + εv);
@@ -275,7 +275,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
 /// A momentum-dependent force F(p) added to ṗ (thesis eq. 2.4.4), acting componentwise
 /// (Fᵢ depends on pᵢ only), written once over the evaluation scalar.
 ///
-/// RATTLE evaluates it at p_{k+½} in both half-steps (SPEC §2), so the first half-step solves
+/// RATTLE evaluates it at p_{k+½} in both half-steps (docs/conventions.md), so the first half-step solves
 /// p − (h/2) F(p) = c per component; [`DissipativeTerm::implicit_half_step`] does so by Newton on
 /// the dual-derived derivative, and a term with a closed-form root may override it (tested equal).
 pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {

@@ -1,4 +1,4 @@
-//! Point loads F_k(t) at nodes k (thesis eq. 2.2.2, SPEC §1 and §6): vectors in the transverse
+//! Point loads F_k(t) at nodes k (thesis eq. 2.2.2, docs/conventions.md and §6): vectors in the transverse
 //! plane (x, z), constant, harmonic, or interpolated from a time series, switched on and off by a
 //! window and ramped in.
 

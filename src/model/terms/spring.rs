@@ -1,5 +1,5 @@
 //! Torsional springs ½ Σᵢ kᵢ θᵢ² between consecutive pendulums and at the supports (thesis eq.
-//! 2.2.2-2.2.3, SPEC §1).
+//! 2.2.2-2.2.3, docs/conventions.md).
 
 use super::{Ctx, DualScratch, Embed, ForceTerm};
 use crate::error::{Error, Result};

@@ -404,3 +404,39 @@ fn terms_present_are_the_scene_s() {
     assert_eq!(names.0, ["springs", "point loads", "control"]);
     assert!(chain.drag().is_none());
 }
+
+/// The reaction-force tip drive (eq. 3.2.1/3.2.2) is linear in (ζ_k, v_k, u_k, u_{k+1}); its
+/// hand-written transpose `ReactionTip::reverse` must equal the Dual64 derivatives of the forward
+/// map `first_half` ∘ `second_half` contracted with the cotangent (ζ̄, v̄), including the
+/// derivative in 1/m_n, to 1e-12.
+#[test]
+fn reaction_tip_reverse_is_the_transposed_dual_jacobian() {
+    use chainbeam::model::ReactionTip;
+    let (h, inv_m, bar) = (0.01, 1.0 / 1.7, [0.37, -1.9]);
+    let x = [0.12, -0.4, 2.5, -3.1]; // ζ_k, v_k, u_k, u_{k+1}
+    let tip = ReactionTip {
+        inv_tip_mass: inv_m,
+    };
+    let rev = tip.reverse(bar, (x[2], x[3]), h);
+    let got = [
+        rev.target[0],
+        rev.target[1],
+        rev.controls.0,
+        rev.controls.1,
+        rev.inv_tip_mass,
+    ];
+    for (j, got) in got.iter().enumerate() {
+        let seed = |i: usize, v: f64| Dual64::new(v, if i == j { 1.0 } else { 0.0 });
+        let tip = ReactionTip {
+            inv_tip_mass: seed(4, inv_m),
+        };
+        let xd: Vec<Dual64> = x.iter().enumerate().map(|(i, &v)| seed(i, v)).collect();
+        let (zeta, v_half) = tip.first_half([xd[0], xd[1]], xd[2], h);
+        let v = tip.second_half(v_half, xd[3], h);
+        let want = bar[0] * zeta.eps + bar[1] * v.eps;
+        assert!(
+            (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+            "direction {j}: reverse {got} vs dual {want}"
+        );
+    }
+}

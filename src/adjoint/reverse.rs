@@ -4,7 +4,9 @@
 
 use super::tape::StateView;
 use crate::error::Result;
-use crate::model::{Chain, Ctx, DissipativeTerm, DualScratch, Parameter, Scalar, TipCondition};
+use crate::model::{
+    Chain, Ctx, DissipativeTerm, DualScratch, Parameter, ReactionTip, Scalar, TipCondition,
+};
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 
@@ -75,8 +77,8 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.newton(k, sk.q, sk1, cot)?;
         let ctx0 = Ctx::new(k as f64 * self.h, u_k, k);
         self.first_half(sk, sk1, &ctx0, cot)?;
-        if self.ch.tip_condition() == TipCondition::Reaction {
-            self.tip_target(k, (u_k, u_k1), cot);
+        if let Some(tip) = self.ch.reaction_tip() {
+            self.tip_target(&tip, k, (u_k, u_k1), cot);
         }
         Ok(())
     }
@@ -255,17 +257,22 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     }
 
     /// Tip target dynamics of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u).
-    fn tip_target(&mut self, k: usize, (u_k, u_k1): (D, D), cot: &mut Cotangents<D, DIM>) {
-        let (ch, h, hh) = (self.ch, self.h, 0.5 * self.h);
-        let inv_mn = ch.inv_masses[ch.n() - 1];
-        let tb = &mut cot.tip_bar;
-        let v_half_bar = tb[1] + tb[0] * h;
-        cot.ubar[k + 1] -= tb[1] * inv_mn * hh;
-        cot.ubar[k] -= v_half_bar * inv_mn * hh;
+    fn tip_target(
+        &mut self,
+        tip: &ReactionTip<D>,
+        k: usize,
+        u: (D, D),
+        cot: &mut Cotangents<D, DIM>,
+    ) {
+        let bar = tip.reverse(cot.tip_bar, u, self.h);
+        cot.ubar[k] += bar.controls.0;
+        cot.ubar[k + 1] += bar.controls.1;
         if let Some(ip) = self.mass_param {
-            cot.thbar[ip] += (tb[1] * u_k1 + v_half_bar * u_k) * inv_mn * inv_mn * hh;
+            // d(1/m_n)/dm = −1/m_n² (the mass parameter scales every mass).
+            let inv_mn = tip.inv_tip_mass;
+            cot.thbar[ip] -= bar.inv_tip_mass * inv_mn * inv_mn;
         }
-        tb[1] = v_half_bar;
+        cot.tip_bar = bar.target;
     }
 }
 

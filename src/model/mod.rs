@@ -19,7 +19,7 @@ pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, y
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
     ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity,
-    HarmonicForce, PointLoad, PointLoads, Springs, TermVisitor,
+    HarmonicForce, PointLoad, PointLoads, ReactionTip, ReactionTipBar, Springs, TermVisitor,
 };
 
 use crate::error::{Error, Result};
@@ -340,6 +340,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// What holds the tip.
     pub fn tip_condition(&self) -> TipCondition {
         self.tip
+    }
+
+    /// The tip drive of the reaction-force variant ([`TipCondition::Reaction`]), `None` for
+    /// other tips.
+    pub fn reaction_tip(&self) -> Option<ReactionTip<D>> {
+        (self.tip == TipCondition::Reaction).then(|| ReactionTip {
+            inv_tip_mass: self.inv_masses[self.n() - 1],
+        })
     }
 
     /// Whether the model has the tip constraint row (locked or reaction-force tip).

@@ -26,8 +26,8 @@
 //! **Projection for (p_{k+1}, μ_k)** is linear with the symmetric tridiagonal (bordered) matrix
 //! Ĝ(q_{k+1}) M⁻¹ Ĝ(q_{k+1})ᵀ.
 //!
-//! **Reaction-force tip** ([`TipCondition::Reaction`], eq. 3.2.1/3.2.2): the tip's z follows
-//! m_n ζ̈ = −u (the reaction cancels every other force on it), integrated by Störmer–Verlet
+//! **Reaction-force tip** ([`crate::model::TipCondition::Reaction`], eq. 3.2.1/3.2.2, the type
+//! [`crate::model::ReactionTip`]): the tip's z follows m_n ζ̈ = −u (the reaction cancels every other force on it), integrated by Störmer–Verlet
 //! v_{k+½} = v_k − h/(2 m_n) u_k, ζ_{k+1} = ζ_k + h v_{k+½}, v_{k+1} = v_{k+½} − h/(2 m_n) u_{k+1},
 //! and imposed as the rheonomic constraints l(q_{k+1}) = ζ_{k+1}, L M⁻¹ p_{k+1} = v_{k+1}. With
 //! u = 0 this is exactly the locked beam. The control then needs no potential term: its force lies
@@ -36,7 +36,7 @@
 use super::{singular, Stepper};
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{e2, Chain, Ctx, DissipativeTerm, Scalar, TipCondition};
+use crate::model::{e2, Chain, Ctx, DissipativeTerm, Scalar};
 use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
@@ -258,12 +258,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// Tip target of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u): (ζ_{k+1},
     /// v_{k+½}), zeros for other tips.
     fn tip_half_kick(&self, state: &State<D, DIM>, u_k: D) -> (D, D) {
-        if self.chain.tip_condition() != TipCondition::Reaction {
-            return (D::zero(), D::zero());
+        match self.chain.reaction_tip() {
+            Some(tip) => tip.first_half(state.tip_target, u_k, self.h),
+            None => (D::zero(), D::zero()),
         }
-        let inv_mn = self.chain.inv_masses[self.chain.n() - 1];
-        let v_half = state.tip_target[1] - u_k * inv_mn * (0.5 * self.h);
-        (state.tip_target[0] + v_half * self.h, v_half)
     }
 
     /// Newton for λ (predictor μ_{k−1}) on ĝ(q_{k+1}(λ)) = 0; leaves q_{k+1} in `state.q`, λ in
@@ -355,12 +353,13 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 ws.a[i][d] = b;
             }
         }
-        let v_next = if ch.tip_condition() == TipCondition::Reaction {
-            let v = v_half - u_k1 * ch.inv_masses[ch.n() - 1] * hh;
-            state.tip_target = [zeta_next, v];
-            v
-        } else {
-            D::zero()
+        let v_next = match ch.reaction_tip() {
+            Some(tip) => {
+                let v = tip.second_half(v_half, u_k1, h);
+                state.tip_target = [zeta_next, v];
+                v
+            }
+            None => D::zero(),
         };
         projection_solve(
             ch,

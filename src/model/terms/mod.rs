@@ -27,12 +27,14 @@ mod control;
 mod drag;
 mod gravity;
 mod point_load;
+mod reaction_tip;
 mod spring;
 
 pub use control::ControlForce;
 pub use drag::Drag;
 pub use gravity::Gravity;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
+pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;
 
 use super::{Parameter, Scalar};

@@ -35,6 +35,8 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
     scratch: DualScratch<D, DIM>,
+    /// Start time t₀ of the horizon (step k at t₀ + k h).
+    pub t0: f64,
 }
 
 impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
@@ -45,6 +47,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         ReverseSweep {
             ch,
             h,
+            t0: 0.0,
             params,
             mass_param: params.iter().position(|p| *p == Parameter::Mass),
             drag_param: params.iter().position(|p| *p == Parameter::Drag),
@@ -70,10 +73,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         cot: &mut Cotangents<D, DIM>,
     ) -> Result<()> {
         self.projection(k, sk1, cot)?;
-        let ctx1 = Ctx::new((k + 1) as f64 * self.h, u_k1, k + 1);
+        let ctx1 = Ctx::new(self.t0 + (k + 1) as f64 * self.h, u_k1, k + 1);
         self.second_half(sk1, &ctx1, cot)?;
         self.newton(k, sk.q, sk1, cot)?;
-        let ctx0 = Ctx::new(k as f64 * self.h, u_k, k);
+        let ctx0 = Ctx::new(self.t0 + k as f64 * self.h, u_k, k);
         self.first_half(sk, sk1, &ctx0, cot)?;
         if self.ch.tip_condition() == TipCondition::Reaction {
             self.tip_target(k, (u_k, u_k1), cot);
@@ -206,7 +209,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
         if let (Some(ip), Some(drag)) = (self.drag_param, ch.drag()) {
-            let ctx = Ctx::new(k as f64 * h, D::zero(), k);
+            let ctx = Ctx::new(self.t0 + k as f64 * h, D::zero(), k);
             let mut s = D::zero();
             for i in 0..ch.n() {
                 for d in 0..DIM {

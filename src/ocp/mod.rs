@@ -118,7 +118,7 @@ use faer::Mat;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use crate::adjoint::{BendingObjective, ControlMap, ControlProblem};
+use crate::adjoint::{BendingObjective, ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
 use crate::scene::ObjectiveKind;
 use line_search::{rollout, Feedback, Traj};
@@ -335,8 +335,8 @@ const MAX_QP_ITERS: usize = 40;
 
 /// Minimises J of a [`ControlProblem`] with per-step or piecewise-constant controls from θ₀
 /// (projected onto the box) by the structured Gauss-Newton method of the module docs.
-pub fn solve<P: ControlMap>(
-    problem: &ControlProblem<P, BendingObjective>,
+pub fn solve<P: ControlMap, O: Objective>(
+    problem: &ControlProblem<P, O>,
     theta0: &[f64],
     options: &OcpOptions,
 ) -> Result<OcpResult> {
@@ -404,15 +404,25 @@ pub struct Solver {
 }
 
 impl Solver {
-    /// Builds the solver for `problem` (validates the options, the model and the control map).
-    pub fn new<P: ControlMap>(
-        problem: &ControlProblem<P, BendingObjective>,
+    /// Builds the solver for `problem` (validates the options, the model, the objective — a
+    /// [`BendingObjective`] — and the control map).
+    pub fn new<P: ControlMap, O: Objective>(
+        problem: &ControlProblem<P, O>,
         options: &OcpOptions,
     ) -> Result<Self> {
         options.validate()?;
+        let obj = problem
+            .objective()
+            .bending()
+            .ok_or_else(|| Error::InvalidArgument {
+                name: "objective",
+                reason: "the Riccati solver needs a bending-moment objective (c or c_sum, with \
+                     effort): it exploits their Gauss-Newton form"
+                    .into(),
+            })?;
         let steps = problem.steps();
-        let model = StageModel::new(problem.chain(), problem.time_step())?;
-        let obj = problem.objective();
+        let model =
+            StageModel::new(problem.chain(), problem.time_step())?.with_start(problem.start());
         let h = problem.time_step();
         let cost = StageCost {
             effort: obj.effort * h,

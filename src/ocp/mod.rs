@@ -7,7 +7,7 @@
 //! # The problem
 //! J(θ) = Σ_{k=0}^{N} [c_k M₀(t_k)² + ρh u_k²] + (σ/h) Σ_{k=1}^{N} (u_k − u_{k−1})²
 //! over the RATTLE trajectory from the straight beam at rest, with c_k = 1 (c_sum, eq. 3.3.4) or
-//! c_k = [k = N] (c, eq. 3.3.2), ρ the effort weight of [`BendingObjective::effort`], σ ≥ 0 the
+//! c_k = [k = N] (c, eq. 3.3.2), ρ the effort weight of [`BendingObjective::effort`](crate::BendingObjective::effort), σ ≥ 0 the
 //! optional rate penalty [`OcpOptions::rate_penalty`] (σh Σ ((u_k − u_{k−1})/h)²: real thrusters
 //! cannot jump), u_k = θ_{piece(k)} (per-step: θ = u; piecewise: the pieces of
 //! [`PiecewiseControl`](crate::PiecewiseControl)), and the box lower ≤ θ ≤ upper. The costs are
@@ -79,7 +79,7 @@
 //! iteration ≤ 20 simulations) are not met: see "Where it is slow".
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
-//! [`BendingObjective`] (c or c_sum, with effort), controls that are per-step or piecewise
+//! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise
 //! constant in time. Locked and reaction-force tips are refused with
 //! [`Error::InvalidArgument`] (their tip constraint removes a dimension of the state manifold that
 //! the tangent coordinates do not).
@@ -118,7 +118,7 @@ use faer::Mat;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use crate::adjoint::{BendingObjective, ControlMap, ControlProblem, Objective};
+use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
 use crate::scene::ObjectiveKind;
 use line_search::{rollout, Feedback, Traj};
@@ -405,7 +405,7 @@ pub struct Solver {
 
 impl Solver {
     /// Builds the solver for `problem` (validates the options, the model, the objective — a
-    /// [`BendingObjective`] — and the control map).
+    /// [`BendingObjective`](crate::BendingObjective) — and the control map).
     pub fn new<P: ControlMap, O: Objective>(
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,

@@ -143,7 +143,7 @@ pub use steppers::rattle;
 
 pub use adjoint::{
     BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, Objective,
-    Parametrisation, PerStepControl, PiecewiseControl,
+    Parametrisation, PerStepControl, PiecewiseControl, Start,
 };
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};

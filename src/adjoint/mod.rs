@@ -49,8 +49,8 @@ pub use problem::ControlProblem;
 pub use tape::{AdjointResult, Checkpointing, AUTO_MEMORY_BUDGET};
 
 use crate::error::{Error, Result};
-use crate::model::{Chain, Parameter, Scalar};
-use crate::rattle::Rattle;
+use crate::model::{Chain, Parameter, Scalar, TipCondition};
+use crate::rattle::{Rattle, State};
 use num_dual::Dual;
 use objective::StageEval;
 use reverse::{Cotangents, ReverseSweep};
@@ -89,6 +89,107 @@ pub(crate) fn check_controls<D: Scalar>(u: &[D], steps: usize) -> Result<()> {
     }
 }
 
+/// Tolerance of [`Start::check`] on the position constraints ½(‖qᵢ‖² − 1) (RATTLE's steps meet
+/// them to 10⁻¹⁴) and, relative to 1 + maxᵢ‖vᵢ‖, on the hidden constraints qᵢ·vᵢ, v = M⁻¹p.
+pub const START_TOLERANCE: f64 = 1e-9;
+
+/// Where a horizon starts: the state S₀ at time t₀. Step k of the horizon runs from
+/// t₀ + k h to t₀ + (k + 1) h with the controls u_k, u_{k+1} (indexed from 0 on the horizon);
+/// its multipliers μ are the Newton predictor of the first step (all zero: the consistent
+/// multiplier is computed). Without a `Start` a horizon starts from the straight beam at rest at
+/// t₀ = 0.
+#[derive(Clone, Debug)]
+pub struct Start<D, const DIM: usize> {
+    /// The state S₀ = (q₀, p₀, λ, μ, tip target).
+    pub state: State<D, DIM>,
+    /// The start time t₀ \[s\].
+    pub t0: f64,
+}
+
+impl<D: Scalar, const DIM: usize> Start<D, DIM> {
+    /// Checks S₀ against `chain`: sizes (n attitudes and momenta, n + tip multipliers), finite
+    /// values, a finite t₀, and S₀ on the constraint manifold: ĝ(q₀) = 0 (‖qᵢ‖ = 1, and the tip
+    /// row against its target) and Ĝ(q₀) M⁻¹ p₀ = 0 (the tip row against the target velocity),
+    /// to [`START_TOLERANCE`].
+    pub fn check(&self, chain: &Chain<D, DIM>) -> Result<()> {
+        let (n, nc, st) = (chain.n(), chain.n_constraints(), &self.state);
+        for (name, got, expected) in [
+            ("initial state q", st.q.len(), n),
+            ("initial state p", st.p.len(), n),
+            ("initial state lambda", st.lambda.len(), nc),
+            ("initial state mu", st.mu.len(), nc),
+        ] {
+            if got != expected {
+                return Err(Error::WrongLength {
+                    name,
+                    expected,
+                    got,
+                });
+            }
+        }
+        let flat = |x: &[[D; DIM]]| x.iter().flatten().map(|v| v.re()).collect::<Vec<_>>();
+        let scalars = |x: &[D]| x.iter().map(|v| v.re()).collect::<Vec<_>>();
+        let tip = scalars(&st.tip_target);
+        for (name, values) in [
+            ("initial state q", flat(&st.q)),
+            ("initial state p", flat(&st.p)),
+            ("initial state lambda", scalars(&st.lambda)),
+            ("initial state mu", scalars(&st.mu)),
+            ("initial state tip target", tip),
+            ("start time", vec![self.t0]),
+        ] {
+            if let Some(index) = values.iter().position(|x| !x.is_finite()) {
+                return Err(Error::NotFinite { name, index });
+            }
+        }
+        self.check_manifold(chain)
+    }
+
+    /// The constraint part of [`Start::check`].
+    fn check_manifold(&self, chain: &Chain<D, DIM>) -> Result<()> {
+        let (n, nc, st) = (chain.n(), chain.n_constraints(), &self.state);
+        let ops = chain.constraints();
+        let mut r = vec![D::zero(); nc];
+        let position = ops.residual(&st.q, st.tip_target[0], &mut r);
+        let mut v = vec![[D::zero(); DIM]; n];
+        chain.apply_inverse_mass(&st.p, &mut v);
+        ops.apply(&st.q, &v, &mut r);
+        if chain.tip_condition() == TipCondition::Reaction {
+            r[n] -= st.tip_target[1];
+        }
+        let vmax = v.iter().flatten().fold(0.0f64, |m, x| m.max(x.re().abs()));
+        let velocity = r.iter().fold(0.0f64, |m, x| m.max(x.re().abs())) / (1.0 + vmax);
+        if position > START_TOLERANCE || velocity > START_TOLERANCE {
+            return Err(Error::InvalidArgument {
+                name: "initial state",
+                reason: format!(
+                    "not on the constraint manifold: position residual {position:.3e}, \
+                     velocity residual {velocity:.3e} (relative), tolerance {START_TOLERANCE:e}"
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The state a horizon starts from and the integrator for it (start time set).
+fn start_state<D: Scalar, const DIM: usize>(
+    chain: &Chain<D, DIM>,
+    h: f64,
+    start: Option<&Start<D, DIM>>,
+) -> Result<(Rattle<D, DIM>, State<D, DIM>)> {
+    let t0 = start.map_or(0.0, |s| s.t0);
+    let rattle = Rattle::new(chain.clone(), h)?.with_start_time(t0);
+    let state = match start {
+        Some(s) => {
+            s.check(chain)?;
+            s.state.clone()
+        }
+        None => rattle.straight_state(),
+    };
+    Ok((rattle, state))
+}
+
 /// A horizon: the model, the number of steps N and the controls u_0..u_N.
 #[derive(Clone, Copy)]
 struct Horizon<'a, D, const DIM: usize> {
@@ -103,11 +204,10 @@ fn forward_sweep<D: Scalar, O: Objective, const DIM: usize>(
     hz: &Horizon<'_, D, DIM>,
     rattle: &mut Rattle<D, DIM>,
     stage: &mut StageEval<'_, O, D>,
-    kk: usize,
+    (kk, mut state): (usize, State<D, DIM>),
 ) -> Result<(D, StateStore<D, DIM>)> {
     let (chain, u, steps) = (hz.chain, hz.controls, hz.steps);
     let half = chain.has_drag();
-    let mut state = rattle.straight_state();
     rattle.prepare(&mut state, 0, u[0])?;
     let mut value = stage.value(chain, 0, &state.q, u[0]);
     let (n, nc) = (chain.n(), chain.n_constraints());
@@ -155,6 +255,22 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     params: &[Parameter],
     checkpointing: Checkpointing,
 ) -> Result<AdjointResult<D>> {
+    adjoint_gradient_from(chain, h, steps, u, objective, params, checkpointing, None)
+}
+
+/// [`adjoint_gradient`] on a horizon that starts from `start` (S₀ at t₀) instead of the straight
+/// beam at rest at t = 0. The initial state is data: no gradient flows into it.
+#[allow(clippy::too_many_arguments)]
+pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
+    chain: &Chain<D, DIM>,
+    h: f64,
+    steps: usize,
+    u: &[D],
+    objective: &O,
+    params: &[Parameter],
+    checkpointing: Checkpointing,
+    start: Option<&Start<D, DIM>>,
+) -> Result<AdjointResult<D>> {
     check_controls(u, steps)?;
     check_parameters(chain, params)?;
     let (n, nc) = (chain.n(), chain.n_constraints());
@@ -168,13 +284,13 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
         zpos: Vec::new(),
     };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
-    let mut rattle = Rattle::new(chain.clone(), h)?;
+    let (mut rattle, state0) = start_state(chain, h, start)?;
     let hz = Horizon {
         chain,
         steps,
         controls: u,
     };
-    let (value, checkpoints) = forward_sweep(&hz, &mut rattle, &mut stage, kk)?;
+    let (value, checkpoints) = forward_sweep(&hz, &mut rattle, &mut stage, (kk, state0))?;
 
     let zero = vec![[D::zero(); DIM]; n];
     let mut cot = Cotangents {
@@ -188,6 +304,7 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     let last = checkpoints.view(n_segments).q;
     stage.accumulate(chain, (steps, last, u[steps]), &mut cot, k1_param);
     let mut sweep = ReverseSweep::new(chain, h, params);
+    sweep.t0 = start.map_or(0.0, |s| s.t0);
     let half = chain.has_drag();
     let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
     for seg in (0..n_segments).rev() {
@@ -222,9 +339,20 @@ pub fn forward_value<D: Scalar, O: Objective, const DIM: usize>(
     u: &[D],
     objective: &O,
 ) -> Result<D> {
+    forward_value_from(chain, h, steps, u, objective, None)
+}
+
+/// [`forward_value`] on a horizon that starts from `start` (S₀ at t₀).
+pub fn forward_value_from<D: Scalar, O: Objective, const DIM: usize>(
+    chain: &Chain<D, DIM>,
+    h: f64,
+    steps: usize,
+    u: &[D],
+    objective: &O,
+    start: Option<&Start<D, DIM>>,
+) -> Result<D> {
     check_controls(u, steps)?;
-    let mut r = Rattle::new(chain.clone(), h)?;
-    let mut st = r.straight_state();
+    let (mut r, mut st) = start_state(chain, h, start)?;
     r.prepare(&mut st, 0, u[0])?;
     let mut stage = StageEval {
         obj: objective,

@@ -32,6 +32,11 @@ pub trait Objective: Send + Sync {
     fn uses_positions(&self) -> bool {
         false
     }
+    /// The objective as a [`BendingObjective`], if it is one (the structured Riccati solver of
+    /// [`crate::ocp`] exploits its Gauss-Newton form Σ c_k M₀² + ρh Σ u²). Default `None`.
+    fn bending(&self) -> Option<BendingObjective> {
+        None
+    }
 }
 
 /// The thesis's bending-moment objectives (§3.3) with an optional effort penalty.
@@ -66,6 +71,9 @@ impl BendingObjective {
 }
 
 impl Objective for BendingObjective {
+    fn bending(&self) -> Option<BendingObjective> {
+        Some(*self)
+    }
     fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
         let m = match self.kind {
             ObjectiveKind::Final if s.k != s.steps => D::zero(),

@@ -2,11 +2,12 @@
 //! Hessian-vector products (forward-over-adjoint).
 
 use super::{
-    adjoint_gradient, forward_value, AdjointResult, BendingObjective, Checkpointing, ControlMap,
-    Objective, Parametrisation, PerStepControl, PiecewiseControl,
+    adjoint_gradient_from, forward_value_from, AdjointResult, BendingObjective, Checkpointing,
+    ControlMap, Objective, Parametrisation, PerStepControl, PiecewiseControl, Start,
 };
 use crate::error::{Error, Result};
 use crate::model::{Chain, Parameter, Scalar};
+use crate::rattle::State;
 use crate::scene::{ControlKind, ObjectiveKind, Scene};
 use num_dual::Dual64;
 
@@ -21,6 +22,7 @@ pub struct ControlProblem<P = Parametrisation, O = BendingObjective> {
     map: P,
     objective: O,
     checkpointing: Checkpointing,
+    start: Option<Start<f64, 2>>,
 }
 
 impl ControlProblem<Parametrisation, BendingObjective> {
@@ -60,7 +62,30 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
             map,
             objective,
             checkpointing: Checkpointing::default(),
+            start: None,
         })
+    }
+
+    /// The same problem on a horizon that starts from `state` at time `t0` (instead of the
+    /// straight beam at rest at t = 0): step k runs from t₀ + k h with the controls u_k, u_{k+1}
+    /// of θ (indexed from 0 on this horizon), so the tail of a longer run from its state at step m
+    /// is this problem with t₀ = m h. The state's μ is the first step's Newton predictor (all
+    /// zero: computed). The state is data: gradients are with respect to θ only.
+    ///
+    /// # Errors
+    /// [`Error::WrongLength`] / [`Error::NotFinite`] naming the part of the state (or the start
+    /// time), [`Error::InvalidArgument`] when the state is off the constraint manifold
+    /// (ĝ(q) = 0 and Ĝ(q) M⁻¹ p = 0 to [`crate::adjoint::START_TOLERANCE`]).
+    pub fn starting_from(mut self, state: State<f64, 2>, t0: f64) -> Result<Self> {
+        let start = Start { state, t0 };
+        start.check(&self.chain)?;
+        self.start = Some(start);
+        Ok(self)
+    }
+
+    /// The start of the horizon (None: the straight beam at rest at t = 0).
+    pub fn start(&self) -> Option<&Start<f64, 2>> {
+        self.start.as_ref()
     }
 
     /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
@@ -124,7 +149,14 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// J(θ) by one forward simulation (no storage).
     pub fn value(&self, theta: &[f64]) -> Result<f64> {
         let u = self.controls(theta)?;
-        forward_value(&self.chain, self.h, self.steps, &u, &self.objective)
+        forward_value_from(
+            &self.chain,
+            self.h,
+            self.steps,
+            &u,
+            &self.objective,
+            self.start.as_ref(),
+        )
     }
 
     /// (J(θ), ∇J(θ)) by the discrete adjoint.
@@ -135,7 +167,8 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
 
     /// J and ∇_θJ = (∂u/∂θ)ᵀ ∇_u J for controls `u` on `chain`, in any scalar type.
     fn theta_gradient<D: Scalar>(&self, chain: &Chain<D, 2>, u: &[D]) -> Result<(D, Vec<D>)> {
-        let r = adjoint_gradient(
+        let start = self.start_as::<D>();
+        let r = adjoint_gradient_from(
             chain,
             self.h,
             self.steps,
@@ -143,6 +176,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
             &self.objective,
             &[],
             self.checkpointing,
+            start.as_ref(),
         )?;
         let mut g = vec![D::zero(); self.map.n_params()];
         self.map.transpose(&r.control_gradient, &mut g);
@@ -157,7 +191,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// The full adjoint result at θ, with gradients for the physical parameters `params` too.
     pub fn adjoint(&self, theta: &[f64], params: &[Parameter]) -> Result<AdjointResult<f64>> {
         let u = self.controls(theta)?;
-        adjoint_gradient(
+        adjoint_gradient_from(
             &self.chain,
             self.h,
             self.steps,
@@ -165,6 +199,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
             &self.objective,
             params,
             self.checkpointing,
+            self.start.as_ref(),
         )
     }
 
@@ -187,6 +222,14 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         self.map.controls(&th, &mut u);
         let (_, g) = self.theta_gradient(&self.chain_as::<Dual64>(), &u)?;
         Ok(g.iter().map(|x| x.eps).collect())
+    }
+
+    /// The start lifted to another scalar type.
+    fn start_as<D: Scalar>(&self) -> Option<Start<D, 2>> {
+        self.start.as_ref().map(|s| Start {
+            state: s.state.lift(),
+            t0: s.t0,
+        })
     }
 
     /// The model lifted to another scalar type.

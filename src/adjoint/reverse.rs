@@ -39,6 +39,8 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
     scratch: DualScratch<D, DIM>,
+    /// Start time t₀ of the horizon (step k at t₀ + k h).
+    pub t0: f64,
 }
 
 impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
@@ -49,6 +51,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         ReverseSweep {
             ch,
             h,
+            t0: 0.0,
             params,
             mass_param: params.iter().position(|p| *p == Parameter::Mass),
             drag_params: match ch.dissipation() {
@@ -82,10 +85,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         cot: &mut Cotangents<D, DIM>,
     ) -> Result<()> {
         self.projection(k, sk1, cot)?;
-        let ctx1 = Ctx::new((k + 1) as f64 * self.h, u_k1, k + 1);
+        let ctx1 = Ctx::new(self.t0 + (k + 1) as f64 * self.h, u_k1, k + 1);
         self.second_half(sk1, &ctx1, cot)?;
         self.newton(k, sk.q, sk1, cot)?;
-        let ctx0 = Ctx::new(k as f64 * self.h, u_k, k);
+        let ctx0 = Ctx::new(self.t0 + k as f64 * self.h, u_k, k);
         self.first_half(sk, sk1, &ctx0, cot)?;
         if let Some(tip) = self.ch.reaction_tip() {
             self.tip_target(&tip, k, (u_k, u_k1), cot);
@@ -218,7 +221,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
         if let Some(drag) = ch.dissipation() {
-            let ctx = Ctx::new(k as f64 * h, D::zero(), k);
+            let ctx = Ctx::new(self.t0 + k as f64 * h, D::zero(), k);
             dissipation_contraction(
                 &drag,
                 &self.drag_params,

@@ -45,6 +45,7 @@
 //! the step residual, ∂λ/∂θ = −R_λ⁻¹ R_θ (the derivative parts are exact, not iterated). The
 //! real parts are those of the `f64` stage map bit for bit.
 
+use crate::adjoint::Start;
 use crate::error::{Error, Result};
 use crate::model::{Chain, Scalar, TipCondition};
 use crate::rattle::{Rattle, State};
@@ -53,7 +54,8 @@ use nalgebra::SVector;
 use num_dual::{Derivative, DualSVec64};
 
 /// Directions per dual-number chunk (`DualSVec64<8>`: measured 11 f64-steps per dual step, the
-/// best cost per direction of the sizes 8, 10, 12, 16; RICCATI.md §7).
+/// best cost per direction of the sizes 8, 10, 12, 16; 7 and 11, which fit the 2n + 1 = 21
+/// directions of n = 10 exactly, measured no better).
 pub const CHUNK: usize = 8;
 pub(crate) type Dv = DualSVec64<CHUNK>;
 
@@ -80,6 +82,8 @@ pub(crate) struct StageModel {
     pub control: Vec<[f64; 2]>,
     /// ∂M₀/∂z-component of q₁: M₀ = scale · q₁,z (eq. 3.1.3).
     pub moment_scale: f64,
+    /// The horizon's start (S₀, t₀); None: straight at rest at t = 0.
+    pub start: Option<Start<f64, 2>>,
 }
 
 impl StageModel {
@@ -128,7 +132,14 @@ impl StageModel {
             mass,
             control,
             moment_scale,
+            start: None,
         })
+    }
+
+    /// The model of a horizon starting from `start` ([`crate::ControlProblem::starting_from`]).
+    pub fn with_start(mut self, start: Option<&Start<f64, 2>>) -> Self {
+        self.start = start.cloned();
+        self
     }
 
     /// Tangent dimension 2n.
@@ -237,6 +248,7 @@ impl<D: Scalar> Projector<D> {
 pub(crate) struct Stepper<D> {
     pub rattle: Rattle<D, 2>,
     pub state: State<D, 2>,
+    initial: Option<State<D, 2>>,
     proj: Projector<D>,
     pb: Vec<[D; 2]>,
     b: Vec<[f64; 2]>,
@@ -245,11 +257,13 @@ pub(crate) struct Stepper<D> {
 
 impl<D: Scalar> Stepper<D> {
     pub fn new(model: &StageModel) -> Result<Self> {
-        let rattle = Rattle::new(model.chain.lift::<D>(), model.h)?;
+        let t0 = model.start.as_ref().map_or(0.0, |s| s.t0);
+        let rattle = Rattle::new(model.chain.lift::<D>(), model.h)?.with_start_time(t0);
         let state = rattle.straight_state();
         Ok(Stepper {
             rattle,
             state,
+            initial: model.start.as_ref().map(|s| s.state.lift()),
             proj: Projector::new(model.n),
             pb: vec![[D::zero(); 2]; model.n],
             b: model.control.clone(),
@@ -257,10 +271,15 @@ impl<D: Scalar> Stepper<D> {
         })
     }
 
-    /// Resets `state` to the initial state (straight, at rest) and computes its consistent
-    /// multiplier for the control u₀ (the Newton predictor of step 0).
+    /// Resets `state` to the initial state (the start's S₀, or straight at rest) and computes
+    /// its consistent multiplier for the control u₀ when it has none (the Newton predictor of
+    /// step 0).
     pub fn reset(&mut self, u0: D) -> Result<()> {
         let st = &mut self.state;
+        if let Some(init) = &self.initial {
+            st.clone_from(init);
+            return self.rattle.prepare(st, 0, u0);
+        }
         for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
             *q = [D::one(), D::zero()];
             *p = [D::zero(); 2];
@@ -315,7 +334,10 @@ impl JacobianWorkspace {
     }
 
     /// A_k (column-major 2n × 2n, into `a`) and B_k (into `b`) at x̂_k = (q, p) with rates
-    /// `omega`, Newton predictor `mu` and control u.
+    /// `omega`, Newton start `mu` and control u. With `mu` the converged λ of the nominal step
+    /// the real parts are converged at once (bit for bit the nominal's) and the Newton loop does
+    /// only its derivative-only update: the implicit function theorem, one bordered-tridiagonal
+    /// solve with 8 right-hand sides per chunk.
     #[allow(clippy::too_many_arguments)]
     pub fn jacobians(
         &mut self,

@@ -150,6 +150,7 @@ pub mod bounds;
 pub mod observers;
 pub mod polish;
 pub mod problem;
+mod riccati;
 pub mod supervisor;
 
 use std::fmt;
@@ -195,15 +196,22 @@ pub enum Method {
     /// *squared* CG residual with the forcing term min(½, √‖g‖)‖g‖, so once ‖g‖ < 1 its inner
     /// solves stop early and it slows to gradient-descent-like steps; prefer the trust region.
     NewtonCg,
+    /// The structured Gauss-Newton solver of [`crate::ocp`] (Riccati backward passes, box bounds
+    /// handled exactly by interior-point QPs): O(N) per iteration for per-step, piecewise and
+    /// constant controls of a bending-moment objective; other problems are refused with
+    /// [`Error::InvalidArgument`] (`method`). The argmin options do not apply (module
+    /// `riccati`).
+    Riccati,
 }
 
 impl Method {
-    /// The name used on the command line: `lbfgs`, `trust-region` or `newton-cg`.
+    /// The name used on the command line: `lbfgs`, `trust-region`, `newton-cg` or `riccati`.
     pub fn name(self) -> &'static str {
         match self {
             Method::Lbfgs => "lbfgs",
             Method::TrustRegion => "trust-region",
             Method::NewtonCg => "newton-cg",
+            Method::Riccati => "riccati",
         }
     }
 }
@@ -221,9 +229,12 @@ impl FromStr for Method {
             "lbfgs" | "l-bfgs" => Ok(Method::Lbfgs),
             "trust-region" | "trustregion" => Ok(Method::TrustRegion),
             "newton-cg" | "newtoncg" => Ok(Method::NewtonCg),
+            "riccati" => Ok(Method::Riccati),
             _ => Err(Error::InvalidArgument {
                 name: "method",
-                reason: format!("unknown method `{s}` (expected lbfgs, trust-region or newton-cg)"),
+                reason: format!(
+                    "unknown method `{s}` (expected lbfgs, trust-region, newton-cg or riccati)"
+                ),
             }),
         }
     }
@@ -483,6 +494,9 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         let (problem, opts) = (self.problem, &self.opts);
         opts.validate()?;
         check_start(problem, theta0)?;
+        if opts.method == Method::Riccati {
+            return riccati::run(problem, theta0, opts);
+        }
         if opts.method != Method::Lbfgs && problem.hessian().is_none() {
             return Err(adapter::no_hessian());
         }

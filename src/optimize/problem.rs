@@ -9,6 +9,7 @@
 
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
+use crate::ocp::{OcpOptions, OcpResult};
 
 /// A differentiable objective J(θ) of n real parameters: what the optimisers need.
 ///
@@ -99,6 +100,15 @@ pub trait OptimProblem {
     fn check_range(&self, _theta: &[f64]) -> Result<()> {
         Ok(())
     }
+
+    /// Runs the structured Riccati solver ([`Method::Riccati`](super::Method::Riccati),
+    /// [`crate::ocp`]) from θ₀, if the problem has one (default `None`: refused).
+    ///
+    /// # Errors
+    /// The solver's typed error (e.g. an unsupported objective, tip or control map).
+    fn riccati(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
+        None
+    }
 }
 
 /// Hessian-vector products v ↦ ∇²J(θ) v: the capability the trust region, Newton-CG, the
@@ -181,6 +191,11 @@ impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
                 }
             })
             .collect()
+    }
+    /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of a
+    /// [`BendingObjective`](crate::BendingObjective).
+    fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::solve(self, theta0, options))
     }
     /// Every force |u_k| ≤ [`resolved_control_limit`]; otherwise [`Error::ControlOutOfRange`].
     fn check_range(&self, theta: &[f64]) -> Result<()> {

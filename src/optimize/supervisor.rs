@@ -509,6 +509,8 @@ pub(crate) fn run_method<Q: OptimProblem + ?Sized>(
             let a = adapter.clone().with_hvp_cap(cg);
             execute(a, solver, start, setup)
         }
+        // `minimize` hands this method to crate::ocp before any argmin solver is built.
+        Method::Riccati => Err(super::riccati::unsupported()),
     }
 }
 

@@ -84,6 +84,26 @@ impl<D: Scalar, const DIM: usize> State<D, DIM> {
             tip_target: [D::zero(); 2],
         }
     }
+
+    /// The same state in another scalar type (real parts only).
+    pub fn lift<D2: Scalar>(&self) -> State<D2, DIM> {
+        let v = |x: &[[D; DIM]]| {
+            x.iter()
+                .map(|a| std::array::from_fn(|d| D2::from(a[d].re())))
+                .collect()
+        };
+        let s = |x: &[D]| x.iter().map(|a| D2::from(a.re())).collect();
+        State {
+            q: v(&self.q),
+            p: v(&self.p),
+            lambda: s(&self.lambda),
+            mu: s(&self.mu),
+            tip_target: [
+                D2::from(self.tip_target[0].re()),
+                D2::from(self.tip_target[1].re()),
+            ],
+        }
+    }
 }
 
 /// Statistics of one step.
@@ -115,6 +135,7 @@ struct Workspace<D, const DIM: usize> {
 pub struct Rattle<D, const DIM: usize> {
     chain: Chain<D, DIM>,
     h: f64,
+    t0: f64,
     options: RattleOptions,
     ws: Workspace<D, DIM>,
 }
@@ -147,6 +168,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         Ok(Rattle {
             chain,
             h,
+            t0: 0.0,
             options: RattleOptions::default(),
             ws,
         })
@@ -156,6 +178,19 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     pub fn with_options(mut self, options: RattleOptions) -> Self {
         self.options = options;
         self
+    }
+
+    /// Sets the start time t₀: step k is taken at t_k = t₀ + k h (default t₀ = 0), so that a
+    /// horizon starting from a state of a longer run sees the same time-dependent loads.
+    pub fn with_start_time(mut self, t0: f64) -> Self {
+        self.t0 = t0;
+        self
+    }
+
+    /// t_k = t₀ + k h.
+    #[inline]
+    pub fn time(&self, k: usize) -> f64 {
+        self.t0 + k as f64 * self.h
     }
 
     /// The model.
@@ -211,7 +246,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// multipliers (the Newton predictor stays `state.mu`), so that a step recomputed from a stored
     /// state repeats the original arithmetic bit for bit.
     pub fn prepare_force(&mut self, state: &State<D, DIM>, k: usize, u_k: D) -> Result<()> {
-        let t = k as f64 * self.h;
+        let t = self.time(k);
         self.chain
             .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
         self.ws.force_ready = true;
@@ -309,7 +344,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             if iterations >= self.options.max_iterations && extra_done == 0 {
                 return Err(Error::NewtonNotConverged {
                     step: k,
-                    time: k as f64 * h,
+                    time: self.t0 + k as f64 * h,
                     residual: rmax,
                     iterations,
                     tolerance: self.options.tolerance,
@@ -341,7 +376,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let (h, hh) = (self.h, 0.5 * self.h);
         let ch = &self.chain;
         let ws = &mut self.ws;
-        let t1 = (k + 1) as f64 * h;
+        let t1 = self.t0 + (k + 1) as f64 * h;
         ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
         let ctx = Ctx::new(t1, u_k1, k + 1);
         let drag = ch.dissipation();

@@ -103,6 +103,9 @@ enum MethodArg {
     Lbfgs,
     /// Trust-region Newton-CG (Hessian-vector products by forward-over-adjoint).
     TrustRegion,
+    /// Structured Gauss-Newton with Riccati passes (per-step, piecewise or constant controls;
+    /// O(N) per iteration, bounds handled exactly).
+    Riccati,
 }
 
 impl SolverArgs {
@@ -161,6 +164,7 @@ impl SolverArgs {
             method: match self.method {
                 MethodArg::Lbfgs => Method::Lbfgs,
                 MethodArg::TrustRegion => Method::TrustRegion,
+                MethodArg::Riccati => Method::Riccati,
             },
             max_iters: self.max_iters.unwrap_or(defaults.max_iters),
             grad_tol: self.gtol.unwrap_or(defaults.grad_tol),

@@ -3,7 +3,7 @@
 //! ```text
 //! chainbeam simulate SCENE.toml [--controls FILE] [--format csv|npy] [--output FILE]
 //! chainbeam gradient SCENE.toml [--controls FILE | --pieces P] [--effort RHO] [--output FILE]
-//! chainbeam optimize SCENE.toml [--starts K] [--method lbfgs|trust-region] [--bound U]
+//! chainbeam optimize SCENE.toml [--starts K] [--method lbfgs|trust-region|riccati] [--bound U]
 //!                               [--pieces P] [--effort RHO] [--progress] [--output FILE]
 //! chainbeam explore  SCENE.toml [--starts K] [--design latin|random|perturb] [--output FILE]
 //! ```

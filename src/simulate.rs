@@ -355,26 +355,33 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     rattle.prepare(&mut state, 0, controls[0])?;
     let mut scratch = vec![[D::zero(); DIM]; n];
     let record = |traj: &mut Trajectory<D, DIM>,
-                  st: &State<D, DIM>,
-                  k: usize,
+                  (st, k): (&State<D, DIM>, usize),
+                  (lambda, mu): (&[D], &[D]),
                   scratch: &mut [[D; DIM]],
                   ch: &Chain<D, DIM>| {
         traj.q.extend_from_slice(&st.q);
         traj.p.extend_from_slice(&st.p);
-        traj.lambda.extend_from_slice(&st.lambda);
-        traj.mu.extend_from_slice(&st.mu);
+        traj.lambda.extend_from_slice(lambda);
+        traj.mu.extend_from_slice(mu);
         let t = k as f64 * h;
         let e = ch.kinetic_energy(&st.p, scratch) + ch.potential_energy(&st.q, t, controls[k]);
         traj.energy.push(e);
         traj.moment.push(ch.base_moment(&st.q));
         traj.tip_target.push(st.tip_target[0]);
     };
-    state.lambda.copy_from_slice(&state.mu.clone());
-    record(&mut traj, &state, 0, &mut scratch, rattle.chain());
+    // The initial state has no multipliers: λ_0 = μ_0 = the consistent multiplier.
+    let mu0 = rattle.consistent_multiplier().to_vec();
+    let first = (&mu0[..], &mu0[..]);
+    record(&mut traj, (&state, 0), first, &mut scratch, rattle.chain());
     for k in 0..steps {
         let s = rattle.step(&mut state, k, controls[k], controls[k + 1])?;
         traj.stats.push(s);
-        record(&mut traj, &state, k + 1, &mut scratch, rattle.chain());
+        let m = state
+            .multipliers
+            .as_ref()
+            .expect("a step leaves its multipliers");
+        let lm = (&m.lambda[..], &m.mu[..]);
+        record(&mut traj, (&state, k + 1), lm, &mut scratch, rattle.chain());
     }
     Ok(traj)
 }

@@ -138,7 +138,9 @@ fn time_reversibility() {
         p[0] = -p[0];
         p[1] = -p[1];
     }
-    st.mu.iter_mut().for_each(|m| *m = 0.0);
+    // The reversed state is a new initial state: its first step starts from the consistent
+    // multiplier.
+    st.multipliers = None;
     let mut back = Rattle::new(chain, 0.01).unwrap();
     for k in 0..steps {
         back.step(&mut st, k, 0.0, 0.0).unwrap();

@@ -128,7 +128,8 @@ fn tail_optimum_matches_trust_region() {
 fn bad_starts_are_refused() {
     let p = problem(10);
     let n = p.chain().n();
-    let good = State::<f64, 2>::straight(n, p.chain().n_constraints());
+    let nc = p.chain().n_constraints();
+    let good = State::<f64, 2>::straight(n);
     let mut short = good.clone();
     short.q.pop();
     assert!(matches!(
@@ -167,6 +168,16 @@ fn bad_starts_are_refused() {
         ),
         "{e}"
     );
+    // Multipliers of the wrong length (n + 1 where the free tip has n).
+    let mut long = good.clone();
+    long.multipliers_mut(nc + 1);
+    assert!(matches!(
+        problem(10).starting_from(long, 0.0),
+        Err(Error::WrongLength {
+            name: "initial state lambda",
+            ..
+        })
+    ));
     // A momentum along the pendulum (qᵢ·vᵢ ≠ 0) violates the hidden constraint.
     let mut along = good;
     along.p[4] = [2.0, 0.0];

@@ -95,8 +95,8 @@ pub const START_TOLERANCE: f64 = 1e-9;
 
 /// Where a horizon starts: the state S₀ at time t₀. Step k of the horizon runs from
 /// t₀ + k h to t₀ + (k + 1) h with the controls u_k, u_{k+1} (indexed from 0 on the horizon);
-/// its multipliers μ are the Newton predictor of the first step (all zero: the consistent
-/// multiplier is computed). Without a `Start` a horizon starts from the straight beam at rest at
+/// its multipliers μ, if given, are the Newton predictor of the first step (`None`: the
+/// consistent multiplier is computed). Without a `Start` a horizon starts from the straight beam at rest at
 /// t₀ = 0.
 #[derive(Clone, Debug)]
 pub struct Start<D, const DIM: usize> {
@@ -113,11 +113,17 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
     /// to [`START_TOLERANCE`].
     pub fn check(&self, chain: &Chain<D, DIM>) -> Result<()> {
         let (n, nc, st) = (chain.n(), chain.n_constraints(), &self.state);
+        let none: (&[D], &[D]) = (&[], &[]);
+        let (lambda, mu) = st
+            .multipliers
+            .as_ref()
+            .map_or(none, |m| (&m.lambda[..], &m.mu[..]));
+        let nc_given = if st.multipliers.is_some() { nc } else { 0 };
         for (name, got, expected) in [
             ("initial state q", st.q.len(), n),
             ("initial state p", st.p.len(), n),
-            ("initial state lambda", st.lambda.len(), nc),
-            ("initial state mu", st.mu.len(), nc),
+            ("initial state lambda", lambda.len(), nc_given),
+            ("initial state mu", mu.len(), nc_given),
         ] {
             if got != expected {
                 return Err(Error::WrongLength {
@@ -133,8 +139,8 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
         for (name, values) in [
             ("initial state q", flat(&st.q)),
             ("initial state p", flat(&st.p)),
-            ("initial state lambda", scalars(&st.lambda)),
-            ("initial state mu", scalars(&st.mu)),
+            ("initial state lambda", scalars(lambda)),
+            ("initial state mu", scalars(mu)),
             ("initial state tip target", tip),
             ("start time", vec![self.t0]),
         ] {

@@ -67,6 +67,8 @@ pub(crate) struct StateStore<D, const DIM: usize> {
     p: Vec<[D; DIM]>,
     lambda: Vec<D>,
     mu: Vec<D>,
+    /// Whether the state has multipliers (false for an initial state; λ, μ are stored as zeros).
+    has_multipliers: Vec<bool>,
     tip: Vec<[D; 2]>,
     phalf: Vec<[D; DIM]>,
     w: Vec<[D; DIM]>,
@@ -77,7 +79,9 @@ pub(crate) struct StateStore<D, const DIM: usize> {
 pub(crate) struct StateView<'a, D, const DIM: usize> {
     pub q: &'a [[D; DIM]],
     pub p: &'a [[D; DIM]],
+    /// λ of the step into this state (zeros for an initial state).
     pub lambda: &'a [D],
+    /// μ of the step into this state (zeros for an initial state).
     pub mu: &'a [D],
     pub tip: [D; 2],
     /// p_{k−½} of the step into this state.
@@ -99,6 +103,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
             p: Vec::with_capacity(capacity * n),
             lambda: Vec::with_capacity(capacity * nc),
             mu: Vec::with_capacity(capacity * nc),
+            has_multipliers: Vec::with_capacity(capacity),
             tip: Vec::with_capacity(capacity),
             phalf: Vec::with_capacity(half),
             w: Vec::with_capacity(half),
@@ -116,8 +121,17 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     pub fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[[D; DIM]])) {
         self.q.extend_from_slice(&s.q);
         self.p.extend_from_slice(&s.p);
-        self.lambda.extend_from_slice(&s.lambda);
-        self.mu.extend_from_slice(&s.mu);
+        match &s.multipliers {
+            Some(m) => {
+                self.lambda.extend_from_slice(&m.lambda);
+                self.mu.extend_from_slice(&m.mu);
+            }
+            None => {
+                self.lambda.extend(std::iter::repeat_n(D::zero(), self.nc));
+                self.mu.extend(std::iter::repeat_n(D::zero(), self.nc));
+            }
+        }
+        self.has_multipliers.push(s.multipliers.is_some());
         self.tip.push(s.tip_target);
         if self.records_half_step {
             if half.0.is_empty() {
@@ -138,6 +152,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
         self.p.clear();
         self.lambda.clear();
         self.mu.clear();
+        self.has_multipliers.clear();
         self.tip.clear();
         self.phalf.clear();
         self.w.clear();
@@ -177,8 +192,13 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
         let v = self.view(i);
         s.q.copy_from_slice(v.q);
         s.p.copy_from_slice(v.p);
-        s.lambda.copy_from_slice(v.lambda);
-        s.mu.copy_from_slice(v.mu);
+        if self.has_multipliers[i] {
+            let m = s.multipliers_mut(self.nc);
+            m.lambda.copy_from_slice(v.lambda);
+            m.mu.copy_from_slice(v.mu);
+        } else {
+            s.multipliers = None;
+        }
         s.tip_target = v.tip;
     }
 }

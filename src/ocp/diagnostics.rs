@@ -74,8 +74,10 @@ impl Solver {
         let st = &mut self.stepper.state;
         self.model.apply_mass(&v, &mut st.p);
         st.q.copy_from_slice(&q);
-        st.mu.copy_from_slice(self.nominal.mu(k));
-        st.lambda.copy_from_slice(self.nominal.mu(k));
+        let mu = self.nominal.mu(k);
+        let m = st.multipliers_mut(mu.len());
+        m.mu.copy_from_slice(mu);
+        m.lambda.copy_from_slice(mu);
         self.stepper.advance(k, u)?;
         let st = &self.stepper.state;
         let mut out: Vec<f64> = st.q.iter().map(|q| q[1].atan2(q[0])).collect();

@@ -133,7 +133,11 @@ pub(crate) fn rollout(
         let st = &stepper.state;
         out.q[k * n..(k + 1) * n].copy_from_slice(&st.q);
         out.p[k * n..(k + 1) * n].copy_from_slice(&st.p);
-        out.mu[k * n..(k + 1) * n].copy_from_slice(&st.mu);
+        let mu = match &st.multipliers {
+            Some(m) => &m.mu[..],
+            None => stepper.rattle.consistent_multiplier(),
+        };
+        out.mu[k * n..(k + 1) * n].copy_from_slice(mu);
         if fb.is_none() || k == 0 || !free[k] {
             model.rates(&st.q, &st.p, scratch, &mut out.omega[k * n..(k + 1) * n]);
         }
@@ -143,7 +147,9 @@ pub(crate) fn rollout(
         total += cost.value(k, m, u, w);
         if k < steps {
             stepper.advance(k, u)?;
-            out.lambda[k * n..(k + 1) * n].copy_from_slice(&stepper.state.lambda);
+            let m = stepper.state.multipliers.as_ref();
+            let lambda = m.expect("a step leaves its multipliers").lambda.as_slice();
+            out.lambda[k * n..(k + 1) * n].copy_from_slice(lambda);
         }
     }
     out.cost = total;

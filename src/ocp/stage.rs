@@ -284,8 +284,7 @@ impl<D: Scalar> Stepper<D> {
             *q = [D::one(), D::zero()];
             *p = [D::zero(); 2];
         }
-        st.lambda.iter_mut().for_each(|x| *x = D::zero());
-        st.mu.iter_mut().for_each(|x| *x = D::zero());
+        st.multipliers = None;
         st.tip_target = [D::zero(); 2];
         self.rattle.prepare(st, 0, u0)
     }
@@ -393,11 +392,9 @@ impl JacobianWorkspace {
                         Dv::new(p[i][d], Derivative::some(SVector::from(self.seed_p[i][d])));
                 }
             }
-            for (m, &v) in st.mu.iter_mut().zip(mu) {
-                *m = Dv::from_re(v);
-            }
-            for (l, &v) in st.lambda.iter_mut().zip(mu) {
-                *l = Dv::from_re(v);
+            let m = st.multipliers_mut(mu.len());
+            for ((ml, mm), &v) in m.lambda.iter_mut().zip(m.mu.iter_mut()).zip(mu) {
+                (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
             }
             st.tip_target = [Dv::from_re(0.0); 2];
             let ud = if end == ndir {

@@ -58,6 +58,16 @@ impl Default for RattleOptions {
     }
 }
 
+/// The multipliers of one RATTLE step q_k → q_{k+1} (eq. 1.6.1): λ_k of the position constraint
+/// and μ_k of the hidden (momentum) constraint, each of length n (+1 with a tip constraint).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Multipliers<D> {
+    /// λ_k.
+    pub lambda: Vec<D>,
+    /// μ_k (the next step's Newton predictor).
+    pub mu: Vec<D>,
+}
+
 /// The state at time t_k, with the multipliers of the step that produced it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct State<D, const DIM: usize> {
@@ -65,24 +75,32 @@ pub struct State<D, const DIM: usize> {
     pub q: Vec<[D; DIM]>,
     /// Conjugate momenta pᵢ.
     pub p: Vec<[D; DIM]>,
-    /// λ of the last step (length n, +1 with a tip constraint).
-    pub lambda: Vec<D>,
-    /// μ of the last step (length n, +1 with a tip constraint).
-    pub mu: Vec<D>,
+    /// The multipliers of the step that produced this state; `None` for an initial state, which
+    /// no step produced (its first step then starts Newton from the consistent multiplier,
+    /// [`Rattle::consistent_multiplier`]).
+    pub multipliers: Option<Multipliers<D>>,
     /// Reaction-force variant: the tip target ζ_k and velocity v_k (zero otherwise).
     pub tip_target: [D; 2],
 }
 
 impl<D: Scalar, const DIM: usize> State<D, DIM> {
     /// The straight beam at rest, qᵢ = e₂, p = 0 (the initial state of every thesis scene).
-    pub fn straight(n: usize, n_constraints: usize) -> Self {
+    pub fn straight(n: usize) -> Self {
         State {
             q: vec![e2::<D, DIM>(); n],
             p: vec![[D::zero(); DIM]; n],
-            lambda: vec![D::zero(); n_constraints],
-            mu: vec![D::zero(); n_constraints],
+            multipliers: None,
             tip_target: [D::zero(); 2],
         }
+    }
+
+    /// The multipliers, created (zero) if the state has none yet: what a step writes into.
+    /// Allocates only the first time.
+    pub fn multipliers_mut(&mut self, n_constraints: usize) -> &mut Multipliers<D> {
+        self.multipliers.get_or_insert_with(|| Multipliers {
+            lambda: vec![D::zero(); n_constraints],
+            mu: vec![D::zero(); n_constraints],
+        })
     }
 
     /// The same state in another scalar type (real parts only).
@@ -96,8 +114,10 @@ impl<D: Scalar, const DIM: usize> State<D, DIM> {
         State {
             q: v(&self.q),
             p: v(&self.p),
-            lambda: s(&self.lambda),
-            mu: s(&self.mu),
+            multipliers: self.multipliers.as_ref().map(|m| Multipliers {
+                lambda: s(&m.lambda),
+                mu: s(&m.mu),
+            }),
             tip_target: [
                 D2::from(self.tip_target[0].re()),
                 D2::from(self.tip_target[1].re()),
@@ -124,6 +144,10 @@ struct Workspace<D, const DIM: usize> {
     qnew: Vec<[D; DIM]>,
     tmp: Vec<[D; DIM]>,
     lam: Vec<D>,
+    /// The consistent multiplier of a state without multipliers (the first step's predictor).
+    mu0: Vec<D>,
+    /// Whether `mu0` belongs to the state being stepped.
+    mu0_ready: bool,
     rhs: Vec<D>,
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
@@ -160,6 +184,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             qnew: v.clone(),
             tmp: v,
             lam: vec![D::zero(); nc],
+            mu0: vec![D::zero(); nc],
+            mu0_ready: false,
             rhs: vec![D::zero(); nc],
             scal: vec![D::zero(); n],
             tri: BorderedTridiag::new(n, chain.has_tip_constraint()),
@@ -201,6 +227,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// Mutable access to the model (e.g. to seed a parameter); invalidates the cached force.
     pub fn chain_mut(&mut self) -> &mut Chain<D, DIM> {
         self.ws.force_ready = false;
+        self.ws.mu0_ready = false;
         &mut self.chain
     }
 
@@ -211,45 +238,60 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
 
     /// The straight beam at rest.
     pub fn straight_state(&self) -> State<D, DIM> {
-        State::straight(self.chain.n(), self.chain.n_constraints())
+        State::straight(self.chain.n())
     }
 
     /// Prepares a step from `state` at step index `k` with control u_k: evaluates U_q(q_k; u_k)
-    /// and, when `state` has no multipliers yet (all zero), the consistent multiplier used as the
-    /// Newton predictor. Called automatically by [`Rattle::step`] when needed.
+    /// and, when `state` has no multipliers yet (an initial state), the consistent multiplier used
+    /// as the Newton predictor ([`Rattle::consistent_multiplier`]). Called automatically by
+    /// [`Rattle::step`] when needed.
     pub fn prepare(&mut self, state: &mut State<D, DIM>, k: usize, u_k: D) -> Result<()> {
         self.prepare_force(state, k, u_k)?;
-        if state.mu.iter().all(|m| m.re() == 0.0) {
-            // Consistent multiplier: at rest (and as a predictor in general) solve
-            // Ĝ M⁻¹ Ĝᵀ λ = −Ĝ M⁻¹ U_q.
-            let ws = &mut self.ws;
-            for (o, f) in ws.a.iter_mut().zip(ws.force.iter()) {
-                *o = f.map(|x| -x);
-            }
-            let target = D::zero();
-            projection_solve(
-                &self.chain,
-                &state.q,
-                &ws.a,
-                target,
-                &mut ws.tmp,
-                &mut ws.tri,
-                &mut ws.rhs,
-            )
-            .map_err(|zp| singular(k, zp))?;
-            state.mu.copy_from_slice(&ws.rhs);
+        if state.multipliers.is_none() {
+            self.solve_consistent_multiplier(state, k)?;
         }
         Ok(())
     }
 
+    /// The consistent multiplier of the last prepared state without multipliers: the solution of
+    /// Ĝ M⁻¹ Ĝᵀ μ = −Ĝ M⁻¹ U_q(q_k) (the multiplier that keeps Ĝ M⁻¹ p = 0 at rest), which the
+    /// first step starts Newton from and [`crate::simulate`] reports as λ_0 = μ_0.
+    pub fn consistent_multiplier(&self) -> &[D] {
+        &self.ws.mu0
+    }
+
+    /// Solves Ĝ M⁻¹ Ĝᵀ μ₀ = −Ĝ M⁻¹ U_q into the workspace (U_q must be prepared).
+    fn solve_consistent_multiplier(&mut self, state: &State<D, DIM>, k: usize) -> Result<()> {
+        let ws = &mut self.ws;
+        for (o, f) in ws.a.iter_mut().zip(ws.force.iter()) {
+            *o = f.map(|x| -x);
+        }
+        let target = D::zero();
+        let q = &state.q;
+        projection_solve(
+            &self.chain,
+            q,
+            &ws.a,
+            target,
+            &mut ws.tmp,
+            &mut ws.tri,
+            &mut ws.rhs,
+        )
+        .map_err(|zp| singular(k, zp))?;
+        ws.mu0.copy_from_slice(&ws.rhs);
+        ws.mu0_ready = true;
+        Ok(())
+    }
+
     /// Evaluates and caches U_q(q_k; u_k) for the next [`Rattle::step`] without touching the
-    /// multipliers (the Newton predictor stays `state.mu`), so that a step recomputed from a stored
-    /// state repeats the original arithmetic bit for bit.
+    /// multipliers (the Newton predictor stays the state's μ), so that a step recomputed from a
+    /// stored state repeats the original arithmetic bit for bit.
     pub fn prepare_force(&mut self, state: &State<D, DIM>, k: usize, u_k: D) -> Result<()> {
         let t = self.time(k);
         self.chain
             .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
         self.ws.force_ready = true;
+        self.ws.mu0_ready = false;
         Ok(())
     }
 
@@ -277,7 +319,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         u_k1: D,
     ) -> Result<StepStats> {
         if !self.ws.force_ready {
-            self.prepare(state, k, u_k)?;
+            self.prepare_force(state, k, u_k)?;
+        }
+        if state.multipliers.is_none() && !self.ws.mu0_ready {
+            self.solve_consistent_multiplier(state, k)?;
         }
         let hh = 0.5 * self.h;
         // a = p_k − h/2 U_q(q_k; u_k)
@@ -311,7 +356,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let ch = &self.chain;
         let ops = ch.constraints();
         let ws = &mut self.ws;
-        ws.lam.copy_from_slice(&state.mu);
+        match &state.multipliers {
+            Some(m) => ws.lam.copy_from_slice(&m.mu),
+            None => ws.lam.copy_from_slice(&ws.mu0),
+        }
         let updates = derivative_updates::<D>();
         let mut extra_done = 0;
         let mut iterations = 0;
@@ -331,7 +379,9 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             if rmax <= self.options.tolerance {
                 if extra_done == updates {
-                    state.lambda.copy_from_slice(&ws.lam);
+                    let nc = ws.lam.len();
+                    state.multipliers_mut(nc).lambda.copy_from_slice(&ws.lam);
+                    ws.mu0_ready = false;
                     std::mem::swap(&mut state.q, &mut ws.qnew);
                     return Ok(StepStats {
                         iterations,
@@ -410,7 +460,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         // p_{k+1} = b − Ĝᵀ y, μ = y / (h/2)
         ch.constraints()
             .subtract_transpose(&ws.a, &state.q, &ws.rhs, &mut state.p);
-        for (m, y) in state.mu.iter_mut().zip(ws.rhs.iter()) {
+        let mu = &mut state.multipliers_mut(ws.rhs.len()).mu;
+        for (m, y) in mu.iter_mut().zip(ws.rhs.iter()) {
             *m = *y / hh;
         }
         Ok(())

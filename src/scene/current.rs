@@ -65,19 +65,13 @@ pub enum CurrentProfile {
 /// The unit direction (d_x, d_z) of an angle ψ \[°\] from +z toward +x, exact at multiples of 90°
 /// (so that ψ = 180° stays in the y–z plane).
 pub fn direction_of_angle(degrees: f64) -> [f64; 2] {
-    let r = degrees.rem_euclid(360.0);
-    if r == 0.0 {
-        [0.0, 1.0]
-    } else if r == 90.0 {
-        [1.0, 0.0]
-    } else if r == 180.0 {
-        [0.0, -1.0]
-    } else if r == 270.0 {
-        [-1.0, 0.0]
-    } else {
-        let (s, c) = degrees.to_radians().sin_cos();
-        [s, c]
+    let quarters = degrees.rem_euclid(360.0) / 90.0;
+    if quarters.fract() == 0.0 {
+        // an exact multiple of 90°: 0, 1, 2 or 3 quarter turns
+        return [[0.0, 1.0], [1.0, 0.0], [0.0, -1.0], [-1.0, 0.0]][quarters as usize % 4];
     }
+    let (s, c) = degrees.to_radians().sin_cos();
+    [s, c]
 }
 
 impl Current {

@@ -94,7 +94,7 @@ impl Bounds {
 
     /// "[L, U]" for messages.
     pub(crate) fn describe(&self) -> String {
-        if self.lower == -self.upper {
+        if self.lower.to_bits() == (-self.upper).to_bits() {
             format!("±{}", self.upper)
         } else {
             format!("[{}, {}]", self.lower, self.upper)

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use chainbeam::multistart::{multistart, MultistartReport, StartDesign};
 use chainbeam::optimize::{
-    minimize, Bounds, Method, Minimizer, ObserverMode, OptimOptions, OptimResult,
+    minimize, Bounds, Method, Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult,
 };
 
 use crate::output::Output;
@@ -450,6 +450,11 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     let design = a.design.design(&sp.theta0)?;
     check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), &opts)?;
+    // Before the start's objective is evaluated: a start beyond the resolved force range would
+    // otherwise fail as a Newton failure that does not name the control.
+    sp.problem
+        .check_range(&sp.theta0)
+        .map_err(|e| lib_error(&a.scene, e))?;
     let clock = Instant::now();
     let initial_objective = sp
         .problem

@@ -227,7 +227,7 @@ mod tests {
             assert!((x - y).abs() < 1e-14, "{x} vs {y}");
         }
         let s = Bounds::symmetric(2.5).unwrap();
-        let phi = [-3.0, -0.1, 0.7, 4.0];
+        let phi: [f64; 4] = [-3.0, -0.1, 0.7, 4.0];
         let expected: Vec<f64> = phi.iter().map(|&p| 2.5 * (p / 2.5).sin()).collect();
         assert_eq!(to_theta(Some(s), &phi), expected);
     }

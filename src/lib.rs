@@ -109,9 +109,12 @@
 //! - [`adjoint`]: objectives, control parametrisations, the discrete adjoint read from a tape,
 //!   checkpointing, Hessian-vector products; [`ControlProblem`] (thesis §3.3).
 //! - [`optimize`]: the [`OptimProblem`](optimize::OptimProblem) trait and local minimisation with
-//!   argmin (L-BFGS, trust region, Newton-CG), force bounds, observers, and how a run ended
+//!   argmin (L-BFGS, trust region, Newton-CG), force bounds (symmetric or an asymmetric box,
+//!   [`Bounds`](optimize::Bounds)), observers, and how a run ended
 //!   ([`Termination`](optimize::Termination)).
 //! - [`multistart`]: multistart, clustering of minima, second-order certificates, landscapes.
+//! - [`ocp`]: the per-step optimal-control problem solved by Gauss-Newton SQP steps with a
+//!   Riccati recursion and box constraints on the forces.
 //! - [`statics`]: static equilibrium, solved directly.
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).

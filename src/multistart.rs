@@ -50,7 +50,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult, ACTIVE_BOUND_TOL};
+use crate::optimize::{minimize, Bounds, OptimOptions, OptimProblem, OptimResult};
 
 /// Largest number of parameters for which a certificate is computed (n HVPs and a dense n × n
 /// eigenproblem).
@@ -454,9 +454,9 @@ pub fn multistart<Q: OptimProblem + Sync + ?Sized>(
         });
     }
     let mut points = start_points(design, problem.n_params(), starts, seed)?;
-    if let Some(b) = opts.bound {
+    if let Some(b) = opts.force_bounds()? {
         for x in points.iter_mut().flatten() {
-            *x = x.clamp(-b, b);
+            *x = x.clamp(b.lower(), b.upper());
         }
     }
     let outcomes: Vec<Result<OptimResult>> = map_indexed(threads, points.len(), |i| {
@@ -496,7 +496,7 @@ pub fn multistart<Q: OptimProblem + Sync + ?Sized>(
     let certificate = match minima.as_slice() {
         [m] if problem.n_params() <= MAX_CERTIFICATE_PARAMS && problem.hessian().is_some() => {
             let m = &m.theta;
-            let mut c = map_indexed(threads, 1, |_| certify(problem, m, opts.bound))?;
+            let mut c = map_indexed(threads, 1, |_| certify(problem, m, opts.force_bounds()?))?;
             Some(c.pop().expect("one certificate")?)
         }
         _ => None,
@@ -565,7 +565,7 @@ pub fn cluster(
 pub fn certify<Q: OptimProblem + Sync + ?Sized>(
     problem: &Q,
     theta: &[f64],
-    bound: Option<f64>,
+    bounds: Option<Bounds>,
 ) -> Result<Certificate> {
     let n = problem.n_params();
     if problem.hessian().is_none() {
@@ -608,10 +608,10 @@ pub fn certify<Q: OptimProblem + Sync + ?Sized>(
     } else {
         0.0
     };
-    let free: Vec<usize> = match bound {
+    let free: Vec<usize> = match bounds {
         None => (0..n).collect(),
         Some(b) => (0..n)
-            .filter(|&i| theta[i].abs() < b * (1.0 - ACTIVE_BOUND_TOL))
+            .filter(|&i| b.at_bounds(theta[i]) == (false, false))
             .collect(),
     };
     let reduced = DMatrix::from_fn(free.len(), free.len(), |i, j| sym[(free[i], free[j])]);

@@ -186,7 +186,52 @@ fn symmetric_lower_upper_is_the_bound() {
     assert_success(&b);
     let (a, b) = (json(&a), json(&b));
     assert_eq!(a["controls"], b["controls"]);
-    assert_eq!(b["bound"], 10.0);
+    assert_eq!(a["bound"], 10.0);
+    assert_eq!((&a["lower"], &a["upper"]), (&b["lower"], &b["upper"]));
+    assert_eq!(
+        (b["lower"].as_f64(), b["upper"].as_f64()),
+        (Some(-10.0), Some(10.0))
+    );
+}
+
+/// `--lower/--upper` with an asymmetric box on Table 3.1's scene (riser_5.toml: c = M₀(t_N)²,
+/// constant control; the unbounded root is u* = −33.41 N, where c = 0): a box holding u* finds
+/// it (the same controls as the unbounded run, to the optimiser's 10⁻⁶ N), a box above it stops
+/// on its lower end, and c there is what `gradient` reports for that control (an independent
+/// evaluation of the same objective).
+#[test]
+fn asymmetric_lower_upper_box() {
+    let dir = Dir::new();
+    let sc = scene("riser_5.toml");
+    let free = numbers(&json(&run(&["optimize", s(&sc)])), "controls")[0];
+    assert!((free + 33.4).abs() < 0.1, "{free}");
+    let o = run(&["optimize", s(&sc), "--lower", "-50", "--upper", "5"]);
+    assert_success(&o);
+    let inside = json(&o);
+    assert!((numbers(&inside, "controls")[0] - free).abs() < 1e-6);
+    assert_eq!(inside["active_bounds"], serde_json::json!([]));
+    assert!(inside.get("bound").is_none());
+    let out = dir.join("u.json");
+    let o = run(&[
+        "optimize",
+        s(&sc),
+        "--lower",
+        "-20",
+        "--upper",
+        "5",
+        "-o",
+        s(&out),
+    ]);
+    assert_success(&o);
+    let clamped = json_text(&fs::read_to_string(&out).unwrap());
+    assert_eq!(numbers(&clamped, "controls"), vec![-20.0]);
+    assert_eq!(clamped["active_bounds"], serde_json::json!([0]));
+    assert_eq!(
+        (clamped["lower"].as_f64(), clamped["upper"].as_f64()),
+        (Some(-20.0), Some(5.0))
+    );
+    let g = json(&run(&["gradient", s(&sc), "--controls", s(&out)]));
+    assert_eq!(g["objective"], clamped["objective"]);
 }
 
 #[test]
@@ -242,14 +287,52 @@ fn not_converged_optimize_exits_3_and_says_why() {
 
 #[test]
 fn progress_prints_iterations_on_stderr() {
-    let o = run(&["optimize", s(&scene("riser_5.toml")), "--progress"]);
-    assert_success(&o);
-    let err = stderr(&o);
-    assert!(
-        err.lines().filter(|l| l.starts_with("iter")).count() >= 2,
-        "{err}"
-    );
-    assert_eq!(json(&o)["converged"], true);
+    // stderr is a pipe here, so --progress prints plain lines (no terminal codes): the start,
+    // then one line per iteration numbered 1, 2, …, whose count and last cost and ‖∇c‖ are the
+    // JSON's `iterations`, `objective` and `gradient_norm` (the same run's result). Also under
+    // --quiet, which only silences spinners.
+    let sc = scene("riser_5.toml");
+    for quiet in [false, true] {
+        let mut args = vec!["optimize", s(&sc), "--progress"];
+        if quiet {
+            args.push("--quiet");
+        }
+        let o = run(&args);
+        assert_success(&o);
+        let v = json(&o);
+        let err = stderr(&o);
+        assert!(!err.contains('\u{1b}'), "terminal codes in {err:?}");
+        let lines: Vec<&str> = err.lines().collect();
+        assert!(lines[0].starts_with("lbfgs: start, cost "), "{err}");
+        let iters: Vec<&str> = lines[1..]
+            .iter()
+            .copied()
+            .filter(|l| !l.ends_with("(polish)"))
+            .collect();
+        assert_eq!(
+            iters.len() as u64,
+            v["iterations"].as_u64().unwrap(),
+            "{err}"
+        );
+        for (k, l) in iters.iter().enumerate() {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            assert_eq!((f[0], f[2], f[4]), ("iter", "cost", "|g|"), "{l}");
+            assert_eq!(f[1].parse::<usize>().unwrap(), k + 1);
+        }
+        let last: Vec<&str> = lines.last().unwrap().split_whitespace().collect();
+        let (cost, g) = (
+            last[3].parse::<f64>().unwrap(),
+            last[5].parse::<f64>().unwrap(),
+        );
+        let (j, gn) = (
+            v["objective"].as_f64().unwrap(),
+            v["gradient_norm"].as_f64().unwrap(),
+        );
+        // Printed to 13 and 4 significant digits.
+        assert!((cost - j).abs() <= 1e-12 * j.abs(), "{cost} vs {j}");
+        assert!((g - gn).abs() <= 1e-3 * gn, "{g} vs {gn}");
+        assert_eq!(v["converged"], true);
+    }
 }
 
 #[test]

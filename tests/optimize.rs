@@ -7,8 +7,8 @@ use chainbeam::multistart::{
     StartDesign,
 };
 use chainbeam::optimize::{
-    ineffective_params, minimize, resolved_control_limit, HessianVec, History, Method, Minimizer,
-    ObserverMode, OptimOptions, OptimProblem, OptimResult, Termination, NO_EFFECT_TOL,
+    ineffective_params, minimize, resolved_control_limit, Bounds, HessianVec, History, Method,
+    Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult, Termination, NO_EFFECT_TOL,
 };
 use chainbeam::*;
 
@@ -195,6 +195,122 @@ fn bound_on_constant_control_lands_on_the_bound() {
         assert_eq!(r.active_bounds, vec![0]);
         assert!(r.objective >= p.value(&[-20.0]).unwrap() * (1.0 - 1e-12));
     }
+}
+
+/// Golden-section search for the minimiser of a unimodal f on [a, b], to an interval of width
+/// `tol` (the reference for the bounded 1-D optima below: it uses values of J only, no
+/// gradients, no reparametrisation).
+fn golden_section(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64, tol: f64) -> f64 {
+    let r = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+    let (mut fc, mut fd) = (f(c), f(d));
+    while b - a > tol {
+        if fc <= fd {
+            (b, d, fd) = (d, c, fc);
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            (a, c, fc) = (c, d, fd);
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
+/// Asymmetric boxes L ≤ u ≤ U on Table 3.2's constant control (node 5, c_sum; unbounded
+/// minimiser u* ≈ −47.67 N): with u* inside the box, below it, and above it. The reference is a
+/// golden-section search on the exact objective over [L, U] (the clamped 1-D minimum of a convex
+/// function). Tolerance: near u* the objective's round-off (≈ 4·10⁻¹³, module docs of
+/// `optimize`) hides |u − u*| below ≈ 5·10⁻⁵ N from any value-only search, so the two agree to
+/// 2·10⁻⁴ N; at an active bound both sit on it (the golden section to its interval 10⁻⁹ N).
+#[test]
+fn asymmetric_box_optimum_is_the_clamped_1d_minimum() {
+    let p = constant(5, BendingObjective::summed_moment());
+    let j = |u: f64| p.value(&[u]).unwrap();
+    // (L, U, start, whether the bound is active)
+    let cases = [
+        (-60.0, -30.0, -35.0, None),
+        (-40.0, 100.0, 50.0, Some(-40.0)),
+        (-100.0, -50.0, -90.0, Some(-50.0)),
+    ];
+    for (lo, hi, start, active) in cases {
+        let reference = golden_section(j, lo, hi, 1e-9);
+        for method in [Method::Lbfgs, Method::TrustRegion] {
+            let opts = OptimOptions {
+                method,
+                bounds: Some(Bounds::new(lo, hi).unwrap()),
+                ..Default::default()
+            };
+            let r = minimize(&p, &[start], &opts).unwrap();
+            show(&format!("constant node 5 in [{lo}, {hi}] {method}"), &r);
+            assert!(r.converged, "{}", r.termination);
+            let u = r.theta[0];
+            assert!((lo..=hi).contains(&u), "{u} outside [{lo}, {hi}]");
+            assert!(r.controls.iter().all(|&c| c.to_bits() == u.to_bits()));
+            match active {
+                None => {
+                    assert!((u - reference).abs() <= 2e-4, "{u} vs {reference}");
+                    assert!(r.active_bounds.is_empty());
+                    assert!(r.objective <= j(reference) + 1e-12);
+                }
+                Some(b) => {
+                    assert!(
+                        (u - b).abs() <= 1e-9 && (reference - b).abs() <= 1e-9,
+                        "{u}"
+                    );
+                    assert_eq!(r.active_bounds, vec![0]);
+                }
+            }
+        }
+    }
+}
+
+/// An asymmetric box on the per-step problem of `force_bound_is_respected`: every u_k stays in
+/// [−30, 80] (also every start of a multistart, clamped into it), a bound is active, the result
+/// is a KKT point and no better than the unbounded optimum (a smaller feasible set); a
+/// certificate at it leaves out the components on a bound.
+#[test]
+fn asymmetric_box_is_respected_by_minimize_and_multistart() {
+    let p = per_step_effort(5);
+    let (lo, hi) = (-30.0, 80.0);
+    let free = minimize(&p, &[0.0; 11], &OptimOptions::default()).unwrap();
+    assert!(free.controls.iter().any(|&u| !(lo..=hi).contains(&u)));
+    let opts = OptimOptions {
+        bounds: Some(Bounds::new(lo, hi).unwrap()),
+        ..Default::default()
+    };
+    let r = minimize(&p, &[0.0; 11], &opts).unwrap();
+    assert!(r.converged, "{}", r.termination);
+    assert!(r.controls.iter().all(|u| (lo..=hi).contains(u)));
+    assert!(!r.active_bounds.is_empty());
+    assert!(r.objective >= free.objective);
+    assert!(r.projected_gradient_norm <= 1e-6 * r.initial_gradient_norm);
+    let design = StartDesign::RandomBox {
+        lo: -200.0,
+        hi: 200.0,
+    };
+    let m = multistart(&p, &design, 4, 7, 1, &opts).unwrap();
+    assert!(m
+        .start_points
+        .iter()
+        .flatten()
+        .all(|x| (lo..=hi).contains(x)));
+    for r in &m.results {
+        assert!(r.controls.iter().all(|u| (lo..=hi).contains(u)));
+    }
+    let cert = certify(&p, &r.theta, Some(Bounds::new(lo, hi).unwrap())).unwrap();
+    assert!(cert.free.iter().all(|i| !r.active_bounds.contains(i)));
+    assert_eq!(cert.free.len() + r.active_bounds.len(), 11);
+    // Setting both the symmetric bound and a box is an error naming `bound`.
+    let both = OptimOptions {
+        bound: Some(10.0),
+        ..opts
+    };
+    assert!(matches!(
+        minimize(&p, &[0.0; 11], &both),
+        Err(Error::InvalidArgument { name: "bound", .. })
+    ));
 }
 
 /// Typed errors for infeasible or invalid starts and options (docs/scene-format.md: never a panic).

@@ -140,3 +140,69 @@ fn table_3_4_every_row() {
     assert!(rows[0].folded() && rows[0].max_joint_angle_deg.unwrap() > 55.0);
     assert!(rows[1..].iter().all(|r| !r.folded()));
 }
+
+/// The `tables` example binary itself (`cargo test` builds the examples next to the test
+/// executables; run alone, this test builds it with the test profile): `--help` succeeds, and
+/// every row of `--table 3.1 --json` is the row `compute::table_3_1` computes (the same
+/// deterministic optimisation; JSON numbers are written shortest-round-trip, so they compare
+/// exactly) and meets `table_3_1_every_row`'s criteria against the thesis.
+#[test]
+fn tables_example_help_and_json_rows() {
+    let exe = tables_example();
+    let help = std::process::Command::new(&exe)
+        .arg("--help")
+        .output()
+        .unwrap();
+    assert!(help.status.success(), "{help:?}");
+    assert!(String::from_utf8_lossy(&help.stdout).contains("usage: tables"));
+    let out = std::process::Command::new(&exe)
+        .args(["--table", "3.1", "--json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let tables = v["tables"].as_array().unwrap();
+    assert_eq!(tables.len(), 1);
+    assert_eq!(tables[0]["table"], "3.1");
+    let json_rows = tables[0]["rows"].as_array().unwrap();
+    let rows = compute::table_3_1().unwrap();
+    assert_eq!(json_rows.len(), rows.len());
+    let nums = |x: &serde_json::Value| -> Vec<f64> {
+        x.as_array()
+            .unwrap()
+            .iter()
+            .map(|y| y.as_f64().unwrap())
+            .collect()
+    };
+    for (j, r) in json_rows.iter().zip(&rows) {
+        assert_eq!(j["node"].as_u64(), Some(r.node as u64));
+        assert_eq!(nums(&j["controls"]), r.controls);
+        assert_eq!(j["objective"].as_f64(), Some(r.objective));
+        assert_eq!(nums(&j["thesis_controls"]), r.thesis_controls);
+        let (tu, tc) = thesis::TABLE_3_1[r.node - 1];
+        assert_eq!(j["thesis_objective"].as_f64(), Some(tc));
+        let u = nums(&j["controls"])[0];
+        assert!((u - tu).abs() <= 1e-6 * tu.abs(), "node {}", r.node);
+        assert!(j["objective"].as_f64().unwrap() <= 1e-20);
+    }
+}
+
+/// The path of the `tables` example: next to the test executables' directory, built with the
+/// test profile if `cargo test` was run for this test only.
+fn tables_example() -> std::path::PathBuf {
+    let exe = std::env::current_exe().unwrap();
+    let dir = exe.parent().and_then(|d| d.parent()).unwrap();
+    let path = dir
+        .join("examples")
+        .join(format!("tables{}", std::env::consts::EXE_SUFFIX));
+    if !path.exists() {
+        let status = std::process::Command::new(env!("CARGO"))
+            .args(["build", "--example", "tables", "--profile", "test"])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .status()
+            .unwrap();
+        assert!(status.success(), "cargo build --example tables failed");
+    }
+    assert!(path.exists(), "no example binary at {}", path.display());
+    path
+}

@@ -9,7 +9,7 @@ use std::rc::Rc;
 use argmin::core::{CostFunction, Gradient, Hessian};
 use argmin_math::ArgminDot;
 
-use super::bounds;
+use super::bounds::{self, Bounds};
 use super::observers::Relay;
 use super::problem::OptimProblem;
 use super::ArgminError;
@@ -84,14 +84,15 @@ pub(crate) fn same_bits(a: &[f64], b: &[f64]) -> bool {
 }
 
 /// An [`OptimProblem`] as an argmin problem over `Vec<f64>`, in the solver variables φ (φ = θ
-/// without a bound, θ = b sin(φ/b) with one; module docs of [`optimize`](super)).
+/// without bounds, θ = c + r sin((φ − c)/r) within a box [c − r, c + r]; module docs of
+/// [`optimize`](super)).
 ///
 /// Evaluations are cached by point (one evaluation answers cost and gradient); the counts and
 /// the first fatal error live in state shared with the [`HessianOperator`]s it hands out. Not
 /// `Send` (the shared state is an `Rc`): build one per thread.
 pub struct ArgminAdapter<'a, Q: ?Sized> {
     problem: &'a Q,
-    bound: Option<f64>,
+    bounds: Option<Bounds>,
     scale: f64,
     extended_value: bool,
     cg_cap: usize,
@@ -102,7 +103,7 @@ impl<Q: ?Sized> Clone for ArgminAdapter<'_, Q> {
     fn clone(&self) -> Self {
         ArgminAdapter {
             problem: self.problem,
-            bound: self.bound,
+            bounds: self.bounds,
             scale: self.scale,
             extended_value: self.extended_value,
             cg_cap: self.cg_cap,
@@ -117,15 +118,20 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
     /// # Errors
     /// [`Error::InvalidArgument`] (`bound`) for a bound that is not positive and finite.
     pub fn new(problem: &'a Q, bound: Option<f64>) -> Result<Self> {
-        bounds::check_bound(bound)?;
-        Ok(ArgminAdapter {
+        let bounds = bound.map(Bounds::symmetric).transpose()?;
+        Ok(Self::with_bounds(problem, bounds))
+    }
+
+    /// The adapter for `problem` with an optional box L ≤ θ_i ≤ U ([`Bounds`]).
+    pub fn with_bounds(problem: &'a Q, bounds: Option<Bounds>) -> Self {
+        ArgminAdapter {
             problem,
-            bound,
+            bounds,
             scale: 1.0,
             extended_value: false,
             cg_cap: usize::MAX,
             shared: Rc::new(Shared::default()),
-        })
+        }
     }
 
     /// Makes the argmin problem s·J (cost, gradient and Hessian products all scaled by s > 0,
@@ -164,16 +170,16 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
 
     /// θ of the solver variables φ.
     pub fn to_theta(&self, phi: &[f64]) -> Vec<f64> {
-        bounds::to_theta(self.bound, phi)
+        bounds::to_theta(self.bounds, phi)
     }
 
-    /// φ of θ: an error if θ is not finite or outside the bound; components closer than
-    /// 10⁻⁴·b to the bound are moved that far inside (the bound is stationary in φ).
+    /// φ of θ: an error if θ is not finite or outside the bounds; components closer than
+    /// 10⁻⁴·r to a bound are moved that far inside (the bound is stationary in φ).
     ///
     /// # Errors
     /// [`Error::InvalidArgument`] (`theta0`).
     pub fn to_phi(&self, theta: &[f64]) -> Result<Vec<f64>> {
-        bounds::to_phi(self.bound, theta)
+        bounds::to_phi(self.bounds, theta)
     }
 
     /// The counts so far.
@@ -221,7 +227,7 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
                 quantity: "gradient",
             });
         }
-        let grad_phi = bounds::grad_phi(self.bound, phi, &grad_theta);
+        let grad_phi = bounds::grad_phi(self.bounds, phi, &grad_theta);
         let point = Point {
             phi: phi.to_vec(),
             theta,
@@ -255,7 +261,7 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
             return Err(no_hessian());
         }
         let p = self.evaluate(phi)?;
-        let chain = bounds::hessian_chain(self.bound, phi, &p.theta, &p.grad_theta);
+        let chain = bounds::hessian_chain(self.bounds, phi, &p.theta, &p.grad_theta);
         Ok(HessianOperator {
             problem: self.problem,
             theta: p.theta,

@@ -27,7 +27,7 @@
 //!   control problem, the resolved force range and the no-effect test;
 //! - [`adapter`]: the problem as an argmin problem ([`ArgminAdapter`], [`HessianOperator`]);
 //! - [`supervisor`]: our stopping rules around argmin's solvers, the restarts, [`Termination`];
-//! - [`bounds`]: the sine reparametrisation of a force bound and the KKT measure;
+//! - [`bounds`]: the sine reparametrisation of force bounds ([`Bounds`]) and the KKT measure;
 //! - [`polish`]: the gradient polish;
 //! - [`observers`]: user observers ([`Minimizer::add_observer`], [`History`],
 //!   [`ProgressObserver`]).
@@ -73,32 +73,36 @@
 //!   others act (u_N of a per-step control, thesis §3.3.1) are allowed: no step moves them.
 //!
 //! # Bounded controls: a sine reparametrisation
-//! argmin has no bound-constrained quasi-Newton method (no L-BFGS-B). With a force limit
-//! `bound = Some(b)` the solvers work in unconstrained variables φ with, componentwise (the
-//! variable transformation of MINUIT),
+//! argmin has no bound-constrained quasi-Newton method (no L-BFGS-B). With a force box
+//! L ≤ θ_i ≤ U ([`OptimOptions::bounds`], a [`Bounds`]; the symmetric `bound = Some(b)` is the
+//! box [−b, b]) the solvers work in unconstrained variables φ with, componentwise (the variable
+//! transformation of MINUIT), centre c = (L + U)/2 and half-width r = (U − L)/2,
 //! ```text
-//! θ = b sin(φ/b),   dθ/dφ = cos(φ/b) =: J,   d²θ/dφ² = −sin(φ/b)/b = −θ/b²,
+//! θ = c + r sin((φ − c)/r),   dθ/dφ = cos((φ − c)/r) =: J,   d²θ/dφ² = −(θ − c)/r²,
 //! g_φ = J ⊙ g_θ,    H_φ v = J ⊙ H_θ (J ⊙ v) + (g_θ ⊙ d²θ/dφ²) ⊙ v     (exact chain rule).
 //! ```
+//! For the symmetric box (c = 0, r = b) this is θ = b sin(φ/b). A one-sided limit (L or U
+//! infinite) has no such map and is refused ([`Bounds::new`]): give a finite far side, e.g.
+//! the [`resolved_control_limit`], beyond which forces are refused anyway.
 //! Why this and not the alternatives:
 //! - *Projection* breaks the curvature pairs of L-BFGS and the quadratic model of the trust
 //!   region (argmin's solvers would need rewriting as L-BFGS-B / projected trust region).
 //! - *tanh* (θ = b tanh(φ/b)) reaches the bound only as φ → ∞: an active bound is approached with
 //!   exponentially vanishing gradients and no finite minimiser, so solvers stall instead of
 //!   converging.
-//! - *sine* reaches the bound at the finite φ = ±bπ/2, where g_φ = 0 and, if the bound is active
-//!   (g_θ pushes outward), H_φ has the positive entry |g_θ|/b: the bounded optimum is a regular
-//!   local minimum in φ, found at the solvers' usual (superlinear) rates. |θ| ≤ b holds exactly in
-//!   floating point (|sin| ≤ 1). Near θ = 0, φ ≈ θ, so tolerances and trust radii keep their
-//!   units (N).
+//! - *sine* reaches the bound at the finite φ = c ± rπ/2, where g_φ = 0 and, if the bound is
+//!   active (g_θ pushes outward), H_φ has the positive entry |g_θ|/r: the bounded optimum is a
+//!   regular local minimum in φ, found at the solvers' usual (superlinear) rates. L ≤ θ ≤ U holds
+//!   exactly in floating point (|sin| ≤ 1, and θ is clamped into the box against the rounding of
+//!   c ± r). Near θ = c, φ ≈ θ, so tolerances and trust radii keep their units (N).
 //!
 //! The price: every bound point is a stationary point in φ. Where g_θ points *inward* it is a
 //! saddle or maximum in φ, which descent methods leave; but a start exactly on the bound would
-//! not move, so a θ₀ closer than 10⁻⁴·b to the bound is moved that far inside. For the built-in
+//! not move, so a θ₀ closer than 10⁻⁴·r to a bound is moved that far inside. For the built-in
 //! parametrisations ([`Parametrisation`](crate::Parametrisation)) θ are the forces themselves (or
-//! copies of them), so |θ| ≤ b bounds every u_k; for another [`ControlMap`](crate::ControlMap)
-//! the bound still acts on θ, and [`minimize`] checks |u_k| ≤ b at the end (an error if the map
-//! broke it).
+//! copies of them), so L ≤ θ ≤ U bounds every u_k; for another [`ControlMap`](crate::ControlMap)
+//! the bounds still act on θ, and [`minimize`] checks L ≤ u_k ≤ U at the end (an error if the
+//! map broke it).
 //!
 //! # Stopping
 //! Whichever comes first (each is checked after every iteration, in the solver's variables φ; φ =
@@ -164,7 +168,7 @@ pub use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::KV;
 
 pub use adapter::{ArgminAdapter, EvalCounts, HessianOperator};
-pub use bounds::ACTIVE_BOUND_TOL;
+pub use bounds::{Bounds, ACTIVE_BOUND_TOL};
 pub use observers::{History, ObservedState, ProgressObserver, Record};
 pub use polish::POLISH_COST_TOL;
 pub use problem::{
@@ -265,8 +269,12 @@ pub struct OptimOptions {
     pub cost_rel_tol: f64,
     /// argmin's target: stop when J ≤ `target_cost`. Default −∞ (off).
     pub target_cost: f64,
-    /// Force limit |θ_i| ≤ u_max (see the module docs). Default `None`.
+    /// Symmetric force limit |θ_i| ≤ u_max (see the module docs): the box [−u_max, u_max].
+    /// Default `None`. Set this or [`bounds`](Self::bounds), not both.
     pub bound: Option<f64>,
+    /// Force box L ≤ θ_i ≤ U, possibly asymmetric ([`Bounds`]; module docs). Default `None`.
+    /// Set this or [`bound`](Self::bound), not both.
+    pub bounds: Option<Bounds>,
     /// L-BFGS memory m. Default 10 (more pairs than the thesis problems have parameters).
     pub lbfgs_memory: usize,
     /// L-BFGS: the length of the first trial step −first_step·g₀/‖g₀‖, in the units of θ
@@ -302,6 +310,7 @@ impl Default for OptimOptions {
             cost_rel_tol: 4.0 * f64::EPSILON,
             target_cost: f64::NEG_INFINITY,
             bound: None,
+            bounds: None,
             lbfgs_memory: 10,
             first_step: 1.0,
             trust_radius: 10.0,
@@ -315,6 +324,23 @@ impl Default for OptimOptions {
 }
 
 impl OptimOptions {
+    /// The box the parameters are kept in: [`bounds`](Self::bounds), or [−b, b] for
+    /// [`bound`](Self::bound) = b, or `None`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] (`bound`) for a bound that is not positive and finite, or when
+    /// both `bound` and `bounds` are set.
+    pub fn force_bounds(&self) -> Result<Option<Bounds>> {
+        match (self.bound, self.bounds) {
+            (Some(_), Some(_)) => Err(Error::InvalidArgument {
+                name: "bound",
+                reason: "set either `bound` (symmetric) or `bounds` (a box), not both".into(),
+            }),
+            (Some(b), None) => Bounds::symmetric(b).map(Some),
+            (None, bounds) => Ok(bounds),
+        }
+    }
+
     /// Checks every field (an [`Error::InvalidArgument`] naming it).
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &'static str, reason: String| Err(Error::InvalidArgument { name, reason });
@@ -340,11 +366,7 @@ impl OptimOptions {
         if self.target_cost.is_nan() {
             return bad("target_cost", "must not be NaN".into());
         }
-        if let Some(b) = self.bound {
-            if !(b.is_finite() && b > 0.0) {
-                return bad("bound", format!("must be positive and finite, got {b}"));
-            }
-        }
+        self.force_bounds()?;
         if self.lbfgs_memory == 0 {
             return bad("lbfgs_memory", "must be at least 1".into());
         }
@@ -393,7 +415,8 @@ pub struct OptimResult {
     /// The projected-gradient (first-order KKT) measure: ‖∇_θ J‖ with the components removed
     /// whose bound is active and blocks descent. Equals `gradient_norm` without a bound.
     pub projected_gradient_norm: f64,
-    /// Indices i with |θ_i| ≥ (1 − [`ACTIVE_BOUND_TOL`])·u_max.
+    /// Indices i with θ_i within [`ACTIVE_BOUND_TOL`]·r of a bound (r the half-width of the
+    /// box; for |θ| ≤ u_max: |θ_i| ≥ (1 − [`ACTIVE_BOUND_TOL`])·u_max).
     pub active_bounds: Vec<usize>,
     /// Iterations, over all restarts (L-BFGS / Newton-CG: line searches; trust region:
     /// subproblem solves, accepted or rejected).
@@ -500,7 +523,8 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         if opts.method != Method::Lbfgs && problem.hessian().is_none() {
             return Err(adapter::no_hessian());
         }
-        let adapter = ArgminAdapter::new(problem, opts.bound)?;
+        let bounds = opts.force_bounds()?;
+        let adapter = ArgminAdapter::with_bounds(problem, bounds);
         let phi0 = adapter.to_phi(theta0)?;
         problem.check_range(&adapter.to_theta(&phi0))?;
         let start = adapter.evaluate(&phi0)?;
@@ -581,13 +605,14 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
             Some(c) => c?,
             None => Vec::new(),
         };
-        if let Some(b) = opts.bound {
-            if let Some(k) = controls.iter().position(|u| u.abs() > b) {
+        if let Some(b) = bounds {
+            if let Some(k) = controls.iter().position(|&u| !b.contains(u)) {
                 return Err(Error::InvalidArgument {
                     name: "bound",
                     reason: format!(
-                        "the control map turned bounded parameters into u_{k} = {} beyond ±{b}",
-                        controls[k]
+                        "the control map turned bounded parameters into u_{k} = {} outside {}",
+                        controls[k],
+                        b.describe()
                     ),
                 });
             }
@@ -600,7 +625,7 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
             }
         }
         let (projected_gradient_norm, active_bounds) =
-            bounds::kkt(&theta, &point.grad_theta, opts.bound);
+            bounds::kkt(&theta, &point.grad_theta, bounds);
         let c = adapter.counts();
         Ok(OptimResult {
             objective: point.value,

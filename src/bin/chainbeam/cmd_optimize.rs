@@ -7,11 +7,13 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::multistart::{multistart, MultistartReport, StartDesign};
-use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};
+use chainbeam::optimize::{
+    minimize, Bounds, Method, Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult,
+};
 
 use crate::output::Output;
 use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, SceneProblem};
-use crate::progress::Progress;
+use crate::progress::{IterationProgress, Progress};
 use crate::{check_finite, inputs, lib_error, load_scene, series_files, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
@@ -78,8 +80,8 @@ pub struct SolverArgs {
     /// Force limit: every control value stays in [−U, U] N [default: unbounded].
     #[arg(long, value_name = "U", allow_hyphen_values = true)]
     bound: Option<f64>,
-    /// Lower force limit L [N], with --upper. Only symmetric limits (L = −U) are supported so
-    /// far; they are the same as --bound U.
+    /// Lower force limit L [N], with --upper: every control value stays in [L, U] (L < U, both
+    /// finite; asymmetric allowed). One-sided limits are refused: give a finite far side.
     #[arg(
         long,
         value_name = "L",
@@ -109,41 +111,29 @@ enum MethodArg {
 }
 
 impl SolverArgs {
-    fn bound(&self) -> Result<Option<f64>, CliError> {
-        let positive = |flag: &str, b: f64| {
-            if b.is_finite() && b > 0.0 {
-                Ok(b)
-            } else {
-                Err(CliError::msg(format!(
-                    "{flag}: must be positive and finite, got {b}"
-                )))
-            }
+    /// The symmetric limit (--bound) or the box (--lower/--upper), checked.
+    fn limits(&self) -> Result<(Option<f64>, Option<Bounds>), CliError> {
+        let one_sided = |given: String, missing: &str| {
+            CliError::msg(format!(
+                "{given} without {missing}: one-sided force limits are not supported (the bounded \
+                 optimiser keeps every control in a finite box [L, U]); give {missing} too, e.g. \
+                 far beyond the forces you expect (forces above π·m·l/h² are refused anyway)"
+            ))
         };
         match (self.bound, self.lower, self.upper) {
-            (Some(b), _, _) => positive("--bound", b).map(Some),
-            (None, None, None) => Ok(None),
-            (None, Some(l), Some(u)) => {
-                if !(l.is_finite() && u.is_finite() && l < u) {
-                    return Err(CliError::msg(format!(
-                        "--lower/--upper: need finite L < U, got L = {l}, U = {u}"
-                    )));
-                }
-                if l.to_bits() != (-u).to_bits() {
-                    return Err(CliError::msg(format!(
-                        "--lower {l} --upper {u}: asymmetric force limits are not supported yet; \
-                         the optimiser keeps |u| ≤ U (give --lower −U --upper U, or --bound U)"
-                    )));
-                }
-                positive("--upper", u).map(Some)
-            }
-            (None, Some(l), None) => Err(CliError::msg(format!(
-                "--lower {l} without --upper: one-sided force limits are not supported yet; the \
-                 optimiser keeps |u| ≤ U (give --lower −U --upper U, or --bound U)"
+            (Some(b), _, _) if b.is_finite() && b > 0.0 => Ok((Some(b), None)),
+            (Some(b), _, _) => Err(CliError::msg(format!(
+                "--bound: must be positive and finite, got {b}"
             ))),
-            (None, None, Some(u)) => Err(CliError::msg(format!(
-                "--upper {u} without --lower: one-sided force limits are not supported yet; the \
-                 optimiser keeps |u| ≤ U (give --lower −U --upper U, or --bound U)"
-            ))),
+            (None, None, None) => Ok((None, None)),
+            (None, Some(l), Some(u)) => match Bounds::new(l, u) {
+                Ok(b) => Ok((None, Some(b))),
+                Err(_) => Err(CliError::msg(format!(
+                    "--lower/--upper: need finite L < U, got L = {l}, U = {u}"
+                ))),
+            },
+            (None, Some(l), None) => Err(one_sided(format!("--lower {l}"), "--upper")),
+            (None, None, Some(u)) => Err(one_sided(format!("--upper {u}"), "--lower")),
         }
     }
 
@@ -155,7 +145,7 @@ impl SolverArgs {
                 )));
             }
         }
-        let bound = self.bound()?;
+        let (bound, bounds) = self.limits()?;
         if self.max_iters == Some(0) {
             return Err(CliError::msg("--max-iters: must be at least 1"));
         }
@@ -169,6 +159,7 @@ impl SolverArgs {
             max_iters: self.max_iters.unwrap_or(defaults.max_iters),
             grad_tol: self.gtol.unwrap_or(defaults.grad_tol),
             bound,
+            bounds,
             progress: false,
             ..defaults
         })
@@ -305,8 +296,9 @@ pub struct OptimizeArgs {
     problem: ProblemArgs,
     #[command(flatten)]
     solver: SolverArgs,
-    /// Print the iteration, the objective and ‖∇c‖ of every iteration on stderr (a single
-    /// optimisation, --starts 1, only).
+    /// Show the iteration, the objective and ‖∇c‖ of every iteration on stderr (a single
+    /// optimisation, --starts 1, only): a progress bar on a terminal, else one line per
+    /// iteration (`iter K  cost C  |g| G`). Shown also with --quiet.
     #[arg(long)]
     progress: bool,
     #[command(flatten)]
@@ -343,23 +335,52 @@ fn check_start_in_bound(
     path: &Path,
     sp: &SceneProblem,
     pieces: bool,
-    bound: Option<f64>,
+    opts: &OptimOptions,
 ) -> Result<(), CliError> {
-    let Some(b) = bound else { return Ok(()) };
-    match sp.theta0.iter().position(|t| t.abs() > b) {
+    let Some(b) = opts.force_bounds().map_err(|e| lib_error(path, e))? else {
+        return Ok(());
+    };
+    let limit = match opts.bound {
+        Some(u) => format!("(--bound) ±{u}"),
+        None => format!("(--lower/--upper) [{}, {}]", b.lower(), b.upper()),
+    };
+    match sp.theta0.iter().position(|&t| !b.contains(t)) {
         None => Ok(()),
         Some(i) if pieces => Err(CliError::msg(format!(
             "{}: the start value {} of piece {i} (the mean of control.values over it) lies \
-             outside the force limit {b}",
+             outside the force limit {limit}",
             path.display(),
             sp.theta0[i]
         ))),
         Some(i) => Err(CliError::msg(format!(
             "{}: key `control.values[{i}]`: the start value {} lies outside the force limit \
-             (--bound) {b}",
+             {limit}",
             path.display(),
             sp.theta0[i]
         ))),
+    }
+}
+
+/// The force limits of a run as reported in the JSON: `bound` for --bound, `lower` and `upper`
+/// for any limit.
+#[derive(Serialize)]
+struct LimitsReport {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bound: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lower: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    upper: Option<f64>,
+}
+
+impl LimitsReport {
+    fn of(opts: &OptimOptions) -> Self {
+        let b = opts.force_bounds().ok().flatten();
+        LimitsReport {
+            bound: opts.bound,
+            lower: b.map(|b| b.lower()),
+            upper: b.map(|b| b.upper()),
+        }
     }
 }
 
@@ -405,8 +426,8 @@ struct OptimizeReport {
     initial_controls: Vec<f64>,
     projected_gradient_norm: f64,
     active_bounds: Vec<usize>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    bound: Option<f64>,
+    #[serde(flatten)]
+    limits: LimitsReport,
     gradient_evals: usize,
     hvp_evals: usize,
     objective_kind: &'static str,
@@ -419,7 +440,7 @@ struct OptimizeReport {
 /// Runs `optimize`.
 pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError> {
     let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, None))?;
-    let mut opts = a.solver.options()?;
+    let opts = a.solver.options()?;
     problem::check_effort(a.problem.effort)?;
     let starts = a.starts as usize;
     if a.progress && starts > 1 {
@@ -428,12 +449,16 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
              with --starts > 1",
         ));
     }
-    opts.progress = a.progress;
     let scene = load_scene(&a.scene)?;
     out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     let design = a.design.design(&sp.theta0)?;
-    check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), opts.bound)?;
+    check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), &opts)?;
+    // Before the start's objective is evaluated: a start beyond the resolved force range would
+    // otherwise fail as a Newton failure that does not name the control.
+    sp.problem
+        .check_range(&sp.theta0)
+        .map_err(|e| lib_error(&a.scene, e))?;
     let clock = Instant::now();
     let initial_objective = sp
         .problem
@@ -481,7 +506,16 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
         // The per-iteration lines of --progress replace the spinner.
         let spinner =
             (!a.progress).then(|| progress.spinner(format!("{} on {params}", opts.method.name())));
-        let r = minimize(&sp.problem, &sp.theta0, &opts);
+        let r = if a.progress {
+            Minimizer::new(&sp.problem, opts.clone())
+                .add_observer(
+                    IterationProgress::on_stderr(opts.max_iters),
+                    ObserverMode::Always,
+                )
+                .run(&sp.theta0)
+        } else {
+            minimize(&sp.problem, &sp.theta0, &opts)
+        };
         if let Some(s) = spinner {
             s.finish_and_clear();
         }
@@ -513,7 +547,7 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
         initial_controls: sp.theta0.clone(),
         projected_gradient_norm: best.projected_gradient_norm,
         active_bounds: best.active_bounds.clone(),
-        bound: opts.bound,
+        limits: LimitsReport::of(&opts),
         gradient_evals: best.gradient_evals,
         hvp_evals: best.hvp_evals,
         objective_kind: objective_name(sp.objective.kind),
@@ -596,8 +630,8 @@ struct ExploreReport {
     kind: KindReport,
     control_node: usize,
     method: &'static str,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    bound: Option<f64>,
+    #[serde(flatten)]
+    limits: LimitsReport,
     design: DesignReport,
     seed: u64,
     starts: usize,
@@ -727,7 +761,7 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,
         method: opts.method.name(),
-        bound: opts.bound,
+        limits: LimitsReport::of(&opts),
         design: a.design.describe(),
         seed,
         starts,

@@ -19,11 +19,12 @@
 //! Prints Σ M₀², max |M₀| and J against no control and against the best constant control (same
 //! objective and limit), the iterations, the first-order optimality reached and the time.
 //!
-//! Measured on a shared 2-core machine (N = 1000, all from u = 0): the Riccati solver converges
-//! in 31 iterations and about 2.2 s to J = 1507.4712093; the trust region converges in about
-//! 250 s to a higher local minimum, J = 1507.4813611; L-BFGS stops at its 5000-iteration limit
-//! (13 s, ‖g‖/‖g₀‖ = 8.4·10⁻⁴). N = 10⁴: Riccati 17.5 s, 20 iterations; L-BFGS 151 s, not
-//! converged. See the module docs of `chainbeam::ocp` for the method and the limits.
+//! Measured on a heavily shared 2-core machine (CPU seconds, N = 1000, all from u = 0): the
+//! Riccati solver converges in 31 iterations and 2.5 s to J = 1507.4712093 (Σ M₀² = 1507.2086);
+//! the trust region converges in about 225–250 s to a higher local minimum, J = 1507.4813611;
+//! L-BFGS stops at its 5000-iteration limit (≈ 22 s, projected gradient 1.0·10⁻⁵ ‖g₀‖,
+//! J = 1507.4899744). N = 10⁴: Riccati 20.6 s, 20 iterations, J = 1509.5063910. See the module
+//! docs of `chainbeam::ocp` for the method and the limits.
 //!
 //! ```text
 //! cargo run --release --example long_horizon

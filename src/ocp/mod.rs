@@ -54,29 +54,45 @@
 //!   descent found), or steps whose predicted decrease stays below J's round-off.
 //! - **Where it is slow**: with drag (D = 10) the Gauss-Newton model misses the curvature of the
 //!   quadratic drag p|p| weighted by the costates, so the tail converges linearly (about 30
-//!   iterations to 10⁻⁸ on the long-horizon scene, against 3 without drag). Second-order stage
-//!   terms (full DDP by forward-over-reverse of the stage map) are the next step; so are
-//!   cheaper Jacobians (one dual pass with the multipliers frozen, or a hand-written tangent
-//!   step): the dual-number Jacobians cost about 45 forward simulations per iteration.
+//!   iterations to 10⁻⁸ on the long-horizon scene, against 3 without drag). Without an effort
+//!   penalty (ρ = 0) and near folding (Table 3.4 rows 1, 3, 8) the positive semi-definite
+//!   Gauss-Newton model misses the negative curvature of J and the run can end *not
+//!   converged*. Second-order stage terms (full DDP by forward-over-reverse of the stage map) are
+//!   the next step; so is a hand-written tangent step in f64 (the implicit function theorem on
+//!   the step residual with the terms' Jacobian-vector products) instead of the dual numbers.
+//! - **Start**: a horizon may start from a given state at t₀
+//!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
+//!   t₀ + k h, as in the adjoint.
 //!
-//! # Measured (2-core shared machine, `cargo bench --bench ocp`, `examples/long_horizon.rs`)
-//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖:
+//! # Measured (2-core machine shared by several builds, `examples/long_horizon.rs`)
+//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖. The machine was
+//! heavily loaded (load average ≈ 10 on 2 cores), so CPU seconds (user time of the process,
+//! both Jacobian threads summed, from `/usr/bin/time`) are the comparable measure; wall times
+//! were 5–12× longer.
 //!
-//! | N | method | time | iterations | J | note |
-//! |---|---|---|---|---|---|
-//! | 10³ | this solver | 2.2 s | 31 | 1507.471209304 | converged |
-//! | 10³ | trust region (exact HVPs) | 247.5 s | 113 | 1507.481361068 | converged, a higher local minimum |
-//! | 10³ | L-BFGS | 13.3 s | 5000 (limit) | Σ M₀² = 1507.2437 | not converged (‖g‖/‖g₀‖ = 8.4·10⁻⁴) |
-//! | 10⁴ | this solver | 17.5 s | 20 | 1509.506391033 | converged |
-//! | 10⁴ | L-BFGS | 151.5 s | 5000 (limit) | 1509.700293452 | not converged (3.2·10⁻⁵) |
-//! | 10⁵ | this solver | 198 s | 15 | 1529.756918830 | converged, 493 MB peak |
+//! | N | method | CPU time | iterations | J | Σ M₀² | note |
+//! |---|---|---|---|---|---|---|
+//! | 10³ | this solver | 2.5 s | 31 | 1507.471209304 | 1507.2086 | converged, pg/‖g₀‖ = 8.0·10⁻⁹ |
+//! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
+//! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹), a higher local minimum; 50333 HVPs |
+//! | 10⁴ | this solver | 20.6 s | 20 | 1509.506391033 | 1507.2289 | converged, 7.3·10⁻⁹ |
+//! | 10⁵ | this solver | 222.7 s | 15 | 1529.756918830 | 1507.2306 | converged, 6.7·10⁻⁹; 510 MB peak |
 //!
-//! One iteration at N = 10³ costs ≈ 72 ms ≈ 100 forward simulations (0.72 ms): the rollout,
-//! stage Jacobians and costate sweep 32 ms (45 simulations), and on average 4 Riccati passes
-//! of 4.7 ms (the warm face, or the interior point when the active set changes). Table 3.4
-//! rows 5 and 7 (N = 10): 6.6 and 8.8 ms, against L-BFGS 19.9 and 28.9 ms and the trust
-//! region 19.2 and 11.7 ms, at equal objectives. The issue's targets (N = 10³ in 0.3 s, one
-//! iteration ≤ 20 simulations) are not met: see "Where it is slow".
+//! CPU per iteration: 81 ms (N = 10³), 1.03 s (10⁴), 14.8 s (10⁵); the larger horizons take
+//! more line-search rollouts (5.3 against 1.5 per iteration) and Riccati passes (9 against 4)
+//! per iteration, so the cost per iteration grows 1.8× faster than N from 10³ to 10⁵ while
+//! the cost per rollout, Jacobian pass and Riccati pass is linear in N.
+//!
+//! One iteration at N = 10³ costs about 80 forward simulations: the rollout, the stage
+//! Jacobians and the costate sweep about 46 (single thread, CPU time; 60 before the Newton
+//! start at the nominal λ), and on average 4 Riccati passes of about 9 simulations each (the
+//! warm face, or the interior point when the active set changes). Table 3.4 (per-step, N = 10,
+//! each row bounded by the thesis's largest |u_k|, `cargo bench --bench ocp -- ocp_table_3_4`):
+//! rows 2, 4, 5, 6, 7, 9, 10 converge, at equal objectives (row 2 lower: 30.09 against 32.89;
+//! row 6 1.5·10⁻⁶ relative above the trust region), rows 1 and 3 stop at the trust region's
+//! objective without meeting the gradient test, row 8 stops 10⁻⁵ relative above it. The issue's
+//! targets (N = 10³ in 0.3 s, one iteration ≤ 20 simulations, Table 3.4 in 40 ms) are not met:
+//! see "Where it is slow".
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise

@@ -2,8 +2,8 @@
 //! control problems with a bending-moment objective to the structured Gauss-Newton solver of
 //! [`crate::ocp`] and reports its result as an [`OptimResult`].
 //!
-//! The options carry over as: `bound = Some(b)` → the box −b ≤ θ ≤ b (handled exactly by the
-//! solver's interior-point QPs, no reparametrisation), `max_iters`, `grad_tol` and
+//! The options carry over as: `bound = Some(b)` → the box −b ≤ θ ≤ b, `bounds` → the box
+//! L ≤ θ ≤ U (handled exactly by the solver's interior-point QPs, no reparametrisation), `max_iters`, `grad_tol` and
 //! `rel_grad_tol` on the *projected* gradient. The argmin-specific options (L-BFGS memory,
 //! trust radius, CG, restarts, polish, cost-change and target tests) do not apply; observers are
 //! not called (with `progress` the iteration history is printed to stderr at the end).
@@ -13,16 +13,19 @@ use crate::error::{Error, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 
 /// The Riccati solver's options for [`OptimOptions`].
-pub(crate) fn ocp_options(opts: &OptimOptions) -> OcpOptions {
-    let b = opts.bound.unwrap_or(f64::INFINITY);
-    OcpOptions {
-        lower: -b,
-        upper: b,
+pub(crate) fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
+    let (lower, upper) = match opts.force_bounds()? {
+        Some(b) => (b.lower(), b.upper()),
+        None => (f64::NEG_INFINITY, f64::INFINITY),
+    };
+    Ok(OcpOptions {
+        lower,
+        upper,
         max_iters: opts.max_iters,
         grad_tol: opts.grad_tol,
         rel_grad_tol: opts.rel_grad_tol,
         ..OcpOptions::default()
-    }
+    })
 }
 
 /// The error for a problem the Riccati solver does not cover.
@@ -43,7 +46,7 @@ pub(crate) fn run<Q: OptimProblem + ?Sized>(
     opts: &OptimOptions,
 ) -> Result<OptimResult> {
     let r = problem
-        .riccati(theta0, &ocp_options(opts))
+        .riccati(theta0, &ocp_options(opts)?)
         .ok_or_else(unsupported)??;
     if opts.progress {
         for (i, h) in r.history.iter().enumerate() {

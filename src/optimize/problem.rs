@@ -128,7 +128,9 @@ pub trait HessianVec {
 /// kg, l = 1 m, h = 0.01 s) it is 3.14·10⁴ N, twice the largest force any unbounded Table 3.4
 /// run reaches (1.5·10⁴ N, with the chain already folded) and 10²⁸ times below the −1.46·10³²
 /// N that round-off once sent L-BFGS to on a control that could not act.
-pub fn resolved_control_limit<P: ControlMap, O: Objective>(problem: &ControlProblem<P, O>) -> f64 {
+pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
+    problem: &ControlProblem<P, O, DIM>,
+) -> f64 {
     let chain = problem.chain();
     let c = chain
         .control_node()
@@ -140,7 +142,7 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective>(problem: &ControlProb
     std::f64::consts::PI * m * l / (h * h)
 }
 
-impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
+impl<P: ControlMap, O: Objective, const DIM: usize> OptimProblem for ControlProblem<P, O, DIM> {
     fn n_params(&self) -> usize {
         ControlProblem::n_params(self)
     }
@@ -160,7 +162,8 @@ impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
     fn controls(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
         Some(ControlProblem::controls(self, theta))
     }
-    /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (how
+    /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (the
+    /// magnitude of a 2-axis control; how
     /// strongly θᵢ reaches the forces; 1 for every built-in parametrisation): the largest
     /// resolved force, in θᵢ's units. (For a nonlinear [`ControlMap`], aᵢ is its response to a
     /// unit θᵢ at θ = 0.)
@@ -171,7 +174,7 @@ impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
             .map(|i| {
                 let mut e = vec![0.0; n];
                 e[i] = 1.0;
-                let a = ControlProblem::controls(self, &e)
+                let a = ControlProblem::control_magnitudes(self, &e)
                     .map(|u| u.iter().fold(0.0f64, |m, x| m.max(x.abs())))
                     .unwrap_or(0.0);
                 if a > 0.0 && a.is_finite() {
@@ -182,9 +185,14 @@ impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
             })
             .collect()
     }
-    /// Every force |u_k| ≤ [`resolved_control_limit`]; otherwise [`Error::ControlOutOfRange`].
+    /// Every force |u_k| ≤ [`resolved_control_limit`] (|u_k| = √(u_{x,k}² + u_{z,k}²) for a
+    /// 2-axis control); otherwise [`Error::ControlOutOfRange`].
     fn check_range(&self, theta: &[f64]) -> Result<()> {
-        let u = ControlProblem::controls(self, theta)?;
+        let u = if self.is_two_axis() {
+            ControlProblem::control_magnitudes(self, theta)?
+        } else {
+            ControlProblem::controls(self, theta)?
+        };
         let limit = resolved_control_limit(self);
         match u.iter().position(|x| x.abs() > limit) {
             Some(k) => Err(Error::ControlOutOfRange {
@@ -197,7 +205,7 @@ impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
     }
 }
 
-impl<P: ControlMap, O: Objective> HessianVec for ControlProblem<P, O> {
+impl<P: ControlMap, O: Objective, const DIM: usize> HessianVec for ControlProblem<P, O, DIM> {
     /// Forward-over-adjoint ([`ControlProblem::hessian_vec`]).
     fn hessian_vec(&self, theta: &[f64], v: &[f64]) -> Result<Vec<f64>> {
         ControlProblem::hessian_vec(self, theta, v)

@@ -4,7 +4,10 @@
 //! - `step_f64_planar`: one planar `f64` step for n = 10, 100, 1000, with
 //!   `Throughput::Elements(n)` so the report reads as time per pendulum-step;
 //! - `step_scalar`: `f64` vs `Dual64` (derivative seeded in the interior stiffness), n = 100;
-//! - `step_dim`: planar (DIM = 2) vs spatial (DIM = 3), `f64`, n = 100;
+//! - `step_dim`: planar (DIM = 2) vs spatial (DIM = 3) on the same in-plane cantilever, `f64`,
+//!   n = 10, 100, 1000 (the ratio spatial/planar per pendulum-step);
+//! - `step_current`: the cost of a current, n = 100 with drag D = 10: still water vs a linear
+//!   shear vs a table (planar), and still water vs a current at 45° (spatial);
 //! - `simulate_riser`: `chainbeam::simulate` of the thesis riser scene for N = 10 and N = 1000;
 //! - `force_jvp`: the springs' stiffness product K·v (K = ∂²U/∂q², planar `f64`, at the bent state)
 //!   for n = 10, 100, 1000: `override` is the hand-written [`ForceTerm::force_jvp`] of
@@ -25,7 +28,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use chainbeam::model::{Ctx, DualScratch, Embed, ForceTerm, TermVisitor};
-use chainbeam::{catalogue, Chain, Parameter, Rattle, Scalar, Scene, State, Support};
+use chainbeam::{catalogue, Chain, Current, Parameter, Rattle, Scalar, Scene, State, Support};
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
@@ -142,18 +145,68 @@ fn step_scalar(c: &mut Criterion) {
 }
 
 fn step_dim(c: &mut Criterion) {
-    let n = 100;
-    let scene = cantilever(n);
     let mut group = c.benchmark_group("step_dim");
     group.sample_size(SAMPLES);
+    for n in [10usize, 100, 1000] {
+        let scene = cantilever(n);
+        group.throughput(Throughput::Elements(n as u64));
+        let planar = prepared(&scene, planar_f64(&scene));
+        let spatial = prepared(
+            &scene,
+            Chain::<f64, 3>::from_scene(&scene).expect("valid scene"),
+        );
+        group.bench_function(BenchmarkId::new("planar", n), |b| bench_steps(b, &planar));
+        group.bench_function(BenchmarkId::new("spatial", n), |b| bench_steps(b, &spatial));
+    }
+    group.finish();
+}
+
+/// [`cantilever`]`(n)` with drag D = 10 and, if given, a current (the drag then acts relative
+/// to it).
+fn with_current(n: usize, current: Option<Current>) -> Scene {
+    let mut s = cantilever(n);
+    s.loads.drag = 10.0;
+    s.loads.current = current;
+    s.validate().expect("valid scene");
+    s
+}
+
+/// The cost of a current: one planar step with the still-water drag, with a linear shear and
+/// with a tabulated current (the profile is evaluated once, when the model is built, so both
+/// cost the same per step), and the spatial step with a current at 45°.
+fn step_current(c: &mut Criterion) {
+    let n = 100;
+    let mut group = c.benchmark_group("step_current");
+    group.sample_size(SAMPLES);
     group.throughput(Throughput::Elements(n as u64));
-    let planar = prepared(&scene, planar_f64(&scene));
-    let spatial = prepared(
-        &scene,
-        Chain::<f64, 3>::from_scene(&scene).expect("valid scene"),
-    );
-    group.bench_function(BenchmarkId::new("planar", n), |b| bench_steps(b, &planar));
-    group.bench_function(BenchmarkId::new("spatial", n), |b| bench_steps(b, &spatial));
+    let cases = [
+        ("still_water", None),
+        ("linear", Some(Current::linear(0.5, 0.1, [0.0, 1.0]))),
+        (
+            "table",
+            Some(Current::table(vec![
+                [0.0, 0.5, 0.0],
+                [5.0, 0.3, 0.0],
+                [10.0, 0.1, 0.0],
+            ])),
+        ),
+    ];
+    for (name, current) in cases {
+        let scene = with_current(n, current);
+        let prep = prepared(&scene, planar_f64(&scene));
+        group.bench_function(BenchmarkId::new(name, n), |b| bench_steps(b, &prep));
+    }
+    for (name, current) in [
+        ("spatial_still_water", None),
+        ("spatial_45deg", Some(Current::linear(0.5, 0.1, [1.0, 1.0]))),
+    ] {
+        let scene = with_current(n, current);
+        let prep = prepared(
+            &scene,
+            Chain::<f64, 3>::from_scene(&scene).expect("valid scene"),
+        );
+        group.bench_function(BenchmarkId::new(name, n), |b| bench_steps(b, &prep));
+    }
     group.finish();
 }
 
@@ -309,6 +362,6 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = step_f64_planar, step_scalar, step_dim, simulate_riser, force_jvp
+    targets = step_f64_planar, step_scalar, step_dim, step_current, simulate_riser, force_jvp
 }
 criterion_main!(benches);

@@ -11,7 +11,8 @@
 //! [`all`] lists every scene under a stable name.
 
 use crate::scene::{
-    ControlKind, Harmonic, LoadSeries, ObjectiveKind, PointLoad, Scene, SceneBuilder, Support,
+    ControlKind, Current, Harmonic, LoadSeries, ObjectiveKind, PointLoad, Scene, SceneBuilder,
+    Support,
 };
 
 /// The standard chain of the thesis: n = 10, l = 1, m = 1, k = 1000, h = 0.01.
@@ -365,6 +366,44 @@ pub fn wave_series() -> Scene {
     )
 }
 
+/// A sheared current on the riser (issue 13): [`wave_riser`]'s riser with drag D = 10 kg/m in a
+/// current along +z that falls linearly from 0.3 m/s at the surface (the top node) to
+/// 0.05 m/s at the seabed (the base), h = 0.01 s, N = 1000 (t ∈ [0, 10] s). The drag acts on
+/// the motion relative to the water (docs/conventions.md), so the riser drifts downstream toward
+/// the static offset of `statics::static_equilibrium`. Piecewise control at node 10 with 10
+/// pieces of 1 s (initial guess 0), objective c_sum = Σ M₀(t_k)²: planar, so `chainbeam
+/// optimize` computes the platform force that keeps the wellhead moment small.
+pub fn sheared_current() -> Scene {
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .current(Current::linear(0.3, 0.05, [0.0, 1.0]))
+            .control_piecewise(10, vec![0.0; 10])
+            .objective(ObjectiveKind::Sum)
+            .steps(1000),
+        "sheared_current",
+    )
+}
+
+/// A current that turns with depth (issue 13): [`sheared_current`]'s riser and drag in a
+/// tabulated current (depth below the surface, speed, direction from +z toward +x):
+/// 0.3 m/s along +z at the surface, 0.2 m/s at 45° at 5 m depth, 0.1 m/s along +x at the seabed
+/// (10 m), interpolated linearly in depth. Spatial (the current has x components); no control.
+/// h = 0.01 s, N = 1000.
+pub fn turning_current() -> Scene {
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .current(Current::table(vec![
+                [0.0, 0.3, 0.0],
+                [5.0, 0.2, 45.0],
+                [10.0, 0.1, 90.0],
+            ]))
+            .steps(1000),
+        "turning_current",
+    )
+}
+
 /// The riser's beam (k₁ = k₁₁ = 2000) without its load.
 fn riser_chain_without_load() -> SceneBuilder {
     thesis_chain()
@@ -396,7 +435,7 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// `dissipative_{cantilever,fixed_fixed,pinned_pinned}_d{10,100}` (the two drags of Fig. 2.14),
 /// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
 /// and the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
-/// `wave_riser`, `wave_series`.
+/// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`.
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -432,6 +471,8 @@ pub fn all() -> Vec<(&'static str, Scene)> {
         ("oblique_control", oblique_control()),
         ("wave_riser", wave_riser()),
         ("wave_series", wave_series()),
+        ("sheared_current", sheared_current()),
+        ("turning_current", turning_current()),
     ]);
     scenes
 }

@@ -152,6 +152,7 @@ pub use scene::{
     Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
     SceneBuilder, SceneError, SceneErrorKind, Support, TimeGrid,
 };
+pub use scene::{Current, CurrentProfile};
 pub use simulate::{
     piecewise_constant_controls, scene_controls, scene_controls_x, simulate, simulate_chain,
     simulate_with_controls, simulate_with_controls_xz, SceneTrajectory, Trajectory,

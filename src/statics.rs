@@ -7,7 +7,8 @@
 //! ```text
 //! U(φ) = ½ Σᵢ kᵢ (φᵢ − φ_{i−1})² + Σⱼ lⱼ cⱼ sin φⱼ   [+ ν Σⱼ lⱼ sin φⱼ for a locked tip]
 //! ```
-//! with cⱼ the load coefficient of pendulum j (point loads, gravity and control, eq. 2.2.2/3.1.1).
+//! with cⱼ the load coefficient of pendulum j (point loads, gravity and control, eq. 2.2.2/3.1.1),
+//! plus a current's steady drag at rest (see [`static_equilibrium_at`]).
 //! Newton's method on ∇U = 0 (and the tip constraint Σ lⱼ sin φⱼ = 0) has a tridiagonal Hessian
 //! bordered by the constraint. It is solved densely with partial pivoting (nalgebra's LU): for a
 //! pinned-pinned beam the tridiagonal block alone is singular at the straight configuration (the
@@ -16,7 +17,7 @@
 //! for the n ≤ a few hundred it is used with.
 
 use crate::error::{Error, Result};
-use crate::model::{dot, Chain, Ctx, DualScratch};
+use crate::model::{dot, Chain, Ctx, DissipativeTerm, DualScratch};
 use crate::scene::Scene;
 use crate::simulate::scene_controls;
 use nalgebra::{DMatrix, DVector};
@@ -45,9 +46,22 @@ pub struct StaticSolution {
 /// [`Chain::force_jacobian_product`], block-tridiagonal, so three products seeded on every third
 /// pendulum give all of it). The tip constraint adds ν Σ lⱼ sin φⱼ.
 pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
-    let chain = Chain::<f64, 2>::from_scene(scene)?;
     let u = *scene_controls(scene).last().unwrap_or(&0.0);
     let t = scene.time.step * scene.time.steps as f64;
+    static_equilibrium_at(scene, t, u)
+}
+
+/// The static equilibrium under the loads as they act at time `t` (time-varying point loads
+/// frozen at t) with the control force `u` at the control node.
+///
+/// A current's drag enters as its steady force at rest: ṗ = 0 and p = 0 leave
+/// F(0) = D P⊙|P| ([`crate::model::CurrentDrag`]), a force independent of q, so it adds −F(0) to
+/// ∂U/∂q and nothing to K (the still-water drag has F(0) = 0).
+///
+/// # Errors
+/// As [`static_equilibrium`].
+pub fn static_equilibrium_at(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
+    let chain = Chain::<f64, 2>::from_scene(scene)?;
     let n = chain.n();
     let bordered = chain.has_tip_constraint();
     let l = chain.lengths().to_vec();
@@ -145,6 +159,14 @@ impl Work {
             self.t[j] = [-s, c];
         }
         chain.potential_gradient(&self.q, t, u, 0, &mut self.f)?;
+        if let Some(drag) = chain.dissipation() {
+            let ctx = Ctx::new(t, u, 0);
+            for (i, f) in self.f.iter_mut().enumerate() {
+                for (d, fd) in f.iter_mut().enumerate() {
+                    *fd -= drag.force_component(i, d, 0.0, &ctx);
+                }
+            }
+        }
         let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
         for j in 0..n {
             let (s, c) = phi[j].sin_cos();

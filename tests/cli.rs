@@ -785,6 +785,15 @@ fn describe(name: &str) -> String {
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \
              c_sum = sum of M0(t_k)^2, t in [0, 10] s."
             .into(),
+        "sheared_current" => "Issue 13 (current): the riser with drag D = 10 kg/m in a current along +z \
+             falling linearly from 0.3 m/s at the surface (top node) to 0.05 m/s at the seabed; the \
+             drag acts on the motion relative to the water. Piecewise control at node 10 (10 pieces \
+             of 1 s), objective c_sum = sum of M0(t_k)^2, t in [0, 10] s."
+            .into(),
+        "turning_current" => "Issue 13 (current): the riser with drag D = 10 kg/m in a tabulated current \
+             turning with depth: rows (depth m, speed m/s, direction deg from +z toward +x), along +z \
+             at the surface, 45 deg at 5 m, along +x at the seabed (10 m). Spatial; t in [0, 10] s."
+            .into(),
         _ => {
             let (support, d) = name
                 .strip_prefix("dissipative_")

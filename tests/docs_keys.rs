@@ -13,8 +13,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use chainbeam::scene::{
-    ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS,
-    MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE,
+    MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 use chainbeam::{Scene, SceneErrorKind};
 
@@ -77,11 +77,15 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
             ("support", "\"fixed-fixed\""),
         ],
     ),
-    ("loads", &[("gravity", "1.0")]),
+    ("loads", &[("gravity", "1.0"), ("drag", "1.0")]),
     ("loads.point", &[("node", "2"), ("force", "1.0")]),
     (
         "loads.point.harmonic",
         &[("amplitude", "1.0"), ("period", "2.0")],
+    ),
+    (
+        "loads.current",
+        &[("profile", "\"linear\""), ("speed", "0.5")],
     ),
     ("time", &[("step", "0.01"), ("steps", "5")]),
     ("control", &[("kind", "\"constant\""), ("values", "[0.0]")]),
@@ -134,6 +138,7 @@ fn accepted(table: &str) -> BTreeSet<String> {
                     "{}.not_a_key",
                     match table {
                         "loads.point.harmonic" => "loads.point[0].harmonic[0]".to_string(),
+                        "loads.current" => table.to_string(),
                         _ => table.replace("loads.point", "loads.point[0]"),
                     }
                 )
@@ -150,7 +155,7 @@ fn accepted(table: &str) -> BTreeSet<String> {
 fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
     let doc = documented();
     // The document's tables are exactly the parser's: the root's keys are the top-level tables,
-    // and `point` is the only table inside `[loads]`.
+    // and `point` and `current` are the tables inside `[loads]`.
     let roots = accepted("");
     let doc_roots: BTreeSet<String> = doc.keys().filter(|t| !t.contains('.')).cloned().collect();
     assert_eq!(doc_roots, roots, "top-level tables");
@@ -168,7 +173,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 28, "number of documented keys");
+    assert_eq!(checked, 36, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -201,6 +206,11 @@ fn every_documented_key_is_read() {
         ("loads.point.harmonic", "amplitude", "3.0"),
         ("loads.point.harmonic", "period", "0.5"),
         ("loads.point.harmonic", "phase", "0.25"),
+        ("loads.current", "profile", "\"uniform\""),
+        ("loads.current", "speed", "0.25"),
+        ("loads.current", "bottom_speed", "0.1"),
+        ("loads.current", "surface", "3.5"),
+        ("loads.current", "direction", "[0.0, -1.0]"),
         ("time", "step", "0.02"),
         ("time", "steps", "6"),
         ("control", "node", "3"),
@@ -210,6 +220,24 @@ fn every_documented_key_is_read() {
     ];
     let doc = documented();
     let mut seen = BTreeSet::new();
+    // keys of another profile replace the current's table (base: linear, speed 0.5)
+    let base_current = "[loads.current]\nprofile = \"linear\"\nspeed = 0.5\n";
+    for (key, current) in [
+        (
+            "exponent",
+            "profile = \"power\"\nspeed = 0.5\nexponent = 0.2\n",
+        ),
+        ("table", "profile = \"table\"\ntable = [[0.0, 0.5, 0.0]]\n"),
+    ] {
+        assert!(
+            doc["loads.current"].contains_key(key),
+            "loads.current.{key}"
+        );
+        seen.insert(format!("loads.current.{key}"));
+        let text = render(None).replace(base_current, &format!("[loads.current]\n{current}"));
+        let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_ne!(scene, base, "loads.current.{key} changed nothing");
+    }
     for &(table, key, value) in settings {
         assert!(doc[table].contains_key(key), "{table}.{key} not documented");
         seen.insert(format!("{table}.{key}"));
@@ -244,6 +272,7 @@ fn documented_ranges_are_the_enforced_ones() {
     }
     assert_eq!(cell("loads", "gravity"), range(&GRAVITY_RANGE));
     assert_eq!(cell("loads", "drag"), range(&DRAG_RANGE));
+    assert_eq!(cell("loads.current", "speed"), range(&CURRENT_SPEED_RANGE));
     assert_eq!(cell("loads.point", "force"), range(&FORCE_RANGE));
     assert_eq!(
         cell("loads.point.harmonic", "amplitude"),
@@ -265,6 +294,7 @@ fn documented_ranges_are_the_enforced_ones() {
         ("harmonic period T", &PERIOD_RANGE),
         ("gravity g", &GRAVITY_RANGE),
         ("drag D", &DRAG_RANGE),
+        ("current speed U", &CURRENT_SPEED_RANGE),
         ("time step h", &STEP_RANGE),
     ] {
         let row = format!("| {name} | {} | {} |", range(r), r.unit);
@@ -283,7 +313,7 @@ fn documented_examples_are_valid_scenes() {
         .skip(1)
         .map(|b| b.split("```").next().unwrap())
         .collect();
-    assert_eq!(blocks.len(), 6);
+    assert_eq!(blocks.len(), 7);
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
     let mut scenes = Vec::new();
     for b in &blocks {
@@ -293,6 +323,7 @@ fn documented_examples_are_valid_scenes() {
     }
     assert_eq!(scenes[4], chainbeam::catalogue::wave_riser());
     assert!(scenes[5].is_spatial() && !scenes[4].is_spatial());
+    assert_eq!(scenes[6], chainbeam::catalogue::sheared_current());
     assert_eq!(
         Scene::from_toml_str(blocks[0]).unwrap(),
         chainbeam::catalogue::riser(5)

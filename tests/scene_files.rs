@@ -54,6 +54,7 @@ fn spec_scene() -> Scene {
             gravity: 0.0,
             drag: 0.0,
             points: vec![PointLoad::new(5, 2.0)],
+            current: None,
         },
         time: TimeGrid {
             step: 0.01,

@@ -15,8 +15,8 @@
 
 use chainbeam::model::{Ctx, DissipativeTerm, DualScratch, Embed, ForceTerm, TermVisitor};
 use chainbeam::{
-    catalogue, Chain, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene, SceneBuilder,
-    Support,
+    catalogue, Chain, Current, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene,
+    SceneBuilder, Support,
 };
 use num_dual::{Dual, Dual64};
 
@@ -340,51 +340,156 @@ fn every_force_term_spatial_dual64() {
 }
 
 /// The drag term: F(p) = −D p|p| (eq. 2.4.4); its slope and parameter derivative from duals equal
-/// the closed forms −2D|p| and −p|p|, and the closed-form implicit half step equals the trait's
-/// default Newton solve (to round-off) with W = 1/(1 − (h/2)F′(p)).
+/// the closed forms −2D|p| and −p|p| (the general checks of every dissipative term follow).
 #[test]
-fn drag_term_derivatives_and_implicit_half_step() {
+fn drag_term_closed_forms() {
     let chain = Chain::<f64, 2>::from_scene(&all_terms_scene(false)).unwrap();
     let drag = chain.drag().expect("scene has drag").clone();
     let ctx = Ctx::new(0.0, 0.0, 0);
     let d = 10.0;
     for p in [-3.0, -0.2, 0.0, 0.05, 1.7] {
-        let (f, slope) = drag.force_and_slope(p, &ctx);
+        let (f, slope) = drag.force_and_slope(0, 0, p, &ctx);
         close("F_D", f, -d * p * f64::abs(p), 1.0, 1e-15);
         close("F_D'", slope, -2.0 * d * f64::abs(p), 1.0, 1e-15);
-        let dd = drag.parameter_derivative(p, &ctx, Parameter::Drag);
+        let dd = drag.parameter_derivative(0, 0, p, &ctx, Parameter::Drag);
         close("dF_D/dD", dd, -p * f64::abs(p), 1.0, 1e-15);
     }
-    /// The trait's default implicit solve, for comparison with the override.
-    #[derive(Clone, Debug)]
-    struct Generic(chainbeam::model::Drag<f64>);
-    impl DissipativeTerm<f64> for Generic {
-        fn name(&self) -> &'static str {
-            "generic drag"
-        }
-        fn force_component<E: Embed<f64>>(&self, p: E, ctx: &Ctx<E>) -> E {
-            self.0.force_component(p, ctx)
-        }
-        fn has_parameter(&self, p: Parameter) -> bool {
-            DissipativeTerm::<f64>::has_parameter(&self.0, p)
+}
+
+/// The trait's default implicit solve (Newton on the dual-derived slope) of the chain's
+/// dissipative term, for comparison with the term's closed-form override.
+#[derive(Clone, Debug)]
+struct DefaultSolve<D: Scalar, const DIM: usize>(Chain<D, DIM>);
+
+impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for DefaultSolve<D, DIM> {
+    fn name(&self) -> &'static str {
+        "default solve"
+    }
+    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E {
+        let t = self.0.dissipation().unwrap();
+        t.force_component(i, d, p, ctx)
+    }
+    fn has_parameter(&self, p: Parameter) -> bool {
+        self.0.dissipation().unwrap().has_parameter(p)
+    }
+}
+
+/// The scene of [`all_terms_scene`] with a current (replacing the still-water drag): a linear
+/// shear, or a table whose direction turns with depth (`table`); out of the yz-plane when
+/// `spatial`.
+fn current_scene(spatial: bool, table: bool) -> Scene {
+    let mut s = all_terms_scene(spatial);
+    let dir = if spatial { [0.6, 0.8] } else { [0.0, -1.0] };
+    let psi = if spatial { 40.0 } else { 180.0 };
+    s.loads.current = Some(if table {
+        Current::table(vec![[0.0, 0.9, 0.0], [2.5, 0.6, psi], [5.0, 0.2, psi]]).with_surface(5.5)
+    } else {
+        Current::linear(0.8, 0.3, dir)
+    });
+    s.validate().unwrap();
+    assert_eq!(s.is_spatial(), spatial);
+    s
+}
+
+/// Every dissipative term a scene can have (still-water drag; a current, linear and tabulated),
+/// through [`Chain::dissipation`], for every pendulum and component at momenta on both sides of
+/// the current's:
+/// * ∂F/∂p (dual-derived) = central differences of F (step 1e-5; F is piecewise quadratic, so the
+///   FD error is round-off, 1e-8 relative);
+/// * ∂F/∂θ for each parameter the term reads (D, the current's speed, the mass) = central
+///   differences of F with θ set on the model (step 1e-5·θ; 1e-7 relative), and θ it does not
+///   read give 0;
+/// * the closed-form implicit half step = the trait's default Newton solve ([`DefaultSolve`],
+///   1e-14), and solves p − (h/2)F(p) = c.
+fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
+    let chain = Chain::<D, DIM>::from_scene(scene).unwrap();
+    let term = chain.dissipation().expect("the scene has drag");
+    assert_eq!(term.name(), expect);
+    let ctx = Ctx::new(1.0, D::from(-0.7), 0);
+    let generic = DefaultSolve(chain.clone());
+    let force = |ch: &Chain<D, DIM>, i, d, p: f64| {
+        let t = ch.dissipation().unwrap();
+        t.force_component(i, d, D::from(p), &ctx).re()
+    };
+    let params = [
+        (Parameter::Drag, 10.0),
+        (Parameter::CurrentSpeed, 0.8),
+        (Parameter::Mass, 1.0),
+    ];
+    let mut exercised = 0;
+    for i in 0..chain.n() {
+        for d in 0..DIM {
+            for p in [-3.0, -0.4, 0.3, 2.2] {
+                let (_, slope) = term.force_and_slope(i, d, D::from(p), &ctx);
+                let hp = 1e-5;
+                let fd = (force(&chain, i, d, p + hp) - force(&chain, i, d, p - hp)) / (2.0 * hp);
+                close("dF/dp", slope.re(), fd, fd.abs().max(1.0), 1e-8);
+                for (param, value) in params {
+                    let got = term
+                        .parameter_derivative(i, d, D::from(p), &ctx, param)
+                        .re();
+                    if !term.has_parameter(param) {
+                        assert_eq!(got, 0.0, "{param:?} not read");
+                        continue;
+                    }
+                    if param == Parameter::Mass && !chain.has_parameter(param) {
+                        continue;
+                    }
+                    let hstep = 1e-5 * value;
+                    let (mut cp, mut cm) = (chain.clone(), chain.clone());
+                    cp.set_parameter(param, D::from(value + hstep)).unwrap();
+                    cm.set_parameter(param, D::from(value - hstep)).unwrap();
+                    let fd = (force(&cp, i, d, p) - force(&cm, i, d, p)) / (2.0 * hstep);
+                    let label = format!("{expect} dF[{i}][{d}]/d{param:?} at p = {p}");
+                    close(&label, got, fd, fd.abs().max(1.0), 1e-7);
+                    exercised += usize::from(got.abs() > 1e-3);
+                }
+            }
+            for c in [-40.0, -1.0, -1e-3, 0.0, 2e-2, 3.0, 55.0] {
+                let h = 0.01;
+                let (p1, w1) = term.implicit_half_step(i, d, D::from(c), h, &ctx);
+                let (p2, w2) = generic.implicit_half_step(i, d, D::from(c), h, &ctx);
+                close("implicit p", p1.re(), p2.re(), f64::abs(c).max(1.0), 1e-14);
+                close("implicit W", w1.re(), w2.re(), 1.0, 1e-14);
+                let f = term.force_component(i, d, p1, &ctx);
+                close(
+                    "residual",
+                    (p1 - f * (0.5 * h)).re(),
+                    c,
+                    c.abs().max(1.0),
+                    1e-14,
+                );
+            }
         }
     }
-    let generic = Generic(drag.clone());
-    let h = 0.01;
-    for c in [-40.0, -1.0, -1e-3, 0.0, 2e-2, 3.0, 55.0] {
-        let (p1, w1) = drag.implicit_half_step(c, h, &ctx);
-        let (p2, w2) = generic.implicit_half_step(c, h, &ctx);
-        close("implicit p", p1, p2, f64::abs(c).max(1.0), 1e-14);
-        close("implicit W", w1, w2, 1.0, 1e-14);
-        // p − (h/2) F(p) = c
-        close(
-            "residual",
-            p1 + 0.5 * h * d * p1 * f64::abs(p1),
-            c,
-            f64::abs(c).max(1.0),
-            1e-14,
-        );
-    }
+    assert!(exercised > 0, "no parameter derivative was exercised");
+}
+
+fn check_every_dissipation<D: Scalar, const DIM: usize>() {
+    let spatial = DIM == 3;
+    check_dissipation::<D, DIM>(&all_terms_scene(spatial), "drag");
+    check_dissipation::<D, DIM>(&current_scene(spatial, false), "current drag");
+    check_dissipation::<D, DIM>(&current_scene(spatial, true), "current drag");
+}
+
+#[test]
+fn every_dissipative_term_planar_f64() {
+    check_every_dissipation::<f64, 2>();
+}
+
+#[test]
+fn every_dissipative_term_spatial_f64() {
+    check_every_dissipation::<f64, 3>();
+}
+
+#[test]
+fn every_dissipative_term_planar_dual64() {
+    check_every_dissipation::<Dual64, 2>();
+}
+
+#[test]
+fn every_dissipative_term_spatial_dual64() {
+    check_every_dissipation::<Dual64, 3>();
 }
 
 /// The thesis scenes still build their terms from the catalogue (a smoke check that `visit_terms`

@@ -145,6 +145,7 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
             s.loads.points[load].harmonics[harmonic].amplitude
         }
         Parameter::LoadPhase { load, harmonic } => s.loads.points[load].harmonics[harmonic].phase,
+        Parameter::CurrentSpeed => s.loads.current.as_ref().and_then(|c| c.speed()).unwrap(),
     }
 }
 

@@ -4,7 +4,9 @@
 
 use super::tape::StateView;
 use crate::error::Result;
-use crate::model::{Chain, Ctx, DissipativeTerm, DualScratch, Parameter, Scalar, TipCondition};
+use crate::model::{
+    Chain, Ctx, Dissipation, DissipativeTerm, DualScratch, Parameter, Scalar, TipCondition,
+};
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 
@@ -27,7 +29,8 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     h: f64,
     params: &'a [Parameter],
     mass_param: Option<usize>,
-    drag_param: Option<usize>,
+    /// The requested parameters the dissipative term reads (drag D, current speed, mass).
+    drag_params: Vec<(usize, Parameter)>,
     tmp: Vec<[D; DIM]>,
     tmp2: Vec<[D; DIM]>,
     bbar: Vec<[D; DIM]>,
@@ -49,7 +52,15 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             h,
             params,
             mass_param: params.iter().position(|p| *p == Parameter::Mass),
-            drag_param: params.iter().position(|p| *p == Parameter::Drag),
+            drag_params: match ch.dissipation() {
+                Some(t) => params
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| t.has_parameter(**p))
+                    .map(|(i, p)| (i, *p))
+                    .collect(),
+                None => Vec::new(),
+            },
             tmp: v.clone(),
             tmp2: v.clone(),
             bbar: v.clone(),
@@ -130,22 +141,22 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     ) -> Result<()> {
         let (ch, hh) = (self.ch, 0.5 * self.h);
         self.phbar.copy_from_slice(&self.bbar);
-        if let Some(drag) = ch.drag() {
-            let mut dbar = D::zero();
+        if let Some(drag) = ch.dissipation() {
             for i in 0..ch.n() {
                 for d in 0..DIM {
                     let p = sk1.phalf[i][d];
-                    let (_, slope) = drag.force_and_slope(p, ctx1);
+                    let (_, slope) = drag.force_and_slope(i, d, p, ctx1);
                     self.phbar[i][d] = self.bbar[i][d] * (slope * hh + 1.0);
-                    if self.drag_param.is_some() {
-                        dbar +=
-                            self.bbar[i][d] * drag.parameter_derivative(p, ctx1, Parameter::Drag);
-                    }
                 }
             }
-            if let Some(ip) = self.drag_param {
-                cot.thbar[ip] += dbar * hh;
-            }
+            dissipation_contraction(
+                &drag,
+                &self.drag_params,
+                (sk1.phalf, &self.bbar),
+                ctx1,
+                hh,
+                cot,
+            );
         }
         self.force_terms(sk1.q, ctx1, Half::Second, cot)
     }
@@ -211,16 +222,16 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         }
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
-        if let (Some(ip), Some(drag)) = (self.drag_param, ch.drag()) {
+        if let Some(drag) = ch.dissipation() {
             let ctx = Ctx::new(k as f64 * h, D::zero(), k);
-            let mut s = D::zero();
-            for i in 0..ch.n() {
-                for d in 0..DIM {
-                    let dfd = drag.parameter_derivative(sk1.phalf[i][d], &ctx, Parameter::Drag);
-                    s += self.cbar[i][d] * dfd;
-                }
-            }
-            cot.thbar[ip] += s * hh;
+            dissipation_contraction(
+                &drag,
+                &self.drag_params,
+                (sk1.phalf, &self.cbar),
+                &ctx,
+                hh,
+                cot,
+            );
         }
         Ok(())
     }
@@ -272,6 +283,27 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             cot.thbar[ip] += (tb[1] * u_k1 + v_half_bar * u_k) * inv_mn * inv_mn * hh;
         }
         tb[1] = v_half_bar;
+    }
+}
+
+/// θ̄ += h/2 Σᵢ_d w_{i,d} ∂F_{i,d}(p½)/∂θ for each requested parameter θ the dissipative term
+/// reads (`params`: (index in the request, θ)); w = b̄ (second half) or c̄ (first half).
+fn dissipation_contraction<D: Scalar, const DIM: usize>(
+    drag: &Dissipation<'_, D, DIM>,
+    params: &[(usize, Parameter)],
+    (phalf, w): (&[[D; DIM]], &[[D; DIM]]),
+    ctx: &Ctx<D>,
+    hh: f64,
+    cot: &mut Cotangents<D, DIM>,
+) {
+    for &(ip, param) in params {
+        let mut s = D::zero();
+        for (i, (p, w)) in phalf.iter().zip(w).enumerate() {
+            for d in 0..DIM {
+                s += w[d] * drag.parameter_derivative(i, d, p[d], ctx, param);
+            }
+        }
+        cot.thbar[ip] += s * hh;
     }
 }
 

@@ -18,8 +18,8 @@ pub mod terms;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    ControlForce, Ctx, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity,
-    HarmonicForce, PointLoad, PointLoads, Springs, TermVisitor,
+    ControlForce, Ctx, CurrentDrag, Dissipation, DissipativeTerm, Drag, DualScratch, Embed,
+    ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads, Springs, TermVisitor,
 };
 
 use crate::error::{Error, Result};
@@ -79,6 +79,9 @@ pub enum Parameter {
         /// The harmonic's index in the load.
         harmonic: usize,
     },
+    /// The `speed` of the current's profile (`[loads.current]`: uniform, linear or power law;
+    /// a table has none).
+    CurrentSpeed,
 }
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
@@ -102,6 +105,8 @@ pub struct Chain<D, const DIM: usize> {
     /// along z, u_x = 0). Read into [`Ctx::ux`] by [`Chain::ctx`].
     pub(crate) control_x: Vec<D>,
     pub(crate) drag: Option<Drag<D>>,
+    /// Drag relative to a current; replaces `drag` when the scene has a current.
+    pub(crate) current: Option<CurrentDrag<D, DIM>>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -257,9 +262,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 lengths: lengths.clone(),
             }),
             control_x: Vec::new(),
-            drag: (scene.loads.drag > 0.0).then(|| Drag {
+            drag: (scene.loads.drag > 0.0 && scene.loads.current.is_none()).then(|| Drag {
                 d: D::from(scene.loads.drag),
             }),
+            current: scene
+                .loads
+                .current
+                .as_ref()
+                .map(|c| CurrentDrag::new(c, D::from(scene.loads.drag), &lengths, &masses)),
             lengths,
             masses,
         })
@@ -321,6 +331,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             control: self.control.as_ref().map(|t| t.lift()),
             control_x: self.control_x.iter().map(|x| D2::from(x.re())).collect(),
             drag: self.drag.as_ref().map(|t| t.lift()),
+            current: self.current.as_ref().map(|t| t.lift()),
         }
     }
 
@@ -360,14 +371,30 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.n + usize::from(self.has_tip_constraint())
     }
 
-    /// Whether the model computes drag.
+    /// Whether the model computes drag (still-water or relative to a current).
     pub fn has_drag(&self) -> bool {
-        self.drag.is_some()
+        self.drag.is_some() || self.current.is_some()
     }
 
-    /// The drag term, if the scene has drag.
+    /// The still-water drag term, if the scene has drag and no current.
     pub fn drag(&self) -> Option<&Drag<D>> {
         self.drag.as_ref()
+    }
+
+    /// The drag relative to the current, if the scene has a current.
+    pub fn current_drag(&self) -> Option<&CurrentDrag<D, DIM>> {
+        self.current.as_ref()
+    }
+
+    /// The dissipative term the model has, if any: **the one place that lists them** (the
+    /// still-water drag, or the drag relative to a current, which replaces it).
+    #[inline]
+    pub fn dissipation(&self) -> Option<Dissipation<'_, D, DIM>> {
+        match (&self.current, &self.drag) {
+            (Some(c), _) => Some(Dissipation::Current(c)),
+            (None, Some(d)) => Some(Dissipation::StillWater(d)),
+            (None, None) => None,
+        }
     }
 
     /// Whether the model has the spring of joint i (0..=n).
@@ -489,11 +516,20 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 if let Some(g) = &mut self.gravity {
                     g.masses.iter_mut().for_each(|m| *m = value);
                 }
+                if let Some(c) = &mut self.current {
+                    c.refresh(&self.lengths, &self.masses);
+                }
                 self.refresh_inverses();
             }
-            Parameter::Drag => match &mut self.drag {
-                Some(d) => d.d = value,
-                None => return Err(missing(p, "the scene has no drag (D = 0)")),
+            Parameter::Drag => match (&mut self.drag, &mut self.current) {
+                (Some(d), _) => d.d = value,
+                (None, Some(c)) => c.d = value,
+                (None, None) => return Err(missing(p, "the scene has no drag (D = 0)")),
+            },
+            Parameter::CurrentSpeed => match &mut self.current {
+                Some(c) if c.has_parameter(p) => c.speed = value,
+                Some(_) => return Err(missing(p, "a table profile has no single speed")),
+                None => return Err(missing(p, "the scene has no current")),
             },
             Parameter::LoadForce(i)
             | Parameter::LoadForceX(i)
@@ -531,6 +567,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         match p {
             Parameter::Mass => self.has_uniform_mass(),
             Parameter::Drag => self.has_drag(),
+            Parameter::CurrentSpeed => self.current.as_ref().is_some_and(|c| c.has_parameter(p)),
             Parameter::BaseStiffness => self.springs.present[0],
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,

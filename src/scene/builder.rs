@@ -3,8 +3,8 @@
 use super::raw::NumOrArray;
 use super::validate::{check_size, check_spring, support_name};
 use super::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneError, SceneErrorKind,
-    Support, TimeGrid,
+    Beam, Control, ControlKind, Current, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
+    SceneErrorKind, Support, TimeGrid,
 };
 
 /// Builds a [`Scene`] in code with the same defaults and validation as the file format.
@@ -134,6 +134,12 @@ impl SceneBuilder {
     /// Drag constant D \[kg/m\].
     pub fn drag(mut self, d: f64) -> Self {
         self.loads.drag = d;
+        self
+    }
+
+    /// A steady current along the depth (see [`Current`]; needs a drag D > 0).
+    pub fn current(mut self, current: Current) -> Self {
+        self.loads.current = Some(current);
         self
     }
 

@@ -17,6 +17,7 @@
 #![doc = include_str!("../../docs/scene-format.md")]
 
 mod builder;
+mod current;
 mod error;
 mod raw;
 pub(crate) mod series;
@@ -27,12 +28,15 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use builder::SceneBuilder;
+pub use current::{
+    direction_of_angle, Current, CurrentProfile, DEFAULT_POWER_EXPONENT, MAX_POWER_EXPONENT,
+};
 pub use error::{SceneError, SceneErrorKind};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
-    human_bytes, ValueRange, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE,
-    MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE,
-    STIFFNESS_RANGE,
+    human_bytes, ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,
+    LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES,
+    PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 
 use raw::RawScene;
@@ -206,6 +210,9 @@ pub struct Loads {
     pub drag: f64,
     /// Point loads.
     pub points: Vec<PointLoad>,
+    /// A steady current along the depth (`[loads.current]`); with it the drag acts on the
+    /// velocity relative to the water.
+    pub current: Option<Current>,
 }
 
 /// The time grid t_k = k h, k = 0..=N.
@@ -279,10 +286,16 @@ impl Scene {
     }
 
     /// Whether the scene needs the spatial model (qᵢ ∈ S², `Chain<_, 3>`): some load has a
-    /// component along x ([`PointLoad::is_spatial`]). Otherwise every force lies in the yz-plane
+    /// component along x ([`PointLoad::is_spatial`], or a current with an x component). Otherwise every force lies in the yz-plane
     /// and the planar model (`Chain<_, 2>`) computes the same motion with fewer components.
     pub fn is_spatial(&self) -> bool {
-        self.loads.points.iter().any(PointLoad::is_spatial) || self.has_two_axis_control()
+        self.loads.points.iter().any(PointLoad::is_spatial)
+            || self
+                .loads
+                .current
+                .as_ref()
+                .is_some_and(|c| c.spatial_key().is_some())
+            || self.has_two_axis_control()
     }
 
     /// Whether the scene's control is 2-axis (`values` written as pairs [u_x, u_z]).
@@ -295,7 +308,7 @@ impl Scene {
         if self.has_two_axis_control() {
             return Some("control.values".to_string());
         }
-        self.loads.points.iter().enumerate().find_map(|(i, p)| {
+        let points = self.loads.points.iter().enumerate().find_map(|(i, p)| {
             let key = if p.force_x != 0.0 {
                 "force"
             } else if !p.harmonics.is_empty() && p.direction[0] != 0.0 {
@@ -306,7 +319,9 @@ impl Scene {
                 return None;
             };
             Some(format!("loads.point[{i}].{key}"))
-        })
+        });
+        let current = self.loads.current.as_ref().and_then(Current::spatial_key);
+        points.or_else(|| current.map(String::from))
     }
 }
 

@@ -11,6 +11,7 @@ use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
 use super::builder::assemble_beam;
+use super::current::RawCurrent;
 use super::validate::{check_size, node_index, positive_count};
 use super::{
     Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
@@ -137,6 +138,8 @@ struct RawLoads {
     drag: f64,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     point: Vec<RawPoint>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    current: Option<RawCurrent>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -384,6 +387,7 @@ impl RawScene {
                 gravity: s.loads.gravity,
                 drag: s.loads.drag,
                 point: s.loads.points.iter().map(RawPoint::from_load).collect(),
+                current: s.loads.current.as_ref().map(RawCurrent::from_current),
             }),
             time: RawTime {
                 step: s.time.step,
@@ -440,6 +444,10 @@ impl RawScene {
                 gravity: raw_loads.gravity,
                 drag: raw_loads.drag,
                 points,
+                current: raw_loads
+                    .current
+                    .map(RawCurrent::into_current)
+                    .transpose()?,
             },
             time: TimeGrid {
                 step: self.time.step,

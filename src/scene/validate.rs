@@ -82,6 +82,13 @@ pub const DRAG_RANGE: ValueRange = ValueRange {
     unit: "kg/m",
     why: "h·D·|p| enters the implicit half step",
 };
+/// Current speeds \[m/s\] (`[loads.current]`): 0 to 10³ m/s.
+pub const CURRENT_SPEED_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e3,
+    unit: "m/s",
+    why: "D·P² with P = l·Σm·U is the current's force in the implicit half step",
+};
 /// Period T of a harmonic load \[s\]: 10⁻¹² to 10¹² s.
 pub const PERIOD_RANGE: ValueRange = ValueRange {
     min: 1e-12,
@@ -169,6 +176,9 @@ impl Scene {
         check_range("loads.drag", self.loads.drag, &DRAG_RANGE)?;
         for (i, p) in self.loads.points.iter().enumerate() {
             check_point_load(i, p, n)?;
+        }
+        if let Some(c) = &self.loads.current {
+            c.check(self.loads.drag)?;
         }
         check_positive("time.step", self.time.step)?;
         check_range("time.step", self.time.step, &STEP_RANGE)?;

@@ -143,10 +143,10 @@ pub(crate) fn total_force<D: Scalar, const DIM: usize>(
     out: &mut [[D; DIM]],
 ) -> Result<()> {
     ch.potential_gradient(q, ctx.t, ctx.u, ctx.step, out)?;
-    if let Some(drag) = ch.drag() {
-        for (o, pi) in out.iter_mut().zip(p) {
+    if let Some(drag) = ch.dissipation() {
+        for (i, (o, pi)) in out.iter_mut().zip(p).enumerate() {
             for d in 0..DIM {
-                o[d] -= drag.force_component(pi[d], ctx);
+                o[d] -= drag.force_component(i, d, pi[d], ctx);
             }
         }
     }

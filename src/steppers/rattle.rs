@@ -346,11 +346,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let t1 = (k + 1) as f64 * h;
         ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
         let ctx = Ctx::new(t1, u_k1, k + 1);
+        let drag = ch.dissipation();
         for i in 0..ch.n() {
             for d in 0..DIM {
                 let mut b = ws.half.phalf[i][d] - ws.force[i][d] * hh;
-                if let Some(drag) = ch.drag() {
-                    b += drag.force_component(ws.half.phalf[i][d], &ctx) * hh;
+                if let Some(drag) = &drag {
+                    b += drag.force_component(i, d, ws.half.phalf[i][d], &ctx) * hh;
                 }
                 ws.a[i][d] = b;
             }
@@ -433,12 +434,13 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
     out.c.copy_from_slice(a);
     ch.constraints()
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
-    match ch.drag() {
+    match ch.dissipation() {
         Some(drag) => {
             let ctx = Ctx::new(0.0, D::zero(), 0);
-            for (c, (p, w)) in out.c.iter().zip(out.phalf.iter_mut().zip(&mut out.w)) {
+            let pw = out.phalf.iter_mut().zip(&mut out.w);
+            for (i, (c, (p, w))) in out.c.iter().zip(pw).enumerate() {
                 for d in 0..DIM {
-                    (p[d], w[d]) = drag.implicit_half_step(c[d], h, &ctx);
+                    (p[d], w[d]) = drag.implicit_half_step(i, d, c[d], h, &ctx);
                 }
             }
         }

@@ -18,13 +18,22 @@ impl<D: Scalar> Drag<D> {
     }
 }
 
+/// The root of r + (hD/2) r|r| = c: r = 2c / (1 + √(1 + 2hD|c|)), with W = ∂r/∂c =
+/// 1/(1 + hD|r|) (shared by [`Drag`] and [`super::CurrentDrag`], which solves it for r = p − P).
+#[inline]
+pub(super) fn quadratic_root<D: Scalar>(drag: D, c: D, h: f64) -> (D, D) {
+    let root = (drag * (2.0 * h) * c.abs() + 1.0).sqrt() + 1.0;
+    let r = c * 2.0 * root.recip();
+    (r, (drag * h * r.abs() + 1.0).recip())
+}
+
 impl<D: Scalar> DissipativeTerm<D> for Drag<D> {
     fn name(&self) -> &'static str {
         "drag"
     }
 
     #[inline]
-    fn force_component<E: Embed<D>>(&self, p: E, ctx: &Ctx<E>) -> E {
+    fn force_component<E: Embed<D>>(&self, _i: usize, _d: usize, p: E, ctx: &Ctx<E>) -> E {
         -(ctx.param(Parameter::Drag, self.d) * p * p.abs())
     }
 
@@ -35,9 +44,7 @@ impl<D: Scalar> DissipativeTerm<D> for Drag<D> {
     /// Closed-form root of p + (hD/2) p|p| = c: p = 2c / (1 + √(1 + 2hD|c|)), and
     /// W = 1/(1 + hD|p|) (tested equal to the default Newton solve).
     #[inline]
-    fn implicit_half_step(&self, c: D, h: f64, _ctx: &Ctx<D>) -> (D, D) {
-        let root = (self.d * (2.0 * h) * c.abs() + 1.0).sqrt() + 1.0;
-        let p = c * 2.0 * root.recip();
-        (p, (self.d * h * p.abs() + 1.0).recip())
+    fn implicit_half_step(&self, _i: usize, _d: usize, c: D, h: f64, _ctx: &Ctx<D>) -> (D, D) {
+        quadratic_root(self.d, c, h)
     }
 }

@@ -17,7 +17,9 @@
 //! against the dual-derived default to 1e-12, and every force against the dual gradient of the
 //! energy, for every term in both dimensions and for `f64` and `Dual64` chains.
 //!
-//! A momentum-dependent (dissipative) term implements [`DissipativeTerm`] (thesis eq. 2.4.4).
+//! A momentum-dependent (dissipative) term implements [`DissipativeTerm`] (thesis eq. 2.4.4): the
+//! still-water [`Drag`], or [`CurrentDrag`] when the scene has a current; [`crate::Chain::dissipation`]
+//! returns the one the model has as a [`Dissipation`].
 //!
 //! **Adding a term**: write one type implementing [`ForceTerm`] (or [`DissipativeTerm`]), add it as
 //! a field of [`crate::Chain`] built from its scene entry, and list it in
@@ -25,12 +27,14 @@
 //! products then see it with all its derivatives.
 
 mod control;
+mod current;
 mod drag;
 mod gravity;
 mod point_load;
 mod spring;
 
 pub use control::ControlForce;
+pub use current::{current_velocity, CurrentDrag};
 pub use drag::Drag;
 pub use gravity::Gravity;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
@@ -311,7 +315,8 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
 }
 
 /// A momentum-dependent force F(p) added to ṗ (thesis eq. 2.4.4), acting componentwise
-/// (Fᵢ depends on pᵢ only), written once over the evaluation scalar.
+/// (component d of pendulum i, Fᵢ_d, depends on pᵢ_d only, and may depend on (i, d) through
+/// constants: the current's momenta of [`CurrentDrag`]), written once over the evaluation scalar.
 ///
 /// RATTLE evaluates it at p_{k+½} in both half-steps (docs/conventions.md), so the first half-step solves
 /// p − (h/2) F(p) = c per component; [`DissipativeTerm::implicit_half_step`] does so by Newton on
@@ -320,14 +325,15 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
     /// A short name for diagnostics and tests.
     fn name(&self) -> &'static str;
 
-    /// The force component Fᵢ(pᵢ) (parameters read through [`Ctx::param`]).
-    fn force_component<E: Embed<D>>(&self, p: E, ctx: &Ctx<E>) -> E;
+    /// The force component Fᵢ_d(pᵢ_d) of pendulum `i` (0-based), component `d` (parameters read
+    /// through [`Ctx::param`]).
+    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E;
 
     /// Whether the term reads the physical parameter `p`.
     fn has_parameter(&self, p: Parameter) -> bool;
 
-    /// (Fᵢ, ∂Fᵢ/∂pᵢ) by one `Dual<D>` evaluation.
-    fn force_and_slope(&self, p: D, ctx: &Ctx<D>) -> (D, D) {
+    /// (Fᵢ_d, ∂Fᵢ_d/∂pᵢ_d) by one `Dual<D>` evaluation.
+    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
         let c = Ctx {
             t: ctx.t,
             u: Dual::from_re(ctx.u),
@@ -335,12 +341,12 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
             step: ctx.step,
             seed: None,
         };
-        let f = self.force_component(Dual::new(p, D::one()), &c);
+        let f = self.force_component(i, d, Dual::new(p, D::one()), &c);
         (f.re, f.eps)
     }
 
-    /// ∂Fᵢ/∂θ for a physical parameter θ, by one `Dual<D>` evaluation with θ seeded.
-    fn parameter_derivative(&self, p: D, ctx: &Ctx<D>, param: Parameter) -> D {
+    /// ∂Fᵢ_d/∂θ for a physical parameter θ, by one `Dual<D>` evaluation with θ seeded.
+    fn parameter_derivative(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>, param: Parameter) -> D {
         if !self.has_parameter(param) {
             return D::zero();
         }
@@ -351,17 +357,17 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
             step: ctx.step,
             seed: Some(param),
         };
-        self.force_component(Dual::from_re(p), &c).eps
+        self.force_component(i, d, Dual::from_re(p), &c).eps
     }
 
-    /// Solves p − (h/2) F(p) = c for one component and returns (p, W) with W = ∂p/∂c =
+    /// Solves p − (h/2) Fᵢ_d(p) = c for one component and returns (p, W) with W = ∂p/∂c =
     /// 1/(1 − (h/2) F′(p)). Default: Newton from p = c, to round-off, with the slope from
     /// [`DissipativeTerm::force_and_slope`].
-    fn implicit_half_step(&self, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
+    fn implicit_half_step(&self, i: usize, d: usize, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
         let hh = 0.5 * h;
         let mut p = c;
         for _ in 0..50 {
-            let (f, df) = self.force_and_slope(p, ctx);
+            let (f, df) = self.force_and_slope(i, d, p, ctx);
             let r = p - f * hh - c;
             let step = r * (-(df * hh) + 1.0).recip();
             p -= step;
@@ -369,8 +375,51 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
                 break;
             }
         }
-        let (_, df) = self.force_and_slope(p, ctx);
+        let (_, df) = self.force_and_slope(i, d, p, ctx);
         (p, (-(df * hh) + 1.0).recip())
+    }
+}
+
+/// The dissipative term a chain has ([`crate::Chain::dissipation`]): the thesis's still-water
+/// drag, or the drag relative to a current, which replaces it when the scene has a current. Each
+/// method forwards to the term (including its overrides).
+#[derive(Clone, Copy, Debug)]
+pub enum Dissipation<'a, D, const DIM: usize> {
+    /// F = −D p⊙|p| (eq. 2.4.4).
+    StillWater(&'a Drag<D>),
+    /// F = −D (p − P)⊙|p − P| with P the momenta of the current ([`CurrentDrag`]).
+    Current(&'a CurrentDrag<D, DIM>),
+}
+
+impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for Dissipation<'_, D, DIM> {
+    fn name(&self) -> &'static str {
+        match self {
+            Self::StillWater(t) => t.name(),
+            Self::Current(t) => t.name(),
+        }
+    }
+
+    #[inline]
+    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E {
+        match self {
+            Self::StillWater(t) => t.force_component(i, d, p, ctx),
+            Self::Current(t) => t.force_component(i, d, p, ctx),
+        }
+    }
+
+    fn has_parameter(&self, p: Parameter) -> bool {
+        match self {
+            Self::StillWater(t) => t.has_parameter(p),
+            Self::Current(t) => t.has_parameter(p),
+        }
+    }
+
+    #[inline]
+    fn implicit_half_step(&self, i: usize, d: usize, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
+        match self {
+            Self::StillWater(t) => t.implicit_half_step(i, d, c, h, ctx),
+            Self::Current(t) => t.implicit_half_step(i, d, c, h, ctx),
+        }
     }
 }
 

@@ -11,7 +11,8 @@
 //! [`all`] lists every scene under a stable name.
 
 use crate::scene::{
-    Current, Harmonic, LoadSeries, ObjectiveKind, PointLoad, Scene, SceneBuilder, Support,
+    ControlKind, Current, Harmonic, LoadSeries, ObjectiveKind, PointLoad, Scene, SceneBuilder,
+    Support,
 };
 
 /// The standard chain of the thesis: n = 10, l = 1, m = 1, k = 1000, h = 0.01.
@@ -287,6 +288,22 @@ pub fn oblique_riser() -> Scene {
     )
 }
 
+/// The 2-axis control scene of issue 13: [`oblique_riser`] (F = 2 N at node 5 at 45° between x
+/// and z, no drag, h = 0.01 s, N = 1000) with a 2-axis piecewise control [u_x, u_z] at node 10 of
+/// 10 pieces of 1 s (initial guess 0) and the objective c_sum = Σ |M₀(t_k)|². Spatial; by the
+/// rotational symmetry about y its optimal control points along the load.
+pub fn oblique_control() -> Scene {
+    let f = std::f64::consts::SQRT_2;
+    known_good(
+        riser_chain_without_load()
+            .point_load_vector(5, [f, f])
+            .control_two_axis(10, ControlKind::Piecewise, &[[0.0, 0.0]; 10])
+            .objective(ObjectiveKind::Sum)
+            .steps(1000),
+        "oblique_control",
+    )
+}
+
 /// Period of the waves of [`wave_riser`] and [`wave_series`] \[s\].
 pub const WAVE_PERIOD: f64 = 8.0;
 
@@ -417,8 +434,8 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// `riser_dissipative_1`..`riser_dissipative_10`, `fixed_fixed`, `pinned_pinned`,
 /// `dissipative_{cantilever,fixed_fixed,pinned_pinned}_d{10,100}` (the two drags of Fig. 2.14),
 /// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
-/// and the scenes of the new loads: `oblique_riser`, `wave_riser`, `wave_series`,
-/// `sheared_current`, `turning_current`.
+/// and the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
+/// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`.
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -451,6 +468,7 @@ pub fn all() -> Vec<(&'static str, Scene)> {
         ),
         ("long_horizon", long_horizon()),
         ("oblique_riser", oblique_riser()),
+        ("oblique_control", oblique_control()),
         ("wave_riser", wave_riser()),
         ("wave_series", wave_series()),
         ("sheared_current", sheared_current()),

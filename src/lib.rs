@@ -157,8 +157,8 @@ pub use scene::{
 };
 pub use scene::{Current, CurrentProfile};
 pub use simulate::{
-    piecewise_constant_controls, scene_controls, simulate, simulate_chain, simulate_with_controls,
-    SceneTrajectory, Trajectory,
+    piecewise_constant_controls, scene_controls, scene_controls_x, simulate, simulate_chain,
+    simulate_with_controls, simulate_with_controls_xz, SceneTrajectory, Trajectory,
 };
 
 /// The README's code runs as a doctest.

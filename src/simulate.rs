@@ -28,6 +28,11 @@ pub struct Trajectory<D, const DIM: usize> {
     pub moment: Vec<D>,
     /// Controls u_k used, k = 0..=N.
     pub controls: Vec<D>,
+    /// The x component M₀ₓ(t_k) of the base moment vector
+    /// ([`Chain::base_moment_vector`]), k = 0..=N; empty in the planar model.
+    pub moment_x: Vec<D>,
+    /// The x components u_{x,k} of a 2-axis control, k = 0..=N; empty for a 1-axis control.
+    pub controls_x: Vec<D>,
     /// Reaction-force variant: tip target ζ_k (zero otherwise).
     pub tip_target: Vec<D>,
     /// Per-step Newton statistics, k = 0..N−1.
@@ -86,6 +91,16 @@ impl<D: Scalar, const DIM: usize> Trajectory<D, DIM> {
     pub fn newton_iterations(&self) -> usize {
         self.stats.iter().map(|s| s.iterations).sum()
     }
+    /// |M₀(t_k)| = √(M₀ₓ² + M₀_z²), the magnitude of the base moment vector, k = 0..=N (|M₀_z|
+    /// in the planar model).
+    pub fn moment_magnitude(&self) -> Vec<f64> {
+        (0..=self.steps)
+            .map(|k| {
+                let mx = self.moment_x.get(k).map_or(0.0, |m| m.re());
+                mx.hypot(self.moment[k].re())
+            })
+            .collect()
+    }
 }
 
 /// The piece of step k in a piecewise-constant control with `pieces` = P pieces over N = `steps`
@@ -104,26 +119,44 @@ pub fn piece_index(k: usize, steps: usize, pieces: usize) -> usize {
 }
 
 /// The per-step controls u_0..u_N of a scene: its `[control]` values expanded (constant → N + 1
-/// copies, piecewise → [`piece_index`]), or zeros without a control.
+/// copies, piecewise → [`piece_index`]), or zeros without a control. For a 2-axis control these
+/// are the z components (see [`scene_controls_x`]).
 pub fn scene_controls(scene: &Scene) -> Vec<f64> {
     let steps = scene.time.steps;
-    let n1 = steps + 1;
     match &scene.control {
-        None => vec![0.0; n1],
-        Some(c) => match c.kind {
-            ControlKind::Constant => vec![c.values[0]; n1],
-            ControlKind::PerStep => c.values.clone(),
-            ControlKind::Piecewise => (0..n1)
-                .map(|k| c.values[piece_index(k, steps, c.values.len())])
-                .collect(),
-        },
+        None => vec![0.0; steps + 1],
+        Some(c) => expand_controls(c.kind, &c.values, steps),
+    }
+}
+
+/// The x components u_{x,0..N} of a scene's 2-axis control, expanded like [`scene_controls`];
+/// empty for a 1-axis control or none.
+pub fn scene_controls_x(scene: &Scene) -> Vec<f64> {
+    match &scene.control {
+        Some(c) => c
+            .values_x
+            .as_ref()
+            .map_or_else(Vec::new, |vx| expand_controls(c.kind, vx, scene.time.steps)),
+        None => Vec::new(),
+    }
+}
+
+/// Per-step controls u_0..u_N from a scene's control values of kind `kind`.
+fn expand_controls(kind: ControlKind, values: &[f64], steps: usize) -> Vec<f64> {
+    let n1 = steps + 1;
+    match kind {
+        ControlKind::Constant => vec![values[0]; n1],
+        ControlKind::PerStep => values.to_vec(),
+        ControlKind::Piecewise => (0..n1)
+            .map(|k| values[piece_index(k, steps, values.len())])
+            .collect(),
     }
 }
 
 /// Bytes [`simulate_chain`] stores for a trajectory of N = `steps` steps of n pendulums with
 /// `n_constraints` multipliers in scalar `D` and dimension `DIM`: per time t_k (N + 1 of them) q
 /// and p (2·n·DIM scalars), λ and μ (2·n_c scalars), energy, moment, control and tip target
-/// (4 scalars); per step its [`StepStats`]; plus the n lengths. Saturates at `u64::MAX`.
+/// (4 scalars; 6 in the spatial model, with M₀ₓ and u_x); per step its [`StepStats`]; plus the n lengths. Saturates at `u64::MAX`.
 pub fn trajectory_bytes<D, const DIM: usize>(n: usize, n_constraints: usize, steps: usize) -> u64 {
     let per_time = per_time_bytes::<D, DIM>(n, n_constraints);
     let total = (steps as u128 + 1) * per_time
@@ -134,7 +167,8 @@ pub fn trajectory_bytes<D, const DIM: usize>(n: usize, n_constraints: usize, ste
 
 fn per_time_bytes<D, const DIM: usize>(n: usize, n_constraints: usize) -> u128 {
     let d = std::mem::size_of::<D>() as u128;
-    (2 * n as u128 * DIM as u128 + 2 * n_constraints as u128 + 4) * d
+    let extra = if DIM == 3 { 2 } else { 0 };
+    (2 * n as u128 * DIM as u128 + 2 * n_constraints as u128 + 4 + extra) * d
 }
 
 /// The largest N whose trajectory ([`trajectory_bytes`]) fits [`MAX_TRAJECTORY_BYTES`].
@@ -221,9 +255,22 @@ impl SceneTrajectory {
     pub fn moment(&self) -> &[f64] {
         either!(self, t => &t.moment)
     }
-    /// Controls u_k used, k = 0..=N.
+    /// Controls u_k used, k = 0..=N (z components of a 2-axis control).
     pub fn controls(&self) -> &[f64] {
         either!(self, t => &t.controls)
+    }
+    /// The x component M₀ₓ(t_k) of the base moment vector, k = 0..=N (empty in the planar
+    /// model).
+    pub fn moment_x(&self) -> &[f64] {
+        either!(self, t => &t.moment_x)
+    }
+    /// |M₀(t_k)| = √(M₀ₓ² + M₀_z²), k = 0..=N.
+    pub fn moment_magnitude(&self) -> Vec<f64> {
+        either!(self, t => t.moment_magnitude())
+    }
+    /// The x components u_{x,k} of a 2-axis control, k = 0..=N (empty for a 1-axis control).
+    pub fn controls_x(&self) -> &[f64] {
+        either!(self, t => &t.controls_x)
     }
     /// Reaction-force variant: tip target ζ_k (zero otherwise).
     pub fn tip_target(&self) -> &[f64] {
@@ -266,44 +313,70 @@ impl SceneTrajectory {
 }
 
 /// Simulates a scene in `f64` with its own controls, in the model it needs: the planar one when
-/// all loads lie in the yz-plane (every thesis scene), the spatial one otherwise
-/// ([`Scene::is_spatial`]; docs/scene-format.md "model no more than a scene needs").
+/// all loads lie in the yz-plane and the control (if any) acts along z (every thesis scene), the
+/// spatial one otherwise ([`Scene::is_spatial`]; docs/scene-format.md "model no more than a
+/// scene needs").
 pub fn simulate(scene: &Scene) -> Result<SceneTrajectory> {
-    simulate_with_controls_at(scene, &scene_controls(scene), false)
+    let ux = scene_controls_x(scene);
+    simulate_with_controls_at(scene, (&scene_controls(scene), &ux), false)
 }
 
 /// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1) at the
 /// scene's control node (default: the tip), in the model it needs (see [`simulate()`]).
 pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<SceneTrajectory> {
-    simulate_with_controls_at(scene, controls, true)
+    simulate_with_controls_at(scene, (controls, &[]), true)
+}
+
+/// Simulates a scene with explicit per-step 2-axis controls (u_{x,k}, u_k), k = 0..=N
+/// (`controls_x` and `controls` of length N + 1 each), at the scene's control node (default: the
+/// tip), in the spatial model.
+///
+/// # Errors
+/// As [`simulate_chain`]; [`Error::WrongLength`] if `controls_x` is not N + 1 long.
+pub fn simulate_with_controls_xz(
+    scene: &Scene,
+    controls_x: &[f64],
+    controls: &[f64],
+) -> Result<SceneTrajectory> {
+    crate::adjoint::check_controls(controls_x, scene.time.steps)?;
+    let mut chain = Chain::<f64, 3>::from_scene(scene)?;
+    if chain.control_node().is_none() {
+        chain.set_control_node(Some(scene.n()))?;
+    }
+    chain.set_control_x(controls_x)?;
+    let t = simulate_chain(chain, scene.time.step, scene.time.steps, controls)?;
+    Ok(SceneTrajectory::Spatial(t))
 }
 
 fn simulate_with_controls_at(
     scene: &Scene,
-    controls: &[f64],
+    (controls, controls_x): (&[f64], &[f64]),
     tip_default: bool,
 ) -> Result<SceneTrajectory> {
     fn run<const DIM: usize>(
         scene: &Scene,
-        controls: &[f64],
+        (controls, controls_x): (&[f64], &[f64]),
         tip_default: bool,
     ) -> Result<Trajectory<f64, DIM>> {
         let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
         if tip_default && chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }
+        chain.set_control_x(controls_x)?;
         simulate_chain(chain, scene.time.step, scene.time.steps, controls)
     }
+    let u = (controls, controls_x);
     Ok(if scene.is_spatial() {
-        SceneTrajectory::Spatial(run::<3>(scene, controls, tip_default)?)
+        SceneTrajectory::Spatial(run::<3>(scene, u, tip_default)?)
     } else {
-        SceneTrajectory::Planar(run::<2>(scene, controls, tip_default)?)
+        SceneTrajectory::Planar(run::<2>(scene, u, tip_default)?)
     })
 }
 
 /// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls
-/// u_0..u_N, generic over the scalar (dual numbers give forward-mode derivatives of the whole
-/// trajectory) and the dimension.
+/// u_0..u_N (and the x components of a 2-axis control the chain holds,
+/// [`Chain::set_control_x`]), generic over the scalar (dual numbers give forward-mode
+/// derivatives of the whole trajectory) and the dimension.
 ///
 /// # Errors
 /// [`Error::WrongLength`] or [`Error::NotFinite`] for controls of the wrong length or not
@@ -345,11 +418,17 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
         energy: try_with_capacity(steps + 1, e)?,
         moment: try_with_capacity(steps + 1, e)?,
         controls: try_with_capacity(steps + 1, e)?,
+        moment_x: try_with_capacity(if DIM == 3 { steps + 1 } else { 0 }, e)?,
+        controls_x: try_with_capacity(if DIM == 3 { steps + 1 } else { 0 }, e)?,
         tip_target: try_with_capacity(steps + 1, e)?,
         stats: try_with_capacity(steps, e)?,
         lengths: chain.lengths().iter().map(|l| l.re()).collect(),
     };
     traj.controls.extend_from_slice(controls);
+    if chain.has_control_x() {
+        traj.controls_x
+            .extend((0..=steps).map(|k| chain.control_x(k)));
+    }
     let mut rattle = Rattle::new(chain, h)?;
     let mut state: State<D, DIM> = rattle.straight_state();
     rattle.prepare(&mut state, 0, controls[0])?;
@@ -364,9 +443,14 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
         traj.lambda.extend_from_slice(lambda);
         traj.mu.extend_from_slice(mu);
         let t = k as f64 * h;
-        let e = ch.kinetic_energy(&st.p, scratch) + ch.potential_energy(&st.q, t, controls[k]);
+        let e =
+            ch.kinetic_energy(&st.p, scratch) + ch.potential_energy_at(&st.q, t, controls[k], k);
         traj.energy.push(e);
-        traj.moment.push(ch.base_moment(&st.q));
+        let [mx, mz] = ch.base_moment_vector(&st.q);
+        traj.moment.push(mz);
+        if DIM == 3 {
+            traj.moment_x.push(mx);
+        }
         traj.tip_target.push(st.tip_target[0]);
     };
     // The initial state has no multipliers: λ_0 = μ_0 = the consistent multiplier.

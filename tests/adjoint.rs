@@ -42,6 +42,7 @@ fn check<O: Objective + Clone>(
         node: control_node,
         kind: ControlKind::Constant,
         values: vec![0.0],
+        values_x: None,
     });
     let steps = s.time.steps;
     let theta = start(&map, steps);
@@ -248,6 +249,7 @@ fn hessian_vector_products() {
             node,
             kind: ControlKind::Constant,
             values: vec![0.0],
+            values_x: None,
         });
         let map = Parametrisation::PerStep(PerStepControl { steps: 15 });
         let prob =

@@ -767,6 +767,11 @@ fn describe(name: &str) -> String {
              45 degrees between x and z (force = [fx, fz] = [sqrt 2, sqrt 2]), no drag, t in [0, 10] s. \
              Spatial: simulate runs the spatial model and fills in the x columns."
             .into(),
+        "oblique_control" => "Issue 13 (2-axis control): the oblique riser (F = 2 N at node 5 at 45 \
+             degrees, force = [sqrt 2, sqrt 2]) with a 2-axis piecewise control [u_x, u_z] at node 10, \
+             10 pieces of 1 s (initial guess 0), objective c_sum = sum of |M0(t_k)|^2, t in [0, 10] s. \
+             Spatial; the optimal control points along the load (rotational symmetry)."
+            .into(),
         "wave_riser" => "Issue 13 (waves): the riser with drag D = 10 kg/m and a harmonic load \
              2 N sin(2 pi t / 8 s) at node 5, ramped in over 8 s, t in [0, 32] s; piecewise control at \
              node 10 (32 pieces of 1 s), objective c_sum = sum of M0(t_k)^2 (chainbeam optimize \
@@ -942,28 +947,38 @@ fn cli_reads_shipped_scenes() {
     assert_eq!(numbers(&json(&o), "gradient").len(), 1001);
 }
 
-/// A spatial scene (a load with an x component, docs/scene-format.md): `simulate` keeps the CSV header and
-/// fills in the x columns with the library's spatial trajectory; the planar `gradient` refuses it
-/// with one message naming the key. The series scene reads its CSV beside the scene file.
+/// A spatial scene (a load with an x component or a 2-axis control, docs/scene-format.md):
+/// `simulate` keeps the CSV header, fills in the x columns with the library's spatial trajectory
+/// and has `moment_x` and `control_x` before the last column `control` (docs/cli.md); the planar `gradient` refuses it with
+/// one message naming the key. The series scene reads its CSV beside the scene file.
 #[test]
 fn cli_simulates_spatial_scenes() {
     let dir = scenes_dir();
-    for name in ["oblique_riser", "wave_series"] {
+    for name in ["oblique_riser", "wave_series", "oblique_control"] {
         let path = dir.join(format!("{name}.toml"));
         let o = run_on("simulate", &path, &[]);
         assert_success(&o);
         let out = stdout(&o);
-        assert_eq!(out.lines().next(), Some(header(10).as_str()));
+        let spatial_header = header(10).replace(",control", ",moment_x,control_x,control");
+        assert_eq!(out.lines().next(), Some(spatial_header.as_str()));
         let rows = parse_rows(&out);
         let traj = simulate(&Scene::from_file(&path).unwrap()).unwrap();
         assert!(traj.is_spatial());
         assert_eq!(rows.len(), traj.steps() + 1);
+        let ux = |k: usize| traj.controls_x().get(k).copied().unwrap_or(0.0);
         for (k, row) in rows.iter().enumerate() {
             for (i, r) in traj.positions(k).iter().enumerate() {
                 for d in 0..3 {
                     assert_eq!(row[3 + 3 * i + d].to_bits(), r[d].to_bits());
                 }
             }
+            assert_eq!(row[2].to_bits(), traj.moment()[k].to_bits());
+            assert_eq!(row[33].to_bits(), traj.moment_x()[k].to_bits());
+            assert_eq!(row[34].to_bits(), ux(k).to_bits());
+            assert_eq!(row[35].to_bits(), traj.controls()[k].to_bits());
+        }
+        if name == "oblique_control" {
+            continue; // its control starts at 0 and cancels nothing: the load moves it as oblique_riser
         }
         // the x of the tip moves: toward −x, as the x components of the loads push it
         let tip_x = rows.iter().map(|r| r[3 + 27]).fold(0.0f64, f64::min);

@@ -64,6 +64,7 @@ fn spec_scene() -> Scene {
             node: 10,
             kind: ControlKind::Constant,
             values: vec![0.0],
+            values_x: None,
         }),
         objective: Some(ObjectiveKind::Final),
     }
@@ -1321,6 +1322,7 @@ fn piecewise_scenes_simulate_and_differentiate() {
         node: 10,
         kind: ControlKind::Piecewise,
         values: theta.to_vec(),
+        values_x: None,
     });
     pw.objective = Some(ObjectiveKind::Sum);
     pw.validate().unwrap();

@@ -251,7 +251,9 @@ fn recompute_segment<D: Scalar, const DIM: usize>(
 }
 
 /// One forward and one reverse sweep: J, ∂J/∂u_k and ∂J/∂θ (physical parameters), generic over
-/// the scalar (`Dual64` with seeded inputs gives Hessian-vector products).
+/// the scalar (`Dual64` with seeded inputs gives Hessian-vector products). A 2-axis control's x
+/// components are read from the chain ([`Chain::set_control_x`]) and their gradient ∂J/∂u_{x,k}
+/// is [`AdjointResult::control_gradient_x`].
 pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     chain: &Chain<D, DIM>,
     h: f64,
@@ -304,6 +306,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         pbar: zero,
         tip_bar: [D::zero(); 2],
         ubar: vec![D::zero(); steps + 1],
+        uxbar: vec![D::zero(); if chain.has_control_x() { steps + 1 } else { 0 }],
         thbar: vec![D::zero(); params.len()],
     };
     let n_segments = checkpoints.len() - 1;
@@ -330,6 +333,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     Ok(AdjointResult {
         value,
         control_gradient: cot.ubar,
+        control_gradient_x: cot.uxbar,
         parameter_gradient: cot.thbar,
         state_bytes: (checkpoints.capacity() + buffer.capacity()) * state_size,
     })

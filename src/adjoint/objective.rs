@@ -15,10 +15,15 @@ pub struct Stage<'a, D> {
     pub steps: usize,
     /// Step h.
     pub h: f64,
-    /// Base bending moment M₀(t_k) (eq. 3.1.3).
+    /// Base bending moment M₀(t_k) (eq. 3.1.3): the z component M₀_z of the vector
+    /// [`crate::Chain::base_moment_vector`].
     pub moment: D,
-    /// Control u_k.
+    /// The x component M₀ₓ(t_k) of the base moment (0 in the planar model).
+    pub moment_x: D,
+    /// Control u_k (its z component for a 2-axis control).
     pub control: D,
+    /// The x component u_{x,k} of a 2-axis control (0 otherwise).
+    pub control_x: D,
     /// Node z-displacements z₁..zₙ at t_k (filled only when [`Objective::uses_positions`]).
     pub z: &'a [D],
 }
@@ -39,12 +44,14 @@ pub trait Objective: Send + Sync {
     }
 }
 
-/// The thesis's bending-moment objectives (§3.3) with an optional effort penalty.
+/// The thesis's bending-moment objectives (§3.3) with an optional effort penalty, on the squared
+/// norm |M₀|² = M₀ₓ² + M₀_z² of the base moment vector (M₀² in the planar model, where M₀ₓ = 0
+/// and the sum is bit-for-bit M₀²) and |u|² = u_x² + u_z².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BendingObjective {
-    /// c = M₀(t_N)² (eq. 3.3.2) or c_sum = Σ_{k=0}^{N} M₀(t_k)² (eq. 3.3.4).
+    /// c = |M₀(t_N)|² (eq. 3.3.2) or c_sum = Σ_{k=0}^{N} |M₀(t_k)|² (eq. 3.3.4).
     pub kind: ObjectiveKind,
-    /// ρ ≥ 0 of the control-effort penalty ρ h Σ_{k=0}^{N} u_k² \[N²m²/(N² s)\].
+    /// ρ ≥ 0 of the control-effort penalty ρ h Σ_{k=0}^{N} |u_k|² \[N²m²/(N² s)\].
     pub effort: f64,
 }
 
@@ -77,17 +84,18 @@ impl Objective for BendingObjective {
     fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
         let m = match self.kind {
             ObjectiveKind::Final if s.k != s.steps => D::zero(),
-            _ => s.moment * s.moment,
+            _ => s.moment * s.moment + s.moment_x * s.moment_x,
         };
         if self.effort > 0.0 {
-            m + s.control * s.control * (self.effort * s.h)
+            let u2 = s.control * s.control + s.control_x * s.control_x;
+            m + u2 * (self.effort * s.h)
         } else {
             m
         }
     }
 }
 
-/// The residual r = M₀(t_N) itself, not squared: c = r² (eq. 3.3.2), so Newton or Gauss-Newton
+/// The residual r = M₀(t_N) itself (its z component in the spatial model), not squared: c = r² (eq. 3.3.2), so Newton or Gauss-Newton
 /// on r with the adjoint's ∇r finds the zeros of c exactly (Tables 3.1 and 3.3).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FinalMomentResidual;
@@ -143,7 +151,7 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         q: &[[D; DIM]],
         u: D,
     ) -> D {
-        let m = ch.base_moment(q);
+        let [mx, m] = ch.base_moment_vector(q);
         if self.obj.uses_positions() {
             positions_z(ch, q, &mut self.zpos);
         }
@@ -152,13 +160,16 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             steps: self.steps,
             h: self.h,
             moment: m,
+            moment_x: mx,
             control: u,
+            control_x: ch.control_x(k),
             z: &self.zpos,
         })
     }
 
-    /// Adds ∂ℓ_k/∂q_k to q̄, ∂ℓ_k/∂u_k to ū_k and, when k₁ is a requested parameter (index
-    /// `k1_param`), ∂ℓ_k/∂k₁ through M₀ = 2k₁z₁/l₁².
+    /// Adds ∂ℓ_k/∂q_k to q̄, ∂ℓ_k/∂u_k to ū_k (and ∂ℓ_k/∂u_{x,k} to ū_x for a 2-axis control)
+    /// and, when k₁ is a requested parameter (index `k1_param`), ∂ℓ_k/∂k₁ through
+    /// M₀ = 2k₁(x₁, z₁)/l₁².
     pub(crate) fn accumulate<const DIM: usize>(
         &mut self,
         ch: &Chain<D, DIM>,
@@ -166,22 +177,11 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         cot: &mut Cotangents<D, DIM>,
         k1_param: Option<usize>,
     ) {
-        let qbar = &mut cot.qbar;
-        let ubar = &mut cot.ubar;
-        let k1bar = k1_param.map(|i| &mut cot.thbar[i]);
         let zi_ = zi::<DIM>();
         let scale = ch.moment_stiffness * 2.0 * ch.inv_lengths[0];
-        let m = scale * q[0][zi_];
-        let st = |obj: &O, steps, h, m: Dual<D>, u: Dual<D>, z: &[Dual<D>]| {
-            obj.stage(Stage {
-                k,
-                steps,
-                h,
-                moment: m,
-                control: u,
-                z,
-            })
-        };
+        let [mx, m] = ch.base_moment_vector(q);
+        let point = [m, mx, u, ch.control_x(k)];
+        let two_axis = ch.has_control_x();
         let uses_z = self.obj.uses_positions();
         if uses_z {
             let mut acc = D::zero();
@@ -191,50 +191,62 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             }
         }
         let zslice: &[Dual<D>] = if uses_z { &self.zbuf } else { &[] };
-        let dm = st(
-            self.obj,
-            self.steps,
-            self.h,
-            Dual::new(m, D::one()),
-            Dual::from_re(u),
-            zslice,
-        )
-        .eps;
-        let du = st(
-            self.obj,
-            self.steps,
-            self.h,
-            Dual::from_re(m),
-            Dual::new(u, D::one()),
-            zslice,
-        )
-        .eps;
-        qbar[0][zi_] += dm * scale;
-        ubar[k] += du;
-        if let Some(kb) = k1bar {
-            *kb += dm * 2.0 * q[0][zi_] * ch.inv_lengths[0];
+        // ∂ℓ/∂(M₀_z, M₀ₓ, u, u_x), one dual evaluation each (M₀ₓ and u_x only where they exist).
+        let mut d = [D::zero(); 4];
+        for (i, di) in d.iter_mut().enumerate() {
+            if (i == 1 && DIM == 2) || (i == 3 && !two_axis) {
+                continue;
+            }
+            *di = self.stage_dual(k, point, Some(i), zslice).eps;
+        }
+        cot.qbar[0][zi_] += d[0] * scale;
+        cot.ubar[k] += d[2];
+        if DIM == 3 {
+            cot.qbar[0][0] += d[1] * scale;
+        }
+        if two_axis {
+            cot.uxbar[k] += d[3];
+        }
+        if let Some(kb) = k1_param.map(|i| &mut cot.thbar[i]) {
+            *kb += d[0] * 2.0 * q[0][zi_] * ch.inv_lengths[0];
+            if DIM == 3 {
+                *kb += d[1] * 2.0 * q[0][0] * ch.inv_lengths[0];
+            }
         }
         if uses_z {
             // ∂ℓ/∂z_i, then q̄_{j,z} += l_j Σ_{i ≥ j} ∂ℓ/∂z_i.
-            let n = ch.n();
             let mut acc = D::zero();
-            for i in (0..n).rev() {
+            for i in (0..ch.n()).rev() {
                 let zi_re = self.zbuf[i].re;
                 self.zbuf[i] = Dual::new(zi_re, D::one());
-                let g = st(
-                    self.obj,
-                    self.steps,
-                    self.h,
-                    Dual::from_re(m),
-                    Dual::from_re(u),
-                    &self.zbuf,
-                )
-                .eps;
+                let g = self.stage_dual(k, point, None, &self.zbuf).eps;
                 self.zbuf[i] = Dual::from_re(zi_re);
                 acc += g;
-                qbar[i][zi_] += acc * ch.lengths[i];
+                cot.qbar[i][zi_] += acc * ch.lengths[i];
             }
         }
+    }
+
+    /// ℓ_k in `Dual<D>` at (M₀_z, M₀ₓ, u, u_x) = `point`, with the input `seed` (an index into
+    /// `point`) seeded.
+    fn stage_dual(&self, k: usize, point: [D; 4], seed: Option<usize>, z: &[Dual<D>]) -> Dual<D> {
+        let v = |i: usize| {
+            if seed == Some(i) {
+                Dual::new(point[i], D::one())
+            } else {
+                Dual::from_re(point[i])
+            }
+        };
+        self.obj.stage(Stage {
+            k,
+            steps: self.steps,
+            h: self.h,
+            moment: v(0),
+            moment_x: v(1),
+            control: v(2),
+            control_x: v(3),
+            z,
+        })
     }
 }
 

@@ -14,36 +14,69 @@ use num_dual::Dual64;
 /// An optimal-control problem on a scene: J(θ) = Σ ℓ_k(M₀(t_k), u_k(θ)) over the RATTLE
 /// trajectory, with exact gradients by the discrete adjoint and Hessian-vector products by
 /// forward-over-adjoint.
+///
+/// `DIM = 2` (the default) is the planar model of [`ControlProblem::new`] and
+/// [`ControlProblem::from_scene`]; `DIM = 3` the spatial model of [`ControlProblem::spatial`] and
+/// [`ControlProblem::spatial_from_scene`], whose control may be 2-axis. A 2-axis control
+/// u_k = (u_{x,k}, u_{z,k}) has θ = (θ_x; θ_z): the map's m parameters of the x components first,
+/// then the m of the z components (2m in all, docs/conventions.md "Two-axis controls").
 #[derive(Clone, Debug)]
-pub struct ControlProblem<P = Parametrisation, O = BendingObjective> {
-    chain: Chain<f64, 2>,
+pub struct ControlProblem<P = Parametrisation, O = BendingObjective, const DIM: usize = 2> {
+    chain: Chain<f64, DIM>,
     h: f64,
     steps: usize,
     map: P,
     objective: O,
     checkpointing: Checkpointing,
-    start: Option<Start<f64, 2>>,
+    two_axis: bool,
+    start: Option<Start<f64, DIM>>,
+}
+
+/// The parametrisation a scene's `[control]` asks for (default: constant).
+fn scene_map(scene: &Scene) -> Parametrisation {
+    match scene.control.as_ref().map(|c| c.kind) {
+        Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
+            steps: scene.time.steps,
+        }),
+        Some(ControlKind::Piecewise) => Parametrisation::Piecewise(PiecewiseControl {
+            steps: scene.time.steps,
+            pieces: scene.control.as_ref().map_or(1, |c| c.values.len()),
+        }),
+        _ => Parametrisation::Constant,
+    }
+}
+
+/// The objective a scene's `[objective]` asks for (default: final), without effort penalty.
+fn scene_objective(scene: &Scene) -> BendingObjective {
+    BendingObjective {
+        kind: scene.objective.unwrap_or(ObjectiveKind::Final),
+        effort: 0.0,
+    }
+}
+
+/// The model of a control problem: the scene's, with the control at its node (default: the tip).
+fn control_chain<const DIM: usize>(scene: &Scene) -> Result<Chain<f64, DIM>> {
+    let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+    if chain.control_node().is_none() {
+        chain.set_control_node(Some(scene.n()))?;
+    }
+    Ok(chain)
 }
 
 impl ControlProblem<Parametrisation, BendingObjective> {
     /// The problem a scene file describes: its `[control]` (node and kind; default: constant at
     /// the tip) and `[objective]` (default: final), without effort penalty.
     pub fn from_scene(scene: &Scene) -> Result<Self> {
-        let map = match scene.control.as_ref().map(|c| c.kind) {
-            Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
-                steps: scene.time.steps,
-            }),
-            Some(ControlKind::Piecewise) => Parametrisation::Piecewise(PiecewiseControl {
-                steps: scene.time.steps,
-                pieces: scene.control.as_ref().map_or(1, |c| c.values.len()),
-            }),
-            _ => Parametrisation::Constant,
-        };
-        let obj = BendingObjective {
-            kind: scene.objective.unwrap_or(ObjectiveKind::Final),
-            effort: 0.0,
-        };
-        ControlProblem::new(scene, map, obj)
+        ControlProblem::new(scene, scene_map(scene), scene_objective(scene))
+    }
+}
+
+impl ControlProblem<Parametrisation, BendingObjective, 3> {
+    /// The problem a scene file describes, in the spatial model (any scene; a 2-axis
+    /// `[control]` gives a 2-axis problem): as [`ControlProblem::from_scene`].
+    pub fn spatial_from_scene(scene: &Scene) -> Result<Self> {
+        let two_axis = scene.has_two_axis_control();
+        ControlProblem::spatial(scene, scene_map(scene), scene_objective(scene), two_axis)
     }
 }
 
@@ -51,32 +84,56 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// A problem with the given parametrisation and objective; the control acts at the scene's
     /// control node (default: the tip n).
     pub fn new(scene: &Scene, map: P, objective: O) -> Result<Self> {
-        let mut chain = Chain::<f64, 2>::from_scene(scene)?;
-        if chain.control_node().is_none() {
-            chain.set_control_node(Some(scene.n()))?;
-        }
         Ok(ControlProblem {
-            chain,
+            chain: control_chain(scene)?,
             h: scene.time.step,
             steps: scene.time.steps,
             map,
             objective,
             checkpointing: Checkpointing::default(),
+            two_axis: false,
             start: None,
         })
+    }
+}
+
+impl<P: ControlMap, O: Objective> ControlProblem<P, O, 3> {
+    /// A problem in the spatial model with the given parametrisation and objective, the control
+    /// at the scene's control node (default: the tip n): along z (`two_axis = false`, θ as in the
+    /// planar problem) or 2-axis (θ = (θ_x; θ_z), 2m parameters for a map of m).
+    pub fn spatial(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
+        Ok(ControlProblem {
+            chain: control_chain(scene)?,
+            h: scene.time.step,
+            steps: scene.time.steps,
+            map,
+            objective,
+            checkpointing: Checkpointing::default(),
+            two_axis,
+            start: None,
+        })
+    }
+}
+
+impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
+    /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
+    pub fn with_checkpointing(mut self, c: Checkpointing) -> Self {
+        self.checkpointing = c;
+        self
     }
 
     /// The same problem on a horizon that starts from `state` at time `t0` (instead of the
     /// straight beam at rest at t = 0): step k runs from t₀ + k h with the controls u_k, u_{k+1}
     /// of θ (indexed from 0 on this horizon), so the tail of a longer run from its state at step m
-    /// is this problem with t₀ = m h. The state's μ is the first step's Newton predictor (all
-    /// zero: computed). The state is data: gradients are with respect to θ only.
+    /// is this problem with t₀ = m h. The state's multipliers, if any, give the first step's
+    /// Newton predictor (`None`: the consistent multiplier). The state is data: gradients are
+    /// with respect to θ only.
     ///
     /// # Errors
     /// [`Error::WrongLength`] / [`Error::NotFinite`] naming the part of the state (or the start
     /// time), [`Error::InvalidArgument`] when the state is off the constraint manifold
     /// (ĝ(q) = 0 and Ĝ(q) M⁻¹ p = 0 to [`crate::adjoint::START_TOLERANCE`]).
-    pub fn starting_from(mut self, state: State<f64, 2>, t0: f64) -> Result<Self> {
+    pub fn starting_from(mut self, state: State<f64, DIM>, t0: f64) -> Result<Self> {
         let start = Start { state, t0 };
         start.check(&self.chain)?;
         self.start = Some(start);
@@ -84,19 +141,26 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     }
 
     /// The start of the horizon (None: the straight beam at rest at t = 0).
-    pub fn start(&self) -> Option<&Start<f64, 2>> {
+    pub fn start(&self) -> Option<&Start<f64, DIM>> {
         self.start.as_ref()
     }
 
-    /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
-    pub fn with_checkpointing(mut self, c: Checkpointing) -> Self {
-        self.checkpointing = c;
-        self
+    /// The start lifted to another scalar type.
+    fn start_as<D: Scalar>(&self) -> Option<Start<D, DIM>> {
+        self.start.as_ref().map(|s| Start {
+            state: s.state.lift(),
+            t0: s.t0,
+        })
     }
 
-    /// Number of parameters θ.
+    /// Number of parameters θ (2m for a 2-axis control of a map of m).
     pub fn n_params(&self) -> usize {
-        self.map.n_params()
+        self.map.n_params() * if self.two_axis { 2 } else { 1 }
+    }
+
+    /// Whether the control is 2-axis (θ = (θ_x; θ_z)).
+    pub fn is_two_axis(&self) -> bool {
+        self.two_axis
     }
 
     /// Number of steps N.
@@ -115,7 +179,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     }
 
     /// The model (f64).
-    pub fn chain(&self) -> &Chain<f64, 2> {
+    pub fn chain(&self) -> &Chain<f64, DIM> {
         &self.chain
     }
 
@@ -125,10 +189,10 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     }
 
     fn check_theta(&self, theta: &[f64], name: &'static str) -> Result<()> {
-        if theta.len() != self.map.n_params() {
+        if theta.len() != self.n_params() {
             return Err(Error::WrongLength {
                 name,
-                expected: self.map.n_params(),
+                expected: self.n_params(),
                 got: theta.len(),
             });
         }
@@ -138,49 +202,81 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         }
     }
 
-    /// The per-step controls u_0..u_N of θ.
+    /// (θ_x, θ_z): the blocks of a 2-axis θ, or (∅, θ).
+    fn split<'t, D>(&self, theta: &'t [D]) -> (&'t [D], &'t [D]) {
+        if self.two_axis {
+            theta.split_at(self.map.n_params())
+        } else {
+            (&[], theta)
+        }
+    }
+
+    /// The per-step controls u_0..u_N of θ (their z components for a 2-axis control).
     pub fn controls(&self, theta: &[f64]) -> Result<Vec<f64>> {
         self.check_theta(theta, "theta")?;
         let mut u = vec![0.0; self.steps + 1];
-        self.map.controls(theta, &mut u);
+        self.map.controls(self.split(theta).1, &mut u);
         Ok(u)
+    }
+
+    /// The x components u_{x,0..N} of a 2-axis control of θ (empty for a 1-axis control).
+    pub fn controls_x(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        self.check_theta(theta, "theta")?;
+        Ok(self.expand_x(self.split(theta).0))
+    }
+
+    /// The magnitudes |u_k| = √(u_{x,k}² + u_{z,k}²), k = 0..=N.
+    pub fn control_magnitudes(&self, theta: &[f64]) -> Result<Vec<f64>> {
+        let (u, ux) = (self.controls(theta)?, self.controls_x(theta)?);
+        let x = |k: usize| ux.get(k).copied().unwrap_or(0.0);
+        Ok(u.iter().enumerate().map(|(k, z)| x(k).hypot(*z)).collect())
+    }
+
+    /// u_x = the map of θ_x (empty for a 1-axis control), in any scalar.
+    fn expand_x<D: Scalar>(&self, theta_x: &[D]) -> Vec<D> {
+        if !self.two_axis {
+            return Vec::new();
+        }
+        let mut ux = vec![D::zero(); self.steps + 1];
+        self.map.controls(theta_x, &mut ux);
+        ux
+    }
+
+    /// The model over `D` with the x components `ux` of a 2-axis control.
+    fn chain_with_x<D: Scalar>(&self, ux: &[D]) -> Result<Chain<D, DIM>> {
+        let mut chain = self.chain.lift::<D>();
+        chain.set_control_x(ux)?;
+        Ok(chain)
     }
 
     /// J(θ) by one forward simulation (no storage).
     pub fn value(&self, theta: &[f64]) -> Result<f64> {
         let u = self.controls(theta)?;
-        forward_value_from(
-            &self.chain,
-            self.h,
-            self.steps,
-            &u,
-            &self.objective,
-            self.start.as_ref(),
-        )
+        let ux = self.expand_x(self.split(theta).0);
+        let (h, n, obj, s) = (self.h, self.steps, &self.objective, self.start.as_ref());
+        if ux.is_empty() {
+            return forward_value_from(&self.chain, h, n, &u, obj, s);
+        }
+        let chain = self.chain_with_x(&ux)?;
+        forward_value_from(&chain, h, n, &u, obj, s)
     }
 
     /// (J(θ), ∇J(θ)) by the discrete adjoint.
     pub fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let u = self.controls(theta)?;
-        self.theta_gradient(&self.chain, &u)
+        let r = self.adjoint(theta, &[])?;
+        Ok((r.value, self.theta_bar(&r)))
     }
 
-    /// J and ∇_θJ = (∂u/∂θ)ᵀ ∇_u J for controls `u` on `chain`, in any scalar type.
-    fn theta_gradient<D: Scalar>(&self, chain: &Chain<D, 2>, u: &[D]) -> Result<(D, Vec<D>)> {
-        let start = self.start_as::<D>();
-        let r = adjoint_gradient_from(
-            chain,
-            self.h,
-            self.steps,
-            u,
-            &self.objective,
-            &[],
-            self.checkpointing,
-            start.as_ref(),
-        )?;
-        let mut g = vec![D::zero(); self.map.n_params()];
-        self.map.transpose(&r.control_gradient, &mut g);
-        Ok((r.value, g))
+    /// ∇_θJ = (∂u/∂θ)ᵀ ∇_u J (both blocks for a 2-axis control), in any scalar type.
+    fn theta_bar<D: Scalar>(&self, r: &AdjointResult<D>) -> Vec<D> {
+        let m = self.map.n_params();
+        let mut g = vec![D::zero(); self.n_params()];
+        let (gx, gz) = g.split_at_mut(if self.two_axis { m } else { 0 });
+        self.map.transpose(&r.control_gradient, gz);
+        if self.two_axis {
+            self.map.transpose(&r.control_gradient_x, gx);
+        }
+        g
     }
 
     /// ∇J(θ) by the discrete adjoint.
@@ -188,19 +284,18 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
         Ok(self.value_and_gradient(theta)?.1)
     }
 
-    /// The full adjoint result at θ, with gradients for the physical parameters `params` too.
+    /// The full adjoint result at θ, with gradients for the physical parameters `params` too
+    /// (and ∂J/∂u_{x,k} for a 2-axis control).
     pub fn adjoint(&self, theta: &[f64], params: &[Parameter]) -> Result<AdjointResult<f64>> {
         let u = self.controls(theta)?;
-        adjoint_gradient_from(
-            &self.chain,
-            self.h,
-            self.steps,
-            &u,
-            &self.objective,
-            params,
-            self.checkpointing,
-            self.start.as_ref(),
-        )
+        let ux = self.expand_x(self.split(theta).0);
+        let (h, n, obj, c) = (self.h, self.steps, &self.objective, self.checkpointing);
+        let s = self.start.as_ref();
+        if ux.is_empty() {
+            return adjoint_gradient_from(&self.chain, h, n, &u, obj, params, c, s);
+        }
+        let chain = self.chain_with_x(&ux)?;
+        adjoint_gradient_from(&chain, h, n, &u, obj, params, c, s)
     }
 
     /// ∂J/∂θ_phys for physical parameters (stiffnesses, mass, drag, load magnitudes).
@@ -218,22 +313,19 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
             .zip(v)
             .map(|(&t, &d)| Dual64::new(t, d))
             .collect();
+        let (thx, thz) = self.split(&th);
         let mut u = vec![Dual64::from(0.0); self.steps + 1];
-        self.map.controls(&th, &mut u);
-        let (_, g) = self.theta_gradient(&self.chain_as::<Dual64>(), &u)?;
-        Ok(g.iter().map(|x| x.eps).collect())
+        self.map.controls(thz, &mut u);
+        let chain = self.chain_with_x(&self.expand_x(thx))?;
+        let (h, n, obj, c) = (self.h, self.steps, &self.objective, self.checkpointing);
+        let start = self.start_as::<Dual64>();
+        let r = adjoint_gradient_from(&chain, h, n, &u, obj, &[], c, start.as_ref())?;
+        Ok(self.theta_bar(&r).iter().map(|x| x.eps).collect())
     }
 
-    /// The start lifted to another scalar type.
-    fn start_as<D: Scalar>(&self) -> Option<Start<D, 2>> {
-        self.start.as_ref().map(|s| Start {
-            state: s.state.lift(),
-            t0: s.t0,
-        })
-    }
-
-    /// The model lifted to another scalar type.
-    pub fn chain_as<D: Scalar>(&self) -> Chain<D, 2> {
+    /// The model lifted to another scalar type (without the x components of a 2-axis control,
+    /// which the problem sets per evaluation).
+    pub fn chain_as<D: Scalar>(&self) -> Chain<D, DIM> {
         self.chain.lift()
     }
 }

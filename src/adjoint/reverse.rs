@@ -12,12 +12,14 @@ use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 
 /// The cotangents carried backwards: q̄, p̄ and the tip target's (ζ̄, v̄) at the current step, and
-/// the accumulated ∂J/∂u_k and ∂J/∂θ.
+/// the accumulated ∂J/∂u_k (∂J/∂u_{x,k}) and ∂J/∂θ.
 pub(crate) struct Cotangents<D, const DIM: usize> {
     pub qbar: Vec<[D; DIM]>,
     pub pbar: Vec<[D; DIM]>,
     pub tip_bar: [D; 2],
     pub ubar: Vec<D>,
+    /// ∂J/∂u_{x,k} of a 2-axis control (empty for a 1-axis control).
+    pub uxbar: Vec<D>,
     pub thbar: Vec<D>,
 }
 
@@ -85,10 +87,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         cot: &mut Cotangents<D, DIM>,
     ) -> Result<()> {
         self.projection(k, sk1, cot)?;
-        let ctx1 = Ctx::new(self.t0 + (k + 1) as f64 * self.h, u_k1, k + 1);
+        let ctx1 = self.ch.ctx(self.t0 + (k + 1) as f64 * self.h, u_k1, k + 1);
         self.second_half(sk1, &ctx1, cot)?;
         self.newton(k, sk.q, sk1, cot)?;
-        let ctx0 = Ctx::new(self.t0 + k as f64 * self.h, u_k, k);
+        let ctx0 = self.ch.ctx(self.t0 + k as f64 * self.h, u_k, k);
         self.first_half(sk, sk1, &ctx0, cot)?;
         if let Some(tip) = self.ch.reaction_tip() {
             self.tip_target(&tip, k, (u_k, u_k1), cot);
@@ -163,7 +165,8 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.force_terms(sk1.q, ctx1, Half::Second, cot)
     }
 
-    /// The force terms' share of a half-step's reverse: q̄ −= h/2 K(q) w, ū −= h/2 w·∂F/∂u,
+    /// The force terms' share of a half-step's reverse: q̄ −= h/2 K(q) w, ū −= h/2 w·∂F/∂u
+    /// (ū_x −= h/2 w·∂F/∂u_x for a 2-axis control),
     /// θ̄ −= h/2 w·∂F/∂θ, with w = b̄ (second half) or c̄ (first half).
     fn force_terms(
         &mut self,
@@ -180,6 +183,9 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         let s = &mut self.scratch;
         ch.force_jacobian_product(q, w, ctx, D::from(-hh), &mut cot.qbar, s)?;
         cot.ubar[ctx.step] -= ch.control_contraction(q, w, ctx, s)? * hh;
+        if let Some(uxb) = cot.uxbar.get_mut(ctx.step) {
+            *uxb -= ch.control_x_contraction(q, w, ctx, s)? * hh;
+        }
         for (tb, p) in cot.thbar.iter_mut().zip(self.params) {
             *tb -= ch.force_parameter_contraction(q, w, ctx, *p, s)? * hh;
         }

@@ -50,8 +50,10 @@ impl Checkpointing {
 pub struct AdjointResult<D> {
     /// The objective.
     pub value: D,
-    /// ∂J/∂u_k, k = 0..=N.
+    /// ∂J/∂u_k, k = 0..=N (the z components of a 2-axis control).
     pub control_gradient: Vec<D>,
+    /// ∂J/∂u_{x,k}, k = 0..=N, for a 2-axis control (empty for a 1-axis control).
+    pub control_gradient_x: Vec<D>,
     /// ∂J/∂θ for the requested physical parameters, in request order.
     pub parameter_gradient: Vec<D>,
     /// Bytes of forward states held at the peak (checkpoints plus the segment buffer).

@@ -102,6 +102,9 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) loads: Option<PointLoads<D>>,
     pub(crate) gravity: Option<Gravity<D>>,
     pub(crate) control: Option<ControlForce<D>>,
+    /// The x components u_{x,0..N} of a 2-axis control, indexed by step (empty: a 1-axis control
+    /// along z, u_x = 0). Read into [`Ctx::ux`] by [`Chain::ctx`].
+    pub(crate) control_x: Vec<D>,
     pub(crate) drag: Option<Drag<D>>,
     /// Drag relative to a current; replaces `drag` when the scene has a current.
     pub(crate) current: Option<CurrentDrag<D, DIM>>,
@@ -146,6 +149,8 @@ enum Product {
     Parameter(Parameter),
     /// w · ∂F/∂u.
     Control,
+    /// w · ∂F/∂u_x.
+    ControlX,
 }
 
 /// Derived products of every term (see [`Chain::force_jacobian_product`],
@@ -172,6 +177,7 @@ impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Products<'_, D, DIM> {
             }
             Product::Parameter(p) => self.sum += term.parameter_contraction(q, w, c, p, s)?,
             Product::Control => self.sum += term.control_contraction(q, w, c, s)?,
+            Product::ControlX => self.sum += term.control_x_contraction(q, w, c, s)?,
         }
         Ok(())
     }
@@ -256,6 +262,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 node,
                 lengths: lengths.clone(),
             }),
+            control_x: Vec::new(),
             drag: (scene.loads.drag > 0.0 && scene.loads.current.is_none()).then(|| Drag {
                 d: D::from(scene.loads.drag),
             }),
@@ -323,6 +330,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             loads: self.loads.as_ref().map(|t| t.lift()),
             gravity: self.gravity.as_ref().map(|t| t.lift()),
             control: self.control.as_ref().map(|t| t.lift()),
+            control_x: self.control_x.iter().map(|x| D2::from(x.re())).collect(),
             drag: self.drag.as_ref().map(|t| t.lift()),
             current: self.current.as_ref().map(|t| t.lift()),
         }
@@ -422,7 +430,61 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             node,
             lengths: self.lengths.clone(),
         });
+        if node.is_none() {
+            self.control_x.clear();
+        }
         Ok(())
+    }
+
+    /// Sets (or, with an empty slice, removes) the x components u_{x,0..N} of a 2-axis control,
+    /// one per step k (docs/conventions.md "Two-axis controls"): the control force at t_k is
+    /// (u_{x,k}, u_k). Steps beyond the slice have u_x = 0.
+    ///
+    /// # Errors
+    /// [`Error::NeedsSpatialModel`] for the planar model (`DIM = 2`) with a nonempty slice;
+    /// [`Error::InvalidArgument`] without a control node; [`Error::NotFinite`] for a non-finite
+    /// value.
+    pub fn set_control_x(&mut self, ux: &[D]) -> Result<()> {
+        if !ux.is_empty() {
+            if DIM == 2 {
+                return Err(Error::NeedsSpatialModel {
+                    key: "control.values".to_string(),
+                });
+            }
+            if self.control.is_none() {
+                return Err(Error::InvalidArgument {
+                    name: "control_x",
+                    reason: "the model has no control node".to_string(),
+                });
+            }
+            if let Some(index) = ux.iter().position(|x| !x.re().is_finite()) {
+                return Err(Error::NotFinite {
+                    name: "control_x",
+                    index,
+                });
+            }
+        }
+        self.control_x.clear();
+        self.control_x.extend_from_slice(ux);
+        Ok(())
+    }
+
+    /// Whether the model has a 2-axis control (a nonempty x schedule, [`Chain::set_control_x`]).
+    pub fn has_control_x(&self) -> bool {
+        !self.control_x.is_empty()
+    }
+
+    /// The x component u_{x,k} of the control at step k (0 for a 1-axis control).
+    #[inline]
+    pub fn control_x(&self, k: usize) -> D {
+        self.control_x.get(k).copied().unwrap_or_else(D::zero)
+    }
+
+    /// The evaluation context at time t, step k, control z component u: [`Ctx::new`] with the
+    /// x component u_{x,k} of a 2-axis control ([`Chain::control_x`]).
+    #[inline]
+    pub fn ctx(&self, t: f64, u: D, k: usize) -> Ctx<D> {
+        Ctx::new(t, u, k).with_ux(self.control_x(k))
     }
 
     /// Sets the fold limit in degrees (default [`DEFAULT_FOLD_LIMIT_DEG`]): a joint angle beyond
@@ -608,7 +670,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         out: &mut [[D; DIM]],
     ) -> Result<()> {
         out.iter_mut().for_each(|o| *o = [D::zero(); DIM]);
-        let ctx = Ctx::new(t, u, step);
+        let ctx = self.ctx(t, u, step);
         self.visit_terms(&mut ForceSum { q, ctx, out })
     }
 
@@ -662,6 +724,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.contraction(q, w, ctx, Product::Control, scratch)
     }
 
+    /// w · ∂(∂U/∂q)/∂u_x for the x component of a 2-axis control, summed over the terms
+    /// ([`ForceTerm::control_x_contraction`]; 0 in the planar model).
+    pub fn control_x_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        self.contraction(q, w, ctx, Product::ControlX, scratch)
+    }
+
     fn contraction(
         &self,
         q: &[[D; DIM]],
@@ -706,9 +780,16 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         m
     }
 
-    /// Potential energy U(q; t, u): the sum of every term's energy ([`ForceTerm::energy`]).
+    /// Potential energy U(q; t, u): the sum of every term's energy ([`ForceTerm::energy`]), with
+    /// the x component of a 2-axis control at step 0 (see [`Chain::potential_energy_at`]).
     pub fn potential_energy(&self, q: &[[D; DIM]], t: f64, u: D) -> D {
-        let ctx = Ctx::new(t, u, 0);
+        self.potential_energy_at(q, t, u, 0)
+    }
+
+    /// Potential energy U(q; t_k, u_k) at step k (the x component of a 2-axis control is
+    /// u_{x,k}).
+    pub fn potential_energy_at(&self, q: &[[D; DIM]], t: f64, u: D, k: usize) -> D {
+        let ctx = self.ctx(t, u, k);
         let mut v = EnergySum {
             q,
             ctx,
@@ -734,6 +815,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     #[inline]
     pub fn base_moment(&self, q: &[[D; DIM]]) -> D {
         self.moment_stiffness * 2.0 * q[0][zi::<DIM>()] * self.inv_lengths[0]
+    }
+
+    /// The base bending moment as a vector M₀ = (M₀ₓ, M₀_z) = (2 k₁ / l₁)(e₁ᵀq₁, e₃ᵀq₁) =
+    /// 2 k₁ (x₁, z₁) / l₁² (docs/conventions.md "The bending moment M₀"): each component is the
+    /// moment of the base spring that bends the beam toward that axis, with the sign of eq. 3.1.3
+    /// (M₀_z is [`Chain::base_moment`]; M₀ₓ = 0 in the planar model). A rotation of the loads about
+    /// the beam's axis y rotates (M₀ₓ, M₀_z) with them, so |M₀|² = M₀ₓ² + M₀_z² is invariant.
+    #[inline]
+    pub fn base_moment_vector(&self, q: &[[D; DIM]]) -> [D; 2] {
+        let s = self.moment_stiffness * 2.0 * self.inv_lengths[0];
+        let mx = if DIM == 3 { s * q[0][0] } else { D::zero() };
+        [mx, s * q[0][zi::<DIM>()]]
     }
 
     /// Node positions rᵢ = Σ_{j≤i} l_j q_j, i = 1..=n (node 0 is the origin).

@@ -454,12 +454,13 @@ mod tests {
         for j in 0..k {
             st.advance(j, u(j)).unwrap();
         }
-        let (q, p, mu) = (st.state.q.clone(), st.state.p.clone(), st.state.mu.clone());
+        let mu = st.state.multipliers.as_ref().unwrap().mu.clone();
+        let (q, p) = (st.state.q.clone(), st.state.p.clone());
         let mut omega = vec![0.0; model.n];
         let mut scratch = vec![[0.0; 2]; model.n];
         model.rates(&q, &p, &mut scratch, &mut omega);
         st.advance(k, u(k)).unwrap();
-        let lambda = st.state.lambda.clone();
+        let lambda = st.state.multipliers.as_ref().unwrap().lambda.clone();
         // The predictor μ is not the converged λ: the second run iterates.
         assert!(lambda
             .iter()

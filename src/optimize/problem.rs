@@ -138,7 +138,9 @@ pub trait HessianVec {
 /// kg, l = 1 m, h = 0.01 s) it is 3.14·10⁴ N, twice the largest force any unbounded Table 3.4
 /// run reaches (1.5·10⁴ N, with the chain already folded) and 10²⁸ times below the −1.46·10³²
 /// N that round-off once sent L-BFGS to on a control that could not act.
-pub fn resolved_control_limit<P: ControlMap, O: Objective>(problem: &ControlProblem<P, O>) -> f64 {
+pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
+    problem: &ControlProblem<P, O, DIM>,
+) -> f64 {
     let chain = problem.chain();
     let c = chain
         .control_node()
@@ -150,69 +152,88 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective>(problem: &ControlProb
     std::f64::consts::PI * m * l / (h * h)
 }
 
-impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O> {
-    fn n_params(&self) -> usize {
-        ControlProblem::n_params(self)
-    }
-    /// One forward simulation, no adjoint.
-    fn value(&self, theta: &[f64]) -> Result<f64> {
-        ControlProblem::value(self, theta)
-    }
-    fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
-        ControlProblem::value_and_gradient(self, theta)
-    }
-    fn gradient(&self, theta: &[f64]) -> Result<Vec<f64>> {
-        ControlProblem::gradient(self, theta)
-    }
-    fn hessian(&self) -> Option<&dyn HessianVec> {
-        Some(self)
-    }
-    fn controls(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
-        Some(ControlProblem::controls(self, theta))
-    }
-    /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (how
-    /// strongly θᵢ reaches the forces; 1 for every built-in parametrisation): the largest
-    /// resolved force, in θᵢ's units. (For a nonlinear [`ControlMap`], aᵢ is its response to a
-    /// unit θᵢ at θ = 0.)
-    fn param_scales(&self) -> Vec<f64> {
-        let limit = resolved_control_limit(self);
-        let n = ControlProblem::n_params(self);
-        (0..n)
-            .map(|i| {
-                let mut e = vec![0.0; n];
-                e[i] = 1.0;
-                let a = ControlProblem::controls(self, &e)
-                    .map(|u| u.iter().fold(0.0f64, |m, x| m.max(x.abs())))
-                    .unwrap_or(0.0);
-                if a > 0.0 && a.is_finite() {
-                    limit / a
-                } else {
-                    limit
-                }
-            })
-            .collect()
-    }
+/// [`OptimProblem`] for the planar (`DIM = 2`, with the Riccati solver) and the spatial
+/// (`DIM = 3`) control problems: the same methods, except that only the planar one offers
+/// [`OptimProblem::riccati`] (the solver's tangent coordinates are planar).
+macro_rules! impl_optim_problem {
+    ($dim:literal, $($riccati:tt)*) => {
+        impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O, $dim> {
+        fn n_params(&self) -> usize {
+            ControlProblem::n_params(self)
+        }
+        /// One forward simulation, no adjoint.
+        fn value(&self, theta: &[f64]) -> Result<f64> {
+            ControlProblem::value(self, theta)
+        }
+        fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
+            ControlProblem::value_and_gradient(self, theta)
+        }
+        fn gradient(&self, theta: &[f64]) -> Result<Vec<f64>> {
+            ControlProblem::gradient(self, theta)
+        }
+        fn hessian(&self) -> Option<&dyn HessianVec> {
+            Some(self)
+        }
+        fn controls(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
+            Some(ControlProblem::controls(self, theta))
+        }
+        /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (the
+        /// magnitude of a 2-axis control; how
+        /// strongly θᵢ reaches the forces; 1 for every built-in parametrisation): the largest
+        /// resolved force, in θᵢ's units. (For a nonlinear [`ControlMap`], aᵢ is its response to a
+        /// unit θᵢ at θ = 0.)
+        fn param_scales(&self) -> Vec<f64> {
+            let limit = resolved_control_limit(self);
+            let n = ControlProblem::n_params(self);
+            (0..n)
+                .map(|i| {
+                    let mut e = vec![0.0; n];
+                    e[i] = 1.0;
+                    let a = ControlProblem::control_magnitudes(self, &e)
+                        .map(|u| u.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+                        .unwrap_or(0.0);
+                    if a > 0.0 && a.is_finite() {
+                        limit / a
+                    } else {
+                        limit
+                    }
+                })
+                .collect()
+        }
+        /// Every force |u_k| ≤ [`resolved_control_limit`] (|u_k| = √(u_{x,k}² + u_{z,k}²) for a
+        /// 2-axis control); otherwise [`Error::ControlOutOfRange`].
+        fn check_range(&self, theta: &[f64]) -> Result<()> {
+            let u = if self.is_two_axis() {
+                ControlProblem::control_magnitudes(self, theta)?
+            } else {
+                ControlProblem::controls(self, theta)?
+            };
+            let limit = resolved_control_limit(self);
+            match u.iter().position(|x| x.abs() > limit) {
+                Some(k) => Err(Error::ControlOutOfRange {
+                    index: k,
+                    value: u[k],
+                    limit,
+                }),
+                None => Ok(()),
+            }
+        }
+            $($riccati)*
+        }
+    };
+}
+
+impl_optim_problem!(
+    2,
     /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of a
     /// [`BendingObjective`](crate::BendingObjective).
     fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         Some(crate::ocp::solve(self, theta0, options))
     }
-    /// Every force |u_k| ≤ [`resolved_control_limit`]; otherwise [`Error::ControlOutOfRange`].
-    fn check_range(&self, theta: &[f64]) -> Result<()> {
-        let u = ControlProblem::controls(self, theta)?;
-        let limit = resolved_control_limit(self);
-        match u.iter().position(|x| x.abs() > limit) {
-            Some(k) => Err(Error::ControlOutOfRange {
-                index: k,
-                value: u[k],
-                limit,
-            }),
-            None => Ok(()),
-        }
-    }
-}
+);
+impl_optim_problem!(3,);
 
-impl<P: ControlMap, O: Objective> HessianVec for ControlProblem<P, O> {
+impl<P: ControlMap, O: Objective, const DIM: usize> HessianVec for ControlProblem<P, O, DIM> {
     /// Forward-over-adjoint ([`ControlProblem::hessian_vec`]).
     fn hessian_vec(&self, theta: &[f64], v: &[f64]) -> Result<Vec<f64>> {
         ControlProblem::hessian_vec(self, theta, v)

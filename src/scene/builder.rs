@@ -183,6 +183,7 @@ impl SceneBuilder {
             node,
             kind: ControlKind::Constant,
             values: vec![u],
+            values_x: None,
         });
         self
     }
@@ -193,6 +194,7 @@ impl SceneBuilder {
             node,
             kind: ControlKind::PerStep,
             values,
+            values_x: None,
         });
         self
     }
@@ -204,6 +206,20 @@ impl SceneBuilder {
             node,
             kind: ControlKind::Piecewise,
             values,
+            values_x: None,
+        });
+        self
+    }
+
+    /// A 2-axis control at `node` (docs/conventions.md "Two-axis controls"): `values` are the
+    /// pairs [u_x, u_z] of a control of kind `kind` (1, N + 1 or P pairs). Selects the spatial
+    /// model.
+    pub fn control_two_axis(mut self, node: usize, kind: ControlKind, values: &[[f64; 2]]) -> Self {
+        self.control = Some(Control {
+            node,
+            kind,
+            values: values.iter().map(|v| v[1]).collect(),
+            values_x: Some(values.iter().map(|v| v[0]).collect()),
         });
         self
     }

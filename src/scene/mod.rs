@@ -246,8 +246,12 @@ pub struct Control {
     /// Constant or per-step.
     pub kind: ControlKind,
     /// 1 value (constant), N + 1 values (per-step) or P values (piecewise, 1 ≤ P ≤ N) \[N\]:
-    /// applied, or an optimiser's initial guess.
+    /// applied, or an optimiser's initial guess. The z components u_z of a 2-axis control.
     pub values: Vec<f64>,
+    /// The x components u_x of a 2-axis control (as many as `values`; the scene file writes the
+    /// pairs [u_x, u_z]), `None` for a control along z. A 2-axis control selects the spatial
+    /// model (docs/conventions.md "Two-axis controls").
+    pub values_x: Option<Vec<f64>>,
 }
 
 /// Which bending-moment objective a scene asks for (thesis §3.3).
@@ -291,10 +295,19 @@ impl Scene {
                 .current
                 .as_ref()
                 .is_some_and(|c| c.spatial_key().is_some())
+            || self.has_two_axis_control()
+    }
+
+    /// Whether the scene's control is 2-axis (`values` written as pairs [u_x, u_z]).
+    pub fn has_two_axis_control(&self) -> bool {
+        self.control.as_ref().is_some_and(|c| c.values_x.is_some())
     }
 
     /// The first key that makes the scene spatial (for messages), e.g. `loads.point[1].force`.
     pub fn spatial_key(&self) -> Option<String> {
+        if self.has_two_axis_control() {
+            return Some("control.values".to_string());
+        }
         let points = self.loads.points.iter().enumerate().find_map(|(i, p)| {
             let key = if p.force_x != 0.0 {
                 "force"

@@ -307,7 +307,56 @@ struct RawControl {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     node: Option<i64>,
     kind: ControlKind,
-    values: Vec<f64>,
+    /// u (along z) each, or [u_x, u_z] each (a 2-axis control).
+    values: Vec<NumOrArray>,
+}
+
+impl RawControl {
+    /// The values as (z components, x components of a 2-axis control): every value a number
+    /// (1-axis) or every value a pair [u_x, u_z] (2-axis).
+    fn split_values(values: Vec<NumOrArray>) -> Result<(Vec<f64>, Option<Vec<f64>>), SceneError> {
+        let two_axis = matches!(values.first(), Some(NumOrArray::Array(_)));
+        let (mut vz, mut vx) = (Vec::with_capacity(values.len()), Vec::new());
+        for (i, v) in values.into_iter().enumerate() {
+            let key = format!("control.values[{i}]");
+            match (v, two_axis) {
+                (NumOrArray::Number(u), false) => vz.push(u),
+                (NumOrArray::Array(p), true) if p.len() == 2 => {
+                    vx.push(p[0]);
+                    vz.push(p[1]);
+                }
+                (NumOrArray::Array(p), true) => {
+                    return Err(SceneError::invalid(
+                        key,
+                        format!(
+                            "a 2-axis control value is a pair [u_x, u_z], got {} numbers",
+                            p.len()
+                        ),
+                    ))
+                }
+                _ => {
+                    return Err(SceneError::invalid(
+                        key,
+                        "the values of one control are all numbers u (along z) or all pairs \
+                         [u_x, u_z] (2-axis)",
+                    ))
+                }
+            }
+        }
+        Ok((vz, two_axis.then_some(vx)))
+    }
+
+    /// The scene's values as written: numbers, or pairs [u_x, u_z] for a 2-axis control.
+    fn join_values(c: &Control) -> Vec<NumOrArray> {
+        match &c.values_x {
+            None => c.values.iter().map(|&u| NumOrArray::Number(u)).collect(),
+            Some(vx) => vx
+                .iter()
+                .zip(&c.values)
+                .map(|(&x, &z)| NumOrArray::Array(vec![x, z]))
+                .collect(),
+        }
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -347,7 +396,7 @@ impl RawScene {
             control: s.control.as_ref().map(|c| RawControl {
                 node: Some(to_i64(c.node)),
                 kind: c.kind,
-                values: c.values.clone(),
+                values: RawControl::join_values(c),
             }),
             objective: s.objective.map(|kind| RawObjective { kind }),
         }
@@ -376,14 +425,18 @@ impl RawScene {
         }
         let control = match self.control {
             None => None,
-            Some(c) => Some(Control {
-                node: match c.node {
-                    Some(node) => node_index("control.node", node, n)?,
-                    None => n,
-                },
-                kind: c.kind,
-                values: c.values,
-            }),
+            Some(c) => {
+                let (values, values_x) = RawControl::split_values(c.values)?;
+                Some(Control {
+                    node: match c.node {
+                        Some(node) => node_index("control.node", node, n)?,
+                        None => n,
+                    },
+                    kind: c.kind,
+                    values,
+                    values_x,
+                })
+            }
         };
         Ok(Scene {
             beam,

@@ -199,8 +199,18 @@ impl Scene {
                 ));
             }
             check_control_count(c.kind, c.values.len(), self.time.steps)?;
-            for (i, &u) in c.values.iter().enumerate() {
-                let key = format!("control.values[{i}]");
+            if let Some(vx) = &c.values_x {
+                if vx.len() != c.values.len() {
+                    return Err(SceneError::count(
+                        "control.values_x",
+                        c.values.len(),
+                        vx.len(),
+                    ));
+                }
+            }
+            let vx = c.values_x.iter().flatten();
+            for (i, &u) in c.values.iter().chain(vx).enumerate() {
+                let key = format!("control.values[{}]", i % c.values.len());
                 check_finite(&key, u)?;
                 check_range(&key, u, &FORCE_RANGE)?;
             }
@@ -239,10 +249,12 @@ impl Scene {
         };
         let loads = &self.loads;
         let total_mass: f64 = b.masses.iter().sum();
-        let max_u = self
-            .control
-            .as_ref()
-            .map_or(0.0, |c| c.values.iter().fold(0.0f64, |a, u| a.max(u.abs())));
+        let max_u = self.control.as_ref().map_or(0.0, |c| {
+            let vx = c.values_x.as_deref().unwrap_or(&[]);
+            let ux = |i: usize| vx.get(i).copied().unwrap_or(0.0);
+            let mag = c.values.iter().enumerate().map(|(i, u)| ux(i).hypot(*u));
+            mag.fold(0.0f64, f64::max)
+        });
         let load: f64 = loads
             .points
             .iter()

@@ -24,16 +24,22 @@ CSV (the default): a header line, then one row per time t_k = k·h, k = 0..N (N 
   moment   base bending moment M₀(t_k) = 2·k₁·z₁/l₁² [Nm] (thesis eq. 3.1.3)
   xi,yi,zi position of node i = 1..n [m]; the beam lies along +y. x = 0 for a planar scene;
            a scene with a load along x runs the spatial model and fills x in
-  control  the control force u_k [N] applied at t_k (0 without a control); always the last column
+A spatial scene (a load or a 2-axis control with an x component) has two more columns here:
+  moment_x the x component M₀ₓ(t_k) = 2·k₁·x₁/l₁² [Nm] of the base moment vector (M₀ₓ, M₀); the
+           objectives use |M₀|² = M₀ₓ² + M₀²
+  control_x the x component u_x,k [N] of a 2-axis control (0 for a control along z)
+  control  the control force u_k [N] applied at t_k (0 without a control; its z component for a
+           2-axis control); always the last column
 Numbers are written as the shortest decimal that reads back to the same double.
 
 NumPy (--format npy, or an --output name ending in .npy): one C-ordered float64 array of shape \
-(N + 1, 3n + 4) with the same columns in the same order (np.load(FILE); positions are \
-a[:, 3:-1].reshape(-1, n, 3)).
+(N + 1, 3n + 4), or (N + 1, 3n + 6) for a spatial scene, with the same columns in the same order \
+(np.load(FILE); positions are a[:, 3:3 + 3n].reshape(-1, n, 3), the control a[:, -1]).
 
 Sign convention: a load F > 0 enters H as +F·z and pushes toward −z (and F_x > 0 of a vector load \
-[F_x, F_z] toward −x); u = −F cancels a tip load F. In a spatial scene `moment` is still the \
-moment of z₁ (the bending in the yz-plane).";
+[F_x, F_z] toward −x); u = −F cancels a tip load F, and a 2-axis control [u_x, u_z] follows the same convention in both \
+components. In a spatial scene `moment` is still the moment of z₁ (the bending in the yz-plane) \
+and `moment_x` the moment of x₁.";
 
 /// `simulate`'s flags.
 #[derive(Args)]
@@ -137,6 +143,11 @@ fn check_trajectory(path: &Path, traj: &SceneTrajectory) -> Result<(), CliError>
             ("energy", traj.energy()[k]),
             ("moment", traj.moment()[k]),
             ("control", traj.controls()[k]),
+            ("moment_x", traj.moment_x().get(k).copied().unwrap_or(0.0)),
+            (
+                "control_x",
+                traj.controls_x().get(k).copied().unwrap_or(0.0),
+            ),
         ] {
             if !v.is_finite() {
                 return Err(bad(col));
@@ -153,14 +164,23 @@ fn check_trajectory(path: &Path, traj: &SceneTrajectory) -> Result<(), CliError>
     Ok(())
 }
 
-/// The CSV header: `t,energy,moment,x1,y1,z1,...,xn,yn,zn,control`.
-pub fn csv_header(n: usize) -> String {
+/// The CSV header: `t,energy,moment,x1,y1,z1,...,xn,yn,zn,control`; a spatial scene
+/// (`spatial`) has `moment_x,control_x` before `control`, which stays the last column.
+pub fn csv_header(n: usize, spatial: bool) -> String {
     let mut h = String::from("t,energy,moment");
     for i in 1..=n {
         h.push_str(&format!(",x{i},y{i},z{i}"));
     }
+    if spatial {
+        h.push_str(",moment_x,control_x");
+    }
     h.push_str(",control\n");
     h
+}
+
+/// The number of columns of [`csv_header`]: 3n + 4 (planar) or 3n + 6 (spatial).
+fn columns(traj: &SceneTrajectory) -> usize {
+    4 + 3 * traj.n() + if traj.is_spatial() { 2 } else { 0 }
 }
 
 /// One row of the trajectory at step k, in the column order of [`csv_header`].
@@ -170,6 +190,10 @@ fn row(traj: &SceneTrajectory, k: usize, out: &mut Vec<f64>) {
     for r in traj.positions(k) {
         out.extend(r);
     }
+    if traj.is_spatial() {
+        out.push(traj.moment_x()[k]);
+        out.push(traj.controls_x().get(k).copied().unwrap_or(0.0));
+    }
     out.push(traj.controls()[k]);
 }
 
@@ -178,9 +202,9 @@ fn write_csv(
     traj: &SceneTrajectory,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
-    w.write_all(csv_header(traj.n()).as_bytes())?;
-    let mut values = Vec::with_capacity(4 + 3 * traj.n());
-    let mut line = Vec::with_capacity(24 * (4 + 3 * traj.n()));
+    w.write_all(csv_header(traj.n(), traj.is_spatial()).as_bytes())?;
+    let mut values = Vec::with_capacity(columns(traj));
+    let mut line = Vec::with_capacity(24 * columns(traj));
     let mut buf = zmij::Buffer::new();
     for k in 0..=traj.steps() {
         row(traj, k, &mut values);
@@ -205,7 +229,7 @@ fn write_npy(
     traj: &SceneTrajectory,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
-    let columns = 4 + 3 * traj.n();
+    let columns = columns(traj);
     w.write_all(&npy::header(&[traj.steps() + 1, columns]))?;
     let mut values = Vec::with_capacity(columns);
     let mut bytes = Vec::with_capacity(8 * columns);

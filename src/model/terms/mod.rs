@@ -9,7 +9,8 @@
 //! * [`ForceTerm::force_vjp`]: Kᵀ w = K w (K is a Hessian, hence symmetric);
 //! * [`ForceTerm::parameter_contraction`]: w · ∂(∂U_T/∂q)/∂θ for a physical parameter θ (the term
 //!   reads θ through [`Ctx::param`], which seeds it);
-//! * [`ForceTerm::control_contraction`]: w · ∂(∂U_T/∂q)/∂u (seed u).
+//! * [`ForceTerm::control_contraction`]: w · ∂(∂U_T/∂q)/∂u (seed u), and
+//!   [`ForceTerm::control_x_contraction`] for the x component u_x of a 2-axis control (seed u_x).
 //!
 //! A term may override a derived product with a hand-written fast path (the springs do, for K v,
 //! because the step's adjoint calls it twice per step); `tests/terms.rs` checks every override
@@ -76,29 +77,39 @@ impl<D: Scalar> Embed<D> for Dual<D> {
     }
 }
 
-/// What a term is evaluated at besides q: the time t, the control u, and which physical parameter
-/// (if any) carries a derivative seed.
+/// What a term is evaluated at besides q: the time t, the control u = (u_x, u_z), and which
+/// physical parameter (if any) carries a derivative seed.
 #[derive(Clone, Copy, Debug)]
 pub struct Ctx<E> {
     /// Time t \[s\].
     pub t: f64,
-    /// The control force u at t.
+    /// The control force's z component u (the thesis's u; the only one of a 1-axis control).
     pub u: E,
+    /// The control force's x component u_x (2-axis controls in the spatial model; 0 otherwise,
+    /// docs/conventions.md "Two-axis controls").
+    pub ux: E,
     /// Step index (for error reports).
     pub step: usize,
     /// The parameter seeded by [`Ctx::param`], if any.
     pub seed: Option<Parameter>,
 }
 
-impl<E> Ctx<E> {
-    /// A context without a seeded parameter.
+impl<E: Scalar> Ctx<E> {
+    /// A context without a seeded parameter and with u_x = 0.
     pub fn new(t: f64, u: E, step: usize) -> Self {
         Ctx {
             t,
             u,
+            ux: E::zero(),
             step,
             seed: None,
         }
+    }
+
+    /// The same context with the control's x component `ux`.
+    pub fn with_ux(mut self, ux: E) -> Self {
+        self.ux = ux;
+        self
     }
 
     /// Reads a physical parameter `p` of value `v` into the evaluation scalar, seeded with
@@ -206,6 +217,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
         let c = Ctx {
             t: ctx.t,
             u: Dual::from_re(ctx.u),
+            ux: Dual::from_re(ctx.ux),
             step: ctx.step,
             seed: None,
         };
@@ -248,6 +260,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
         let c = Ctx {
             t: ctx.t,
             u: Dual::from_re(ctx.u),
+            ux: Dual::from_re(ctx.ux),
             step: ctx.step,
             seed: Some(p),
         };
@@ -270,6 +283,31 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
         let c = Ctx {
             t: ctx.t,
             u: Dual::new(ctx.u, D::one()),
+            ux: Dual::from_re(ctx.ux),
+            step: ctx.step,
+            seed: None,
+        };
+        self.force(&scratch.q, &c, &mut scratch.f)?;
+        Ok(scratch.contract(w))
+    }
+
+    /// w · ∂(∂U_T/∂q)/∂u_x for the x component of a 2-axis control, by one `Dual<D>` evaluation
+    /// with u_x seeded.
+    fn control_x_contraction(
+        &self,
+        q: &[[D; DIM]],
+        w: &[[D; DIM]],
+        ctx: &Ctx<D>,
+        scratch: &mut DualScratch<D, DIM>,
+    ) -> Result<D> {
+        if !self.depends_on_control() {
+            return Ok(D::zero());
+        }
+        scratch.load(q, None);
+        let c = Ctx {
+            t: ctx.t,
+            u: Dual::from_re(ctx.u),
+            ux: Dual::new(ctx.ux, D::one()),
             step: ctx.step,
             seed: None,
         };
@@ -301,6 +339,7 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
         let c = Ctx {
             t: ctx.t,
             u: Dual::from_re(ctx.u),
+            ux: Dual::from_re(ctx.ux),
             step: ctx.step,
             seed: None,
         };
@@ -316,6 +355,7 @@ pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
         let c = Ctx {
             t: ctx.t,
             u: Dual::from_re(ctx.u),
+            ux: Dual::from_re(ctx.ux),
             step: ctx.step,
             seed: Some(param),
         };

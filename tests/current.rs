@@ -419,6 +419,13 @@ fn bad_currents_name_the_key_and_the_file() {
             assert!(msg.contains(t), "{msg} lacks {t}");
         }
     }
+    // a current whose steady drag D·|P|² no step could resolve: the load number names time.step
+    let (_dir, path) = scene_file(
+        "[loads]\ndrag = 1e12\n[loads.current]\nprofile = \"uniform\"\nspeed = 1000.0\n",
+    );
+    let err = Scene::from_file(&path).unwrap_err();
+    assert_eq!(err.key(), Some("time.step"), "{err}");
+    assert!(err.to_string().contains("the load number"), "{err}");
     // a current without drag
     let (_dir, path) = scene_file("[loads.current]\nprofile = \"uniform\"\nspeed = 1.0\n");
     let err = Scene::from_file(&path).unwrap_err();

@@ -188,6 +188,33 @@ impl Current {
     }
 }
 
+impl Current {
+    /// The steady force D·|Pᵢ|² of the current on each pendulum at rest (Pᵢ = lᵢ Σ_{k≥i} m_k U_k,
+    /// [`crate::model::CurrentDrag`]), for the load number of the step check.
+    pub(super) fn steady_forces(&self, drag: f64, lengths: &[f64], masses: &[f64]) -> Vec<f64> {
+        let surface = self.surface.unwrap_or_else(|| lengths.iter().sum());
+        let s = self.speed().unwrap_or(0.0);
+        let mut y = 0.0;
+        let velocities: Vec<[f64; 2]> = lengths
+            .iter()
+            .map(|l| {
+                y += l;
+                let (a, b) = crate::model::terms::current_velocity(self, y, surface);
+                [s * a[0] + b[0], s * a[1] + b[1]]
+            })
+            .collect();
+        let mut acc = [0.0; 2];
+        let mut out = vec![0.0; lengths.len()];
+        for i in (0..lengths.len()).rev() {
+            acc[0] += masses[i] * velocities[i][0];
+            acc[1] += masses[i] * velocities[i][1];
+            let p = lengths[i] * acc[0].hypot(acc[1]);
+            out[i] = drag * p * p;
+        }
+        out
+    }
+}
+
 fn check_speed(key: &str, v: f64) -> Result<(), SceneError> {
     check_finite(key, v)?;
     if !CURRENT_SPEED_RANGE.contains(v) {

@@ -65,8 +65,8 @@ format is described in docs/scene-format.md; examples/scenes/ holds the thesis's
 command line is described in full in docs/cli.md.
 
 Units (SI): lengths and positions in m, masses in kg, spring constants in Nm/rad, forces and \
-controls in N, drag D in kg/m, gravity in m/s², time and step h in s, energy in J, base bending \
-moment M₀ in Nm, objectives in N²m².
+controls in N, drag D in kg/m, current speeds in m/s, gravity in m/s², time and step h in s, \
+energy in J, base bending moment M₀ in Nm, objectives in N²m².
 
 Geometry and sign convention (the thesis's): the undeformed beam lies along +y from node 0 at the \
 origin; loads act along z. A load F enters the Hamiltonian as +F·z, so F > 0 pushes the beam toward \

@@ -130,6 +130,7 @@ pub mod error;
 pub mod euler_bernoulli;
 pub mod integrators;
 pub mod model;
+pub mod mpc;
 pub mod multistart;
 pub mod ocp;
 pub mod optimize;

@@ -112,6 +112,9 @@
 //!   argmin (L-BFGS, trust region, Newton-CG), force bounds, observers, and how a run ended
 //!   ([`Termination`](optimize::Termination)).
 //! - [`multistart`]: multistart, clustering of minima, second-order certificates, landscapes.
+//! - [`mpc`]: closed-loop control: a plant stepped with the applied control, receding-horizon
+//!   control on the [`ocp`] solver (real-time iterations, warm starts, plant/model mismatch),
+//!   and the baselines (no control, best constant force, tuned PD law on M₀).
 //! - [`statics`]: static equilibrium, solved directly.
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).

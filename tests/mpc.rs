@@ -9,8 +9,8 @@ use chainbeam::mpc::{
 use chainbeam::ocp::{self, OcpOptions};
 use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::{
-    simulate_with_controls, ControlMap, BendingObjective, ControlProblem, Error,
-    Harmonic, ObjectiveKind, PiecewiseControl, PointLoad, Scene, Support,
+    simulate_with_controls, BendingObjective, ControlMap, ControlProblem, Error, Harmonic,
+    ObjectiveKind, PiecewiseControl, PointLoad, Scene, Support,
 };
 
 const INTERVAL: f64 = 0.1;
@@ -82,7 +82,11 @@ fn plant_reproduces_the_open_loop_simulation() {
     assert_eq!(r.control, u);
     assert_eq!(r.moment.len(), 101);
     for k in 0..=100 {
-        assert_eq!(r.moment[k].to_bits(), open.moment()[k].to_bits(), "step {k}");
+        assert_eq!(
+            r.moment[k].to_bits(),
+            open.moment()[k].to_bits(),
+            "step {k}"
+        );
     }
 }
 
@@ -162,13 +166,20 @@ fn plant_model_mismatch_runs_and_differs_from_the_perfect_model() {
     model.loads.drag = 7.0;
     model.loads.points[0].harmonics[0].amplitude = 1.6;
     let o = options(Horizon::Seconds(1.0), 5.0, 2);
-    let perfect = run_closed_loop(&s, INTERVAL, &mut Mpc::new(&s, INTERVAL, o.clone()).unwrap())
-        .unwrap();
+    let perfect = run_closed_loop(
+        &s,
+        INTERVAL,
+        &mut Mpc::new(&s, INTERVAL, o.clone()).unwrap(),
+    )
+    .unwrap();
     let off = run_closed_loop(&s, INTERVAL, &mut Mpc::new(&model, INTERVAL, o).unwrap()).unwrap();
     let free = run_closed_loop(&s, INTERVAL, &mut NoControl).unwrap();
     let (p, m, f) = (perfect.summary.c_sum, off.summary.c_sum, free.summary.c_sum);
     println!("c_sum: perfect model {p}, mismatched model {m}, no control {f}");
-    assert!((m - p).abs() > 1e-6 * p, "the model's error changes nothing: {m} vs {p}");
+    assert!(
+        (m - p).abs() > 1e-6 * p,
+        "the model's error changes nothing: {m} vs {p}"
+    );
     let du = perfect
         .control
         .iter()
@@ -187,7 +198,11 @@ fn bounds_on_u_hold_in_closed_loop() {
     let bound = 0.3;
     let mut mpc = Mpc::new(&s, INTERVAL, options(Horizon::Seconds(0.5), bound, 2)).unwrap();
     let r = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap();
-    assert!(r.control.iter().all(|u| u.abs() <= bound), "{:?}", r.control);
+    assert!(
+        r.control.iter().all(|u| u.abs() <= bound),
+        "{:?}",
+        r.control
+    );
     assert!(
         r.decisions.iter().any(|d| d.control.abs() == bound),
         "the bound was never active: {:?}",
@@ -201,7 +216,9 @@ fn bounds_on_u_hold_in_closed_loop() {
 fn baselines_improve_on_no_control() {
     // u = 0 is feasible for both problems, so their optima cannot be worse than no control.
     let s = scene(100);
-    let free = run_closed_loop(&s, INTERVAL, &mut NoControl).unwrap().summary;
+    let free = run_closed_loop(&s, INTERVAL, &mut NoControl)
+        .unwrap()
+        .summary;
     let (mut best, _) = ConstantForce::best(&s, 5.0, 0.0).unwrap();
     let constant = run_closed_loop(&s, INTERVAL, &mut best).unwrap().summary;
     assert!(constant.c_sum <= free.c_sum);
@@ -215,7 +232,12 @@ fn baselines_improve_on_no_control() {
     let closed = run_closed_loop(&s, INTERVAL, &mut pd).unwrap().summary;
     // The tuned objective is the closed-loop c_sum of the same loop (ρ = 0).
     assert!((closed.c_sum - r.objective).abs() <= 1e-12 * r.objective);
-    assert!(closed.c_sum < free.c_sum, "{} vs {}", closed.c_sum, free.c_sum);
+    assert!(
+        closed.c_sum < free.c_sum,
+        "{} vs {}",
+        closed.c_sum,
+        free.c_sum
+    );
 }
 
 #[test]
@@ -261,7 +283,10 @@ fn bad_settings_are_typed_errors() {
     // A horizon shorter than the interval, or not a whole number of intervals.
     assert_eq!(invalid_name(new(0.1, o(Horizon::Seconds(0.05)))), "horizon");
     assert_eq!(invalid_name(new(0.1, o(Horizon::Seconds(0.25)))), "horizon");
-    assert_eq!(invalid_name(new(0.1, o(Horizon::Seconds(f64::NAN)))), "horizon");
+    assert_eq!(
+        invalid_name(new(0.1, o(Horizon::Seconds(f64::NAN)))),
+        "horizon"
+    );
     let mut zero = o(Horizon::ToEnd);
     zero.iterations = 0;
     assert_eq!(invalid_name(new(0.1, zero)), "iterations");

@@ -169,14 +169,24 @@ impl OptimProblem for PdTuning {
 
     fn value(&self, theta: &[f64]) -> Result<f64> {
         let g = gains::<f64>(theta, |x, _| x)?;
-        pd_closed_loop_cost(&self.scene, self.interval_steps, &g, self.bound, self.effort)
+        pd_closed_loop_cost(
+            &self.scene,
+            self.interval_steps,
+            &g,
+            self.bound,
+            self.effort,
+        )
     }
 
     fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let g = gains::<DualSVec64<3>>(theta, |x, i| {
-            DualSVec64::<3>::from_re(x).derivative(i)
-        })?;
-        let j = pd_closed_loop_cost(&self.scene, self.interval_steps, &g, self.bound, self.effort)?;
+        let g = gains::<DualSVec64<3>>(theta, |x, i| DualSVec64::<3>::from_re(x).derivative(i))?;
+        let j = pd_closed_loop_cost(
+            &self.scene,
+            self.interval_steps,
+            &g,
+            self.bound,
+            self.effort,
+        )?;
         let grad = match j.eps.0 {
             Some(v) => v.iter().copied().collect(),
             None => vec![0.0; 3],

@@ -327,7 +327,9 @@ fn summarise(
         initial_decision_seconds: decisions.first().map_or(0.0, |d| d.seconds),
         mean_replan_seconds: replan / count,
         worst_replan_seconds: later.iter().fold(0.0, |a, d| a.max(d.seconds)),
-        mean_iterations: iterations.filter(|_| !later.is_empty()).map(|i| i as f64 / count),
+        mean_iterations: iterations
+            .filter(|_| !later.is_empty())
+            .map(|i| i as f64 / count),
         real_time_factor: rtf(replan),
         loop_real_time_factor: rtf(loop_seconds),
     }

@@ -11,8 +11,9 @@
 //!   With `OCP_BENCH_LONG=1` also N = 10⁴ (and 10⁵ with `OCP_BENCH_LONG=2`), and L-BFGS and the
 //!   trust region at N = 10³ (minutes: L-BFGS stops at 5000 iterations, the trust region
 //!   converges after about 225-375 s; `examples/long_horizon.rs` prints the same comparison).
-//! - `ocp_table_3_4/{riccati,lbfgs,trust_region}/node`: Table 3.4 rows 5 and 7 (per-step, N = 10,
-//!   c_sum, the thesis's force bound) from u = 0.
+//! - `ocp_table_3_4/all_rows/{riccati,lbfgs,trust_region}`: all ten rows of Table 3.4
+//!   (per-step, N = 10, c_sum, each row bounded by the thesis's largest |u_k|) from u = 0, in
+//!   total; the per-row objectives, convergence and times are printed to stderr first.
 //!
 //! Run with `cargo bench --bench ocp -- --warm-up-time 1 --measurement-time 5`.
 
@@ -24,6 +25,10 @@ use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
 };
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, SamplingMode};
+
+#[allow(dead_code)]
+#[path = "../examples/tables/thesis.rs"]
+mod thesis;
 
 fn long_horizon(steps: usize) -> Scene {
     let mut s = catalogue::long_horizon();
@@ -125,42 +130,94 @@ fn bench_solve(c: &mut Criterion) {
     g.finish();
 }
 
-fn bench_table_3_4(c: &mut Criterion) {
-    let mut g = c.benchmark_group("ocp_table_3_4");
-    g.sample_size(20);
-    // The thesis's largest |u_k| of the row (examples/tables/thesis.rs): node 5: 374.15 N,
-    // node 7: 4.63 N.
-    for (node, bound) in [(5usize, 374.15217067), (7, 4.62758511)] {
-        let p = ControlProblem::new(
-            &catalogue::riser(node),
-            Parametrisation::PerStep(PerStepControl { steps: 10 }),
-            BendingObjective::summed_moment(),
-        )
-        .expect("valid scene");
-        let ocp = OcpOptions::default().with_bound(bound);
-        g.bench_with_input(BenchmarkId::new("riccati", node), &node, |b, _| {
-            b.iter(|| black_box(solve(&p, black_box(&[0.0; 11]), &ocp).unwrap().objective))
-        });
-        for (name, method) in [
-            ("lbfgs", Method::Lbfgs),
-            ("trust_region", Method::TrustRegion),
-        ] {
-            let opts = OptimOptions {
-                method,
-                bound: Some(bound),
-                max_iters: 2000,
-                ..OptimOptions::default()
-            };
-            g.bench_with_input(BenchmarkId::new(name, node), &node, |b, _| {
-                b.iter(|| {
-                    black_box(
-                        minimize(&p, black_box(&[0.0; 11]), &opts)
-                            .unwrap()
-                            .objective,
-                    )
-                })
-            });
+/// Table 3.4's ten rows (per-step, N = 10, c_sum, no effort), each bounded by the thesis's
+/// largest |u_k| of its row (examples/tables/thesis.rs, as the `tables` example bounds them).
+fn table_3_4_rows() -> Vec<(usize, ControlProblem, f64)> {
+    (1..=10)
+        .map(|node| {
+            let p = ControlProblem::new(
+                &catalogue::riser(node),
+                Parametrisation::PerStep(PerStepControl { steps: 10 }),
+                BendingObjective::summed_moment(),
+            )
+            .expect("valid scene");
+            let bound = thesis::TABLE_3_4[node - 1]
+                .0
+                .iter()
+                .fold(0.0f64, |m, u| m.max(u.abs()));
+            (node, p, bound)
+        })
+        .collect()
+}
+
+fn optim(method: Method, bound: f64) -> OptimOptions {
+    OptimOptions {
+        method,
+        bound: Some(bound),
+        max_iters: 2000,
+        ..OptimOptions::default()
+    }
+}
+
+/// Prints each row's objective, convergence and time for the three methods (one run each).
+fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
+    eprintln!("Table 3.4 (per-step, N = 10), from u = 0, bound = the thesis row's max |u|:");
+    eprintln!(
+        "{:>4} {:>9} {:>22} {:>22} {:>22}",
+        "node", "bound", "riccati J (conv, ms)", "trust region J", "lbfgs J"
+    );
+    let mut total = [0.0f64; 3];
+    for (node, p, bound) in rows {
+        let r = solve(p, &[0.0; 11], &OcpOptions::default().with_bound(*bound)).unwrap();
+        let tr = minimize(p, &[0.0; 11], &optim(Method::TrustRegion, *bound)).unwrap();
+        let lb = minimize(p, &[0.0; 11], &optim(Method::Lbfgs, *bound)).unwrap();
+        for (t, s) in total.iter_mut().zip([r.seconds, tr.seconds, lb.seconds]) {
+            *t += s;
         }
+        eprintln!(
+            "{node:>4} {bound:>9.3} {:>14.9e} {} {:>5.1} {:>14.9e} {} {:>14.9e} {}",
+            r.objective,
+            u8::from(r.converged),
+            r.seconds * 1e3,
+            tr.objective,
+            u8::from(tr.converged),
+            lb.objective,
+            u8::from(lb.converged)
+        );
+    }
+    eprintln!(
+        "total optimisation time [ms]: riccati {:.1}, trust region {:.1}, lbfgs {:.1}",
+        total[0] * 1e3,
+        total[1] * 1e3,
+        total[2] * 1e3
+    );
+}
+
+fn bench_table_3_4(c: &mut Criterion) {
+    let rows = table_3_4_rows();
+    print_table_3_4(&rows);
+    let mut g = c.benchmark_group("ocp_table_3_4");
+    g.sample_size(10);
+    g.bench_function("all_rows/riccati", |b| {
+        b.iter(|| {
+            for (_, p, bound) in &rows {
+                let o = OcpOptions::default().with_bound(*bound);
+                black_box(solve(p, black_box(&[0.0; 11]), &o).unwrap().objective);
+            }
+        })
+    });
+    for (name, method) in [
+        ("all_rows/lbfgs", Method::Lbfgs),
+        ("all_rows/trust_region", Method::TrustRegion),
+    ] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                for (_, p, bound) in &rows {
+                    let o = optim(method, *bound);
+                    black_box(minimize(p, black_box(&[0.0; 11]), &o).unwrap().objective);
+                }
+            })
+        });
     }
     g.finish();
 }

@@ -10,22 +10,27 @@
 //!   general-purpose solvers of [`chainbeam::optimize`] (L-BFGS stalls on this badly conditioned
 //!   1001-dimensional problem; the trust region converges but each Hessian-vector product costs a
 //!   forward-over-adjoint sweep of the whole horizon);
+//! - `--compare` runs all three on the same problem and prints one row each (time, iterations,
+//!   J, Σ M₀², projected gradient relative to ‖g₀‖, converged); `--skip-trust-region` and
+//!   `--skip-lbfgs` leave out the slow baselines, `--method riccati,lbfgs` picks a list;
 //! - `--pieces P` replaces the per-step control by P piecewise-constant pieces: a *different,
 //!   coarser* problem (fewer parameters, a higher optimum), solvable by any method.
 //!
 //! Prints Σ M₀², max |M₀| and J against no control and against the best constant control (same
 //! objective and limit), the iterations, the first-order optimality reached and the time.
 //!
-//! Measured on a shared 2-core machine (N = 1000, all from u = 0): the Riccati solver converges
-//! in 31 iterations and about 2.2 s to J = 1507.4712093; the trust region converges in about
-//! 250 s to a higher local minimum, J = 1507.4813611; L-BFGS stops at its 5000-iteration limit
-//! (13 s, ‖g‖/‖g₀‖ = 8.4·10⁻⁴). N = 10⁴: Riccati 17.5 s, 20 iterations; L-BFGS 151 s, not
-//! converged. See the module docs of `chainbeam::ocp` for the method and the limits.
+//! Measured on a heavily shared 2-core machine (CPU seconds, N = 1000, all from u = 0): the
+//! Riccati solver converges in 31 iterations and 2.5 s to J = 1507.4712093 (Σ M₀² = 1507.2086);
+//! the trust region converges in about 225–250 s to a higher local minimum, J = 1507.4813611;
+//! L-BFGS stops at its 5000-iteration limit (≈ 22 s, projected gradient 1.0·10⁻⁵ ‖g₀‖,
+//! J = 1507.4899744). N = 10⁴: Riccati 20.6 s, 20 iterations, J = 1509.5063910. See the module
+//! docs of `chainbeam::ocp` for the method and the limits.
 //!
 //! ```text
 //! cargo run --release --example long_horizon
 //! cargo run --release --example long_horizon -- --steps 10000
 //! cargo run --release --example long_horizon -- --method trust-region
+//! cargo run --release --example long_horizon -- --compare [--skip-trust-region] [--skip-lbfgs]
 //! cargo run --release --example long_horizon -- --pieces 50 [--method lbfgs]
 //! cargo run --release --example long_horizon -- --rho 0.01 --umax 5 --rate 0.001 --history
 //! ```
@@ -72,66 +77,28 @@ struct Outcome {
     note: String,
 }
 
-fn run() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let rho = arg(&args, "--rho", 0.01)?;
-    let umax = arg(&args, "--umax", 5.0)?;
-    let rate = arg(&args, "--rate", 0.0)?;
-    let steps = arg(&args, "--steps", 1000.0)? as usize;
-    let pieces = arg(&args, "--pieces", 0.0)? as usize;
-    let history = args.iter().any(|a| a == "--history");
-    let method = value(&args, "--method").unwrap_or("riccati");
-    if !["riccati", "lbfgs", "trust-region"].contains(&method) {
-        return Err(Error::InvalidArgument {
-            name: "--method",
-            reason: format!("expected riccati, lbfgs or trust-region, got {method:?}"),
-        });
-    }
-    if rate > 0.0 && method != "riccati" {
-        return Err(Error::InvalidArgument {
-            name: "--rate",
-            reason: "the rate penalty is a term of the Riccati solver's objective only".into(),
-        });
-    }
-    let mut scene = catalogue::long_horizon();
-    scene.time.steps = steps;
-    if let Some(c) = scene.control.as_mut() {
-        c.values = vec![0.0; steps + 1];
-    }
-    let objective = BendingObjective::summed_moment().with_effort(rho);
+/// The settings shared by the runs.
+#[derive(Clone, Copy)]
+struct Setup {
+    umax: f64,
+    rate: f64,
+    history: bool,
+}
 
-    // Best constant control (1 parameter, L-BFGS) as the baseline.
-    let lbfgs = OptimOptions {
-        method: Method::Lbfgs,
-        bound: Some(umax),
-        max_iters: 5000,
-        ..OptimOptions::default()
-    };
-    let constant = ControlProblem::new(&scene, Parametrisation::Constant, objective)?;
-    let c = minimize(&constant, &[0.0], &lbfgs)?;
-
-    let map = if pieces == 0 {
-        Parametrisation::PerStep(PerStepControl { steps })
-    } else {
-        Parametrisation::Piecewise(PiecewiseControl { steps, pieces })
-    };
-    let problem = ControlProblem::new(&scene, map, objective)?;
-    let theta0 = vec![0.0; problem.n_params()];
-    let label = if pieces == 0 {
-        format!("per-step ({} values), {method}", steps + 1)
-    } else {
-        format!(
-            "{pieces} pieces of {:.2} s (coarser problem), {method}",
-            scene.time.step * (steps + 1) as f64 / pieces as f64
-        )
-    };
-    let out = if method == "riccati" {
+/// Solves `problem` from θ₀ with one method.
+fn solve_with(
+    method: &str,
+    problem: &ControlProblem,
+    theta0: &[f64],
+    set: &Setup,
+) -> Result<Outcome> {
+    if method == "riccati" {
         let opts = OcpOptions {
-            rate_penalty: rate,
-            ..OcpOptions::default().with_bound(umax)
+            rate_penalty: set.rate,
+            ..OcpOptions::default().with_bound(set.umax)
         };
-        let r = ocp::solve(&problem, &theta0, &opts)?;
-        if history {
+        let r = ocp::solve(problem, theta0, &opts)?;
+        if set.history {
             for (i, h) in r.history.iter().enumerate() {
                 eprintln!(
                     "iter {:>3}: J = {:.12}, |pg| before = {:.3e}, alpha = {}, mu = {:.1e}",
@@ -143,7 +110,7 @@ fn run() -> Result<()> {
                 );
             }
         }
-        Outcome {
+        return Ok(Outcome {
             controls: r.controls.clone(),
             objective: r.objective,
             iterations: r.iterations,
@@ -158,79 +125,163 @@ fn run() -> Result<()> {
                 r.active_bounds.len(),
                 r.termination
             ),
-        }
+        });
+    }
+    let m = if method == "lbfgs" {
+        Method::Lbfgs
     } else {
-        let m = if method == "lbfgs" {
-            Method::Lbfgs
+        Method::TrustRegion
+    };
+    let opts = OptimOptions {
+        method: m,
+        bound: Some(set.umax),
+        max_iters: 5000,
+        progress: set.history,
+        ..OptimOptions::default()
+    };
+    let r = minimize(problem, theta0, &opts)?;
+    Ok(Outcome {
+        controls: r.controls.clone(),
+        objective: r.objective,
+        iterations: r.iterations,
+        seconds: r.seconds,
+        ratio: r.projected_gradient_norm / r.initial_gradient_norm,
+        converged: r.converged,
+        note: format!(
+            "{} adjoint sweeps, {} HVPs; {}",
+            r.gradient_evals, r.hvp_evals, r.termination
+        ),
+    })
+}
+
+/// The methods to run: `--method a,b`, or `--compare` (all three) minus `--skip-lbfgs` /
+/// `--skip-trust-region`.
+fn methods(args: &[String]) -> Result<Vec<String>> {
+    let list = if args.iter().any(|a| a == "--compare") {
+        "riccati,lbfgs,trust-region"
+    } else {
+        value(args, "--method").unwrap_or("riccati")
+    };
+    let skip = |m: &str| args.iter().any(|a| a == &format!("--skip-{m}"));
+    let out: Vec<String> = list
+        .split(',')
+        .filter(|m| !skip(m))
+        .map(str::to_owned)
+        .collect();
+    match out
+        .iter()
+        .find(|m| !["riccati", "lbfgs", "trust-region"].contains(&m.as_str()))
+    {
+        Some(m) => Err(Error::InvalidArgument {
+            name: "--method",
+            reason: format!("expected riccati, lbfgs or trust-region, got {m:?}"),
+        }),
+        None => Ok(out),
+    }
+}
+
+fn run() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let rho = arg(&args, "--rho", 0.01)?;
+    let set = Setup {
+        umax: arg(&args, "--umax", 5.0)?,
+        rate: arg(&args, "--rate", 0.0)?,
+        history: args.iter().any(|a| a == "--history"),
+    };
+    let steps = arg(&args, "--steps", 1000.0)? as usize;
+    let pieces = arg(&args, "--pieces", 0.0)? as usize;
+    let methods = methods(&args)?;
+    if set.rate > 0.0 && methods.iter().any(|m| m != "riccati") {
+        return Err(Error::InvalidArgument {
+            name: "--rate",
+            reason: "the rate penalty is a term of the Riccati solver's objective only".into(),
+        });
+    }
+    let mut scene = catalogue::long_horizon();
+    scene.time.steps = steps;
+    if let Some(c) = scene.control.as_mut() {
+        c.values = vec![0.0; steps + 1];
+    }
+    let objective = BendingObjective::summed_moment().with_effort(rho);
+
+    // Best constant control (1 parameter) as the baseline.
+    let constant = ControlProblem::new(&scene, Parametrisation::Constant, objective)?;
+    let c = solve_with(
+        "lbfgs",
+        &constant,
+        &[0.0],
+        &Setup {
+            history: false,
+            ..set
+        },
+    )?;
+
+    let map = if pieces == 0 {
+        Parametrisation::PerStep(PerStepControl { steps })
+    } else {
+        Parametrisation::Piecewise(PiecewiseControl { steps, pieces })
+    };
+    let problem = ControlProblem::new(&scene, map, objective)?;
+    let theta0 = vec![0.0; problem.n_params()];
+    let label = |method: &str| {
+        if pieces == 0 {
+            format!("per-step ({} values), {method}", steps + 1)
         } else {
-            Method::TrustRegion
-        };
-        let r = minimize(
-            &problem,
-            &theta0,
-            &OptimOptions {
-                method: m,
-                progress: history,
-                ..lbfgs.clone()
-            },
-        )?;
-        Outcome {
-            controls: r.controls.clone(),
-            objective: r.objective,
-            iterations: r.iterations,
-            seconds: r.seconds,
-            ratio: r.projected_gradient_norm / r.initial_gradient_norm,
-            converged: r.converged,
-            note: format!(
-                "{} adjoint sweeps, {} HVPs; {}",
-                r.gradient_evals, r.hvp_evals, r.termination
-            ),
+            format!(
+                "{pieces} pieces of {:.2} s (coarser problem), {method}",
+                scene.time.step * (steps + 1) as f64 / pieces as f64
+            )
         }
     };
-
     let (s0, m0) = moments(&scene, &vec![0.0; steps + 1])?;
     let (sc, mc) = moments(&scene, &c.controls)?;
-    let (sp, mp) = moments(&scene, &out.controls)?;
     println!(
         "riser, D = 10 kg/m, F = 2 N at node 5, N = {steps}, h = 0.01 s; rho = {rho}, \
-         |u| <= {umax} N{}\n",
-        if rate > 0.0 {
-            format!(", rate penalty sigma = {rate}")
+         |u| <= {} N{}\n",
+        set.umax,
+        if set.rate > 0.0 {
+            format!(", rate penalty sigma = {}", set.rate)
         } else {
             String::new()
         }
     );
     println!(
-        "{:<48} {:>14} {:>10} {:>16} {:>9} {:>6} {:>9}",
-        "control", "sum M0^2", "max |M0|", "J", "max |u|", "iters", "time [s]"
+        "{:<44} {:>14} {:>9} {:>17} {:>7} {:>6} {:>9} {:>8} {:>5}",
+        "control", "sum M0^2", "max |M0|", "J", "max |u|", "iters", "time [s]", "pg/|g0|", "conv"
     );
-    println!("{:<48} {:>14.4} {:>10.4}", "none", s0, m0);
-    println!(
-        "{:<48} {:>14.4} {:>10.4} {:>16.9} {:>9.3} {:>6} {:>9.3}",
-        format!("best constant u = {:.3} N (lbfgs)", c.theta[0]),
+    println!("{:<44} {:>14.4} {:>9.4}", "none", s0, m0);
+    let row = |name: String, o: &Outcome, sum: f64, max: f64| {
+        let umax_used = o.controls.iter().fold(0.0f64, |a, u| a.max(u.abs()));
+        println!(
+            "{:<44} {:>14.4} {:>9.4} {:>17.9} {:>7.3} {:>6} {:>9.3} {:>8.1e} {:>5}",
+            name, sum, max, o.objective, umax_used, o.iterations, o.seconds, o.ratio, o.converged
+        );
+    };
+    row(
+        format!("best constant u = {:.3} N (lbfgs)", c.controls[0]),
+        &c,
         sc,
         mc,
-        c.objective,
-        c.theta[0].abs(),
-        c.iterations,
-        c.seconds
     );
-    let umax_used = out.controls.iter().fold(0.0f64, |a, u| a.max(u.abs()));
-    println!(
-        "{:<48} {:>14.4} {:>10.4} {:>16.9} {:>9.3} {:>6} {:>9.3}",
-        label, sp, mp, out.objective, umax_used, out.iterations, out.seconds
-    );
-    println!(
-        "\nvs none: sum M0^2 reduced {:.1}x, max |M0| {:.2}x; vs best constant: {:.2}x, {:.2}x",
-        s0 / sp,
-        m0 / mp,
-        sc / sp,
-        mc / mp
-    );
-    println!(
-        "{method}: converged = {}, projected gradient / |g0| = {:.1e}; {}",
-        out.converged, out.ratio, out.note
-    );
+    let mut notes = Vec::new();
+    for method in &methods {
+        let out = solve_with(method, &problem, &theta0, &set)?;
+        let (sp, mp) = moments(&scene, &out.controls)?;
+        row(label(method), &out, sp, mp);
+        notes.push(format!(
+            "{method}: vs none sum M0^2 reduced {:.1}x, max |M0| {:.2}x; vs best constant \
+             {:.2}x, {:.2}x; {}",
+            s0 / sp,
+            m0 / mp,
+            sc / sp,
+            mc / mp,
+            out.note
+        ));
+    }
+    println!();
+    for n in notes {
+        println!("{n}");
+    }
     Ok(())
 }
 

@@ -24,6 +24,9 @@ pub(crate) struct Traj {
     pub p: Vec<[f64; 2]>,
     pub omega: Vec<f64>,
     pub mu: Vec<f64>,
+    /// λ of step k (k < N): the converged position multiplier, the exact Newton start of the
+    /// dual-number step of the stage Jacobians.
+    pub lambda: Vec<f64>,
     pub u: Vec<f64>,
     pub moment: Vec<f64>,
     pub cost: f64,
@@ -38,6 +41,7 @@ impl Traj {
             p: vec![[0.0; 2]; m * n],
             omega: vec![0.0; m * n],
             mu: vec![0.0; m * n],
+            lambda: vec![0.0; m * n],
             u: vec![0.0; m],
             moment: vec![0.0; m],
             cost: 0.0,
@@ -58,6 +62,10 @@ impl Traj {
     #[inline]
     pub fn mu(&self, k: usize) -> &[f64] {
         &self.mu[k * self.n..(k + 1) * self.n]
+    }
+    #[inline]
+    pub fn lambda(&self, k: usize) -> &[f64] {
+        &self.lambda[k * self.n..(k + 1) * self.n]
     }
     /// ∂M₀/∂φ₁ at t_k: M₀ = s·q₁,z, ∂q₁/∂φ₁ = t₁, so ∂M₀/∂φ₁ = s·t₁,z = s·q₁,y.
     #[inline]
@@ -135,6 +143,7 @@ pub(crate) fn rollout(
         total += cost.value(k, m, u, w);
         if k < steps {
             stepper.advance(k, u)?;
+            out.lambda[k * n..(k + 1) * n].copy_from_slice(&stepper.state.lambda);
         }
     }
     out.cost = total;

@@ -1,0 +1,178 @@
+//! Linearisation diagnostics (the tests' handles): the costate gradient, the stage Jacobians
+//! and the stage map in tangent coordinates, one Gauss-Newton step and the dense Gauss-Newton
+//! Hessian it is checked against.
+
+use super::*;
+
+impl Solver {
+    /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
+    /// adjoint in tangent coordinates).
+    pub fn gradient(&mut self) -> Result<Vec<f64>> {
+        self.costate()?;
+        Ok(self.theta_gradient())
+    }
+
+    /// A_k (2n × 2n) and B_k (2n) at the nominal, in the tangent coordinates ξ = (φ, ω).
+    pub fn stage_jacobians(&mut self, k: usize) -> Result<(Mat<f64>, Vec<f64>)> {
+        self.check_stage(k)?;
+        let nxi = self.nxi;
+        let mut a = vec![0.0; nxi * nxi];
+        let mut b = vec![0.0; nxi];
+        let nom = &self.nominal;
+        self.jws[0].jacobians(
+            &self.model,
+            k,
+            nom.q(k),
+            nom.p(k),
+            nom.omega(k),
+            nom.lambda(k),
+            nom.u[k],
+            &mut a,
+            &mut b,
+        )?;
+        Ok((Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]), b))
+    }
+
+    fn check_stage(&self, k: usize) -> Result<()> {
+        if k >= self.steps {
+            return Err(Error::InvalidArgument {
+                name: "stage",
+                reason: format!("must be below N = {}, got {k}", self.steps),
+            });
+        }
+        Ok(())
+    }
+
+    /// The tangent coordinates ξ = (φ₁..φₙ, ω₁..ωₙ) of the nominal x̂_k (absolute angles from e₂
+    /// and angular rates).
+    pub fn coordinates(&self, k: usize) -> Vec<f64> {
+        let q = self.nominal.q(k);
+        let mut x: Vec<f64> = q.iter().map(|q| q[1].atan2(q[0])).collect();
+        x.extend_from_slice(self.nominal.omega(k));
+        x
+    }
+
+    /// The stage map F_k in tangent coordinates: x̂_k built from ξ (qᵢ = (cos φᵢ, sin φᵢ),
+    /// p = M(ωᵢ tᵢ)), one stage with control u, and the coordinates of x̂_{k+1}. The Newton
+    /// predictor is the nominal's. (For finite-difference checks of [`Solver::stage_jacobians`].)
+    pub fn stage_map(&mut self, k: usize, xi: &[f64], u: f64) -> Result<Vec<f64>> {
+        self.check_stage(k)?;
+        let n = self.n;
+        if xi.len() != 2 * n {
+            return Err(Error::InvalidArgument {
+                name: "xi",
+                reason: format!("expected 2n = {} values, got {}", 2 * n, xi.len()),
+            });
+        }
+        let q: Vec<[f64; 2]> = xi[..n].iter().map(|f| [f.cos(), f.sin()]).collect();
+        let v: Vec<[f64; 2]> = (0..n)
+            .map(|i| {
+                let t = tangent(&q[i]);
+                [xi[n + i] * t[0], xi[n + i] * t[1]]
+            })
+            .collect();
+        let st = &mut self.stepper.state;
+        self.model.apply_mass(&v, &mut st.p);
+        st.q.copy_from_slice(&q);
+        st.mu.copy_from_slice(self.nominal.mu(k));
+        st.lambda.copy_from_slice(self.nominal.mu(k));
+        self.stepper.advance(k, u)?;
+        let st = &self.stepper.state;
+        let mut out: Vec<f64> = st.q.iter().map(|q| q[1].atan2(q[0])).collect();
+        let mut w = vec![0.0; n];
+        self.model.rates(&st.q, &st.p, &mut self.scratch, &mut w);
+        out.extend_from_slice(&w);
+        Ok(out)
+    }
+
+    /// The Gauss-Newton step δθ at the nominal with a proximal weight `mu` (added to every
+    /// Q_uu): one Riccati pass and a closed-loop rollout of the *linearised* dynamics
+    /// δz_{k+1} = Ã_k δz_k + B̃_k δv_k (without active bounds and with μ = 0, the minimiser of the
+    /// Gauss-Newton model). Needs the Jacobians of the whole horizon in memory.
+    pub fn gauss_newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
+        self.check_in_memory()?;
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        self.active.fill(false);
+        self.prox = mu;
+        if !self.sweep(true)? {
+            return Err(Error::InvalidArgument {
+                name: "mu",
+                reason: format!("a stage QP is unbounded below with mu = {mu}"),
+            });
+        }
+        self.linear_rollout(1.0, Arc::ClosedLoop);
+        Ok(self.theta_stage.iter().map(|&k| self.dv_t[k]).collect())
+    }
+
+    fn check_in_memory(&self) -> Result<()> {
+        if self.block < self.steps {
+            return Err(Error::InvalidArgument {
+                name: "jacobian_memory",
+                reason: format!(
+                    "the linearised rollout needs every stage Jacobian in memory ({} bytes)",
+                    self.steps * 8 * (self.nxi * self.nxi + self.nxi)
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The Gauss-Newton Hessian and the gradient of J(θ) at the nominal, assembled densely
+    /// from the stage Jacobians: H = Σ_k 2c_k ∇r_k∇r_kᵀ + 2ρh PᵀP + rate terms, with
+    /// ∇_u r_k = ∂M₀/∂φ₁ · e₁ᵀ A_{k−1}⋯A_{j+1} B_j (r_k = M₀(t_k)) and P = ∂u/∂θ. O(N² n²):
+    /// for checking [`Solver::gauss_newton_step`] on small horizons.
+    pub fn dense_gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
+        let (steps, nxi) = (self.steps, self.nxi);
+        let m = steps + 1;
+        let mut x = Mat::<f64>::zeros(nxi, m);
+        let mut hu = Mat::<f64>::zeros(m, m);
+        let mut gu = vec![0.0; m];
+        let scale = self.model.moment_scale;
+        for k in 0..=steps {
+            if k > 0 {
+                self.jacobians(k - 1, k)?;
+                let (a, b) = (&self.a_store[..nxi * nxi], &self.b_store[..nxi]);
+                let xa = Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]) * &x;
+                x = xa;
+                for i in 0..nxi {
+                    x[(i, k - 1)] += b[i];
+                }
+            }
+            let c = self.cost.weight(k);
+            let d = self.nominal.dmoment(k, scale);
+            let mk = self.nominal.moment[k];
+            for i in 0..m {
+                let ri = d * x[(0, i)];
+                gu[i] += 2.0 * c * mk * ri;
+                for j in 0..m {
+                    hu[(i, j)] += 2.0 * c * ri * d * x[(0, j)];
+                }
+            }
+            let u = self.nominal.u[k];
+            gu[k] += 2.0 * self.cost.effort * u;
+            hu[(k, k)] += 2.0 * self.cost.effort;
+            if k > 0 && self.cost.rate > 0.0 {
+                let r = self.cost.rate;
+                let du = u - self.nominal.u[k - 1];
+                gu[k] += 2.0 * r * du;
+                gu[k - 1] -= 2.0 * r * du;
+                hu[(k, k)] += 2.0 * r;
+                hu[(k - 1, k - 1)] += 2.0 * r;
+                hu[(k, k - 1)] -= 2.0 * r;
+                hu[(k - 1, k)] -= 2.0 * r;
+            }
+        }
+        self.jac_range = None;
+        let p = self.n_params;
+        let mut h = Mat::<f64>::zeros(p, p);
+        let mut g = vec![0.0; p];
+        for k in 0..m {
+            g[self.piece[k]] += gu[k];
+            for l in 0..m {
+                h[(self.piece[k], self.piece[l])] += hu[(k, l)];
+            }
+        }
+        Ok((h, g))
+    }
+}

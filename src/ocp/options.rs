@@ -1,0 +1,183 @@
+//! Options and results of the Riccati solver.
+
+use crate::error::{Error, Result};
+
+/// Options of [`solve`]. Build with struct update syntax or [`OcpOptions::with_bound`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct OcpOptions {
+    /// Lower bound on every θ (force, N). Default −∞.
+    pub lower: f64,
+    /// Upper bound on every θ. Default +∞.
+    pub upper: f64,
+    /// σ ≥ 0 of the rate penalty (σ/h) Σ (u_k − u_{k−1})² = σh Σ ((u_k − u_{k−1})/h)². Default 0.
+    pub rate_penalty: f64,
+    /// Iterations (accepted steps). Default 200.
+    pub max_iters: usize,
+    /// Stop when the projected gradient ≤ `rel_grad_tol`·‖g₀‖. Default 10⁻⁸.
+    pub rel_grad_tol: f64,
+    /// Stop when the projected gradient ≤ `grad_tol`. Default 0 (off).
+    pub grad_tol: f64,
+    /// c of the acceptance test J̄ − J(α) ≥ c·(−ΔJ(α)). Default 0.1.
+    pub armijo: f64,
+    /// Step lengths tried per step (α = 1, then quadratic interpolation within [α/10, α/2]).
+    /// Default 10.
+    pub backtracks: usize,
+    /// Largest relative proximal weight μ/mean(Q_uu) before giving up. Default 10¹⁰.
+    pub max_regularisation: f64,
+    /// Bytes the stage Jacobians may occupy; beyond it they are recomputed per block in every
+    /// backward pass. Default 1 GiB.
+    pub jacobian_memory: usize,
+    /// Threads for the stage Jacobians; 0 = rayon's pool size. Default 0.
+    pub threads: usize,
+}
+
+impl Default for OcpOptions {
+    fn default() -> Self {
+        OcpOptions {
+            lower: f64::NEG_INFINITY,
+            upper: f64::INFINITY,
+            rate_penalty: 0.0,
+            max_iters: 200,
+            rel_grad_tol: 1e-8,
+            grad_tol: 0.0,
+            armijo: 0.1,
+            backtracks: 10,
+            max_regularisation: 1e10,
+            jacobian_memory: 1 << 30,
+            threads: 0,
+        }
+    }
+}
+
+impl OcpOptions {
+    /// The symmetric box |θ| ≤ `b`.
+    pub fn with_bound(mut self, b: f64) -> Self {
+        self.lower = -b;
+        self.upper = b;
+        self
+    }
+
+    /// Checks every field ([`Error::InvalidArgument`] naming it).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &'static str, reason: String| Err(Error::InvalidArgument { name, reason });
+        if self.lower.is_nan() || self.upper.is_nan() || self.lower >= self.upper {
+            return bad(
+                "bounds",
+                format!(
+                    "need lower < upper (not NaN), got [{}, {}]",
+                    self.lower, self.upper
+                ),
+            );
+        }
+        if self.lower == f64::INFINITY || self.upper == f64::NEG_INFINITY {
+            return bad("bounds", "the box is empty".into());
+        }
+        if !(self.rate_penalty.is_finite() && self.rate_penalty >= 0.0) {
+            return bad(
+                "rate_penalty",
+                format!("must be finite and >= 0, got {}", self.rate_penalty),
+            );
+        }
+        for (name, v) in [
+            ("rel_grad_tol", self.rel_grad_tol),
+            ("grad_tol", self.grad_tol),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, format!("must be finite and >= 0, got {v}"));
+            }
+        }
+        if !(self.armijo > 0.0 && self.armijo < 1.0) {
+            return bad("armijo", format!("must be in (0, 1), got {}", self.armijo));
+        }
+        if self.backtracks == 0 {
+            return bad("backtracks", "must be at least 1".into());
+        }
+        if !(self.max_regularisation.is_finite() && self.max_regularisation > 0.0) {
+            return bad(
+                "max_regularisation",
+                format!(
+                    "must be positive and finite, got {}",
+                    self.max_regularisation
+                ),
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Why a run stopped.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Termination {
+    /// The projected gradient met the tolerance.
+    Converged,
+    /// [`OcpOptions::max_iters`] accepted steps without convergence.
+    MaxIterations,
+    /// No step length was accepted even with the regularisation at its limit.
+    RegularisationLimit,
+    /// Several steps in a row predicted a decrease below J's round-off while the gradient
+    /// stayed above the tolerance.
+    RoundOff,
+}
+
+impl std::fmt::Display for Termination {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Termination::Converged => "converged (projected gradient below the tolerance)",
+            Termination::MaxIterations => "iteration limit reached",
+            Termination::RegularisationLimit => {
+                "no descent step found with the regularisation at its limit"
+            }
+            Termination::RoundOff => "predicted decrease below the round-off of J",
+        })
+    }
+}
+
+/// One accepted iteration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IterationRecord {
+    /// J after the step.
+    pub objective: f64,
+    /// Projected gradient before the step.
+    pub projected_gradient_norm: f64,
+    /// The accepted step length.
+    pub alpha: f64,
+    /// Relative proximal weight μ/mean(Q_uu) of the accepted step.
+    pub regularisation: f64,
+}
+
+/// The outcome of [`solve`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct OcpResult {
+    /// J at the result (including the rate penalty, if any).
+    pub objective: f64,
+    /// J at the (projected) start.
+    pub initial_objective: f64,
+    /// The parameters θ.
+    pub theta: Vec<f64>,
+    /// The forces u_0..u_N.
+    pub controls: Vec<f64>,
+    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds).
+    pub gradient_norm: f64,
+    /// ‖θ − Π_box(θ − ∇J)‖₂ at the result: the first-order optimality measure.
+    pub projected_gradient_norm: f64,
+    /// ‖∇J(θ₀)‖₂ at the start.
+    pub initial_gradient_norm: f64,
+    /// Indices of θ on a bound.
+    pub active_bounds: Vec<usize>,
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// Rollouts (forward simulations of the whole horizon, line-search trials included).
+    pub rollouts: usize,
+    /// Passes computing the stage Jacobians of the whole horizon.
+    pub jacobian_passes: usize,
+    /// Riccati passes (interior-point iterations of the QPs, and fallback passes).
+    pub backward_passes: usize,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// Whether the projected-gradient test stopped the run.
+    pub converged: bool,
+    /// Why the run stopped.
+    pub termination: Termination,
+    /// One record per accepted iteration.
+    pub history: Vec<IterationRecord>,
+}

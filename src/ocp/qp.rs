@@ -1,0 +1,307 @@
+//! The Gauss-Newton QP of one iteration: linearised rollouts, the warm face and the
+//! primal-dual interior-point method whose Newton systems are Riccati passes (module docs,
+//! "The step").
+
+use super::*;
+
+impl Solver {
+    /// A closed-loop rollout of the *linearised* dynamics from the model point δ with the gains
+    /// of the last Riccati pass and step length α: Δv_k = clamp(α k_k + K_k Δz_k) (clamped to
+    /// the box about the model point), Δz_{k+1} = Ã_k Δz_k + B̃_k Δv_k, written to `dv_t`,
+    /// `dz_t` as δ + Δ. Returns the Gauss-Newton model of J at δ + Δ with and without the
+    /// proximal term: Σ ℓ_k(M₀ + ∂M₀/∂φ₁ δφ₁, u + δu, w + δw) (+ ½ μ Σ δv²). Needs every stage
+    /// Jacobian in memory.
+    pub(super) fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> (f64, f64) {
+        let (nz, nxi, steps) = (self.nz, self.nxi, self.steps);
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let nom = &self.nominal;
+        let scale = self.model.moment_scale;
+        let (dz, next) = (&mut self.lin_dz, &mut self.lin_next);
+        dz.fill(0.0);
+        let (mut q, mut prox) = (0.0, 0.0);
+        for k in 0..=steps {
+            let u0 = nom.u[k] + self.dv[k];
+            let d = if self.free[k] {
+                match mode {
+                    Arc::Projected => (u0 + alpha * self.dir[k]).clamp(lo, hi) - u0,
+                    _ => {
+                        let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+                        let x = alpha * self.riccati.ff[k]
+                            + g.iter().zip(dz.iter()).map(|(a, b)| a * b).sum::<f64>();
+                        if mode == Arc::Direction {
+                            self.dir[k] = x;
+                            x
+                        } else {
+                            (u0 + x).clamp(lo, hi) - u0
+                        }
+                    }
+                }
+            } else {
+                dz[nxi]
+            };
+            self.dv_t[k] = self.dv[k] + d;
+            for i in 0..nz {
+                self.dz_t[k * nz + i] = self.dz[k * nz + i] + dz[i];
+            }
+            let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
+            let u = nom.u[k] + self.dv_t[k];
+            let w = if k > 0 {
+                nom.u[k - 1] + self.dv_t[k - 1]
+            } else {
+                0.0
+            };
+            q += self.cost.value(k, m, u, w);
+            if self.free[k] {
+                prox += 0.5 * self.prox * self.dv_t[k] * self.dv_t[k];
+            }
+            if k < steps {
+                let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
+                let b = &self.b_store[k * nxi..(k + 1) * nxi];
+                for i in 0..nxi {
+                    next[i] = b[i] * d;
+                }
+                for j in 0..nxi {
+                    let (col, x) = (&a[j * nxi..(j + 1) * nxi], dz[j]);
+                    for i in 0..nxi {
+                        next[i] += col[i] * x;
+                    }
+                }
+                if nz > nxi {
+                    next[nxi] = d;
+                }
+                std::mem::swap(dz, next);
+            }
+        }
+        (q + prox, q)
+    }
+
+    /// The QP's solution on a guessed face: the controls of the nominal that sit exactly on a
+    /// bound stay there, the others take the exact Newton step of the model with them fixed
+    /// (one Riccati pass). Accepted when the model's projected gradient at the result is at
+    /// most `tol`, i.e. when the face was the right one (the usual case once the active set
+    /// has settled: 1 pass instead of the interior point's 5–15). Returns the model value
+    /// without the proximal term, or `None` (then [`Solver::solve_qp`] runs).
+    pub(super) fn warm_qp(&mut self, tol: f64) -> Result<Option<f64>> {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        if !(lo.is_finite() || hi.is_finite()) {
+            return Ok(None);
+        }
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        let mut any = false;
+        for k in 0..=self.steps {
+            let u = self.nominal.u[k];
+            self.active[k] = self.free[k] && (u <= lo || u >= hi);
+            self.fixed[k] = 0.0;
+            any |= self.active[k];
+        }
+        if !any || !self.sweep(true)? {
+            return Ok(None);
+        }
+        let (_, q_plain) = self.linear_rollout(1.0, Arc::ClosedLoop);
+        std::mem::swap(&mut self.dv, &mut self.dv_t);
+        std::mem::swap(&mut self.dz, &mut self.dz_t);
+        // The model gradient at the new point (the gains of the Riccati pass are kept).
+        self.active.fill(false);
+        self.sweep(false)?;
+        if !(q_plain.is_finite() && self.projected_norm() <= tol) {
+            return Ok(None);
+        }
+        let nz = self.nz;
+        for k in 0..=self.steps {
+            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+            self.ff_out[k] = self.dv[k]
+                - g.iter()
+                    .zip(&self.dz[k * nz..(k + 1) * nz])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+        }
+        Ok(Some(q_plain))
+    }
+
+    /// Solves the box-constrained Gauss-Newton QP of the nominal (with the proximal weight
+    /// `self.prox`) by a primal-dual interior-point method whose Newton systems are Riccati
+    /// passes (Rao, Wright, Rawlings 1998; the scheme of HPIPM): with slacks s = v − lo,
+    /// s' = hi − v and multipliers z, z′ ≥ 0, each iteration solves the LQR with
+    /// Q_uu += z/s + z′/s′ and l_u += −τ/s + τ/s′ (τ = σ·mean complementarity, σ = 0.1), steps
+    /// to 99.5 % of the distance to the boundary, and stops when the model's projected
+    /// gradient is at most `tol`. The iterates stay strictly inside the box; the solution is
+    /// left in `dv`, `dz` with the gains of the last pass (controls on a bound get K ≈ 0 from
+    /// their large barrier curvature). Returns the model value without the proximal term, or
+    /// `None` if a pass broke down.
+    pub(super) fn solve_qp(&mut self, tol: f64) -> Result<Option<f64>> {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
+        let steps = self.steps;
+        // A strictly interior start: the nominal moved 1 % of the box width inside.
+        let kappa = 1e-2 * width;
+        for k in 0..=steps {
+            let u = self.nominal.u[k];
+            self.dir[k] = if self.free[k] {
+                let (l, h) = (lo - u, hi - u);
+                let c = if h - l > 2.0 * kappa {
+                    0.0f64.clamp(l + kappa, h - kappa)
+                } else {
+                    0.5 * (l + h)
+                };
+                if c.is_finite() {
+                    c
+                } else {
+                    0.0
+                }
+            } else {
+                0.0
+            };
+        }
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        self.linear_rollout(1.0, Arc::Projected);
+        std::mem::swap(&mut self.dv, &mut self.dv_t);
+        std::mem::swap(&mut self.dz, &mut self.dz_t);
+        self.active.fill(false);
+        self.sweep(false)?;
+        let gscale = self
+            .riccati
+            .grad
+            .iter()
+            .fold(0.0f64, |m, g| m.max(g.abs()))
+            .max(1e-12);
+        for k in 0..=steps {
+            self.zl[k] = if lo.is_finite() { gscale } else { 0.0 };
+            self.zh[k] = if hi.is_finite() { gscale } else { 0.0 };
+        }
+        let nb = (0..=steps).filter(|&k| self.free[k]).count()
+            * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
+        let mut q_plain = self.nominal.cost;
+        let mut sigma = 0.1;
+        for it in 0..MAX_QP_ITERS {
+            if it > 0 {
+                self.sweep(false)?;
+            }
+            let pg = self.projected_norm();
+            let mut gap = 0.0;
+            for k in 0..=steps {
+                if self.free[k] {
+                    let u = self.nominal.u[k] + self.dv[k];
+                    if lo.is_finite() {
+                        gap += (u - lo) * self.zl[k];
+                    }
+                    if hi.is_finite() {
+                        gap += (hi - u) * self.zh[k];
+                    }
+                }
+            }
+            let mean_gap = if nb > 0 { gap / nb as f64 } else { 0.0 };
+            // Converged, or at the floating-point floor of the complementarity.
+            if (it > 0 && pg <= tol) || !(mean_gap.is_finite()) || (nb > 0 && mean_gap < 1e-280) {
+                break;
+            }
+            let tau = sigma * mean_gap;
+            for k in 0..=steps {
+                let (mut qs, mut ls) = (0.0, 0.0);
+                if self.free[k] {
+                    let u = self.nominal.u[k] + self.dv[k];
+                    if lo.is_finite() {
+                        let s = u - lo;
+                        qs += self.zl[k] / s;
+                        ls -= tau / s;
+                    }
+                    if hi.is_finite() {
+                        let s = hi - u;
+                        qs += self.zh[k] / s;
+                        ls += tau / s;
+                    }
+                }
+                self.ip_quu[k] = qs;
+                self.ip_lu[k] = ls;
+            }
+            self.barrier = true;
+            let ok = self.sweep(true);
+            self.barrier = false;
+            if !ok? {
+                return Ok(None);
+            }
+            self.linear_rollout(1.0, Arc::Direction);
+            // Fraction to the boundary.
+            let (mut ap, mut ad) = (1.0f64, 1.0f64);
+            for k in 0..=steps {
+                if !self.free[k] {
+                    continue;
+                }
+                let u = self.nominal.u[k] + self.dv[k];
+                let dx = self.dir[k];
+                if lo.is_finite() {
+                    let s = u - lo;
+                    if dx < 0.0 {
+                        ap = ap.min(-0.995 * s / dx);
+                    }
+                    let dzl = tau / s - self.zl[k] - self.zl[k] / s * dx;
+                    if dzl < 0.0 {
+                        ad = ad.min(-0.995 * self.zl[k] / dzl);
+                    }
+                    self.dzl[k] = dzl;
+                }
+                if hi.is_finite() {
+                    let s = hi - u;
+                    if dx > 0.0 {
+                        ap = ap.min(0.995 * s / dx);
+                    }
+                    let dzh = tau / s - self.zh[k] + self.zh[k] / s * dx;
+                    if dzh < 0.0 {
+                        ad = ad.min(-0.995 * self.zh[k] / dzh);
+                    }
+                    self.dzh[k] = dzh;
+                }
+            }
+            let (_, qp) = self.linear_rollout(ap, Arc::ClosedLoop);
+            q_plain = qp;
+            std::mem::swap(&mut self.dv, &mut self.dv_t);
+            std::mem::swap(&mut self.dz, &mut self.dz_t);
+            for k in 0..=steps {
+                if self.free[k] {
+                    if lo.is_finite() {
+                        self.zl[k] += ad * self.dzl[k];
+                    }
+                    if hi.is_finite() {
+                        self.zh[k] += ad * self.dzh[k];
+                    }
+                }
+            }
+            sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
+        }
+        if !(q_plain.is_finite() && self.dv.iter().chain(&self.dz).all(|x| x.is_finite())) {
+            return Ok(None);
+        }
+        // Controls the interior point left within 10⁻⁶ of the box width of a bound whose
+        // multiplier exceeds the slack go exactly onto the bound, without feedback: bounds
+        // are then met with equality, not approached.
+        let nz = self.nz;
+        for k in 0..=steps {
+            if !self.free[k] {
+                continue;
+            }
+            let u = self.nominal.u[k];
+            let v = u + self.dv[k];
+            let snap = if lo.is_finite() && v - lo <= 1e-6 * width && self.zl[k] > v - lo {
+                Some(lo)
+            } else if hi.is_finite() && hi - v <= 1e-6 * width && self.zh[k] > hi - v {
+                Some(hi)
+            } else {
+                None
+            };
+            if let Some(b) = snap {
+                self.dv[k] = b - u;
+                self.riccati.gain[k * nz..(k + 1) * nz].fill(0.0);
+            }
+        }
+        for k in 0..=self.steps {
+            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
+            self.ff_out[k] = self.dv[k]
+                - g.iter()
+                    .zip(&self.dz[k * nz..(k + 1) * nz])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
+        }
+        Ok(Some(q_plain))
+    }
+}

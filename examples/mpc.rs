@@ -21,7 +21,7 @@ use chainbeam::optimize::OptimOptions;
 use chainbeam::Scene;
 
 const INTERVAL: f64 = 0.1;
-const HORIZON: f64 = 3.0;
+const HORIZON: f64 = 2.0;
 const BOUND: f64 = 5.0;
 const EFFORT: f64 = 0.01;
 

@@ -121,8 +121,8 @@ fn mpc_bad_settings_are_one_error_and_leave_outputs_alone() {
         (vec!["--interval", "0.015"], "interval"),
         (vec!["--horizon", "0.05"], "horizon"),
         (vec!["--iterations", "0"], "iterations"),
-        (vec!["--bound", "-1"], "bounds"),
-        (vec!["--effort", "-1"], "effort"),
+        (vec!["--bound=-1"], "bounds"),
+        (vec!["--effort=-1"], "effort"),
     ] {
         let mut a = args.clone();
         a.extend(["-o", "keep.csv"]);

@@ -17,7 +17,7 @@ pub fn entries() -> Vec<Entry> {
         caption: "(beyond the thesis, issue 14) The base bending moment M₀(t) of the riser under \
                   an irregular sea at node 5 and a control force at the platform: no control, \
                   the best constant force, a PD law on M₀ with tuned gains, and receding-horizon \
-                  control (3 s horizon, a decision every 0.1 s, 2 Gauss-Newton iterations per \
+                  control (2 s horizon, a decision every 0.1 s, 1 Gauss-Newton iteration per \
                   re-plan) with a perfect and with a wrong model; lower panel: the forces.",
         make: fig_mpc,
     }]
@@ -37,7 +37,7 @@ fn fig_mpc(ctx: &Ctx) -> Res<Made> {
     model.loads.points[0].harmonics.truncate(1);
     model.loads.points[0].harmonics[0].amplitude *= 0.8;
     let options = MpcOptions {
-        horizon: Horizon::Seconds(3.0),
+        horizon: Horizon::Seconds(2.0),
         effort: EFFORT,
         ocp: OcpOptions::default().with_bound(BOUND),
         ..MpcOptions::default()

@@ -20,9 +20,12 @@ pub enum Horizon {
 /// Settings of [`Mpc`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MpcOptions {
-    /// The horizon. Default 3 s.
+    /// The horizon. Default 2 s (a quarter of the 8 s wave period; measured on `mpc_riser`:
+    /// c_sum 0.137 against 0.135 with 3 s, at 40 % of the cost).
     pub horizon: Horizon,
-    /// Gauss-Newton iterations per re-plan (the real-time iteration budget). Default 2.
+    /// Gauss-Newton iterations per re-plan (the real-time iteration budget). Default 1: from
+    /// the shifted plan one iteration is as good as two on `mpc_riser` (c_sum 0.137 and 0.136
+    /// over 10 s) at half the cost.
     pub iterations: usize,
     /// Iterations of the first plan (cold, at t = 0 from the beam at rest). Default 50.
     pub first_iterations: usize,
@@ -39,8 +42,8 @@ pub struct MpcOptions {
 impl Default for MpcOptions {
     fn default() -> Self {
         MpcOptions {
-            horizon: Horizon::Seconds(3.0),
-            iterations: 2,
+            horizon: Horizon::Seconds(2.0),
+            iterations: 1,
             first_iterations: 50,
             warm_start: true,
             effort: 0.01,

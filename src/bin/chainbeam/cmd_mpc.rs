@@ -61,13 +61,13 @@ pub struct MpcArgs {
     #[arg(long, value_name = "MODEL.toml")]
     pub model: Option<PathBuf>,
     /// Horizon of each plan [s], a whole number of intervals.
-    #[arg(long, value_name = "S", default_value_t = 3.0)]
+    #[arg(long, value_name = "S", default_value_t = 2.0)]
     pub horizon: f64,
     /// Control interval [s], a multiple of time.step that divides the run.
     #[arg(long, value_name = "S", default_value_t = 0.1)]
     pub interval: f64,
     /// Gauss-Newton iterations per re-plan.
-    #[arg(long, value_name = "K", default_value_t = 2)]
+    #[arg(long, value_name = "K", default_value_t = 1)]
     pub iterations: usize,
     /// Iterations of the first (cold) plan at t = 0.
     #[arg(long, value_name = "K", default_value_t = 50)]

@@ -141,7 +141,7 @@ impl PdTuning {
     /// [`Error::InvalidArgument`] naming `interval`, `bound` or `effort`.
     pub fn new(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
         let m = interval_steps(interval, scene.time.step)?;
-        if !(bound > 0.0) {
+        if bound.is_nan() || bound <= 0.0 {
             return Err(Error::InvalidArgument {
                 name: "bound",
                 reason: format!("must be positive, got {bound}"),

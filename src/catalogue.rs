@@ -329,6 +329,36 @@ pub fn wave_riser() -> Scene {
     )
 }
 
+/// The closed-loop scene of issue 14 ([`crate::mpc`]): [`wave_riser`]'s riser and drag
+/// (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
+/// 0.5 N · sin(2π t/5.3 s + 1), ramped in over the first 8 s, h = 0.01 s, N = 6000
+/// (t ∈ [0, 60] s). Control at node 10 (the platform; the `[control]` value 0 is only the
+/// open-loop default, `chainbeam mpc` decides it every control interval), objective
+/// c_sum = Σ M₀(t_k)².
+pub fn mpc_riser() -> Scene {
+    let sea = vec![
+        Harmonic {
+            amplitude: 2.0,
+            period: WAVE_PERIOD,
+            phase: 0.0,
+        },
+        Harmonic {
+            amplitude: 0.5,
+            period: 5.3,
+            phase: 1.0,
+        },
+    ];
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .load(PointLoad::harmonic(5, [0.0, 1.0], sea).ramped(WAVE_PERIOD))
+            .control_constant(10, 0.0)
+            .objective(ObjectiveKind::Sum)
+            .steps(6000),
+        "mpc_riser",
+    )
+}
+
 /// The rows of [`wave_series`]'s file `wave_series.csv`: every 0.1 s over [0, 32] s, an oblique
 /// sea with F_x = 0.8 sin(2π t/8) and F_z = 2 sin(2π t/8 + 0.5) + 0.5 sin(2π t/5.3) \[N\].
 pub fn wave_series_rows() -> Vec<[f64; 3]> {
@@ -434,8 +464,9 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// `riser_dissipative_1`..`riser_dissipative_10`, `fixed_fixed`, `pinned_pinned`,
 /// `dissipative_{cantilever,fixed_fixed,pinned_pinned}_d{10,100}` (the two drags of Fig. 2.14),
 /// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
-/// and the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
-/// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`.
+/// the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
+/// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`, and the closed-loop scene
+/// `mpc_riser`.
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -473,6 +504,7 @@ pub fn all() -> Vec<(&'static str, Scene)> {
         ("wave_series", wave_series()),
         ("sheared_current", sheared_current()),
         ("turning_current", turning_current()),
+        ("mpc_riser", mpc_riser()),
     ]);
     scenes
 }

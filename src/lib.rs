@@ -115,6 +115,9 @@
 //! - [`multistart`]: multistart, clustering of minima, second-order certificates, landscapes.
 //! - [`ocp`]: the per-step optimal-control problem solved by Gauss-Newton SQP steps with a
 //!   Riccati recursion and box constraints on the forces.
+//! - [`mpc`]: closed-loop control: a plant stepped with the applied control, receding-horizon
+//!   control on the [`ocp`] solver (real-time iterations, warm starts, plant/model mismatch),
+//!   and the baselines (no control, best constant force, tuned PD law on M₀).
 //! - [`statics`]: static equilibrium, solved directly.
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).
@@ -133,6 +136,7 @@ pub mod error;
 pub mod euler_bernoulli;
 pub mod integrators;
 pub mod model;
+pub mod mpc;
 pub mod multistart;
 pub mod ocp;
 pub mod optimize;

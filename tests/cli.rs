@@ -781,6 +781,11 @@ fn describe(name: &str) -> String {
              node 5 read from the time series wave_series.csv (t, fx, fz; an oblique sea of two wave \
              components, linearly interpolated), ramped in over 8 s, t in [0, 32] s. Spatial."
             .into(),
+        "mpc_riser" => "Issue 14 (closed loop): the riser with drag D = 10 kg/m under an irregular \
+             sea at node 5, 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1), ramped in over \
+             8 s, t in [0, 60] s; control at node 10 (the platform), objective c_sum = sum of \
+             M0(t_k)^2. chainbeam mpc decides the control every interval (docs/cli.md)."
+            .into(),
         "long_horizon" => "Future work of thesis §3.3 (Fig. 3.12): riser with drag D = 10 kg/m, F = 2 N \
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \
              c_sum = sum of M0(t_k)^2, t in [0, 10] s."

@@ -16,6 +16,7 @@ mod calib;
 mod ch2;
 mod ch3;
 mod extra;
+mod mpc;
 mod ocean;
 mod optctl;
 mod planar;
@@ -84,6 +85,7 @@ fn entries() -> Vec<Entry> {
     v.extend(extra::entries());
     v.extend(calib::entries());
     v.extend(ocean::entries());
+    v.extend(mpc::entries());
     // chapter 3 in figure order: the optimiser's figures (3.7, 3.8, 3.10, 3.13) between the others
     let mut c3 = ch3::entries();
     c3.extend(optctl::entries());

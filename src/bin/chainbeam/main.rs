@@ -6,6 +6,8 @@
 //! chainbeam optimize SCENE.toml [--starts K] [--method lbfgs|trust-region|riccati] [--bound U]
 //!                               [--pieces P] [--effort RHO] [--progress] [--output FILE]
 //! chainbeam explore  SCENE.toml [--starts K] [--design latin|random|perturb] [--output FILE]
+//! chainbeam mpc      SCENE.toml [--horizon S] [--interval S] [--iterations K] [--bound U]
+//!                               [--model MODEL.toml] [--baselines] [--summary FILE] [--output FILE]
 //! ```
 //!
 //! The full contract (every flag, the CSV columns, the `.npy` layout, the JSON keys and the exit
@@ -18,12 +20,13 @@
 //! all the same. A signal (SIGINT, SIGTERM, SIGHUP) removes the temporary output file and ends
 //! the process by that signal.
 //!
-//! Module map: [`cmd_simulate`], [`cmd_gradient`], [`cmd_optimize`] (optimize and explore) run
-//! the subcommands; [`problem`] builds the control problem from the scene and the flags;
+//! Module map: [`cmd_simulate`], [`cmd_gradient`], [`cmd_optimize`] (optimize and explore),
+//! [`cmd_mpc`] run the subcommands; [`problem`] builds the control problem from the scene and the flags;
 //! [`controls_io`] reads `--controls` files; [`output`] writes results safely; [`npy`] is the
 //! NumPy writer; [`progress`] draws spinners.
 
 mod cmd_gradient;
+mod cmd_mpc;
 mod cmd_optimize;
 mod cmd_simulate;
 mod controls_io;
@@ -131,6 +134,9 @@ enum Command {
     /// Map the local minima of the scene's objective from many starts (JSON).
     #[command(long_about = cmd_optimize::EXPLORE_LONG_ABOUT)]
     Explore(cmd_optimize::ExploreArgs),
+    /// Receding-horizon (MPC) control in closed loop, with baselines (CSV and JSON).
+    #[command(long_about = cmd_mpc::LONG_ABOUT)]
+    Mpc(cmd_mpc::MpcArgs),
 }
 
 /// A failure reported to the user: one line on stderr and a non-zero exit status.
@@ -252,5 +258,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Gradient(a) => cmd_gradient::run(&a, progress),
         Command::Optimize(a) => cmd_optimize::run_optimize(&a, progress),
         Command::Explore(a) => cmd_optimize::run_explore(&a, progress),
+        Command::Mpc(a) => cmd_mpc::run(&a, progress),
     }
 }

@@ -1,0 +1,286 @@
+//! `chainbeam mpc`: receding-horizon control of the scene in closed loop (CSV trajectory and
+//! JSON summary), with the baselines beside it.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use serde::Serialize;
+
+use chainbeam::mpc::{
+    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, NoControl, PdLaw,
+    PdTuning, Summary,
+};
+use chainbeam::ocp::OcpOptions;
+use chainbeam::optimize::OptimOptions;
+use chainbeam::Scene;
+
+use crate::output::{push_f64, Output};
+use crate::progress::Progress;
+use crate::{check_finite, lib_error, load_scene, series_files, to_json, CliError};
+use crate::{OUTPUT_HELP, SCENE_HELP};
+
+/// `mpc --help`.
+pub const LONG_ABOUT: &str = "\
+Run the scene in closed loop under a receding-horizon (model predictive) controller: every \
+--interval seconds the controller observes the beam's state, solves the optimal-control problem \
+min Σ M₀(t_k)² + ρ·h·Σ u_k² over the next --horizon seconds of its model (the scene itself, or \
+--model FILE: another drag, a forecast of the loads with errors) by the Gauss-Newton/Riccati \
+solver, warm-started from its previous plan and limited to --iterations iterations (real-time \
+iteration), and applies the plan's first force, held over the interval, at control.node \
+(default: the tip). The plant is the scene: RATTLE from the straight beam at rest, t in [0, N·h]. \
+The first plan (at t = 0, cold) gets --first-iterations.
+
+With --baselines the same loop also runs without control, with the best constant force \
+(optimised over the whole scene) and with a PD law u = clamp(u_b − K_p·M₀ − K_d·dM₀/dt) on the \
+measured base moment whose gains are tuned over the scene's closed-loop c_sum.
+
+CSV (--output; default standard output): one row per t_k, k = 0..N:
+  t        time t_k [s]
+  moment   base bending moment M₀(t_k) [Nm] under MPC
+  control  the force u_k [N] applied by MPC
+  tip      tip displacement z_n(t_k) [m] under MPC
+  with --baselines also moment_none, moment_constant, control_constant, moment_pd, control_pd.
+
+JSON (--summary FILE): settings, and per controller: c_sum = Σ M₀(t_k)² [N²m²], max_abs_moment, \
+max_abs_control, effort h·Σ u² [N²s], decisions, initial_decision_seconds, mean_replan_seconds, \
+worst_replan_seconds (the decisions after the first), mean_iterations, real_time_factor \
+(simulated time / controller wall time), loop_real_time_factor; real_time (worst re-plan ≤ \
+interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's.
+
+Exit status 0 also when re-plans stop at their iteration budget (that is the method); 1 on \
+invalid settings (naming the flag) or a failed step or solve.";
+
+/// `mpc`'s flags.
+#[derive(Args)]
+pub struct MpcArgs {
+    #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// The controller's model (a scene file with the same number of pendulums); default: the
+    /// scene itself (a perfect model). Its [time] length and [control] values are not used.
+    #[arg(long, value_name = "MODEL.toml")]
+    pub model: Option<PathBuf>,
+    /// Horizon of each plan [s], a whole number of intervals.
+    #[arg(long, value_name = "S", default_value_t = 2.0)]
+    pub horizon: f64,
+    /// Control interval [s], a multiple of time.step that divides the run.
+    #[arg(long, value_name = "S", default_value_t = 0.1)]
+    pub interval: f64,
+    /// Gauss-Newton iterations per re-plan.
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub iterations: usize,
+    /// Iterations of the first (cold) plan at t = 0.
+    #[arg(long, value_name = "K", default_value_t = 50)]
+    pub first_iterations: usize,
+    /// Force bound |u| ≤ U [N] (also for the baselines).
+    #[arg(long, value_name = "U", default_value_t = 5.0)]
+    pub bound: f64,
+    /// Effort weight ρ of ρ·h·Σ u_k².
+    #[arg(long, value_name = "RHO", default_value_t = 0.01)]
+    pub effort: f64,
+    /// Rate penalty σ of (σ/h)·Σ (u_k − u_{k−1})².
+    #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
+    pub rate_penalty: f64,
+    /// Also run no control, the best constant force and a tuned PD law.
+    #[arg(long)]
+    pub baselines: bool,
+    /// Write the JSON summary to FILE (written like --output).
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
+    #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct Settings {
+    horizon: f64,
+    interval: f64,
+    iterations: usize,
+    first_iterations: usize,
+    bound: f64,
+    effort: f64,
+    rate_penalty: f64,
+    model: Option<String>,
+}
+
+#[derive(Serialize)]
+struct Report {
+    settings: Settings,
+    mpc: Summary,
+    real_time: bool,
+    baselines: Vec<Summary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pd_gains: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    c_sum_ratio_to_constant: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    c_sum_ratio_to_pd: Option<f64>,
+}
+
+/// The runs of the baselines: none, constant, PD (with its gains).
+struct Baselines {
+    runs: [ClosedLoopResult; 3],
+    gains: [f64; 3],
+}
+
+/// Runs `mpc`.
+pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
+    let mut inputs: Vec<&Path> = vec![&a.scene];
+    inputs.extend(a.model.as_deref());
+    if a.summary.is_some() && a.summary == a.output {
+        return Err(CliError::msg(
+            "--summary: must be another file than --output",
+        ));
+    }
+    let out = Output::prepare(a.output.as_deref(), &inputs)?;
+    let summary_out = a
+        .summary
+        .as_deref()
+        .map(|s| Output::prepare(Some(s), &inputs))
+        .transpose()?;
+    let scene = load_scene(&a.scene)?;
+    out.refuse_inputs(&series_files(&a.scene, &scene))?;
+    let model = match &a.model {
+        Some(path) => load_scene(path)?,
+        None => scene.clone(),
+    };
+    let options = MpcOptions {
+        horizon: Horizon::Seconds(a.horizon),
+        iterations: a.iterations,
+        first_iterations: a.first_iterations,
+        warm_start: true,
+        effort: a.effort,
+        ocp: OcpOptions {
+            rate_penalty: a.rate_penalty,
+            ..OcpOptions::default().with_bound(a.bound)
+        },
+    };
+    let flag_error = |e| lib_error(a.model.as_deref().unwrap_or(&a.scene), e);
+    let mut mpc = Mpc::new(&model, a.interval, options).map_err(flag_error)?;
+    let spinner = progress.spinner(format!(
+        "closed loop: {} s, a plan every {} s over {} s",
+        scene.time.steps as f64 * scene.time.step,
+        a.interval,
+        a.horizon
+    ));
+    let closed = run_closed_loop(&scene, a.interval, &mut mpc);
+    spinner.finish_and_clear();
+    let closed = closed.map_err(|e| lib_error(&a.scene, e))?;
+    let baselines = if a.baselines {
+        Some(run_baselines(a, &scene, &progress)?)
+    } else {
+        None
+    };
+    check_run(&a.scene, &closed)?;
+    let report = report(a, closed.summary.clone(), baselines.as_ref());
+    let json = to_json(&report)?;
+    let mut sink = out.open()?;
+    if let Err(e) = write_csv(sink.writer(), &closed, baselines.as_ref()) {
+        return Err(sink.error(&e));
+    }
+    sink.finish()?;
+    match summary_out {
+        Some(s) => s.write_all(&json),
+        None => Ok(()),
+    }
+}
+
+fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Baselines, CliError> {
+    let err = |e| lib_error(&a.scene, e);
+    let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
+    let none = run_closed_loop(scene, a.interval, &mut NoControl).map_err(err)?;
+    let (mut constant, _) = ConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
+    let constant = run_closed_loop(scene, a.interval, &mut constant).map_err(err)?;
+    let tuning = PdTuning::new(scene, a.interval, a.bound, a.effort).map_err(err)?;
+    let opts = OptimOptions {
+        max_iters: 200,
+        first_step: 0.01,
+        ..OptimOptions::default()
+    };
+    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
+    let gains = [pd.bias, pd.kp, pd.kd];
+    let pd = run_closed_loop(scene, a.interval, &mut pd).map_err(err)?;
+    spinner.finish_and_clear();
+    for r in [&none, &constant, &pd] {
+        check_run(&a.scene, r)?;
+    }
+    Ok(Baselines {
+        runs: [none, constant, pd],
+        gains,
+    })
+}
+
+fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
+    let ratio = |i: usize| b.map(|b| mpc.c_sum / b.runs[i].summary.c_sum);
+    Report {
+        settings: Settings {
+            horizon: a.horizon,
+            interval: a.interval,
+            iterations: a.iterations,
+            first_iterations: a.first_iterations,
+            bound: a.bound,
+            effort: a.effort,
+            rate_penalty: a.rate_penalty,
+            model: a.model.as_ref().map(|p| p.display().to_string()),
+        },
+        real_time: mpc.worst_replan_seconds <= a.interval,
+        c_sum_ratio_to_constant: ratio(1),
+        c_sum_ratio_to_pd: ratio(2),
+        pd_gains: b.map(|b| b.gains),
+        baselines: b.map_or_else(Vec::new, |b| {
+            b.runs.iter().map(|r| r.summary.clone()).collect()
+        }),
+        mpc,
+    }
+}
+
+/// Never write NaN: the run's columns and summary are checked before anything is written.
+fn check_run(path: &Path, r: &ClosedLoopResult) -> Result<(), CliError> {
+    check_finite(path, "moment", &r.moment)?;
+    check_finite(path, "control", &r.control)?;
+    check_finite(path, "tip", &r.tip)?;
+    let s = &r.summary;
+    check_finite(
+        path,
+        "summary",
+        &[s.c_sum, s.max_abs_moment, s.max_abs_control, s.effort],
+    )
+}
+
+fn write_csv(
+    w: &mut dyn Write,
+    r: &ClosedLoopResult,
+    b: Option<&Baselines>,
+) -> std::io::Result<()> {
+    let mut header = String::from("t,moment,control,tip");
+    if b.is_some() {
+        header.push_str(",moment_none,moment_constant,control_constant,moment_pd,control_pd");
+    }
+    header.push('\n');
+    w.write_all(header.as_bytes())?;
+    let mut line = Vec::with_capacity(256);
+    let mut buf = zmij::Buffer::new();
+    for k in 0..r.t.len() {
+        line.clear();
+        let mut values = vec![r.t[k], r.moment[k], r.control[k], r.tip[k]];
+        if let Some(b) = b {
+            let [none, constant, pd] = &b.runs;
+            values.extend([
+                none.moment[k],
+                constant.moment[k],
+                constant.control[k],
+                pd.moment[k],
+                pd.control[k],
+            ]);
+        }
+        for (j, v) in values.iter().enumerate() {
+            if j > 0 {
+                line.push(b',');
+            }
+            push_f64(&mut line, &mut buf, *v);
+        }
+        line.push(b'\n');
+        w.write_all(&line)?;
+    }
+    Ok(())
+}

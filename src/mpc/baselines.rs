@@ -1,0 +1,245 @@
+//! The baselines a receding-horizon controller is measured against: no control, the best
+//! constant force, and a PD law on the measured base moment with tuned gains.
+
+use num_dual::DualSVec64;
+
+use super::{interval_steps, Controller, Observation, Plant};
+use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
+use crate::error::{Error, Result};
+use crate::model::Scalar;
+use crate::ocp::{self, OcpOptions, OcpResult};
+use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult};
+use crate::scene::Scene;
+
+/// u = 0 at every step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NoControl;
+
+impl Controller for NoControl {
+    fn name(&self) -> String {
+        "none".into()
+    }
+    fn control(&mut self, _: &Observation<'_>) -> Result<f64> {
+        Ok(0.0)
+    }
+}
+
+/// One force u for the whole run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConstantForce {
+    /// The force (N).
+    pub u: f64,
+}
+
+impl ConstantForce {
+    /// The best constant force on `scene`: min_u c_sum + ρ h Σ u² = Σ_k M₀(t_k)² + ρ h (N + 1) u²
+    /// subject to |u| ≤ `bound`, by the Riccati solver on the one-piece problem (an offline
+    /// optimum over the whole run, with the plant's own model and loads).
+    ///
+    /// # Errors
+    /// The problem's and the solver's errors.
+    pub fn best(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OcpResult)> {
+        let steps = scene.time.steps;
+        let map = PiecewiseControl { steps, pieces: 1 };
+        let objective = BendingObjective::summed_moment().with_effort(effort);
+        let problem = ControlProblem::new(scene, map, objective)?;
+        let r = ocp::solve(&problem, &[0.0], &OcpOptions::default().with_bound(bound))?;
+        Ok((ConstantForce { u: r.theta[0] }, r))
+    }
+}
+
+impl Controller for ConstantForce {
+    fn name(&self) -> String {
+        "constant".into()
+    }
+    fn control(&mut self, _: &Observation<'_>) -> Result<f64> {
+        Ok(self.u)
+    }
+}
+
+/// A PD law on the measured base moment, sampled at the control interval:
+/// u = clamp(u_b − K_p M₀ − K_d Ṁ₀, −u_max, u_max).
+///
+/// Why the base moment and not the tip displacement: M₀ is the quantity to keep small, and a
+/// wellhead moment is what riser monitoring measures; a law on the tip displacement regulates the
+/// platform's position, which the wave moves together with the whole beam, and only indirectly
+/// the moment at the seabed. The bias u_b is the feedforward a control engineer adds against a
+/// steady load (a current): without it a PD law leaves a steady moment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PdLaw {
+    /// u_b (N).
+    pub bias: f64,
+    /// K_p (N per Nm).
+    pub kp: f64,
+    /// K_d (N s per Nm).
+    pub kd: f64,
+    /// u_max (N; infinite: no limit).
+    pub bound: f64,
+}
+
+/// The law at one sample, in any scalar (the clamp passes no derivative on the bound).
+fn pd<D: Scalar>(gains: &[D; 3], moment: D, rate: D, bound: f64) -> D {
+    let u = gains[0] - gains[1] * moment - gains[2] * rate;
+    if u.re() > bound {
+        D::from(bound)
+    } else if u.re() < -bound {
+        D::from(-bound)
+    } else {
+        u
+    }
+}
+
+impl PdLaw {
+    /// The gains (u_b, K_p, K_d) minimising the closed-loop J = c_sum + ρ h Σ u_k² of `scene`
+    /// ([`pd_closed_loop_cost`]) from `start`, by [`minimize`] with `options`.
+    ///
+    /// # Errors
+    /// The closed loop's and the optimiser's errors.
+    pub fn tune(
+        tuning: &PdTuning,
+        start: [f64; 3],
+        options: &OptimOptions,
+    ) -> Result<(PdLaw, OptimResult)> {
+        let r = minimize(tuning, &start, options)?;
+        let law = PdLaw {
+            bias: r.theta[0],
+            kp: r.theta[1],
+            kd: r.theta[2],
+            bound: tuning.bound,
+        };
+        Ok((law, r))
+    }
+}
+
+impl Controller for PdLaw {
+    fn name(&self) -> String {
+        "PD".into()
+    }
+    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        let gains = [self.bias, self.kp, self.kd];
+        Ok(pd(&gains, obs.moment, obs.moment_rate, self.bound))
+    }
+}
+
+/// The closed-loop cost of a PD law's gains θ = (u_b, K_p, K_d) on a scene, as an
+/// [`OptimProblem`]: J(θ) = Σ_{k=0}^{N} [M₀(t_k)² + ρ h u_k²] of the loop of [`super::run_closed_loop`]
+/// with [`PdLaw`] (the same plant, sampling and hold), its gradient by forward-mode dual numbers
+/// (`DualSVec64<3>`) through the RATTLE steps of the loop.
+#[derive(Clone, Debug)]
+pub struct PdTuning {
+    scene: Scene,
+    interval_steps: usize,
+    bound: f64,
+    effort: f64,
+}
+
+impl PdTuning {
+    /// The tuning problem of `scene` with decisions every `interval` seconds, |u| ≤ `bound`
+    /// (infinite: none) and effort weight ρ = `effort`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] naming `interval`, `bound` or `effort`.
+    pub fn new(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
+        let m = interval_steps(interval, scene.time.step)?;
+        if bound.is_nan() || bound <= 0.0 {
+            return Err(Error::InvalidArgument {
+                name: "bound",
+                reason: format!("must be positive, got {bound}"),
+            });
+        }
+        if !(effort.is_finite() && effort >= 0.0) {
+            return Err(Error::InvalidArgument {
+                name: "effort",
+                reason: format!("must be finite and >= 0, got {effort}"),
+            });
+        }
+        Ok(PdTuning {
+            scene: scene.clone(),
+            interval_steps: m,
+            bound,
+            effort,
+        })
+    }
+}
+
+impl OptimProblem for PdTuning {
+    fn n_params(&self) -> usize {
+        3
+    }
+
+    fn value(&self, theta: &[f64]) -> Result<f64> {
+        let g = gains::<f64>(theta, |x, _| x)?;
+        pd_closed_loop_cost(
+            &self.scene,
+            self.interval_steps,
+            &g,
+            self.bound,
+            self.effort,
+        )
+    }
+
+    fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
+        let g = gains::<DualSVec64<3>>(theta, |x, i| DualSVec64::<3>::from_re(x).derivative(i))?;
+        let j = pd_closed_loop_cost(
+            &self.scene,
+            self.interval_steps,
+            &g,
+            self.bound,
+            self.effort,
+        )?;
+        let grad = match j.eps.0 {
+            Some(v) => v.iter().copied().collect(),
+            None => vec![0.0; 3],
+        };
+        Ok((j.re, grad))
+    }
+}
+
+/// The three gains of θ in a scalar type (`seed(x, i)` lifts θᵢ).
+fn gains<D: Scalar>(theta: &[f64], seed: impl Fn(f64, usize) -> D) -> Result<[D; 3]> {
+    if theta.len() != 3 {
+        return Err(Error::WrongLength {
+            name: "gains",
+            expected: 3,
+            got: theta.len(),
+        });
+    }
+    if let Some(index) = theta.iter().position(|x| !x.is_finite()) {
+        return Err(Error::NotFinite {
+            name: "gains",
+            index,
+        });
+    }
+    Ok(std::array::from_fn(|i| seed(theta[i], i)))
+}
+
+/// J = Σ_{k=0}^{N} [M₀(t_k)² + ρ h u_k²] of the PD loop u_j = clamp(u_b − K_p M₀ − K_d Ṁ₀) sampled
+/// every `interval_steps` steps on `scene`'s plant, in any scalar: with dual gains, the exact
+/// derivative of the discrete closed loop (the clamp passes none on the bound).
+///
+/// # Errors
+/// The plant's errors (an unstable law folds the beam: [`Error::Folded`], or Newton fails).
+pub fn pd_closed_loop_cost<D: Scalar>(
+    scene: &Scene,
+    interval_steps: usize,
+    gains: &[D; 3],
+    bound: f64,
+    effort: f64,
+) -> Result<D> {
+    let mut plant = Plant::<D>::new(scene)?;
+    let rho_h = effort * plant.h();
+    let stage = |p: &Plant<D>| {
+        let (m, u) = (p.moment(), p.control());
+        m * m + u * u * rho_h
+    };
+    let mut j = D::zero();
+    while plant.step_index() < plant.steps() {
+        let rate = plant.moment_rate();
+        plant.set_control(pd(gains, plant.moment(), rate, bound))?;
+        for _ in 0..interval_steps.min(plant.steps() - plant.step_index()) {
+            j += stage(&plant);
+            plant.advance()?;
+        }
+    }
+    Ok(j + stage(&plant))
+}

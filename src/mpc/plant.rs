@@ -1,0 +1,165 @@
+//! The plant: a scene simulated interval by interval by RATTLE with the control the loop applies.
+
+use crate::error::{Error, Result};
+use crate::model::{Chain, Scalar};
+use crate::rattle::{Rattle, State};
+use crate::scene::Scene;
+
+/// The true system of a closed loop: the planar RATTLE map (thesis eq. 1.6.1) of a scene, from
+/// the straight beam at rest at t = 0, advanced step by step with the control force u_k at the
+/// scene's control node (default: the tip n). Generic over the scalar, so that a closed loop can
+/// be differentiated with respect to a feedback law's gains by dual numbers.
+///
+/// # The control at a switching time
+/// A RATTLE step k → k+1 takes u_k in its first and u_{k+1} in its second half-kick, and
+/// p_{k+1} depends on u_{k+1}. A controller decides u_k from the state at t_k, so the plant first
+/// takes the step into t_k with the held control u_{k+1} = u_k−1 (or a controller's predicted
+/// control), the controller observes that state, and [`Plant::set_control`] re-takes that last
+/// step with the decided u_k. The trajectory is therefore exactly the open-loop RATTLE trajectory
+/// of the applied per-step controls u_0..u_N (what [`crate::simulate_with_controls`] computes),
+/// and the state the controller saw differs from it only in p_k, by
+/// (h/2)(u_k − ũ_k) P(q_k) b (ũ_k the control it was computed with, P the projection onto the
+/// hidden constraint, b = ∂U_q/∂u): zero when the prediction is right.
+#[derive(Clone, Debug)]
+pub struct Plant<D: Scalar> {
+    rattle: Rattle<D, 2>,
+    state: State<D, 2>,
+    /// The state at t_{k−1}, from which the last step is re-taken.
+    prev: State<D, 2>,
+    k: usize,
+    steps: usize,
+    /// u_k (the control at the current t_k) and u_{k−1}.
+    u: D,
+    u_prev: D,
+    /// M⁻¹p, for Ṁ₀.
+    velocity: Vec<[D; 2]>,
+}
+
+impl<D: Scalar> Plant<D> {
+    /// The plant of a planar scene at t = 0 with u_0 = 0 (the scene's `[control]` values are
+    /// not applied: the loop's controller decides them).
+    ///
+    /// # Errors
+    /// The scene's model errors; [`Error::NeedsSpatialModel`] for a scene with loads along x.
+    pub fn new(scene: &Scene) -> Result<Self> {
+        let mut chain = Chain::<f64, 2>::from_scene(scene)?;
+        if chain.control_node().is_none() {
+            chain.set_control_node(Some(scene.n()))?;
+        }
+        let rattle = Rattle::new(chain.lift::<D>(), scene.time.step)?;
+        let state = rattle.straight_state();
+        let mut plant = Plant {
+            prev: state.clone(),
+            state,
+            rattle,
+            k: 0,
+            steps: scene.time.steps,
+            u: D::zero(),
+            u_prev: D::zero(),
+            velocity: vec![[D::zero(); 2]; scene.n()],
+        };
+        plant.rattle.prepare(&mut plant.state, 0, D::zero())?;
+        Ok(plant)
+    }
+
+    /// The current step index k.
+    pub fn step_index(&self) -> usize {
+        self.k
+    }
+
+    /// The scene's number of steps N.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The step h.
+    pub fn h(&self) -> f64 {
+        self.rattle.h()
+    }
+
+    /// t_k = k h.
+    pub fn time(&self) -> f64 {
+        self.k as f64 * self.rattle.h()
+    }
+
+    /// The state at t_k.
+    pub fn state(&self) -> &State<D, 2> {
+        &self.state
+    }
+
+    /// The model.
+    pub fn chain(&self) -> &Chain<D, 2> {
+        self.rattle.chain()
+    }
+
+    /// The control u_k applied at t_k.
+    pub fn control(&self) -> D {
+        self.u
+    }
+
+    /// The base bending moment M₀(t_k) = 2 k₁ z₁ / l₁² (thesis eq. 3.1.3).
+    pub fn moment(&self) -> D {
+        self.chain().base_moment(&self.state.q)
+    }
+
+    /// Its rate Ṁ₀ = 2 k₁ ż₁ / l₁² with q̇ = M⁻¹p (M₀ is linear in z₁).
+    pub fn moment_rate(&mut self) -> D {
+        let ch = self.rattle.chain();
+        ch.apply_inverse_mass(&self.state.p, &mut self.velocity);
+        ch.base_moment(&self.velocity)
+    }
+
+    /// The tip displacement z_n = Σ lᵢ qᵢ,z.
+    pub fn tip(&self) -> D {
+        self.chain().tip_z(&self.state.q)
+    }
+
+    /// Sets u_k at the current t_k. At k = 0 the beam is at rest and only the force is
+    /// recomputed; at k > 0 the step k−1 → k is re-taken with (u_{k−1}, u_k), so the
+    /// trajectory is the RATTLE trajectory of the applied controls (type docs).
+    ///
+    /// # Errors
+    /// [`Error::NotFinite`] for a non-finite u; the step's errors.
+    pub fn set_control(&mut self, u: D) -> Result<()> {
+        if !u.re().is_finite() {
+            return Err(Error::NotFinite {
+                name: "control",
+                index: self.k,
+            });
+        }
+        self.u = u;
+        if self.k == 0 {
+            self.state = self.rattle.straight_state();
+            self.rattle.prepare(&mut self.state, 0, u)
+        } else {
+            self.retake()
+        }
+    }
+
+    /// Re-takes the step k−1 → k from the stored state with (u_{k−1}, u_k).
+    fn retake(&mut self) -> Result<()> {
+        let k = self.k - 1;
+        self.state.clone_from(&self.prev);
+        self.rattle.prepare_force(&self.state, k, self.u_prev)?;
+        self.rattle.step(&mut self.state, k, self.u_prev, self.u)?;
+        Ok(())
+    }
+
+    /// Advances one step to t_{k+1} holding the control (u_{k+1} = u_k).
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] (`steps`) past t_N; the step's errors.
+    pub fn advance(&mut self) -> Result<()> {
+        if self.k >= self.steps {
+            return Err(Error::InvalidArgument {
+                name: "steps",
+                reason: format!("the plant is at its last step N = {}", self.steps),
+            });
+        }
+        self.prev.clone_from(&self.state);
+        self.rattle.step(&mut self.state, self.k, self.u, self.u)?;
+        self.u_prev = self.u;
+        self.k += 1;
+        Ok(())
+    }
+}

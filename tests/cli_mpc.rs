@@ -1,0 +1,147 @@
+//! `chainbeam mpc`: the closed-loop CSV and JSON summary, the baselines, and bad settings
+//! (exit status 1, one line naming the flag, outputs untouched).
+
+use std::fs;
+use std::path::Path;
+use std::process::Output;
+
+use assert_cmd::cargo::cargo_bin_cmd;
+
+/// A small riser (n = 4, D = 10 kg/m) with a wave of period 2 s at node 2, 1 s of closed loop.
+const SCENE: &str = r#"[beam]
+pendulums = 4
+length = 1.0
+mass = 1.0
+stiffness = 1000.0
+support = "riser"
+base_stiffness = 2000.0
+tip_stiffness = 2000.0
+
+[loads]
+drag = 10.0
+
+[[loads.point]]
+node = 2
+ramp = 0.5
+
+[[loads.point.harmonic]]
+amplitude = 2.0
+period = 2.0
+
+[time]
+step = 0.01
+steps = 100
+
+[control]
+node = 4
+kind = "constant"
+values = [0.0]
+"#;
+
+fn run(dir: &Path, args: &[&str]) -> Output {
+    cargo_bin_cmd!("chainbeam")
+        .current_dir(dir)
+        .arg("mpc")
+        .arg("scene.toml")
+        .args(args)
+        .output()
+        .expect("run chainbeam")
+}
+
+fn setup() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
+    dir
+}
+
+#[test]
+fn mpc_writes_the_closed_loop_csv_and_summary() {
+    let dir = setup();
+    let o = run(
+        dir.path(),
+        &[
+            "--horizon",
+            "0.5",
+            "--bound",
+            "1.0",
+            "--baselines",
+            "-o",
+            "loop.csv",
+            "--summary",
+            "summary.json",
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = fs::read_to_string(dir.path().join("loop.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "t,moment,control,tip,moment_none,moment_constant,control_constant,moment_pd,control_pd"
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 101, "N + 1 rows");
+    assert!(rows
+        .iter()
+        .all(|r| r[2].abs() <= 1.0 && r[6].abs() <= 1.0 && r[8].abs() <= 1.0));
+    let v: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.path().join("summary.json")).unwrap())
+            .unwrap();
+    // c_sum of the summary is Σ M₀(t_k)² of the CSV's moment column (numbers round-trip).
+    let c_sum: f64 = rows.iter().map(|r| r[1] * r[1]).sum();
+    let reported = v["mpc"]["c_sum"].as_f64().unwrap();
+    assert!(
+        (reported - c_sum).abs() <= 1e-12 * c_sum,
+        "{reported} vs {c_sum}"
+    );
+    assert_eq!(v["mpc"]["decisions"].as_u64(), Some(10));
+    assert_eq!(v["baselines"].as_array().unwrap().len(), 3);
+    let none: f64 = rows.iter().map(|r| r[4] * r[4]).sum();
+    let none_reported = v["baselines"][0]["c_sum"].as_f64().unwrap();
+    assert!((none_reported - none).abs() <= 1e-12 * none);
+    let ratio = v["c_sum_ratio_to_pd"].as_f64().unwrap();
+    let pd = v["baselines"][2]["c_sum"].as_f64().unwrap();
+    assert!((ratio - reported / pd).abs() <= 1e-12 * ratio);
+    for key in [
+        "real_time_factor",
+        "mean_replan_seconds",
+        "worst_replan_seconds",
+    ] {
+        assert!(v["mpc"][key].as_f64().unwrap() > 0.0, "{key}");
+    }
+    assert!(v["real_time"].is_boolean());
+}
+
+#[test]
+fn mpc_bad_settings_are_one_error_and_leave_outputs_alone() {
+    let dir = setup();
+    fs::write(dir.path().join("keep.csv"), "old\n").unwrap();
+    for (args, needle) in [
+        (vec!["--interval", "0.015"], "interval"),
+        (vec!["--horizon", "0.05"], "horizon"),
+        (vec!["--iterations", "0"], "iterations"),
+        (vec!["--bound=-1"], "bounds"),
+        (vec!["--effort=-1"], "effort"),
+    ] {
+        let mut a = args.clone();
+        a.extend(["-o", "keep.csv"]);
+        let o = run(dir.path(), &a);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert_eq!(
+            fs::read_to_string(dir.path().join("keep.csv")).unwrap(),
+            "old\n"
+        );
+    }
+    let o = run(dir.path(), &["-o", "x.csv", "--summary", "x.csv"]);
+    assert_eq!(o.status.code(), Some(1));
+    let o = run(dir.path(), &["-o", "scene.toml"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        fs::read_to_string(dir.path().join("scene.toml")).unwrap(),
+        SCENE
+    );
+}

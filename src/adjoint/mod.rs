@@ -263,16 +263,15 @@ pub fn adjoint_gradient<D: Scalar, O: Objective, const DIM: usize>(
     params: &[Parameter],
     checkpointing: Checkpointing,
 ) -> Result<AdjointResult<D>> {
-    adjoint_gradient_from(chain, h, steps, u, objective, params, checkpointing, None)
+    adjoint_gradient_from(chain, (h, steps), u, objective, params, checkpointing, None)
 }
 
 /// [`adjoint_gradient`] on a horizon that starts from `start` (S₀ at t₀) instead of the straight
-/// beam at rest at t = 0. The initial state is data: no gradient flows into it.
-#[allow(clippy::too_many_arguments)]
+/// beam at rest at t = 0, over the horizon `(h, steps)` (time step, number of steps N). The
+/// initial state is data: no gradient flows into it.
 pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     chain: &Chain<D, DIM>,
-    h: f64,
-    steps: usize,
+    (h, steps): (f64, usize),
     u: &[D],
     objective: &O,
     params: &[Parameter],

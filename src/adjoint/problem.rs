@@ -292,10 +292,10 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         let (h, n, obj, c) = (self.h, self.steps, &self.objective, self.checkpointing);
         let s = self.start.as_ref();
         if ux.is_empty() {
-            return adjoint_gradient_from(&self.chain, h, n, &u, obj, params, c, s);
+            return adjoint_gradient_from(&self.chain, (h, n), &u, obj, params, c, s);
         }
         let chain = self.chain_with_x(&ux)?;
-        adjoint_gradient_from(&chain, h, n, &u, obj, params, c, s)
+        adjoint_gradient_from(&chain, (h, n), &u, obj, params, c, s)
     }
 
     /// ∂J/∂θ_phys for physical parameters (stiffnesses, mass, drag, load magnitudes).
@@ -319,7 +319,7 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         let chain = self.chain_with_x(&self.expand_x(thx))?;
         let (h, n, obj, c) = (self.h, self.steps, &self.objective, self.checkpointing);
         let start = self.start_as::<Dual64>();
-        let r = adjoint_gradient_from(&chain, h, n, &u, obj, &[], c, start.as_ref())?;
+        let r = adjoint_gradient_from(&chain, (h, n), &u, obj, &[], c, start.as_ref())?;
         Ok(self.theta_bar(&r).iter().map(|x| x.eps).collect())
     }
 

@@ -19,17 +19,13 @@ impl Solver {
         let mut a = vec![0.0; nxi * nxi];
         let mut b = vec![0.0; nxi];
         let nom = &self.nominal;
-        self.jws[0].jacobians(
-            &self.model,
-            k,
-            nom.q(k),
-            nom.p(k),
-            nom.omega(k),
-            nom.lambda(k),
-            nom.u[k],
-            &mut a,
-            &mut b,
-        )?;
+        let x = StagePoint {
+            q: nom.q(k),
+            p: nom.p(k),
+            omega: nom.omega(k),
+            mu: nom.lambda(k),
+        };
+        self.jws[0].jacobians((&self.model, k), x, nom.u[k], (&mut a, &mut b))?;
         Ok((Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]), b))
     }
 

@@ -84,12 +84,10 @@ impl Solver {
                 };
                 self.counts.0 += 1;
                 let ok = rollout(
-                    &self.model,
+                    (&self.model, &self.cost),
                     &mut self.stepper,
-                    &self.cost,
                     &self.free,
-                    lo,
-                    hi,
+                    (lo, hi),
                     Some(&fb),
                     &mut self.trial,
                     &mut self.scratch,

@@ -85,15 +85,12 @@ pub(crate) struct Feedback<'a> {
 
 /// Rolls out the stage maps from the initial state, writing `out` and its cost. With `fb`
 /// the free controls follow the feedback law; without it they are `out.u` as given. Held stages
-/// copy the previous control. `scratch` has length n.
-#[allow(clippy::too_many_arguments)]
+/// copy the previous control. Controls stay in the box `(lo, hi)`. `scratch` has length n.
 pub(crate) fn rollout(
-    model: &StageModel,
+    (model, cost): (&StageModel, &StageCost),
     stepper: &mut Stepper<f64>,
-    cost: &StageCost,
     free: &[bool],
-    lo: f64,
-    hi: f64,
+    (lo, hi): (f64, f64),
     fb: Option<&Feedback<'_>>,
     out: &mut Traj,
     scratch: &mut [[f64; 2]],

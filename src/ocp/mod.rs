@@ -145,7 +145,7 @@ use crate::error::{Error, Result};
 use crate::scene::ObjectiveKind;
 use line_search::{rollout, Feedback, Traj};
 use riccati::{Riccati, StageCost, StageInput};
-use stage::{tangent, JacobianWorkspace, StageModel, Stepper};
+use stage::{tangent, JacobianWorkspace, StageModel, StagePoint, Stepper};
 
 /// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
 /// the run stops ([`Termination::RoundOff`]).
@@ -367,12 +367,10 @@ impl Solver {
         self.jac_range = None;
         self.counts.0 += 1;
         rollout(
-            &self.model,
+            (&self.model, &self.cost),
             &mut self.stepper,
-            &self.cost,
             &self.free,
-            lo,
-            hi,
+            (lo, hi),
             None,
             &mut self.nominal,
             &mut self.scratch,
@@ -405,17 +403,13 @@ impl Solver {
         let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut JacobianWorkspace| {
             for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(nxi)).enumerate() {
                 let k = lo + c * chunk + i;
-                ws.jacobians(
-                    model,
-                    k,
-                    nom.q(k),
-                    nom.p(k),
-                    nom.omega(k),
-                    nom.lambda(k),
-                    nom.u[k],
-                    ai,
-                    bi,
-                )?;
+                let x = StagePoint {
+                    q: nom.q(k),
+                    p: nom.p(k),
+                    omega: nom.omega(k),
+                    mu: nom.lambda(k),
+                };
+                ws.jacobians((model, k), x, nom.u[k], (ai, bi))?;
             }
             Ok::<(), Error>(())
         };

@@ -53,6 +53,20 @@ use crate::tridiag::BorderedTridiag;
 use nalgebra::SVector;
 use num_dual::{Derivative, DualSVec64};
 
+/// The point x̂_k of a stage's linearisation: attitudes q, momenta p, rates ω (the tangent
+/// coordinates' velocities) and the Newton start μ of the step ([`JacobianWorkspace::jacobians`]).
+#[derive(Clone, Copy, Debug)]
+pub struct StagePoint<'a> {
+    /// qᵢ.
+    pub q: &'a [[f64; 2]],
+    /// pᵢ.
+    pub p: &'a [[f64; 2]],
+    /// ωᵢ = tᵢ·(M⁻¹p)ᵢ.
+    pub omega: &'a [f64],
+    /// The Newton start (the nominal's converged λ_k).
+    pub mu: &'a [f64],
+}
+
 /// Directions per dual-number chunk (`DualSVec64<8>`: measured 11 f64-steps per dual step, the
 /// best cost per direction of the sizes 8, 10, 12, 16; 7 and 11, which fit the 2n + 1 = 21
 /// directions of n = 10 exactly, measured no better).
@@ -337,18 +351,12 @@ impl JacobianWorkspace {
     /// the real parts are converged at once (bit for bit the nominal's) and the Newton loop does
     /// only its derivative-only update: the implicit function theorem, one bordered-tridiagonal
     /// solve with 8 right-hand sides per chunk.
-    #[allow(clippy::too_many_arguments)]
     pub fn jacobians(
         &mut self,
-        model: &StageModel,
-        k: usize,
-        q: &[[f64; 2]],
-        p: &[[f64; 2]],
-        omega: &[f64],
-        mu: &[f64],
+        (model, k): (&StageModel, usize),
+        StagePoint { q, p, omega, mu }: StagePoint<'_>,
         u: f64,
-        a: &mut [f64],
-        b: &mut [f64],
+        (a, b): (&mut [f64], &mut [f64]),
     ) -> Result<()> {
         let n = model.n;
         let nx = 2 * n;
@@ -470,9 +478,15 @@ mod tests {
         let mut ws = JacobianWorkspace::new(&model).unwrap();
         let (mut a1, mut b1) = (vec![0.0; nx * nx], vec![0.0; nx]);
         let (mut a2, mut b2) = (a1.clone(), b1.clone());
-        ws.jacobians(&model, k, &q, &p, &omega, &lambda, u(k), &mut a1, &mut b1)
+        let x = |mu| StagePoint {
+            q: &q,
+            p: &p,
+            omega: &omega,
+            mu,
+        };
+        ws.jacobians((&model, k), x(&lambda), u(k), (&mut a1, &mut b1))
             .unwrap();
-        ws.jacobians(&model, k, &q, &p, &omega, &mu, u(k), &mut a2, &mut b2)
+        ws.jacobians((&model, k), x(&mu), u(k), (&mut a2, &mut b2))
             .unwrap();
         let rel = |x: &[f64], y: &[f64]| {
             let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -238,8 +238,7 @@ impl SceneBuilder {
             self.length,
             self.mass,
             self.stiffness,
-            self.base_stiffness,
-            self.tip_stiffness,
+            (self.base_stiffness, self.tip_stiffness),
             self.support,
             self.reaction_force,
         )?;
@@ -264,16 +263,15 @@ pub(super) fn end_springs(support: Support) -> (bool, bool) {
     }
 }
 
-/// Builds the beam from file-shaped values, applying the defaults of the module documentation.
-/// `n` must have passed [`check_size`].
-#[allow(clippy::too_many_arguments)]
+/// Builds the beam from file-shaped values, applying the defaults of the module documentation;
+/// `end_springs` = (`beam.base_stiffness`, `beam.tip_stiffness`). `n` must have passed
+/// [`check_size`].
 pub(super) fn assemble_beam(
     n: usize,
     length: NumOrArray,
     mass: NumOrArray,
     stiffness: NumOrArray,
-    base_stiffness: Option<f64>,
-    tip_stiffness: Option<f64>,
+    (base_stiffness, tip_stiffness): (Option<f64>, Option<f64>),
     support: Support,
     reaction_force: bool,
 ) -> Result<Beam, SceneError> {

@@ -413,8 +413,7 @@ impl RawScene {
             b.length,
             b.mass,
             b.stiffness,
-            b.base_stiffness,
-            b.tip_stiffness,
+            (b.base_stiffness, b.tip_stiffness),
             b.support,
             b.reaction_force,
         )?;

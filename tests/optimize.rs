@@ -236,7 +236,7 @@ fn asymmetric_box_optimum_is_the_clamped_1d_minimum() {
     ];
     for (lo, hi, start, active) in cases {
         let reference = golden_section(j, lo, hi, 1e-9);
-        for method in [Method::Lbfgs, Method::TrustRegion] {
+        for method in [Method::Lbfgs, Method::TrustRegion, Method::Riccati] {
             let opts = OptimOptions {
                 method,
                 bounds: Some(Bounds::new(lo, hi).unwrap()),

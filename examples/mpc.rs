@@ -8,8 +8,9 @@
 //! cargo run --release --example mpc -- 20      # the first 20 s only
 //! ```
 //!
-//! The wrong model underestimates the drag by 30 % (D = 7 instead of 10 kg/m) and its forecast
-//! misses the sea's 5.3 s component (0.5 N) and underestimates the 8 s wave by 20 %: the
+//! The wrong model (`catalogue::mpc_riser_wrong_model`) underestimates the drag by 30 %
+//! (D = 7 instead of 10 kg/m), overestimates the current by 20 %, and its forecast misses the
+//! sea's 5.3 s component (0.5 N) and underestimates the 8 s wave by 20 %: the
 //! controller sees the true state at every decision, but plans with these loads.
 
 use chainbeam::catalogue;
@@ -18,21 +19,11 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
-use chainbeam::Scene;
 
 const INTERVAL: f64 = 0.1;
-const HORIZON: f64 = 2.0;
+const HORIZON: f64 = 3.0;
 const BOUND: f64 = 5.0;
 const EFFORT: f64 = 0.01;
-
-fn wrong_model(plant: &Scene) -> Scene {
-    let mut model = plant.clone();
-    model.loads.drag *= 0.7;
-    let sea = &mut model.loads.points[0].harmonics;
-    sea.truncate(1);
-    sea[0].amplitude *= 0.8;
-    model
-}
 
 fn row(s: &Summary, label: &str) {
     let ms = |x: f64| format!("{:9.2}", 1e3 * x);
@@ -77,7 +68,11 @@ fn main() -> chainbeam::Result<()> {
     let pd = run_closed_loop(&scene, INTERVAL, &mut pd)?.summary;
     let mut perfect = Mpc::new(&scene, INTERVAL, options.clone())?;
     let perfect = run_closed_loop(&scene, INTERVAL, &mut perfect)?.summary;
-    let mut wrong = Mpc::new(&wrong_model(&scene), INTERVAL, options.clone())?;
+    let mut wrong = Mpc::new(
+        &catalogue::mpc_riser_wrong_model(),
+        INTERVAL,
+        options.clone(),
+    )?;
     let wrong = run_closed_loop(&scene, INTERVAL, &mut wrong)?.summary;
 
     let t = scene.time.steps as f64 * scene.time.step;

@@ -332,7 +332,10 @@ pub fn wave_riser() -> Scene {
 /// The closed-loop scene of issue 14 ([`crate::mpc`]): [`wave_riser`]'s riser and drag
 /// (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
 /// 0.5 N · sin(2π t/5.3 s + 1), ramped in over the first 8 s, h = 0.01 s, N = 6000
-/// (t ∈ [0, 60] s). Control at node 10 (the platform; the `[control]` value 0 is only the
+/// (t ∈ [0, 60] s), in a sheared current along +z, 0.1 m/s at the surface falling linearly to
+/// 0.02 m/s at the seabed (its steady drag bends the riser one way, a mean base moment of about
+/// 28 Nm, which a constant force of about 2.9 N cancels within the bound |u| ≤ 5 N of
+/// `chainbeam mpc`; [`sheared_current`]'s 0.3 m/s would need more than 5 N). Control at node 10 (the platform; the `[control]` value 0 is only the
 /// open-loop default, `chainbeam mpc` decides it every control interval), objective
 /// c_sum = Σ M₀(t_k)².
 pub fn mpc_riser() -> Scene {
@@ -352,11 +355,32 @@ pub fn mpc_riser() -> Scene {
         riser_chain_without_load()
             .drag(10.0)
             .load(PointLoad::harmonic(5, [0.0, 1.0], sea).ramped(WAVE_PERIOD))
+            .current(Current::linear(0.1, 0.02, [0.0, 1.0]))
             .control_constant(10, 0.0)
             .objective(ObjectiveKind::Sum)
             .steps(6000),
         "mpc_riser",
     )
+}
+
+/// The controller's *wrong* model of [`mpc_riser`] (the mismatch case of `examples/mpc.rs` and
+/// the `mpc_moment` figure): the drag underestimated by 30 % (D = 7 instead of 10 kg/m), the
+/// current overestimated by 20 % (0.12 → 0.024 m/s), and a forecast of the sea that misses its
+/// 5.3 s component and underestimates the 8 s wave by 20 % (1.6 N). Use it as the `model` of
+/// [`crate::mpc::Mpc::new`] with [`mpc_riser`] as the plant (`chainbeam mpc --model`).
+pub fn mpc_riser_wrong_model() -> Scene {
+    let mut model = mpc_riser();
+    model.loads.drag *= 0.7;
+    if let Some(c) = model.loads.current.as_mut() {
+        c.profile = crate::scene::CurrentProfile::Linear {
+            speed: 0.12,
+            bottom_speed: 0.024,
+        };
+    }
+    let sea = &mut model.loads.points[0].harmonics;
+    sea.truncate(1);
+    sea[0].amplitude *= 0.8;
+    model
 }
 
 /// The rows of [`wave_series`]'s file `wave_series.csv`: every 0.1 s over [0, 32] s, an oblique
@@ -466,7 +490,7 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
 /// the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
 /// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`, and the closed-loop scene
-/// `mpc_riser`.
+/// `mpc_riser` with its controller's wrong model `mpc_riser_wrong_model`.
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -505,6 +529,7 @@ pub fn all() -> Vec<(&'static str, Scene)> {
         ("sheared_current", sheared_current()),
         ("turning_current", turning_current()),
         ("mpc_riser", mpc_riser()),
+        ("mpc_riser_wrong_model", mpc_riser_wrong_model()),
     ]);
     scenes
 }

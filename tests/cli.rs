@@ -783,8 +783,14 @@ fn describe(name: &str) -> String {
             .into(),
         "mpc_riser" => "Issue 14 (closed loop): the riser with drag D = 10 kg/m under an irregular \
              sea at node 5, 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1), ramped in over \
-             8 s, t in [0, 60] s; control at node 10 (the platform), objective c_sum = sum of \
+             8 s, in a sheared current (along +z, 0.1 m/s at the surface falling linearly to \
+             0.02 m/s at the seabed), t in [0, 60] s; control at node 10 (the platform), objective c_sum = sum of \
              M0(t_k)^2. chainbeam mpc decides the control every interval (docs/cli.md)."
+            .into(),
+        "mpc_riser_wrong_model" => "Issue 14 (closed loop, model mismatch): a wrong model of \
+             mpc_riser for chainbeam mpc --model: drag 7 instead of 10 kg/m, the current 20 % too \
+             strong, and a forecast of the sea without its 5.3 s component and with the 8 s wave \
+             20 % too weak (1.6 N). The plant is mpc_riser.toml."
             .into(),
         "long_horizon" => "Future work of thesis §3.3 (Fig. 3.12): riser with drag D = 10 kg/m, F = 2 N \
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \

@@ -355,6 +355,26 @@ fn non_convergence_and_bad_input_are_reported() {
     assert!(r.projected_gradient_norm > 1e-8 * r.initial_gradient_norm);
     assert_eq!(r.iterations, 1);
 
+    // The real-time iteration (`final_gradient: false`): the same step, bit for bit, one pass
+    // of stage Jacobians fewer (the one that only served the final report), and the run says
+    // that its budget was spent, not that it converged. Counts from the solver's own counters.
+    let rt = solve(
+        &p,
+        &vec![0.0; steps + 1],
+        &OcpOptions {
+            max_iters: 1,
+            final_gradient: false,
+            ..OcpOptions::default()
+        },
+    )
+    .unwrap();
+    assert!(!rt.converged);
+    assert_eq!(rt.termination, Termination::Budget);
+    assert_eq!(rt.theta, r.theta);
+    assert_eq!(rt.objective.to_bits(), r.objective.to_bits());
+    assert_eq!(rt.jacobian_passes + 1, r.jacobian_passes);
+    assert_eq!(rt.projected_gradient_norm, rt.initial_gradient_norm);
+
     let bad = OcpOptions {
         lower: 1.0,
         upper: -1.0,

@@ -15,9 +15,9 @@ pub fn entries() -> Vec<Entry> {
     vec![Entry {
         id: "mpc_moment",
         caption: "(beyond the thesis, issue 14) The base bending moment M₀(t) of the riser under \
-                  an irregular sea at node 5 and a control force at the platform: no control, \
-                  the best constant force, a PD law on M₀ with tuned gains, and receding-horizon \
-                  control (2 s horizon, a decision every 0.1 s, 1 Gauss-Newton iteration per \
+                  an irregular sea at node 5 in a sheared current, and a control force at the \
+                  platform: no control, the best constant force, a PD law on M₀ with tuned gains, and receding-horizon \
+                  control (3 s horizon, a decision every 0.1 s, 1 Gauss-Newton iteration per \
                   re-plan) with a perfect and with a wrong model; lower panel: the forces.",
         make: fig_mpc,
     }]
@@ -32,12 +32,10 @@ fn fig_mpc(ctx: &Ctx) -> Res<Made> {
     if ctx.quick {
         scene.time.steps = 1000;
     }
-    let mut model = scene.clone();
-    model.loads.drag *= 0.7;
-    model.loads.points[0].harmonics.truncate(1);
-    model.loads.points[0].harmonics[0].amplitude *= 0.8;
+    let mut model = catalogue::mpc_riser_wrong_model();
+    model.time.steps = scene.time.steps;
     let options = MpcOptions {
-        horizon: Horizon::Seconds(2.0),
+        horizon: Horizon::Seconds(3.0),
         effort: EFFORT,
         ocp: OcpOptions::default().with_bound(BOUND),
         ..MpcOptions::default()

@@ -21,10 +21,15 @@ impl Solver {
         let mut roundoff_pg = f64::INFINITY;
         let mut history = Vec::new();
         let mut g0 = None;
+        let mut last_pg = f64::INFINITY;
         let termination = 'outer: loop {
+            if iterations > 0 && iterations >= opts.max_iters && !opts.final_gradient {
+                break Termination::Budget;
+            }
             // The exact gradient at the nominal (costate sweep) and the convergence test.
             self.costate()?;
             let pg = self.projected_norm();
+            last_pg = pg;
             let gref = *g0
                 .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
             if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
@@ -163,7 +168,8 @@ impl Solver {
             }
         };
         // The true gradient at the final nominal (the QP iterations overwrite the costates).
-        if termination == Termination::RegularisationLimit {
+        let stale = termination == Termination::Budget;
+        if termination == Termination::RegularisationLimit || stale {
             self.riccati.grad.copy_from_slice(&self.gtrue);
         }
         self.dv.fill(0.0);
@@ -171,7 +177,12 @@ impl Solver {
         let theta = self.theta();
         let g = self.theta_gradient();
         let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let pg = self.projected_norm();
+        // With the budget spent (no final gradient), the measure of the last evaluation.
+        let pg = if stale {
+            last_pg
+        } else {
+            self.projected_norm()
+        };
         let active_bounds = theta
             .iter()
             .enumerate()

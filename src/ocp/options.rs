@@ -29,6 +29,14 @@ pub struct OcpOptions {
     pub jacobian_memory: usize,
     /// Threads for the stage Jacobians; 0 = rayon's pool size. Default 0.
     pub threads: usize,
+    /// Whether a run that spends its [`max_iters`](Self::max_iters) evaluates the gradient at
+    /// its last iterate (one more pass of stage Jacobians and costates) to report it. Default
+    /// `true`. `false` is the real-time iteration of a receding-horizon controller, which only
+    /// needs the step: the run then ends with [`Termination::Budget`], and the result's
+    /// gradient norms are those at the start of the last iteration (the last point where the
+    /// gradient was evaluated). Measured on `mpc_riser` with one iteration per re-plan, this
+    /// halves the Jacobian passes (2 → 1 per re-plan).
+    pub final_gradient: bool,
 }
 
 impl Default for OcpOptions {
@@ -45,6 +53,7 @@ impl Default for OcpOptions {
             max_regularisation: 1e10,
             jacobian_memory: 1 << 30,
             threads: 0,
+            final_gradient: true,
         }
     }
 }
@@ -112,6 +121,10 @@ pub enum Termination {
     Converged,
     /// [`OcpOptions::max_iters`] accepted steps without convergence.
     MaxIterations,
+    /// [`OcpOptions::max_iters`] accepted steps with [`OcpOptions::final_gradient`] off: a
+    /// real-time iteration's budget, spent as asked; whether the last iterate is stationary was
+    /// not evaluated (not converged).
+    Budget,
     /// No step length was accepted even with the regularisation at its limit.
     RegularisationLimit,
     /// Several steps in a row predicted a decrease below J's round-off while the gradient
@@ -124,6 +137,9 @@ impl std::fmt::Display for Termination {
         f.write_str(match self {
             Termination::Converged => "converged (projected gradient below the tolerance)",
             Termination::MaxIterations => "iteration limit reached",
+            Termination::Budget => {
+                "iteration budget spent (final gradient not evaluated: real-time iteration)"
+            }
             Termination::RegularisationLimit => {
                 "no descent step found with the regularisation at its limit"
             }
@@ -156,9 +172,11 @@ pub struct OcpResult {
     pub theta: Vec<f64>,
     /// The forces u_0..u_N.
     pub controls: Vec<f64>,
-    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds).
+    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds); after [`Termination::Budget`], at
+    /// the start of the last iteration.
     pub gradient_norm: f64,
-    /// ‖θ − Π_box(θ − ∇J)‖₂ at the result: the first-order optimality measure.
+    /// ‖θ − Π_box(θ − ∇J)‖₂ at the result: the first-order optimality measure; after
+    /// [`Termination::Budget`], at the start of the last iteration.
     pub projected_gradient_norm: f64,
     /// ‖∇J(θ₀)‖₂ at the start.
     pub initial_gradient_norm: f64,

@@ -72,7 +72,8 @@ fn result(r: OcpResult, opts: &OptimOptions) -> OptimResult {
             initial: r.initial_gradient_norm,
             tolerance: opts.rel_grad_tol,
         },
-        ocp::Termination::MaxIterations => Termination::MaxIterations {
+        // `minimize` keeps `final_gradient` on; a budget is an iteration limit all the same.
+        ocp::Termination::MaxIterations | ocp::Termination::Budget => Termination::MaxIterations {
             max_iters: opts.max_iters,
         },
         // No accepted decrease (regularisation at its limit, or below J's round-off).

@@ -61,7 +61,7 @@ pub struct MpcArgs {
     #[arg(long, value_name = "MODEL.toml")]
     pub model: Option<PathBuf>,
     /// Horizon of each plan [s], a whole number of intervals.
-    #[arg(long, value_name = "S", default_value_t = 2.0)]
+    #[arg(long, value_name = "S", default_value_t = 3.0)]
     pub horizon: f64,
     /// Control interval [s], a multiple of time.step that divides the run.
     #[arg(long, value_name = "S", default_value_t = 0.1)]

@@ -2,6 +2,7 @@
 //! primal-dual interior-point method whose Newton systems are Riccati passes (module docs,
 //! "The step").
 
+use super::riccati::dot;
 use super::*;
 
 impl Solver {
@@ -26,8 +27,7 @@ impl Solver {
                     Arc::Projected => (u0 + alpha * self.dir[k]).clamp(lo, hi) - u0,
                     _ => {
                         let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-                        let x = alpha * self.riccati.ff[k]
-                            + g.iter().zip(dz.iter()).map(|(a, b)| a * b).sum::<f64>();
+                        let x = alpha * self.riccati.ff[k] + dot(g, dz);
                         if mode == Arc::Direction {
                             self.dir[k] = x;
                             x
@@ -110,11 +110,7 @@ impl Solver {
         let nz = self.nz;
         for k in 0..=self.steps {
             let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-            self.ff_out[k] = self.dv[k]
-                - g.iter()
-                    .zip(&self.dz[k * nz..(k + 1) * nz])
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
+            self.ff_out[k] = self.dv[k] - dot(g, &self.dz[k * nz..(k + 1) * nz]);
         }
         Ok(Some(q_plain))
     }
@@ -296,11 +292,7 @@ impl Solver {
         }
         for k in 0..=self.steps {
             let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-            self.ff_out[k] = self.dv[k]
-                - g.iter()
-                    .zip(&self.dz[k * nz..(k + 1) * nz])
-                    .map(|(a, b)| a * b)
-                    .sum::<f64>();
+            self.ff_out[k] = self.dv[k] - dot(g, &self.dz[k * nz..(k + 1) * nz]);
         }
         Ok(Some(q_plain))
     }

@@ -38,8 +38,26 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
 #[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
+/// Σ aᵢbᵢ over the common length, with four partial sums: independent add chains (and SIMD)
+/// instead of one chain whose latency bounds a plain fold; the small dense products of a stage
+/// are mostly such dots (measured: `cargo bench --bench ocp -- riccati_pass`).
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    let mut acc = [0.0; 4];
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    (acc[0] + acc[2]) + (acc[1] + acc[3]) + tail
 }
 
 /// The cost weights of the stage cost.

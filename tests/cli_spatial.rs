@@ -469,3 +469,41 @@ fn explore_maps_a_two_axis_scene() {
         assert_eq!(pairs(r, "start_point").0.len(), 2);
     }
 }
+
+/// Every key of the JSON that `gradient`, `optimize` and `explore` write on a 2-axis scene (top
+/// level, and the entries of `results`, `minima` and `certificate`) is documented in docs/cli.md
+/// (as `key`), so a reader of the repository finds `model` and the rest.
+#[test]
+fn json_keys_of_spatial_runs_are_documented() {
+    let doc =
+        fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/cli.md")).unwrap();
+    let path = scene("oblique_control.toml");
+    let explore = [
+        "explore", "--starts", "2", "--pieces", "2", "--lo", "-3", "--hi", "3",
+    ];
+    for args in [&["gradient"][..], &["optimize"], &explore] {
+        let mut argv = vec![args[0], s(&path)];
+        argv.extend(&args[1..]);
+        let o = run(&argv);
+        assert_success(&o);
+        let v = json(&o);
+        let mut objects = vec![&v];
+        for list in ["results", "minima"] {
+            objects.extend(v[list].as_array().into_iter().flatten());
+        }
+        objects.extend(v.get("certificate"));
+        let mut keys: Vec<&String> = objects
+            .iter()
+            .flat_map(|o| o.as_object().unwrap().keys())
+            .collect();
+        keys.dedup();
+        assert!(keys.iter().any(|k| *k == "model"), "{}", args[0]);
+        for key in keys {
+            assert!(
+                doc.contains(&format!("`{key}`")),
+                "{}: `{key}` is not documented in docs/cli.md",
+                args[0]
+            );
+        }
+    }
+}

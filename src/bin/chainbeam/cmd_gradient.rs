@@ -30,7 +30,13 @@ gradient is in N²m²/N = Nm².
 without --effort), P values with --pieces P. With --controls FILE the file decides: 1 value is a \
 constant, N + 1 values are per-step, and the JSON of optimize says its own kind.
 
-Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, objective_kind, \
+Spatial scenes (a load, the current or the control with an x component) run the spatial model, \
+planar ones the planar model (JSON key model); the objectives then use |M₀|² = M₀ₓ² + M₀². A \
+2-axis control (control.values as pairs [u_x, u_z], or a --controls file of pairs) has 2 \
+parameters per value, and controls and gradient are reported as pairs too: [u_x, u_z] and \
+[dc/du_x, dc/du_z] per value.
+
+Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, model, objective_kind, \
 effort, control_kind, pieces (piecewise only), control_node. The output is itself a valid \
 --controls file.
 

@@ -381,7 +381,7 @@ fn bad_two_axis_controls_files_are_refused() {
         (
             "triple.json",
             "[[1, 2, 3]]".into(),
-            vec!["entry 0 is neither", "pair [u_x, u_z]"],
+            vec!["entry 0 is not a finite number or a pair [u_x, u_z]"],
         ),
     ];
     for (name, body, needles) in &cases {

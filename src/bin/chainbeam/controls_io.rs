@@ -99,7 +99,8 @@ fn json_values(path: &Path, array: &[serde_json::Value], key: &str) -> Result<Co
             return Err(err(
                 path,
                 format_args!(
-                    "{key}: entry {i} is neither a finite number nor a pair [u_x, u_z] of finite                      numbers: {x}"
+                    "{key}: entry {i} is not a finite number or a pair [u_x, u_z] of finite \
+                     numbers: {x}"
                 ),
             ));
         };
@@ -110,7 +111,8 @@ fn json_values(path: &Path, array: &[serde_json::Value], key: &str) -> Result<Co
                 return Err(err(
                     path,
                     format_args!(
-                        "{key}: entry {i} is {} but entry 0 is {}: every entry is a number (a                          force along z) or every entry a pair [u_x, u_z] (a 2-axis control)",
+                        "{key}: entry {i} is {} but entry 0 is {}: every entry is a number (a \
+                         force along z) or every entry a pair [u_x, u_z] (a 2-axis control)",
                         if ux.is_some() { "a pair" } else { "a number" },
                         if ux.is_some() { "a number" } else { "a pair" },
                     ),
@@ -380,7 +382,7 @@ mod tests {
         );
         let e = json("[[1, 2, 3]]").unwrap_err();
         assert!(
-            e.contains("entry 0 is neither") && e.contains("[u_x, u_z]"),
+            e.contains("entry 0 is not a finite number or a pair") && e.contains("[u_x, u_z]"),
             "{e}"
         );
     }

@@ -127,8 +127,10 @@ pub enum Error {
     /// which needs the spatial model (`Chain<_, 3>`; [`crate::simulate()`] chooses it itself).
     #[error(
         "`{key}` has an x component, so the scene needs the spatial model (qᵢ ∈ S², \
-         Chain<_, 3>), but this operation uses the planar model: gradients, optimisation and \
-         statics are planar for now (`simulate` runs spatial scenes)"
+         Chain<_, 3>), but this operation uses the planar model: statics, MPC and the Riccati \
+         solver are planar for now (simulation, and gradients and optimisation through \
+         `ControlProblem::spatial` or the command line's gradient, optimize and explore, run \
+         spatial scenes)"
     )]
     NeedsSpatialModel {
         /// The first key with an x component, e.g. `loads.point[0].force`.

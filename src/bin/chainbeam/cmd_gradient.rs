@@ -5,8 +5,10 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
+use chainbeam::optimize::OptimProblem;
+
 use crate::output::Output;
-use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs};
+use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, Values};
 use crate::progress::Progress;
 use crate::{
     check_finite, controls_io, inputs, lib_error, load_scene, series_files, to_json, CliError,
@@ -28,7 +30,13 @@ gradient is in N²m²/N = Nm².
 without --effort), P values with --pieces P. With --controls FILE the file decides: 1 value is a \
 constant, N + 1 values are per-step, and the JSON of optimize says its own kind.
 
-Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, objective_kind, \
+Spatial scenes (a load, the current or the control with an x component) run the spatial model, \
+planar ones the planar model (JSON key model); the objectives then use |M₀|² = M₀ₓ² + M₀². A \
+2-axis control (control.values as pairs [u_x, u_z], or a --controls file of pairs) has 2 \
+parameters per value, and controls and gradient are reported as pairs too: [u_x, u_z] and \
+[dc/du_x, dc/du_z] per value.
+
+Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, model, objective_kind, \
 effort, control_kind, pieces (piecewise only), control_node. The output is itself a valid \
 --controls file.
 
@@ -40,8 +48,9 @@ pub struct GradientArgs {
     #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
     pub scene: PathBuf,
     /// Evaluate at these controls instead of the scene's control.values: the JSON that
-    /// `optimize` or `gradient` writes, the `control` column of a `simulate` CSV, or a single
-    /// column of numbers (1 value: constant; N + 1 values: per-step).
+    /// `optimize` or `gradient` writes, the `control` column (and `control_x`, if any) of a
+    /// `simulate` CSV, or a single column of numbers (1 value: constant; N + 1 values:
+    /// per-step). A 2-axis scene needs pairs [u_x, u_z].
     #[arg(long, value_name = "FILE", conflicts_with = "pieces")]
     pub controls: Option<PathBuf>,
     #[command(flatten)]
@@ -53,9 +62,10 @@ pub struct GradientArgs {
 #[derive(Serialize)]
 struct GradientReport {
     objective: f64,
-    gradient: Vec<f64>,
-    controls: Vec<f64>,
+    gradient: Values,
+    controls: Values,
     gradient_norm: f64,
+    model: &'static str,
     objective_kind: &'static str,
     effort: f64,
     #[serde(flatten)]
@@ -85,8 +95,9 @@ pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
     let report = GradientReport {
         objective,
         gradient_norm: problem::norm(&gradient),
-        gradient,
-        controls: sp.theta0,
+        gradient: sp.problem.layout(&gradient),
+        controls: sp.problem.layout(&sp.theta0),
+        model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),

@@ -12,7 +12,9 @@ use chainbeam::optimize::{
 };
 
 use crate::output::Output;
-use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, SceneProblem};
+use crate::problem::{
+    self, kind_report, objective_name, AnyProblem, KindReport, ProblemArgs, SceneProblem, Values,
+};
 use crate::progress::{IterationProgress, Progress};
 use crate::{check_finite, inputs, lib_error, load_scene, series_files, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
@@ -26,9 +28,16 @@ parameters θ (constant or per-step force [N] at control.node, default the tip; 
 --starts K > 1 it runs K starts (the scene's values and K − 1 others drawn with --seed) in \
 parallel (--threads) and reports the best.
 
-Output (JSON): objective [N²m²], controls (the optimal θ, laid out as control.values) [N], \
-gradient_norm, iterations, seconds, converged, termination, and further details (docs/cli.md). \
-The output is a valid --controls file for simulate and gradient.
+Spatial scenes (a load, the current or the control with an x component) are optimised in the \
+spatial model, planar ones in the planar model (JSON key model); the objectives then use \
+|M₀|² = M₀ₓ² + M₀². A 2-axis control (control.values as pairs [u_x, u_z]) has 2 parameters per \
+value and its controls are reported as pairs [u_x, u_z]; --bound, --lower and --upper limit each \
+component. --method riccati is planar only and refuses a spatial scene.
+
+Output (JSON): objective [N²m²], controls (the optimal θ, laid out as control.values: numbers, \
+or pairs [u_x, u_z] for a 2-axis control) [N], gradient_norm, iterations, seconds, converged, \
+termination, model, and further details (docs/cli.md). The output is a valid --controls file \
+for simulate and gradient.
 
 Exit status 3 (not 0) when the optimiser stopped without meeting a convergence test (iteration \
 limit, no progress): the JSON is written with \"converged\": false and one line on stderr says \
@@ -41,7 +50,9 @@ pub const EXPLORE_LONG_ABOUT: &str = "\
 Run a multistart exploration of the landscape of the scene's [objective] over its [control] \
 parameters: K local minimisations from the points of a start design (--design latin|random|\
 perturb, drawn with --seed; results do not depend on --threads), run in parallel, then cluster \
-the converged results into distinct local minima.
+the converged results into distinct local minima. Spatial scenes run the spatial model (JSON key \
+model); a 2-axis control's controls and start points are pairs [u_x, u_z], and the indices of \
+inert, certificate.free and active bounds count θ = (θ_x; θ_z), the x components first.
 
 Output (JSON):
   minima        the distinct minima, lowest objective first: objective [N²m²], controls [N] \
@@ -51,8 +62,8 @@ gradient_norm, iterations, converged, termination, minimum (index into minima, f
 starts), or error (for a start whose simulation failed)
   certificate   when every converged start reached one minimum (and it has at most 200 \
 parameters): the Hessian's eigenvalues there and whether it is positive definite
-  and objective_kind, effort, control_kind, pieces, control_node, method, bound, design, seed, \
-starts, converged_starts, failed_starts, inert, seconds.
+  and model, objective_kind, effort, control_kind, pieces, control_node, method, bound, design, \
+seed, starts, converged_starts, failed_starts, inert, seconds.
 
 Exit status 3 (not 0) when any start did not converge or failed: the map is then incomplete. The \
 JSON is written all the same, and one line on stderr counts those starts and gives the first.
@@ -106,7 +117,7 @@ enum MethodArg {
     /// Trust-region Newton-CG (Hessian-vector products by forward-over-adjoint).
     TrustRegion,
     /// Structured Gauss-Newton with Riccati passes (per-step, piecewise or constant controls;
-    /// O(N) per iteration, bounds handled exactly).
+    /// O(N) per iteration, bounds handled exactly; planar scenes only).
     Riccati,
 }
 
@@ -329,6 +340,40 @@ pub struct ExploreArgs {
     output: Option<PathBuf>,
 }
 
+/// `--method riccati` on a problem in the spatial model: refused before any work, naming the
+/// flag and why the scene is spatial.
+fn refuse_riccati_on_spatial(
+    path: &Path,
+    sp: &SceneProblem,
+    opts: &OptimOptions,
+) -> Result<(), CliError> {
+    match (&sp.spatial_reason, opts.method) {
+        (Some(why), Method::Riccati) => Err(CliError::msg(format!(
+            "{}: --method riccati: this scene needs the spatial model ({why}), and {}",
+            path.display(),
+            problem::RICCATI_PLANAR
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// Where θᵢ sits in the scene's `control.values`: "key `control.values[j]`", with `[0]` (u_x) or
+/// `[1]` (u_z) for a 2-axis control, or "piece j" (and its component) with `--pieces`.
+fn theta_name(i: usize, n: usize, two_axis: bool, pieces: bool) -> String {
+    let (j, component) = if two_axis {
+        let m = n / 2;
+        (i % m, Some(usize::from(i >= m)))
+    } else {
+        (i, None)
+    };
+    match (pieces, component) {
+        (true, None) => format!("piece {j}"),
+        (true, Some(c)) => format!("piece {j} ({})", ["u_x", "u_z"][c]),
+        (false, None) => format!("key `control.values[{j}]`"),
+        (false, Some(c)) => format!("key `control.values[{j}][{c}]` ({})", ["u_x", "u_z"][c]),
+    }
+}
+
 /// The start θ₀ must lie within the force limit; the error names the key (or the piece) and the
 /// limit.
 fn check_start_in_bound(
@@ -344,18 +389,20 @@ fn check_start_in_bound(
         Some(u) => format!("(--bound) ±{u}"),
         None => format!("(--lower/--upper) [{}, {}]", b.lower(), b.upper()),
     };
+    let (n, two_axis) = (sp.theta0.len(), sp.problem.is_two_axis());
     match sp.theta0.iter().position(|&t| !b.contains(t)) {
         None => Ok(()),
         Some(i) if pieces => Err(CliError::msg(format!(
-            "{}: the start value {} of piece {i} (the mean of control.values over it) lies \
-             outside the force limit {limit}",
+            "{}: the start value {} of {} (the mean of control.values over it) lies outside the \
+             force limit {limit}",
             path.display(),
-            sp.theta0[i]
+            sp.theta0[i],
+            theta_name(i, n, two_axis, true)
         ))),
         Some(i) => Err(CliError::msg(format!(
-            "{}: key `control.values[{i}]`: the start value {} lies outside the force limit \
-             {limit}",
+            "{}: {}: the start value {} lies outside the force limit {limit}",
             path.display(),
+            theta_name(i, n, two_axis, false),
             sp.theta0[i]
         ))),
     }
@@ -406,7 +453,7 @@ fn why(r: &OptimResult) -> String {
 #[derive(Serialize)]
 struct OptimizeReport {
     objective: f64,
-    controls: Vec<f64>,
+    controls: Values,
     gradient_norm: f64,
     iterations: usize,
     seconds: f64,
@@ -423,13 +470,14 @@ struct OptimizeReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     failed_starts: Option<usize>,
     initial_objective: f64,
-    initial_controls: Vec<f64>,
+    initial_controls: Values,
     projected_gradient_norm: f64,
     active_bounds: Vec<usize>,
     #[serde(flatten)]
     limits: LimitsReport,
     gradient_evals: usize,
     hvp_evals: usize,
+    model: &'static str,
     objective_kind: &'static str,
     effort: f64,
     #[serde(flatten)]
@@ -452,6 +500,7 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
     let scene = load_scene(&a.scene)?;
     out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
+    refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
     let design = a.design.design(&sp.theta0)?;
     check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), &opts)?;
     // Before the start's objective is evaluated: a start beyond the resolved force range would
@@ -531,7 +580,7 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
     )?;
     let report = OptimizeReport {
         objective: best.objective,
-        controls: best.theta.clone(),
+        controls: sp.problem.layout(&best.theta),
         gradient_norm: best.gradient_norm,
         iterations: best.iterations,
         seconds: clock.elapsed().as_secs_f64(),
@@ -544,12 +593,13 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
         minima_found: (starts > 1).then_some(minima_found),
         failed_starts: (starts > 1).then_some(failed_starts),
         initial_objective,
-        initial_controls: sp.theta0.clone(),
+        initial_controls: sp.problem.layout(&sp.theta0),
         projected_gradient_norm: best.projected_gradient_norm,
         active_bounds: best.active_bounds.clone(),
         limits: LimitsReport::of(&opts),
         gradient_evals: best.gradient_evals,
         hvp_evals: best.hvp_evals,
+        model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
@@ -584,11 +634,11 @@ fn all_failed(path: &Path, report: &MultistartReport) -> CliError {
 #[derive(Serialize)]
 struct StartReport {
     start: usize,
-    start_point: Vec<f64>,
+    start_point: Values,
     #[serde(skip_serializing_if = "Option::is_none")]
     objective: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    controls: Option<Vec<f64>>,
+    controls: Option<Values>,
     #[serde(skip_serializing_if = "Option::is_none")]
     gradient_norm: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -606,7 +656,7 @@ struct StartReport {
 #[derive(Serialize)]
 struct MinimumReport {
     objective: f64,
-    controls: Vec<f64>,
+    controls: Values,
     count: usize,
     best_start: usize,
     starts: Vec<usize>,
@@ -615,7 +665,7 @@ struct MinimumReport {
 #[derive(Serialize)]
 struct CertificateReport {
     objective: f64,
-    controls: Vec<f64>,
+    controls: Values,
     eigenvalues: Vec<f64>,
     positive_definite: bool,
     free: Vec<usize>,
@@ -624,6 +674,7 @@ struct CertificateReport {
 
 #[derive(Serialize)]
 struct ExploreReport {
+    model: &'static str,
     objective_kind: &'static str,
     effort: f64,
     #[serde(flatten)]
@@ -646,6 +697,104 @@ struct ExploreReport {
     certificate: Option<CertificateReport>,
 }
 
+/// One entry per start, in start order: its start point, its result (or its error) and the
+/// minimum it reached; every number checked finite (the error names `results[i]`).
+fn start_reports(
+    path: &Path,
+    report: &MultistartReport,
+    problem: &AnyProblem,
+) -> Result<Vec<StartReport>, CliError> {
+    // Which minimum each start reached.
+    let mut minimum_of = vec![None; report.start_points.len()];
+    for (m, min) in report.minima.iter().enumerate() {
+        for &s in &min.starts {
+            if let Some(slot) = minimum_of.get_mut(s) {
+                *slot = Some(m);
+            }
+        }
+    }
+    let mut results = Vec::with_capacity(report.start_points.len());
+    for (start, p) in report.start_points.iter().enumerate() {
+        check_finite(path, &format!("results[{start}]"), p)?;
+        results.push(StartReport {
+            start,
+            start_point: problem.layout(p),
+            objective: None,
+            controls: None,
+            gradient_norm: None,
+            iterations: None,
+            converged: None,
+            termination: None,
+            minimum: minimum_of[start],
+            error: None,
+        });
+    }
+    for (r, &start) in report.results.iter().zip(&report.result_starts) {
+        // Never write NaN: check every number.
+        let key = format!("results[{start}]");
+        check_finite(path, &key, &r.theta)?;
+        check_finite(path, &key, &[r.objective, r.gradient_norm])?;
+        if let Some(e) = results.get_mut(start) {
+            e.objective = Some(r.objective);
+            e.controls = Some(problem.layout(&r.theta));
+            e.gradient_norm = Some(r.gradient_norm);
+            e.iterations = Some(r.iterations);
+            e.converged = Some(r.converged);
+            e.termination = Some(r.termination.to_string());
+        }
+    }
+    for f in &report.failures {
+        if let Some(e) = results.get_mut(f.start) {
+            e.error = Some(f.error.to_string());
+        }
+    }
+    Ok(results)
+}
+
+/// The distinct minima, every number checked finite (the error names `minima[i]`).
+fn minimum_reports(
+    path: &Path,
+    report: &MultistartReport,
+    problem: &AnyProblem,
+) -> Result<Vec<MinimumReport>, CliError> {
+    let mut minima = Vec::with_capacity(report.minima.len());
+    for (i, m) in report.minima.iter().enumerate() {
+        let key = format!("minima[{i}]");
+        check_finite(path, &key, &[m.objective])?;
+        check_finite(path, &key, &m.theta)?;
+        minima.push(MinimumReport {
+            objective: m.objective,
+            controls: problem.layout(&m.theta),
+            count: m.count,
+            best_start: m.best_start,
+            starts: m.starts.clone(),
+        });
+    }
+    Ok(minima)
+}
+
+/// The second-order certificate, if the multistart gave one, checked finite.
+fn certificate_report(
+    path: &Path,
+    report: &MultistartReport,
+    problem: &AnyProblem,
+) -> Result<Option<CertificateReport>, CliError> {
+    let Some(c) = &report.certificate else {
+        return Ok(None);
+    };
+    check_finite(path, "certificate.eigenvalues", &c.eigenvalues)?;
+    check_finite(path, "certificate", &[c.objective, c.asymmetry])?;
+    check_finite(path, "certificate.controls", &c.theta)?;
+    Ok(Some(CertificateReport {
+        objective: c.objective,
+        controls: problem.layout(&c.theta),
+        eigenvalues: c.eigenvalues.clone(),
+        positive_definite: c.positive_definite,
+        free: c.free.clone(),
+        asymmetry: c.asymmetry,
+    }))
+}
+
 /// Runs `explore`.
 pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> {
     let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, None))?;
@@ -654,6 +803,7 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
     let scene = load_scene(&a.scene)?;
     out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
+    refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
     let design = a.design.design(&sp.theta0)?;
     let starts = a.starts as usize;
     let seed = a.parallel.seed;
@@ -671,91 +821,12 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
         return Err(all_failed(&a.scene, &report));
     }
 
-    // Which minimum each start reached.
-    let mut minimum_of = vec![None; starts];
-    for (m, min) in report.minima.iter().enumerate() {
-        for &s in &min.starts {
-            if let Some(slot) = minimum_of.get_mut(s) {
-                *slot = Some(m);
-            }
-        }
-    }
-    let mut results: Vec<StartReport> = report
-        .start_points
-        .iter()
-        .enumerate()
-        .map(|(start, p)| StartReport {
-            start,
-            start_point: p.clone(),
-            objective: None,
-            controls: None,
-            gradient_norm: None,
-            iterations: None,
-            converged: None,
-            termination: None,
-            minimum: minimum_of.get(start).copied().flatten(),
-            error: None,
-        })
-        .collect();
-    for (r, &start) in report.results.iter().zip(&report.result_starts) {
-        if let Some(e) = results.get_mut(start) {
-            e.objective = Some(r.objective);
-            e.controls = Some(r.theta.clone());
-            e.gradient_norm = Some(r.gradient_norm);
-            e.iterations = Some(r.iterations);
-            e.converged = Some(r.converged);
-            e.termination = Some(r.termination.to_string());
-        }
-    }
-    for f in &report.failures {
-        if let Some(e) = results.get_mut(f.start) {
-            e.error = Some(f.error.to_string());
-        }
-    }
-    // Never write NaN: check every number.
-    for r in &results {
-        let key = format!("results[{}]", r.start);
-        check_finite(&a.scene, &key, &r.start_point)?;
-        check_finite(&a.scene, &key, r.controls.as_deref().unwrap_or(&[]))?;
-        let scalars: Vec<f64> = [r.objective, r.gradient_norm]
-            .into_iter()
-            .flatten()
-            .collect();
-        check_finite(&a.scene, &key, &scalars)?;
-    }
-    let minima: Vec<MinimumReport> = report
-        .minima
-        .iter()
-        .map(|m| MinimumReport {
-            objective: m.objective,
-            controls: m.theta.clone(),
-            count: m.count,
-            best_start: m.best_start,
-            starts: m.starts.clone(),
-        })
-        .collect();
-    for (i, m) in minima.iter().enumerate() {
-        let key = format!("minima[{i}]");
-        check_finite(&a.scene, &key, &[m.objective])?;
-        check_finite(&a.scene, &key, &m.controls)?;
-    }
-    let certificate = match &report.certificate {
-        Some(c) => {
-            check_finite(&a.scene, "certificate.eigenvalues", &c.eigenvalues)?;
-            check_finite(&a.scene, "certificate", &[c.objective, c.asymmetry])?;
-            Some(CertificateReport {
-                objective: c.objective,
-                controls: c.theta.clone(),
-                eigenvalues: c.eigenvalues.clone(),
-                positive_definite: c.positive_definite,
-                free: c.free.clone(),
-                asymmetry: c.asymmetry,
-            })
-        }
-        None => None,
-    };
+    let results = start_reports(&a.scene, &report, &sp.problem)?;
+    let minima = minimum_reports(&a.scene, &report, &sp.problem)?;
+    let certificate = certificate_report(&a.scene, &report, &sp.problem)?;
     let converged_starts = report.results.iter().filter(|r| r.converged).count();
     let json = ExploreReport {
+        model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
-use chainbeam::{simulate, simulate_with_controls, ControlMap, Scene, SceneTrajectory};
+use chainbeam::{
+    simulate, simulate_with_controls, simulate_with_controls_xz, ControlMap, Scene, SceneTrajectory,
+};
 
 use crate::output::{push_f64, Output};
 use crate::progress::Progress;
@@ -16,7 +18,9 @@ use crate::{OUTPUT_HELP, SCENE_HELP};
 pub const LONG_ABOUT: &str = "\
 Simulate a scene from the straight beam at rest with RATTLE (step h = time.step, N = time.steps), \
 applying the scene's [control] (u_k at node control.node; a constant control is applied at every \
-t_k) or the forces of --controls FILE, and write the trajectory.
+t_k) or the forces of --controls FILE (pairs [u_x, u_z] in the JSON of optimize, or the control_x \
+and control columns of a simulate CSV, are a 2-axis control: both components are applied), and \
+write the trajectory.
 
 CSV (the default): a header line, then one row per time t_k = k·h, k = 0..N (N + 1 rows):
   t        time t_k [s]
@@ -47,9 +51,11 @@ pub struct SimulateArgs {
     #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
     pub scene: PathBuf,
     /// Apply these control forces instead of the scene's [control]: the JSON that `optimize` or
-    /// `gradient` writes (its `controls`), the `control` column of a `simulate` CSV, or a single
-    /// column of numbers; 1 value (constant) or N + 1 values u_0..u_N, finite. They act at
-    /// control.node (default: the tip).
+    /// `gradient` writes (its `controls`), the `control` column (and `control_x`, if any) of a
+    /// `simulate` CSV, or a single column of numbers; 1 value (constant) or N + 1 values
+    /// u_0..u_N, finite. Pairs [u_x, u_z] (or a CSV with `control_x`) are a 2-axis control, both
+    /// components applied (a scene with a 2-axis control needs them). They act at control.node
+    /// (default: the tip).
     #[arg(long, value_name = "FILE")]
     pub controls: Option<PathBuf>,
     /// Output format [default: npy if the --output name ends in .npy, else csv].
@@ -99,7 +105,8 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         scene.n()
     ));
     let traj = match &controls {
-        Some(u) => simulate_with_controls(&scene, u),
+        Some((u, None)) => simulate_with_controls(&scene, u),
+        Some((u, Some(ux))) => simulate_with_controls_xz(&scene, ux, u),
         None => simulate(&scene),
     };
     spinner.finish_and_clear();
@@ -119,12 +126,20 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     sink.finish()
 }
 
-/// The forces u_0..u_N of a `--controls` file on this scene.
-fn controls_u(scene: &Scene, file: &controls_io::ControlsFile) -> Result<Vec<f64>, CliError> {
+/// The forces u_0..u_N of a `--controls` file on this scene and, for a 2-axis control, their x
+/// components u_{x,0..N}.
+fn controls_u(
+    scene: &Scene,
+    file: &controls_io::ControlsFile,
+) -> Result<(Vec<f64>, Option<Vec<f64>>), CliError> {
+    file.check_axes(scene)?;
     let map = file.parametrisation(scene.time.steps)?;
-    let mut u = vec![0.0; scene.time.steps + 1];
-    map.controls(&file.values, &mut u);
-    Ok(u)
+    let expand = |values: &[f64]| {
+        let mut u = vec![0.0; scene.time.steps + 1];
+        map.controls(values, &mut u);
+        u
+    };
+    Ok((expand(&file.values), file.values_x.as_deref().map(expand)))
 }
 
 /// Never write NaN: every value is checked before the first byte goes out.

@@ -7,18 +7,21 @@
 //!   present, says how the values map to the forces u_0..u_N.
 //! - **JSON array** (`[`): the values themselves.
 //! - **CSV**: a header line and rows; the column named `control` is read (the last column of a
+//!   `simulate` CSV), and with it the column `control_x` when there is one (a spatial scene's
 //!   `simulate` CSV). A file with a one-field header reads that column; a file whose first line
 //!   is a number is a single column without a header. Blank lines and lines starting with `#`
 //!   are skipped.
 //!
-//! Without a declared kind, 1 value is a constant force and N + 1 values are the per-step forces
-//! u_0..u_N (N = `time.steps`); anything else is an error naming the file and both counts. Every
-//! value must be finite.
+//! A 2-axis control is written as in a scene file: every JSON entry a pair `[u_x, u_z]` (or a
+//! CSV with `control_x` and `control` columns); otherwise every entry is a number, a force along
+//! z. Without a declared kind, 1 value (or pair) is a constant force and N + 1 are the per-step
+//! forces u_0..u_N (N = `time.steps`); anything else is an error naming the file and both counts.
+//! Every value must be finite.
 
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use chainbeam::{Parametrisation, PerStepControl, PiecewiseControl};
+use chainbeam::{Parametrisation, PerStepControl, PiecewiseControl, Scene};
 
 use crate::CliError;
 
@@ -38,8 +41,11 @@ pub enum Declared {
 pub struct ControlsFile {
     /// The file (for messages).
     pub path: PathBuf,
-    /// The values, in file order.
+    /// The values, in file order (the z components u_z of a 2-axis control).
     pub values: Vec<f64>,
+    /// The x components u_x of a 2-axis control (as many as `values`), `None` for a control
+    /// along z.
+    pub values_x: Option<Vec<f64>>,
     /// The kind the file declares (JSON `control_kind`), if any.
     pub declared: Option<Declared>,
 }
@@ -53,7 +59,7 @@ pub fn read(path: &Path) -> Result<ControlsFile, CliError> {
     let text = fs::read_to_string(path)
         .map_err(|e| err(path, format_args!("cannot read the controls file: {e}")))?;
     let trimmed = text.trim_start();
-    let (values, declared) = if trimmed.starts_with('{') || trimmed.starts_with('[') {
+    let ((values, values_x), declared) = if trimmed.starts_with('{') || trimmed.starts_with('[') {
         from_json(path, &text)?
     } else {
         (from_csv(path, &text)?, None)
@@ -64,11 +70,61 @@ pub fn read(path: &Path) -> Result<ControlsFile, CliError> {
     Ok(ControlsFile {
         path: path.to_path_buf(),
         values,
+        values_x,
         declared,
     })
 }
 
-fn from_json(path: &Path, text: &str) -> Result<(Vec<f64>, Option<Declared>), CliError> {
+/// The values u_z and, for a 2-axis control, u_x of a controls file.
+type Columns = (Vec<f64>, Option<Vec<f64>>);
+
+/// One entry of a JSON `controls` array: a number, or a pair [u_x, u_z] of a 2-axis control.
+fn json_entry(x: &serde_json::Value) -> Option<(Option<f64>, f64)> {
+    let finite = |v: &serde_json::Value| v.as_f64().filter(|f| f.is_finite());
+    match x {
+        serde_json::Value::Array(pair) if pair.len() == 2 => {
+            Some((Some(finite(&pair[0])?), finite(&pair[1])?))
+        }
+        _ => Some((None, finite(x)?)),
+    }
+}
+
+/// The numbers (or pairs [u_x, u_z]) of a JSON `controls` array; `key` names it in messages.
+fn json_values(path: &Path, array: &[serde_json::Value], key: &str) -> Result<Columns, CliError> {
+    let mut values = Vec::with_capacity(array.len());
+    let mut values_x = Vec::new();
+    let mut pairs = None;
+    for (i, x) in array.iter().enumerate() {
+        let Some((ux, uz)) = json_entry(x) else {
+            return Err(err(
+                path,
+                format_args!(
+                    "{key}: entry {i} is not a finite number or a pair [u_x, u_z] of finite \
+                     numbers: {x}"
+                ),
+            ));
+        };
+        match (*pairs.get_or_insert(ux.is_some()), ux) {
+            (true, Some(x)) => values_x.push(x),
+            (false, None) => {}
+            _ => {
+                return Err(err(
+                    path,
+                    format_args!(
+                        "{key}: entry {i} is {} but entry 0 is {}: every entry is a number (a \
+                         force along z) or every entry a pair [u_x, u_z] (a 2-axis control)",
+                        if ux.is_some() { "a pair" } else { "a number" },
+                        if ux.is_some() { "a number" } else { "a pair" },
+                    ),
+                ))
+            }
+        }
+        values.push(uz);
+    }
+    Ok((values, (pairs == Some(true)).then_some(values_x)))
+}
+
+fn from_json(path: &Path, text: &str) -> Result<(Columns, Option<Declared>), CliError> {
     let v: serde_json::Value =
         serde_json::from_str(text).map_err(|e| err(path, format_args!("not valid JSON: {e}")))?;
     let (array, key) =
@@ -79,7 +135,10 @@ fn from_json(path: &Path, text: &str) -> Result<(Vec<f64>, Option<Declared>), Cl
                 Some(other) => {
                     return Err(err(
                         path,
-                        format_args!("key `controls`: expected an array of numbers, got {other}"),
+                        format_args!(
+                            "key `controls`: expected an array of numbers or of pairs \
+                             [u_x, u_z], got {other}"
+                        ),
                     ))
                 }
                 None => return Err(err(
@@ -90,18 +149,7 @@ fn from_json(path: &Path, text: &str) -> Result<(Vec<f64>, Option<Declared>), Cl
             },
             _ => unreachable!("the text starts with '{{' or '['"),
         };
-    let mut values = Vec::with_capacity(array.len());
-    for (i, x) in array.iter().enumerate() {
-        match x.as_f64() {
-            Some(f) if f.is_finite() => values.push(f),
-            _ => {
-                return Err(err(
-                    path,
-                    format_args!("{key}: entry {i} is not a finite number: {x}"),
-                ))
-            }
-        }
-    }
+    let values = json_values(path, array, key)?;
     let declared = match v.get("control_kind") {
         None => None,
         Some(k) => Some(match k.as_str() {
@@ -150,14 +198,14 @@ fn parse_number(path: &Path, line: usize, field: &str) -> Result<f64, CliError> 
     }
 }
 
-fn from_csv(path: &Path, text: &str) -> Result<Vec<f64>, CliError> {
+fn from_csv(path: &Path, text: &str) -> Result<Columns, CliError> {
     let mut lines = text
         .lines()
         .enumerate()
         .map(|(i, l)| (i + 1, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
     let Some((first_no, first)) = lines.next() else {
-        return Ok(Vec::new());
+        return Ok((Vec::new(), None));
     };
     let fields: Vec<&str> = first.split(',').map(str::trim).collect();
     let mut values = Vec::new();
@@ -181,6 +229,11 @@ fn from_csv(path: &Path, text: &str) -> Result<Vec<f64>, CliError> {
             ),
         ));
     };
+    // A spatial scene's `simulate` CSV: the x components of a 2-axis control beside `control`.
+    let column_x = (width > 1)
+        .then(|| fields.iter().position(|f| *f == "control_x"))
+        .flatten();
+    let mut values_x = Vec::new();
     for (no, line) in lines {
         let row: Vec<&str> = line.split(',').collect();
         if row.len() != width {
@@ -194,34 +247,73 @@ fn from_csv(path: &Path, text: &str) -> Result<Vec<f64>, CliError> {
             ));
         }
         values.push(parse_number(path, no, row[column])?);
+        if let Some(cx) = column_x {
+            values_x.push(parse_number(path, no, row[cx])?);
+        }
     }
-    Ok(values)
+    Ok((values, column_x.map(|_| values_x)))
 }
 
 impl ControlsFile {
+    /// Whether the file holds a 2-axis control (pairs [u_x, u_z], or `control_x` and `control`
+    /// columns).
+    pub fn is_two_axis(&self) -> bool {
+        self.values_x.is_some()
+    }
+
+    /// θ laid out as the library's control problem takes it: the values, or for a 2-axis
+    /// control θ = (θ_x; θ_z), the x components first (docs/conventions.md "Two-axis controls").
+    pub fn theta(&self) -> Vec<f64> {
+        let mut theta = self.values_x.clone().unwrap_or_default();
+        theta.extend(&self.values);
+        theta
+    }
+
+    /// Refuses a file with one number per value on a scene whose control is 2-axis: the x
+    /// components would be lost without a word.
+    pub fn check_axes(&self, scene: &Scene) -> Result<(), CliError> {
+        if scene.has_two_axis_control() && !self.is_two_axis() {
+            return Err(err(
+                &self.path,
+                "the scene's control is 2-axis (`control.values` are pairs [u_x, u_z]) but the \
+                 controls file holds one number per value: write pairs [u_x, u_z] ([0, u] for a \
+                 force along z alone), as `optimize` writes them, or give the CSV of `simulate` \
+                 with its `control_x` and `control` columns",
+            ));
+        }
+        Ok(())
+    }
+
     /// The parametrisation of these values on a scene with N = `steps` (module docs), checking
-    /// the count.
+    /// the count (of pairs, for a 2-axis control).
     pub fn parametrisation(&self, steps: usize) -> Result<Parametrisation, CliError> {
         let got = self.values.len();
         let n1 = steps + 1;
+        let (one, many) = if self.is_two_axis() {
+            ("pair [u_x, u_z]", "pairs [u_x, u_z]")
+        } else {
+            ("value", "values")
+        };
         let want = |what: String| {
+            let unit = if got == 1 { one } else { many };
+            let unit = unit.split(' ').next().unwrap_or(unit);
             Err(err(
                 &self.path,
-                format_args!("expected {what}, got {got} value{}", plural(got)),
+                format_args!("expected {what}, got {got} {unit}"),
             ))
         };
         match self.declared {
             Some(Declared::Constant) if got == 1 => Ok(Parametrisation::Constant),
-            Some(Declared::Constant) => want("1 value (control_kind \"constant\")".into()),
+            Some(Declared::Constant) => want(format!("1 {one} (control_kind \"constant\")")),
             Some(Declared::PerStep) if got == n1 => {
                 Ok(Parametrisation::PerStep(PerStepControl { steps }))
             }
             Some(Declared::PerStep) => want(format!(
-                "N + 1 = {n1} values u_0..u_N for this scene (time.steps = {steps}; \
+                "N + 1 = {n1} {many} u_0..u_N for this scene (time.steps = {steps}; \
                  control_kind \"per-step\")"
             )),
             Some(Declared::Piecewise(p)) if p != got => {
-                want(format!("pieces = {p} values (control_kind \"piecewise\")"))
+                want(format!("pieces = {p} {many} (control_kind \"piecewise\")"))
             }
             Some(Declared::Piecewise(p)) if p == 0 || p > steps => Err(err(
                 &self.path,
@@ -237,18 +329,10 @@ impl ControlsFile {
             None if got == 1 => Ok(Parametrisation::Constant),
             None if got == n1 => Ok(Parametrisation::PerStep(PerStepControl { steps })),
             None => want(format!(
-                "N + 1 = {n1} values u_0..u_N for this scene (time.steps = {steps}), or 1 value \
+                "N + 1 = {n1} {many} u_0..u_N for this scene (time.steps = {steps}), or 1 {one} \
                  (a constant force)"
             )),
         }
-    }
-}
-
-fn plural(n: usize) -> &'static str {
-    if n == 1 {
-        ""
-    } else {
-        "s"
     }
 }
 
@@ -258,7 +342,49 @@ mod tests {
 
     fn parse(text: &str) -> Result<Vec<f64>, String> {
         let p = Path::new("c.csv");
-        from_csv(p, text).map_err(|e| e.to_string())
+        match from_csv(p, text) {
+            Ok((v, None)) => Ok(v),
+            Ok((_, Some(x))) => panic!("unexpected control_x column {x:?}"),
+            Err(e) => Err(e.to_string()),
+        }
+    }
+
+    fn json(text: &str) -> Result<Columns, String> {
+        from_json(Path::new("u.json"), text)
+            .map(|(c, _)| c)
+            .map_err(|e| e.to_string())
+    }
+
+    /// A spatial `simulate` CSV gives both columns; pairs in JSON give a 2-axis control; mixed
+    /// or malformed entries are refused with the entry's index.
+    #[test]
+    fn two_axis_forms() {
+        let (v, x) = from_csv(
+            Path::new("t.csv"),
+            "t,moment,moment_x,control_x,control\n0,1,2,3,4\n1,5,6,7,8\n",
+        )
+        .unwrap();
+        assert_eq!((v, x), (vec![4.0, 8.0], Some(vec![3.0, 7.0])));
+        assert_eq!(
+            json("{\"controls\": [[1, 2], [3, 4.5]]}").unwrap(),
+            (vec![2.0, 4.5], Some(vec![1.0, 3.0]))
+        );
+        assert_eq!(json("[1, 2]").unwrap(), (vec![1.0, 2.0], None));
+        let e = json("[[1, 2], 3]").unwrap_err();
+        assert!(
+            e.contains("entry 1 is a number but entry 0 is a pair"),
+            "{e}"
+        );
+        let e = json("[1, [2, 3]]").unwrap_err();
+        assert!(
+            e.contains("entry 1 is a pair but entry 0 is a number"),
+            "{e}"
+        );
+        let e = json("[[1, 2, 3]]").unwrap_err();
+        assert!(
+            e.contains("entry 0 is not a finite number or a pair") && e.contains("[u_x, u_z]"),
+            "{e}"
+        );
     }
 
     #[test]

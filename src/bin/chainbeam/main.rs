@@ -73,7 +73,10 @@ energy in J, base bending moment M₀ in Nm, objectives in N²m².
 
 Geometry and sign convention (the thesis's): the undeformed beam lies along +y from node 0 at the \
 origin; loads act along z. A load F enters the Hamiltonian as +F·z, so F > 0 pushes the beam toward \
-−z, and a control u = −F at the tip cancels a tip load F.
+−z, and a control u = −F at the tip cancels a tip load F. A load, current or control with an x \
+component makes the scene spatial: simulate, gradient, optimize and explore run it in the spatial \
+model (a planar scene keeps the planar one), and a 2-axis control is written as pairs [u_x, u_z] \
+in the scene and in the JSON.
 
 Exit status: 0 success; 1 error (invalid scene or controls file, failed computation, unwritable \
 output: one line on stderr naming the file, the key or flag and the reason); 2 command-line usage \

@@ -1,11 +1,14 @@
 //! The control problem a command works on: the scene's `[control]` and `[objective]`, changed by
-//! `--pieces`, `--effort` and `--controls`.
+//! `--pieces`, `--effort` and `--controls`, in the model the scene needs ([`AnyProblem`]: the
+//! planar model unless a load, the current or the control has an x component).
 
 use std::path::Path;
 
 use clap::Args;
 use serde::Serialize;
 
+use chainbeam::ocp::{OcpOptions, OcpResult};
+use chainbeam::optimize::{HessianVec, OptimProblem};
 use chainbeam::{
     BendingObjective, ControlMap, ControlProblem, ObjectiveKind, Parametrisation, PiecewiseControl,
     Scene,
@@ -18,26 +21,161 @@ use crate::{lib_error, CliError};
 #[derive(Args, Clone, Debug)]
 pub struct ProblemArgs {
     /// Piecewise-constant control with P pieces (1 ≤ P ≤ N = time.steps) instead of the scene's
-    /// control kind; the start values are the scene's forces averaged over each piece.
+    /// control kind; the start values are the scene's forces averaged over each piece (each
+    /// component of a 2-axis control).
     #[arg(long, value_name = "P")]
     pub pieces: Option<usize>,
-    /// Adds the control-effort penalty ρ·h·Σ_{k=0..N} u_k² to the objective (ρ ≥ 0, in
+    /// Adds the control-effort penalty ρ·h·Σ_{k=0..N} |u_k|² to the objective (ρ ≥ 0, in
     /// m²/s: the penalty is then in N²m² like the objective).
     #[arg(long, value_name = "RHO", allow_hyphen_values = true)]
     pub effort: Option<f64>,
 }
 
+/// The spatial control problem (`DIM = 3`), with a control along z or a 2-axis control.
+pub type SpatialProblem = ControlProblem<Parametrisation, BendingObjective, 3>;
+
+/// A control problem in the model its scene needs: "model no more than a scene needs".
+pub enum AnyProblem {
+    /// Every force lies in the yz-plane: the planar model (`DIM = 2`), as in the thesis.
+    Planar(ControlProblem),
+    /// A load, the current or the control has an x component (or the controls are 2-axis): the
+    /// spatial model (`DIM = 3`).
+    Spatial(SpatialProblem),
+}
+
+impl AnyProblem {
+    /// The planar problem, unless the scene needs the spatial model ([`Scene::spatial_key`]) or
+    /// the control is 2-axis (`two_axis`: θ = (θ_x; θ_z), 2m parameters for a map of m).
+    pub fn new(
+        scene: &Scene,
+        map: Parametrisation,
+        objective: BendingObjective,
+        two_axis: bool,
+    ) -> chainbeam::Result<Self> {
+        Ok(if two_axis || scene.spatial_key().is_some() {
+            AnyProblem::Spatial(ControlProblem::spatial(scene, map, objective, two_axis)?)
+        } else {
+            AnyProblem::Planar(ControlProblem::new(scene, map, objective)?)
+        })
+    }
+
+    /// The parametrisation (of each component, for a 2-axis control).
+    pub fn map(&self) -> &Parametrisation {
+        match self {
+            AnyProblem::Planar(p) => p.map(),
+            AnyProblem::Spatial(p) => p.map(),
+        }
+    }
+
+    /// Whether the control is 2-axis (θ = (θ_x; θ_z)).
+    pub fn is_two_axis(&self) -> bool {
+        matches!(self, AnyProblem::Spatial(p) if p.is_two_axis())
+    }
+
+    /// The model's name in the JSON (`model`): "planar" or "spatial".
+    pub fn model_name(&self) -> &'static str {
+        match self {
+            AnyProblem::Planar(_) => "planar",
+            AnyProblem::Spatial(_) => "spatial",
+        }
+    }
+
+    /// θ (or a gradient with respect to θ) as the JSON reports it: laid out as `control.values`,
+    /// numbers, or pairs [x, z] for a 2-axis control.
+    pub fn layout(&self, theta: &[f64]) -> Values {
+        if !self.is_two_axis() {
+            return Values::Numbers(theta.to_vec());
+        }
+        let (x, z) = theta.split_at(theta.len() / 2);
+        Values::Pairs(x.iter().zip(z).map(|(a, b)| [*a, *b]).collect())
+    }
+
+    /// The problem as the optimisers see it.
+    fn optim(&self) -> &(dyn OptimProblem + Sync) {
+        match self {
+            AnyProblem::Planar(p) => p,
+            AnyProblem::Spatial(p) => p,
+        }
+    }
+}
+
+/// The optimisers' view: every method delegates to the planar or spatial problem, except the
+/// Riccati solver, which is planar only and refuses the spatial problem with a message that says
+/// so.
+impl OptimProblem for AnyProblem {
+    fn n_params(&self) -> usize {
+        self.optim().n_params()
+    }
+    fn value(&self, theta: &[f64]) -> chainbeam::Result<f64> {
+        self.optim().value(theta)
+    }
+    fn value_and_gradient(&self, theta: &[f64]) -> chainbeam::Result<(f64, Vec<f64>)> {
+        self.optim().value_and_gradient(theta)
+    }
+    fn gradient(&self, theta: &[f64]) -> chainbeam::Result<Vec<f64>> {
+        self.optim().gradient(theta)
+    }
+    fn hessian(&self) -> Option<&dyn HessianVec> {
+        match self {
+            AnyProblem::Planar(p) => Some(p),
+            AnyProblem::Spatial(p) => Some(p),
+        }
+    }
+    fn controls(&self, theta: &[f64]) -> Option<chainbeam::Result<Vec<f64>>> {
+        self.optim().controls(theta)
+    }
+    fn param_scales(&self) -> Vec<f64> {
+        self.optim().param_scales()
+    }
+    fn check_range(&self, theta: &[f64]) -> chainbeam::Result<()> {
+        self.optim().check_range(theta)
+    }
+    fn riccati(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+    ) -> Option<chainbeam::Result<OcpResult>> {
+        match self {
+            AnyProblem::Planar(p) => p.riccati(theta0, options),
+            AnyProblem::Spatial(_) => Some(Err(chainbeam::Error::InvalidArgument {
+                name: "method",
+                reason: RICCATI_PLANAR.into(),
+            })),
+        }
+    }
+}
+
+/// Why `--method riccati` cannot run a spatial problem.
+pub const RICCATI_PLANAR: &str = "the Riccati solver is planar only (its tangent coordinates are \
+                                  those of the yz-plane); use --method lbfgs (the default) or \
+                                  trust-region";
+
+/// Numbers as the JSON reports them: one per value, or pairs [x, z] of a 2-axis control (the
+/// layout of a scene file's `control.values`).
+#[derive(Serialize)]
+#[serde(untagged)]
+pub enum Values {
+    /// One number per value (a control along z).
+    Numbers(Vec<f64>),
+    /// One pair [x component, z component] per value (a 2-axis control).
+    Pairs(Vec<[f64; 2]>),
+}
+
 /// The control problem of a scene and the parameters θ₀ to evaluate it at (or start from).
 pub struct SceneProblem {
-    /// The problem.
-    pub problem: ControlProblem,
+    /// The problem, in the model the scene (and the controls) need.
+    pub problem: AnyProblem,
     /// θ₀: the scene's `control.values` (or one constant 0 at the tip without a `[control]`),
-    /// averaged over pieces with `--pieces`, or the `--controls` file's values.
+    /// averaged over pieces with `--pieces`, or the `--controls` file's values; for a 2-axis
+    /// control θ₀ = (θ_x; θ_z), the x components first.
     pub theta0: Vec<f64>,
     /// The node the control acts at.
     pub control_node: usize,
     /// The objective (kind and effort).
     pub objective: BendingObjective,
+    /// Why the spatial model was chosen (for messages), e.g. "`loads.point[0].force` has an x
+    /// component"; `None` for the planar model.
+    pub spatial_reason: Option<String>,
 }
 
 /// How the parametrisation is reported in the JSON: `control_kind` and, for piecewise controls,
@@ -88,25 +226,34 @@ pub fn check_effort(effort: Option<f64>) -> Result<f64, CliError> {
     }
 }
 
-/// The scene's own parametrisation and θ₀.
+/// The scene's own parametrisation and θ₀ (θ₀ = (θ_x; θ_z) for a 2-axis control).
 fn scene_parametrisation(
     path: &Path,
     scene: &Scene,
 ) -> Result<(Parametrisation, Vec<f64>), CliError> {
-    let base = ControlProblem::from_scene(scene).map_err(|e| lib_error(path, e))?;
-    let map = *base.map();
-    let theta0 = match &scene.control {
-        Some(c) => c.values.clone(),
-        None => vec![0.0],
+    let map = if scene.spatial_key().is_some() {
+        *ControlProblem::spatial_from_scene(scene)
+            .map_err(|e| lib_error(path, e))?
+            .map()
+    } else {
+        *ControlProblem::from_scene(scene)
+            .map_err(|e| lib_error(path, e))?
+            .map()
     };
-    if theta0.len() != map.n_params() {
+    let (values, values_x) = match &scene.control {
+        Some(c) => (c.values.clone(), c.values_x.clone()),
+        None => (vec![0.0], None),
+    };
+    if values.len() != map.n_params() {
         return Err(CliError::msg(format!(
             "{}: key `control.values`: expected {} values, got {}",
             path.display(),
             map.n_params(),
-            theta0.len()
+            values.len()
         )));
     }
+    let mut theta0 = values_x.unwrap_or_default();
+    theta0.extend(values);
     Ok((map, theta0))
 }
 
@@ -122,8 +269,49 @@ fn piece_means(pc: PiecewiseControl, u: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// θ of `--pieces P`: the means over each piece of the forces of θ under `map`, component by
+/// component for a 2-axis θ = (θ_x; θ_z).
+fn pieces_theta(
+    path: &Path,
+    steps: usize,
+    p: usize,
+    (map, theta, two_axis): (Parametrisation, &[f64], bool),
+) -> Result<(Parametrisation, Vec<f64>), CliError> {
+    if p == 0 || p > steps {
+        return Err(CliError::msg(format!(
+            "--pieces: the number of pieces must be between 1 and N = {steps} (time.steps of \
+             {}), got {p}",
+            path.display()
+        )));
+    }
+    let pc = PiecewiseControl { steps, pieces: p };
+    let blocks = if two_axis { 2 } else { 1 };
+    let mut out = Vec::with_capacity(blocks * p);
+    for block in theta.chunks(theta.len() / blocks) {
+        let mut u = vec![0.0; steps + 1];
+        map.controls(block, &mut u);
+        out.extend(piece_means(pc, &u));
+    }
+    Ok((Parametrisation::Piecewise(pc), out))
+}
+
+/// Why `scene` (with the controls of `file`, if any) needs the spatial model, if it does.
+fn spatial_reason(scene: &Scene, file: Option<&ControlsFile>) -> Option<String> {
+    match (scene.spatial_key(), file) {
+        (Some(key), _) if scene.has_two_axis_control() => {
+            Some(format!("`{key}` are pairs [u_x, u_z], a 2-axis control"))
+        }
+        (Some(key), _) => Some(format!("`{key}` has an x component")),
+        (None, Some(f)) if f.is_two_axis() => Some(format!(
+            "the controls file {} holds a 2-axis control",
+            f.path.display()
+        )),
+        (None, _) => None,
+    }
+}
+
 /// Builds the problem: the scene's control and objective, `args`' changes, and (if given) the
-/// parametrisation and values of a `--controls` file.
+/// parametrisation and values of a `--controls` file, in the model they need.
 pub fn build(
     path: &Path,
     scene: &Scene,
@@ -133,32 +321,25 @@ pub fn build(
     let effort = check_effort(args.and_then(|a| a.effort))?;
     let steps = scene.time.steps;
     let (mut map, mut theta0) = scene_parametrisation(path, scene)?;
+    let mut two_axis = scene.has_two_axis_control();
     if let Some(p) = args.and_then(|a| a.pieces) {
-        if p == 0 || p > steps {
-            return Err(CliError::msg(format!(
-                "--pieces: the number of pieces must be between 1 and N = {steps} (time.steps \
-                 of {}), got {p}",
-                path.display()
-            )));
-        }
-        let u = ControlProblem::new(scene, map, BendingObjective::final_moment())
-            .and_then(|pr| pr.controls(&theta0))
-            .map_err(|e| lib_error(path, e))?;
-        let pc = PiecewiseControl { steps, pieces: p };
-        theta0 = piece_means(pc, &u);
-        map = Parametrisation::Piecewise(pc);
+        (map, theta0) = pieces_theta(path, steps, p, (map, &theta0, two_axis))?;
     }
     if let Some(c) = controls {
+        c.check_axes(scene)?;
         map = c.parametrisation(steps)?;
-        theta0 = c.values.clone();
+        theta0 = c.theta();
+        two_axis = c.is_two_axis();
     }
     let objective = BendingObjective {
         kind: scene.objective.unwrap_or(ObjectiveKind::Final),
         effort,
     };
-    let problem = ControlProblem::new(scene, map, objective).map_err(|e| lib_error(path, e))?;
+    let problem =
+        AnyProblem::new(scene, map, objective, two_axis).map_err(|e| lib_error(path, e))?;
     let control_node = scene.control.as_ref().map_or(scene.n(), |c| c.node);
     Ok(SceneProblem {
+        spatial_reason: spatial_reason(scene, controls),
         problem,
         theta0,
         control_node,

@@ -40,9 +40,13 @@ impl Solver {
                 dz[nxi]
             };
             self.dv_t[k] = self.dv[k] + d;
-            for i in 0..nz {
-                self.dz_t[k * nz + i] = self.dz[k * nz + i] + dz[i];
-            }
+            let (zt, z0) = (
+                &mut self.dz_t[k * nz..(k + 1) * nz],
+                &self.dz[k * nz..(k + 1) * nz],
+            );
+            zt.iter_mut()
+                .zip(z0.iter().zip(dz.iter()))
+                .for_each(|(t, (a, b))| *t = a + b);
             let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
             let u = nom.u[k] + self.dv_t[k];
             let w = if k > 0 {
@@ -57,14 +61,11 @@ impl Solver {
             if k < steps {
                 let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
                 let b = &self.b_store[k * nxi..(k + 1) * nxi];
-                for i in 0..nxi {
-                    next[i] = b[i] * d;
-                }
-                for j in 0..nxi {
-                    let (col, x) = (&a[j * nxi..(j + 1) * nxi], dz[j]);
-                    for i in 0..nxi {
-                        next[i] += col[i] * x;
-                    }
+                // δz' = A δz + B δv, column by column (contiguous AXPYs, no bounds checks).
+                let head = &mut next[..nxi];
+                head.iter_mut().zip(b).for_each(|(y, bi)| *y = bi * d);
+                for (col, &x) in a.chunks_exact(nxi).zip(&dz[..nxi]) {
+                    head.iter_mut().zip(col).for_each(|(y, c)| *y += c * x);
                 }
                 if nz > nxi {
                     next[nxi] = d;

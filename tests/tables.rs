@@ -206,3 +206,56 @@ fn tables_example() -> std::path::PathBuf {
     assert!(path.exists(), "no example binary at {}", path.display());
     path
 }
+
+/// `minimize` with `Method::Riccati` on every Table 3.4 row (per-step, N = 10, c_sum, no
+/// effort, bounded by the thesis row's largest |u_k| as the `tables` example does): every run
+/// converges, inside the box, and ends at most at the Gauss-Newton solver's own point. Where
+/// that solver stalls short of the tolerance (its PSD model misses negative curvature: without
+/// an effort penalty, near folding), the trust region finishes from its point and the result
+/// says so (`method`); references: the stalled `ocp::solve` result on the same row, and the
+/// bound from the thesis's printed controls.
+#[test]
+fn table_3_4_riccati_converges_on_every_row() {
+    use chainbeam::ocp;
+    use chainbeam::optimize::{minimize, Method, OptimOptions};
+    let mut finished = 0;
+    for node in 1..=10 {
+        let p = ControlProblem::new(
+            &catalogue::riser(node),
+            Parametrisation::PerStep(PerStepControl { steps: 10 }),
+            BendingObjective::summed_moment(),
+        )
+        .unwrap();
+        let bound = thesis::TABLE_3_4[node - 1]
+            .0
+            .iter()
+            .fold(0.0f64, |m, u| m.max(u.abs()));
+        let opts = OptimOptions {
+            method: Method::Riccati,
+            bound: Some(bound),
+            max_iters: 2000,
+            ..OptimOptions::default()
+        };
+        let r = minimize(&p, &[0.0; 11], &opts).unwrap();
+        let gn = ocp::solve(
+            &p,
+            &[0.0; 11],
+            &chainbeam::optimize::riccati_options(&opts).unwrap(),
+        )
+        .unwrap();
+        println!(
+            "3.4 node {node}: J = {:.10e} ({}, {}), Gauss-Newton alone {:.10e} ({})",
+            r.objective, r.method, r.termination, gn.objective, gn.termination
+        );
+        assert!(r.converged, "node {node}: {}", r.termination);
+        assert!(r.theta.iter().all(|u| u.abs() <= bound));
+        assert!(r.objective <= gn.objective * (1.0 + 1e-12));
+        if r.method == Method::TrustRegion {
+            assert!(!gn.converged, "node {node}: handed over although converged");
+            finished += 1;
+        }
+    }
+    // Measured: rows 1, 3 and 8 stall (the bench `ocp_table_3_4` prints them with `+tr`): the
+    // hand-over is exercised here, not only possible.
+    assert!(finished >= 1);
+}

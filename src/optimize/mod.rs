@@ -175,6 +175,7 @@ pub use problem::{
     ineffective_params, resolved_control_limit, HessianVec, NoEffectCheck, OptimProblem,
     NO_EFFECT_TOL,
 };
+pub use riccati::ocp_options as riccati_options;
 pub use supervisor::{Termination, MAX_REJECTIONS};
 
 use crate::error::{Error, Result};
@@ -204,7 +205,9 @@ pub enum Method {
     /// handled exactly by interior-point QPs): O(N) per iteration for per-step, piecewise and
     /// constant controls of a bending-moment objective; other problems are refused with
     /// [`Error::InvalidArgument`] (`method`). The argmin options do not apply (module
-    /// `riccati`).
+    /// `riccati`). If its Gauss-Newton model stalls short of the tolerance (it cannot see
+    /// negative curvature: no effort penalty, a chain near folding), the trust region finishes
+    /// from its point and the result's `method` says [`Method::TrustRegion`].
     Riccati,
 }
 

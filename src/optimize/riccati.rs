@@ -6,14 +6,21 @@
 //! L ≤ θ ≤ U (handled exactly by the solver's interior-point QPs, no reparametrisation), `max_iters`, `grad_tol` and
 //! `rel_grad_tol` on the *projected* gradient. The argmin-specific options (L-BFGS memory,
 //! trust radius, CG, restarts, polish, cost-change and target tests) do not apply; observers are
-//! not called (with `progress` the iteration history is printed to stderr at the end).
+//! not called (with `progress` the iteration history is printed to stderr at the end). A run
+//! that stalls short of the tolerance is finished by the trust region
+//! ([`finish_by_trust_region`]).
 
 use super::{Method, OptimOptions, OptimProblem, OptimResult, Termination};
 use crate::error::{Error, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 
-/// The Riccati solver's options for [`OptimOptions`].
-pub(crate) fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
+/// The options of [`crate::ocp::solve`] that [`minimize`](super::minimize) derives from
+/// [`OptimOptions`] for [`Method::Riccati`] (the box, `max_iters`, the gradient tolerances);
+/// re-exported as `optimize::riccati_options`.
+///
+/// # Errors
+/// [`Error::InvalidArgument`] for an invalid bound.
+pub fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
     let (lower, upper) = match opts.force_bounds()? {
         Some(b) => (b.lower(), b.upper()),
         None => (f64::NEG_INFINITY, f64::INFINITY),
@@ -56,7 +63,42 @@ pub(crate) fn run<Q: OptimProblem + ?Sized>(
             );
         }
     }
-    Ok(result(r, opts))
+    let res = result(r, opts);
+    if res.converged || res.termination != Termination::LineSearchStalled {
+        return Ok(res);
+    }
+    finish_by_trust_region(problem, res, opts)
+}
+
+/// The hand-over when the Gauss-Newton iteration stalls short of the tolerance (no accepted
+/// decrease with the regularisation at its limit, or decreases below J's round-off): its
+/// positive semi-definite model misses negative curvature of J (no effort penalty, or a chain
+/// near folding: Table 3.4 rows 1, 3 and 8). [`minimize`](super::minimize) then continues from
+/// its point with the trust region on exact Hessian-vector products (which sees that
+/// curvature) and returns *that* result: `method` is [`Method::TrustRegion`], the counts and
+/// the time add both phases. Without Hessian-vector products, or if the trust region fails to
+/// start, the stalled result is returned as it is (not converged).
+fn finish_by_trust_region<Q: OptimProblem + ?Sized>(
+    problem: &Q,
+    stalled: OptimResult,
+    opts: &OptimOptions,
+) -> Result<OptimResult> {
+    if problem.hessian().is_none() {
+        return Ok(stalled);
+    }
+    let tr = OptimOptions {
+        method: Method::TrustRegion,
+        ..opts.clone()
+    };
+    let Ok(mut t) = super::minimize(problem, &stalled.theta, &tr) else {
+        return Ok(stalled);
+    };
+    t.iterations += stalled.iterations;
+    t.cost_evals += stalled.cost_evals;
+    t.gradient_evals += stalled.gradient_evals;
+    t.seconds += stalled.seconds;
+    t.initial_gradient_norm = stalled.initial_gradient_norm;
+    Ok(t)
 }
 
 /// The [`OptimResult`] of an [`OcpResult`].

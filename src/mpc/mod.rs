@@ -128,8 +128,14 @@ pub struct Observation<'a> {
     pub steps: usize,
     /// The control interval (s).
     pub interval: f64,
-    /// The state (q_k, p_k) (p_k with the held or predicted control, [`Plant`]).
+    /// The state (q_k, p_k), p_k with the held control u_{k−1} in the second half-kick of the
+    /// step into t_k ([`Plant`]).
     pub state: &'a State<f64, 2>,
+    /// (q_k, p̂_k): the state before the control's half-kick at t_k, p̂_k the momentum of the
+    /// step into t_k taken with zero control in its second half-kick, which the force decided
+    /// now completes ([`Plant::state_before_kick`]); `None` at k = 0 (the beam at rest, no step
+    /// into t₀) and for a reaction-force tip.
+    pub state_before_kick: Option<&'a State<f64, 2>>,
     /// M₀(t_k) (Nm).
     pub moment: f64,
     /// Ṁ₀(t_k) (Nm/s).
@@ -150,12 +156,6 @@ pub trait Controller {
     /// # Errors
     /// The controller's failure (a failed solve, settings that do not fit the plant).
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64>;
-
-    /// The force this controller expects to return at its next decision, if it has one (a
-    /// receding-horizon plan's next piece); the plant computes the observed state with it.
-    fn predicted(&self) -> Option<f64> {
-        None
-    }
 
     /// Iterations of the optimiser at the last decision (None: no optimiser).
     fn last_iterations(&self) -> Option<usize> {
@@ -270,9 +270,7 @@ pub fn run_closed_loop(
     let mut rec = Recorder::with_capacity(steps + 1);
     let mut decisions = Vec::with_capacity(steps / m);
     for _ in 0..steps / m {
-        if let Some(u) = controller.predicted() {
-            plant.set_control(u)?;
-        }
+        plant.update_state_before_kick()?;
         let moment_rate = plant.moment_rate();
         let obs = Observation {
             k: plant.step_index(),
@@ -281,6 +279,7 @@ pub fn run_closed_loop(
             steps,
             interval,
             state: plant.state(),
+            state_before_kick: plant.state_before_kick(),
             moment: plant.moment(),
             moment_rate,
             tip: plant.tip(),

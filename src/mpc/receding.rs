@@ -178,7 +178,12 @@ impl Mpc {
                 ),
             ));
         }
-        template.clone().starting_from(obs.state.clone(), obs.t)
+        // The force decided now completes the half-kick of the step into t_k: plan from the
+        // state before it (exact: the plan's θ₀ acts on both sides of t_k as in the plant).
+        match obs.state_before_kick {
+            Some(hat) => template.clone().starting_before_kick(hat.clone(), obs.t),
+            None => template.clone().starting_from(obs.state.clone(), obs.t),
+        }
     }
 
     /// The pieces of the horizon at `obs`.
@@ -237,10 +242,6 @@ impl Controller for Mpc {
         self.last = Some(r);
         self.decisions += 1;
         Ok(self.plan[0])
-    }
-
-    fn predicted(&self) -> Option<f64> {
-        (self.options.warm_start && self.plan.len() > 1).then(|| self.plan[1])
     }
 
     fn last_iterations(&self) -> Option<usize> {

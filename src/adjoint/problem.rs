@@ -125,9 +125,12 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     /// The same problem on a horizon that starts from `state` at time `t0` (instead of the
     /// straight beam at rest at t = 0): step k runs from t₀ + k h with the controls u_k, u_{k+1}
     /// of θ (indexed from 0 on this horizon), so the tail of a longer run from its state at step m
-    /// is this problem with t₀ = m h. The state's multipliers, if any, give the first step's
-    /// Newton predictor (`None`: the consistent multiplier). The state is data: gradients are
-    /// with respect to θ only.
+    /// is this problem with t₀ = m h. The state's momentum is p₀ itself, with the control's
+    /// half-kick at t₀ in it ([`StartKick::Included`]): the horizon's u₀ acts through the first
+    /// half-kick of step 0 only, so ∂J/∂u₀ is not the run's ∂J/∂u_m (for a start whose kick the
+    /// horizon's u₀ supplies, [`ControlProblem::starting_before_kick`]). The state's
+    /// multipliers, if any, give the first step's Newton predictor (`None`: the consistent
+    /// multiplier). The state is data: gradients are with respect to θ only.
     ///
     /// # Errors
     /// [`Error::WrongLength`] / [`Error::NotFinite`] naming the part of the state (or the start

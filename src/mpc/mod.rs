@@ -24,8 +24,8 @@
 //! # The controllers
 //! - [`Mpc`]: receding horizon. At t_{jm} it solves
 //!   min_θ Σ_{k=0}^{H} M₀(t_{jm+k})² + ρ h Σ u_k² (+ the rate penalty σ/h Σ (Δu)²), |θ| ≤ u_max,
-//!   over a horizon of H steps of its *model* scene, starting from the observed state at the
-//!   observed time ([`ControlProblem::starting_from`](crate::ControlProblem::starting_from)),
+//!   over a horizon of H steps of its *model* scene, starting from the observed state before
+//!   the control's half-kick at the observed time (below, "The start of a horizon"),
 //!   with one piece per control interval, by the Gauss-Newton/Riccati solver warm-started from
 //!   the previous plan shifted by one interval (the tail padded with its last value) and a fixed
 //!   iteration budget (real-time iteration: 1-2 Gauss-Newton steps per re-plan), then applies
@@ -40,15 +40,24 @@
 //!   ([`pd_closed_loop_cost`]).
 //!
 //! # The start of a horizon
-//! [`ControlProblem::starting_from`](crate::ControlProblem::starting_from) holds the observed
-//! momentum p_k fixed, while in the plant p_k also carries the second half-kick
-//! (h/2) u_k P(q_k) b of the decided force. The plant therefore computes the observed state with
-//! the controller's predicted force (the next piece of its plan, [`Controller::predicted`]), and
-//! a re-plan sees its first force act through one half-kick less than the plant does: the first
-//! piece's impulse is short by h/2 of m h. With a perfect model and the horizon to the end, the
-//! closed loop reproduces the open-loop optimum to within this (tests/mpc.rs: 1.0 % in the
-//! forces, 1.8·10⁻³ in J, against the bound 1/(2m) = 5 %); a start "before the second
-//! half-kick" in [`crate::ocp`] would make it exact.
+//! A RATTLE step k−1 → k takes u_k in its second half-kick, so the plant's p_k depends on the
+//! force the controller is about to decide. After the projection onto the hidden constraint
+//! that half-kick is affine in the force (b = ∂U_q/∂u, P(q) the projection,
+//! [`Plant`] "The state before the control's half-kick"):
+//! ```text
+//! p_k = p̂_k − (h/2) u_k P(q_k) b,
+//! ```
+//! with p̂_k, the momentum of the step into t_k taken with zero control in its second
+//! half-kick, independent of u_k. The plant exposes (q_k, p̂_k)
+//! ([`Observation::state_before_kick`]) and [`Mpc`] plans from it with the kick pending
+//! ([`ControlProblem::starting_before_kick`](crate::ControlProblem::starting_before_kick)): the
+//! plan's first force supplies the half-kick by the equation above, so it acts on both sides
+//! of t_k exactly as the plant then applies it, and a re-plan is exactly the tail of the run
+//! it continues (at k = 0 the beam is at rest, p_0 = 0 whatever u_0, and the plan starts from
+//! it as it is). With a perfect model and the horizon to the end the closed loop reproduces
+//! the open-loop optimum to the solver's tolerance (tests/mpc.rs: 6.2·10⁻¹⁰ in the forces,
+//! 7.9·10⁻¹⁴ in J; a start that held the observed p_k fixed left the first force short by a
+//! half-kick: 1.0 % and 1.8·10⁻³).
 //!
 //! # Measured (`chainbeam mpc examples/scenes/mpc_riser.toml --baselines`, `cargo run --release --example mpc`)
 //! The scene: n = 10, D = 10 kg/m, the irregular sea at node 5 and a sheared current along +z

@@ -323,8 +323,9 @@ fn pending_tail() -> (ControlProblem, Vec<f64>) {
 /// θᵢ seeded, through the forward value the problem's `value` runs, the start lifted with its
 /// kick) to 1e-12 relative to ‖∇J‖∞ (both exact to round-off) and central differences (step
 /// 10⁻⁶·max(1, |θᵢ|): truncation O(δ²) relative to J's curvature, round-off 10⁻¹⁶ J/δ) to
-/// 1e-6; its Hessian-vector product (forward-over-adjoint) equals central differences of the
-/// gradient (step 10⁻⁶) to 1e-6 relative to ‖Hv‖∞.
+/// 1e-6, and the Riccati solver's costate gradient to 1e-12; its Hessian-vector product
+/// (forward-over-adjoint) equals central differences of the gradient (step 10⁻⁶) to 1e-6
+/// relative to ‖Hv‖∞.
 #[test]
 fn pending_kick_gradient_equals_dual_numbers_and_differences() {
     let (tail, theta) = pending_tail();
@@ -364,6 +365,23 @@ fn pending_kick_gradient_equals_dual_numbers_and_differences() {
             (g[i] - fd).abs() <= 1e-6 * scale,
             "θ[{i}]: adjoint {} vs central difference {fd}",
             g[i]
+        );
+    }
+    // The Riccati solver's costate sweep (B_0 with the kick; piecewise: held stages) equals the
+    // adjoint to 1e-12 (as tests/ocp.rs for the ordinary start), also with the Jacobians
+    // recomputed in blocks of 7 stages.
+    for memory in [1 << 30, 7 * 8 * (400 + 20)] {
+        let opts = OcpOptions {
+            jacobian_memory: memory,
+            ..OcpOptions::default()
+        };
+        let mut solver = Solver::new(&tail, &opts).unwrap();
+        let j_ocp = solver.set_point(&theta).unwrap();
+        assert!((j_ocp - j).abs() <= 1e-12 * j, "J {j_ocp} vs {j}");
+        let e = max_rel_diff(&solver.gradient().unwrap(), &g);
+        assert!(
+            e <= 1e-12,
+            "memory {memory}: costate gradient off by {e:.2e}"
         );
     }
     let v = [1.0, -0.5, 0.25, 0.8, -1.2];

@@ -70,24 +70,30 @@
 //! | none | 4797918.4 | 35.51 | 0 |
 //! | best constant force | 92936.4 | 9.14 | 2.93 |
 //! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 |
-//! | MPC, perfect model | 9274.8 | 12.02 | 5.00 |
-//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14348.9 | 11.58 | 5.00 |
+//! | MPC, perfect model | 9292.1 | 12.04 | 5.00 |
+//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 13916.4 | 11.61 | 5.00 |
 //!
 //! MPC's c_sum is 10.0 % of the best constant force's and 17.0 % of the tuned PD law's (wrong
-//! model: 15.4 % and 26.2 %). Its max |M₀| is higher than the constant force's: the transient
+//! model: 15.0 % and 25.5 %). (The MPC rows were re-measured with the exact start of "The start
+//! of a horizon", load average ≈ 4; with the start that held p_k fixed they were 9274.8 and
+//! 14348.9: with a 3 s horizon and one iteration per re-plan the exact start is not the
+//! better controller by construction, only the exact tail of its plan. The other rows do not
+//! depend on it.) Its max |M₀| is higher than the constant force's: the transient
 //! when the current switches on at t = 0 saturates every controller, and MPC trades that peak
-//! for the sum it minimises. Without the current (the same sea alone) MPC's c_sum was 1.83
+//! for the sum it minimises. Without the current (the same sea alone) MPC's c_sum was 1.82
 //! against the PD law's 61262: the current's steady drag, which the force must cancel
 //! (≈ 2.9 N of the 5 N), is what leaves MPC a residual.
 //!
-//! Re-plan cost (wall clock, same load): mean 18.0 ms, worst 41.4 ms, real-time factor 5.6 —
+//! Re-plan cost (wall clock, load average ≈ 4): mean 18.7 ms, worst 40.9 ms, real-time factor
+//! 5.4 (with the earlier start, load ≈ 3: 18.0 ms, 41.4 ms, 5.6; the start adds one O(n)
+//! projection per rollout) —
 //! worst ≤ the 100 ms interval (real-time capable), the issue's mean ≤ 10 ms not met on this
 //! machine. Each re-plan pays two rollouts, one pass of stage Jacobians by dual numbers (half
 //! of the time, `perf`), about four Riccati passes of the QP and their linear rollouts; the
 //! pass that only served a final convergence test is skipped
 //! ([`OcpOptions::final_gradient`](crate::ocp::OcpOptions::final_gradient)). Horizon against
-//! cost: c_sum 37909 / 9275 / 7593 / 7469 for 2 / 3 / 4 / 5 s at 1 : 2.0 : 2.6 : 2.7 the mean
-//! re-plan time of 2 s ([`MpcOptions::horizon`]).
+//! cost: c_sum 38363 / 9292 / 7592 / 7469 for 2 / 3 / 4 / 5 s at 1 : 2.0 : 2.6 : 2.7 the mean
+//! re-plan time of 2 s (the times measured with the earlier start, [`MpcOptions::horizon`]).
 //!
 //! # Example
 //! ```

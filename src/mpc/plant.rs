@@ -120,7 +120,17 @@ impl<D: Scalar> Plant<D> {
         {
             return Ok(());
         }
-        self.before_kick.clone_from(&self.state);
+        let (hat, st) = (&mut self.before_kick, &self.state);
+        hat.q.copy_from_slice(&st.q);
+        hat.tip_target = st.tip_target;
+        // The multipliers (the next step's Newton predictor), in place after the first time.
+        match (&mut hat.multipliers, &st.multipliers) {
+            (Some(h), Some(m)) => {
+                h.lambda.copy_from_slice(&m.lambda);
+                h.mu.copy_from_slice(&m.mu);
+            }
+            (h, m) => h.clone_from(m),
+        }
         let p = &mut self.before_kick.p;
         self.rattle
             .control_half_kick(&self.state.q, (self.u, D::zero()), p)?;

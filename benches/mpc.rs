@@ -45,6 +45,7 @@ fn bench_replan(c: &mut Criterion) {
     for _ in 0..1000 {
         plant.advance().expect("step");
     }
+    plant.update_state_before_kick().expect("projection");
     let moment_rate = plant.moment_rate();
     let obs = Observation {
         k: plant.step_index(),
@@ -53,6 +54,7 @@ fn bench_replan(c: &mut Criterion) {
         steps: plant.steps(),
         interval: INTERVAL,
         state: plant.state(),
+        state_before_kick: plant.state_before_kick(),
         moment: plant.moment(),
         moment_rate,
         tip: plant.tip(),

@@ -96,14 +96,50 @@ pub const START_TOLERANCE: f64 = 1e-9;
 /// Where a horizon starts: the state S₀ at time t₀. Step k of the horizon runs from
 /// t₀ + k h to t₀ + (k + 1) h with the controls u_k, u_{k+1} (indexed from 0 on the horizon);
 /// its multipliers μ, if given, are the Newton predictor of the first step (`None`: the
-/// consistent multiplier is computed). Without a `Start` a horizon starts from the straight beam at rest at
-/// t₀ = 0.
+/// consistent multiplier is computed). Without a `Start` a horizon starts from the straight beam
+/// at rest at t₀ = 0.
+///
+/// # The control's half-kick at t₀ ([`StartKick`])
+/// A RATTLE step into t₀ takes the control u(t₀) in its second half-kick, and after the
+/// projection onto the hidden constraint that half-kick is affine in it: with b = ∂U_q/∂u
+/// (block j: l_j e₃ for j below the control node, eq. 3.1.1; b_x = ∂U_q/∂u_x likewise along e₁
+/// for the x component of a 2-axis control) and P(q) = I − Ĝᵀ(Ĝ M⁻¹ Ĝᵀ)⁻¹ Ĝ M⁻¹ the
+/// projection (linear: the hidden constraint's target is 0),
+/// ```text
+/// p₀ = p̂₀ − (h/2) P(q₀) (u₀ b + u_{x,0} b_x),
+/// ```
+/// where p̂₀ is the momentum of the same step taken with zero control in its second half-kick.
+/// [`StartKick::Included`] (the default, [`ControlProblem::starting_from`]) holds the given
+/// momentum p₀ fixed: the horizon's u₀ acts through the first half-kick of step 0 only.
+/// [`StartKick::Pending`] ([`ControlProblem::starting_before_kick`]) reads the given momentum as
+/// p̂₀ and the horizon's first force supplies the half-kick by the equation above, so that the
+/// horizon's u₀ is *the* control at t₀ of the run it continues, acting on both sides of t₀ as in
+/// the run (the start a receding-horizon controller needs, [`crate::mpc`]). The value, the
+/// adjoint gradient (∂J/∂u₀ += −(h/2) p̄₀ · P(q₀) b, p̄₀ = ∂J/∂p₀ the costate where the reverse
+/// sweep ends; ∂J/∂u_{x,0} likewise with b_x), the Hessian-vector products and the Riccati
+/// solver ([`crate::ocp`], whose stage map applies the same rule at every k ≥ 1) all evaluate
+/// this one map. A pending kick needs the control to be a force term: the reaction-force tip
+/// (whose control drives the tip target, eq. 3.2.1) is refused.
 #[derive(Clone, Debug)]
 pub struct Start<D, const DIM: usize> {
-    /// The state S₀ = (q₀, p₀, λ, μ, tip target).
+    /// The state S₀ = (q₀, p₀ or p̂₀, λ, μ, tip target).
     pub state: State<D, DIM>,
     /// The start time t₀ \[s\].
     pub t0: f64,
+    /// Whether the momentum already holds the control's half-kick at t₀ (type docs).
+    pub kick: StartKick,
+}
+
+/// What the momentum of a [`Start`] holds (the equation in the docs of [`Start`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StartKick {
+    /// The given momentum is p₀, with the control's half-kick at t₀ in it (or none): the
+    /// horizon's u₀ acts through the first half-kick of step 0 only.
+    #[default]
+    Included,
+    /// The given momentum is p̂₀, without the control's half-kick at t₀: the horizon's u₀
+    /// supplies it, p₀ = p̂₀ − (h/2) P(q₀)(u₀ b + u_{x,0} b_x).
+    Pending,
 }
 
 impl<D: Scalar, const DIM: usize> Start<D, DIM> {
@@ -148,6 +184,14 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
                 return Err(Error::NotFinite { name, index });
             }
         }
+        if self.kick == StartKick::Pending && chain.tip_condition() == TipCondition::Reaction {
+            return Err(Error::InvalidArgument {
+                name: "start kick",
+                reason: "a pending control half-kick needs the control as a force term; the \
+                         reaction-force tip's control drives the tip target (eq. 3.2.1)"
+                    .into(),
+            });
+        }
         self.check_manifold(chain)
     }
 
@@ -178,22 +222,99 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
     }
 }
 
-/// The state a horizon starts from and the integrator for it (start time set).
+/// The control's pending half-kick at the start of a horizon ([`StartKick::Pending`]): the
+/// directions d = −(h/2) P(q₀) b and d_x = −(h/2) P(q₀) b_x (empty for a 1-axis control), so
+/// that p₀ = p̂₀ + u₀ d + u_{x,0} d_x (docs of [`Start`]).
+struct PendingKick<D, const DIM: usize> {
+    d: Vec<[D; DIM]>,
+    dx: Vec<[D; DIM]>,
+}
+
+impl<D: Scalar, const DIM: usize> PendingKick<D, DIM> {
+    /// The directions at q₀ ([`Rattle::control_half_kick`] with unit controls).
+    fn new(rattle: &mut Rattle<D, DIM>, q0: &[[D; DIM]]) -> Result<Self> {
+        let n = rattle.chain().n();
+        let mut d = vec![[D::zero(); DIM]; n];
+        rattle.control_half_kick(q0, (D::one(), D::zero()), &mut d)?;
+        let mut dx = Vec::new();
+        if rattle.chain().has_control_x() {
+            dx.resize(n, [D::zero(); DIM]);
+            rattle.control_half_kick(q0, (D::zero(), D::one()), &mut dx)?;
+        }
+        Ok(PendingKick { d, dx })
+    }
+
+    /// p₀ = p̂₀ + u₀ d + u_{x,0} d_x.
+    fn apply(&self, (u0, ux0): (D, D), p: &mut [[D; DIM]]) {
+        for (i, pi) in p.iter_mut().enumerate() {
+            for k in 0..DIM {
+                pi[k] += self.d[i][k] * u0;
+                if let Some(dx) = self.dx.get(i) {
+                    pi[k] += dx[k] * ux0;
+                }
+            }
+        }
+    }
+
+    /// Its adjoint: ∂J/∂u₀ += p̄₀ · d, ∂J/∂u_{x,0} += p̄₀ · d_x.
+    fn reverse(&self, pbar: &[[D; DIM]], cot: &mut Cotangents<D, DIM>) {
+        let dot = |d: &[[D; DIM]]| {
+            let mut s = D::zero();
+            for (a, b) in pbar.iter().zip(d) {
+                for k in 0..DIM {
+                    s += a[k] * b[k];
+                }
+            }
+            s
+        };
+        cot.ubar[0] += dot(&self.d);
+        if let Some(uxb) = cot.uxbar.first_mut() {
+            *uxb += dot(&self.dx);
+        }
+    }
+}
+
+/// The start of a horizon's sweeps: the integrator (start time set), the state S₀ (with the
+/// pending half-kick of u₀ applied) and the kick's directions for the adjoint.
+struct Initial<D, const DIM: usize> {
+    rattle: Rattle<D, DIM>,
+    state: State<D, DIM>,
+    kick: Option<PendingKick<D, DIM>>,
+}
+
+/// The state a horizon starts from, with the control u₀'s half-kick applied when it is pending
+/// ([`StartKick::Pending`]).
 fn start_state<D: Scalar, const DIM: usize>(
     chain: &Chain<D, DIM>,
     h: f64,
     start: Option<&Start<D, DIM>>,
-) -> Result<(Rattle<D, DIM>, State<D, DIM>)> {
+    u0: D,
+) -> Result<Initial<D, DIM>> {
     let t0 = start.map_or(0.0, |s| s.t0);
-    let rattle = Rattle::new(chain.clone(), h)?.with_start_time(t0);
-    let state = match start {
-        Some(s) => {
-            s.check(chain)?;
-            s.state.clone()
-        }
-        None => rattle.straight_state(),
+    let mut rattle = Rattle::new(chain.clone(), h)?.with_start_time(t0);
+    let Some(s) = start else {
+        let state = rattle.straight_state();
+        return Ok(Initial {
+            rattle,
+            state,
+            kick: None,
+        });
     };
-    Ok((rattle, state))
+    s.check(chain)?;
+    let mut state = s.state.clone();
+    let kick = match s.kick {
+        StartKick::Included => None,
+        StartKick::Pending => {
+            let kick = PendingKick::new(&mut rattle, &state.q)?;
+            kick.apply((u0, chain.control_x(0)), &mut state.p);
+            Some(kick)
+        }
+    };
+    Ok(Initial {
+        rattle,
+        state,
+        kick,
+    })
 }
 
 /// A horizon: the model, the number of steps N and the controls u_0..u_N.
@@ -291,7 +412,11 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         zpos: Vec::new(),
     };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
-    let (mut rattle, state0) = start_state(chain, h, start)?;
+    let Initial {
+        mut rattle,
+        state: state0,
+        kick,
+    } = start_state(chain, h, start, u[0])?;
     let hz = Horizon {
         chain,
         steps,
@@ -329,6 +454,11 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
             stage.accumulate(chain, (k, sk.q, u[k]), &mut cot, k1_param);
         }
     }
+    // The reverse sweep ends with p̄₀ = ∂J/∂p₀; a pending kick makes p₀ depend on u₀.
+    if let Some(kick) = &kick {
+        let pbar = std::mem::take(&mut cot.pbar);
+        kick.reverse(&pbar, &mut cot);
+    }
     Ok(AdjointResult {
         value,
         control_gradient: cot.ubar,
@@ -361,7 +491,11 @@ pub fn forward_value_from<D: Scalar, O: Objective, const DIM: usize>(
     start: Option<&Start<D, DIM>>,
 ) -> Result<D> {
     check_controls(u, steps)?;
-    let (mut r, mut st) = start_state(chain, h, start)?;
+    let Initial {
+        rattle: mut r,
+        state: mut st,
+        ..
+    } = start_state(chain, h, start, u[0])?;
     r.prepare(&mut st, 0, u[0])?;
     let mut stage = StageEval {
         obj: objective,

@@ -3,7 +3,7 @@
 
 use super::{
     adjoint_gradient_from, forward_value_from, AdjointResult, BendingObjective, Checkpointing,
-    ControlMap, Objective, Parametrisation, PerStepControl, PiecewiseControl, Start,
+    ControlMap, Objective, Parametrisation, PerStepControl, PiecewiseControl, Start, StartKick,
 };
 use crate::error::{Error, Result};
 use crate::model::{Chain, Parameter, Scalar};
@@ -125,16 +125,43 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     /// The same problem on a horizon that starts from `state` at time `t0` (instead of the
     /// straight beam at rest at t = 0): step k runs from t₀ + k h with the controls u_k, u_{k+1}
     /// of θ (indexed from 0 on this horizon), so the tail of a longer run from its state at step m
-    /// is this problem with t₀ = m h. The state's multipliers, if any, give the first step's
-    /// Newton predictor (`None`: the consistent multiplier). The state is data: gradients are
-    /// with respect to θ only.
+    /// is this problem with t₀ = m h. The state's momentum is p₀ itself, with the control's
+    /// half-kick at t₀ in it ([`StartKick::Included`]): the horizon's u₀ acts through the first
+    /// half-kick of step 0 only, so ∂J/∂u₀ is not the run's ∂J/∂u_m (for a start whose kick the
+    /// horizon's u₀ supplies, [`ControlProblem::starting_before_kick`]). The state's
+    /// multipliers, if any, give the first step's Newton predictor (`None`: the consistent
+    /// multiplier). The state is data: gradients are with respect to θ only.
     ///
     /// # Errors
     /// [`Error::WrongLength`] / [`Error::NotFinite`] naming the part of the state (or the start
     /// time), [`Error::InvalidArgument`] when the state is off the constraint manifold
     /// (ĝ(q) = 0 and Ĝ(q) M⁻¹ p = 0 to [`crate::adjoint::START_TOLERANCE`]).
-    pub fn starting_from(mut self, state: State<f64, DIM>, t0: f64) -> Result<Self> {
-        let start = Start { state, t0 };
+    pub fn starting_from(self, state: State<f64, DIM>, t0: f64) -> Result<Self> {
+        self.with_start(state, t0, StartKick::Included)
+    }
+
+    /// The same problem on a horizon that starts from `state_hat` = (q₀, p̂₀) at time `t0` with
+    /// the control's half-kick at t₀ still pending ([`StartKick::Pending`]): p̂₀ is the momentum
+    /// of the step into t₀ taken with zero control in its second half-kick, and the horizon's
+    /// first force supplies that half-kick,
+    /// ```text
+    /// p₀ = p̂₀ − (h/2) P(q₀)(u₀ b + u_{x,0} b_x),   P(q) = I − Ĝᵀ(Ĝ M⁻¹ Ĝᵀ)⁻¹ Ĝ M⁻¹,
+    /// ```
+    /// b = ∂U_q/∂u, b_x = ∂U_q/∂u_x (docs of [`Start`]). So the tail of a longer run from step m
+    /// is this problem with θ's u₀ = the run's u_m, and ∂J/∂u₀ is the run's ∂J/∂u_m from the
+    /// tail's stages (unlike [`ControlProblem::starting_from`], where u₀ acts only through the
+    /// first half-kick of step 0). Value, gradient, Hessian-vector products and the Riccati
+    /// solver [`crate::ocp`] all honour it.
+    ///
+    /// # Errors
+    /// As [`ControlProblem::starting_from`]; [`Error::InvalidArgument`] (`start kick`) for a
+    /// reaction-force tip, whose control is not a force term.
+    pub fn starting_before_kick(self, state_hat: State<f64, DIM>, t0: f64) -> Result<Self> {
+        self.with_start(state_hat, t0, StartKick::Pending)
+    }
+
+    fn with_start(mut self, state: State<f64, DIM>, t0: f64, kick: StartKick) -> Result<Self> {
+        let start = Start { state, t0, kick };
         start.check(&self.chain)?;
         self.start = Some(start);
         Ok(self)
@@ -150,6 +177,7 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         self.start.as_ref().map(|s| Start {
             state: s.state.lift(),
             t0: s.t0,
+            kick: s.kick,
         })
     }
 

@@ -736,6 +736,21 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.contraction(q, w, ctx, Product::ControlX, scratch)
     }
 
+    /// The control term's force alone, u ∂U_q/∂u + u_x ∂U_q/∂u_x (block j: l_j (u_x, u) for
+    /// j below the control node, eq. 3.1.1; u_x only in the spatial model), into `out`
+    /// (overwritten; zero without a control node). U_q is affine in the control, so this is
+    /// U_q(q; u, u_x) − U_q(q; 0, 0) without the round-off of the other terms.
+    pub fn control_force(&self, u: D, ux: D, out: &mut [[D; DIM]]) -> Result<()> {
+        out.iter_mut().for_each(|o| *o = [D::zero(); DIM]);
+        match &self.control {
+            Some(c) => {
+                let ctx = Ctx::new(0.0, u, 0).with_ux(ux);
+                ForceTerm::<D, DIM>::force(c, &[], &ctx, out)
+            }
+            None => Ok(()),
+        }
+    }
+
     fn contraction(
         &self,
         q: &[[D; DIM]],

@@ -24,8 +24,8 @@
 //! # The controllers
 //! - [`Mpc`]: receding horizon. At t_{jm} it solves
 //!   min_θ Σ_{k=0}^{H} M₀(t_{jm+k})² + ρ h Σ u_k² (+ the rate penalty σ/h Σ (Δu)²), |θ| ≤ u_max,
-//!   over a horizon of H steps of its *model* scene, starting from the observed state at the
-//!   observed time ([`ControlProblem::starting_from`](crate::ControlProblem::starting_from)),
+//!   over a horizon of H steps of its *model* scene, starting from the observed state before
+//!   the control's half-kick at the observed time (below, "The start of a horizon"),
 //!   with one piece per control interval, by the Gauss-Newton/Riccati solver warm-started from
 //!   the previous plan shifted by one interval (the tail padded with its last value) and a fixed
 //!   iteration budget (real-time iteration: 1-2 Gauss-Newton steps per re-plan), then applies
@@ -40,15 +40,24 @@
 //!   ([`pd_closed_loop_cost`]).
 //!
 //! # The start of a horizon
-//! [`ControlProblem::starting_from`](crate::ControlProblem::starting_from) holds the observed
-//! momentum p_k fixed, while in the plant p_k also carries the second half-kick
-//! (h/2) u_k P(q_k) b of the decided force. The plant therefore computes the observed state with
-//! the controller's predicted force (the next piece of its plan, [`Controller::predicted`]), and
-//! a re-plan sees its first force act through one half-kick less than the plant does: the first
-//! piece's impulse is short by h/2 of m h. With a perfect model and the horizon to the end, the
-//! closed loop reproduces the open-loop optimum to within this (tests/mpc.rs: 1.0 % in the
-//! forces, 1.8·10⁻³ in J, against the bound 1/(2m) = 5 %); a start "before the second
-//! half-kick" in [`crate::ocp`] would make it exact.
+//! A RATTLE step k−1 → k takes u_k in its second half-kick, so the plant's p_k depends on the
+//! force the controller is about to decide. After the projection onto the hidden constraint
+//! that half-kick is affine in the force (b = ∂U_q/∂u, P(q) the projection,
+//! [`Plant`] "The state before the control's half-kick"):
+//! ```text
+//! p_k = p̂_k − (h/2) u_k P(q_k) b,
+//! ```
+//! with p̂_k, the momentum of the step into t_k taken with zero control in its second
+//! half-kick, independent of u_k. The plant exposes (q_k, p̂_k)
+//! ([`Observation::state_before_kick`]) and [`Mpc`] plans from it with the kick pending
+//! ([`ControlProblem::starting_before_kick`](crate::ControlProblem::starting_before_kick)): the
+//! plan's first force supplies the half-kick by the equation above, so it acts on both sides
+//! of t_k exactly as the plant then applies it, and a re-plan is exactly the tail of the run
+//! it continues (at k = 0 the beam is at rest, p_0 = 0 whatever u_0, and the plan starts from
+//! it as it is). With a perfect model and the horizon to the end the closed loop reproduces
+//! the open-loop optimum to the solver's tolerance (tests/mpc.rs: 6.2·10⁻¹⁰ in the forces,
+//! 7.9·10⁻¹⁴ in J; a start that held the observed p_k fixed left the first force short by a
+//! half-kick: 1.0 % and 1.8·10⁻³).
 //!
 //! # Measured (`chainbeam mpc examples/scenes/mpc_riser.toml --baselines`, `cargo run --release --example mpc`)
 //! The scene: n = 10, D = 10 kg/m, the irregular sea at node 5 and a sheared current along +z
@@ -61,24 +70,30 @@
 //! | none | 4797918.4 | 35.51 | 0 |
 //! | best constant force | 92936.4 | 9.14 | 2.93 |
 //! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 |
-//! | MPC, perfect model | 9274.8 | 12.02 | 5.00 |
-//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14348.9 | 11.58 | 5.00 |
+//! | MPC, perfect model | 9292.1 | 12.04 | 5.00 |
+//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 13916.4 | 11.61 | 5.00 |
 //!
 //! MPC's c_sum is 10.0 % of the best constant force's and 17.0 % of the tuned PD law's (wrong
-//! model: 15.4 % and 26.2 %). Its max |M₀| is higher than the constant force's: the transient
+//! model: 15.0 % and 25.5 %). (The MPC rows were re-measured with the exact start of "The start
+//! of a horizon", load average ≈ 4; with the start that held p_k fixed they were 9274.8 and
+//! 14348.9: with a 3 s horizon and one iteration per re-plan the exact start is not the
+//! better controller by construction, only the exact tail of its plan. The other rows do not
+//! depend on it.) Its max |M₀| is higher than the constant force's: the transient
 //! when the current switches on at t = 0 saturates every controller, and MPC trades that peak
-//! for the sum it minimises. Without the current (the same sea alone) MPC's c_sum was 1.83
+//! for the sum it minimises. Without the current (the same sea alone) MPC's c_sum was 1.82
 //! against the PD law's 61262: the current's steady drag, which the force must cancel
 //! (≈ 2.9 N of the 5 N), is what leaves MPC a residual.
 //!
-//! Re-plan cost (wall clock, same load): mean 18.0 ms, worst 41.4 ms, real-time factor 5.6 —
+//! Re-plan cost (wall clock, load average ≈ 4): mean 18.7 ms, worst 40.9 ms, real-time factor
+//! 5.4 (with the earlier start, load ≈ 3: 18.0 ms, 41.4 ms, 5.6; the start adds one O(n)
+//! projection per rollout) —
 //! worst ≤ the 100 ms interval (real-time capable), the issue's mean ≤ 10 ms not met on this
 //! machine. Each re-plan pays two rollouts, one pass of stage Jacobians by dual numbers (half
 //! of the time, `perf`), about four Riccati passes of the QP and their linear rollouts; the
 //! pass that only served a final convergence test is skipped
 //! ([`OcpOptions::final_gradient`](crate::ocp::OcpOptions::final_gradient)). Horizon against
-//! cost: c_sum 37909 / 9275 / 7593 / 7469 for 2 / 3 / 4 / 5 s at 1 : 2.0 : 2.6 : 2.7 the mean
-//! re-plan time of 2 s ([`MpcOptions::horizon`]).
+//! cost: c_sum 38363 / 9292 / 7592 / 7469 for 2 / 3 / 4 / 5 s at 1 : 2.0 : 2.6 : 2.7 the mean
+//! re-plan time of 2 s (the times measured with the earlier start, [`MpcOptions::horizon`]).
 //!
 //! # Example
 //! ```
@@ -128,8 +143,14 @@ pub struct Observation<'a> {
     pub steps: usize,
     /// The control interval (s).
     pub interval: f64,
-    /// The state (q_k, p_k) (p_k with the held or predicted control, [`Plant`]).
+    /// The state (q_k, p_k), p_k with the held control u_{k−1} in the second half-kick of the
+    /// step into t_k ([`Plant`]).
     pub state: &'a State<f64, 2>,
+    /// (q_k, p̂_k): the state before the control's half-kick at t_k, p̂_k the momentum of the
+    /// step into t_k taken with zero control in its second half-kick, which the force decided
+    /// now completes ([`Plant::state_before_kick`]); `None` at k = 0 (the beam at rest, no step
+    /// into t₀) and for a reaction-force tip.
+    pub state_before_kick: Option<&'a State<f64, 2>>,
     /// M₀(t_k) (Nm).
     pub moment: f64,
     /// Ṁ₀(t_k) (Nm/s).
@@ -150,12 +171,6 @@ pub trait Controller {
     /// # Errors
     /// The controller's failure (a failed solve, settings that do not fit the plant).
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64>;
-
-    /// The force this controller expects to return at its next decision, if it has one (a
-    /// receding-horizon plan's next piece); the plant computes the observed state with it.
-    fn predicted(&self) -> Option<f64> {
-        None
-    }
 
     /// Iterations of the optimiser at the last decision (None: no optimiser).
     fn last_iterations(&self) -> Option<usize> {
@@ -270,9 +285,7 @@ pub fn run_closed_loop(
     let mut rec = Recorder::with_capacity(steps + 1);
     let mut decisions = Vec::with_capacity(steps / m);
     for _ in 0..steps / m {
-        if let Some(u) = controller.predicted() {
-            plant.set_control(u)?;
-        }
+        plant.update_state_before_kick()?;
         let moment_rate = plant.moment_rate();
         let obs = Observation {
             k: plant.step_index(),
@@ -281,6 +294,7 @@ pub fn run_closed_loop(
             steps,
             interval,
             state: plant.state(),
+            state_before_kick: plant.state_before_kick(),
             moment: plant.moment(),
             moment_rate,
             tip: plant.tip(),

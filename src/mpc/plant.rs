@@ -13,13 +13,27 @@ use crate::scene::Scene;
 /// # The control at a switching time
 /// A RATTLE step k → k+1 takes u_k in its first and u_{k+1} in its second half-kick, and
 /// p_{k+1} depends on u_{k+1}. A controller decides u_k from the state at t_k, so the plant first
-/// takes the step into t_k with the held control u_{k+1} = u_k−1 (or a controller's predicted
-/// control), the controller observes that state, and [`Plant::set_control`] re-takes that last
-/// step with the decided u_k. The trajectory is therefore exactly the open-loop RATTLE trajectory
-/// of the applied per-step controls u_0..u_N (what [`crate::simulate_with_controls`] computes),
-/// and the state the controller saw differs from it only in p_k, by
-/// (h/2)(u_k − ũ_k) P(q_k) b (ũ_k the control it was computed with, P the projection onto the
-/// hidden constraint, b = ∂U_q/∂u): zero when the prediction is right.
+/// takes the step into t_k with the held control u_{k+1} = u_k−1, the controller observes that
+/// state, and [`Plant::set_control`] re-takes that last step with the decided u_k. The trajectory
+/// is therefore exactly the open-loop RATTLE trajectory of the applied per-step controls
+/// u_0..u_N (what [`crate::simulate_with_controls`] computes).
+///
+/// # The state before the control's half-kick
+/// Which p_k a controller sees at t_k depends on a control it has not decided yet. After the
+/// projection onto the hidden constraint the second half-kick is affine in the control: with
+/// b = ∂U_q/∂u (block j: l_j e₃ for j below the control node, eq. 3.1.1) and
+/// P(q) = I − Ĝᵀ(Ĝ M⁻¹ Ĝᵀ)⁻¹ Ĝ M⁻¹,
+/// ```text
+/// p_k = p̂_k − (h/2) u_k P(q_k) b,
+/// ```
+/// where p̂_k, the momentum of the step into t_k taken with zero control in its second
+/// half-kick, does not depend on u_k. [`Plant::state_before_kick`] is (q_k, p̂_k), computed as
+/// p̂_k = p_k + (h/2) u P(q_k) b from the state and the control u its step took
+/// ([`crate::Rattle::control_half_kick`]); a controller that plans from it with the kick
+/// pending ([`crate::ControlProblem::starting_before_kick`]) lets its first force act on both
+/// sides of t_k exactly as the plant then applies it. At k = 0 there is no step into t₀ (the
+/// beam is at rest, p_0 = 0 whatever u_0) and there is no such state; nor for a reaction-force
+/// tip, whose control is not a force term.
 #[derive(Clone, Debug)]
 pub struct Plant<D: Scalar> {
     rattle: Rattle<D, 2>,
@@ -33,6 +47,9 @@ pub struct Plant<D: Scalar> {
     u_prev: D,
     /// M⁻¹p, for Ṁ₀.
     velocity: Vec<[D; 2]>,
+    /// (q_k, p̂_k) and the step k it was computed at ([`Plant::update_state_before_kick`]).
+    before_kick: State<D, 2>,
+    before_kick_at: Option<usize>,
 }
 
 impl<D: Scalar> Plant<D> {
@@ -50,6 +67,7 @@ impl<D: Scalar> Plant<D> {
         let state = rattle.straight_state();
         let mut plant = Plant {
             prev: state.clone(),
+            before_kick: state.clone(),
             state,
             rattle,
             k: 0,
@@ -57,6 +75,7 @@ impl<D: Scalar> Plant<D> {
             u: D::zero(),
             u_prev: D::zero(),
             velocity: vec![[D::zero(); 2]; scene.n()],
+            before_kick_at: None,
         };
         plant.rattle.prepare(&mut plant.state, 0, D::zero())?;
         Ok(plant)
@@ -85,6 +104,50 @@ impl<D: Scalar> Plant<D> {
     /// The state at t_k.
     pub fn state(&self) -> &State<D, 2> {
         &self.state
+    }
+
+    /// Computes (q_k, p̂_k), the state at t_k before the control's half-kick (type docs), for
+    /// [`Plant::state_before_kick`]: p̂_k = p_k + (h/2) u P(q_k) b with u the control of the
+    /// step into t_k. Nothing to compute at k = 0 or for a reaction-force tip. O(n), no
+    /// allocation.
+    ///
+    /// # Errors
+    /// [`Error::SingularSystem`] from the projection.
+    pub fn update_state_before_kick(&mut self) -> Result<()> {
+        if self.k == 0
+            || self.before_kick_at == Some(self.k)
+            || self.chain().reaction_tip().is_some()
+        {
+            return Ok(());
+        }
+        let (hat, st) = (&mut self.before_kick, &self.state);
+        hat.q.copy_from_slice(&st.q);
+        hat.tip_target = st.tip_target;
+        // The multipliers (the next step's Newton predictor), in place after the first time.
+        match (&mut hat.multipliers, &st.multipliers) {
+            (Some(h), Some(m)) => {
+                h.lambda.copy_from_slice(&m.lambda);
+                h.mu.copy_from_slice(&m.mu);
+            }
+            (h, m) => h.clone_from(m),
+        }
+        let p = &mut self.before_kick.p;
+        self.rattle
+            .control_half_kick(&self.state.q, (self.u, D::zero()), p)?;
+        for (ph, pk) in p.iter_mut().zip(&self.state.p) {
+            // p̂ = p_k − (−(h/2) u P(q_k) b)
+            *ph = [pk[0] - ph[0], pk[1] - ph[1]];
+        }
+        self.before_kick_at = Some(self.k);
+        Ok(())
+    }
+
+    /// (q_k, p̂_k), the state at t_k with the momentum of the step into t_k taken with zero
+    /// control in its second half-kick (type docs), if [`Plant::update_state_before_kick`]
+    /// computed it at this step; `None` at k = 0 and for a reaction-force tip. It does not
+    /// depend on the control set at t_k.
+    pub fn state_before_kick(&self) -> Option<&State<D, 2>> {
+        (self.before_kick_at == Some(self.k)).then_some(&self.before_kick)
     }
 
     /// The model.

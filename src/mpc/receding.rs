@@ -13,7 +13,9 @@ pub enum Horizon {
     /// A fixed horizon (s), a whole number of control intervals.
     Seconds(f64),
     /// To the end of the run t_N (the horizon shrinks by one interval per decision): with a
-    /// perfect model this reproduces the open-loop optimum (principle of optimality).
+    /// perfect model this reproduces the open-loop optimum (principle of optimality; to the
+    /// solver's tolerance, since each re-plan starts before the control's half-kick and is
+    /// exactly the tail of the run, [`crate::mpc`] "The start of a horizon").
     ToEnd,
 }
 
@@ -21,14 +23,14 @@ pub enum Horizon {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MpcOptions {
     /// The horizon. Default 3 s. Measured on `mpc_riser` (its current's steady drag bends the
-    /// riser slowly, through the drag's long time constant): closed-loop c_sum 37909 with 2 s,
-    /// 9275 with 3 s, 7593 with 4 s, 7469 with 5 s, at mean re-plan costs of 1 : 2.0 : 2.6 :
+    /// riser slowly, through the drag's long time constant): closed-loop c_sum 38363 with 2 s,
+    /// 9292 with 3 s, 7592 with 4 s, 7469 with 5 s, at mean re-plan costs of 1 : 2.0 : 2.6 :
     /// 2.7 (loaded 2-core machine); 2 s is myopic there (below the best constant force only by
-    /// 2.5×, 3 s by 10×), beyond 3 s the gain is small.
+    /// 2.4×, 3 s by 10×), beyond 3 s the gain is small.
     pub horizon: Horizon,
     /// Gauss-Newton iterations per re-plan (the real-time iteration budget). Default 1: from
-    /// the shifted plan one iteration is as good as two on `mpc_riser` (c_sum 0.137 and 0.136
-    /// over 10 s) at half the cost.
+    /// the shifted plan one iteration is as good as two on `mpc_riser` (its first 10 s: c_sum
+    /// 7707 and 7674, 0.4 % apart) at half the cost.
     pub iterations: usize,
     /// Iterations of the first plan (cold, at t = 0 from the beam at rest). Default 50.
     pub first_iterations: usize,
@@ -178,7 +180,12 @@ impl Mpc {
                 ),
             ));
         }
-        template.clone().starting_from(obs.state.clone(), obs.t)
+        // The force decided now completes the half-kick of the step into t_k: plan from the
+        // state before it (exact: the plan's θ₀ acts on both sides of t_k as in the plant).
+        match obs.state_before_kick {
+            Some(hat) => template.clone().starting_before_kick(hat.clone(), obs.t),
+            None => template.clone().starting_from(obs.state.clone(), obs.t),
+        }
     }
 
     /// The pieces of the horizon at `obs`.
@@ -237,10 +244,6 @@ impl Controller for Mpc {
         self.last = Some(r);
         self.decisions += 1;
         Ok(self.plan[0])
-    }
-
-    fn predicted(&self) -> Option<f64> {
-        (self.options.warm_start && self.plan.len() > 1).then(|| self.plan[1])
     }
 
     fn last_iterations(&self) -> Option<usize> {

@@ -62,7 +62,10 @@
 //!   the step residual with the terms' Jacobian-vector products) instead of the dual numbers.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
-//!   t₀ + k h, as in the adjoint.
+//!   t₀ + k h, as in the adjoint. With the control's half-kick pending
+//!   ([`ControlProblem::starting_before_kick`], the given momentum is p̂₀) stage 0 applies
+//!   p₀ = p̂₀ − (h/2) u₀ P(q₀) b like every later stage ([`stage`]), so B₀ and the costate
+//!   gradient carry it (tests/start.rs: equal to the adjoint's to 10⁻¹⁴).
 //!
 //! # Measured (2-core machine shared by several builds, `examples/long_horizon.rs`)
 //! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖. The machine was

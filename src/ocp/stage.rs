@@ -14,9 +14,14 @@
 //! where p̂_{k+1} is the momentum of the same step taken with u_{k+1} = 0. The DDP state is
 //! x̂_k = (q_k, p̂_k) and the stage map is
 //! ```text
-//! F_k(x̂_k, u_k):  p_k = p̂_k − (h/2) u_k P(q_k) b   (k ≥ 1; p_0 is the initial momentum),
+//! F_k(x̂_k, u_k):  p_k = p̂_k − (h/2) u_k P(q_k) b   (k ≥ 1, see below for k = 0),
 //!                 (q_{k+1}, p̂_{k+1}) = RATTLE step from (q_k, p_k) with controls (u_k, 0).
 //! ```
+//! At k = 0 the rule depends on the start ([`Start`]): from the straight beam at rest or from a
+//! start whose momentum includes its half-kick ([`StartKick::Included`]) the given momentum is
+//! p_0 itself (x̂_0 = (q_0, p_0), no kick); from a start with the kick pending
+//! ([`StartKick::Pending`]) it is p̂_0 and stage 0 applies the same rule as k ≥ 1, so that B_0
+//! carries the half-kick's −(h/2) P(q_0) b as every other B_k does.
 //! It lies on the same manifold as (q, p), and the costs (M₀ depends on q only) are unchanged,
 //! so the trajectory and the objective are exactly those of [`crate::rattle`]. Without the shift
 //! B_k would depend on u_{k+1} and the Riccati recursion would be wrong, not only slow.
@@ -45,7 +50,7 @@
 //! the step residual, ∂λ/∂θ = −R_λ⁻¹ R_θ (the derivative parts are exact, not iterated). The
 //! real parts are those of the `f64` stage map bit for bit.
 
-use crate::adjoint::Start;
+use crate::adjoint::{Start, StartKick};
 use crate::error::{Error, Result};
 use crate::model::{Chain, Scalar, TipCondition};
 use crate::rattle::{Rattle, State};
@@ -263,6 +268,8 @@ pub(crate) struct Stepper<D> {
     pub rattle: Rattle<D, 2>,
     pub state: State<D, 2>,
     initial: Option<State<D, 2>>,
+    /// Whether stage 0 applies the control's half-kick (a start with [`StartKick::Pending`]).
+    pending: bool,
     proj: Projector<D>,
     pb: Vec<[D; 2]>,
     b: Vec<[f64; 2]>,
@@ -278,6 +285,10 @@ impl<D: Scalar> Stepper<D> {
             rattle,
             state,
             initial: model.start.as_ref().map(|s| s.state.lift()),
+            pending: model
+                .start
+                .as_ref()
+                .is_some_and(|s| s.kick == StartKick::Pending),
             proj: Projector::new(model.n),
             pb: vec![[D::zero(); 2]; model.n],
             b: model.control.clone(),
@@ -303,9 +314,10 @@ impl<D: Scalar> Stepper<D> {
         self.rattle.prepare(st, 0, u0)
     }
 
-    /// x̂_k → x̂_{k+1} = F_k(x̂_k, u_k).
+    /// x̂_k → x̂_{k+1} = F_k(x̂_k, u_k) (with the half-kick p_k = p̂_k − (h/2) u_k P(q_k) b at
+    /// k ≥ 1, and at k = 0 from a start with a pending kick).
     pub fn advance(&mut self, k: usize, u: D) -> Result<()> {
-        if k > 0 {
+        if k > 0 || self.pending {
             self.proj
                 .apply(self.rattle.chain(), &self.state.q, &self.b, k, &mut self.pb)?;
             for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {

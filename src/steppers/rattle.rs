@@ -33,7 +33,7 @@
 //! u = 0 this is exactly the locked beam. The control then needs no potential term: its force lies
 //! along Lᵀ and would be absorbed by the tip multiplier.
 
-use super::{singular, Stepper};
+use super::{refuse_reaction_tip, singular, Stepper};
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
 use crate::model::{e2, Chain, Ctx, DissipativeTerm, Scalar};
@@ -292,6 +292,45 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             .potential_gradient(&state.q, t, u_k, k, &mut self.ws.force)?;
         self.ws.force_ready = true;
         self.ws.mu0_ready = false;
+        Ok(())
+    }
+
+    /// The control's half-kick at q (the part of a step's second half-kick that the control
+    /// u_{k+1} contributes, after the projection):
+    /// `out` = −(h/2) P(q)(u ∂U_q/∂u + u_x ∂U_q/∂u_x), P(q) = I − Ĝᵀ(Ĝ M⁻¹ Ĝᵀ)⁻¹ Ĝ M⁻¹, so
+    /// that a step's p_{k+1} is that of the same step taken with zero control in its second
+    /// half-kick plus this (exactly in exact arithmetic: U_q is affine in the control and the
+    /// projection linear). O(n), no allocation; the cached force and Newton predictor of the
+    /// next step are untouched.
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] (`tip condition`) for the reaction-force tip, whose control
+    /// drives the tip target (eq. 3.2.1) instead of acting as a force term;
+    /// [`Error::SingularSystem`] (reported at step 0).
+    pub fn control_half_kick(
+        &mut self,
+        q: &[[D; DIM]],
+        (u, ux): (D, D),
+        out: &mut [[D; DIM]],
+    ) -> Result<()> {
+        refuse_reaction_tip(&self.chain, "a control half-kick")?;
+        let ws = &mut self.ws;
+        self.chain.control_force(u, ux, &mut ws.a)?;
+        projection_solve(
+            &self.chain,
+            q,
+            &ws.a,
+            D::zero(),
+            &mut ws.tmp,
+            &mut ws.tri,
+            &mut ws.rhs,
+        )
+        .map_err(|zp| singular(0, zp))?;
+        self.chain
+            .constraints()
+            .subtract_transpose(&ws.a, q, &ws.rhs, out);
+        let hh = D::from(-0.5 * self.h);
+        out.iter_mut().flatten().for_each(|x| *x *= hh);
         Ok(())
     }
 

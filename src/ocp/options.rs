@@ -2,7 +2,7 @@
 
 use crate::error::{Error, Result};
 
-/// Options of [`solve`]. Build with struct update syntax or [`OcpOptions::with_bound`].
+/// Options of [`solve`](super::solve). Build with struct update syntax or [`OcpOptions::with_bound`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct OcpOptions {
     /// Lower bound on every θ (force, N). Default −∞.
@@ -161,7 +161,7 @@ pub struct IterationRecord {
     pub regularisation: f64,
 }
 
-/// The outcome of [`solve`].
+/// The outcome of [`solve`](super::solve).
 #[derive(Clone, Debug, PartialEq)]
 pub struct OcpResult {
     /// J at the result (including the rate penalty, if any).

@@ -59,7 +59,7 @@ use nalgebra::SVector;
 use num_dual::{Derivative, DualSVec64};
 
 /// The point x̂_k of a stage's linearisation: attitudes q, momenta p, rates ω (the tangent
-/// coordinates' velocities) and the Newton start μ of the step ([`JacobianWorkspace::jacobians`]).
+/// coordinates' velocities) and the Newton start μ of the step (`JacobianWorkspace::jacobians`).
 #[derive(Clone, Copy, Debug)]
 pub struct StagePoint<'a> {
     /// qᵢ.

@@ -255,7 +255,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
 
     /// The consistent multiplier of the last prepared state without multipliers: the solution of
     /// Ĝ M⁻¹ Ĝᵀ μ = −Ĝ M⁻¹ U_q(q_k) (the multiplier that keeps Ĝ M⁻¹ p = 0 at rest), which the
-    /// first step starts Newton from and [`crate::simulate`] reports as λ_0 = μ_0.
+    /// first step starts Newton from and [`crate::simulate()`] reports as λ_0 = μ_0.
     pub fn consistent_multiplier(&self) -> &[D] {
         &self.ws.mu0
     }

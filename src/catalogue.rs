@@ -443,7 +443,8 @@ pub fn sheared_current() -> Scene {
 /// tabulated current (depth below the surface, speed, direction from +z toward +x):
 /// 0.3 m/s along +z at the surface, 0.2 m/s at 45° at 5 m depth, 0.1 m/s along +x at the seabed
 /// (10 m), interpolated linearly in depth. Spatial (the current has x components); no control.
-/// h = 0.01 s, N = 1000.
+/// h = 0.01 s, N = 1000. The riser drifts toward the static offset of
+/// `statics::static_equilibrium`, solved in the spatial model (tests/statics_spatial.rs).
 pub fn turning_current() -> Scene {
     known_good(
         riser_chain_without_load()

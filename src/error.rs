@@ -123,12 +123,29 @@ pub enum Error {
         /// The Newton iteration.
         iteration: usize,
     },
+    /// The spatial statics ([`crate::statics::static_equilibrium_spatial`]) of a beam without end
+    /// springs (pinned-pinned): the spatial model locks only the tip's z, so the beam turns
+    /// freely about the z axis through its base and has no isolated equilibrium (its Newton
+    /// matrix is singular). A planar scene's pinned-pinned statics is solved in the planar model.
+    #[error(
+        "static equilibrium in the spatial model: a {} beam ({tip:?} tip: only the tip's z is \
+         held) has no end springs, so it turns freely about the z axis through its base and has \
+         no isolated equilibrium; only a planar scene's {} statics is solved",
+        support_name(*support),
+        support_name(*support)
+    )]
+    StaticNotIsolated {
+        /// The scene's support.
+        support: crate::scene::Support,
+        /// How the model holds the tip.
+        tip: crate::model::TipCondition,
+    },
     /// The planar model (`Chain<_, 2>`) was asked for a scene with a load out of the yz-plane,
     /// which needs the spatial model (`Chain<_, 3>`; [`crate::simulate()`] chooses it itself).
     #[error(
         "`{key}` has an x component, so the scene needs the spatial model (qᵢ ∈ S², \
-         Chain<_, 3>), but this operation uses the planar model: statics, MPC and the Riccati \
-         solver are planar for now (simulation, and gradients and optimisation through \
+         Chain<_, 3>), but this operation uses the planar model: MPC and the Riccati solver are \
+         planar for now (simulation, statics, and gradients and optimisation through \
          `ControlProblem::spatial` or the command line's gradient, optimize and explore, run \
          spatial scenes)"
     )]
@@ -226,6 +243,17 @@ fn newton_advice(h: Option<f64>) -> String {
              stiffness or the loads), or the beam is folding"
         ),
         None => "the loads may be too large for an equilibrium, or the beam is folding".to_string(),
+    }
+}
+
+/// The scene-file name of a support (`support = "pinned-pinned"`).
+fn support_name(support: crate::scene::Support) -> &'static str {
+    use crate::scene::Support;
+    match support {
+        Support::Cantilever => "cantilever",
+        Support::Riser => "riser",
+        Support::FixedFixed => "fixed-fixed",
+        Support::PinnedPinned => "pinned-pinned",
     }
 }
 

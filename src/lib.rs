@@ -118,7 +118,7 @@
 //! - [`mpc`]: closed-loop control: a plant stepped with the applied control, receding-horizon
 //!   control on the [`ocp`] solver (real-time iterations, warm starts, plant/model mismatch),
 //!   and the baselines (no control, best constant force, tuned PD law on M₀).
-//! - [`statics`]: static equilibrium, solved directly.
+//! - [`statics`]: static equilibrium, solved directly (planar and spatial scenes).
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).
 //!

@@ -1,58 +1,146 @@
-//! Static equilibrium of the planar chain, solved directly (the ground truth a dissipative
-//! simulation must settle to, thesis §2.4.4).
+//! Static equilibrium of the chain, solved directly (the ground truth a dissipative simulation
+//! must settle to, thesis §2.4.4), in the model the scene needs: the planar one (qⱼ ∈ S¹) for a
+//! scene whose loads lie in the y–z plane, the spatial one (qⱼ ∈ S²) for a scene with loads or a
+//! current along x ([`Scene::is_spatial`]), like [`crate::simulate()`].
 //!
-//! The solve is independent of the integrator: in the plane the chain is parametrised by the
-//! absolute angles φⱼ of the pendulums (qⱼ = (cos φⱼ, sin φⱼ) in (y, z)), so the joint angles are
-//! θᵢ = φᵢ − φ_{i−1} (φ₀ = φ_{n+1} = 0) and
+//! The energy and its derivatives come from the model's force terms ([`crate::model::terms`]):
+//! f = ∂U/∂q ([`Chain::potential_gradient`]) and K = ∂²U/∂q² ([`Chain::force_jacobian_product`],
+//! symmetric and block-tridiagonal, so a few products seeded on every third pendulum give all of
+//! it). A current's drag enters as its steady force at rest, F(0) = D P⊙|P|
+//! ([`crate::model::CurrentDrag`]): independent of q, it adds −F(0) to f and nothing to K (the
+//! still-water drag has F(0) = 0). A locked tip (fixed-fixed, pinned-pinned, and the
+//! reaction-force variant at its rest target 0) adds ν l(q) to the energy, with
+//! l(q) = Σ lⱼ e₃ᵀqⱼ the tip's z: the constraint the model imposes (in the spatial model too,
+//! where the tip's x stays free, as in the dynamics); ν is the tip multiplier.
+//!
+//! # Planar: Newton in the absolute angles
+//!
+//! In the plane the chain is parametrised by the absolute angles φⱼ of the pendulums
+//! (qⱼ = (cos φⱼ, sin φⱼ) in (y, z)), so the joint angles are θᵢ = φᵢ − φ_{i−1}
+//! (φ₀ = φ_{n+1} = 0) and
 //! ```text
 //! U(φ) = ½ Σᵢ kᵢ (φᵢ − φ_{i−1})² + Σⱼ lⱼ cⱼ sin φⱼ   [+ ν Σⱼ lⱼ sin φⱼ for a locked tip]
 //! ```
-//! with cⱼ the load coefficient of pendulum j (point loads, gravity and control, eq. 2.2.2/3.1.1),
-//! plus a current's steady drag at rest (see [`static_equilibrium_at`]).
-//! Newton's method on ∇U = 0 (and the tip constraint Σ lⱼ sin φⱼ = 0) has a tridiagonal Hessian
-//! bordered by the constraint. It is solved densely with partial pivoting (nalgebra's LU): for a
-//! pinned-pinned beam the tridiagonal block alone is singular at the straight configuration (the
-//! rigid rotation is removed only by the border), so the pivot-free bordered elimination of
+//! with cⱼ the load coefficient of pendulum j (point loads, gravity and control, eq. 2.2.2/3.1.1).
+//! With tⱼ = ∂qⱼ/∂φⱼ the gradient is ∂U/∂φⱼ = fⱼ·tⱼ and the Hessian
+//! ∂²U/∂φⱼ∂φₖ = tⱼᵀKⱼₖtₖ − δⱼₖ fⱼ·qⱼ (three products of K). Newton's method on ∇U = 0 (and the
+//! tip constraint Σ lⱼ sin φⱼ = 0) has a tridiagonal Hessian bordered by the constraint.
+//!
+//! # Spatial: Newton on the product of spheres
+//!
+//! In the spatial model qⱼ ∈ S² has no global angle chart, so each Newton step works in a local
+//! chart around the current iterate: Tⱼ = (aⱼ, bⱼ) is an orthonormal basis of the tangent plane
+//! of qⱼ (aⱼ the unit vector of the x–qⱼ plane orthogonal to qⱼ, bⱼ = aⱼ × qⱼ: (e₁, e₃) on the
+//! straight beam, and bⱼ the planar tangent tⱼ when qⱼ lies in the y–z plane), with two
+//! coordinates δⱼ ∈ ℝ² per pendulum and the retraction
+//! ```text
+//! qⱼ(δ) = (qⱼ + Tⱼδⱼ) / |qⱼ + Tⱼδⱼ| = qⱼ + Tⱼδⱼ − ½|δⱼ|² qⱼ + O(|δ|³).
+//! ```
+//! Inserting this expansion into the Taylor expansion of U about the iterate,
+//! ```text
+//! U(q(δ)) = U + Σⱼ fⱼ·(qⱼ(δ) − qⱼ) + ½ Σⱼₖ (qⱼ(δ) − qⱼ)ᵀKⱼₖ(qₖ(δ) − qₖ) + O(|δ|³)
+//!         = U + Σⱼ fⱼᵀTⱼδⱼ + ½ Σⱼₖ δⱼᵀTⱼᵀKⱼₖTₖδₖ − ½ Σⱼ (fⱼ·qⱼ)|δⱼ|² + O(|δ|³),
+//! ```
+//! gives the Riemannian gradient and Hessian of U on the product of spheres,
+//! ```text
+//! ∂U/∂δⱼ = Tⱼᵀfⱼ ,    ∂²U/∂δⱼ∂δₖ = TⱼᵀKⱼₖTₖ − δⱼₖ (fⱼ·qⱼ) I₂ ,
+//! ```
+//! the second term the sphere's curvature (the normal component of the force, which the length
+//! constraints carry, bends the chart). In the plane (δⱼ = (0, φ-increment)) this is the planar
+//! Hessian above. With a locked tip f is the Lagrangian's gradient f + ν lⱼ e₃ and the system is
+//! bordered by the constraint row ∂l/∂δⱼ = lⱼ Tⱼᵀe₃. The step solves the (2n (+1))² system
+//! H δ = −∇U (δⱼₖ above is Kronecker's) and retracts, qⱼ ← qⱼ(δ), then re-centres the chart at
+//! the new iterate (new bases Tⱼ). The retraction agrees with the sphere's geodesics to second
+//! order, so this is Newton's method on the manifold and converges quadratically (measured in
+//! tests/statics_spatial.rs: 2 to 6 iterations from the straight beam). K is seeded on the
+//! tangent directions aⱼ and bⱼ of every third pendulum: six products give every block.
+//!
+//! A spatial beam without end springs (pinned-pinned) has no isolated equilibrium: its tip is
+//! locked only in z, so the whole beam turns freely about the z axis through the base. Its
+//! spatial statics is refused ([`Error::StaticNotIsolated`]).
+//!
+//! Both systems are solved densely with partial pivoting (nalgebra's LU): for a pinned-pinned
+//! beam the planar tridiagonal block alone is singular at the straight configuration (the rigid
+//! rotation is removed only by the border), so the pivot-free bordered elimination of
 //! [`crate::tridiag`] does not apply. This is a verification tool, not a hot loop; O(n³) is fine
 //! for the n ≤ a few hundred it is used with.
+
+mod spatial;
 
 use crate::error::{Error, Result};
 use crate::model::{dot, Chain, Ctx, DissipativeTerm, DualScratch};
 use crate::scene::Scene;
-use crate::simulate::scene_controls;
+use crate::simulate::{scene_controls, scene_controls_x};
 use nalgebra::{DMatrix, DVector};
 
+/// Newton iterations before [`Error::StaticNotConverged`].
+const MAX_ITERATIONS: usize = 100;
+
+/// The scaled residual below which Newton stops (gradient over the largest spring constant, and
+/// the tip's z in metres).
+const TOLERANCE: f64 = 1e-14;
+
 /// A static equilibrium of the chain.
+///
+/// A planar solution has x = 0 at every node; `positions` holds (y, z) in both models, so code
+/// written for the planar statics reads a spatial solution's in-plane coordinates unchanged, and
+/// `positions_x` (or [`StaticSolution::positions_xyz`]) adds x.
 #[derive(Clone, Debug, PartialEq)]
 pub struct StaticSolution {
-    /// Absolute pendulum angles φⱼ \[rad\] (from +y toward +z).
+    /// The angle of each pendulum from +y toward +z, atan2(e₃ᵀqⱼ, e₂ᵀqⱼ) \[rad\]: the absolute
+    /// angle φⱼ of the planar chain (for a spatial solution, of qⱼ's projection onto the y–z
+    /// plane; see `attitudes`).
     pub angles: Vec<f64>,
     /// Node positions (y, z) of nodes 1..=n.
     pub positions: Vec<[f64; 2]>,
+    /// Node x coordinates of nodes 1..=n (all 0 for a planar solution).
+    pub positions_x: Vec<f64>,
+    /// The pendulums' unit vectors qⱼ as (x, y, z).
+    pub attitudes: Vec<[f64; 3]>,
+    /// Whether the spatial model (qⱼ ∈ S²) was solved.
+    pub spatial: bool,
     /// The tip multiplier ν (the tip reaction force, thesis sign), 0 for a free tip.
     pub tip_multiplier: f64,
     /// Newton iterations used.
     pub iterations: usize,
-    /// Final max-norm of the gradient residual.
+    /// Final max-norm of the gradient residual (scaled by the largest spring constant).
     pub residual: f64,
+    /// The scaled residual at each Newton iterate, from the straight beam to the solution
+    /// (`iterations + 1` values, the last is `residual`): quadratic convergence shows as
+    /// rₖ₊₁ ≲ C rₖ².
+    pub residuals: Vec<f64>,
+}
+
+impl StaticSolution {
+    /// Node positions (x, y, z) of nodes 1..=n.
+    pub fn positions_xyz(&self) -> Vec<[f64; 3]> {
+        let yz = self.positions.iter().zip(&self.positions_x);
+        yz.map(|(&[y, z], &x)| [x, y, z]).collect()
+    }
 }
 
 /// Solves the static equilibrium of a scene's beam under its loads, as they act at the final time
-/// t_N, with the final control u_N. Errors if Newton does not converge in 100 iterations.
+/// t_N, with the final control (u_{x,N}, u_N), in the model the scene needs (module docs): the
+/// planar one unless [`Scene::is_spatial`].
 ///
-/// The energy and its derivatives come from the model's force terms ([`crate::model::terms`]):
-/// with qⱼ = (cos φⱼ, sin φⱼ) and tⱼ = ∂qⱼ/∂φⱼ, the gradient is ∂U/∂φⱼ = fⱼ·tⱼ (f = ∂U/∂q,
-/// [`Chain::potential_gradient`]) and the Hessian ∂²U/∂φⱼ∂φₖ = tⱼᵀKⱼₖtₖ − δⱼₖ fⱼ·qⱼ (K = ∂²U/∂q²,
-/// [`Chain::force_jacobian_product`], block-tridiagonal, so three products seeded on every third
-/// pendulum give all of it). The tip constraint adds ν Σ lⱼ sin φⱼ.
+/// # Errors
+/// [`Error::StaticNotConverged`] if Newton does not converge in 100 iterations,
+/// [`Error::StaticSingular`], [`Error::Folded`] for an iterate that folds the beam,
+/// [`Error::StaticNotIsolated`] for a spatial pinned-pinned scene, and the scene's errors.
 pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
     let u = *scene_controls(scene).last().unwrap_or(&0.0);
+    let ux = *scene_controls_x(scene).last().unwrap_or(&0.0);
     let t = scene.time.step * scene.time.steps as f64;
-    static_equilibrium_at(scene, t, u)
+    if scene.is_spatial() {
+        static_equilibrium_spatial(scene, t, [ux, u])
+    } else {
+        planar(scene, t, u)
+    }
 }
 
 /// The static equilibrium under the loads as they act at time `t` (time-varying point loads
-/// frozen at t) with the control force `u` at the control node.
+/// frozen at t) with the control force `u` along z at the control node, in the model the scene
+/// needs (a 2-axis control's x component is 0 here: see [`static_equilibrium_spatial`]).
 ///
 /// A current's drag enters as its steady force at rest: ṗ = 0 and p = 0 leave
 /// F(0) = D P⊙|P| ([`crate::model::CurrentDrag`]), a force independent of q, so it adds −F(0) to
@@ -61,45 +149,57 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
 /// # Errors
 /// As [`static_equilibrium`].
 pub fn static_equilibrium_at(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
+    if scene.is_spatial() {
+        static_equilibrium_spatial(scene, t, [0.0, u])
+    } else {
+        planar(scene, t, u)
+    }
+}
+
+/// The static equilibrium in the spatial model (qⱼ ∈ S², Newton on the product of spheres,
+/// module docs) under the loads at time `t` with the control `u` = (u_x, u_z) at the control
+/// node, for any scene: a planar scene gives the planar equilibrium (x = 0) by the other method.
+///
+/// # Errors
+/// As [`static_equilibrium`]; [`Error::StaticNotIsolated`] for a beam without end springs
+/// (pinned-pinned), [`Error::InvalidArgument`] for u_x ≠ 0 in a scene without a control.
+pub fn static_equilibrium_spatial(scene: &Scene, t: f64, u: [f64; 2]) -> Result<StaticSolution> {
+    spatial::solve(scene, t, u)
+}
+
+/// The largest spring constant (at least 1): the scale of the gradient residual.
+fn residual_scale(springs: &[f64]) -> f64 {
+    springs.iter().fold(0.0f64, |a, &b| a.max(b)).max(1.0)
+}
+
+/// Appends the scaled residual max |rhs[..m]| / scale (and |rhs[m]|, the tip's z, if present) to
+/// `history` and returns it, `None` if it is not finite.
+fn record_residual(rhs: &[f64], m: usize, scale: f64, history: &mut Vec<f64>) -> Option<f64> {
+    let r = rhs[..m].iter().fold(0.0f64, |a, g| a.max(g.abs() / scale));
+    let r = rhs[m..].iter().fold(r, |a, c| a.max(c.abs()));
+    history.push(r);
+    r.is_finite().then_some(r)
+}
+
+/// The planar solve (module docs), Newton in the absolute angles.
+fn planar(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
     let chain = Chain::<f64, 2>::from_scene(scene)?;
     let n = chain.n();
     let bordered = chain.has_tip_constraint();
-    let l = chain.lengths().to_vec();
     let mut phi = vec![0.0f64; n];
     let mut nu = 0.0f64;
     let mut rhs = vec![0.0; n + usize::from(bordered)];
-    let mut last = f64::INFINITY;
-    let scale = chain
-        .springs()
-        .iter()
-        .fold(0.0f64, |a, &b| a.max(b))
-        .max(1.0);
+    let mut residuals = Vec::new();
+    let scale = residual_scale(chain.springs());
     let mut work = Work::new(n);
-    for it in 0..100 {
+    for it in 0..MAX_ITERATIONS {
         let a = work.newton_system(&chain, (&phi, nu), (t, u), &mut rhs)?;
-        let mut rmax = rhs[..n].iter().fold(0.0f64, |m, g| m.max(g.abs() / scale));
-        if bordered {
-            rmax = rmax.max(rhs[n].abs());
+        let r = record_residual(&rhs, n, scale, &mut residuals);
+        if r.is_some_and(|r| r < TOLERANCE) {
+            return Ok(planar_solution(&chain, phi, nu, residuals));
         }
-        last = rmax;
-        if !rmax.is_finite() {
+        if r.is_none() {
             break;
-        }
-        if rmax < 1e-14 {
-            let mut positions = Vec::with_capacity(n);
-            let (mut y, mut z) = (0.0, 0.0);
-            for j in 0..n {
-                y += l[j] * phi[j].cos();
-                z += l[j] * phi[j].sin();
-                positions.push([y, z]);
-            }
-            return Ok(StaticSolution {
-                angles: phi,
-                positions,
-                tip_multiplier: nu,
-                iterations: it,
-                residual: rmax,
-            });
         }
         let sol = a
             .lu()
@@ -113,9 +213,37 @@ pub fn static_equilibrium_at(scene: &Scene, t: f64, u: f64) -> Result<StaticSolu
         }
     }
     Err(Error::StaticNotConverged {
-        iterations: 100,
-        residual: last,
+        iterations: MAX_ITERATIONS,
+        residual: residuals.last().copied().unwrap_or(f64::NAN),
     })
+}
+
+/// The converged planar iterate as a [`StaticSolution`].
+fn planar_solution(
+    chain: &Chain<f64, 2>,
+    phi: Vec<f64>,
+    nu: f64,
+    residuals: Vec<f64>,
+) -> StaticSolution {
+    let l = chain.lengths();
+    let mut positions = Vec::with_capacity(phi.len());
+    let (mut y, mut z) = (0.0, 0.0);
+    for (lj, p) in l.iter().zip(&phi) {
+        y += lj * p.cos();
+        z += lj * p.sin();
+        positions.push([y, z]);
+    }
+    StaticSolution {
+        attitudes: phi.iter().map(|p| [0.0, p.cos(), p.sin()]).collect(),
+        positions_x: vec![0.0; phi.len()],
+        angles: phi,
+        positions,
+        spatial: false,
+        tip_multiplier: nu,
+        iterations: residuals.len() - 1,
+        residual: residuals.last().copied().unwrap_or(0.0),
+        residuals,
+    }
 }
 
 /// Buffers of the static Newton iteration.

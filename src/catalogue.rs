@@ -277,7 +277,7 @@ pub fn long_horizon() -> Scene {
 /// with F = 2 N at node 5 at 45° between x and z, `force = [√2, √2]`, h = 0.01 s, N = 1000
 /// (t ∈ [0, 10] s). Spatial: [`crate::simulate()`] runs the spatial model, and by the model's
 /// rotational symmetry about y the deflection is the in-plane one of [`riser`]`(5)`'s load turned
-/// by 45° (tests/loads.rs). No control (controls act along z only for now).
+/// by 45° (tests/loads.rs). No control (a 2-axis control on the same load: [`oblique_control`]).
 pub fn oblique_riser() -> Scene {
     let f = std::f64::consts::SQRT_2;
     known_good(
@@ -403,7 +403,7 @@ pub fn wave_series_rows() -> Vec<[f64; 3]> {
 /// A measured-style load history (issue 13): [`wave_riser`]'s riser and drag with the load at
 /// node 5 read from the time series `wave_series.csv` ([`wave_series_rows`]: an oblique sea of two
 /// wave components, so the scene is spatial), ramped in over 8 s, N = 3200 (t ∈ [0, 32] s). No
-/// control (controls act along z only for now).
+/// control (2-axis controls: [`oblique_control`]).
 ///
 /// The series' file name is relative to the scene file (examples/scenes/wave_series.csv).
 pub fn wave_series() -> Scene {

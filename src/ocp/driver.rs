@@ -3,6 +3,34 @@
 
 use super::*;
 
+/// The running state of one [`Solver::solve`].
+struct Progress {
+    /// J at the (projected) start.
+    j0: f64,
+    /// Relative proximal weight μ/mean(Q_uu).
+    mu: f64,
+    /// Accepted steps.
+    iterations: usize,
+    /// Consecutive accepted steps below J's round-off, and the projected gradient they are
+    /// measured against.
+    roundoff_steps: usize,
+    roundoff_pg: f64,
+    history: Vec<IterationRecord>,
+    /// ‖∇J(θ₀)‖ (set by the first gradient).
+    g0: Option<f64>,
+    /// The projected gradient of the last evaluation.
+    last_pg: f64,
+}
+
+/// The step the line search accepted.
+struct Accepted {
+    alpha: f64,
+    /// Taken in the round-off regime (the model's decrease below J's resolution).
+    roundoff: bool,
+    /// Actual over predicted decrease.
+    ratio: f64,
+}
+
 impl Solver {
     /// Runs the solver from θ₀ (projected onto the box): Gauss-Newton SQP iterations whose
     /// box-constrained QP is solved by Riccati-based projected Newton, globalised by closed-loop
@@ -10,163 +38,218 @@ impl Solver {
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0, 0);
-        let j0 = self.set_point(theta0)?;
-        let opts = self.opts.clone();
-        let (lo, hi) = (opts.lower, opts.upper);
-        let in_memory = self.block >= self.steps;
-        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
-        let mut mu = 0.0;
-        let mut iterations = 0;
-        let mut roundoff_steps = 0;
-        let mut roundoff_pg = f64::INFINITY;
-        let mut history = Vec::new();
-        let mut g0 = None;
-        let mut last_pg = f64::INFINITY;
-        let termination = 'outer: loop {
-            if iterations > 0 && iterations >= opts.max_iters && !opts.final_gradient {
-                break Termination::Budget;
-            }
-            // The exact gradient at the nominal (costate sweep) and the convergence test.
-            self.costate()?;
-            let pg = self.projected_norm();
-            last_pg = pg;
-            let gref = *g0
-                .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
-            if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
-                break Termination::Converged;
-            }
-            if iterations >= opts.max_iters {
-                break Termination::MaxIterations;
-            }
-            self.gtrue.copy_from_slice(&self.riccati.grad);
-            // The step: the box-constrained QP of the Gauss-Newton model, solved to a relative
-            // accuracy η = min(0.1, √(‖pg‖/‖g₀‖)) (inexact Newton with a vanishing forcing
-            // term); without every Jacobian in memory, one Riccati pass on the ε-active set.
-            let jbar = self.nominal.cost;
-            let (d1, d2) = loop {
-                self.prox = mu * self.quu_scale;
-                if in_memory {
-                    let eta = (pg / gref).sqrt().min(0.1);
-                    let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
-                    let tol = (eta * pg).max(0.1 * target);
-                    let q = match self.warm_qp(tol)? {
-                        Some(q) => Some(q),
-                        None => self.solve_qp(tol)?,
-                    };
-                    if let Some(q) = q {
-                        let a: f64 = (0..=self.steps)
-                            .filter(|&k| self.free[k])
-                            .map(|k| self.gtrue[k] * self.dv[k])
-                            .sum();
-                        break (a, (q - jbar) - a);
-                    }
-                } else {
-                    self.set_active((1e-3 * width).min(pg));
-                    if self.sweep(true)? {
-                        self.ff_out.copy_from_slice(&self.riccati.ff);
-                        break (self.riccati.d1, self.riccati.d2);
-                    }
-                }
-                mu = (mu * 10.0).max(MU_MIN);
-                if mu > opts.max_regularisation {
-                    break 'outer Termination::RegularisationLimit;
-                }
-            };
-            // Line search on closed-loop rollouts of the simulator: α = 1 first, then the
-            // minimiser of the quadratic through J̄, the slope d1 and J(α), kept in [α/10, α/2].
-            let jscale = jbar.abs().max(1e-6 * j0.abs());
-            let tiny = ROUNDOFF * jscale;
-            let mut accepted = None;
-            let mut alpha = 1.0;
-            for _ in 0..opts.backtracks {
-                let dj = alpha * d1 + alpha * alpha * d2;
-                let fb = Feedback {
-                    nominal: &self.nominal,
-                    gain: &self.riccati.gain,
-                    ff: &self.ff_out,
-                    alpha,
-                    nz: self.nz,
-                };
-                self.counts.0 += 1;
-                let ok = rollout(
-                    (&self.model, &self.cost),
-                    &mut self.stepper,
-                    &self.free,
-                    (lo, hi),
-                    Some(&fb),
-                    &mut self.trial,
-                    &mut self.scratch,
-                )
-                .is_ok();
-                let mut next = 0.5 * alpha;
-                if ok {
-                    let jt = self.trial.cost;
-                    if -dj <= tiny {
-                        // Round-off regime: the model's decrease is not resolvable in J; take
-                        // the step unless J rises beyond its round-off.
-                        if jt <= jbar + NOISE * jscale {
-                            accepted = Some((alpha, true, 1.0));
-                            break;
-                        }
-                    } else {
-                        let ratio = (jbar - jt) / (-dj);
-                        if ratio >= opts.armijo {
-                            accepted = Some((alpha, false, ratio));
-                            break;
-                        }
-                        let b = (jt - jbar - alpha * d1) / (alpha * alpha);
-                        if b > 0.0 && d1 < 0.0 {
-                            next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
-                        }
-                    }
-                }
-                alpha = next;
-            }
-            match accepted {
-                Some((alpha, roundoff, ratio)) => {
-                    std::mem::swap(&mut self.nominal, &mut self.trial);
-                    self.jac_range = None;
-                    iterations += 1;
-                    history.push(IterationRecord {
-                        objective: self.nominal.cost,
-                        projected_gradient_norm: pg,
-                        alpha,
-                        regularisation: mu,
-                    });
-                    if roundoff {
-                        // Below J's resolution only the projected gradient shows progress: stop
-                        // when it has not fallen by 10 % over several such steps.
-                        if roundoff_steps == 0 || pg < 0.9 * roundoff_pg {
-                            roundoff_steps = 0;
-                            roundoff_pg = pg;
-                        }
-                        roundoff_steps += 1;
-                        if roundoff_steps > MAX_ROUNDOFF_STEPS {
-                            self.costate()?;
-                            let pg = self.projected_norm();
-                            if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
-                                break Termination::Converged;
-                            }
-                            break Termination::RoundOff;
-                        }
-                    } else {
-                        roundoff_steps = 0;
-                    }
-                    // Levenberg-Marquardt schedule on the agreement of J with its model.
-                    if alpha >= 1.0 && ratio > 0.75 {
-                        mu = if mu * 0.25 < MU_MIN { 0.0 } else { mu * 0.25 };
-                    } else if alpha < 1.0 || ratio < 0.25 {
-                        mu = (mu * 4.0).max(MU_MIN);
-                    }
-                }
-                None => {
-                    mu = (mu * 10.0).max(MU_MIN);
-                    if mu > opts.max_regularisation {
-                        break Termination::RegularisationLimit;
-                    }
-                }
+        let mut pr = Progress {
+            j0: self.set_point(theta0)?,
+            mu: 0.0,
+            iterations: 0,
+            roundoff_steps: 0,
+            roundoff_pg: f64::INFINITY,
+            history: Vec::new(),
+            g0: None,
+            last_pg: f64::INFINITY,
+        };
+        let termination = loop {
+            if let Some(t) = self.iterate(&mut pr)? {
+                break t;
             }
         };
+        Ok(self.report(termination, pr, t0))
+    }
+
+    /// One iteration: the exact gradient and the stopping tests, the step of the Gauss-Newton
+    /// model, the line search and the regularisation schedule. `Some` ends the run.
+    fn iterate(&mut self, pr: &mut Progress) -> Result<Option<Termination>> {
+        let opts = self.opts.clone();
+        if pr.iterations > 0 && pr.iterations >= opts.max_iters && !opts.final_gradient {
+            return Ok(Some(Termination::Budget));
+        }
+        // The exact gradient at the nominal (costate sweep) and the convergence test.
+        self.costate()?;
+        let pg = self.projected_norm();
+        pr.last_pg = pg;
+        let gref = *pr
+            .g0
+            .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
+        let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
+        if pg <= target {
+            return Ok(Some(Termination::Converged));
+        }
+        if pr.iterations >= opts.max_iters {
+            return Ok(Some(Termination::MaxIterations));
+        }
+        self.gtrue.copy_from_slice(&self.riccati.grad);
+        let jbar = self.nominal.cost;
+        let Some(model) = self.model_step(pr, (pg, gref))? else {
+            return Ok(Some(Termination::RegularisationLimit));
+        };
+        match self.backtrack(jbar, pr.j0, model) {
+            Some(acc) => self.accept(pr, acc, (pg, target)),
+            None => {
+                pr.mu = (pr.mu * 10.0).max(MU_MIN);
+                Ok((pr.mu > opts.max_regularisation).then_some(Termination::RegularisationLimit))
+            }
+        }
+    }
+
+    /// The step: the box-constrained QP of the Gauss-Newton model, solved to a relative
+    /// accuracy η = min(0.1, √(‖pg‖/‖g₀‖)) (inexact Newton with a vanishing forcing term);
+    /// without every Jacobian in memory, one Riccati pass on the ε-active set. Raises μ until
+    /// the model is solvable; returns the predicted change ΔJ(α) = α d1 + α² d2 as (d1, d2), or
+    /// `None` with μ beyond its limit.
+    fn model_step(
+        &mut self,
+        pr: &mut Progress,
+        (pg, gref): (f64, f64),
+    ) -> Result<Option<(f64, f64)>> {
+        let opts = self.opts.clone();
+        let (lo, hi) = (opts.lower, opts.upper);
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
+        let jbar = self.nominal.cost;
+        loop {
+            self.prox = pr.mu * self.quu_scale;
+            if self.block >= self.steps {
+                let eta = (pg / gref).sqrt().min(0.1);
+                let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
+                let tol = (eta * pg).max(0.1 * target);
+                let q = match self.warm_qp(tol)? {
+                    Some(q) => Some(q),
+                    None => self.solve_qp(tol)?,
+                };
+                if let Some(q) = q {
+                    let a: f64 = (0..=self.steps)
+                        .filter(|&k| self.free[k])
+                        .map(|k| self.gtrue[k] * self.dv[k])
+                        .sum();
+                    return Ok(Some((a, (q - jbar) - a)));
+                }
+            } else {
+                self.set_active((1e-3 * width).min(pg));
+                if self.sweep(true)? {
+                    self.ff_out.copy_from_slice(&self.riccati.ff);
+                    return Ok(Some((self.riccati.d1, self.riccati.d2)));
+                }
+            }
+            pr.mu = (pr.mu * 10.0).max(MU_MIN);
+            if pr.mu > opts.max_regularisation {
+                return Ok(None);
+            }
+        }
+    }
+
+    /// Line search on closed-loop rollouts of the simulator into `self.trial`: α = 1 first,
+    /// then the minimiser of the quadratic through J̄, the slope d1 and J(α), kept in
+    /// [α/10, α/2]; accepted when J̄ − J(α) ≥ c·(−ΔJ(α)), or, where −ΔJ is below J's round-off,
+    /// when J does not rise beyond it.
+    fn backtrack(&mut self, jbar: f64, j0: f64, (d1, d2): (f64, f64)) -> Option<Accepted> {
+        let jscale = jbar.abs().max(1e-6 * j0.abs());
+        let tiny = ROUNDOFF * jscale;
+        let mut alpha = 1.0;
+        for _ in 0..self.opts.backtracks {
+            let dj = alpha * d1 + alpha * alpha * d2;
+            let mut next = 0.5 * alpha;
+            if self.trial_rollout(alpha) {
+                let jt = self.trial.cost;
+                if -dj <= tiny {
+                    // Round-off regime: the model's decrease is not resolvable in J; take the
+                    // step unless J rises beyond its round-off.
+                    if jt <= jbar + NOISE * jscale {
+                        return Some(Accepted {
+                            alpha,
+                            roundoff: true,
+                            ratio: 1.0,
+                        });
+                    }
+                } else {
+                    let ratio = (jbar - jt) / (-dj);
+                    if ratio >= self.opts.armijo {
+                        return Some(Accepted {
+                            alpha,
+                            roundoff: false,
+                            ratio,
+                        });
+                    }
+                    let b = (jt - jbar - alpha * d1) / (alpha * alpha);
+                    if b > 0.0 && d1 < 0.0 {
+                        next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
+                    }
+                }
+            }
+            alpha = next;
+        }
+        None
+    }
+
+    /// The closed-loop rollout u_k = clamp(ū_k + α k_k + K_k δz_k) into `self.trial`; `false`
+    /// if the simulation failed.
+    fn trial_rollout(&mut self, alpha: f64) -> bool {
+        let fb = Feedback {
+            nominal: &self.nominal,
+            gain: &self.riccati.gain,
+            ff: &self.ff_out,
+            alpha,
+            nz: self.nz,
+        };
+        self.counts.0 += 1;
+        rollout(
+            (&self.model, &self.cost),
+            &mut self.stepper,
+            &self.free,
+            (self.opts.lower, self.opts.upper),
+            Some(&fb),
+            &mut self.trial,
+            &mut self.scratch,
+        )
+        .is_ok()
+    }
+
+    /// Takes the accepted step: the trial becomes the nominal, the history grows, the
+    /// round-off stop is checked and μ follows the Levenberg-Marquardt schedule on the agreement
+    /// of J with its model. `Some` ends the run.
+    fn accept(
+        &mut self,
+        pr: &mut Progress,
+        acc: Accepted,
+        (pg, target): (f64, f64),
+    ) -> Result<Option<Termination>> {
+        std::mem::swap(&mut self.nominal, &mut self.trial);
+        self.jac_range = None;
+        pr.iterations += 1;
+        pr.history.push(IterationRecord {
+            objective: self.nominal.cost,
+            projected_gradient_norm: pg,
+            alpha: acc.alpha,
+            regularisation: pr.mu,
+        });
+        if acc.roundoff {
+            // Below J's resolution only the projected gradient shows progress: stop when it has
+            // not fallen by 10 % over several such steps.
+            if pr.roundoff_steps == 0 || pg < 0.9 * pr.roundoff_pg {
+                pr.roundoff_steps = 0;
+                pr.roundoff_pg = pg;
+            }
+            pr.roundoff_steps += 1;
+            if pr.roundoff_steps > MAX_ROUNDOFF_STEPS {
+                self.costate()?;
+                return Ok(Some(if self.projected_norm() <= target {
+                    Termination::Converged
+                } else {
+                    Termination::RoundOff
+                }));
+            }
+        } else {
+            pr.roundoff_steps = 0;
+        }
+        let mu = pr.mu;
+        if acc.alpha >= 1.0 && acc.ratio > 0.75 {
+            pr.mu = if mu * 0.25 < MU_MIN { 0.0 } else { mu * 0.25 };
+        } else if acc.alpha < 1.0 || acc.ratio < 0.25 {
+            pr.mu = (mu * 4.0).max(MU_MIN);
+        }
+        Ok(None)
+    }
+
+    /// The result at the final nominal.
+    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
         // The true gradient at the final nominal (the QP iterations overwrite the costates).
         let stale = termination == Termination::Budget;
         if termination == Termination::RegularisationLimit || stale {
@@ -179,33 +262,34 @@ impl Solver {
         let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
         // With the budget spent (no final gradient), the measure of the last evaluation.
         let pg = if stale {
-            last_pg
+            pr.last_pg
         } else {
             self.projected_norm()
         };
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
         let active_bounds = theta
             .iter()
             .enumerate()
             .filter(|(_, &t)| t <= lo || t >= hi)
             .map(|(i, _)| i)
             .collect();
-        Ok(OcpResult {
+        OcpResult {
             objective: self.nominal.cost,
-            initial_objective: j0,
+            initial_objective: pr.j0,
             controls: self.nominal.u.clone(),
             theta,
             gradient_norm: gn,
             projected_gradient_norm: pg,
-            initial_gradient_norm: g0.unwrap_or(gn),
+            initial_gradient_norm: pr.g0.unwrap_or(gn),
             active_bounds,
-            iterations,
+            iterations: pr.iterations,
             rollouts: self.counts.0,
             jacobian_passes: self.counts.1,
             backward_passes: self.counts.2,
             seconds: t0.elapsed().as_secs_f64(),
             converged: termination == Termination::Converged,
             termination,
-            history,
-        })
+            history: pr.history,
+        }
     }
 }

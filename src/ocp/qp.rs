@@ -108,11 +108,7 @@ impl Solver {
         if !(q_plain.is_finite() && self.projected_norm() <= tol) {
             return Ok(None);
         }
-        let nz = self.nz;
-        for k in 0..=self.steps {
-            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-            self.ff_out[k] = self.dv[k] - dot(g, &self.dz[k * nz..(k + 1) * nz]);
-        }
+        self.store_feedforward();
         Ok(Some(q_plain))
     }
 
@@ -127,12 +123,57 @@ impl Solver {
     /// their large barrier curvature). Returns the model value without the proximal term, or
     /// `None` if a pass broke down.
     pub(super) fn solve_qp(&mut self, tol: f64) -> Result<Option<f64>> {
+        self.interior_start()?;
+        let steps = self.steps;
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let nb = (0..=steps).filter(|&k| self.free[k]).count()
+            * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
+        let mut q_plain = self.nominal.cost;
+        let mut sigma = 0.1;
+        for it in 0..MAX_QP_ITERS {
+            if it > 0 {
+                self.sweep(false)?;
+            }
+            let pg = self.projected_norm();
+            let gap = self.complementarity();
+            let mean_gap = if nb > 0 { gap / nb as f64 } else { 0.0 };
+            // Converged, or at the floating-point floor of the complementarity.
+            if (it > 0 && pg <= tol) || !(mean_gap.is_finite()) || (nb > 0 && mean_gap < 1e-280) {
+                break;
+            }
+            let tau = sigma * mean_gap;
+            self.barrier_terms(tau);
+            self.barrier = true;
+            let ok = self.sweep(true);
+            self.barrier = false;
+            if !ok? {
+                return Ok(None);
+            }
+            self.linear_rollout(1.0, Arc::Direction);
+            let (ap, ad) = self.fraction_to_boundary(tau);
+            let (_, qp) = self.linear_rollout(ap, Arc::ClosedLoop);
+            q_plain = qp;
+            std::mem::swap(&mut self.dv, &mut self.dv_t);
+            std::mem::swap(&mut self.dz, &mut self.dz_t);
+            self.step_multipliers(ad);
+            sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
+        }
+        if !(q_plain.is_finite() && self.dv.iter().chain(&self.dz).all(|x| x.is_finite())) {
+            return Ok(None);
+        }
+        self.snap_to_bounds();
+        self.store_feedforward();
+        Ok(Some(q_plain))
+    }
+
+    /// The interior point's start: the nominal moved 1 % of the box width inside (strictly
+    /// interior), its linearised rollout, the model gradient there (one Riccati sweep) and the
+    /// bound multipliers z = z′ = max |g| (0 for an infinite bound).
+    fn interior_start(&mut self) -> Result<()> {
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
-        let steps = self.steps;
-        // A strictly interior start: the nominal moved 1 % of the box width inside.
         let kappa = 1e-2 * width;
-        for k in 0..=steps {
+        for k in 0..=self.steps {
             let u = self.nominal.u[k];
             self.dir[k] = if self.free[k] {
                 let (l, h) = (lo - u, hi - u);
@@ -163,117 +204,114 @@ impl Solver {
             .iter()
             .fold(0.0f64, |m, g| m.max(g.abs()))
             .max(1e-12);
-        for k in 0..=steps {
+        for k in 0..=self.steps {
             self.zl[k] = if lo.is_finite() { gscale } else { 0.0 };
             self.zh[k] = if hi.is_finite() { gscale } else { 0.0 };
         }
-        let nb = (0..=steps).filter(|&k| self.free[k]).count()
-            * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
-        let mut q_plain = self.nominal.cost;
-        let mut sigma = 0.1;
-        for it in 0..MAX_QP_ITERS {
-            if it > 0 {
-                self.sweep(false)?;
-            }
-            let pg = self.projected_norm();
-            let mut gap = 0.0;
-            for k in 0..=steps {
-                if self.free[k] {
-                    let u = self.nominal.u[k] + self.dv[k];
-                    if lo.is_finite() {
-                        gap += (u - lo) * self.zl[k];
-                    }
-                    if hi.is_finite() {
-                        gap += (hi - u) * self.zh[k];
-                    }
-                }
-            }
-            let mean_gap = if nb > 0 { gap / nb as f64 } else { 0.0 };
-            // Converged, or at the floating-point floor of the complementarity.
-            if (it > 0 && pg <= tol) || !(mean_gap.is_finite()) || (nb > 0 && mean_gap < 1e-280) {
-                break;
-            }
-            let tau = sigma * mean_gap;
-            for k in 0..=steps {
-                let (mut qs, mut ls) = (0.0, 0.0);
-                if self.free[k] {
-                    let u = self.nominal.u[k] + self.dv[k];
-                    if lo.is_finite() {
-                        let s = u - lo;
-                        qs += self.zl[k] / s;
-                        ls -= tau / s;
-                    }
-                    if hi.is_finite() {
-                        let s = hi - u;
-                        qs += self.zh[k] / s;
-                        ls += tau / s;
-                    }
-                }
-                self.ip_quu[k] = qs;
-                self.ip_lu[k] = ls;
-            }
-            self.barrier = true;
-            let ok = self.sweep(true);
-            self.barrier = false;
-            if !ok? {
-                return Ok(None);
-            }
-            self.linear_rollout(1.0, Arc::Direction);
-            // Fraction to the boundary.
-            let (mut ap, mut ad) = (1.0f64, 1.0f64);
-            for k in 0..=steps {
-                if !self.free[k] {
-                    continue;
-                }
+        Ok(())
+    }
+
+    /// The complementarity gap Σ (v − lo) z + (hi − v) z′ over the free stages.
+    fn complementarity(&self) -> f64 {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let mut gap = 0.0;
+        for k in 0..=self.steps {
+            if self.free[k] {
                 let u = self.nominal.u[k] + self.dv[k];
-                let dx = self.dir[k];
+                if lo.is_finite() {
+                    gap += (u - lo) * self.zl[k];
+                }
+                if hi.is_finite() {
+                    gap += (hi - u) * self.zh[k];
+                }
+            }
+        }
+        gap
+    }
+
+    /// The barrier terms of the next Riccati pass: Q_uu += z/s + z′/s′, l_u += −τ/s + τ/s′.
+    fn barrier_terms(&mut self, tau: f64) {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        for k in 0..=self.steps {
+            let (mut qs, mut ls) = (0.0, 0.0);
+            if self.free[k] {
+                let u = self.nominal.u[k] + self.dv[k];
                 if lo.is_finite() {
                     let s = u - lo;
-                    if dx < 0.0 {
-                        ap = ap.min(-0.995 * s / dx);
-                    }
-                    let dzl = tau / s - self.zl[k] - self.zl[k] / s * dx;
-                    if dzl < 0.0 {
-                        ad = ad.min(-0.995 * self.zl[k] / dzl);
-                    }
-                    self.dzl[k] = dzl;
+                    qs += self.zl[k] / s;
+                    ls -= tau / s;
                 }
                 if hi.is_finite() {
                     let s = hi - u;
-                    if dx > 0.0 {
-                        ap = ap.min(0.995 * s / dx);
-                    }
-                    let dzh = tau / s - self.zh[k] + self.zh[k] / s * dx;
-                    if dzh < 0.0 {
-                        ad = ad.min(-0.995 * self.zh[k] / dzh);
-                    }
-                    self.dzh[k] = dzh;
+                    qs += self.zh[k] / s;
+                    ls += tau / s;
                 }
             }
-            let (_, qp) = self.linear_rollout(ap, Arc::ClosedLoop);
-            q_plain = qp;
-            std::mem::swap(&mut self.dv, &mut self.dv_t);
-            std::mem::swap(&mut self.dz, &mut self.dz_t);
-            for k in 0..=steps {
-                if self.free[k] {
-                    if lo.is_finite() {
-                        self.zl[k] += ad * self.dzl[k];
-                    }
-                    if hi.is_finite() {
-                        self.zh[k] += ad * self.dzh[k];
-                    }
+            self.ip_quu[k] = qs;
+            self.ip_lu[k] = ls;
+        }
+    }
+
+    /// The multipliers' steps (in `dzl`, `dzh`) and the primal and dual step lengths that keep
+    /// 0.5 % of the distance to the boundary.
+    fn fraction_to_boundary(&mut self, tau: f64) -> (f64, f64) {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let (mut ap, mut ad) = (1.0f64, 1.0f64);
+        for k in 0..=self.steps {
+            if !self.free[k] {
+                continue;
+            }
+            let u = self.nominal.u[k] + self.dv[k];
+            let dx = self.dir[k];
+            if lo.is_finite() {
+                let s = u - lo;
+                if dx < 0.0 {
+                    ap = ap.min(-0.995 * s / dx);
+                }
+                let dzl = tau / s - self.zl[k] - self.zl[k] / s * dx;
+                if dzl < 0.0 {
+                    ad = ad.min(-0.995 * self.zl[k] / dzl);
+                }
+                self.dzl[k] = dzl;
+            }
+            if hi.is_finite() {
+                let s = hi - u;
+                if dx > 0.0 {
+                    ap = ap.min(0.995 * s / dx);
+                }
+                let dzh = tau / s - self.zh[k] + self.zh[k] / s * dx;
+                if dzh < 0.0 {
+                    ad = ad.min(-0.995 * self.zh[k] / dzh);
+                }
+                self.dzh[k] = dzh;
+            }
+        }
+        (ap, ad)
+    }
+
+    /// z += α_d Δz, z′ += α_d Δz′.
+    fn step_multipliers(&mut self, ad: f64) {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        for k in 0..=self.steps {
+            if self.free[k] {
+                if lo.is_finite() {
+                    self.zl[k] += ad * self.dzl[k];
+                }
+                if hi.is_finite() {
+                    self.zh[k] += ad * self.dzh[k];
                 }
             }
-            sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
         }
-        if !(q_plain.is_finite() && self.dv.iter().chain(&self.dz).all(|x| x.is_finite())) {
-            return Ok(None);
-        }
-        // Controls the interior point left within 10⁻⁶ of the box width of a bound whose
-        // multiplier exceeds the slack go exactly onto the bound, without feedback: bounds
-        // are then met with equality, not approached.
+    }
+
+    /// Controls the interior point left within 10⁻⁶ of the box width of a bound whose
+    /// multiplier exceeds the slack go exactly onto the bound, without feedback: bounds are then
+    /// met with equality, not approached.
+    fn snap_to_bounds(&mut self) {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let nz = self.nz;
-        for k in 0..=steps {
+        for k in 0..=self.steps {
             if !self.free[k] {
                 continue;
             }
@@ -291,10 +329,15 @@ impl Solver {
                 self.riccati.gain[k * nz..(k + 1) * nz].fill(0.0);
             }
         }
+    }
+
+    /// The feedforward of the closed-loop rollouts: k_k = δv_k − K_k δz_k, so that
+    /// u_k = ū_k + α k_k + K_k δz_k reproduces the QP's step at α = 1.
+    fn store_feedforward(&mut self) {
+        let nz = self.nz;
         for k in 0..=self.steps {
             let g = &self.riccati.gain[k * nz..(k + 1) * nz];
             self.ff_out[k] = self.dv[k] - dot(g, &self.dz[k * nz..(k + 1) * nz]);
         }
-        Ok(Some(q_plain))
     }
 }

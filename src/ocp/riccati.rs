@@ -119,6 +119,15 @@ pub(crate) struct StageInput<'a> {
     pub b: Option<&'a [f64]>,
 }
 
+/// (Q_u, Q_uu, g) of a stage: the scalar control terms of the recursion and the exact
+/// gradient's entry g = l_u + B̃ᵀν′.
+#[derive(Clone, Copy, Debug)]
+struct QuTerms {
+    qu: f64,
+    quu: f64,
+    g: f64,
+}
+
 /// The backward pass's workspace and results (sized once per problem).
 #[derive(Clone, Debug)]
 pub(crate) struct Riccati {
@@ -250,11 +259,27 @@ impl Riccati {
     /// Returns `false` if the stage's box-QP is unbounded below (its step is then 0; raise
     /// `mu`). The costate and the gradient are computed either way.
     pub fn stage(&mut self, inp: &StageInput<'_>, cost: &StageCost, mu: f64) -> bool {
-        let (nxi, nz, k) = (self.nxi, self.nz, inp.k);
+        let local = self.stage_costs(inp, cost);
+        let q = match (inp.a, inp.b) {
+            (Some(a), Some(b)) => self.propagate(inp, (a, b), local),
+            _ => {
+                self.qx.copy_from_slice(&self.lx);
+                self.nu.copy_from_slice(&self.lx);
+                local
+            }
+        };
+        let bounded = self.gains_and_value(inp, mu, q);
+        self.symmetrise_and_shift();
+        bounded
+    }
+
+    /// The stage cost's derivatives (Gauss-Newton: l_xx = 2c ∇M₀∇M₀ᵀ): l_x into `lx`, l_xx
+    /// into `qxx`, l_ux into `qux`; returns (l_u, l_uu, l_u) as the start of (Q_u, Q_uu, g).
+    fn stage_costs(&mut self, inp: &StageInput<'_>, cost: &StageCost) -> QuTerms {
+        let (nxi, k) = (self.nxi, inp.k);
         let wi = nxi; // index of w when aug = 1
         let c = cost.weight(k);
         let rate = if k > 0 { cost.rate } else { 0.0 };
-        // Stage-cost derivatives.
         self.lx.fill(0.0);
         self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
         let lxx00 = 2.0 * c * inp.dmoment * inp.dmoment;
@@ -282,122 +307,140 @@ impl Riccati {
         if self.aug == 1 {
             self.qux[wi] = lux_w;
         }
-        let (mut qu, mut quu, mut g) = (lu, luu, lu);
-        match (inp.a, inp.b) {
-            (Some(a), Some(b)) => {
-                // Ã and B̃.
-                self.at.fill(0.0);
-                for j in 0..nxi {
-                    self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
-                }
-                if inp.free {
-                    self.bt[..nxi].copy_from_slice(&b[..nxi]);
-                    if self.aug == 1 {
-                        self.bt[wi] = 1.0;
-                    }
-                } else {
-                    for i in 0..nxi {
-                        self.at[(i, wi)] = b[i];
-                    }
-                    self.at[(wi, wi)] = 1.0;
-                }
-                // T = S′Ã;  Q_xx += Ãᵀ T.
-                matmul(
-                    self.t.as_mut(),
-                    Accum::Replace,
-                    self.s_next.as_ref(),
-                    self.at.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                matmul(
-                    self.qxx.as_mut(),
-                    Accum::Add,
-                    self.at.as_ref().transpose(),
-                    self.t.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                // Q_x = l_x + Ãᵀs′, ν = l_x + Ãᵀν′.
-                for j in 0..nz {
-                    let col = self.at.col_as_slice(j);
-                    self.qx[j] = self.lx[j] + dot(col, &self.sv_next);
-                    self.nu[j] = self.lx[j] + dot(col, &self.nu_next);
-                }
-                if inp.free {
-                    // SB = S′B̃, Q_uu, Q_ux = l_ux + ÃᵀSB, Q_u, g.
-                    let (mut bsb, mut bs, mut bnu) = (0.0, 0.0, 0.0);
-                    for i in 0..nz {
-                        // S′ is symmetric: row i = column i.
-                        let x = dot(self.s_next.col_as_slice(i), &self.bt);
-                        self.sb[i] = x;
-                        bsb += self.bt[i] * x;
-                        bs += self.bt[i] * self.sv_next[i];
-                        bnu += self.bt[i] * self.nu_next[i];
-                    }
-                    quu += bsb;
-                    qu += bs;
-                    g += bnu;
-                    for j in 0..nz {
-                        self.qux[j] += dot(self.at.col_as_slice(j), &self.sb);
-                    }
-                }
+        QuTerms {
+            qu: lu,
+            quu: luu,
+            g: lu,
+        }
+    }
+
+    /// The dynamics' part with the augmented Ã, B̃ (held stages: u = w enters Ã): Q_xx += ÃᵀS′Ã,
+    /// Q_x = l_x + Ãᵀs′, ν = l_x + Ãᵀν′ and, at a free stage, Q_uu += B̃ᵀS′B̃, Q_u += B̃ᵀs′,
+    /// g += B̃ᵀν′, Q_ux += B̃ᵀS′Ã.
+    fn propagate(&mut self, inp: &StageInput<'_>, (a, b): (&[f64], &[f64]), q: QuTerms) -> QuTerms {
+        let (nxi, nz) = (self.nxi, self.nz);
+        let wi = nxi;
+        let QuTerms {
+            mut qu,
+            mut quu,
+            mut g,
+        } = q;
+        self.at.fill(0.0);
+        for j in 0..nxi {
+            self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
+        }
+        if inp.free {
+            self.bt[..nxi].copy_from_slice(&b[..nxi]);
+            if self.aug == 1 {
+                self.bt[wi] = 1.0;
             }
-            _ => {
-                self.qx.copy_from_slice(&self.lx);
-                self.nu.copy_from_slice(&self.lx);
+        } else {
+            for i in 0..nxi {
+                self.at[(i, wi)] = b[i];
+            }
+            self.at[(wi, wi)] = 1.0;
+        }
+        // T = S′Ã;  Q_xx += Ãᵀ T.
+        matmul(
+            self.t.as_mut(),
+            Accum::Replace,
+            self.s_next.as_ref(),
+            self.at.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        matmul(
+            self.qxx.as_mut(),
+            Accum::Add,
+            self.at.as_ref().transpose(),
+            self.t.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        for j in 0..nz {
+            let col = self.at.col_as_slice(j);
+            self.qx[j] = self.lx[j] + dot(col, &self.sv_next);
+            self.nu[j] = self.lx[j] + dot(col, &self.nu_next);
+        }
+        if inp.free {
+            // SB = S′B̃ (S′ is symmetric: row i = column i).
+            let (mut bsb, mut bs, mut bnu) = (0.0, 0.0, 0.0);
+            for i in 0..nz {
+                let x = dot(self.s_next.col_as_slice(i), &self.bt);
+                self.sb[i] = x;
+                bsb += self.bt[i] * x;
+                bs += self.bt[i] * self.sv_next[i];
+                bnu += self.bt[i] * self.nu_next[i];
+            }
+            quu += bsb;
+            qu += bs;
+            g += bnu;
+            for j in 0..nz {
+                self.qux[j] += dot(self.at.col_as_slice(j), &self.sb);
             }
         }
-        // Box-QP, gains, value function.
+        QuTerms { qu, quu, g }
+    }
+
+    /// The stage's box-QP, its gains and the value function handed to stage k − 1 (module
+    /// docs: s = Q_x + KᵀQ_uu k + KᵀQ_u + Q_uxᵀk, S = Q_xx + KᵀQ_uu K + KᵀQ_ux + Q_uxᵀK), with
+    /// the proximal weight μ in K, k and S alike. `false` if the QP is unbounded below.
+    fn gains_and_value(&mut self, inp: &StageInput<'_>, mu: f64, q: QuTerms) -> bool {
+        let (nz, k) = (self.nz, inp.k);
+        let QuTerms { qu, mut quu, g } = q;
         let mut bounded = true;
         let gain = &mut self.gain[k * nz..(k + 1) * nz];
         self.s_cur.copy_from(&self.qxx);
         self.sv.copy_from_slice(&self.qx);
-        if inp.free {
-            // The regularisation is a proximal term ½ μ δv² of the model: in K, k and S alike.
-            self.quu_sum += quu.abs();
-            self.quu_count += 1;
-            quu += mu + inp.quu_shift;
-            let qt = quu;
-            // An unbounded stage QP takes no step; the costate sweep goes on (the gradient
-            // does not depend on the model) and the caller raises μ.
-            let sol = solve_scalar(qt, qu, inp.lo, inp.hi).unwrap_or_else(|| {
-                bounded = false;
-                BoxQpStep {
-                    step: 0.0,
-                    clamped: true,
-                }
-            });
-            let kk = sol.step;
-            if sol.clamped {
-                gain.fill(0.0);
-            } else {
-                for (g_, q) in gain.iter_mut().zip(&self.qux) {
-                    *g_ = -q / qt;
-                }
-            }
-            for i in 0..nz {
-                self.sv[i] += gain[i] * (quu * kk + qu) + self.qux[i] * kk;
-            }
-            if !sol.clamped {
-                for j in 0..nz {
-                    let (gj, qj) = (gain[j], self.qux[j]);
-                    let col = self.s_cur.col_as_slice_mut(j);
-                    for i in 0..nz {
-                        col[i] += quu * gain[i] * gj + gain[i] * qj + self.qux[i] * gj;
-                    }
-                }
-            }
-            self.ff[k] = kk;
-            self.grad[k] = g;
-            self.d1 += kk * qu;
-            self.d2 += 0.5 * kk * kk * quu;
-        } else {
+        if !inp.free {
             gain.fill(0.0);
             self.ff[k] = 0.0;
             self.grad[k] = 0.0;
+            return bounded;
         }
-        // Symmetrise S and hand it to stage k − 1.
+        self.quu_sum += quu.abs();
+        self.quu_count += 1;
+        quu += mu + inp.quu_shift;
+        let qt = quu;
+        // An unbounded stage QP takes no step; the costate sweep goes on (the gradient does
+        // not depend on the model) and the caller raises μ.
+        let sol = solve_scalar(qt, qu, inp.lo, inp.hi).unwrap_or_else(|| {
+            bounded = false;
+            BoxQpStep {
+                step: 0.0,
+                clamped: true,
+            }
+        });
+        let kk = sol.step;
+        if sol.clamped {
+            gain.fill(0.0);
+        } else {
+            for (g_, q) in gain.iter_mut().zip(&self.qux) {
+                *g_ = -q / qt;
+            }
+        }
+        for i in 0..nz {
+            self.sv[i] += gain[i] * (quu * kk + qu) + self.qux[i] * kk;
+        }
+        if !sol.clamped {
+            for j in 0..nz {
+                let (gj, qj) = (gain[j], self.qux[j]);
+                let col = self.s_cur.col_as_slice_mut(j);
+                for i in 0..nz {
+                    col[i] += quu * gain[i] * gj + gain[i] * qj + self.qux[i] * gj;
+                }
+            }
+        }
+        self.ff[k] = kk;
+        self.grad[k] = g;
+        self.d1 += kk * qu;
+        self.d2 += 0.5 * kk * kk * quu;
+        bounded
+    }
+
+    /// S ← (S + Sᵀ)/2, and (S, s, ν) become the next stage's (S′, s′, ν′).
+    fn symmetrise_and_shift(&mut self) {
+        let nz = self.nz;
         for i in 0..nz {
             for j in 0..i {
                 let v = 0.5 * (self.s_cur[(i, j)] + self.s_cur[(j, i)]);
@@ -408,6 +451,5 @@ impl Riccati {
         std::mem::swap(&mut self.s_cur, &mut self.s_next);
         std::mem::swap(&mut self.sv, &mut self.sv_next);
         std::mem::swap(&mut self.nu, &mut self.nu_next);
-        bounded
     }
 }

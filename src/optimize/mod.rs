@@ -562,64 +562,26 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
             *adapter.shared.current.borrow_mut() = Some(start.clone());
         }
         let run = supervisor::supervise(&adapter, start, opts, gnorm0)?;
-        let (mut point, mut termination) = (run.point, run.termination);
-        let grad_test =
-            |p: &adapter::Point| supervisor::gradient_test(opts, gnorm0, norm(&p.grad_phi));
-        let mut polished = 0;
-        let mut polish_error = None;
-        if run.polish
-            && problem.hessian().is_some()
-            && grad_test(&point).is_none()
-            && opts.target_cost < point.value
-        {
-            let cap = opts.cg_max_iters.unwrap_or(2 * point.phi.len().max(1));
-            while polished < opts.polish_steps {
-                match polish::polish_step(&adapter, &point, cap) {
-                    Ok(Some(next)) => {
-                        point = next;
-                        polished += 1;
-                    }
-                    Ok(None) => break,
-                    Err(e) => {
-                        polish_error = Some(e);
-                        break;
-                    }
-                }
-                if let Some(message) = relay_iter(&adapter, &point) {
-                    termination = Termination::Observer { message };
-                    break;
-                }
-                if grad_test(&point).is_some() {
-                    break;
-                }
-            }
-            if let (false, Some(t)) = (
-                matches!(termination, Termination::Observer { .. }),
-                grad_test(&point),
-            ) {
-                termination = t;
-            }
+        let mut polish = Polish {
+            point: run.point,
+            termination: run.termination,
+            steps: 0,
+            error: None,
+        };
+        if run.polish && problem.hessian().is_some() {
+            polish.run(&adapter, opts, gnorm0);
         }
+        let Polish {
+            point,
+            mut termination,
+            steps: polished,
+            error: polish_error,
+        } = polish;
         if let Some(e) = adapter.take_error() {
             return Err(e);
         }
         let theta = point.theta.clone();
-        let controls = match problem.controls(&theta) {
-            Some(c) => c?,
-            None => Vec::new(),
-        };
-        if let Some(b) = bounds {
-            if let Some(k) = controls.iter().position(|&u| !b.contains(u)) {
-                return Err(Error::InvalidArgument {
-                    name: "bound",
-                    reason: format!(
-                        "the control map turned bounded parameters into u_{k} = {} outside {}",
-                        controls[k],
-                        b.describe()
-                    ),
-                });
-            }
-        }
+        let controls = checked_controls(problem, &theta, bounds)?;
         if let Some(relay) = adapter.shared.relay.borrow_mut().as_mut() {
             if let Err(e) = relay.finish(&point, &termination) {
                 termination = Termination::Observer {
@@ -652,6 +614,86 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
             method: opts.method,
         })
     }
+}
+
+/// The gradient polish after the supervised run (module docs, "Gradient polish"): up to
+/// `polish_steps` Newton steps on ∇J = 0 while the gradient test is unmet, each shown to the
+/// observers.
+struct Polish {
+    point: adapter::Point,
+    termination: Termination,
+    /// Accepted polish steps.
+    steps: usize,
+    /// The error that stopped the polish early.
+    error: Option<Error>,
+}
+
+impl Polish {
+    fn run<Q: OptimProblem + ?Sized>(
+        &mut self,
+        adapter: &ArgminAdapter<'_, Q>,
+        opts: &OptimOptions,
+        gnorm0: f64,
+    ) {
+        let grad_test =
+            |p: &adapter::Point| supervisor::gradient_test(opts, gnorm0, norm(&p.grad_phi));
+        if !(grad_test(&self.point).is_none() && opts.target_cost < self.point.value) {
+            return;
+        }
+        let cap = opts.cg_max_iters.unwrap_or(2 * self.point.phi.len().max(1));
+        while self.steps < opts.polish_steps {
+            match polish::polish_step(adapter, &self.point, cap) {
+                Ok(Some(next)) => {
+                    self.point = next;
+                    self.steps += 1;
+                }
+                Ok(None) => break,
+                Err(e) => {
+                    self.error = Some(e);
+                    break;
+                }
+            }
+            if let Some(message) = relay_iter(adapter, &self.point) {
+                self.termination = Termination::Observer { message };
+                break;
+            }
+            if grad_test(&self.point).is_some() {
+                break;
+            }
+        }
+        if let (false, Some(t)) = (
+            matches!(self.termination, Termination::Observer { .. }),
+            grad_test(&self.point),
+        ) {
+            self.termination = t;
+        }
+    }
+}
+
+/// The forces u(θ) of a control problem (empty for other problems), checked against the box:
+/// [`Error::InvalidArgument`] (`bound`) if the control map turned bounded θ into forces beyond it.
+fn checked_controls<Q: OptimProblem + ?Sized>(
+    problem: &Q,
+    theta: &[f64],
+    bounds: Option<Bounds>,
+) -> Result<Vec<f64>> {
+    let controls = match problem.controls(theta) {
+        Some(c) => c?,
+        None => Vec::new(),
+    };
+    if let Some(b) = bounds {
+        if let Some(k) = controls.iter().position(|&u| !b.contains(u)) {
+            return Err(Error::InvalidArgument {
+                name: "bound",
+                reason: format!(
+                    "the control map turned bounded parameters into u_{k} = {} outside {}",
+                    controls[k],
+                    b.describe()
+                ),
+            });
+        }
+    }
+    Ok(controls)
 }
 
 /// Shows an accepted polish step to the observers; the message of an observer that stopped.

@@ -12,7 +12,8 @@ use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
 
 pub fn entries() -> Vec<Entry> {
-    vec![Entry {
+    vec![
+    Entry {
         id: "mpc_moment",
         caption: "(beyond the thesis, issue 14) The base bending moment M₀(t) of the riser under \
                   an irregular sea at node 5 in a sheared current, and a control force at the \
@@ -20,7 +21,85 @@ pub fn entries() -> Vec<Entry> {
                   control (3 s horizon, a decision every 0.1 s, 1 Gauss-Newton iteration per \
                   re-plan) with a perfect and with a wrong model; lower panel: the forces.",
         make: fig_mpc,
+    },
+    Entry {
+        id: "mpc_horizon",
+        caption: "(beyond the thesis, issue 14) Speed against accuracy of receding-horizon \
+                  control on the same scene: closed-loop Σ M₀² (log scale) against the mean \
+                  re-plan time, for horizons of 1 to 5 s (a decision every 0.1 s, 1 \
+                  Gauss-Newton iteration per re-plan, perfect model), with the best constant \
+                  force and the tuned PD law as horizontal references.",
+        make: fig_horizon,
     }]
+}
+
+/// Closed-loop c_sum against the mean re-plan time for horizons of 1..5 s (the default 3 s
+/// among them), beside the constant force and the PD law.
+fn fig_horizon(ctx: &Ctx) -> Res<Made> {
+    let mut scene = catalogue::mpc_riser();
+    if ctx.quick {
+        scene.time.steps = 1000;
+    }
+    let (mut constant, _) = ConstantForce::best(&scene, BOUND, EFFORT)?;
+    let constant = run_closed_loop(&scene, INTERVAL, &mut constant)?
+        .summary
+        .c_sum;
+    let tuning = PdTuning::new(&scene, INTERVAL, BOUND, EFFORT)?;
+    let opts = OptimOptions {
+        max_iters: if ctx.quick { 20 } else { 200 },
+        first_step: 0.01,
+        ..OptimOptions::default()
+    };
+    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
+    let pd = run_closed_loop(&scene, INTERVAL, &mut pd)?.summary.c_sum;
+    let horizons: &[f64] = if ctx.quick {
+        &[1.0, 3.0]
+    } else {
+        &[1.0, 2.0, 3.0, 4.0, 5.0]
+    };
+    let mut pts = Vec::new();
+    let mut notes = Vec::new();
+    for &h in horizons {
+        let options = MpcOptions {
+            horizon: Horizon::Seconds(h),
+            effort: EFFORT,
+            ocp: OcpOptions::default().with_bound(BOUND),
+            ..MpcOptions::default()
+        };
+        let r = run_closed_loop(&scene, INTERVAL, &mut Mpc::new(&scene, INTERVAL, options)?)?;
+        let ms = 1e3 * r.summary.mean_replan_seconds;
+        pts.push((ms, r.summary.c_sum));
+        notes.push(format!(
+            "{h} s: Σ M₀² = {:.1} at {ms:.1} ms",
+            r.summary.c_sum
+        ));
+    }
+    let (x0, x1) = (0.0, pts.iter().fold(0.0f64, |m, p| m.max(p.0)) * 1.1);
+    let mut panel = Panel::new(
+        "MPC horizon: accuracy against speed",
+        "mean re-plan [ms]",
+        "Σ M₀²",
+    )
+    .logy()
+    .legend(Legend::UpperRight);
+    panel.push(Series::line("MPC, horizons 1-5 s", pts, color(3)).markers());
+    panel.push(
+        Series::line(
+            "best constant",
+            vec![(x0, constant), (x1, constant)],
+            color(1),
+        )
+        .dashed(),
+    );
+    panel.push(Series::line("tuned PD on M₀", vec![(x0, pd), (x1, pd)], color(2)).dotted());
+    let files = ctx.save(&Figure::single("mpc_horizon", panel))?;
+    Ok(Made {
+        files,
+        note: format!(
+            "{}; best constant {constant:.1}, tuned PD {pd:.1} (timings are this machine's).",
+            notes.join("; ")
+        ),
+    })
 }
 
 const INTERVAL: f64 = 0.1;

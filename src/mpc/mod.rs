@@ -86,17 +86,20 @@
 //!
 //! Re-plan cost (wall clock, load average ≈ 4): mean 18.7 ms, worst 40.9 ms, real-time factor
 //! 5.4 (with the earlier start, load ≈ 3: 18.0 ms, 41.4 ms, 5.6; the start adds one O(n)
-//! projection per rollout) —
-//! worst ≤ the 100 ms interval (real-time capable), the issue's mean ≤ 10 ms not met on this
-//! machine. On the idle machine (`cargo bench --bench mpc`, load ≈ 1.5): one re-plan at
-//! t = 10 s takes 6.8 / 14.7 / 17.5 / 15.8 ms for horizons of 1 / 2 / 3 / 4 s, and the 10 s
+//! projection per rollout): worst ≤ the 100 ms interval (real-time capable), the issue's mean
+//! ≤ 10 ms not met. On the idle machine (`cargo bench --bench mpc`, load ≈ 1.5): one re-plan
+//! at t = 10 s takes 6.8 / 14.7 / 17.5 / 15.8 ms for horizons of 1 / 2 / 3 / 4 s, and the 10 s
 //! closed loop with the 3 s horizon runs at a controller real-time factor of 6.3 (mean re-plan
-//! 16.0 ms, worst 23.5 ms); the whole loop, plant included, 5.2× faster than real time. Each re-plan pays two rollouts, one pass of stage Jacobians by dual numbers (half
-//! of the time, `perf`), about four Riccati passes of the QP and their linear rollouts; the
-//! pass that only served a final convergence test is skipped
-//! ([`OcpOptions::final_gradient`](crate::ocp::OcpOptions::final_gradient)). Horizon against
-//! cost: c_sum 38363 / 9292 / 7592 / 7469 for 2 / 3 / 4 / 5 s at 1 : 2.0 : 2.6 : 2.7 the mean
-//! re-plan time of 2 s (the times measured with the earlier start, [`MpcOptions::horizon`]).
+//! 16.0 ms, worst 23.5 ms); the whole loop, plant included, 5.2× faster than real time. Each
+//! re-plan pays two rollouts, one pass of stage Jacobians by dual numbers (half of the time,
+//! `perf`), about four Riccati passes of the QP and their linear rollouts; the pass that only
+//! served a final convergence test is skipped
+//! ([`OcpOptions::final_gradient`](crate::ocp::OcpOptions::final_gradient)).
+//!
+//! Horizon against cost (`cargo run --release -p paper_figures -- --only mpc_horizon`, idle
+//! machine, 60 s): c_sum 3703102 / 38363 / 9292 / 7592 / 7469 for horizons of 1 / 2 / 3 / 4 /
+//! 5 s at mean re-plan times of 6.5 / 10.5 / 15.2 / 19.7 / 25.7 ms ([`MpcOptions::horizon`]):
+//! 1 s is worse than no MPC at all, 2 s beats the PD law only by 1.4×, 3 s by 5.9×.
 //!
 //! # Example
 //! ```

@@ -23,10 +23,11 @@ pub enum Horizon {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MpcOptions {
     /// The horizon. Default 3 s. Measured on `mpc_riser` (its current's steady drag bends the
-    /// riser slowly, through the drag's long time constant): closed-loop c_sum 38363 with 2 s,
-    /// 9292 with 3 s, 7592 with 4 s, 7469 with 5 s, at mean re-plan costs of 1 : 2.0 : 2.6 :
-    /// 2.7 (loaded 2-core machine); 2 s is myopic there (below the best constant force only by
-    /// 2.4×, 3 s by 10×), beyond 3 s the gain is small.
+    /// riser slowly, through the drag's long time constant; the `mpc_horizon` figure of
+    /// `paper_figures`): closed-loop c_sum 38363 with 2 s, 9292 with 3 s, 7592 with 4 s, 7469
+    /// with 5 s, at mean re-plan times of 10.5, 15.2, 19.7 and 25.7 ms (idle 2-core machine);
+    /// 2 s is myopic there (below the best constant force only by 2.4×, 3 s by 10×), beyond
+    /// 3 s the gain is small.
     pub horizon: Horizon,
     /// Gauss-Newton iterations per re-plan (the real-time iteration budget). Default 1: from
     /// the shifted plan one iteration is as good as two on `mpc_riser` (its first 10 s: c_sum

@@ -5,8 +5,9 @@
 //! - `ocp_parts/*/N`: the parts of one iteration at N = 10³ and 10⁴ — one forward simulation
 //!   (`ControlProblem::value`, the unit), a rollout plus the stage Jacobians plus the costate
 //!   sweep (`set_point` + `gradient`), and one Riccati pass with a linearised rollout
-//!   (`gauss_newton_step`). An iteration is one Jacobian pass plus 5–15 Riccati passes
-//!   (the interior-point QP) plus 1–3 rollouts; the ratios to `forward` are machine-independent.
+//!   (`gauss_newton_step`). An iteration is one Jacobian pass plus a few Riccati passes (the
+//!   warm face or the interior-point QP: 125 passes in the 31 iterations of N = 10³) plus 1–3
+//!   rollouts; the ratios to `forward` are machine-independent.
 //! - `ocp_solve/riccati/1000`: time to the optimum (projected gradient ≤ 10⁻⁸‖g₀‖) from u = 0.
 //!   With `OCP_BENCH_LONG=1` also N = 10⁴ (and 10⁵ with `OCP_BENCH_LONG=2`), and L-BFGS and the
 //!   trust region at N = 10³ (minutes: L-BFGS stops at 5000 iterations, the trust region

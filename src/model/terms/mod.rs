@@ -279,16 +279,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
         if !self.depends_on_control() {
             return Ok(D::zero());
         }
-        scratch.load(q, None);
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::new(ctx.u, D::one()),
-            ux: Dual::from_re(ctx.ux),
-            step: ctx.step,
-            seed: None,
-        };
-        self.force(&scratch.q, &c, &mut scratch.f)?;
-        Ok(scratch.contract(w))
+        control_seeded(self, (q, w), ctx, (D::one(), D::zero()), scratch)
     }
 
     /// w · ∂(∂U_T/∂q)/∂u_x for the x component of a 2-axis control, by one `Dual<D>` evaluation
@@ -303,17 +294,30 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
         if !self.depends_on_control() {
             return Ok(D::zero());
         }
-        scratch.load(q, None);
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::from_re(ctx.u),
-            ux: Dual::new(ctx.ux, D::one()),
-            step: ctx.step,
-            seed: None,
-        };
-        self.force(&scratch.q, &c, &mut scratch.f)?;
-        Ok(scratch.contract(w))
+        control_seeded(self, (q, w), ctx, (D::zero(), D::one()), scratch)
     }
+}
+
+/// w · ∂(∂U_T/∂q)/∂(u, u_x)·(s_u, s_x): one `Dual<D>` evaluation of the term's force with the
+/// control components seeded by `seed` (the defaults of [`ForceTerm::control_contraction`] and
+/// [`ForceTerm::control_x_contraction`]).
+fn control_seeded<D: Scalar, T: ForceTerm<D, DIM>, const DIM: usize>(
+    term: &T,
+    (q, w): (&[[D; DIM]], &[[D; DIM]]),
+    ctx: &Ctx<D>,
+    (su, sx): (D, D),
+    scratch: &mut DualScratch<D, DIM>,
+) -> Result<D> {
+    scratch.load(q, None);
+    let c = Ctx {
+        t: ctx.t,
+        u: Dual::new(ctx.u, su),
+        ux: Dual::new(ctx.ux, sx),
+        step: ctx.step,
+        seed: None,
+    };
+    term.force(&scratch.q, &c, &mut scratch.f)?;
+    Ok(scratch.contract(w))
 }
 
 /// A momentum-dependent force F(p) added to ṗ (thesis eq. 2.4.4), acting componentwise

@@ -136,6 +136,7 @@
 //!    predictive control, JOTA 1998 (the Riccati recursion as a structured KKT solve).
 
 pub mod boxqp;
+pub mod condensed;
 mod diagnostics;
 mod driver;
 pub mod line_search;
@@ -144,6 +145,7 @@ mod qp;
 pub mod riccati;
 pub mod stage;
 
+pub use condensed::Condensed;
 pub use options::{IterationRecord, OcpOptions, OcpResult, Termination};
 
 use std::time::Instant;

@@ -1,0 +1,685 @@
+//! Full condensing: Gauss-Newton on the decisions θ themselves, with the dense sensitivities
+//! ∂M₀(t_k)/∂θ_j from forward dual numbers — for horizons with few decisions and many steps
+//! (receding-horizon control: 30 pieces of 10 steps).
+//!
+//! # Why a second method
+//! The Riccati solver ([`super::Solver`]) linearises every stage: 2n + 1 directions through
+//! each of the N steps (the stage Jacobians A_k, B_k), then O(N n³) per Riccati pass, several
+//! passes per QP. When the decisions are few (m ≪ 2n per piece of steps, m pieces), the
+//! sensitivities of the residuals r_k = M₀(t_k) to θ cost less: direction j starts at its
+//! piece's first stage s_j, so chunk c of 8 decisions runs through N − s_{8c} steps, and the
+//! total is Σ_c (N − s_{8c}) dual steps of 8 directions against 3N for the stage Jacobians
+//! (n = 10). The Gauss-Newton QP is then dense and tiny (m × m), solved exactly by a primal
+//! active-set method (no Riccati pass at all). The cost grows as N·m (quadratic when m grows
+//! with the horizon), so the Riccati solver stays the method for long horizons and per-step
+//! controls; acados makes the same choice between full condensing and a Riccati-based QP
+//! solver (Frison, Diehl et al., *Algorithms and methods for high-performance model predictive
+//! control*, 2018).
+//!
+//! # The model
+//! With S_kj = ∂M₀(t_k)/∂θ_j at the nominal and u_k = θ_{piece(k)},
+//! ```text
+//! J(θ + δ) ≈ Σ_k c_k (M₀_k + S_k δ)² + ρh Σ_k (u_k + δ_{piece(k)})² + (σ/h) Σ_{k≥1} (Δu_k + Δδ_k)²
+//! g = 2 Σ_k c_k M₀_k S_kᵀ + (effort and rate terms, exact),   H = 2 Σ_k c_k S_kᵀ S_k + (…)
+//! ```
+//! the same Gauss-Newton model as the Riccati solver's (the dense Hessian of
+//! [`super::Solver::dense_gauss_newton`]), so g is the exact gradient (tested against the adjoint
+//! to 10⁻¹²) and the step the same Gauss-Newton step (tested against the Riccati step to
+//! 10⁻¹⁰). The dual steps start at the nominal's converged multipliers: the Newton iteration
+//! does one derivative-only update, the implicit function theorem (as for the stage
+//! Jacobians, [`super::stage`]).
+//!
+//! # Globalisation and convergence
+//! As the Riccati solver: a Levenberg weight μ·mean(diag H) on the QP, an open-loop line search
+//! on rollouts of θ + αδ (α = 1 first, then the quadratic interpolation in [α/10, α/2],
+//! accepted when J̄ − J(α) ≥ c·(−ΔJ(α))), and the projected gradient for convergence
+//! ([`OcpOptions`] tolerances, [`Termination`]).
+
+use std::time::Instant;
+
+use faer::Mat;
+use nalgebra::SVector;
+use num_dual::Derivative;
+#[cfg(feature = "parallel")]
+use rayon::prelude::*;
+
+use super::line_search::{rollout, Traj};
+use super::riccati::StageCost;
+use super::stage::{Dv, StageModel, Stepper, CHUNK};
+use super::{
+    available_threads, control_structure, ids, IterationRecord, OcpOptions, OcpResult, Termination,
+    MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF,
+};
+use crate::adjoint::{ControlMap, ControlProblem, Objective};
+use crate::error::{Error, Result};
+use crate::scene::ObjectiveKind;
+
+/// Gauss-Newton on the condensed problem (module docs), with its buffers.
+#[derive(Clone, Debug)]
+pub struct Condensed {
+    model: StageModel,
+    cost: StageCost,
+    opts: OcpOptions,
+    steps: usize,
+    np: usize,
+    piece: Vec<usize>,
+    free: Vec<bool>,
+    /// First stage of θ_j.
+    theta_stage: Vec<usize>,
+    nominal: Traj,
+    trial: Traj,
+    stepper: Stepper<f64>,
+    scratch: Vec<[f64; 2]>,
+    chunks: Vec<SensChunk>,
+    threads: usize,
+    /// H (np × np, row-major, lower triangle filled) and g at the nominal.
+    hess: Vec<f64>,
+    grad: Vec<f64>,
+    /// The QP's step δ and its working set.
+    qp: BoxQp,
+    counts: (usize, usize),
+}
+
+/// The running state of one [`Condensed::solve`].
+struct Progress {
+    j0: f64,
+    /// Relative Levenberg weight.
+    mu: f64,
+    iterations: usize,
+    /// ‖∇J(θ₀)‖.
+    g0: Option<f64>,
+    last_pg: f64,
+    /// Consecutive accepted steps below J's round-off and the projected gradient they are
+    /// measured against.
+    roundoff_steps: usize,
+    roundoff_pg: f64,
+    history: Vec<IterationRecord>,
+}
+
+impl Progress {
+    /// Whether steps below J's resolution stopped reducing the projected gradient `pg` by
+    /// 10 % over [`MAX_ROUNDOFF_STEPS`] steps (as the Riccati solver).
+    fn stalled(&mut self, roundoff: bool, pg: f64) -> bool {
+        if !roundoff {
+            self.roundoff_steps = 0;
+            return false;
+        }
+        if self.roundoff_steps == 0 || pg < 0.9 * self.roundoff_pg {
+            self.roundoff_steps = 0;
+            self.roundoff_pg = pg;
+        }
+        self.roundoff_steps += 1;
+        self.roundoff_steps > MAX_ROUNDOFF_STEPS
+    }
+}
+
+/// The step the line search accepted.
+struct Accepted {
+    alpha: f64,
+    /// Actual over predicted decrease.
+    ratio: f64,
+    /// Taken below J's round-off.
+    roundoff: bool,
+}
+
+/// The sensitivities of the decisions θ_first … θ_{first+len−1} (one dual-number chunk).
+#[derive(Clone, Debug)]
+struct SensChunk {
+    first: usize,
+    len: usize,
+    stepper: Stepper<Dv>,
+    /// Row k: ∂M₀(t_k)/∂θ_{first+s} in slot s, k = 0..=N.
+    rows: Vec<[f64; CHUNK]>,
+}
+
+impl Condensed {
+    /// Builds the solver for `problem` (as [`super::Solver::new`]: a planar problem with a
+    /// free tip, a bending-moment objective and per-step or piecewise-constant controls).
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] naming the option, the objective, the control map or the tip.
+    pub fn new<P: ControlMap, O: Objective>(
+        problem: &ControlProblem<P, O>,
+        options: &OcpOptions,
+    ) -> Result<Self> {
+        options.validate()?;
+        let obj = problem
+            .objective()
+            .bending()
+            .ok_or_else(|| Error::InvalidArgument {
+                name: "objective",
+                reason: "the condensed Gauss-Newton solver needs a bending-moment objective \
+                         (c or c_sum, with effort)"
+                    .into(),
+            })?;
+        let steps = problem.steps();
+        let h = problem.time_step();
+        let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
+        let cost = StageCost {
+            effort: obj.effort * h,
+            rate: options.rate_penalty / h,
+            final_only: obj.kind == ObjectiveKind::Final,
+            steps,
+        };
+        let np = problem.n_params();
+        let (piece, free) = control_structure(&problem.controls(&ids(np))?, np)?;
+        let theta_stage: Vec<usize> = (0..=steps).filter(|&k| free[k]).collect();
+        let chunks = (0..np)
+            .step_by(CHUNK)
+            .map(|first| {
+                Ok(SensChunk {
+                    first,
+                    len: CHUNK.min(np - first),
+                    stepper: Stepper::new(&model)?,
+                    rows: vec![[0.0; CHUNK]; steps + 1],
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let threads = if options.threads == 0 {
+            available_threads()
+        } else {
+            options.threads
+        };
+        let n = model.n;
+        Ok(Condensed {
+            stepper: Stepper::new(&model)?,
+            scratch: vec![[0.0; 2]; n],
+            nominal: Traj::new(n, steps),
+            trial: Traj::new(n, steps),
+            hess: vec![0.0; np * np],
+            grad: vec![0.0; np],
+            qp: BoxQp::new(np),
+            model,
+            cost,
+            opts: options.clone(),
+            steps,
+            np,
+            piece,
+            free,
+            theta_stage,
+            chunks,
+            threads,
+            counts: (0, 0),
+        })
+    }
+
+    /// θ of the nominal.
+    pub fn theta(&self) -> Vec<f64> {
+        self.theta_stage
+            .iter()
+            .map(|&k| self.nominal.u[k])
+            .collect()
+    }
+
+    /// Simulates θ (projected onto the box) into `out` and returns J.
+    fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let out = if into_trial {
+            &mut self.trial
+        } else {
+            &mut self.nominal
+        };
+        for k in 0..=self.steps {
+            out.u[k] = theta[self.piece[k]].clamp(lo, hi);
+        }
+        self.counts.0 += 1;
+        rollout(
+            (&self.model, &self.cost),
+            &mut self.stepper,
+            &self.free,
+            (lo, hi),
+            None,
+            out,
+            &mut self.scratch,
+        )?;
+        Ok(out.cost)
+    }
+
+    /// Sets the nominal to θ (projected onto the box); returns J.
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] (`theta`) for a wrong length or a non-finite entry; the
+    /// simulation's errors.
+    pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+        if theta.len() != self.np {
+            return Err(Error::InvalidArgument {
+                name: "theta",
+                reason: format!("expected {} values, got {}", self.np, theta.len()),
+            });
+        }
+        if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
+            return Err(Error::InvalidArgument {
+                name: "theta",
+                reason: format!("entry {i} is not finite"),
+            });
+        }
+        self.simulate(theta, false)
+    }
+
+    /// The sensitivities S of every chunk at the nominal (in parallel over the chunks), then
+    /// the Gauss-Newton Hessian and the exact gradient.
+    fn linearise(&mut self) -> Result<()> {
+        let (model, nominal) = (&self.model, &self.nominal);
+        let (piece, stage) = (&self.piece[..], &self.theta_stage[..]);
+        let work = |c: &mut SensChunk| c.sweep(model, nominal, piece, stage[c.first]);
+        #[cfg(feature = "parallel")]
+        if self.threads > 1 {
+            self.chunks.par_iter_mut().try_for_each(work)?;
+        } else {
+            self.chunks.iter_mut().try_for_each(work)?;
+        }
+        #[cfg(not(feature = "parallel"))]
+        self.chunks.iter_mut().try_for_each(work)?;
+        self.counts.1 += 1;
+        self.assemble();
+        Ok(())
+    }
+
+    /// H and g of the module docs from the sensitivities (lower triangle of H).
+    fn assemble(&mut self) {
+        let np = self.np;
+        self.hess.fill(0.0);
+        self.grad.fill(0.0);
+        let mut s = vec![0.0; np];
+        for k in 0..=self.steps {
+            let c = self.cost.weight(k);
+            if c != 0.0 {
+                for ch in &self.chunks {
+                    s[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[k][..ch.len]);
+                }
+                // Decisions after stage k do not act on M₀(t_k).
+                let last = self.piece[k.saturating_sub(1)].min(np - 1) + 1;
+                let r = self.nominal.moment[k];
+                for i in 0..last {
+                    self.grad[i] += 2.0 * c * r * s[i];
+                    let row = &mut self.hess[i * np..i * np + i + 1];
+                    let si = 2.0 * c * s[i];
+                    for (h, sj) in row.iter_mut().zip(&s[..=i]) {
+                        *h += si * sj;
+                    }
+                }
+            }
+            self.control_terms(k);
+        }
+    }
+
+    /// The exact effort and rate terms of stage k in H and g.
+    fn control_terms(&mut self, k: usize) {
+        let np = self.np;
+        let (p, u) = (self.piece[k], self.nominal.u[k]);
+        self.grad[p] += 2.0 * self.cost.effort * u;
+        self.hess[p * np + p] += 2.0 * self.cost.effort;
+        let r = self.cost.rate;
+        if k > 0 && r > 0.0 && self.piece[k - 1] != p {
+            let q = self.piece[k - 1];
+            let du = u - self.nominal.u[k - 1];
+            self.grad[p] += 2.0 * r * du;
+            self.grad[q] -= 2.0 * r * du;
+            self.hess[p * np + p] += 2.0 * r;
+            self.hess[q * np + q] += 2.0 * r;
+            // p = q + 1 > q: the lower triangle.
+            self.hess[p * np + q] -= 2.0 * r;
+        }
+    }
+
+    /// ‖θ − Π_box(θ − g)‖₂ at the nominal.
+    fn projected_norm(&self) -> f64 {
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        self.theta_stage
+            .iter()
+            .zip(&self.grad)
+            .map(|(&k, g)| {
+                let t = self.nominal.u[k];
+                let d = t - (t - g).clamp(lo, hi);
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// Runs the solver from θ₀ (projected onto the box): the iterations of the module docs.
+    ///
+    /// # Errors
+    /// As [`Condensed::set_point`]; a failed simulation of the nominal.
+    pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
+        let t0 = Instant::now();
+        self.counts = (0, 0);
+        let mut pr = Progress {
+            j0: self.set_point(theta0)?,
+            mu: 0.0,
+            iterations: 0,
+            g0: None,
+            last_pg: f64::INFINITY,
+            roundoff_steps: 0,
+            roundoff_pg: f64::INFINITY,
+            history: Vec::new(),
+        };
+        let termination = loop {
+            if let Some(t) = self.iterate(&mut pr)? {
+                break t;
+            }
+        };
+        Ok(self.report(termination, pr, t0))
+    }
+
+    /// One iteration: linearisation, stopping tests, the QP step and its line search, the
+    /// regularisation schedule. `Some` ends the run.
+    fn iterate(&mut self, pr: &mut Progress) -> Result<Option<Termination>> {
+        let opts = &self.opts;
+        if pr.iterations > 0 && pr.iterations >= opts.max_iters && !opts.final_gradient {
+            return Ok(Some(Termination::Budget));
+        }
+        self.linearise()?;
+        let pg = self.projected_norm();
+        pr.last_pg = pg;
+        let gref = *pr
+            .g0
+            .get_or_insert_with(|| self.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
+        let opts = &self.opts;
+        if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
+            return Ok(Some(Termination::Converged));
+        }
+        if pr.iterations >= opts.max_iters {
+            return Ok(Some(Termination::MaxIterations));
+        }
+        let Some(acc) = self.step(&mut pr.mu) else {
+            return Ok(Some(Termination::RegularisationLimit));
+        };
+        std::mem::swap(&mut self.nominal, &mut self.trial);
+        pr.iterations += 1;
+        pr.history.push(IterationRecord {
+            objective: self.nominal.cost,
+            projected_gradient_norm: pg,
+            alpha: acc.alpha,
+            regularisation: pr.mu,
+        });
+        if pr.stalled(acc.roundoff, pg) {
+            return Ok(Some(Termination::RoundOff));
+        }
+        let mu = pr.mu;
+        if acc.alpha >= 1.0 && acc.ratio > 0.75 {
+            pr.mu = if mu * 0.25 < MU_MIN { 0.0 } else { mu * 0.25 };
+        } else if acc.alpha < 1.0 || acc.ratio < 0.25 {
+            pr.mu = (mu * 4.0).max(MU_MIN);
+        }
+        Ok(None)
+    }
+
+    /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
+    /// `None` with μ beyond its limit.
+    fn step(&mut self, mu: &mut f64) -> Option<Accepted> {
+        let theta = self.theta();
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let np = self.np;
+        let scale = (0..np).map(|i| self.hess[i * np + i]).sum::<f64>() / np as f64;
+        let scale = if scale > 0.0 && scale.is_finite() {
+            scale
+        } else {
+            1.0
+        };
+        loop {
+            let bounds = (&theta[..], lo, hi);
+            if let Some(model) = self.qp.solve(&self.hess, &self.grad, bounds, *mu * scale) {
+                if let Some(acc) = self.backtrack(&theta, model) {
+                    return Some(acc);
+                }
+            }
+            *mu = (*mu * 10.0).max(MU_MIN);
+            if *mu > self.opts.max_regularisation {
+                return None;
+            }
+        }
+    }
+
+    /// Line search on rollouts of θ + αδ into `trial` (module docs).
+    fn backtrack(&mut self, theta: &[f64], (d1, d2): (f64, f64)) -> Option<Accepted> {
+        let jbar = self.nominal.cost;
+        let tiny = ROUNDOFF * jbar.abs().max(f64::MIN_POSITIVE);
+        let mut alpha = 1.0;
+        let mut trial = theta.to_vec();
+        for _ in 0..self.opts.backtracks {
+            let dj = alpha * d1 + alpha * alpha * d2;
+            for ((t, th), d) in trial.iter_mut().zip(theta).zip(&self.qp.delta) {
+                *t = th + alpha * d;
+            }
+            let mut next = 0.5 * alpha;
+            if let Ok(jt) = self.simulate(&trial, true) {
+                if -dj <= tiny {
+                    if jt <= jbar + NOISE * jbar.abs() {
+                        return Some(Accepted {
+                            alpha,
+                            ratio: 1.0,
+                            roundoff: true,
+                        });
+                    }
+                } else {
+                    let ratio = (jbar - jt) / (-dj);
+                    if ratio >= self.opts.armijo {
+                        return Some(Accepted {
+                            alpha,
+                            ratio,
+                            roundoff: false,
+                        });
+                    }
+                    let b = (jt - jbar - alpha * d1) / (alpha * alpha);
+                    if b > 0.0 && d1 < 0.0 {
+                        next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
+                    }
+                }
+            }
+            alpha = next;
+        }
+        None
+    }
+
+    fn report(&self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
+        let theta = self.theta();
+        let gn = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        OcpResult {
+            objective: self.nominal.cost,
+            initial_objective: pr.j0,
+            controls: self.nominal.u.clone(),
+            active_bounds: (0..self.np)
+                .filter(|&i| theta[i] <= lo || theta[i] >= hi)
+                .collect(),
+            theta,
+            gradient_norm: gn,
+            projected_gradient_norm: pr.last_pg,
+            initial_gradient_norm: pr.g0.unwrap_or(gn),
+            iterations: pr.iterations,
+            rollouts: self.counts.0,
+            jacobian_passes: self.counts.1,
+            backward_passes: 0,
+            seconds: t0.elapsed().as_secs_f64(),
+            converged: termination == Termination::Converged,
+            termination,
+            history: pr.history,
+        }
+    }
+
+    /// The Gauss-Newton Hessian (full, symmetric) and the gradient at the nominal (for tests).
+    ///
+    /// # Errors
+    /// A failed dual-number step.
+    pub fn gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
+        self.linearise()?;
+        let np = self.np;
+        let h = Mat::from_fn(np, np, |i, j| self.hess[i.max(j) * np + i.min(j)]);
+        Ok((h, self.grad.clone()))
+    }
+}
+
+impl SensChunk {
+    /// Rows S_k of this chunk's decisions: dual numbers seeded on u from the chunk's first
+    /// stage s₀, real parts held at the nominal's and each step started at its converged
+    /// multipliers (one derivative-only Newton update).
+    fn sweep(&mut self, model: &StageModel, nom: &Traj, piece: &[usize], s0: usize) -> Result<()> {
+        let n = model.n;
+        let steps = self.rows.len() - 1;
+        self.rows[..=s0].fill([0.0; CHUNK]);
+        let st = &mut self.stepper.state;
+        for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
+            *q = [Dv::from_re(0.0); 2];
+            *p = [Dv::from_re(0.0); 2];
+        }
+        for k in s0..steps {
+            let st = &mut self.stepper.state;
+            for (i, (q, p)) in st.q.iter_mut().zip(st.p.iter_mut()).enumerate() {
+                for d in 0..2 {
+                    q[d].re = nom.q(k)[i][d];
+                    p[d].re = nom.p(k)[i][d];
+                }
+            }
+            let m = st.multipliers_mut(n);
+            for ((ml, mm), &v) in m.lambda.iter_mut().zip(m.mu.iter_mut()).zip(nom.lambda(k)) {
+                (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
+            }
+            st.tip_target = [Dv::from_re(0.0); 2];
+            let mut seed = [0.0; CHUNK];
+            let j = piece[k];
+            if (self.first..self.first + self.len).contains(&j) {
+                seed[j - self.first] = 1.0;
+            }
+            let u = Dv::new(nom.u[k], Derivative::some(SVector::from(seed)));
+            self.stepper.advance(k, u)?;
+            let z = &self.stepper.state.q[0][1];
+            let row = &mut self.rows[k + 1];
+            *row = [0.0; CHUNK];
+            if let Some(e) = z.eps.0.as_ref() {
+                for (r, v) in row.iter_mut().zip(e.iter()) {
+                    *r = model.moment_scale * v;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A dense convex box QP min ½ δᵀ(H + λI)δ + gᵀδ, lo ≤ δ ≤ hi (lo ≤ 0 ≤ hi), by a primal
+/// active-set method from δ = 0 (Nocedal & Wright, *Numerical Optimization*, Alg. 16.3):
+/// Newton steps on the free set (Cholesky of its block), a ratio test that fixes the first
+/// blocking bound, and the release of the bound whose multiplier has the wrong sign.
+#[derive(Clone, Debug)]
+struct BoxQp {
+    delta: Vec<f64>,
+    /// 0 free, −1 at its lower bound, +1 at its upper bound.
+    fixed: Vec<i8>,
+    free: Vec<usize>,
+    resid: Vec<f64>,
+}
+
+impl BoxQp {
+    fn new(np: usize) -> Self {
+        BoxQp {
+            delta: vec![0.0; np],
+            fixed: vec![0; np],
+            free: Vec::with_capacity(np),
+            resid: vec![0.0; np],
+        }
+    }
+
+    /// (H + λI)δ + g into `resid` (H: lower triangle, row-major).
+    fn residual(&mut self, h: &[f64], g: &[f64], lambda: f64) {
+        let np = g.len();
+        for i in 0..np {
+            let mut r = g[i] + lambda * self.delta[i];
+            for j in 0..np {
+                r += h[i.max(j) * np + i.min(j)] * self.delta[j];
+            }
+            self.resid[i] = r;
+        }
+    }
+
+    /// Solves the QP with the box lo − θ ≤ δ ≤ hi − θ; returns the model change (gᵀδ, ½δᵀHδ)
+    /// without λ, or `None` when H + λI is not positive definite on a free set.
+    fn solve(
+        &mut self,
+        h: &[f64],
+        g: &[f64],
+        (theta, lo, hi): (&[f64], f64, f64),
+        lambda: f64,
+    ) -> Option<(f64, f64)> {
+        let np = g.len();
+        let lower = |i: usize| lo - theta[i];
+        let upper = |i: usize| hi - theta[i];
+        self.delta.fill(0.0);
+        for i in 0..np {
+            self.fixed[i] = if lower(i) >= 0.0 && g[i] > 0.0 {
+                -1
+            } else if upper(i) <= 0.0 && g[i] < 0.0 {
+                1
+            } else {
+                0
+            };
+        }
+        for _ in 0..10 * np + 10 {
+            self.free.clear();
+            self.free.extend((0..np).filter(|&i| self.fixed[i] == 0));
+            self.residual(h, g, lambda);
+            let nf = self.free.len();
+            let p = if nf > 0 {
+                let hf = Mat::from_fn(nf, nf, |a, b| {
+                    let (i, j) = (self.free[a], self.free[b]);
+                    h[i.max(j) * np + i.min(j)] + if a == b { lambda } else { 0.0 }
+                });
+                let rhs = Mat::from_fn(nf, 1, |a, _| -self.resid[self.free[a]]);
+                let llt = hf.llt(faer::Side::Lower).ok()?;
+                faer::linalg::solvers::Solve::solve(&llt, &rhs)
+            } else {
+                Mat::zeros(0, 1)
+            };
+            // Ratio test along p: the first bound the full step would cross.
+            let (mut alpha, mut block) = (1.0, None);
+            for (a, &i) in self.free.iter().enumerate() {
+                let (d, pi) = (self.delta[i], p[(a, 0)]);
+                let (to, side) = if pi < 0.0 {
+                    (lower(i), -1)
+                } else {
+                    (upper(i), 1)
+                };
+                let crosses = (pi < 0.0 && d + pi < to) || (pi > 0.0 && d + pi > to);
+                if crosses {
+                    let a_i = ((to - d) / pi).max(0.0);
+                    if a_i < alpha {
+                        alpha = a_i;
+                        block = Some((i, side, to));
+                    }
+                }
+            }
+            for (a, &i) in self.free.iter().enumerate() {
+                self.delta[i] += alpha * p[(a, 0)];
+            }
+            if let Some((i, side, to)) = block {
+                self.delta[i] = to;
+                self.fixed[i] = side;
+                continue;
+            }
+            // A minimiser on the working set: release the worst wrong-signed multiplier.
+            self.residual(h, g, lambda);
+            let worst = (0..np)
+                .filter(|&i| self.fixed[i] != 0)
+                .map(|i| (i, -f64::from(self.fixed[i]) * self.resid[i]))
+                .filter(|&(_, m)| m < 0.0)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            match worst {
+                Some((i, _)) => self.fixed[i] = 0,
+                None => return Some(self.model_change(h, g)),
+            }
+        }
+        None
+    }
+
+    /// (gᵀδ, ½δᵀHδ).
+    fn model_change(&self, h: &[f64], g: &[f64]) -> (f64, f64) {
+        let np = g.len();
+        let mut quad = 0.0;
+        for i in 0..np {
+            for j in 0..np {
+                quad += self.delta[i] * h[i.max(j) * np + i.min(j)] * self.delta[j];
+            }
+        }
+        let lin = g.iter().zip(&self.delta).map(|(a, b)| a * b).sum();
+        (lin, 0.5 * quad)
+    }
+}

@@ -4,8 +4,8 @@
 //! plant and model may differ, bounds hold, the baselines and the PD gradient, bad settings.
 
 use chainbeam::mpc::{
-    pd_closed_loop_cost, run_closed_loop, ConstantForce, Controller, Horizon, Mpc, MpcOptions,
-    NoControl, Observation, PdLaw, PdTuning, Plant,
+    pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon,
+    Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
 };
 use chainbeam::ocp::{self, OcpOptions};
 use chainbeam::optimize::{OptimOptions, OptimProblem};
@@ -47,11 +47,14 @@ fn options(horizon: Horizon, bound: f64, iterations: usize) -> MpcOptions {
         horizon,
         iterations,
         first_iterations: 200,
-        warm_start: true,
         effort: EFFORT,
         ocp: OcpOptions::default().with_bound(bound),
+        ..MpcOptions::default()
     }
 }
+
+/// Both solvers of a re-plan (`MpcSolver`): every property below holds for each.
+const SOLVERS: [MpcSolver; 2] = [MpcSolver::Condensed, MpcSolver::Riccati];
 
 /// Returns scripted forces, one per interval.
 struct Script(Vec<f64>, usize);
@@ -93,7 +96,7 @@ fn plant_reproduces_the_open_loop_simulation() {
 
 /// The largest relative difference between the full-horizon MPC's decisions and the open-loop
 /// optimum on `s` (pieces of 0.1 s), and the relative difference of the objectives.
-fn full_horizon_gap(s: &Scene) -> (f64, f64) {
+fn full_horizon_gap(s: &Scene, solver: MpcSolver) -> (f64, f64) {
     let steps = s.time.steps;
     let pieces = (steps as f64 * s.time.step / INTERVAL).round() as usize;
     let map = PiecewiseControl { steps, pieces };
@@ -102,7 +105,11 @@ fn full_horizon_gap(s: &Scene) -> (f64, f64) {
     let ocp_opts = OcpOptions::default().with_bound(5.0);
     let open = ocp::solve(&problem, &vec![0.0; pieces], &ocp_opts).unwrap();
     assert!(open.converged, "{}", open.termination);
-    let mut mpc = Mpc::new(s, INTERVAL, options(Horizon::ToEnd, 5.0, 200)).unwrap();
+    let o = MpcOptions {
+        solver,
+        ..options(Horizon::ToEnd, 5.0, 200)
+    };
+    let mut mpc = Mpc::new(s, INTERVAL, o).unwrap();
     let r = run_closed_loop(s, INTERVAL, &mut mpc).unwrap();
     // The first decision is the open-loop problem itself.
     let scale = open.theta.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -126,17 +133,22 @@ fn full_horizon_mpc_with_a_perfect_model_reproduces_the_open_loop_optimum() {
     // the plant then applies it (before: the observed p_k held fixed, the first force short by
     // a half-kick; measured 1.0·10⁻² in the forces and 1.8·10⁻³ in J).
     //
-    // Measured now: 6.2·10⁻¹⁰ in the forces (relative to max|θ*|) and 7.9·10⁻¹⁴ in J. The
+    // Measured now: 6.2·10⁻¹⁰ in the forces (relative to max|θ*|) and 7.9·10⁻¹⁴ in J with the
+    // Riccati solver, 6.8·10⁻¹⁰ and 6.0·10⁻¹⁴ with the condensed one. The
     // tolerances are the solver's, not tuned: every plan is solved to a projected gradient of
     // 10⁻⁸ of its initial one (`OcpOptions::rel_grad_tol`, the tolerance the first decision is
     // checked to), and J is resolved to 10⁻¹⁰ relative (src/ocp: J's round-off and the RATTLE
     // Newton tolerance; predicted decreases below it are not resolved); J is stationary at the
     // optimum, so the forces' gap enters it only at second order.
     let s = scene(100);
-    let (gap, dj) = full_horizon_gap(&s);
-    println!("largest relative force gap {gap:.3e}, relative objective gap {dj:.3e}");
-    assert!(gap <= 1e-8, "gap {gap}");
-    assert!(dj <= 1e-10, "objective gap {dj}");
+    for solver in SOLVERS {
+        let (gap, dj) = full_horizon_gap(&s, solver);
+        println!(
+            "{solver:?}: largest relative force gap {gap:.3e}, relative objective gap {dj:.3e}"
+        );
+        assert!(gap <= 1e-8, "{solver:?}: gap {gap}");
+        assert!(dj <= 1e-10, "{solver:?}: objective gap {dj}");
+    }
 }
 
 #[test]
@@ -192,9 +204,10 @@ fn plant_state_before_kick_is_the_step_without_the_control_in_its_second_half() 
 }
 
 /// Σ of the solver's iterations over the re-plans (the first, cold plan excluded).
-fn replan_iterations(s: &Scene, warm_start: bool) -> usize {
+fn replan_iterations(s: &Scene, warm_start: bool, solver: MpcSolver) -> usize {
     let mut o = options(Horizon::Seconds(0.5), 5.0, 100);
     o.warm_start = warm_start;
+    o.solver = solver;
     // An absolute tolerance: the default relative one (10⁻⁸‖∇J(θ₀)‖) asks more of a better start.
     o.ocp.rel_grad_tol = 0.0;
     o.ocp.grad_tol = 1e-6;
@@ -207,10 +220,12 @@ fn replan_iterations(s: &Scene, warm_start: bool) -> usize {
 fn warm_starting_reduces_iterations() {
     // Both runs solve every re-plan to the same tolerance (budget 100, not reached); counts.
     let s = scene(100);
-    let warm = replan_iterations(&s, true);
-    let cold = replan_iterations(&s, false);
-    println!("re-plan iterations: warm {warm}, cold {cold}");
-    assert!(warm < cold, "warm {warm} vs cold {cold}");
+    for solver in SOLVERS {
+        let warm = replan_iterations(&s, true, solver);
+        let cold = replan_iterations(&s, false, solver);
+        println!("{solver:?}: re-plan iterations: warm {warm}, cold {cold}");
+        assert!(warm < cold, "{solver:?}: warm {warm} vs cold {cold}");
+    }
 }
 
 #[test]
@@ -251,8 +266,19 @@ fn bounds_on_u_hold_in_closed_loop() {
     // so the bound is active at some decisions.
     let s = scene(100);
     let bound = 0.3;
-    let mut mpc = Mpc::new(&s, INTERVAL, options(Horizon::Seconds(0.5), bound, 2)).unwrap();
-    let r = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap();
+    for solver in SOLVERS {
+        let o = MpcOptions {
+            solver,
+            ..options(Horizon::Seconds(0.5), bound, 2)
+        };
+        let mut mpc = Mpc::new(&s, INTERVAL, o).unwrap();
+        bounds_hold(&run_closed_loop(&s, INTERVAL, &mut mpc).unwrap(), bound);
+    }
+    let (best, _) = ConstantForce::best(&s, bound, EFFORT).unwrap();
+    assert!(best.u.abs() <= bound);
+}
+
+fn bounds_hold(r: &ClosedLoopResult, bound: f64) {
     assert!(
         r.control.iter().all(|u| u.abs() <= bound),
         "{:?}",
@@ -263,8 +289,6 @@ fn bounds_on_u_hold_in_closed_loop() {
         "the bound was never active: {:?}",
         r.decisions
     );
-    let (best, _) = ConstantForce::best(&s, bound, EFFORT).unwrap();
-    assert!(best.u.abs() <= bound);
 }
 
 #[test]

@@ -127,7 +127,7 @@ mod receding;
 
 pub use baselines::{pd_closed_loop_cost, ConstantForce, NoControl, PdLaw, PdTuning};
 pub use plant::Plant;
-pub use receding::{Horizon, Mpc, MpcOptions};
+pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver};
 
 use std::time::Instant;
 

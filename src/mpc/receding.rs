@@ -19,6 +19,21 @@ pub enum Horizon {
     ToEnd,
 }
 
+/// The optimal-control solver of each re-plan.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MpcSolver {
+    /// Full condensing ([`ocp::Condensed`]): sensitivities of the bending moments to the
+    /// horizon's pieces by forward dual numbers, a dense box QP. Its cost grows as the number of
+    /// steps times the number of pieces, the cheaper choice for the horizons of a few seconds
+    /// of receding-horizon control (measured on `mpc_riser`, 3 s: module docs of
+    /// [`crate::mpc`]).
+    #[default]
+    Condensed,
+    /// The Riccati solver ([`ocp::Solver`]): stage Jacobians and Riccati passes, linear in the
+    /// horizon whatever the number of pieces — the choice for long horizons.
+    Riccati,
+}
+
 /// Settings of [`Mpc`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MpcOptions {
@@ -38,6 +53,8 @@ pub struct MpcOptions {
     /// Start each re-plan from the previous plan shifted by one interval (tail padded with its
     /// last value); `false` starts from θ = 0. Default `true`.
     pub warm_start: bool,
+    /// The solver of each re-plan. Default [`MpcSolver::Condensed`].
+    pub solver: MpcSolver,
     /// Effort weight ρ of ρ h Σ u_k² ([`BendingObjective::effort`]). Default 0.01.
     pub effort: f64,
     /// The solver's options: the bounds on u (default |u| ≤ 5 N), the rate penalty and the
@@ -52,6 +69,7 @@ impl Default for MpcOptions {
             iterations: 1,
             first_iterations: 50,
             warm_start: true,
+            solver: MpcSolver::default(),
             effort: 0.01,
             ocp: OcpOptions::default().with_bound(5.0),
         }
@@ -240,7 +258,10 @@ impl Controller for Mpc {
         };
         // Real-time iteration: the step is all a decision needs (OcpOptions::final_gradient).
         opts.final_gradient = false;
-        let r = ocp::solve(&problem, &self.warm, &opts)?;
+        let r = match self.options.solver {
+            MpcSolver::Condensed => ocp::Condensed::new(&problem, &opts)?.solve(&self.warm)?,
+            MpcSolver::Riccati => ocp::solve(&problem, &self.warm, &opts)?,
+        };
         self.plan.clone_from(&r.theta);
         self.last = Some(r);
         self.decisions += 1;

@@ -4,12 +4,12 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, NoControl, PdLaw,
-    PdTuning, Summary,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, MpcSolver,
+    NoControl, PdLaw, PdTuning, Summary,
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
@@ -25,8 +25,8 @@ pub const LONG_ABOUT: &str = "\
 Run the scene in closed loop under a receding-horizon (model predictive) controller: every \
 --interval seconds the controller observes the beam's state, solves the optimal-control problem \
 min Σ M₀(t_k)² + ρ·h·Σ u_k² over the next --horizon seconds of its model (the scene itself, or \
---model FILE: another drag, a forecast of the loads with errors) by the Gauss-Newton/Riccati \
-solver, warm-started from its previous plan and limited to --iterations iterations (real-time \
+--model FILE: another drag, a forecast of the loads with errors) by a Gauss-Newton solver \
+(--solver), warm-started from its previous plan and limited to --iterations iterations (real-time \
 iteration), and applies the plan's first force, held over the interval, at control.node \
 (default: the tip). The plant is the scene: RATTLE from the straight beam at rest, t in [0, N·h]. \
 The first plan (at t = 0, cold) gets --first-iterations.
@@ -69,6 +69,11 @@ pub struct MpcArgs {
     /// Gauss-Newton iterations per re-plan.
     #[arg(long, value_name = "K", default_value_t = 1)]
     pub iterations: usize,
+    /// The solver of each plan: `condensed` (sensitivities to the plan's forces, a dense QP;
+    /// the faster for horizons of a few seconds) or `riccati` (stage Jacobians and Riccati
+    /// passes; linear in the horizon).
+    #[arg(long, value_enum, default_value_t = SolverArg::Condensed)]
+    pub solver: SolverArg,
     /// Iterations of the first (cold) plan at t = 0.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub first_iterations: usize,
@@ -91,9 +96,20 @@ pub struct MpcArgs {
     pub output: Option<PathBuf>,
 }
 
+/// `--solver`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SolverArg {
+    /// [`MpcSolver::Condensed`].
+    Condensed,
+    /// [`MpcSolver::Riccati`].
+    Riccati,
+}
+
 #[derive(Serialize)]
 struct Settings {
     horizon: f64,
+    solver: SolverArg,
     interval: f64,
     iterations: usize,
     first_iterations: usize,
@@ -148,12 +164,16 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         horizon: Horizon::Seconds(a.horizon),
         iterations: a.iterations,
         first_iterations: a.first_iterations,
-        warm_start: true,
+        solver: match a.solver {
+            SolverArg::Condensed => MpcSolver::Condensed,
+            SolverArg::Riccati => MpcSolver::Riccati,
+        },
         effort: a.effort,
         ocp: OcpOptions {
             rate_penalty: a.rate_penalty,
             ..OcpOptions::default().with_bound(a.bound)
         },
+        ..MpcOptions::default()
     };
     let flag_error = |e| lib_error(a.model.as_deref().unwrap_or(&a.scene), e);
     let mut mpc = Mpc::new(&model, a.interval, options).map_err(flag_error)?;
@@ -215,6 +235,7 @@ fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
     Report {
         settings: Settings {
             horizon: a.horizon,
+            solver: a.solver,
             interval: a.interval,
             iterations: a.iterations,
             first_iterations: a.first_iterations,

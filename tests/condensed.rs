@@ -206,3 +206,52 @@ fn budget_and_errors_are_reported() {
     assert!(c.set_point(&[0.0; 3]).is_err());
     assert!(c.set_point(&vec![f64::NAN; p.n_params()]).is_err());
 }
+
+/// A solver moved to another start (`Condensed::restart`, as the receding horizon re-plans)
+/// gives bit for bit the result of a solver built for that start; a problem of another horizon
+/// is refused naming `problem`.
+#[test]
+fn restart_equals_a_fresh_solver() {
+    let scene = mpc_scene(200);
+    let mut plant = chainbeam::mpc::Plant::<f64>::new(&scene).unwrap();
+    for _ in 0..150 {
+        plant.advance().unwrap();
+    }
+    plant.update_state_before_kick().unwrap();
+    let hat = plant.state_before_kick().unwrap().clone();
+    let map = Parametrisation::Piecewise(PiecewiseControl {
+        steps: 50,
+        pieces: 5,
+    });
+    let obj = BendingObjective::summed_moment().with_effort(0.01);
+    let at_rest = ControlProblem::new(&mpc_scene(50), map.clone(), obj).unwrap();
+    let moving = at_rest
+        .clone()
+        .starting_before_kick(hat, plant.time())
+        .unwrap();
+    let opts = OcpOptions::default().with_bound(5.0);
+    let theta = wiggle(5, 0.5);
+    let mut reused = Condensed::new(&at_rest, &opts).unwrap();
+    reused.solve(&theta).unwrap();
+    reused.restart(&moving).unwrap();
+    let a = reused.solve(&theta).unwrap();
+    let b = Condensed::new(&moving, &opts)
+        .unwrap()
+        .solve(&theta)
+        .unwrap();
+    assert_eq!(a.theta, b.theta);
+    assert_eq!(a.objective, b.objective);
+    let other = ControlProblem::new(
+        &mpc_scene(60),
+        Parametrisation::Piecewise(PiecewiseControl {
+            steps: 60,
+            pieces: 5,
+        }),
+        obj,
+    )
+    .unwrap();
+    match reused.restart(&other) {
+        Err(chainbeam::Error::InvalidArgument { name, .. }) => assert_eq!(name, "problem"),
+        r => panic!("expected the typed error, got {r:?}"),
+    }
+}

@@ -88,6 +88,8 @@ pub struct Mpc {
     pieces: Option<usize>,
     /// The problem of the last horizon length (cloned and started from each observation).
     template: Option<(usize, ControlProblem<PiecewiseControl, BendingObjective>)>,
+    /// The condensed solver of the last horizon length, kept between re-plans.
+    condensed: Option<(usize, ocp::Condensed)>,
     plan: Vec<f64>,
     warm: Vec<f64>,
     last: Option<OcpResult>,
@@ -155,6 +157,7 @@ impl Mpc {
             model_steps,
             pieces,
             template: None,
+            condensed: None,
             plan: Vec::new(),
             warm: Vec::new(),
             last: None,
@@ -205,6 +208,24 @@ impl Mpc {
             Some(hat) => template.clone().starting_before_kick(hat.clone(), obs.t),
             None => template.clone().starting_from(obs.state.clone(), obs.t),
         }
+    }
+
+    /// The condensed solver for a horizon of `pieces`, moved to `problem`'s start (built on the
+    /// first call and whenever the horizon's length changes).
+    fn condensed(
+        &mut self,
+        pieces: usize,
+        problem: &ControlProblem<PiecewiseControl, BendingObjective>,
+        opts: &OcpOptions,
+    ) -> Result<&mut ocp::Condensed> {
+        match &mut self.condensed {
+            Some((p, solver)) if *p == pieces => {
+                solver.restart(problem)?;
+                solver.set_max_iters(opts.max_iters);
+            }
+            slot => *slot = Some((pieces, ocp::Condensed::new(problem, opts)?)),
+        }
+        Ok(&mut self.condensed.as_mut().expect("set above").1)
     }
 
     /// The pieces of the horizon at `obs`.
@@ -259,7 +280,12 @@ impl Controller for Mpc {
         // Real-time iteration: the step is all a decision needs (OcpOptions::final_gradient).
         opts.final_gradient = false;
         let r = match self.options.solver {
-            MpcSolver::Condensed => ocp::Condensed::new(&problem, &opts)?.solve(&self.warm)?,
+            MpcSolver::Condensed => {
+                let warm = std::mem::take(&mut self.warm);
+                let r = self.condensed(pieces, &problem, &opts)?.solve(&warm);
+                self.warm = warm;
+                r?
+            }
             MpcSolver::Riccati => ocp::solve(&problem, &self.warm, &opts)?,
         };
         self.plan.clone_from(&r.theta);

@@ -175,6 +175,7 @@ impl Condensed {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
+        let chunks = balanced(chunks);
         let threads = if options.threads == 0 {
             available_threads()
         } else {
@@ -201,6 +202,47 @@ impl Condensed {
             threads,
             counts: (0, 0),
         })
+    }
+
+    /// Moves the solver to `problem`'s start (state, t₀, pending kick): the problem it was built
+    /// for, from another state (a receding horizon re-plans with one solver).
+    ///
+    /// # Errors
+    /// [`Error::InvalidArgument`] (`problem`) when the horizon, the step, the number of
+    /// parameters or of pendulums differ from the solver's.
+    pub fn restart<P: ControlMap, O: Objective>(
+        &mut self,
+        problem: &ControlProblem<P, O>,
+    ) -> Result<()> {
+        let (steps, h, np, n) = (self.steps, self.model.h, self.np, self.model.n);
+        let other = (
+            problem.steps(),
+            problem.time_step(),
+            problem.n_params(),
+            problem.chain().n(),
+        );
+        if other != (steps, h, np, n) {
+            return Err(Error::InvalidArgument {
+                name: "problem",
+                reason: format!(
+                    "a restart needs the solver's horizon (N, h, parameters, pendulums) = \
+                     {:?}, got {other:?}",
+                    (steps, h, np, n)
+                ),
+            });
+        }
+        let start = problem.start();
+        self.model.start = start.cloned();
+        self.stepper.set_start(start);
+        for c in &mut self.chunks {
+            c.stepper.set_start(start);
+        }
+        Ok(())
+    }
+
+    /// Changes the iteration limit [`OcpOptions::max_iters`] of later solves (at least 1).
+    pub fn set_max_iters(&mut self, max_iters: usize) {
+        self.opts.max_iters = max_iters.max(1);
     }
 
     /// θ of the nominal.
@@ -554,6 +596,23 @@ impl SensChunk {
         }
         Ok(())
     }
+}
+
+/// The chunks ordered longest, shortest, second longest, second shortest, …: the chunk of
+/// θ_first runs from θ_first's stage to N, so the recursive halving of rayon's parallel
+/// iterator hands each thread about the same number of steps.
+fn balanced(mut chunks: Vec<SensChunk>) -> Vec<SensChunk> {
+    let mut out = Vec::with_capacity(chunks.len());
+    let mut front = true;
+    while !chunks.is_empty() {
+        out.push(if front {
+            chunks.remove(0)
+        } else {
+            chunks.pop().expect("not empty")
+        });
+        front = !front;
+    }
+    out
 }
 
 /// A dense convex box QP min ½ δᵀ(H + λI)δ + gᵀδ, lo ≤ δ ≤ hi (lo ≤ 0 ≤ hi), by a primal

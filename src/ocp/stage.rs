@@ -296,6 +296,14 @@ impl<D: Scalar> Stepper<D> {
         })
     }
 
+    /// Moves the stepper to another horizon start of the same model (the receding horizon of
+    /// [`crate::mpc`]): its start time, initial state and pending kick.
+    pub fn set_start(&mut self, start: Option<&Start<f64, 2>>) {
+        self.rattle.set_start_time(start.map_or(0.0, |s| s.t0));
+        self.initial = start.map(|s| s.state.lift());
+        self.pending = start.is_some_and(|s| s.kick == StartKick::Pending);
+    }
+
     /// Resets `state` to the initial state (the start's S₀, or straight at rest) and computes
     /// its consistent multiplier for the control u₀ when it has none (the Newton predictor of
     /// step 0).

@@ -213,6 +213,11 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         self
     }
 
+    /// Changes the start time t₀ in place ([`Rattle::with_start_time`]).
+    pub fn set_start_time(&mut self, t0: f64) {
+        self.t0 = t0;
+    }
+
     /// t_k = t₀ + k h.
     #[inline]
     pub fn time(&self, k: usize) -> f64 {

@@ -1,7 +1,9 @@
 //! Receding-horizon control of the riser against waves (issue 14): the closed loop of
 //! `catalogue::mpc_riser` (n = 10, an irregular sea at node 5, 60 s, a decision every 0.1 s)
 //! under no control, the best constant force, a tuned PD law on the base moment, MPC with a
-//! perfect model and MPC with a wrong model, printed as a table.
+//! perfect model and MPC with a wrong model, printed as a table. The MPC rows re-plan with the
+//! condensed solver (the default, `MpcSolver::Condensed`); the perfect model is also run with
+//! the Riccati solver, for the speed of the two on the same loop.
 //!
 //! ```sh
 //! cargo run --release --example mpc            # 60 s
@@ -15,7 +17,8 @@
 
 use chainbeam::catalogue;
 use chainbeam::mpc::{
-    run_closed_loop, ConstantForce, Horizon, Mpc, MpcOptions, NoControl, PdLaw, PdTuning, Summary,
+    run_closed_loop, ConstantForce, Horizon, Mpc, MpcOptions, MpcSolver, NoControl, PdLaw,
+    PdTuning, Summary,
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
@@ -74,6 +77,12 @@ fn main() -> chainbeam::Result<()> {
         options.clone(),
     )?;
     let wrong = run_closed_loop(&scene, INTERVAL, &mut wrong)?.summary;
+    let riccati = MpcOptions {
+        solver: MpcSolver::Riccati,
+        ..options.clone()
+    };
+    let mut riccati = Mpc::new(&scene, INTERVAL, riccati)?;
+    let riccati = run_closed_loop(&scene, INTERVAL, &mut riccati)?.summary;
 
     let t = scene.time.steps as f64 * scene.time.step;
     println!(
@@ -96,6 +105,7 @@ fn main() -> chainbeam::Result<()> {
         (&pd, "tuned PD on M0"),
         (&perfect, "MPC, perfect model"),
         (&wrong, "MPC, wrong model"),
+        (&riccati, "MPC, perfect, Riccati"),
     ] {
         row(s, label);
     }
@@ -108,5 +118,11 @@ fn main() -> chainbeam::Result<()> {
             1e3 * s.initial_decision_seconds
         );
     }
+    println!(
+        "Re-plans: the condensed solver takes {:.2}x less time than the Riccati solver on average \
+         (worst {:.2}x)",
+        riccati.mean_replan_seconds / perfect.mean_replan_seconds,
+        riccati.worst_replan_seconds / perfect.worst_replan_seconds
+    );
     Ok(())
 }

@@ -5,8 +5,8 @@ use crate::plot::{color, Figure, Legend, Panel, Res, Series};
 use crate::{Ctx, Entry, Made};
 use chainbeam::catalogue;
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, NoControl, PdLaw,
-    PdTuning,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, MpcSolver,
+    NoControl, PdLaw, PdTuning,
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
@@ -27,8 +27,9 @@ pub fn entries() -> Vec<Entry> {
         caption: "(beyond the thesis, issue 14) Speed against accuracy of receding-horizon \
                   control on the same scene: closed-loop Σ M₀² (log scale) against the mean \
                   re-plan time, for horizons of 1 to 5 s (a decision every 0.1 s, 1 \
-                  Gauss-Newton iteration per re-plan, perfect model), with the best constant \
-                  force and the tuned PD law as horizontal references.",
+                  Gauss-Newton iteration per re-plan, perfect model), re-planned by the \
+                  condensed and by the Riccati solver, with the best constant force and the \
+                  tuned PD law as horizontal references.",
         make: fig_horizon,
     }]
 }
@@ -57,23 +58,33 @@ fn fig_horizon(ctx: &Ctx) -> Res<Made> {
     } else {
         &[1.0, 2.0, 3.0, 4.0, 5.0]
     };
-    let mut pts = Vec::new();
     let mut notes = Vec::new();
-    for &h in horizons {
-        let options = MpcOptions {
-            horizon: Horizon::Seconds(h),
-            effort: EFFORT,
-            ocp: OcpOptions::default().with_bound(BOUND),
-            ..MpcOptions::default()
-        };
-        let r = run_closed_loop(&scene, INTERVAL, &mut Mpc::new(&scene, INTERVAL, options)?)?;
-        let ms = 1e3 * r.summary.mean_replan_seconds;
-        pts.push((ms, r.summary.c_sum));
-        notes.push(format!(
-            "{h} s: Σ M₀² = {:.1} at {ms:.1} ms",
-            r.summary.c_sum
-        ));
+    let mut series = Vec::new();
+    for (solver, name) in [
+        (MpcSolver::Condensed, "condensed"),
+        (MpcSolver::Riccati, "Riccati"),
+    ] {
+        let mut pts = Vec::new();
+        for &h in horizons {
+            let options = MpcOptions {
+                horizon: Horizon::Seconds(h),
+                effort: EFFORT,
+                solver,
+                ocp: OcpOptions::default().with_bound(BOUND),
+                ..MpcOptions::default()
+            };
+            let mut mpc = Mpc::new(&scene, INTERVAL, options)?;
+            let r = run_closed_loop(&scene, INTERVAL, &mut mpc)?;
+            let ms = 1e3 * r.summary.mean_replan_seconds;
+            pts.push((ms, r.summary.c_sum));
+            notes.push(format!(
+                "{name} {h} s: Σ M₀² = {:.1} at {ms:.1} ms",
+                r.summary.c_sum
+            ));
+        }
+        series.push((name, pts));
     }
+    let pts: Vec<(f64, f64)> = series.iter().flat_map(|s| s.1.clone()).collect();
     let (x0, x1) = (0.0, pts.iter().fold(0.0f64, |m, p| m.max(p.0)) * 1.1);
     let mut panel = Panel::new(
         "MPC horizon: accuracy against speed",
@@ -82,7 +93,10 @@ fn fig_horizon(ctx: &Ctx) -> Res<Made> {
     )
     .logy()
     .legend(Legend::UpperRight);
-    panel.push(Series::line("MPC, horizons 1-5 s", pts, color(3)).markers());
+    for (i, (name, pts)) in series.into_iter().enumerate() {
+        let label = format!("MPC ({name} solver), horizons 1-5 s");
+        panel.push(Series::line(&label, pts, color(3 + i)).markers());
+    }
     panel.push(
         Series::line(
             "best constant",

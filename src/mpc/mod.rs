@@ -1,5 +1,5 @@
 //! Closed-loop control of the riser: a receding-horizon (model predictive) controller built on
-//! the Riccati solver of [`crate::ocp`], the baselines it is measured against, and the loop that
+//! the Gauss-Newton solvers of [`crate::ocp`] (condensed or Riccati), the baselines it is measured against, and the loop that
 //! runs any of them against a plant that may differ from the controller's model.
 //!
 //! # The loop
@@ -26,8 +26,9 @@
 //!   min_θ Σ_{k=0}^{H} M₀(t_{jm+k})² + ρ h Σ u_k² (+ the rate penalty σ/h Σ (Δu)²), |θ| ≤ u_max,
 //!   over a horizon of H steps of its *model* scene, starting from the observed state before
 //!   the control's half-kick at the observed time (below, "The start of a horizon"),
-//!   with one piece per control interval, by the Gauss-Newton/Riccati solver warm-started from
-//!   the previous plan shifted by one interval (the tail padded with its last value) and a fixed
+//!   with one piece per control interval, by a Gauss-Newton solver ([`MpcSolver`]: the
+//!   condensed one by default, or the Riccati one) warm-started from the previous plan shifted
+//!   by one interval (the tail padded with its last value) and a fixed
 //!   iteration budget (real-time iteration: 1-2 Gauss-Newton steps per re-plan), then applies
 //!   θ₀. The model's forecast of the loads is the model scene's loads: the plant and the model
 //!   may differ in any scene quantity (drag, load amplitude or phase, a current, the step).
@@ -59,48 +60,68 @@
 //! 7.9·10⁻¹⁴ in J; a start that held the observed p_k fixed left the first force short by a
 //! half-kick: 1.0 % and 1.8·10⁻³).
 //!
-//! # Measured (`chainbeam mpc examples/scenes/mpc_riser.toml --baselines`, `cargo run --release --example mpc`)
+//! # Which solver re-plans ([`MpcSolver`])
+//! A 3 s horizon is 300 steps but only 30 decisions. The Riccati solver linearises every step
+//! (21 dual-number directions per step for n = 10, then several Riccati passes over 300
+//! stages: cost linear in the horizon); the condensed solver
+//! ([`ocp::Condensed`](crate::ocp::Condensed)) propagates one direction per decision from the
+//! decision's first step on (about N·m/2 direction-steps for m decisions) and solves a dense
+//! 30 × 30 box QP: fewer operations while m is a few tens, with the same Gauss-Newton model
+//! and the same exact gradient. It is the default; the Riccati solver remains the choice for
+//! long horizons and per-step controls (its cost does not grow with m). The solver is kept
+//! between re-plans ([`ocp::Condensed::restart`](crate::ocp::Condensed::restart)).
+//!
+//! # Measured (`cargo run --release --example mpc`, `chainbeam mpc examples/scenes/mpc_riser.toml --baselines`)
 //! The scene: n = 10, D = 10 kg/m, the irregular sea at node 5 and a sheared current along +z
 //! (0.1 → 0.02 m/s, switched on at t = 0 on the straight beam); 60 s, interval 0.1 s, horizon
-//! 3 s, 1 Gauss-Newton iteration per re-plan, |u| ≤ 5 N, ρ = 0.01, on the 2-core machine while
-//! another build ran (load average ≈ 3):
+//! 3 s, 1 Gauss-Newton iteration per re-plan, |u| ≤ 5 N, ρ = 0.01, on the 2-core machine
+//! (load average ≈ 1.5):
 //!
-//! | controller | c_sum | max \|M₀\| (Nm) | max \|u\| (N) |
-//! |---|---|---|---|
-//! | none | 4797918.4 | 35.51 | 0 |
-//! | best constant force | 92936.4 | 9.14 | 2.93 |
-//! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 |
-//! | MPC, perfect model | 9292.1 | 12.04 | 5.00 |
-//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 13916.4 | 11.61 | 5.00 |
+//! | controller | c_sum | max \|M₀\| (Nm) | max \|u\| (N) | mean / worst re-plan (ms) |
+//! |---|---|---|---|---|
+//! | none | 4797918.4 | 35.51 | 0 | |
+//! | best constant force | 92936.4 | 9.14 | 2.93 | |
+//! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 | |
+//! | MPC, perfect model (condensed solver) | 9289.3 | 12.16 | 5.00 | 6.5 / 14.1 |
+//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14293.7 | 11.76 | 5.00 | 6.1 / 11.4 |
+//! | MPC, perfect model, Riccati solver | 9292.1 | 12.04 | 5.00 | 14.5 / 33.4 |
 //!
 //! MPC's c_sum is 10.0 % of the best constant force's and 17.0 % of the tuned PD law's (wrong
-//! model: 15.0 % and 25.5 %). (The MPC rows were re-measured with the exact start of "The start
-//! of a horizon", load average ≈ 4; with the start that held p_k fixed they were 9274.8 and
-//! 14348.9: with a 3 s horizon and one iteration per re-plan the exact start is not the
-//! better controller by construction, only the exact tail of its plan. The other rows do not
-//! depend on it.) Its max |M₀| is higher than the constant force's: the transient
-//! when the current switches on at t = 0 saturates every controller, and MPC trades that peak
-//! for the sum it minimises. Without the current (the same sea alone) MPC's c_sum was 1.82
-//! against the PD law's 61262: the current's steady drag, which the force must cancel
-//! (≈ 2.9 N of the 5 N), is what leaves MPC a residual.
+//! model: 15.4 % and 26.1 %); the two solvers' loops differ by 0.03 % (one iteration per
+//! re-plan: the line searches differ, open loop against Riccati feedback; solved to the
+//! tolerance every plan gives the same optimum with either, tests/cli_mpc.rs). Its max |M₀| is
+//! higher than the constant force's: the transient when the current switches on at t = 0
+//! saturates every controller, and MPC trades that peak for the sum it minimises. Without the
+//! current (the same sea alone) MPC's c_sum was 1.82 against the PD law's 61262: the current's
+//! steady drag, which the force must cancel (≈ 2.9 N of the 5 N), is what leaves MPC a
+//! residual.
 //!
-//! Re-plan cost (wall clock, load average ≈ 4): mean 18.7 ms, worst 40.9 ms, real-time factor
-//! 5.4 (with the earlier start, load ≈ 3: 18.0 ms, 41.4 ms, 5.6; the start adds one O(n)
-//! projection per rollout): worst ≤ the 100 ms interval (real-time capable), the issue's mean
-//! ≤ 10 ms not met. On the idle machine (`cargo bench --bench mpc`, load ≈ 1.5): one re-plan
-//! at t = 10 s takes 6.8 / 14.7 / 17.5 / 15.8 ms for horizons of 1 / 2 / 3 / 4 s, and the 10 s
-//! closed loop with the 3 s horizon runs at a controller real-time factor of 6.3 (mean re-plan
-//! 16.0 ms, worst 23.5 ms); the whole loop, plant included, 5.2× faster than real time. Each
-//! re-plan pays two rollouts, one pass of stage Jacobians by dual numbers (half of the time,
-//! `perf`), about four Riccati passes of the QP and their linear rollouts; the pass that only
+//! Re-plan cost: the condensed solver takes 2.2× less time than the Riccati solver on this
+//! loop (mean 6.5 against 14.5 ms; worst 14.1 against 33.4 ms), real-time factor of the
+//! controller 15.4 against 6.9: the worst re-plan fits the 100 ms interval with either, and the
+//! mean ≤ 10 ms holds with the condensed solver. `cargo bench --bench mpc` (one re-plan at
+//! t = 10 s; the machine's timings vary by about ±20 % from run to run): 1.8 / 3.0 / 6.1 /
+//! 10.0 ms for horizons of 1 / 2 / 3 / 4 s with the condensed solver, 6.1 / 13.8 / 17.7 /
+//! 15.5 ms with the Riccati solver; the 10 s closed loop with the 3 s horizon: mean re-plan
+//! 5.5–7.2 ms, worst 10.2–12.4 ms, the whole loop (plant included) 16× faster than real time.
+//! A condensed re-plan is two or three rollouts (the nominal from the observed state, the line
+//! search) and one pass of sensitivities (about 60 % of its time); the gradient pass that only
 //! served a final convergence test is skipped
 //! ([`OcpOptions::final_gradient`](crate::ocp::OcpOptions::final_gradient)).
 //!
-//! Horizon against cost (`cargo run --release -p paper_figures -- --only mpc_horizon`, idle
-//! machine, 60 s): c_sum 3703102 / 38363 / 9292 / 7592 / 7469 for horizons of 1 / 2 / 3 / 4 /
-//! 5 s at mean re-plan times of 6.5 / 10.5 / 15.2 / 19.7 / 25.7 ms ([`MpcOptions::horizon`]):
-//! 1 s is 40× worse than the best constant force (myopic), 2 s beats the PD law by 1.4×, 3 s by
-//! 5.9×.
+//! Tried and left out: reusing the previous re-plan's stage Jacobians shifted by one interval
+//! (the multi-level real-time iteration, with the gradient kept exact by one adjoint sweep)
+//! made a Riccati re-plan 18 % cheaper but the closed loop 2.4× worse (c_sum 22312 against
+//! 9292 over 60 s): the Jacobians computed 3 s ahead differ from those at the nominal by 1–5 %,
+//! and on this ill-conditioned problem (ρh = 10⁻⁴) that spoils the step; more line-search
+//! rollouts ate most of the saving. A model with a coarser step (0.02 s) fails: the riser's
+//! fastest mode needs h = 0.01 s (the RATTLE Newton iteration diverges).
+//!
+//! Horizon against cost (`cargo run --release -p paper_figures -- --only mpc_horizon`, 60 s):
+//! c_sum 3427342 / 35294 / 9289 / 7582 / 7466 for horizons of 1 / 2 / 3 / 4 / 5 s at mean
+//! re-plan times of 1.8 / 3.6 / 6.8 / 9.8 / 14.3 ms (condensed; Riccati: 3703102 / 38363 /
+//! 9292 / 7592 / 7469 at 6.6 / 9.9 / 13.9 / 18.3 / 25.4 ms) ([`MpcOptions::horizon`]): 1 s is
+//! 37× worse than the best constant force (myopic), 2 s beats the PD law by 1.5×, 3 s by 5.9×.
 //!
 //! # Example
 //! ```

@@ -1,5 +1,5 @@
-//! The receding-horizon controller: real-time iterations of the Gauss-Newton/Riccati solver
-//! from the observed state, warm-started from the previous plan.
+//! The receding-horizon controller: real-time iterations of a Gauss-Newton solver (condensed or
+//! Riccati) from the observed state, warm-started from the previous plan.
 
 use super::{interval_steps, Controller, Observation};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
@@ -39,10 +39,10 @@ pub enum MpcSolver {
 pub struct MpcOptions {
     /// The horizon. Default 3 s. Measured on `mpc_riser` (its current's steady drag bends the
     /// riser slowly, through the drag's long time constant; the `mpc_horizon` figure of
-    /// `paper_figures`): closed-loop c_sum 38363 with 2 s, 9292 with 3 s, 7592 with 4 s, 7469
-    /// with 5 s, at mean re-plan times of 10.5, 15.2, 19.7 and 25.7 ms (idle 2-core machine);
-    /// 2 s is myopic there (below the best constant force only by 2.4×, 3 s by 10×), beyond
-    /// 3 s the gain is small.
+    /// `paper_figures`): closed-loop c_sum 35294 with 2 s, 9289 with 3 s, 7582 with 4 s, 7466
+    /// with 5 s, at mean re-plan times of 3.6, 6.8, 9.8 and 14.3 ms with the condensed solver
+    /// (2-core machine); 2 s is myopic there (below the best constant force only by 2.6×,
+    /// 3 s by 10×), beyond 3 s the gain is small.
     pub horizon: Horizon,
     /// Gauss-Newton iterations per re-plan (the real-time iteration budget). Default 1: from
     /// the shifted plan one iteration is as good as two on `mpc_riser` (its first 10 s: c_sum

@@ -4,6 +4,12 @@
 //! whatever the number of controls, where a Hessian-vector product of a trust-region method costs
 //! a whole forward-over-adjoint sweep and a Newton step needs many of them.
 //!
+//! A second method on the same problem and the same Gauss-Newton model, [`Condensed`] (full
+//! condensing: the sensitivities of the bending moments to θ by forward dual numbers and a
+//! dense box QP), is cheaper when the decisions are few over many steps (the receding horizons
+//! of [`crate::mpc`]: 30 pieces of 10 steps); its cost grows with N times the number of
+//! decisions, this solver's with N alone ([`condensed`] "Why a second method").
+//!
 //! # The problem
 //! J(θ) = Σ_{k=0}^{N} [c_k M₀(t_k)² + ρh u_k²] + (σ/h) Σ_{k=1}^{N} (u_k − u_{k−1})²
 //! over the RATTLE trajectory from the straight beam at rest, with c_k = 1 (c_sum, eq. 3.3.4) or

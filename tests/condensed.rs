@@ -224,7 +224,7 @@ fn restart_equals_a_fresh_solver() {
         pieces: 5,
     });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let at_rest = ControlProblem::new(&mpc_scene(50), map.clone(), obj).unwrap();
+    let at_rest = ControlProblem::new(&mpc_scene(50), map, obj).unwrap();
     let moving = at_rest
         .clone()
         .starting_before_kick(hat, plant.time())

@@ -4,7 +4,12 @@
 //! A_k, against dual numbers carried along the whole horizon), its optima against the Riccati
 //! solver's, bounds, a moving start, and honest failure.
 
+#[allow(dead_code)]
+#[path = "../examples/tables/thesis.rs"]
+mod thesis;
+
 use chainbeam::ocp::{Condensed, OcpOptions, Solver, Termination};
+use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, PiecewiseControl,
     Scene,
@@ -253,5 +258,48 @@ fn restart_equals_a_fresh_solver() {
     match reused.restart(&other) {
         Err(chainbeam::Error::InvalidArgument { name, .. }) => assert_eq!(name, "problem"),
         r => panic!("expected the typed error, got {r:?}"),
+    }
+}
+
+/// Table 3.4 rows 5, 7 and 9 (per-step, N = 10, c_sum without effort penalty, bounded by the
+/// thesis's largest |u_k| as in the `tables` example): u_N acts on nothing J sees (a zero row
+/// of H and a zero gradient), and the QP leaves it where it is instead of raising the
+/// regularisation on a singular Hessian (row 9: 46 iterations, 192 before). Each row converges
+/// to the trust region's objective (reference: `minimize` with `Method::TrustRegion`, exact
+/// Hessian-vector products) to 1e-8 relative.
+#[test]
+fn table_3_4_rows_with_an_inert_control_converge() {
+    for node in [5usize, 7, 9] {
+        let p = ControlProblem::new(
+            &catalogue::riser(node),
+            Parametrisation::PerStep(PerStepControl { steps: 10 }),
+            BendingObjective::summed_moment(),
+        )
+        .unwrap();
+        let bound = thesis::TABLE_3_4[node - 1]
+            .0
+            .iter()
+            .fold(0.0f64, |m, u| m.max(u.abs()));
+        let o = |method| OptimOptions {
+            method,
+            bound: Some(bound),
+            max_iters: 2000,
+            ..OptimOptions::default()
+        };
+        let opts = riccati_options(&o(Method::Riccati)).unwrap();
+        let r = Condensed::new(&p, &opts)
+            .unwrap()
+            .solve(&[0.0; 11])
+            .unwrap();
+        assert!(r.converged, "row {node}: {:?}", r.termination);
+        assert_eq!(r.theta[10], 0.0, "row {node}: u_N moved");
+        let tr = minimize(&p, &[0.0; 11], &o(Method::TrustRegion)).unwrap();
+        let rel = (r.objective - tr.objective) / tr.objective;
+        assert!(
+            rel <= 1e-8,
+            "row {node}: {} vs trust region {}",
+            r.objective,
+            tr.objective
+        );
     }
 }

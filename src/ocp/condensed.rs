@@ -351,6 +351,13 @@ impl Condensed {
         let (p, u) = (self.piece[k], self.nominal.u[k]);
         self.grad[p] += 2.0 * self.cost.effort * u;
         self.hess[p * np + p] += 2.0 * self.cost.effort;
+        self.rate_terms(k);
+    }
+
+    /// The rate penalty's terms of stage k in H and g.
+    fn rate_terms(&mut self, k: usize) {
+        let np = self.np;
+        let (p, u) = (self.piece[k], self.nominal.u[k]);
         let r = self.cost.rate;
         if k > 0 && r > 0.0 && self.piece[k - 1] != p {
             let q = self.piece[k - 1];
@@ -384,6 +391,10 @@ impl Condensed {
     /// # Errors
     /// As [`Condensed::set_point`]; a failed simulation of the nominal.
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
+        self.run(theta0)
+    }
+
+    fn run(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0);
         let mut pr = Progress {
@@ -619,10 +630,15 @@ fn balanced(mut chunks: Vec<SensChunk>) -> Vec<SensChunk> {
 /// active-set method from δ = 0 (Nocedal & Wright, *Numerical Optimization*, Alg. 16.3):
 /// Newton steps on the free set (Cholesky of its block), a ratio test that fixes the first
 /// blocking bound, and the release of the bound whose multiplier has the wrong sign.
+/// A decision without effect (a zero row of H and a zero gradient: u_N of a per-step control
+/// without effort penalty acts on nothing J sees) stays where it is, as the Riccati solver's
+/// inert controls ([`super::boxqp`]).
+const INERT: i8 = 2;
+
 #[derive(Clone, Debug)]
 struct BoxQp {
     delta: Vec<f64>,
-    /// 0 free, −1 at its lower bound, +1 at its upper bound.
+    /// 0 free, −1 at its lower bound, +1 at its upper bound, [`INERT`].
     fixed: Vec<i8>,
     free: Vec<usize>,
     resid: Vec<f64>,
@@ -664,7 +680,10 @@ impl BoxQp {
         let upper = |i: usize| hi - theta[i];
         self.delta.fill(0.0);
         for i in 0..np {
-            self.fixed[i] = if lower(i) >= 0.0 && g[i] > 0.0 {
+            let inert = g[i] == 0.0 && (0..np).all(|j| h[i.max(j) * np + i.min(j)] == 0.0);
+            self.fixed[i] = if inert {
+                INERT
+            } else if lower(i) >= 0.0 && g[i] > 0.0 {
                 -1
             } else if upper(i) <= 0.0 && g[i] < 0.0 {
                 1
@@ -717,7 +736,7 @@ impl BoxQp {
             // A minimiser on the working set: release the worst wrong-signed multiplier.
             self.residual(h, g, lambda);
             let worst = (0..np)
-                .filter(|&i| self.fixed[i] != 0)
+                .filter(|&i| self.fixed[i] == -1 || self.fixed[i] == 1)
                 .map(|i| (i, -f64::from(self.fixed[i]) * self.resid[i]))
                 .filter(|&(_, m)| m < 0.0)
                 .min_by(|a, b| a.1.total_cmp(&b.1));

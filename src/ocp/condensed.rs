@@ -304,14 +304,14 @@ impl Condensed {
         let (model, nominal) = (&self.model, &self.nominal);
         let (piece, stage) = (&self.piece[..], &self.theta_stage[..]);
         let work = |c: &mut SensChunk| c.sweep(model, nominal, piece, stage[c.first]);
-        #[cfg(feature = "parallel")]
         if self.threads > 1 {
+            #[cfg(feature = "parallel")]
             self.chunks.par_iter_mut().try_for_each(work)?;
+            #[cfg(not(feature = "parallel"))]
+            self.chunks.iter_mut().try_for_each(work)?;
         } else {
             self.chunks.iter_mut().try_for_each(work)?;
         }
-        #[cfg(not(feature = "parallel"))]
-        self.chunks.iter_mut().try_for_each(work)?;
         self.counts.1 += 1;
         self.assemble();
         Ok(())

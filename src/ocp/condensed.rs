@@ -43,12 +43,13 @@ use num_dual::Derivative;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, RoundoffWatch};
 use super::line_search::{rollout, Traj};
 use super::riccati::StageCost;
 use super::stage::{Dv, StageModel, Stepper, CHUNK};
 use super::{
-    available_threads, control_structure, ids, IterationRecord, OcpOptions, OcpResult, Termination,
-    MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF,
+    available_threads, check_theta, control_structure, ids, IterationRecord, OcpOptions, OcpResult,
+    Termination,
 };
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
@@ -89,37 +90,9 @@ struct Progress {
     /// ‖∇J(θ₀)‖.
     g0: Option<f64>,
     last_pg: f64,
-    /// Consecutive accepted steps below J's round-off and the projected gradient they are
-    /// measured against.
-    roundoff_steps: usize,
-    roundoff_pg: f64,
+    /// Steps below J's round-off.
+    roundoff: RoundoffWatch,
     history: Vec<IterationRecord>,
-}
-
-impl Progress {
-    /// Whether steps below J's resolution stopped reducing the projected gradient `pg` by
-    /// 10 % over [`MAX_ROUNDOFF_STEPS`] steps (as the Riccati solver).
-    fn stalled(&mut self, roundoff: bool, pg: f64) -> bool {
-        if !roundoff {
-            self.roundoff_steps = 0;
-            return false;
-        }
-        if self.roundoff_steps == 0 || pg < 0.9 * self.roundoff_pg {
-            self.roundoff_steps = 0;
-            self.roundoff_pg = pg;
-        }
-        self.roundoff_steps += 1;
-        self.roundoff_steps > MAX_ROUNDOFF_STEPS
-    }
-}
-
-/// The step the line search accepted.
-struct Accepted {
-    alpha: f64,
-    /// Actual over predicted decrease.
-    ratio: f64,
-    /// Taken below J's round-off.
-    roundoff: bool,
 }
 
 /// The sensitivities of the decisions θ_first … θ_{first+len−1} (one dual-number chunk).
@@ -283,18 +256,7 @@ impl Condensed {
     /// [`Error::InvalidArgument`] (`theta`) for a wrong length or a non-finite entry; the
     /// simulation's errors.
     pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
-        if theta.len() != self.np {
-            return Err(Error::InvalidArgument {
-                name: "theta",
-                reason: format!("expected {} values, got {}", self.np, theta.len()),
-            });
-        }
-        if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-            return Err(Error::InvalidArgument {
-                name: "theta",
-                reason: format!("entry {i} is not finite"),
-            });
-        }
+        check_theta(theta, self.np)?;
         self.simulate(theta, false)
     }
 
@@ -403,8 +365,7 @@ impl Condensed {
             iterations: 0,
             g0: None,
             last_pg: f64::INFINITY,
-            roundoff_steps: 0,
-            roundoff_pg: f64::INFINITY,
+            roundoff: RoundoffWatch::default(),
             history: Vec::new(),
         };
         let termination = loop {
@@ -435,7 +396,7 @@ impl Condensed {
         if pr.iterations >= opts.max_iters {
             return Ok(Some(Termination::MaxIterations));
         }
-        let Some(acc) = self.step(&mut pr.mu) else {
+        let Some(acc) = self.step(&mut pr.mu, pr.j0) else {
             return Ok(Some(Termination::RegularisationLimit));
         };
         std::mem::swap(&mut self.nominal, &mut self.trial);
@@ -446,21 +407,16 @@ impl Condensed {
             alpha: acc.alpha,
             regularisation: pr.mu,
         });
-        if pr.stalled(acc.roundoff, pg) {
+        if pr.roundoff.stalled(acc.roundoff, pg) {
             return Ok(Some(Termination::RoundOff));
         }
-        let mu = pr.mu;
-        if acc.alpha >= 1.0 && acc.ratio > 0.75 {
-            pr.mu = if mu * 0.25 < MU_MIN { 0.0 } else { mu * 0.25 };
-        } else if acc.alpha < 1.0 || acc.ratio < 0.25 {
-            pr.mu = (mu * 4.0).max(MU_MIN);
-        }
+        pr.mu = next_mu(pr.mu, &acc);
         Ok(None)
     }
 
     /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
     /// `None` with μ beyond its limit.
-    fn step(&mut self, mu: &mut f64) -> Option<Accepted> {
+    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<Accepted> {
         let theta = self.theta();
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let np = self.np;
@@ -473,56 +429,23 @@ impl Condensed {
         loop {
             let bounds = (&theta[..], lo, hi);
             if let Some(model) = self.qp.solve(&self.hess, &self.grad, bounds, *mu * scale) {
-                if let Some(acc) = self.backtrack(&theta, model) {
+                let (jbar, search) = (self.nominal.cost, (self.opts.armijo, self.opts.backtracks));
+                let mut trial = theta.clone();
+                let mut rollout = |alpha: f64| {
+                    for ((t, th), d) in trial.iter_mut().zip(&theta).zip(&self.qp.delta) {
+                        *t = th + alpha * d;
+                    }
+                    self.simulate(&trial, true).ok()
+                };
+                if let Some(acc) = backtrack((jbar, j0), model, search, &mut rollout) {
                     return Some(acc);
                 }
             }
-            *mu = (*mu * 10.0).max(MU_MIN);
+            *mu = raise_mu(*mu);
             if *mu > self.opts.max_regularisation {
                 return None;
             }
         }
-    }
-
-    /// Line search on rollouts of θ + αδ into `trial` (module docs).
-    fn backtrack(&mut self, theta: &[f64], (d1, d2): (f64, f64)) -> Option<Accepted> {
-        let jbar = self.nominal.cost;
-        let tiny = ROUNDOFF * jbar.abs().max(f64::MIN_POSITIVE);
-        let mut alpha = 1.0;
-        let mut trial = theta.to_vec();
-        for _ in 0..self.opts.backtracks {
-            let dj = alpha * d1 + alpha * alpha * d2;
-            for ((t, th), d) in trial.iter_mut().zip(theta).zip(&self.qp.delta) {
-                *t = th + alpha * d;
-            }
-            let mut next = 0.5 * alpha;
-            if let Ok(jt) = self.simulate(&trial, true) {
-                if -dj <= tiny {
-                    if jt <= jbar + NOISE * jbar.abs() {
-                        return Some(Accepted {
-                            alpha,
-                            ratio: 1.0,
-                            roundoff: true,
-                        });
-                    }
-                } else {
-                    let ratio = (jbar - jt) / (-dj);
-                    if ratio >= self.opts.armijo {
-                        return Some(Accepted {
-                            alpha,
-                            ratio,
-                            roundoff: false,
-                        });
-                    }
-                    let b = (jt - jbar - alpha * d1) / (alpha * alpha);
-                    if b > 0.0 && d1 < 0.0 {
-                        next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
-                    }
-                }
-            }
-            alpha = next;
-        }
-        None
     }
 
     fn report(&self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {

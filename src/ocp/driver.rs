@@ -1,6 +1,7 @@
 //! The iteration: start, Gauss-Newton QP, closed-loop line search, regularisation schedule,
 //! convergence and failure reports (module docs, "Globalisation", "Convergence").
 
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, RoundoffWatch};
 use super::*;
 
 /// The running state of one [`Solver::solve`].
@@ -11,24 +12,13 @@ struct Progress {
     mu: f64,
     /// Accepted steps.
     iterations: usize,
-    /// Consecutive accepted steps below J's round-off, and the projected gradient they are
-    /// measured against.
-    roundoff_steps: usize,
-    roundoff_pg: f64,
+    /// Steps below J's round-off.
+    roundoff: RoundoffWatch,
     history: Vec<IterationRecord>,
     /// ‖∇J(θ₀)‖ (set by the first gradient).
     g0: Option<f64>,
     /// The projected gradient of the last evaluation.
     last_pg: f64,
-}
-
-/// The step the line search accepted.
-struct Accepted {
-    alpha: f64,
-    /// Taken in the round-off regime (the model's decrease below J's resolution).
-    roundoff: bool,
-    /// Actual over predicted decrease.
-    ratio: f64,
 }
 
 impl Solver {
@@ -42,8 +32,7 @@ impl Solver {
             j0: self.set_point(theta0)?,
             mu: 0.0,
             iterations: 0,
-            roundoff_steps: 0,
-            roundoff_pg: f64::INFINITY,
+            roundoff: RoundoffWatch::default(),
             history: Vec::new(),
             g0: None,
             last_pg: f64::INFINITY,
@@ -82,10 +71,12 @@ impl Solver {
         let Some(model) = self.model_step(pr, (pg, gref))? else {
             return Ok(Some(Termination::RegularisationLimit));
         };
-        match self.backtrack(jbar, pr.j0, model) {
+        let search = (opts.armijo, opts.backtracks);
+        let trial = |alpha| self.trial_rollout(alpha).then_some(self.trial.cost);
+        match backtrack((jbar, pr.j0), model, search, trial) {
             Some(acc) => self.accept(pr, acc, (pg, target)),
             None => {
-                pr.mu = (pr.mu * 10.0).max(MU_MIN);
+                pr.mu = raise_mu(pr.mu);
                 Ok((pr.mu > opts.max_regularisation).then_some(Termination::RegularisationLimit))
             }
         }
@@ -129,54 +120,11 @@ impl Solver {
                     return Ok(Some((self.riccati.d1, self.riccati.d2)));
                 }
             }
-            pr.mu = (pr.mu * 10.0).max(MU_MIN);
+            pr.mu = raise_mu(pr.mu);
             if pr.mu > opts.max_regularisation {
                 return Ok(None);
             }
         }
-    }
-
-    /// Line search on closed-loop rollouts of the simulator into `self.trial`: α = 1 first,
-    /// then the minimiser of the quadratic through J̄, the slope d1 and J(α), kept in
-    /// [α/10, α/2]; accepted when J̄ − J(α) ≥ c·(−ΔJ(α)), or, where −ΔJ is below J's round-off,
-    /// when J does not rise beyond it.
-    fn backtrack(&mut self, jbar: f64, j0: f64, (d1, d2): (f64, f64)) -> Option<Accepted> {
-        let jscale = jbar.abs().max(1e-6 * j0.abs());
-        let tiny = ROUNDOFF * jscale;
-        let mut alpha = 1.0;
-        for _ in 0..self.opts.backtracks {
-            let dj = alpha * d1 + alpha * alpha * d2;
-            let mut next = 0.5 * alpha;
-            if self.trial_rollout(alpha) {
-                let jt = self.trial.cost;
-                if -dj <= tiny {
-                    // Round-off regime: the model's decrease is not resolvable in J; take the
-                    // step unless J rises beyond its round-off.
-                    if jt <= jbar + NOISE * jscale {
-                        return Some(Accepted {
-                            alpha,
-                            roundoff: true,
-                            ratio: 1.0,
-                        });
-                    }
-                } else {
-                    let ratio = (jbar - jt) / (-dj);
-                    if ratio >= self.opts.armijo {
-                        return Some(Accepted {
-                            alpha,
-                            roundoff: false,
-                            ratio,
-                        });
-                    }
-                    let b = (jt - jbar - alpha * d1) / (alpha * alpha);
-                    if b > 0.0 && d1 < 0.0 {
-                        next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
-                    }
-                }
-            }
-            alpha = next;
-        }
-        None
     }
 
     /// The closed-loop rollout u_k = clamp(ū_k + α k_k + K_k δz_k) into `self.trial`; `false`
@@ -220,31 +168,17 @@ impl Solver {
             alpha: acc.alpha,
             regularisation: pr.mu,
         });
-        if acc.roundoff {
-            // Below J's resolution only the projected gradient shows progress: stop when it has
-            // not fallen by 10 % over several such steps.
-            if pr.roundoff_steps == 0 || pg < 0.9 * pr.roundoff_pg {
-                pr.roundoff_steps = 0;
-                pr.roundoff_pg = pg;
-            }
-            pr.roundoff_steps += 1;
-            if pr.roundoff_steps > MAX_ROUNDOFF_STEPS {
-                self.costate()?;
-                return Ok(Some(if self.projected_norm() <= target {
-                    Termination::Converged
-                } else {
-                    Termination::RoundOff
-                }));
-            }
-        } else {
-            pr.roundoff_steps = 0;
+        // Below J's resolution only the projected gradient shows progress: stop when it has
+        // not fallen by 10 % over several such steps.
+        if pr.roundoff.stalled(acc.roundoff, pg) {
+            self.costate()?;
+            return Ok(Some(if self.projected_norm() <= target {
+                Termination::Converged
+            } else {
+                Termination::RoundOff
+            }));
         }
-        let mu = pr.mu;
-        if acc.alpha >= 1.0 && acc.ratio > 0.75 {
-            pr.mu = if mu * 0.25 < MU_MIN { 0.0 } else { mu * 0.25 };
-        } else if acc.alpha < 1.0 || acc.ratio < 0.25 {
-            pr.mu = (mu * 4.0).max(MU_MIN);
-        }
+        pr.mu = next_mu(pr.mu, &acc);
         Ok(None)
     }
 

@@ -145,6 +145,7 @@ pub mod boxqp;
 pub mod condensed;
 mod diagnostics;
 mod driver;
+mod globalise;
 pub mod line_search;
 mod options;
 mod qp;
@@ -361,25 +362,9 @@ impl Solver {
         self.n_params
     }
 
-    fn check_theta(&self, theta: &[f64]) -> Result<()> {
-        if theta.len() != self.n_params {
-            return Err(Error::InvalidArgument {
-                name: "theta",
-                reason: format!("expected {} values, got {}", self.n_params, theta.len()),
-            });
-        }
-        if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-            return Err(Error::InvalidArgument {
-                name: "theta",
-                reason: format!("entry {i} is not finite"),
-            });
-        }
-        Ok(())
-    }
-
     /// Simulates θ (projected onto the box) as the new nominal trajectory and returns J.
     pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
-        self.check_theta(theta)?;
+        check_theta(theta, self.n_params)?;
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         for k in 0..=self.steps {
             self.nominal.u[k] = theta[self.piece[k]].clamp(lo, hi);
@@ -591,6 +576,23 @@ impl Solver {
             .sum::<f64>()
             .sqrt()
     }
+}
+
+/// θ has `n_params` finite entries ([`Error::InvalidArgument`] naming `theta` otherwise).
+fn check_theta(theta: &[f64], n_params: usize) -> Result<()> {
+    if theta.len() != n_params {
+        return Err(Error::InvalidArgument {
+            name: "theta",
+            reason: format!("expected {n_params} values, got {}", theta.len()),
+        });
+    }
+    if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
+        return Err(Error::InvalidArgument {
+            name: "theta",
+            reason: format!("entry {i} is not finite"),
+        });
+    }
+    Ok(())
 }
 
 /// θ_j = j, to read the control structure off the control map.

@@ -1,0 +1,119 @@
+//! What the Riccati solver ([`super::Solver`]) and the condensed solver ([`super::Condensed`])
+//! share to turn a model step into an accepted one: the backtracking rule on actual against
+//! predicted decrease (with J's round-off), the Levenberg schedule, and the stall test for
+//! steps below J's resolution. Each solver supplies only its own trial (a closed-loop rollout
+//! with Riccati feedback, or an open-loop rollout of θ + αδ).
+
+use super::{MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF};
+
+/// The step the line search accepted.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Accepted {
+    pub alpha: f64,
+    /// Taken in the round-off regime (the model's decrease below J's resolution).
+    pub roundoff: bool,
+    /// Actual over predicted decrease.
+    pub ratio: f64,
+}
+
+/// Backtracking on J(α) = `trial(α)` (`None`: the trial failed) from J̄ = `jbar` with the
+/// predicted change ΔJ(α) = α d1 + α² d2: α = 1 first, then the minimiser of the quadratic
+/// through J̄, d1 and J(α), kept in [α/10, α/2]; accepted when J̄ − J(α) ≥ c·(−ΔJ(α))
+/// (c = `armijo`), or, where −ΔJ is below J's round-off (relative to max(|J̄|, 10⁻⁶ |J₀|)),
+/// when J does not rise beyond it. At most `tries` trials.
+pub(crate) fn backtrack(
+    (jbar, j0): (f64, f64),
+    (d1, d2): (f64, f64),
+    (armijo, tries): (f64, usize),
+    mut trial: impl FnMut(f64) -> Option<f64>,
+) -> Option<Accepted> {
+    let jscale = jbar.abs().max(1e-6 * j0.abs());
+    let tiny = ROUNDOFF * jscale;
+    let mut alpha = 1.0;
+    for _ in 0..tries {
+        let dj = alpha * d1 + alpha * alpha * d2;
+        let mut next = 0.5 * alpha;
+        if let Some(jt) = trial(alpha) {
+            if -dj <= tiny {
+                if jt <= jbar + NOISE * jscale {
+                    return Some(Accepted {
+                        alpha,
+                        roundoff: true,
+                        ratio: 1.0,
+                    });
+                }
+            } else {
+                let ratio = (jbar - jt) / (-dj);
+                if ratio >= armijo {
+                    return Some(Accepted {
+                        alpha,
+                        roundoff: false,
+                        ratio,
+                    });
+                }
+                let b = (jt - jbar - alpha * d1) / (alpha * alpha);
+                if b > 0.0 && d1 < 0.0 {
+                    next = (-d1 / (2.0 * b)).clamp(0.1 * alpha, 0.5 * alpha);
+                }
+            }
+        }
+        alpha = next;
+    }
+    None
+}
+
+/// The Levenberg weight after an accepted step: lowered (to 0 below [`MU_MIN`]) after a full
+/// step whose decrease matched the model, raised after a short step or a poor match.
+pub(crate) fn next_mu(mu: f64, acc: &Accepted) -> f64 {
+    if acc.alpha >= 1.0 && acc.ratio > 0.75 {
+        if mu * 0.25 < MU_MIN {
+            0.0
+        } else {
+            mu * 0.25
+        }
+    } else if acc.alpha < 1.0 || acc.ratio < 0.25 {
+        (mu * 4.0).max(MU_MIN)
+    } else {
+        mu
+    }
+}
+
+/// The Levenberg weight after a failed model step or line search.
+pub(crate) fn raise_mu(mu: f64) -> f64 {
+    (mu * 10.0).max(MU_MIN)
+}
+
+/// Consecutive accepted steps below J's round-off, and the projected gradient they are measured
+/// against: below J's resolution only the projected gradient shows progress.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RoundoffWatch {
+    steps: usize,
+    pg: f64,
+}
+
+impl Default for RoundoffWatch {
+    fn default() -> Self {
+        RoundoffWatch {
+            steps: 0,
+            pg: f64::INFINITY,
+        }
+    }
+}
+
+impl RoundoffWatch {
+    /// Records an accepted step (`roundoff`: taken below J's resolution) at projected gradient
+    /// `pg`; true when more than [`MAX_ROUNDOFF_STEPS`] such steps in a row have not lowered
+    /// the projected gradient by 10 %.
+    pub fn stalled(&mut self, roundoff: bool, pg: f64) -> bool {
+        if !roundoff {
+            self.steps = 0;
+            return false;
+        }
+        if self.steps == 0 || pg < 0.9 * self.pg {
+            self.steps = 0;
+            self.pg = pg;
+        }
+        self.steps += 1;
+        self.steps > MAX_ROUNDOFF_STEPS
+    }
+}

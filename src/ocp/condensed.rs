@@ -48,12 +48,10 @@ use super::line_search::{rollout, Traj};
 use super::riccati::StageCost;
 use super::stage::{Dv, StageModel, Stepper, CHUNK};
 use super::{
-    available_threads, check_theta, control_structure, ids, IterationRecord, OcpOptions, OcpResult,
-    Termination,
+    available_threads, check_theta, IterationRecord, OcpOptions, OcpResult, Setup, Termination,
 };
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
-use crate::scene::ObjectiveKind;
 
 /// Gauss-Newton on the condensed problem (module docs), with its buffers.
 #[derive(Clone, Debug)]
@@ -115,28 +113,15 @@ impl Condensed {
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,
     ) -> Result<Self> {
-        options.validate()?;
-        let obj = problem
-            .objective()
-            .bending()
-            .ok_or_else(|| Error::InvalidArgument {
-                name: "objective",
-                reason: "the condensed Gauss-Newton solver needs a bending-moment objective \
-                         (c or c_sum, with effort)"
-                    .into(),
-            })?;
-        let steps = problem.steps();
-        let h = problem.time_step();
-        let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
-        let cost = StageCost {
-            effort: obj.effort * h,
-            rate: options.rate_penalty / h,
-            final_only: obj.kind == ObjectiveKind::Final,
+        let Setup {
+            model,
+            cost,
             steps,
-        };
-        let np = problem.n_params();
-        let (piece, free) = control_structure(&problem.controls(&ids(np))?, np)?;
-        let theta_stage: Vec<usize> = (0..=steps).filter(|&k| free[k]).collect();
+            n_params: np,
+            piece,
+            free,
+            theta_stage,
+        } = Setup::new(problem, options, "the condensed Gauss-Newton solver")?;
         let chunks = (0..np)
             .step_by(CHUNK)
             .map(|first| {

@@ -273,29 +273,15 @@ impl Solver {
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,
     ) -> Result<Self> {
-        options.validate()?;
-        let obj = problem
-            .objective()
-            .bending()
-            .ok_or_else(|| Error::InvalidArgument {
-                name: "objective",
-                reason: "the Riccati solver needs a bending-moment objective (c or c_sum, with \
-                     effort): it exploits their Gauss-Newton form"
-                    .into(),
-            })?;
-        let steps = problem.steps();
-        let model =
-            StageModel::new(problem.chain(), problem.time_step())?.with_start(problem.start());
-        let h = problem.time_step();
-        let cost = StageCost {
-            effort: obj.effort * h,
-            rate: options.rate_penalty / h,
-            final_only: obj.kind == ObjectiveKind::Final,
+        let Setup {
+            model,
+            cost,
             steps,
-        };
-        let n_params = problem.n_params();
-        let (piece, free) = control_structure(&problem.controls(&ids(n_params))?, n_params)?;
-        let theta_stage: Vec<usize> = (0..=steps).filter(|&k| free[k]).collect();
+            n_params,
+            piece,
+            free,
+            theta_stage,
+        } = Setup::new(problem, options, "the Riccati solver")?;
         let n = model.n;
         let nxi = model.nx();
         let aug = usize::from(options.rate_penalty > 0.0 || free.iter().any(|f| !f));
@@ -575,6 +561,64 @@ impl Solver {
             })
             .sum::<f64>()
             .sqrt()
+    }
+}
+
+/// What both solvers read off a problem: the stage model from its start, the stage costs,
+/// and the control structure u_k = θ_{piece(k)}.
+struct Setup {
+    model: StageModel,
+    cost: StageCost,
+    steps: usize,
+    n_params: usize,
+    piece: Vec<usize>,
+    /// Whether stage k starts a piece (has a decision).
+    free: Vec<bool>,
+    /// The first stage of θ_j.
+    theta_stage: Vec<usize>,
+}
+
+impl Setup {
+    /// Validates the options, the model (planar, free tip, a control node), the objective (a
+    /// [`BendingObjective`](crate::BendingObjective)) and the control map (per-step or piecewise
+    /// constant); `solver` names the solver in the objective's error.
+    fn new<P: ControlMap, O: Objective>(
+        problem: &ControlProblem<P, O>,
+        options: &OcpOptions,
+        solver: &str,
+    ) -> Result<Self> {
+        options.validate()?;
+        let obj = problem
+            .objective()
+            .bending()
+            .ok_or_else(|| Error::InvalidArgument {
+                name: "objective",
+                reason: format!(
+                    "{solver} needs a bending-moment objective (c or c_sum, with effort): it \
+                     exploits their Gauss-Newton form"
+                ),
+            })?;
+        let steps = problem.steps();
+        let h = problem.time_step();
+        let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
+        let cost = StageCost {
+            effort: obj.effort * h,
+            rate: options.rate_penalty / h,
+            final_only: obj.kind == ObjectiveKind::Final,
+            steps,
+        };
+        let n_params = problem.n_params();
+        let (piece, free) = control_structure(&problem.controls(&ids(n_params))?, n_params)?;
+        let theta_stage = (0..=steps).filter(|&k| free[k]).collect();
+        Ok(Setup {
+            model,
+            cost,
+            steps,
+            n_params,
+            piece,
+            free,
+            theta_stage,
+        })
     }
 }
 

@@ -12,16 +12,18 @@
 //!   With `OCP_BENCH_LONG=1` also N = 10⁴ (and 10⁵ with `OCP_BENCH_LONG=2`), and L-BFGS and the
 //!   trust region at N = 10³ (minutes: L-BFGS stops at 5000 iterations, the trust region
 //!   converges after about 225-375 s; `examples/long_horizon.rs` prints the same comparison).
-//! - `ocp_table_3_4/all_rows/{riccati,lbfgs,trust_region}`: all ten rows of Table 3.4
-//!   (per-step, N = 10, c_sum, each row bounded by the thesis's largest |u_k|) from u = 0, in
-//!   total; the per-row objectives, convergence and times are printed to stderr first.
+//! - `ocp_table_3_4/all_rows/{riccati,condensed,lbfgs,trust_region}`: all ten rows of Table
+//!   3.4 (per-step, N = 10, c_sum, each row bounded by the thesis's largest |u_k|) from u = 0,
+//!   in total (`condensed`: [`chainbeam::ocp::Condensed`], the dense Gauss-Newton on the 11
+//!   controls, called directly); the per-row objectives, convergence and times are printed to
+//!   stderr first.
 //!
 //! Run with `cargo bench --bench ocp -- --warm-up-time 1 --measurement-time 5`.
 
 use std::hint::black_box;
 
-use chainbeam::ocp::{solve, OcpOptions, Solver};
-use chainbeam::optimize::{minimize, Method, OptimOptions};
+use chainbeam::ocp::{solve, Condensed, OcpOptions, Solver};
+use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
 };
@@ -164,21 +166,29 @@ fn optim(method: Method, bound: f64) -> OptimOptions {
 fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
     eprintln!("Table 3.4 (per-step, N = 10), from u = 0, bound = the thesis row's max |u|:");
     eprintln!(
-        "{:>4} {:>9} {:>22} {:>22} {:>22}",
-        "node", "bound", "riccati J (conv, ms)", "trust region J", "lbfgs J"
+        "{:>4} {:>9} {:>22} {:>22} {:>22} {:>22}",
+        "node",
+        "bound",
+        "riccati J (conv, ms)",
+        "condensed J (conv, ms)",
+        "trust region J",
+        "lbfgs J"
     );
-    let mut total = [0.0f64; 3];
+    let mut total = [0.0f64; 4];
     for (node, p, bound) in rows {
         // What `minimize` with Method::Riccati returns (a stalled Gauss-Newton run finished by
         // the trust region: `+tr` after the time).
         let r = minimize(p, &[0.0; 11], &optim(Method::Riccati, *bound)).unwrap();
         let tr = minimize(p, &[0.0; 11], &optim(Method::TrustRegion, *bound)).unwrap();
         let lb = minimize(p, &[0.0; 11], &optim(Method::Lbfgs, *bound)).unwrap();
-        for (t, s) in total.iter_mut().zip([r.seconds, tr.seconds, lb.seconds]) {
+        let c = condensed(p, *bound);
+        let times = [r.seconds, c.seconds, tr.seconds, lb.seconds];
+        for (t, s) in total.iter_mut().zip(times) {
             *t += s;
         }
         eprintln!(
-            "{node:>4} {bound:>9.3} {:>14.9e} {} {:>5.1}{} {:>14.9e} {} {:>14.9e} {}",
+            "{node:>4} {bound:>9.3} {:>14.9e} {} {:>5.1}{} {:>14.9e} {} {:>5.1} {:>14.9e} {} \
+             {:>14.9e} {}",
             r.objective,
             u8::from(r.converged),
             r.seconds * 1e3,
@@ -187,6 +197,9 @@ fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
             } else {
                 "+tr"
             },
+            c.objective,
+            u8::from(c.converged),
+            c.seconds * 1e3,
             tr.objective,
             u8::from(tr.converged),
             lb.objective,
@@ -194,11 +207,19 @@ fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
         );
     }
     eprintln!(
-        "total optimisation time [ms]: riccati {:.1}, trust region {:.1}, lbfgs {:.1}",
+        "total optimisation time [ms]: riccati {:.1}, condensed {:.1}, trust region {:.1}, \
+         lbfgs {:.1}",
         total[0] * 1e3,
         total[1] * 1e3,
-        total[2] * 1e3
+        total[2] * 1e3,
+        total[3] * 1e3
     );
+}
+
+/// The condensed solver on a Table 3.4 row, with the options `minimize` derives (box, limits).
+fn condensed(p: &ControlProblem, bound: f64) -> chainbeam::ocp::OcpResult {
+    let opts = riccati_options(&optim(Method::Riccati, bound)).unwrap();
+    Condensed::new(p, &opts).unwrap().solve(&[0.0; 11]).unwrap()
 }
 
 fn bench_table_3_4(c: &mut Criterion) {
@@ -220,6 +241,13 @@ fn bench_table_3_4(c: &mut Criterion) {
             })
         });
     }
+    g.bench_function("all_rows/condensed", |b| {
+        b.iter(|| {
+            for (_, p, bound) in &rows {
+                black_box(condensed(p, *bound).objective);
+            }
+        })
+    });
     g.finish();
 }
 

@@ -264,7 +264,8 @@ fn restart_equals_a_fresh_solver() {
 /// Table 3.4 rows 5, 7 and 9 (per-step, N = 10, c_sum without effort penalty, bounded by the
 /// thesis's largest |u_k| as in the `tables` example): u_N acts on nothing J sees (a zero row
 /// of H and a zero gradient), and the QP leaves it where it is instead of raising the
-/// regularisation on a singular Hessian (row 9: 46 iterations, 192 before). Each row converges
+/// regularisation on a singular Hessian (row 9: 2 iterations; 192 before the inert control and
+/// the round-off-level first Levenberg weight, `MU_FIRST`). Each row converges
 /// to the trust region's objective (reference: `minimize` with `Method::TrustRegion`, exact
 /// Hessian-vector products) to 1e-8 relative.
 #[test]

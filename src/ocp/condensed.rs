@@ -29,6 +29,19 @@
 //! does one derivative-only update, the implicit function theorem (as for the stage
 //! Jacobians, [`super::stage`]).
 //!
+//! # Curvature
+//! Gauss-Newton converges linearly when the residuals M₀_k stay large at the optimum (no effort
+//! penalty, Table 3.4): its model lacks 2 Σ_k c_k M₀_k ∇²M₀_k. The dense problem is small enough
+//! to carry NL2SOL's structured secant approximation A of that term (Dennis, Gay, Welsch,
+//! *An adaptive nonlinear least-squares algorithm*, ACM TOMS 1981): after each step
+//! s = θ₊ − θ, with y = 2 Σ_k c_k M₀_k(θ₊) (S_k(θ₊) − S_k(θ)), A is sized by
+//! min(1, |sᵀy|/|sᵀAs|) and updated by the symmetric Powell-Broyden formula to A s = y; the
+//! next step's model adds A only when, on the step just taken, the model with A predicted the
+//! change of J better than the one without (NL2SOL's adaptive choice). The first step of a
+//! solve is always the Gauss-Newton step (A = 0), so a receding horizon's one-iteration
+//! re-plans are unchanged. Measured on Table 3.4 (`cargo bench --bench ocp -- ocp_table_3_4`):
+//! all ten rows converge in 25 ms in total, against 58 ms without A.
+//!
 //! # Globalisation and convergence
 //! As the Riccati solver: a Levenberg weight μ·mean(diag H) on the QP, an open-loop line search
 //! on rollouts of θ + αδ (α = 1 first, then the quadratic interpolation in [α/10, α/2],
@@ -76,8 +89,24 @@ pub struct Condensed {
     grad: Vec<f64>,
     /// The QP's step δ and its working set.
     qp: BoxQp,
+    /// The structured secant approximation A ≈ 2 Σ_k c_k M₀_k ∇²M₀_k (np × np, full) and the
+    /// sensitivities and θ of the previous linearisation (module docs, "Curvature").
+    secant: Vec<f64>,
+    prev_rows: Vec<f64>,
+    prev_theta: Vec<f64>,
+    has_prev: bool,
+    /// Whether the model of the next step adds A (chosen after each step by which model
+    /// predicted its decrease better).
+    use_secant: bool,
     counts: (usize, usize),
 }
+
+/// The first nonzero relative Levenberg weight after a failed step with μ = 0. The dense
+/// Gauss-Newton Hessian is often singular to round-off (controls with little effect, no effort
+/// penalty): a shift at that level makes the QP convex without limiting the step. (From 10⁻⁶,
+/// the Riccati solver's smallest weight, the steps along a flat valley stayed short: Table 3.4
+/// row 9 took 46 iterations, with 10⁻¹² it takes 2.)
+const MU_FIRST: f64 = 1e-12;
 
 /// The running state of one [`Condensed::solve`].
 struct Progress {
@@ -148,6 +177,11 @@ impl Condensed {
             hess: vec![0.0; np * np],
             grad: vec![0.0; np],
             qp: BoxQp::new(np),
+            secant: vec![0.0; np * np],
+            prev_rows: vec![0.0; (steps + 1) * np],
+            prev_theta: vec![0.0; np],
+            has_prev: false,
+            use_secant: false,
             model,
             cost,
             opts: options.clone(),
@@ -260,8 +294,82 @@ impl Condensed {
             self.chunks.iter_mut().try_for_each(work)?;
         }
         self.counts.1 += 1;
+        if self.has_prev {
+            self.update_secant();
+        }
         self.assemble();
+        if self.use_secant {
+            let np = self.np;
+            for i in 0..np {
+                for j in 0..=i {
+                    self.hess[i * np + j] += self.secant[i * np + j];
+                }
+            }
+        }
+        self.snapshot();
         Ok(())
+    }
+
+    /// Keeps S and θ of this linearisation for the next secant update.
+    fn snapshot(&mut self) {
+        let np = self.np;
+        for k in 0..=self.steps {
+            sens_row(&self.chunks, k, &mut self.prev_rows[k * np..(k + 1) * np]);
+        }
+        self.prev_theta = self.theta();
+        self.has_prev = true;
+    }
+
+    /// The structured secant update of A (Dennis, Gay, Welsch 1981, NL2SOL): with the step
+    /// s = θ − θ_prev and y = 2 Σ_k c_k M₀_k (S_k − S_prev,k) (the change of the Jacobian applied
+    /// to the new residuals), A is sized by min(1, |sᵀy|/|sᵀAs|) and updated by the symmetric
+    /// Powell-Broyden formula so that A s = y.
+    fn update_secant(&mut self) {
+        let np = self.np;
+        let theta = self.theta();
+        let st: Vec<f64> = theta
+            .iter()
+            .zip(&self.prev_theta)
+            .map(|(a, b)| a - b)
+            .collect();
+        let ss: f64 = st.iter().map(|x| x * x).sum();
+        if ss == 0.0 {
+            return;
+        }
+        let mut y = vec![0.0; np];
+        let mut row = vec![0.0; np];
+        for k in 0..=self.steps {
+            let c = self.cost.weight(k);
+            if c == 0.0 {
+                continue;
+            }
+            sens_row(&self.chunks, k, &mut row);
+            let r = self.nominal.moment[k];
+            for j in 0..np {
+                y[j] += 2.0 * c * r * (row[j] - self.prev_rows[k * np + j]);
+            }
+        }
+        let a = &mut self.secant;
+        let as_: Vec<f64> = (0..np)
+            .map(|i| (0..np).map(|j| a[i * np + j] * st[j]).sum())
+            .collect();
+        let sas: f64 = st.iter().zip(&as_).map(|(x, y)| x * y).sum();
+        let sy: f64 = st.iter().zip(&y).map(|(x, y)| x * y).sum();
+        let tau = if sas != 0.0 {
+            (sy.abs() / sas.abs()).min(1.0)
+        } else {
+            1.0
+        };
+        let w: Vec<f64> = (0..np).map(|i| y[i] - tau * as_[i]).collect();
+        let ws: f64 = w.iter().zip(&st).map(|(x, y)| x * y).sum();
+        for i in 0..np {
+            for j in 0..=i {
+                let v = tau * a[i * np + j] + (w[i] * st[j] + st[i] * w[j]) / ss
+                    - ws * st[i] * st[j] / (ss * ss);
+                a[i * np + j] = v;
+                a[j * np + i] = v;
+            }
+        }
     }
 
     /// H and g of the module docs from the sensitivities (lower triangle of H).
@@ -273,9 +381,7 @@ impl Condensed {
         for k in 0..=self.steps {
             let c = self.cost.weight(k);
             if c != 0.0 {
-                for ch in &self.chunks {
-                    s[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[k][..ch.len]);
-                }
+                sens_row(&self.chunks, k, &mut s);
                 // Decisions after stage k do not act on M₀(t_k).
                 let last = self.piece[k.saturating_sub(1)].min(np - 1) + 1;
                 let r = self.nominal.moment[k];
@@ -344,6 +450,9 @@ impl Condensed {
     fn run(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0);
+        self.secant.fill(0.0);
+        self.has_prev = false;
+        self.use_secant = false;
         let mut pr = Progress {
             j0: self.set_point(theta0)?,
             mu: 0.0,
@@ -381,9 +490,10 @@ impl Condensed {
         if pr.iterations >= opts.max_iters {
             return Ok(Some(Termination::MaxIterations));
         }
-        let Some(acc) = self.step(&mut pr.mu, pr.j0) else {
+        let Some((acc, model)) = self.step(&mut pr.mu, pr.j0) else {
             return Ok(Some(Termination::RegularisationLimit));
         };
+        self.choose_model(&acc, model);
         std::mem::swap(&mut self.nominal, &mut self.trial);
         pr.iterations += 1;
         pr.history.push(IterationRecord {
@@ -401,7 +511,7 @@ impl Condensed {
 
     /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
     /// `None` with μ beyond its limit.
-    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<Accepted> {
+    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<(Accepted, (f64, f64))> {
         let theta = self.theta();
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let np = self.np;
@@ -423,14 +533,31 @@ impl Condensed {
                     self.simulate(&trial, true).ok()
                 };
                 if let Some(acc) = backtrack((jbar, j0), model, search, &mut rollout) {
-                    return Some(acc);
+                    return Some((acc, model));
                 }
             }
-            *mu = raise_mu(*mu);
+            *mu = if *mu == 0.0 { MU_FIRST } else { raise_mu(*mu) };
             if *mu > self.opts.max_regularisation {
                 return None;
             }
         }
+    }
+
+    /// NL2SOL's adaptive choice (Dennis, Gay, Welsch 1981): the next step's model adds the
+    /// secant term A when, for the step just taken (`acc`, model change (d1, d2) of the model
+    /// used), the model with A predicted the actual change of J better than the Gauss-Newton
+    /// model without it.
+    fn choose_model(&mut self, acc: &Accepted, (d1, d2): (f64, f64)) {
+        let (np, a) = (self.np, acc.alpha);
+        let d = &self.qp.delta;
+        let dad: f64 = (0..np)
+            .map(|i| d[i] * (0..np).map(|j| self.secant[i * np + j] * d[j]).sum::<f64>())
+            .sum();
+        let qa = 0.5 * a * a * dad;
+        let used = a * d1 + a * a * d2;
+        let gn = if self.use_secant { used - qa } else { used };
+        let actual = self.trial.cost - self.nominal.cost;
+        self.use_secant = (actual - (gn + qa)).abs() < (actual - gn).abs();
     }
 
     fn report(&self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
@@ -464,6 +591,8 @@ impl Condensed {
     /// # Errors
     /// A failed dual-number step.
     pub fn gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
+        self.secant.fill(0.0);
+        self.has_prev = false;
         self.linearise()?;
         let np = self.np;
         let h = Mat::from_fn(np, np, |i, j| self.hess[i.max(j) * np + i.min(j)]);
@@ -514,6 +643,13 @@ impl SensChunk {
             }
         }
         Ok(())
+    }
+}
+
+/// S_k, the sensitivities of M₀(t_k) to θ, gathered from the chunks into `out`.
+fn sens_row(chunks: &[SensChunk], k: usize, out: &mut [f64]) {
+    for ch in chunks {
+        out[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[k][..ch.len]);
     }
 }
 
@@ -667,5 +803,58 @@ impl BoxQp {
         }
         let lin = g.iter().zip(&self.delta).map(|(a, b)| a * b).sum();
         (lin, 0.5 * quad)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{catalogue, BendingObjective, Parametrisation, PerStepControl};
+
+    /// The structured secant update satisfies the secant equation A s = y (s = θ₂ − θ₁,
+    /// y = 2 Σ c_k M₀_k(θ₂)(S_k(θ₂) − S_k(θ₁)), recomputed here from the two linearisations) to
+    /// round-off, and keeps A symmetric (Powell-symmetric-Broyden, Dennis & Moré 1977).
+    #[test]
+    fn secant_update_satisfies_the_secant_equation() {
+        let p = ControlProblem::new(
+            &catalogue::riser(3),
+            Parametrisation::PerStep(PerStepControl { steps: 10 }),
+            BendingObjective::summed_moment(),
+        )
+        .unwrap();
+        let mut c = Condensed::new(&p, &OcpOptions::default()).unwrap();
+        let t1: Vec<f64> = (0..11).map(|k| (0.7 * k as f64).sin()).collect();
+        let t2: Vec<f64> = t1.iter().map(|x| 1.3 * x + 0.2).collect();
+        c.set_point(&t1).unwrap();
+        c.linearise().unwrap();
+        let s1 = c.prev_rows.clone();
+        c.set_point(&t2).unwrap();
+        c.linearise().unwrap();
+        let s2 = &c.prev_rows;
+        let np = 11;
+        let mut y = vec![0.0; np];
+        for k in 0..=10 {
+            let m = c.nominal.moment[k];
+            for j in 0..np {
+                y[j] += 2.0 * m * (s2[k * np + j] - s1[k * np + j]);
+            }
+        }
+        let s: Vec<f64> = t2.iter().zip(&t1).map(|(a, b)| a - b).collect();
+        let ymax = y.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(ymax > 0.0);
+        for i in 0..np {
+            let as_i: f64 = (0..np).map(|j| c.secant[i * np + j] * s[j]).sum();
+            assert!(
+                (as_i - y[i]).abs() <= 1e-12 * ymax,
+                "row {i}: {as_i} vs {}",
+                y[i]
+            );
+            for j in 0..np {
+                assert_eq!(
+                    c.secant[i * np + j].to_bits(),
+                    c.secant[j * np + i].to_bits()
+                );
+            }
+        }
     }
 }

@@ -1,5 +1,5 @@
-//! `--method riccati` (the structured solver of `chainbeam::ocp`) through `minimize`, the
-//! multistart and the CLI: the same optima as the trust region (the reference: an independent
+//! `--method riccati` and `--method condensed` (the structured solvers of `chainbeam::ocp`)
+//! through `minimize`, the multistart and the CLI: the same optima as the trust region (the reference: an independent
 //! second-order method on exact Hessian-vector products), the bound kept, and a typed refusal
 //! of problems it does not cover.
 
@@ -20,22 +20,26 @@ fn opts(method: Method, bound: Option<f64>) -> OptimOptions {
 }
 
 /// Table 3.4, row 5 (riser, F = 2 N at node 5, per-step control, c_sum) with ρ = 0.01, bounded
-/// and unbounded: `minimize` with `Method::Riccati` reaches the trust region's objective.
+/// and unbounded: `minimize` with `Method::Riccati` and with `Method::Condensed` reaches the
+/// trust region's objective.
 #[test]
 fn minimize_dispatches_to_the_riccati_solver() {
     let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
     let p = ControlProblem::new(&catalogue::riser(5), map, obj).unwrap();
-    for bound in [None, Some(3.0)] {
-        let r = minimize(&p, &[0.0; 11], &opts(Method::Riccati, bound)).unwrap();
-        assert_eq!(r.method, Method::Riccati);
+    for (bound, method) in [None, Some(3.0)]
+        .into_iter()
+        .flat_map(|b| [(b, Method::Riccati), (b, Method::Condensed)])
+    {
+        let r = minimize(&p, &[0.0; 11], &opts(method, bound)).unwrap();
+        assert_eq!(r.method, method);
         assert!(r.converged, "{:?}", r.termination);
         assert!(r.projected_gradient_norm <= 1e-8 * r.initial_gradient_norm);
         let tr = minimize(&p, &[0.0; 11], &opts(Method::TrustRegion, bound)).unwrap();
         let rel = (r.objective - tr.objective).abs() / tr.objective;
         assert!(
             rel <= 1e-9,
-            "{bound:?}: {} vs {}",
+            "{method} {bound:?}: {} vs {}",
             r.objective,
             tr.objective
         );
@@ -49,9 +53,11 @@ fn minimize_dispatches_to_the_riccati_solver() {
     }
     // A constant control is one piece: handled.
     let c = ControlProblem::new(&catalogue::riser(5), Parametrisation::Constant, obj).unwrap();
-    let r = minimize(&c, &[0.0], &opts(Method::Riccati, None)).unwrap();
     let tr = minimize(&c, &[0.0], &opts(Method::TrustRegion, None)).unwrap();
-    assert!((r.objective - tr.objective).abs() <= 1e-9 * tr.objective);
+    for method in [Method::Riccati, Method::Condensed] {
+        let r = minimize(&c, &[0.0], &opts(method, None)).unwrap();
+        assert!((r.objective - tr.objective).abs() <= 1e-9 * tr.objective);
+    }
 }
 
 /// A locked tip is outside the solver's model: a typed error naming the tip, no panic.
@@ -63,12 +69,14 @@ fn unsupported_problems_are_refused() {
         BendingObjective::summed_moment(),
     )
     .unwrap();
-    let e = minimize(&p, &[0.0], &opts(Method::Riccati, None)).unwrap_err();
-    assert!(e.to_string().contains("tip"), "{e}");
+    for method in [Method::Riccati, Method::Condensed] {
+        let e = minimize(&p, &[0.0], &opts(method, None)).unwrap_err();
+        assert!(e.to_string().contains("tip"), "{e}");
+    }
 }
 
-/// The CLI: `optimize --method riccati` on the thesis riser (c_sum) with a per-step control
-/// reaches the trust region's objective and reports `method = "riccati"`; `--pieces` and
+/// The CLI: `optimize --method riccati` (and `condensed`) on the thesis riser (c_sum) with a
+/// per-step control reaches the trust region's objective and reports the method; `--pieces` and
 /// `--bound` work; a locked-tip scene fails with a message.
 #[test]
 fn cli_optimize_with_riccati() {
@@ -88,25 +96,27 @@ fn cli_optimize_with_riccati() {
             "optimize", sc, "--method", m, "--effort", "0.01", "--bound", "3",
         ]
     };
-    let o = run(&args("riccati"));
-    assert_success(&o);
-    let r = json(&o);
-    assert_eq!(r["method"], "riccati");
-    assert_eq!(r["converged"], true);
-    assert!(numbers(&r, "controls").iter().all(|u| u.abs() <= 3.0));
     let tr = json(&run(&args("trust-region")));
-    let (a, b) = (
-        r["objective"].as_f64().unwrap(),
-        tr["objective"].as_f64().unwrap(),
-    );
-    assert!((a - b).abs() <= 1e-9 * b, "{a} vs {b}");
-    let o = run(&[
-        "optimize", sc, "--method", "riccati", "--pieces", "5", "--effort", "0.01", "--bound", "10",
-    ]);
-    assert_success(&o);
-    assert_eq!(numbers(&json(&o), "controls").len(), 5);
-    let locked = scene("fixed_fixed.toml");
-    let o = run(&["optimize", locked.to_str().unwrap(), "--method", "riccati"]);
-    assert!(!o.status.success());
-    assert!(stderr(&o).contains("tip"), "{}", stderr(&o));
+    for m in ["riccati", "condensed"] {
+        let o = run(&args(m));
+        assert_success(&o);
+        let r = json(&o);
+        assert_eq!(r["method"], m);
+        assert_eq!(r["converged"], true);
+        assert!(numbers(&r, "controls").iter().all(|u| u.abs() <= 3.0));
+        let (a, b) = (
+            r["objective"].as_f64().unwrap(),
+            tr["objective"].as_f64().unwrap(),
+        );
+        assert!((a - b).abs() <= 1e-9 * b, "{m}: {a} vs {b}");
+        let o = run(&[
+            "optimize", sc, "--method", m, "--pieces", "5", "--effort", "0.01", "--bound", "10",
+        ]);
+        assert_success(&o);
+        assert_eq!(numbers(&json(&o), "controls").len(), 5);
+        let locked = scene("fixed_fixed.toml");
+        let o = run(&["optimize", locked.to_str().unwrap(), "--method", m]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("tip"), "{}", stderr(&o));
+    }
 }

@@ -109,6 +109,15 @@ pub trait OptimProblem {
     fn riccati(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
         None
     }
+
+    /// Runs the condensed Gauss-Newton solver ([`Method::Condensed`](super::Method::Condensed),
+    /// [`crate::ocp::Condensed`]) from θ₀, if the problem has one (default `None`: refused).
+    ///
+    /// # Errors
+    /// The solver's typed error (as [`OptimProblem::riccati`]).
+    fn condensed(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
+        None
+    }
 }
 
 /// Hessian-vector products v ↦ ∇²J(θ) v: the capability the trust region, Newton-CG, the
@@ -154,7 +163,8 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
 
 /// [`OptimProblem`] for the planar (`DIM = 2`, with the Riccati solver) and the spatial
 /// (`DIM = 3`) control problems: the same methods, except that only the planar one offers
-/// [`OptimProblem::riccati`] (the solver's tangent coordinates are planar).
+/// [`OptimProblem::riccati`] and [`OptimProblem::condensed`] (the solvers' tangent coordinates
+/// are planar).
 macro_rules! impl_optim_problem {
     ($dim:literal, $($riccati:tt)*) => {
         impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O, $dim> {
@@ -223,14 +233,18 @@ macro_rules! impl_optim_problem {
     };
 }
 
-impl_optim_problem!(
+impl_optim_problem! {
     2,
     /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of a
     /// [`BendingObjective`](crate::BendingObjective).
     fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         Some(crate::ocp::solve(self, theta0, options))
     }
-);
+    /// [`crate::ocp::Condensed`]: the same problems as the Riccati solver.
+    fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))
+    }
+}
 impl_optim_problem!(3,);
 
 impl<P: ControlMap, O: Objective, const DIM: usize> HessianVec for ControlProblem<P, O, DIM> {

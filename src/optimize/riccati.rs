@@ -1,6 +1,7 @@
-//! [`Method::Riccati`]: [`minimize`](super::minimize) hands per-step, piecewise and constant
-//! control problems with a bending-moment objective to the structured Gauss-Newton solver of
-//! [`crate::ocp`] and reports its result as an [`OptimResult`].
+//! [`Method::Riccati`] and [`Method::Condensed`]: [`minimize`](super::minimize) hands per-step,
+//! piecewise and constant control problems with a bending-moment objective to the structured
+//! Gauss-Newton solvers of [`crate::ocp`] (the Riccati solver, or the condensed one) and
+//! reports their result as an [`OptimResult`].
 //!
 //! The options carry over as: `bound = Some(b)` → the box −b ≤ θ ≤ b, `bounds` → the box
 //! L ≤ θ ≤ U (handled exactly by the solver's interior-point QPs, no reparametrisation), `max_iters`, `grad_tol` and
@@ -35,31 +36,36 @@ pub fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
     })
 }
 
-/// The error for a problem the Riccati solver does not cover.
-pub(crate) fn unsupported() -> Error {
+/// The error for a problem the structured solvers (`method`: riccati or condensed) do not
+/// cover.
+pub(crate) fn unsupported(method: Method) -> Error {
     Error::InvalidArgument {
         name: "method",
-        reason: "riccati needs a control problem (per-step, piecewise or constant controls) \
-                 with a bending-moment objective (c or c_sum, with effort); use lbfgs or \
-                 trust-region"
-            .into(),
+        reason: format!(
+            "{method} needs a control problem (per-step, piecewise or constant controls) with a \
+             bending-moment objective (c or c_sum, with effort); use lbfgs or trust-region"
+        ),
     }
 }
 
-/// Runs the Riccati solver on `problem` from θ₀.
+/// Runs the Riccati solver (or, with [`Method::Condensed`], the condensed one) on `problem`
+/// from θ₀.
 pub(crate) fn run<Q: OptimProblem + ?Sized>(
     problem: &Q,
     theta0: &[f64],
     opts: &OptimOptions,
 ) -> Result<OptimResult> {
-    let r = problem
-        .riccati(theta0, &ocp_options(opts)?)
-        .ok_or_else(unsupported)??;
+    let options = ocp_options(opts)?;
+    let r = match opts.method {
+        Method::Condensed => problem.condensed(theta0, &options),
+        _ => problem.riccati(theta0, &options),
+    }
+    .ok_or_else(|| unsupported(opts.method))??;
     if opts.progress {
         for (i, h) in r.history.iter().enumerate() {
             eprintln!(
-                "riccati {i:4}  J = {:.12e}  |pg| = {:.3e}  alpha = {:.3}",
-                h.objective, h.projected_gradient_norm, h.alpha
+                "{} {i:4}  J = {:.12e}  |pg| = {:.3e}  alpha = {:.3}",
+                opts.method, h.objective, h.projected_gradient_norm, h.alpha
             );
         }
     }
@@ -142,6 +148,6 @@ fn result(r: OcpResult, opts: &OptimOptions) -> OptimResult {
         seconds: r.seconds,
         converged: termination.is_converged(),
         termination,
-        method: Method::Riccati,
+        method: opts.method,
     }
 }

@@ -510,7 +510,7 @@ pub(crate) fn run_method<Q: OptimProblem + ?Sized>(
             execute(a, solver, start, setup)
         }
         // `minimize` hands this method to crate::ocp before any argmin solver is built.
-        Method::Riccati => Err(super::riccati::unsupported()),
+        Method::Riccati | Method::Condensed => Err(super::riccati::unsupported(opts.method)),
     }
 }
 

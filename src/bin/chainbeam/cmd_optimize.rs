@@ -32,7 +32,7 @@ Spatial scenes (a load, the current or the control with an x component) are opti
 spatial model, planar ones in the planar model (JSON key model); the objectives then use \
 |M₀|² = M₀ₓ² + M₀². A 2-axis control (control.values as pairs [u_x, u_z]) has 2 parameters per \
 value and its controls are reported as pairs [u_x, u_z]; --bound, --lower and --upper limit each \
-component. --method riccati is planar only and refuses a spatial scene.
+component. --method riccati and condensed are planar only and refuse a spatial scene.
 
 Output (JSON): objective [N²m²], controls (the optimal θ, laid out as control.values: numbers, \
 or pairs [u_x, u_z] for a 2-axis control) [N], gradient_norm, iterations, seconds, converged, \
@@ -119,6 +119,9 @@ enum MethodArg {
     /// Structured Gauss-Newton with Riccati passes (per-step, piecewise or constant controls;
     /// O(N) per iteration, bounds handled exactly; planar scenes only).
     Riccati,
+    /// Condensed Gauss-Newton (the same problems as riccati; sensitivities to the controls and
+    /// a dense QP: the faster for few controls, e.g. Table 3.4; planar scenes only).
+    Condensed,
 }
 
 impl SolverArgs {
@@ -166,6 +169,7 @@ impl SolverArgs {
                 MethodArg::Lbfgs => Method::Lbfgs,
                 MethodArg::TrustRegion => Method::TrustRegion,
                 MethodArg::Riccati => Method::Riccati,
+                MethodArg::Condensed => Method::Condensed,
             },
             max_iters: self.max_iters.unwrap_or(defaults.max_iters),
             grad_tol: self.gtol.unwrap_or(defaults.grad_tol),
@@ -348,8 +352,8 @@ fn refuse_riccati_on_spatial(
     opts: &OptimOptions,
 ) -> Result<(), CliError> {
     match (&sp.spatial_reason, opts.method) {
-        (Some(why), Method::Riccati) => Err(CliError::msg(format!(
-            "{}: --method riccati: this scene needs the spatial model ({why}), and {}",
+        (Some(why), m @ (Method::Riccati | Method::Condensed)) => Err(CliError::msg(format!(
+            "{}: --method {m}: this scene needs the spatial model ({why}), and {}",
             path.display(),
             problem::RICCATI_PLANAR
         ))),

@@ -137,18 +137,33 @@ impl OptimProblem for AnyProblem {
     ) -> Option<chainbeam::Result<OcpResult>> {
         match self {
             AnyProblem::Planar(p) => p.riccati(theta0, options),
-            AnyProblem::Spatial(_) => Some(Err(chainbeam::Error::InvalidArgument {
-                name: "method",
-                reason: RICCATI_PLANAR.into(),
-            })),
+            AnyProblem::Spatial(_) => Some(Err(planar_only())),
+        }
+    }
+    fn condensed(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+    ) -> Option<chainbeam::Result<OcpResult>> {
+        match self {
+            AnyProblem::Planar(p) => p.condensed(theta0, options),
+            AnyProblem::Spatial(_) => Some(Err(planar_only())),
         }
     }
 }
 
-/// Why `--method riccati` cannot run a spatial problem.
-pub const RICCATI_PLANAR: &str = "the Riccati solver is planar only (its tangent coordinates are \
-                                  those of the yz-plane); use --method lbfgs (the default) or \
-                                  trust-region";
+/// The refusal of a structured solver on a spatial problem.
+fn planar_only() -> chainbeam::Error {
+    chainbeam::Error::InvalidArgument {
+        name: "method",
+        reason: RICCATI_PLANAR.into(),
+    }
+}
+
+/// Why `--method riccati` (or `condensed`) cannot run a spatial problem.
+pub const RICCATI_PLANAR: &str = "the structured solvers (riccati, condensed) are planar only \
+                                  (their tangent coordinates are those of the yz-plane); use \
+                                  --method lbfgs (the default) or trust-region";
 
 /// Numbers as the JSON reports them: one per value, or pairs [x, z] of a 2-axis control (the
 /// layout of a scene file's `control.values`).

@@ -14,16 +14,16 @@
 //!   converges after about 225-375 s; `examples/long_horizon.rs` prints the same comparison).
 //! - `ocp_table_3_4/all_rows/{riccati,condensed,lbfgs,trust_region}`: all ten rows of Table
 //!   3.4 (per-step, N = 10, c_sum, each row bounded by the thesis's largest |u_k|) from u = 0,
-//!   in total (`condensed`: [`chainbeam::ocp::Condensed`], the dense Gauss-Newton on the 11
-//!   controls, called directly); the per-row objectives, convergence and times are printed to
-//!   stderr first.
+//!   in total, through `minimize` (`condensed`: [`Method::Condensed`], the dense Gauss-Newton
+//!   on the 11 controls); the per-row objectives, convergence and times are printed to stderr
+//!   first.
 //!
 //! Run with `cargo bench --bench ocp -- --warm-up-time 1 --measurement-time 5`.
 
 use std::hint::black_box;
 
-use chainbeam::ocp::{solve, Condensed, OcpOptions, Solver};
-use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
+use chainbeam::ocp::{solve, OcpOptions, Solver};
+use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
 };
@@ -181,7 +181,7 @@ fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
         let r = minimize(p, &[0.0; 11], &optim(Method::Riccati, *bound)).unwrap();
         let tr = minimize(p, &[0.0; 11], &optim(Method::TrustRegion, *bound)).unwrap();
         let lb = minimize(p, &[0.0; 11], &optim(Method::Lbfgs, *bound)).unwrap();
-        let c = condensed(p, *bound);
+        let c = minimize(p, &[0.0; 11], &optim(Method::Condensed, *bound)).unwrap();
         let times = [r.seconds, c.seconds, tr.seconds, lb.seconds];
         for (t, s) in total.iter_mut().zip(times) {
             *t += s;
@@ -216,12 +216,6 @@ fn print_table_3_4(rows: &[(usize, ControlProblem, f64)]) {
     );
 }
 
-/// The condensed solver on a Table 3.4 row, with the options `minimize` derives (box, limits).
-fn condensed(p: &ControlProblem, bound: f64) -> chainbeam::ocp::OcpResult {
-    let opts = riccati_options(&optim(Method::Riccati, bound)).unwrap();
-    Condensed::new(p, &opts).unwrap().solve(&[0.0; 11]).unwrap()
-}
-
 fn bench_table_3_4(c: &mut Criterion) {
     let rows = table_3_4_rows();
     print_table_3_4(&rows);
@@ -229,6 +223,7 @@ fn bench_table_3_4(c: &mut Criterion) {
     g.sample_size(10);
     for (name, method) in [
         ("all_rows/riccati", Method::Riccati),
+        ("all_rows/condensed", Method::Condensed),
         ("all_rows/lbfgs", Method::Lbfgs),
         ("all_rows/trust_region", Method::TrustRegion),
     ] {
@@ -241,13 +236,7 @@ fn bench_table_3_4(c: &mut Criterion) {
             })
         });
     }
-    g.bench_function("all_rows/condensed", |b| {
-        b.iter(|| {
-            for (_, p, bound) in &rows {
-                black_box(condensed(p, *bound).objective);
-            }
-        })
-    });
+
     g.finish();
 }
 

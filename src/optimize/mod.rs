@@ -213,9 +213,13 @@ pub enum Method {
     /// [`Method::Riccati`]: the sensitivities of the bending moments to θ by forward dual
     /// numbers and a dense box QP, with NL2SOL's structured secant term for the residual
     /// curvature. Its cost per iteration grows with N times the number of parameters, so it is
-    /// the faster choice for few parameters (Table 3.4: all ten rows in 25 ms against 186 ms for
-    /// `riccati`), not for long per-step horizons. A stalled run is finished by the trust region
-    /// as for `riccati`.
+    /// the faster choice for few parameters, not for long per-step horizons. Table 3.4
+    /// (`cargo bench --bench ocp -- ocp_table_3_4`): all ten rows converge in 23 ms in total
+    /// (`riccati` 192 ms, trust region 146 ms, L-BFGS 132 ms), at the trust region's objective
+    /// on five rows, lower on rows 1 (22.93 against 27.25) and 10, higher on row 3 (another
+    /// local minimum, +0.16 %) and by 1.5–2.4·10⁻⁶ on rows 6 and 8 (where `riccati`'s
+    /// Gauss-Newton phase stops at the same points). A stalled run is finished by the trust
+    /// region as for `riccati`.
     Condensed,
 }
 

@@ -75,30 +75,32 @@
 //! The scene: n = 10, D = 10 kg/m, the irregular sea at node 5 and a sheared current along +z
 //! (0.1 → 0.02 m/s, switched on at t = 0 on the straight beam); 60 s, interval 0.1 s, horizon
 //! 3 s, 1 Gauss-Newton iteration per re-plan, |u| ≤ 5 N, ρ = 0.01, on the 2-core machine
-//! (load average ≈ 1.5):
+//! (load average ≈ 1.5; its timings vary by about ±20 % from run to run):
 //!
 //! | controller | c_sum | max \|M₀\| (Nm) | max \|u\| (N) | mean / worst re-plan (ms) |
 //! |---|---|---|---|---|
 //! | none | 4797918.4 | 35.51 | 0 | |
 //! | best constant force | 92936.4 | 9.14 | 2.93 | |
 //! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 | |
-//! | MPC, perfect model (condensed solver) | 9289.3 | 12.16 | 5.00 | 6.5 / 14.1 |
-//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14293.7 | 11.76 | 5.00 | 6.1 / 11.4 |
-//! | MPC, perfect model, Riccati solver | 9292.1 | 12.04 | 5.00 | 14.5 / 33.4 |
+//! | MPC, perfect model (condensed solver) | 9256.7 | 12.16 | 5.00 | 6.2 / 17.2 |
+//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14223.4 | 11.76 | 5.00 | 6.4 / 11.4 |
+//! | MPC, perfect model, Riccati solver | 9292.1 | 12.04 | 5.00 | 16.4 / 26.5 |
 //!
-//! MPC's c_sum is 10.0 % of the best constant force's and 17.0 % of the tuned PD law's (wrong
-//! model: 15.4 % and 26.1 %); the two solvers' loops differ by 0.03 % (one iteration per
-//! re-plan: the line searches differ, open loop against Riccati feedback; solved to the
-//! tolerance every plan gives the same optimum with either, tests/cli_mpc.rs). Its max |M₀| is
+//! MPC's c_sum is 10.0 % of the best constant force's and 16.9 % of the tuned PD law's (wrong
+//! model: 15.3 % and 26.0 %); the two solvers' loops differ by 0.4 % (the cold first plan, 50
+//! iterations, ends closer to its optimum with the condensed solver's secant term, and the
+//! one-iteration re-plans differ in their line searches, open loop against Riccati feedback;
+//! solved to the tolerance every plan gives the same optimum with either, tests/cli_mpc.rs).
+//! Its max |M₀| is
 //! higher than the constant force's: the transient when the current switches on at t = 0
 //! saturates every controller, and MPC trades that peak for the sum it minimises. Without the
 //! current (the same sea alone) MPC's c_sum was 1.82 against the PD law's 61262: the current's
 //! steady drag, which the force must cancel (≈ 2.9 N of the 5 N), is what leaves MPC a
 //! residual.
 //!
-//! Re-plan cost: the condensed solver takes 2.2× less time than the Riccati solver on this
-//! loop (mean 6.5 against 14.5 ms; worst 14.1 against 33.4 ms), real-time factor of the
-//! controller 15.4 against 6.9: the worst re-plan fits the 100 ms interval with either, and the
+//! Re-plan cost: the condensed solver takes 2.6× less time than the Riccati solver on this
+//! loop (mean 6.2 against 16.4 ms; worst 17.2 against 26.5 ms), real-time factor of the
+//! controller 16.1 against 6.1: the worst re-plan fits the 100 ms interval with either, and the
 //! mean ≤ 10 ms holds with the condensed solver. `cargo bench --bench mpc` (one re-plan at
 //! t = 10 s; the machine's timings vary by about ±20 % from run to run): 1.8 / 3.0 / 6.1 /
 //! 10.0 ms for horizons of 1 / 2 / 3 / 4 s with the condensed solver, 6.1 / 13.8 / 17.7 /
@@ -118,9 +120,9 @@
 //! fastest mode needs h = 0.01 s (the RATTLE Newton iteration diverges).
 //!
 //! Horizon against cost (`cargo run --release -p paper_figures -- --only mpc_horizon`, 60 s):
-//! c_sum 3427342 / 35294 / 9289 / 7582 / 7466 for horizons of 1 / 2 / 3 / 4 / 5 s at mean
-//! re-plan times of 1.8 / 3.6 / 6.8 / 9.8 / 14.3 ms (condensed; Riccati: 3703102 / 38363 /
-//! 9292 / 7592 / 7469 at 6.6 / 9.9 / 13.9 / 18.3 / 25.4 ms) ([`MpcOptions::horizon`]): 1 s is
+//! c_sum 3457848 / 35312 / 9257 / 7590 / 7465 for horizons of 1 / 2 / 3 / 4 / 5 s at mean
+//! re-plan times of 1.7 / 3.5 / 6.6 / 11.8 / 14.7 ms (condensed; Riccati: 3703102 / 38363 /
+//! 9292 / 7592 / 7469 at 6.9 / 11.2 / 15.5 / 18.3 / 24.6 ms) ([`MpcOptions::horizon`]): 1 s is
 //! 37× worse than the best constant force (myopic), 2 s beats the PD law by 1.5×, 3 s by 5.9×.
 //!
 //! # Example

@@ -14,7 +14,10 @@
 //!   J, Σ M₀², projected gradient relative to ‖g₀‖, converged); `--skip-trust-region` and
 //!   `--skip-lbfgs` leave out the slow baselines, `--method riccati,lbfgs` picks a list;
 //! - `--pieces P` replaces the per-step control by P piecewise-constant pieces: a *different,
-//!   coarser* problem (fewer parameters, a higher optimum), solvable by any method.
+//!   coarser* problem (fewer parameters, a higher optimum), solvable by any method, among them
+//!   `--method condensed` ([`chainbeam::ocp::Condensed`]: Gauss-Newton on the P forces
+//!   themselves, whose cost per iteration grows with N × P — fine for tens of pieces, not for
+//!   the 1001 per-step controls).
 //!
 //! Prints Σ M₀², max |M₀| and J against no control and against the best constant control (same
 //! objective and limit), the iterations, the first-order optimality reached and the time.
@@ -94,12 +97,16 @@ fn solve_with(
     theta0: &[f64],
     set: &Setup,
 ) -> Result<Outcome> {
-    if method == "riccati" {
+    if method == "riccati" || method == "condensed" {
         let opts = OcpOptions {
             rate_penalty: set.rate,
             ..OcpOptions::default().with_bound(set.umax)
         };
-        let r = ocp::solve(problem, theta0, &opts)?;
+        let r = if method == "condensed" {
+            ocp::Condensed::new(problem, &opts)?.solve(theta0)?
+        } else {
+            ocp::solve(problem, theta0, &opts)?
+        };
         if set.history {
             for (i, h) in r.history.iter().enumerate() {
                 eprintln!(
@@ -172,11 +179,11 @@ fn methods(args: &[String]) -> Result<Vec<String>> {
         .collect();
     match out
         .iter()
-        .find(|m| !["riccati", "lbfgs", "trust-region"].contains(&m.as_str()))
+        .find(|m| !["riccati", "condensed", "lbfgs", "trust-region"].contains(&m.as_str()))
     {
         Some(m) => Err(Error::InvalidArgument {
             name: "--method",
-            reason: format!("expected riccati, lbfgs or trust-region, got {m:?}"),
+            reason: format!("expected riccati, condensed, lbfgs or trust-region, got {m:?}"),
         }),
         None => Ok(out),
     }

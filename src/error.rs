@@ -123,6 +123,24 @@ pub enum Error {
         /// The Newton iteration.
         iteration: usize,
     },
+    /// A static Newton iterate folded the beam (a joint at the fold limit θ → π, thesis §2.2.2):
+    /// the loads may be more than the springs can hold, or the iteration left the equilibrium's
+    /// basin. (A simulation reports the same event as [`Error::Folded`] with its step.)
+    #[error(
+        "static equilibrium: the Newton iterate of iteration {iteration} folds the beam: joint \
+         {joint} has angle {angle_deg:.2}° (limit {limit_deg:.2}°); the loads may exceed what \
+         the springs hold"
+    )]
+    StaticFolded {
+        /// The Newton iteration.
+        iteration: usize,
+        /// Joint index i (the spring between q_{i−1} and q_i), 1..=n+1.
+        joint: usize,
+        /// The joint angle in degrees.
+        angle_deg: f64,
+        /// The configured fold limit in degrees.
+        limit_deg: f64,
+    },
     /// The spatial statics ([`crate::statics::static_equilibrium_spatial`]) of a beam without end
     /// springs (pinned-pinned): the spatial model locks only the tip's z, so the beam turns
     /// freely about the z axis through its base and has no isolated equilibrium (its Newton

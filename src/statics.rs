@@ -125,7 +125,7 @@ impl StaticSolution {
 ///
 /// # Errors
 /// [`Error::StaticNotConverged`] if Newton does not converge in 100 iterations,
-/// [`Error::StaticSingular`], [`Error::Folded`] for an iterate that folds the beam,
+/// [`Error::StaticSingular`], [`Error::StaticFolded`] for an iterate that folds the beam,
 /// [`Error::StaticNotIsolated`] for a spatial pinned-pinned scene, and the scene's errors.
 pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
     let u = *scene_controls(scene).last().unwrap_or(&0.0);
@@ -193,7 +193,9 @@ fn planar(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
     let scale = residual_scale(chain.springs());
     let mut work = Work::new(n);
     for it in 0..MAX_ITERATIONS {
-        let a = work.newton_system(&chain, (&phi, nu), (t, u), &mut rhs)?;
+        let a = work
+            .newton_system(&chain, (&phi, nu), (t, u), &mut rhs)
+            .map_err(|e| folded_at(e, it))?;
         let r = record_residual(&rhs, n, scale, &mut residuals);
         if r.is_some_and(|r| r < TOLERANCE) {
             return Ok(planar_solution(&chain, phi, nu, residuals));
@@ -243,6 +245,24 @@ fn planar_solution(
         iterations: residuals.len() - 1,
         residual: residuals.last().copied().unwrap_or(0.0),
         residuals,
+    }
+}
+
+/// A folded iterate as the statics' error (the terms report [`Error::Folded`] at "step 0").
+pub(crate) fn folded_at(e: Error, iteration: usize) -> Error {
+    match e {
+        Error::Folded {
+            joint,
+            angle_deg,
+            limit_deg,
+            ..
+        } => Error::StaticFolded {
+            iteration,
+            joint,
+            angle_deg,
+            limit_deg,
+        },
+        e => e,
     }
 }
 

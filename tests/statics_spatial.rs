@@ -289,7 +289,8 @@ fn newton_on_the_spheres_converges_quadratically() {
 /// nodes 8, 9 and 10 (energy F l (q₁₀ₓ − q₉ₓ)) turn pendulum 9 toward +x and pendulum 10 toward
 /// −x; with F = 10⁶ N the spring of joint 10 (k = 1000, at most ½kπ² ≈ 5·10³ J against
 /// 2F l = 2·10⁶ J) cannot stop the fold: the Newton iterates fold the beam beyond 179°
-/// ([`Error::Folded`], measured: 179.45°; at F = 10⁵ N the equilibrium exists, at 175°). Also a
+/// ([`Error::StaticFolded`], naming the Newton iteration rather than a time step; measured:
+/// 179.45°; at F = 10⁵ N the equilibrium exists, at 175°). Also a
 /// spatial pinned-pinned beam ([`Error::StaticNotIsolated`]) and an x control on a scene without
 /// a control node.
 #[test]
@@ -303,7 +304,11 @@ fn bad_spatial_statics_give_typed_errors() {
         .unwrap();
     let err = static_equilibrium(&folded).unwrap_err();
     println!("folded riser: {err}");
-    assert!(matches!(err, Error::Folded { joint: 10, .. }), "{err:?}");
+    assert!(
+        matches!(err, Error::StaticFolded { joint: 10, .. }),
+        "{err:?}"
+    );
+    assert!(!err.to_string().contains("step"), "{err}");
 
     let pinned = SceneBuilder::new(10)
         .support(Support::PinnedPinned)

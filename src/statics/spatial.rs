@@ -28,7 +28,9 @@ pub(super) fn solve(scene: &Scene, t: f64, u: [f64; 2]) -> Result<StaticSolution
     let mut rhs = vec![0.0; 2 * n + usize::from(chain.has_tip_constraint())];
     let mut residuals = Vec::new();
     for it in 0..MAX_ITERATIONS {
-        let a = work.newton_system(&chain, nu, &ctx, &mut rhs)?;
+        let a = work
+            .newton_system(&chain, nu, &ctx, &mut rhs)
+            .map_err(|e| super::folded_at(e, it))?;
         let r = record_residual(&rhs, 2 * n, scale, &mut residuals);
         if r.is_some_and(|r| r < TOLERANCE) {
             return Ok(work.solution(&chain, nu, residuals));

@@ -722,55 +722,25 @@ impl BoxQp {
         lambda: f64,
     ) -> Option<(f64, f64)> {
         let np = g.len();
-        let lower = |i: usize| lo - theta[i];
-        let upper = |i: usize| hi - theta[i];
+        let bounds = |i: usize| (lo - theta[i], hi - theta[i]);
         self.delta.fill(0.0);
         for i in 0..np {
             let inert = g[i] == 0.0 && (0..np).all(|j| h[i.max(j) * np + i.min(j)] == 0.0);
+            let (l, u) = bounds(i);
             self.fixed[i] = if inert {
                 INERT
-            } else if lower(i) >= 0.0 && g[i] > 0.0 {
+            } else if l >= 0.0 && g[i] > 0.0 {
                 -1
-            } else if upper(i) <= 0.0 && g[i] < 0.0 {
+            } else if u <= 0.0 && g[i] < 0.0 {
                 1
             } else {
                 0
             };
         }
         for _ in 0..10 * np + 10 {
-            self.free.clear();
-            self.free.extend((0..np).filter(|&i| self.fixed[i] == 0));
-            self.residual(h, g, lambda);
-            let nf = self.free.len();
-            let p = if nf > 0 {
-                let hf = Mat::from_fn(nf, nf, |a, b| {
-                    let (i, j) = (self.free[a], self.free[b]);
-                    h[i.max(j) * np + i.min(j)] + if a == b { lambda } else { 0.0 }
-                });
-                let rhs = Mat::from_fn(nf, 1, |a, _| -self.resid[self.free[a]]);
-                let llt = hf.llt(faer::Side::Lower).ok()?;
-                faer::linalg::solvers::Solve::solve(&llt, &rhs)
-            } else {
-                Mat::zeros(0, 1)
-            };
-            // Ratio test along p: the first bound the full step would cross.
-            let (mut alpha, mut block) = (1.0, None);
-            for (a, &i) in self.free.iter().enumerate() {
-                let (d, pi) = (self.delta[i], p[(a, 0)]);
-                let (to, side) = if pi < 0.0 {
-                    (lower(i), -1)
-                } else {
-                    (upper(i), 1)
-                };
-                let crosses = (pi < 0.0 && d + pi < to) || (pi > 0.0 && d + pi > to);
-                if crosses {
-                    let a_i = ((to - d) / pi).max(0.0);
-                    if a_i < alpha {
-                        alpha = a_i;
-                        block = Some((i, side, to));
-                    }
-                }
-            }
+            let p = self.free_newton_step(h, g, lambda)?;
+            // The first bound the full step crosses, if any, joins the working set.
+            let (alpha, block) = self.ratio_test(&p, bounds);
             for (a, &i) in self.free.iter().enumerate() {
                 self.delta[i] += alpha * p[(a, 0)];
             }
@@ -792,6 +762,50 @@ impl BoxQp {
             }
         }
         None
+    }
+
+    /// The Newton step p on the free set (the others held): (H + λI)_FF p = −((H + λI)δ + g)_F,
+    /// by faer's Cholesky; `None` when the free block is not positive definite.
+    fn free_newton_step(&mut self, h: &[f64], g: &[f64], lambda: f64) -> Option<Mat<f64>> {
+        let np = g.len();
+        self.free.clear();
+        self.free.extend((0..np).filter(|&i| self.fixed[i] == 0));
+        self.residual(h, g, lambda);
+        let nf = self.free.len();
+        if nf == 0 {
+            return Some(Mat::zeros(0, 1));
+        }
+        let hf = Mat::from_fn(nf, nf, |a, b| {
+            let (i, j) = (self.free[a], self.free[b]);
+            h[i.max(j) * np + i.min(j)] + if a == b { lambda } else { 0.0 }
+        });
+        let rhs = Mat::from_fn(nf, 1, |a, _| -self.resid[self.free[a]]);
+        let llt = hf.llt(faer::Side::Lower).ok()?;
+        Some(faer::linalg::solvers::Solve::solve(&llt, &rhs))
+    }
+
+    /// The largest α ≤ 1 that keeps δ + α p in the box (bounds of decision i: `bounds(i)`), and
+    /// the bound that stops it (decision, side, value).
+    fn ratio_test(
+        &self,
+        p: &Mat<f64>,
+        bounds: impl Fn(usize) -> (f64, f64),
+    ) -> (f64, Option<(usize, i8, f64)>) {
+        let (mut alpha, mut block) = (1.0, None);
+        for (a, &i) in self.free.iter().enumerate() {
+            let (d, pi) = (self.delta[i], p[(a, 0)]);
+            let (l, u) = bounds(i);
+            let (to, side) = if pi < 0.0 { (l, -1) } else { (u, 1) };
+            let crosses = (pi < 0.0 && d + pi < to) || (pi > 0.0 && d + pi > to);
+            if crosses {
+                let a_i = ((to - d) / pi).max(0.0);
+                if a_i < alpha {
+                    alpha = a_i;
+                    block = Some((i, side, to));
+                }
+            }
+        }
+        (alpha, block)
     }
 
     /// (gᵀδ, ½δᵀHδ).

@@ -102,10 +102,11 @@
 //! loop (mean 6.2 against 16.4 ms; worst 17.2 against 26.5 ms), real-time factor of the
 //! controller 16.1 against 6.1: the worst re-plan fits the 100 ms interval with either, and the
 //! mean ≤ 10 ms holds with the condensed solver. `cargo bench --bench mpc` (one re-plan at
-//! t = 10 s; the machine's timings vary by about ±20 % from run to run): 1.8 / 3.0 / 6.1 /
-//! 10.0 ms for horizons of 1 / 2 / 3 / 4 s with the condensed solver, 6.1 / 13.8 / 17.7 /
-//! 15.5 ms with the Riccati solver; the 10 s closed loop with the 3 s horizon: mean re-plan
-//! 5.5–7.2 ms, worst 10.2–12.4 ms, the whole loop (plant included) 16× faster than real time.
+//! t = 10 s; the machine's timings vary by about ±20 % from run to run): 1.7 / 4.6 / 5.5 /
+//! 8.5 ms for horizons of 1 / 2 / 3 / 4 s with the condensed solver, 5.0 / 12.1 / 14.9 /
+//! 12.8 ms with the Riccati solver; the 10 s closed loop with the 3 s horizon: mean re-plan
+//! 4.8 ms, worst 9.7 ms, controller real-time factor 21 (Riccati: 13.5 ms, 19.4 ms, 7.5), the
+//! whole loop (plant included) 16× faster than real time (Riccati 6.7×).
 //! A condensed re-plan is two or three rollouts (the nominal from the observed state, the line
 //! search) and one pass of sensitivities (about 60 % of its time); the gradient pass that only
 //! served a final convergence test is skipped

@@ -35,7 +35,7 @@
 
 use super::boxqp::{solve_scalar, BoxQpStep};
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::{Accum, Mat, MatRef, Par};
 
 #[inline]
 /// Σ aᵢbᵢ over the common length, with four partial sums: independent add chains (and SIMD)
@@ -325,9 +325,14 @@ impl Riccati {
             mut quu,
             mut g,
         } = q;
-        self.at.fill(0.0);
-        for j in 0..nxi {
-            self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
+        // Without the augmented state (per-step controls, no rate penalty) Ã is A_k itself:
+        // the store's column-major block is used in place.
+        let direct = self.aug == 0;
+        if !direct {
+            self.at.fill(0.0);
+            for j in 0..nxi {
+                self.at.col_as_slice_mut(j)[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
+            }
         }
         if inp.free {
             self.bt[..nxi].copy_from_slice(&b[..nxi]);
@@ -340,27 +345,39 @@ impl Riccati {
             }
             self.at[(wi, wi)] = 1.0;
         }
+        let at = if direct {
+            MatRef::from_column_major_slice(a, nz, nz)
+        } else {
+            self.at.as_ref()
+        };
+        let col = |j: usize| -> &[f64] {
+            if direct {
+                &a[j * nz..(j + 1) * nz]
+            } else {
+                self.at.col_as_slice(j)
+            }
+        };
         // T = S′Ã;  Q_xx += Ãᵀ T.
         matmul(
             self.t.as_mut(),
             Accum::Replace,
             self.s_next.as_ref(),
-            self.at.as_ref(),
+            at,
             1.0,
             Par::Seq,
         );
         matmul(
             self.qxx.as_mut(),
             Accum::Add,
-            self.at.as_ref().transpose(),
+            at.transpose(),
             self.t.as_ref(),
             1.0,
             Par::Seq,
         );
         for j in 0..nz {
-            let col = self.at.col_as_slice(j);
-            self.qx[j] = self.lx[j] + dot(col, &self.sv_next);
-            self.nu[j] = self.lx[j] + dot(col, &self.nu_next);
+            let c = col(j);
+            self.qx[j] = self.lx[j] + dot(c, &self.sv_next);
+            self.nu[j] = self.lx[j] + dot(c, &self.nu_next);
         }
         if inp.free {
             // SB = S′B̃ (S′ is symmetric: row i = column i).
@@ -376,7 +393,7 @@ impl Riccati {
             qu += bs;
             g += bnu;
             for j in 0..nz {
-                self.qux[j] += dot(self.at.col_as_slice(j), &self.sb);
+                self.qux[j] += dot(col(j), &self.sb);
             }
         }
         QuTerms { qu, quu, g }
@@ -423,11 +440,12 @@ impl Riccati {
             self.sv[i] += gain[i] * (quu * kk + qu) + self.qux[i] * kk;
         }
         if !sol.clamped {
+            // K Q_uu Kᵀ + K Q_ux + Q_uxᵀ Kᵀ with K = −Q_ux/Q_uu: the rank-one −Q_ux Q_uxᵀ/Q_uu.
             for j in 0..nz {
-                let (gj, qj) = (gain[j], self.qux[j]);
+                let cj = -self.qux[j] / qt;
                 let col = self.s_cur.col_as_slice_mut(j);
-                for i in 0..nz {
-                    col[i] += quu * gain[i] * gj + gain[i] * qj + self.qux[i] * gj;
+                for (c, q) in col.iter_mut().zip(&self.qux) {
+                    *c += q * cj;
                 }
             }
         }

@@ -101,7 +101,10 @@
 //! linearised rollout 3.96 ms (5.4 simulations; 5.14 ms before the four-sum dots and the
 //! contiguous AXPYs of `riccati.rs`/`qp.rs`), and the whole N = 10³ run 2.0 s wall (31
 //! iterations), N = 10⁴ 17.2 s (20 iterations). faer's two 20 × 20 products of a stage take
-//! 1.24 µs of its ≈ 3.4 µs. Table 3.4 (per-step, N = 10,
+//! 1.24 µs of its ≈ 3.4 µs. With A_k used in place and the value update as one rank-one term
+//! (load ≈ 1.5, `cargo bench --bench ocp -- "ocp_parts|ocp_solve"`): forward 0.88 ms,
+//! rollout + Jacobians + costates 22.1 ms, one Riccati pass 2.95 ms (N = 10⁴: 17.1, 204,
+//! 36.0 ms), the N = 10³ run 1.46 s (31 iterations, 47 ms or 54 simulations each). Table 3.4 (per-step, N = 10,
 //! each row bounded by the thesis's largest |u_k|, `cargo bench --bench ocp -- ocp_table_3_4`):
 //! rows 2, 4, 5, 6, 7, 9, 10 converge, at equal objectives (row 2 lower: 30.09 against 32.89;
 //! row 6 1.5·10⁻⁶ relative above the trust region), rows 1 and 3 stop at the trust region's

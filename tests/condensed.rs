@@ -304,3 +304,29 @@ fn table_3_4_rows_with_an_inert_control_converge() {
         );
     }
 }
+
+/// A per-step horizon of N = 40000 steps would need about 51 GB of sensitivities (N × 40001
+/// parameters, twice, and two dense 40001² matrices): refused before anything of that size is
+/// allocated, with a typed error naming `method` that points to the Riccati solver.
+#[test]
+fn a_long_per_step_horizon_is_refused_not_allocated() {
+    let steps = 40_000;
+    let mut scene = catalogue::long_horizon();
+    scene.time.steps = steps;
+    if let Some(c) = scene.control.as_mut() {
+        c.values = vec![0.0; steps + 1];
+    }
+    let p = ControlProblem::new(
+        &scene,
+        Parametrisation::PerStep(PerStepControl { steps }),
+        BendingObjective::summed_moment().with_effort(0.01),
+    )
+    .unwrap();
+    match Condensed::new(&p, &OcpOptions::default()) {
+        Err(chainbeam::Error::InvalidArgument { name, reason }) => {
+            assert_eq!(name, "method");
+            assert!(reason.contains("Riccati"), "{reason}");
+        }
+        r => panic!("expected the typed refusal, got {:?}", r.map(|_| ())),
+    }
+}

@@ -153,6 +153,7 @@ impl Condensed {
             free,
             theta_stage,
         } = Setup::new(problem, options, "the condensed Gauss-Newton solver")?;
+        check_memory(steps, np)?;
         let chunks = (0..np)
             .step_by(CHUNK)
             .map(|first| {
@@ -646,6 +647,30 @@ impl SensChunk {
         }
         Ok(())
     }
+}
+
+/// The solver's storage grows as N × (parameters): the sensitivities of every chunk, the
+/// previous linearisation's (for the secant update) and the dense m × m matrices. Refused, before
+/// anything of that size is allocated, beyond the library's memory budget
+/// ([`MAX_TRAJECTORY_BYTES`](crate::scene::MAX_TRAJECTORY_BYTES)): such a problem (long per-step
+/// horizons) is the Riccati solver's, whose storage is linear in N.
+fn check_memory(steps: usize, np: usize) -> Result<()> {
+    let (n1, m) = (steps as u128 + 1, np as u128);
+    let chunks = m.div_ceil(CHUNK as u128);
+    let bytes = 8 * (n1 * chunks * CHUNK as u128 + n1 * m + 2 * m * m);
+    let budget = u128::from(crate::scene::MAX_TRAJECTORY_BYTES);
+    if bytes > budget {
+        return Err(Error::InvalidArgument {
+            name: "method",
+            reason: format!(
+                "the condensed solver would store {} for N = {steps} steps and {np} parameters \
+                 (over the memory limit of {}); use the Riccati solver for long per-step horizons",
+                crate::scene::human_bytes(u64::try_from(bytes).unwrap_or(u64::MAX)),
+                crate::scene::human_bytes(crate::scene::MAX_TRAJECTORY_BYTES)
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// S_k, the sensitivities of M₀(t_k) to θ, gathered from the chunks into `out`.

@@ -394,3 +394,17 @@ fn bad_settings_are_typed_errors() {
     let e = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap_err();
     assert_eq!(invalid_name(e), "interval");
 }
+
+/// The default solver picks the condensed one for short plans and the Riccati one for long ones
+/// (the rule of `MpcSolver::Auto`: up to 4(2n + 1) pieces; the crossover measured on
+/// `mpc_riser`, n = 10, lies between 80 and 100 pieces).
+#[test]
+fn auto_solver_picks_by_plan_length() {
+    assert_eq!(MpcOptions::default().solver, MpcSolver::Auto);
+    assert_eq!(MpcSolver::Auto.resolve(30, 10), MpcSolver::Condensed);
+    assert_eq!(MpcSolver::Auto.resolve(84, 10), MpcSolver::Condensed);
+    assert_eq!(MpcSolver::Auto.resolve(85, 10), MpcSolver::Riccati);
+    assert_eq!(MpcSolver::Auto.resolve(600, 10), MpcSolver::Riccati);
+    assert_eq!(MpcSolver::Riccati.resolve(5, 10), MpcSolver::Riccati);
+    assert_eq!(MpcSolver::Condensed.resolve(600, 10), MpcSolver::Condensed);
+}

@@ -70,9 +70,9 @@ pub struct MpcArgs {
     #[arg(long, value_name = "K", default_value_t = 1)]
     pub iterations: usize,
     /// The solver of each plan: `condensed` (sensitivities to the plan's forces, a dense QP;
-    /// the faster for horizons of a few seconds) or `riccati` (stage Jacobians and Riccati
-    /// passes; linear in the horizon).
-    #[arg(long, value_enum, default_value_t = SolverArg::Condensed)]
+    /// the faster for horizons of a few seconds), `riccati` (stage Jacobians and Riccati
+    /// passes; linear in the horizon) or `auto` (condensed up to 4(2n+1) forces per plan).
+    #[arg(long, value_enum, default_value_t = SolverArg::Auto)]
     pub solver: SolverArg,
     /// Iterations of the first (cold) plan at t = 0.
     #[arg(long, value_name = "K", default_value_t = 50)]
@@ -100,6 +100,8 @@ pub struct MpcArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SolverArg {
+    /// [`MpcSolver::Auto`].
+    Auto,
     /// [`MpcSolver::Condensed`].
     Condensed,
     /// [`MpcSolver::Riccati`].
@@ -165,6 +167,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         iterations: a.iterations,
         first_iterations: a.first_iterations,
         solver: match a.solver {
+            SolverArg::Auto => MpcSolver::Auto,
             SolverArg::Condensed => MpcSolver::Condensed,
             SolverArg::Riccati => MpcSolver::Riccati,
         },

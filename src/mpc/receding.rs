@@ -25,9 +25,10 @@ pub enum MpcSolver {
     /// [`MpcSolver::Condensed`] for plans of at most 4(2n + 1) pieces (n pendulums), else
     /// [`MpcSolver::Riccati`] ([`MpcSolver::resolve`]): the condensed cost grows with steps ×
     /// pieces, the Riccati one with steps alone. Measured on `mpc_riser` (n = 10, pieces of
-    /// 10 steps, mean re-plan over its first 10 s): condensed / Riccati 18.5 / 26.9 ms with 60
-    /// pieces, 30.3 / 36.9 ms with 80, 48.1 / 48.5 ms with 100 — the crossover near 4(2n + 1)
-    /// = 84 to 100.
+    /// 10 steps; `chainbeam mpc examples/scenes/mpc_riser.toml --horizon H --solver S
+    /// --summary s.json`, mean re-plan over 60 s): condensed / Riccati 31.7 / 38.5 ms with 80
+    /// pieces (H = 8 s), 53.8 / 51.1 ms with 100 (H = 10 s) — the crossover between the two,
+    /// near 4(2n + 1) = 84.
     #[default]
     Auto,
     /// Full condensing ([`ocp::Condensed`]): sensitivities of the bending moments to the

@@ -100,11 +100,11 @@ pub struct MpcArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SolverArg {
-    /// [`MpcSolver::Auto`].
+    /// condensed up to 4(2n+1) forces per plan (n pendulums), riccati beyond
     Auto,
-    /// [`MpcSolver::Condensed`].
+    /// sensitivities of M₀ to the plan's forces and a dense QP (cost ∝ steps × forces)
     Condensed,
-    /// [`MpcSolver::Riccati`].
+    /// stage Jacobians and Riccati passes (cost ∝ steps)
     Riccati,
 }
 

@@ -58,7 +58,7 @@ use num_dual::Derivative;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use super::globalise::{backtrack, next_mu, raise_mu, Accepted, RoundoffWatch};
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, Progress};
 use super::line_search::{rollout, Traj};
 use super::riccati::StageCost;
 use super::stage::{Dv, StageModel, Stepper, CHUNK};
@@ -109,20 +109,6 @@ pub struct Condensed {
 /// the Riccati solver's smallest weight, the steps along a flat valley stayed short: Table 3.4
 /// row 9 took 46 iterations, with 10⁻¹² it takes 2.)
 const MU_FIRST: f64 = 1e-12;
-
-/// The running state of one [`Condensed::solve`].
-struct Progress {
-    j0: f64,
-    /// Relative Levenberg weight.
-    mu: f64,
-    iterations: usize,
-    /// ‖∇J(θ₀)‖.
-    g0: Option<f64>,
-    last_pg: f64,
-    /// Steps below J's round-off.
-    roundoff: RoundoffWatch,
-    history: Vec<IterationRecord>,
-}
 
 /// The sensitivities of the decisions θ_first … θ_{first+len−1} (one dual-number chunk).
 #[derive(Clone, Debug)]
@@ -456,15 +442,7 @@ impl Condensed {
         self.secant.fill(0.0);
         self.has_prev = false;
         self.use_secant = false;
-        let mut pr = Progress {
-            j0: self.set_point(theta0)?,
-            mu: 0.0,
-            iterations: 0,
-            g0: None,
-            last_pg: f64::INFINITY,
-            roundoff: RoundoffWatch::default(),
-            history: Vec::new(),
-        };
+        let mut pr = Progress::new(self.set_point(theta0)?);
         let termination = loop {
             if let Some(t) = self.iterate(&mut pr)? {
                 break t;
@@ -476,22 +454,14 @@ impl Condensed {
     /// One iteration: linearisation, stopping tests, the QP step and its line search, the
     /// regularisation schedule. `Some` ends the run.
     fn iterate(&mut self, pr: &mut Progress) -> Result<Option<Termination>> {
-        let opts = &self.opts;
-        if pr.iterations > 0 && pr.iterations >= opts.max_iters && !opts.final_gradient {
+        if pr.budget_spent(&self.opts) {
             return Ok(Some(Termination::Budget));
         }
         self.linearise()?;
         let pg = self.projected_norm();
-        pr.last_pg = pg;
-        let gref = *pr
-            .g0
-            .get_or_insert_with(|| self.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
-        let opts = &self.opts;
-        if pg <= opts.grad_tol.max(opts.rel_grad_tol * gref) {
-            return Ok(Some(Termination::Converged));
-        }
-        if pr.iterations >= opts.max_iters {
-            return Ok(Some(Termination::MaxIterations));
+        let (stop, _, _) = pr.stop_test(&self.opts, pg, &self.grad);
+        if stop.is_some() {
+            return Ok(stop);
         }
         let Some((acc, model)) = self.step(&mut pr.mu, pr.j0) else {
             return Ok(Some(Termination::RegularisationLimit));

@@ -1,25 +1,8 @@
 //! The iteration: start, Gauss-Newton QP, closed-loop line search, regularisation schedule,
 //! convergence and failure reports (module docs, "Globalisation", "Convergence").
 
-use super::globalise::{backtrack, next_mu, raise_mu, Accepted, RoundoffWatch};
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, Progress};
 use super::*;
-
-/// The running state of one [`Solver::solve`].
-struct Progress {
-    /// J at the (projected) start.
-    j0: f64,
-    /// Relative proximal weight μ/mean(Q_uu).
-    mu: f64,
-    /// Accepted steps.
-    iterations: usize,
-    /// Steps below J's round-off.
-    roundoff: RoundoffWatch,
-    history: Vec<IterationRecord>,
-    /// ‖∇J(θ₀)‖ (set by the first gradient).
-    g0: Option<f64>,
-    /// The projected gradient of the last evaluation.
-    last_pg: f64,
-}
 
 impl Solver {
     /// Runs the solver from θ₀ (projected onto the box): Gauss-Newton SQP iterations whose
@@ -28,15 +11,7 @@ impl Solver {
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0, 0);
-        let mut pr = Progress {
-            j0: self.set_point(theta0)?,
-            mu: 0.0,
-            iterations: 0,
-            roundoff: RoundoffWatch::default(),
-            history: Vec::new(),
-            g0: None,
-            last_pg: f64::INFINITY,
-        };
+        let mut pr = Progress::new(self.set_point(theta0)?);
         let termination = loop {
             if let Some(t) = self.iterate(&mut pr)? {
                 break t;
@@ -49,22 +24,15 @@ impl Solver {
     /// model, the line search and the regularisation schedule. `Some` ends the run.
     fn iterate(&mut self, pr: &mut Progress) -> Result<Option<Termination>> {
         let opts = self.opts.clone();
-        if pr.iterations > 0 && pr.iterations >= opts.max_iters && !opts.final_gradient {
+        if pr.budget_spent(&opts) {
             return Ok(Some(Termination::Budget));
         }
         // The exact gradient at the nominal (costate sweep) and the convergence test.
         self.costate()?;
         let pg = self.projected_norm();
-        pr.last_pg = pg;
-        let gref = *pr
-            .g0
-            .get_or_insert_with(|| self.riccati.grad.iter().map(|g| g * g).sum::<f64>().sqrt());
-        let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
-        if pg <= target {
-            return Ok(Some(Termination::Converged));
-        }
-        if pr.iterations >= opts.max_iters {
-            return Ok(Some(Termination::MaxIterations));
+        let (stop, target, gref) = pr.stop_test(&opts, pg, &self.riccati.grad);
+        if stop.is_some() {
+            return Ok(stop);
         }
         self.gtrue.copy_from_slice(&self.riccati.grad);
         let jbar = self.nominal.cost;

@@ -4,7 +4,9 @@
 //! steps below J's resolution. Each solver supplies only its own trial (a closed-loop rollout
 //! with Riccati feedback, or an open-loop rollout of θ + αδ).
 
-use super::{MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF};
+use super::{
+    IterationRecord, OcpOptions, Termination, MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF,
+};
 
 /// The step the line search accepted.
 #[derive(Clone, Copy, Debug)]
@@ -115,5 +117,68 @@ impl RoundoffWatch {
         }
         self.steps += 1;
         self.steps > MAX_ROUNDOFF_STEPS
+    }
+}
+
+/// The running state of one solve (either solver).
+pub(crate) struct Progress {
+    /// J at the (projected) start.
+    pub j0: f64,
+    /// Relative Levenberg weight.
+    pub mu: f64,
+    /// Accepted steps.
+    pub iterations: usize,
+    /// Steps below J's round-off.
+    pub roundoff: RoundoffWatch,
+    pub history: Vec<IterationRecord>,
+    /// ‖∇J(θ₀)‖ (set by the first gradient).
+    pub g0: Option<f64>,
+    /// The projected gradient of the last evaluation.
+    pub last_pg: f64,
+}
+
+impl Progress {
+    /// The state at the start, J(θ₀) = `j0`.
+    pub fn new(j0: f64) -> Self {
+        Progress {
+            j0,
+            mu: 0.0,
+            iterations: 0,
+            roundoff: RoundoffWatch::default(),
+            history: Vec::new(),
+            g0: None,
+            last_pg: f64::INFINITY,
+        }
+    }
+
+    /// Whether a real-time budget is spent (no final gradient wanted:
+    /// [`OcpOptions::final_gradient`]); tested before the next linearisation.
+    pub fn budget_spent(&self, opts: &OcpOptions) -> bool {
+        self.iterations > 0 && self.iterations >= opts.max_iters && !opts.final_gradient
+    }
+
+    /// The stopping tests on the projected gradient `pg` (the gradient `grad` sets ‖∇J(θ₀)‖ at
+    /// the first call): [`Termination::Converged`] at max(grad_tol, rel_grad_tol ‖g₀‖),
+    /// [`Termination::MaxIterations`] at the limit. Returns the tolerance as well, and
+    /// ‖g₀‖.
+    pub fn stop_test(
+        &mut self,
+        opts: &OcpOptions,
+        pg: f64,
+        grad: &[f64],
+    ) -> (Option<Termination>, f64, f64) {
+        self.last_pg = pg;
+        let gref = *self
+            .g0
+            .get_or_insert_with(|| grad.iter().map(|g| g * g).sum::<f64>().sqrt());
+        let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
+        let stop = if pg <= target {
+            Some(Termination::Converged)
+        } else if self.iterations >= opts.max_iters {
+            Some(Termination::MaxIterations)
+        } else {
+            None
+        };
+        (stop, target, gref)
     }
 }

@@ -40,7 +40,7 @@
 //! cargo run --release --example long_horizon -- --rho 0.01 --umax 5 --rate 0.001 --history
 //! ```
 
-use chainbeam::ocp::{self, OcpOptions};
+use chainbeam::ocp::{self, Curvature, OcpOptions};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
     catalogue, simulate_with_controls, BendingObjective, ControlProblem, Error, Parametrisation,
@@ -88,6 +88,7 @@ struct Setup {
     umax: f64,
     rate: f64,
     history: bool,
+    curvature: Curvature,
 }
 
 /// Solves `problem` from θ₀ with one method.
@@ -100,6 +101,7 @@ fn solve_with(
     if method == "riccati" || method == "condensed" {
         let opts = OcpOptions {
             rate_penalty: set.rate,
+            curvature: set.curvature,
             ..OcpOptions::default().with_bound(set.umax)
         };
         let r = if method == "condensed" {
@@ -196,6 +198,17 @@ fn run() -> Result<()> {
         umax: arg(&args, "--umax", 5.0)?,
         rate: arg(&args, "--rate", 0.0)?,
         history: args.iter().any(|a| a == "--history"),
+        curvature: match value(&args, "--curvature") {
+            None | Some("auto") => Curvature::Auto,
+            Some("exact") => Curvature::Exact,
+            Some("gauss-newton") => Curvature::GaussNewton,
+            Some(other) => {
+                return Err(Error::InvalidArgument {
+                    name: "--curvature",
+                    reason: format!("expected auto, exact or gauss-newton, got {other:?}"),
+                })
+            }
+        },
     };
     let steps = arg(&args, "--steps", 1000.0)? as usize;
     let pieces = arg(&args, "--pieces", 0.0)? as usize;

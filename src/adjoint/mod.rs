@@ -39,6 +39,9 @@ mod problem;
 mod reverse;
 mod tape;
 
+pub(crate) use reverse::{Cotangents, ReverseSweep};
+pub(crate) use tape::StateView;
+
 pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };
@@ -53,7 +56,7 @@ use crate::model::{Chain, Parameter, Scalar, TipCondition};
 use crate::rattle::{Rattle, State};
 use num_dual::Dual;
 use objective::StageEval;
-use reverse::{Cotangents, ReverseSweep};
+
 use tape::StateStore;
 
 /// Validates the parameters requested for a gradient.

@@ -98,6 +98,20 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         Ok(())
     }
 
+    /// The reverse of a momentum projection p = c − Ĝ(q)ᵀy with Ĝ(q) M⁻¹ p = 0 at the state `s`
+    /// (its q, p and y = (h/2)·`s.mu`): with p̄ in `cot.pbar`, adds the projection's share to
+    /// `cot.qbar` and returns c̄ = p̄ − M⁻¹Ĝᵀŷ, A ŷ = Ĝ p̄. The step's final projection; the
+    /// Riccati solver's stage map applies it to the control's half-kick ([`crate::ocp`]).
+    pub fn projection_reverse(
+        &mut self,
+        k: usize,
+        s: &StateView<'_, D, DIM>,
+        cot: &mut Cotangents<D, DIM>,
+    ) -> Result<&[[D; DIM]]> {
+        self.projection(k, s, cot)?;
+        Ok(&self.bbar)
+    }
+
     /// Projection: A ŷ = Ĝ(q′) p̄′ (A = Ĝ M⁻¹ Ĝᵀ at q′), b̄ = p̄′ − M⁻¹ Ĝᵀ ŷ,
     /// q̄′ += −(h/2) μᵢ b̄ᵢ − ŷᵢ (M⁻¹p′)ᵢ. Leaves ŷ in `rhs`.
     fn projection(

@@ -11,6 +11,7 @@ impl Solver {
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0, 0);
+        self.second_order_on = self.opts.curvature == Curvature::Exact && !self.h_store.is_empty();
         let mut pr = Progress::new(self.set_point(theta0)?);
         let termination = loop {
             if let Some(t) = self.iterate(&mut pr)? {
@@ -35,6 +36,10 @@ impl Solver {
             return Ok(stop);
         }
         self.gtrue.copy_from_slice(&self.riccati.grad);
+        self.exact = self.second_order_on;
+        if self.exact {
+            self.hessians()?;
+        }
         let jbar = self.nominal.cost;
         let Some(model) = self.model_step(pr, (pg, gref))? else {
             return Ok(Some(Termination::RegularisationLimit));
@@ -42,8 +47,12 @@ impl Solver {
         let search = (opts.armijo, opts.backtracks);
         let trial = |alpha| self.trial_rollout(alpha).then_some(self.trial.cost);
         match backtrack((jbar, pr.j0), model, search, trial) {
-            Some(acc) => self.accept(pr, acc, (pg, target)),
+            Some(acc) => {
+                self.switch_curvature(acc.alpha >= 1.0 && acc.ratio >= 0.5);
+                self.accept(pr, acc, (pg, target))
+            }
             None => {
+                self.switch_curvature(false);
                 pr.mu = raise_mu(pr.mu);
                 Ok((pr.mu > opts.max_regularisation).then_some(Termination::RegularisationLimit))
             }
@@ -92,6 +101,14 @@ impl Solver {
             if pr.mu > opts.max_regularisation {
                 return Ok(None);
             }
+        }
+    }
+
+    /// [`Curvature::Auto`]: the exact model from the first step the Gauss-Newton model did not
+    /// predict well (`good`: taken in full with actual ≥ ½ predicted decrease) on.
+    fn switch_curvature(&mut self, good: bool) {
+        if self.opts.curvature == Curvature::Auto && !good && !self.h_store.is_empty() {
+            self.second_order_on = true;
         }
     }
 

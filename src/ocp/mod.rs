@@ -149,6 +149,7 @@ pub mod condensed;
 mod diagnostics;
 mod driver;
 mod globalise;
+mod hessian;
 pub mod line_search;
 mod options;
 mod qp;
@@ -156,7 +157,7 @@ pub mod riccati;
 pub mod stage;
 
 pub use condensed::Condensed;
-pub use options::{IterationRecord, OcpOptions, OcpResult, Termination};
+pub use options::{Curvature, IterationRecord, OcpOptions, OcpResult, Termination};
 
 use std::time::Instant;
 
@@ -166,10 +167,12 @@ use rayon::prelude::*;
 
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
+use crate::model::Chain;
 use crate::scene::ObjectiveKind;
+use hessian::Reverse;
 use line_search::{rollout, Feedback, Traj};
 use riccati::{Riccati, StageCost, StageInput};
-use stage::{tangent, JacobianWorkspace, StageModel, StagePoint, Stepper};
+use stage::{tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper};
 
 /// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
 /// the run stops ([`Termination::RoundOff`]).
@@ -198,6 +201,67 @@ enum Arc {
 
 /// Interior-point iterations of one QP solve.
 const MAX_QP_ITERS: usize = 40;
+
+/// The second-order terms of the stages, as the backward pass reads them.
+struct SecondOrder<'a> {
+    on: bool,
+    steps: usize,
+    nz: usize,
+    h: &'a [f64],
+    curv: &'a [f64],
+    dz: &'a [f64],
+}
+
+impl<'a> SecondOrder<'a> {
+    /// The terms in the stores (`on`: the exact model is in use).
+    fn of(
+        on: bool,
+        (steps, nz): (usize, usize),
+        (h, curv, dz): (&'a [f64], &'a [f64], &'a [f64]),
+    ) -> Self {
+        SecondOrder {
+            on,
+            steps,
+            nz,
+            h,
+            curv,
+            dz,
+        }
+    }
+
+    /// ½ δᵀH_kδ + ½ curv_k δφ₁² at the model point δ = (δz_k, δv_k): stage k's second-order
+    /// terms in the model's value.
+    fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
+        let nd = self.nz + 1;
+        let mut v = 0.5 * self.curv[k] * dz[0] * dz[0];
+        if k < self.steps {
+            let h = &self.h[k * nd * nd..(k + 1) * nd * nd];
+            let x = |j: usize| if j < self.nz { dz[j] } else { dv };
+            for j in 0..nd {
+                let xj = x(j);
+                if xj != 0.0 {
+                    let hx: f64 = (0..nd).map(|r| h[j * nd + r] * x(r)).sum();
+                    v += 0.5 * xj * hx;
+                }
+            }
+        }
+        v
+    }
+
+    /// Attaches stage k's terms to its input (nothing for Gauss-Newton).
+    fn attach(&self, inp: &mut StageInput<'a>) {
+        if !self.on {
+            return;
+        }
+        let (k, nz) = (inp.k, self.nz);
+        let nd = nz + 1;
+        inp.curv = self.curv[k];
+        inp.dz = &self.dz[k * nz..(k + 1) * nz];
+        if k < self.steps {
+            inp.hess = Some(&self.h[k * nd * nd..(k + 1) * nd * nd]);
+        }
+    }
+}
 
 /// Minimises J of a [`ControlProblem`] with per-step or piecewise-constant controls from θ₀
 /// (projected onto the box) by the structured Gauss-Newton method of the module docs.
@@ -267,6 +331,14 @@ pub struct Solver {
     prox: f64,
     quu_scale: f64,
     counts: (usize, usize, usize),
+    /// The second-order terms (`hessian`): the dual chain of the reverse steps, H_k per stage
+    /// and the cost's extra curvature per stage; `exact` when the current model uses them.
+    chain_dv: Chain<Dv, 2>,
+    h_store: Vec<f64>,
+    curv: Vec<f64>,
+    exact: bool,
+    /// Whether the iterations from now on use the exact model ([`Curvature`]).
+    second_order_on: bool,
 }
 
 impl Solver {
@@ -300,14 +372,28 @@ impl Solver {
             .collect::<Result<Vec<_>>>()?;
         let stage_bytes = 8 * (nxi * nxi + nxi);
         let block = (options.jacobian_memory / stage_bytes).clamp(1, steps.max(1));
+        let second_order =
+            aug == 0 && block >= steps && options.curvature != Curvature::GaussNewton;
+        let mut riccati = Riccati::new(nxi, aug, steps);
+        let h_store = if second_order {
+            riccati.nu_store = vec![0.0; (steps + 1) * nz];
+            vec![0.0; steps * (nxi + 1) * (nxi + 1)]
+        } else {
+            Vec::new()
+        };
         Ok(Solver {
+            chain_dv: model.chain.lift::<Dv>(),
+            h_store,
+            curv: vec![0.0; steps + 1],
+            exact: false,
+            second_order_on: false,
             stepper: Stepper::new(&model)?,
             scratch: vec![[0.0; 2]; n],
             nominal: Traj::new(n, steps),
             trial: Traj::new(n, steps),
             a_store: vec![0.0; block * nxi * nxi],
             b_store: vec![0.0; block * nxi],
-            riccati: Riccati::new(nxi, aug, steps),
+            riccati,
             active: vec![false; steps + 1],
             fixed: vec![0.0; steps + 1],
             dv: vec![0.0; steps + 1],
@@ -474,6 +560,10 @@ impl Solver {
             quu_shift: qs,
             a: None,
             b: None,
+            hess: None,
+            curv: 0.0,
+            dz: &[],
+            dv: self.dv[k],
         }
     }
 
@@ -484,7 +574,13 @@ impl Solver {
     fn sweep(&mut self, riccati: bool) -> Result<bool> {
         let (steps, nxi, mu) = (self.steps, self.nxi, self.prox);
         self.riccati.begin();
-        let last = self.stage_input(steps, true);
+        let mut last = self.stage_input(steps, true);
+        SecondOrder::of(
+            self.exact,
+            (self.steps, self.nz),
+            (&self.h_store, &self.curv, &self.dz),
+        )
+        .attach(&mut last);
         let mut bounded = if riccati {
             self.counts.2 += 1;
             self.riccati.stage(&last, &self.cost, mu)
@@ -501,6 +597,12 @@ impl Solver {
                 let mut inp = self.stage_input(k, true);
                 inp.a = Some(&self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi]);
                 inp.b = Some(&self.b_store[i * nxi..(i + 1) * nxi]);
+                SecondOrder::of(
+                    self.exact,
+                    (self.steps, self.nz),
+                    (&self.h_store, &self.curv, &self.dz),
+                )
+                .attach(&mut inp);
                 if riccati {
                     bounded &= self.riccati.stage(&inp, &self.cost, mu);
                 } else {
@@ -516,12 +618,66 @@ impl Solver {
         Ok(bounded)
     }
 
-    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep.
+    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep, which
+    /// records the costates ν_k for the second-order terms.
     fn costate(&mut self) -> Result<()> {
         self.dv.fill(0.0);
         self.dz.fill(0.0);
         self.active.fill(false);
-        self.sweep(false).map(|_| ())
+        self.riccati.record = !self.h_store.is_empty();
+        let r = self.sweep(false).map(|_| ());
+        self.riccati.record = false;
+        r
+    }
+
+    /// H_k = ∇²(ν_{k+1}·F̃_k) for every stage at the nominal, in parallel (`hessian`), and the
+    /// cost's curvature −2c_k M₀(t_k)²; needs the costates of the last [`Solver::costate`].
+    fn hessians(&mut self) -> Result<()> {
+        let (steps, nxi) = (self.steps, self.nxi);
+        let nd = nxi + 1;
+        let per = nd * nd;
+        let chunk = steps.div_ceil(self.jws.len()).max(1);
+        let (model, nom, chain) = (&self.model, &self.nominal, &self.chain_dv);
+        let nu = &self.riccati.nu_store;
+        let work = |c: usize, hs: &mut [f64], ws: &mut JacobianWorkspace| {
+            let mut rev = Reverse::new(chain, model, steps);
+            let mut grad = vec![0.0; nd];
+            for (i, h) in hs.chunks_mut(per).enumerate() {
+                let k = c * chunk + i;
+                let x = StagePoint {
+                    q: nom.q(k),
+                    p: nom.p(k),
+                    omega: nom.omega(k),
+                    mu: nom.lambda(k),
+                };
+                let nu1 = &nu[(k + 1) * nxi..(k + 2) * nxi];
+                ws.lagrangian_hessian((model, k), x, (nom.u[k], nu1), &mut rev, (h, &mut grad))?;
+            }
+            Ok::<(), Error>(())
+        };
+        let hs = &mut self.h_store[..steps * per];
+        #[cfg(feature = "parallel")]
+        if self.jws.len() > 1 {
+            hs.par_chunks_mut(chunk * per)
+                .zip(self.jws.par_iter_mut())
+                .enumerate()
+                .try_for_each(|(c, (h, ws))| work(c, h, ws))?;
+        } else {
+            work(0, hs, &mut self.jws[0])?;
+        }
+        #[cfg(not(feature = "parallel"))]
+        for (c, (h, ws)) in hs
+            .chunks_mut(chunk * per)
+            .zip(self.jws.iter_mut())
+            .enumerate()
+        {
+            work(c, h, ws)?;
+        }
+        for k in 0..=steps {
+            let m = self.nominal.moment[k];
+            self.curv[k] = -2.0 * self.cost.weight(k) * m * m;
+        }
+        Ok(())
     }
 
     /// Bertsekas's ε-active set at the model point from the gradient of the last costate

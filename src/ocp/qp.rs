@@ -55,6 +55,10 @@ impl Solver {
                 0.0
             };
             q += self.cost.value(k, m, u, w);
+            if self.exact {
+                let so = SecondOrder::of(true, (steps, nz), (&self.h_store, &self.curv, &[]));
+                q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
+            }
             if self.free[k] {
                 prox += 0.5 * self.prox * self.dv_t[k] * self.dv_t[k];
             }

@@ -117,6 +117,17 @@ pub(crate) struct StageInput<'a> {
     /// A_k (column-major 2n × 2n) and B_k (2n); `None` at the last stage.
     pub a: Option<&'a [f64]>,
     pub b: Option<&'a [f64]>,
+    /// The exact second-order term of the stage map, H_k = ∇²(ν_{k+1}·F̃_k) over (ξ, u)
+    /// (column-major (2n + 1)², [`super::hessian`]); `None` for Gauss-Newton. Only without an
+    /// augmented state.
+    pub hess: Option<&'a [f64]>,
+    /// The stage cost's curvature beyond Gauss-Newton, added to l_φ₁φ₁: 2c M₀ ∂²M₀/∂φ₁² =
+    /// −2c M₀² (M₀ = s sin φ₁); 0 for Gauss-Newton.
+    pub curv: f64,
+    /// The model point δz_k (for the gradient H δ of the second-order terms; empty when
+    /// they are absent) and δv_k.
+    pub dz: &'a [f64],
+    pub dv: f64,
 }
 
 /// (Q_u, Q_uu, g) of a stage: the scalar control terms of the recursion and the exact
@@ -154,6 +165,10 @@ pub(crate) struct Riccati {
     pub ff: Vec<f64>,
     /// Exact gradient of J with respect to the decision of each free stage (0 when held).
     pub grad: Vec<f64>,
+    /// The costates ν_k of the last costate sweep with `record` set (n_z per stage): the
+    /// multipliers of the second-order terms ([`super::hessian`]).
+    pub nu_store: Vec<f64>,
+    pub record: bool,
     /// Σ k Q_u and Σ ½ k² Q_uu (ΔJ(α) = α d1 + α² d2).
     pub d1: f64,
     pub d2: f64,
@@ -186,6 +201,8 @@ impl Riccati {
             gain: vec![0.0; (steps + 1) * nz],
             ff: vec![0.0; steps + 1],
             grad: vec![0.0; steps + 1],
+            nu_store: Vec::new(),
+            record: false,
             d1: 0.0,
             d2: 0.0,
             quu_sum: 0.0,
@@ -223,6 +240,7 @@ impl Riccati {
         } else {
             self.lx[wi] = 2.0 * cost.effort * inp.w;
         }
+        lu += self.second_order(inp, false).0;
         match (inp.a, inp.b) {
             (Some(a), Some(b)) => {
                 let nu1 = &self.nu_next;
@@ -251,6 +269,13 @@ impl Riccati {
                 self.nu.copy_from_slice(&self.lx);
                 self.grad[k] = if inp.free { lu } else { 0.0 };
             }
+        }
+        if self.record {
+            let nz = self.nz;
+            if self.nu_store.len() < (k + 1) * nz {
+                self.nu_store.resize((k + 1) * nz, 0.0);
+            }
+            self.nu_store[k * nz..(k + 1) * nz].copy_from_slice(&self.nu);
         }
         std::mem::swap(&mut self.nu, &mut self.nu_next);
     }
@@ -307,11 +332,57 @@ impl Riccati {
         if self.aug == 1 {
             self.qux[wi] = lux_w;
         }
+        let (dlu, dluu) = self.second_order(inp, true);
+        lu += dlu;
+        luu += dluu;
         QuTerms {
             qu: lu,
             quu: luu,
             g: lu,
         }
+    }
+
+    /// The exact second-order terms of the stage at the model point δ = (δz, δv): l_x += H_xz δ
+    /// (+ curv δφ₁ on φ₁), and with `matrices` l_xx += H_xx (+ curv), l_ux += H_ux; returns
+    /// (H_uz δ, H_uu) for l_u and l_uu. Nothing without them (Gauss-Newton).
+    fn second_order(&mut self, inp: &StageInput<'_>, matrices: bool) -> (f64, f64) {
+        let nxi = self.nxi;
+        if inp.curv != 0.0 {
+            self.lx[0] += inp.curv * inp.dz.first().copied().unwrap_or(0.0);
+            if matrices {
+                self.qxx[(0, 0)] += inp.curv;
+            }
+        }
+        let Some(h) = inp.hess else {
+            return (0.0, 0.0);
+        };
+        let nd = nxi + 1;
+        let col = |j: usize| &h[j * nd..(j + 1) * nd];
+        // H δ, column by column (δ = (δz, δv)).
+        let mut lu = 0.0;
+        for j in 0..nd {
+            let x = if j < nxi { inp.dz[j] } else { inp.dv };
+            if x != 0.0 {
+                for (r, hr) in col(j).iter().enumerate() {
+                    if r < nxi {
+                        self.lx[r] += hr * x;
+                    } else {
+                        lu += hr * x;
+                    }
+                }
+            }
+        }
+        if !matrices {
+            return (lu, 0.0);
+        }
+        for j in 0..nxi {
+            let c = col(j);
+            for (dst, src) in self.qxx.col_as_slice_mut(j)[..nxi].iter_mut().zip(c) {
+                *dst += src;
+            }
+            self.qux[j] += c[nxi];
+        }
+        (lu, col(nxi)[nxi])
     }
 
     /// The dynamics' part with the augmented Ã, B̃ (held stages: u = w enters Ã): Q_xx += ÃᵀS′Ã,

@@ -78,6 +78,11 @@ pub struct StagePoint<'a> {
 pub const CHUNK: usize = 8;
 pub(crate) type Dv = DualSVec64<CHUNK>;
 
+/// Directions of a stage: the 2n tangent coordinates and the control.
+pub(crate) fn ndir(n: usize) -> usize {
+    2 * n + 1
+}
+
 /// The tangent tᵢ = qᵢ rotated by +90° in the (y, z) plane: ∂q/∂φ for q = (cos φ, sin φ).
 #[inline]
 pub(crate) fn tangent<D: Scalar>(q: &[D; 2]) -> [D; 2] {
@@ -167,20 +172,20 @@ impl StageModel {
     }
 
     /// out = M v (v = velocities, out = momenta), O(n): (M̄x)ᵢ = lᵢ Σ_{k≥i} m_k Σ_{j≤k} l_j x_j.
-    pub fn apply_mass(&self, v: &[[f64; 2]], out: &mut [[f64; 2]]) {
+    pub fn apply_mass<D: Scalar>(&self, v: &[[D; 2]], out: &mut [[D; 2]]) {
         let (l, m) = (self.chain.lengths(), self.chain.masses());
-        let mut c = [0.0; 2];
+        let mut c = [D::zero(); 2];
         for j in 0..self.n {
             for d in 0..2 {
-                c[d] += l[j] * v[j][d];
-                out[j][d] = m[j] * c[d];
+                c[d] += v[j][d] * l[j];
+                out[j][d] = c[d] * m[j];
             }
         }
-        let mut acc = [0.0; 2];
+        let mut acc = [D::zero(); 2];
         for i in (0..self.n).rev() {
             for d in 0..2 {
                 acc[d] += out[i][d];
-                out[i][d] = l[i] * acc[d];
+                out[i][d] = acc[d] * l[i];
             }
         }
     }
@@ -205,6 +210,11 @@ pub(crate) struct Projector<D> {
 }
 
 impl<D: Scalar> Projector<D> {
+    /// The multipliers y_b of the last [`Projector::apply`]: P(q) b = b − Ĝ(q)ᵀ y_b.
+    pub fn y(&self) -> &[D] {
+        &self.rhs
+    }
+
     pub fn new(n: usize) -> Self {
         Projector {
             lifted: vec![[D::zero(); 2]; n],
@@ -270,7 +280,7 @@ pub(crate) struct Stepper<D> {
     initial: Option<State<D, 2>>,
     /// Whether stage 0 applies the control's half-kick (a start with [`StartKick::Pending`]).
     pending: bool,
-    proj: Projector<D>,
+    pub proj: Projector<D>,
     pb: Vec<[D; 2]>,
     b: Vec<[f64; 2]>,
     hh: f64,
@@ -325,31 +335,46 @@ impl<D: Scalar> Stepper<D> {
     /// x̂_k → x̂_{k+1} = F_k(x̂_k, u_k) (with the half-kick p_k = p̂_k − (h/2) u_k P(q_k) b at
     /// k ≥ 1, and at k = 0 from a start with a pending kick).
     pub fn advance(&mut self, k: usize, u: D) -> Result<()> {
-        if k > 0 || self.pending {
-            self.proj
-                .apply(self.rattle.chain(), &self.state.q, &self.b, k, &mut self.pb)?;
-            for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {
-                for d in 0..2 {
-                    p[d] -= pb[d] * u * self.hh;
-                }
-            }
-        }
+        self.kick(k, u)?;
         self.rattle.prepare_force(&self.state, k, u)?;
         self.rattle.step(&mut self.state, k, u, D::zero())?;
         Ok(())
+    }
+
+    /// The stage's half-kick p_k = p̂_k − (h/2) u_k P(q_k) b where the stage has one (k ≥ 1, or
+    /// a start with a pending kick); returns whether it did ([`Projector::y`] then holds y_b).
+    pub fn kick(&mut self, k: usize, u: D) -> Result<bool> {
+        if !(k > 0 || self.pending) {
+            return Ok(false);
+        }
+        self.proj
+            .apply(self.rattle.chain(), &self.state.q, &self.b, k, &mut self.pb)?;
+        for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {
+            for d in 0..2 {
+                p[d] -= pb[d] * u * self.hh;
+            }
+        }
+        Ok(true)
+    }
+
+    /// b = ∂U_q/∂u (block j: l_j e₃ below the control node).
+    pub fn control_direction(&self) -> &[[f64; 2]] {
+        &self.b
     }
 }
 
 /// Per-thread scratch of the dual-number stage Jacobians.
 #[derive(Clone, Debug)]
 pub(crate) struct JacobianWorkspace {
-    stepper: Stepper<Dv>,
+    pub(super) stepper: Stepper<Dv>,
     seed_q: Vec<[[f64; CHUNK]; 2]>,
     seed_p: Vec<[[f64; CHUNK]; 2]>,
     dv: Vec<[f64; 2]>,
     dp: Vec<[f64; 2]>,
     minv: Vec<[f64; 2]>,
     tang: Vec<[f64; 2]>,
+    /// The dual buffers of the second-order terms ([`super::hessian`]).
+    pub(super) hb: super::hessian::HessianBuffers,
 }
 
 impl JacobianWorkspace {
@@ -363,7 +388,67 @@ impl JacobianWorkspace {
             dp: vec![[0.0; 2]; n],
             minv: vec![[0.0; 2]; n],
             tang: vec![[0.0; 2]; n],
+            hb: super::hessian::HessianBuffers::new(n),
         })
+    }
+
+    /// Loads x̂_k = (q, p) into the dual stepper with the tangent directions start..end
+    /// (ξ_j for j < 2n, u for j = 2n) seeded into the slots 0..end − start (E e_j on x̂_k:
+    /// δqᵢ = tᵢ δφᵢ, δp = M δv with δvᵢ = tᵢ δωᵢ − qᵢ ωᵢ δφᵢ), the Newton start μ, and returns
+    /// the dual control.
+    pub(super) fn seed(
+        &mut self,
+        model: &StageModel,
+        StagePoint { q, p, omega, mu }: StagePoint<'_>,
+        u: f64,
+        (start, end): (usize, usize),
+    ) -> Dv {
+        let n = model.n;
+        let nx = 2 * n;
+        // Seeds: direction j in slot j − start.
+        for s in self.seed_q.iter_mut().chain(self.seed_p.iter_mut()) {
+            *s = [[0.0; CHUNK]; 2];
+        }
+        let mut u_seed = [0.0; CHUNK];
+        for j in start..end {
+            let slot = j - start;
+            if j == nx {
+                u_seed[slot] = 1.0;
+                continue;
+            }
+            let i = j % n;
+            let t = tangent(&q[i]);
+            // δv_i (only pendulum i moves): φ: −qᵢ ωᵢ, ω: tᵢ; δp = M δv = column i of M̄ ⊗ δvᵢ.
+            let dvi = if j < n {
+                self.seed_q[i][0][slot] = t[0];
+                self.seed_q[i][1][slot] = t[1];
+                [-q[i][0] * omega[i], -q[i][1] * omega[i]]
+            } else {
+                t
+            };
+            for r in 0..n {
+                let mri = model.mass[r * n + i];
+                self.seed_p[r][0][slot] = mri * dvi[0];
+                self.seed_p[r][1][slot] = mri * dvi[1];
+            }
+        }
+        let st = &mut self.stepper.state;
+        for i in 0..n {
+            for d in 0..2 {
+                st.q[i][d] = Dv::new(q[i][d], Derivative::some(SVector::from(self.seed_q[i][d])));
+                st.p[i][d] = Dv::new(p[i][d], Derivative::some(SVector::from(self.seed_p[i][d])));
+            }
+        }
+        let m = st.multipliers_mut(mu.len());
+        for ((ml, mm), &v) in m.lambda.iter_mut().zip(m.mu.iter_mut()).zip(mu) {
+            (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
+        }
+        st.tip_target = [Dv::from_re(0.0); 2];
+        if end == ndir(n) {
+            Dv::new(u, Derivative::some(SVector::from(u_seed)))
+        } else {
+            Dv::from_re(u)
+        }
     }
 
     /// A_k (column-major 2n × 2n, into `a`) and B_k (into `b`) at x̂_k = (q, p) with rates
@@ -374,7 +459,7 @@ impl JacobianWorkspace {
     pub fn jacobians(
         &mut self,
         (model, k): (&StageModel, usize),
-        StagePoint { q, p, omega, mu }: StagePoint<'_>,
+        x: StagePoint<'_>,
         u: f64,
         (a, b): (&mut [f64], &mut [f64]),
     ) -> Result<()> {
@@ -384,52 +469,7 @@ impl JacobianWorkspace {
         let mut start = 0;
         while start < ndir {
             let end = (start + CHUNK).min(ndir);
-            // Seeds: direction j in slot j − start.
-            for s in self.seed_q.iter_mut().chain(self.seed_p.iter_mut()) {
-                *s = [[0.0; CHUNK]; 2];
-            }
-            let mut u_seed = [0.0; CHUNK];
-            for j in start..end {
-                let slot = j - start;
-                if j == nx {
-                    u_seed[slot] = 1.0;
-                    continue;
-                }
-                let i = j % n;
-                let t = tangent(&q[i]);
-                // δv_i (only pendulum i moves): φ: −qᵢ ωᵢ, ω: tᵢ; δp = M δv = column i of M̄ ⊗ δvᵢ.
-                let dvi = if j < n {
-                    self.seed_q[i][0][slot] = t[0];
-                    self.seed_q[i][1][slot] = t[1];
-                    [-q[i][0] * omega[i], -q[i][1] * omega[i]]
-                } else {
-                    t
-                };
-                for r in 0..n {
-                    let mri = model.mass[r * n + i];
-                    self.seed_p[r][0][slot] = mri * dvi[0];
-                    self.seed_p[r][1][slot] = mri * dvi[1];
-                }
-            }
-            let st = &mut self.stepper.state;
-            for i in 0..n {
-                for d in 0..2 {
-                    st.q[i][d] =
-                        Dv::new(q[i][d], Derivative::some(SVector::from(self.seed_q[i][d])));
-                    st.p[i][d] =
-                        Dv::new(p[i][d], Derivative::some(SVector::from(self.seed_p[i][d])));
-                }
-            }
-            let m = st.multipliers_mut(mu.len());
-            for ((ml, mm), &v) in m.lambda.iter_mut().zip(m.mu.iter_mut()).zip(mu) {
-                (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
-            }
-            st.tip_target = [Dv::from_re(0.0); 2];
-            let ud = if end == ndir {
-                Dv::new(u, Derivative::some(SVector::from(u_seed)))
-            } else {
-                Dv::from_re(u)
-            };
+            let ud = self.seed(model, x, u, (start, end));
             self.stepper.advance(k, ud)?;
             // Read out and map by L_{k+1}.
             let st = &self.stepper.state;

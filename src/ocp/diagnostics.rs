@@ -103,6 +103,29 @@ impl Solver {
         Ok(self.theta_stage.iter().map(|&k| self.dv_t[k]).collect())
     }
 
+    /// The exact Newton step δθ at the nominal with a proximal weight `mu`: as
+    /// [`Solver::gauss_newton_step`] with the second-order terms H_k = ∇²(ν_{k+1}·F̃_k) and the
+    /// moment's curvature in the stage QPs ([`super::Curvature::Exact`]), i.e. the minimiser of
+    /// the quadratic model with the exact Hessian of J(θ) plus μ‖δθ‖²/2 (when every stage QP is
+    /// bounded). Per-step controls without rate penalty, every Jacobian in memory.
+    pub fn newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
+        self.check_in_memory()?;
+        if self.h_store.is_empty() {
+            return Err(Error::InvalidArgument {
+                name: "curvature",
+                reason: "the exact model needs per-step controls without rate penalty and a \
+                         curvature other than GaussNewton"
+                    .into(),
+            });
+        }
+        self.costate()?;
+        self.hessians()?;
+        self.exact = true;
+        let step = self.gauss_newton_step(mu);
+        self.exact = false;
+        step
+    }
+
     fn check_in_memory(&self) -> Result<()> {
         if self.block < self.steps {
             return Err(Error::InvalidArgument {

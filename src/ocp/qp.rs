@@ -5,6 +5,9 @@
 use super::riccati::dot;
 use super::*;
 
+/// The interior point stops at this fraction of its starting mean complementarity.
+const GAP_FLOOR: f64 = 1e-15;
+
 impl Solver {
     /// A closed-loop rollout of the *linearised* dynamics from the model point δ with the gains
     /// of the last Riccati pass and step length α: Δv_k = clamp(α k_k + K_k Δz_k) (clamped to
@@ -134,6 +137,7 @@ impl Solver {
             * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
         let mut q_plain = self.nominal.cost;
         let mut sigma = 0.1;
+        let mut gap0 = 0.0;
         for it in 0..MAX_QP_ITERS {
             if it > 0 {
                 self.sweep(false)?;
@@ -141,8 +145,17 @@ impl Solver {
             let pg = self.projected_norm();
             let gap = self.complementarity();
             let mean_gap = if nb > 0 { gap / nb as f64 } else { 0.0 };
-            // Converged, or at the floating-point floor of the complementarity.
-            if (it > 0 && pg <= tol) || !(mean_gap.is_finite()) || (nb > 0 && mean_gap < 1e-280) {
+            if it == 0 {
+                gap0 = mean_gap;
+            }
+            // Converged, or at the floating-point floor of the complementarity: 10⁻¹⁵ of the
+            // start's, where the barrier terms z/s reach the limits of f64 (row 8 of Table 3.4
+            // went on to NaN at 10⁻¹⁹ of it; the model's projected gradient had stalled at
+            // its round-off three passes earlier).
+            if (it > 0 && pg <= tol)
+                || !(mean_gap.is_finite())
+                || (nb > 0 && mean_gap <= GAP_FLOOR * gap0)
+            {
                 break;
             }
             let tau = sigma * mean_gap;

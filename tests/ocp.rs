@@ -256,14 +256,20 @@ fn newton_step_equals_dense_exact_hessian_solve() {
         .flat_map(|i| (0..m).map(move |j| (i, j)))
         .fold(0.0f64, |a, (i, j)| a.max((h[(i, j)] - hgn[(i, j)]).abs()));
     let scale = (0..m).fold(0.0f64, |a, i| a.max(h[(i, i)].abs()));
-    assert!(gap > 1e-3 * scale, "H ≈ GN here ({gap:e}): not a test of the exact terms");
+    assert!(
+        gap > 1e-3 * scale,
+        "H ≈ GN here ({gap:e}): not a test of the exact terms"
+    );
     // μ = 0.01: H + μI is indefinite here (no Cholesky), and the Riccati pass says so (a stage
     // QP unbounded below) instead of returning a step; μ = 0.1 and 1: the same step.
     for mu in [0.01, 0.1, 1.0] {
         let hm = faer::Mat::from_fn(m, m, |i, j| h[(i, j)] + if i == j { mu } else { 0.0 });
         let definite = hm.llt(faer::Side::Lower).is_ok();
         let Ok(step) = s.newton_step(mu) else {
-            assert!(!definite, "mu {mu}: H + mu I is definite but the pass failed");
+            assert!(
+                !definite,
+                "mu {mu}: H + mu I is definite but the pass failed"
+            );
             continue;
         };
         assert!(definite, "mu {mu}: a step from an indefinite model");

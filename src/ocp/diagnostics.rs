@@ -110,7 +110,7 @@ impl Solver {
     /// bounded). Per-step controls without rate penalty, every Jacobian in memory.
     pub fn newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
         self.check_in_memory()?;
-        if self.h_store.is_empty() {
+        if !self.second_order_possible {
             return Err(Error::InvalidArgument {
                 name: "curvature",
                 reason: "the exact model needs per-step controls without rate penalty and a \
@@ -118,7 +118,11 @@ impl Solver {
                     .into(),
             });
         }
-        self.costate()?;
+        let on = self.second_order_on;
+        self.second_order_on = true;
+        let grad = self.costate();
+        self.second_order_on = on;
+        grad?;
         self.hessians()?;
         self.exact = true;
         let step = self.gauss_newton_step(mu);

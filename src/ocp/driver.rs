@@ -11,7 +11,8 @@ impl Solver {
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
         let t0 = Instant::now();
         self.counts = (0, 0, 0);
-        self.second_order_on = self.opts.curvature == Curvature::Exact && !self.h_store.is_empty();
+        self.second_order_on =
+            self.opts.curvature == Curvature::Exact && self.second_order_possible;
         let mut pr = Progress::new(self.set_point(theta0)?);
         let termination = loop {
             if let Some(t) = self.iterate(&mut pr)? {
@@ -107,7 +108,7 @@ impl Solver {
     /// [`Curvature::Auto`]: the exact model from the first step the Gauss-Newton model did not
     /// predict well (`good`: taken in full with actual ≥ ½ predicted decrease) on.
     fn switch_curvature(&mut self, good: bool) {
-        if self.opts.curvature == Curvature::Auto && !good && !self.h_store.is_empty() {
+        if self.opts.curvature == Curvature::Auto && !good && self.second_order_possible {
             self.second_order_on = true;
         }
     }

@@ -339,6 +339,10 @@ pub struct Solver {
     exact: bool,
     /// Whether the iterations from now on use the exact model ([`Curvature`]).
     second_order_on: bool,
+    /// Whether the exact model is available: per-step controls without rate penalty (no
+    /// augmented state), H_k and the Jacobians of every stage within `jacobian_memory`, and a
+    /// curvature other than Gauss-Newton. Its storage is allocated at its first use.
+    second_order_possible: bool,
 }
 
 impl Solver {
@@ -372,18 +376,16 @@ impl Solver {
             .collect::<Result<Vec<_>>>()?;
         let stage_bytes = 8 * (nxi * nxi + nxi);
         let block = (options.jacobian_memory / stage_bytes).clamp(1, steps.max(1));
-        let second_order =
-            aug == 0 && block >= steps && options.curvature != Curvature::GaussNewton;
-        let mut riccati = Riccati::new(nxi, aug, steps);
-        let h_store = if second_order {
-            riccati.nu_store = vec![0.0; (steps + 1) * nz];
-            vec![0.0; steps * (nxi + 1) * (nxi + 1)]
-        } else {
-            Vec::new()
-        };
+        // The exact model keeps H_k beside every A_k, B_k: both within `jacobian_memory`.
+        let exact_bytes = stage_bytes + 8 * (nxi + 1) * (nxi + 1);
+        let second_order_possible = aug == 0
+            && options.jacobian_memory / exact_bytes >= steps
+            && options.curvature != Curvature::GaussNewton;
+        let riccati = Riccati::new(nxi, aug, steps);
         Ok(Solver {
             chain_dv: model.chain.lift::<Dv>(),
-            h_store,
+            h_store: Vec::new(),
+            second_order_possible,
             curv: vec![0.0; steps + 1],
             exact: false,
             second_order_on: false,
@@ -619,15 +621,27 @@ impl Solver {
     }
 
     /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep, which
-    /// records the costates ν_k for the second-order terms.
+    /// records the costates ν_k for the second-order terms when the exact model is on.
     fn costate(&mut self) -> Result<()> {
         self.dv.fill(0.0);
         self.dz.fill(0.0);
         self.active.fill(false);
-        self.riccati.record = !self.h_store.is_empty();
+        self.riccati.record = self.second_order_on;
+        if self.second_order_on {
+            self.second_order_storage();
+        }
         let r = self.sweep(false).map(|_| ());
         self.riccati.record = false;
         r
+    }
+
+    /// Allocates the exact model's storage (H_k per stage, the costates) at its first use.
+    fn second_order_storage(&mut self) {
+        let nd = self.nxi + 1;
+        if self.h_store.is_empty() {
+            self.h_store = vec![0.0; self.steps * nd * nd];
+            self.riccati.nu_store = vec![0.0; (self.steps + 1) * self.nz];
+        }
     }
 
     /// H_k = ∇²(ν_{k+1}·F̃_k) for every stage at the nominal, in parallel (`hessian`), and the

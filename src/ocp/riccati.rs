@@ -272,9 +272,6 @@ impl Riccati {
         }
         if self.record {
             let nz = self.nz;
-            if self.nu_store.len() < (k + 1) * nz {
-                self.nu_store.resize((k + 1) * nz, 0.0);
-            }
             self.nu_store[k * nz..(k + 1) * nz].copy_from_slice(&self.nu);
         }
         std::mem::swap(&mut self.nu, &mut self.nu_next);

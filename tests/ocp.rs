@@ -283,15 +283,15 @@ fn newton_step_equals_dense_exact_hessian_solve() {
 }
 
 /// (d) Table 3.4 rows (per-step, N = 10, c_sum, bounded by the largest |u_k| of the thesis's
-/// column as in the `tables` example): the Riccati solver converges from u = 0 and reaches the
-/// trust region's objective or a lower one (reference: `minimize` with `Method::TrustRegion`).
-/// Rows 2, 5 and 7 (row 2: a lower local minimum, 30.09 against 32.89). Without effort penalty
-/// and with the chain near folding, the Gauss-Newton model is poor on the other rows: rows 1, 8
-/// and 9 stop short of 10⁻⁸ (reported as not converged), row 6 ends 1.5·10⁻⁶ above the trust
-/// region (module docs of `chainbeam::ocp`).
+/// column as in the `tables` example): the Riccati solver (default curvature: Gauss-Newton,
+/// then the exact Hessian) converges from u = 0 and reaches the trust region's objective or a
+/// lower one (reference: `minimize` with `Method::TrustRegion`). Nine rows of ten: row 2 ends
+/// lower (30.09 against 32.89), row 8 lower by 5·10⁻⁹ relative; row 6 converges to another
+/// local minimum 1.5·10⁻⁶ relative above the trust region's (left out). Without effort
+/// penalty and near folding, Gauss-Newton alone ended rows 1, 3 and 8 *not converged*.
 #[test]
 fn table_3_4_rows_agree_with_trust_region() {
-    for node in [2, 5, 7] {
+    for node in [1, 2, 3, 4, 5, 7, 8, 9, 10] {
         let scene = catalogue::riser(node);
         let p =
             ControlProblem::new(&scene, per_step(10), BendingObjective::summed_moment()).unwrap();

@@ -25,9 +25,24 @@
 //!   A_k, B_k by `DualSVec64<8>` through the one generic RATTLE step (its derivative-only Newton
 //!   update is the implicit function theorem, exact to round-off), computed in parallel
 //!   (rayon, one workspace per thread: stages are independent given the trajectory).
-//! - **Gauss-Newton model**: the bending residual r_k = M₀(q_k) is linearised (l_xx = 2∇r∇rᵀ),
-//!   second derivatives of the dynamics are dropped (iLQR rather than full DDP: no second-order
-//!   pass; with ρ > 0 the model is positive definite).
+//! - **Second-order model** ([`Curvature`]): Gauss-Newton first — the bending residual
+//!   r_k = M₀(q_k) linearised (l_xx = 2∇r∇rᵀ), the dynamics' second derivatives dropped (iLQR):
+//!   positive semidefinite, fast from far away. From the first step whose decrease the
+//!   Gauss-Newton model did not predict (not taken in full, or actual < ½ predicted:
+//!   [`Curvature::Auto`], the default), the exact Hessian of J: each stage adds
+//!   H_k = ∇²_{(ξ,u)}(ν_{k+1}·F̃_k), the curvature of its stage map in the tangent chart weighted
+//!   by the nominal's costates, and the moment's own curvature 2c M₀ ∂²M₀/∂φ₁² = −2c M₀².
+//!   With these terms the Riccati recursion solves the Newton system of J(θ) itself (the
+//!   reduced Hessian of the multiple-shooting Lagrangian with the adjoint costates as
+//!   multipliers, Dunn and Bertsekas 1989). H_k comes from the one model as well: the discrete
+//!   adjoint's reverse RATTLE step, run in the same `DualSVec64<8>` as the forward step of the
+//!   Jacobians (forward over reverse, `ocp/hessian.rs`; tested against central differences of
+//!   [A_k B_k]ᵀν to 5·10⁻⁹, and the resulting Newton step against the dense solve with the
+//!   whole-horizon Hessian of `ControlProblem::hessian_vec` to 10⁻¹⁴). Where the exact model
+//!   is indefinite some stage's Q_uu is not positive (Q_uu > 0 at every stage is the Riccati
+//!   form of a positive definite reduced Hessian) and the Levenberg weight below rises until it
+//!   is. Per-step controls without rate penalty, with H_k and every Jacobian within
+//!   [`OcpOptions::jacobian_memory`]; otherwise Gauss-Newton throughout.
 //! - **Exact gradient** ([`riccati`]): a costate sweep ν_k = l_x + A_kᵀν_{k+1} on the same
 //!   Jacobians; it equals the discrete adjoint [`ControlProblem::gradient`] to round-off (tested
 //!   to 1e-12) and drives the convergence test.
@@ -58,14 +73,18 @@
 //!   equal to ‖g‖ without active bounds) at most `max(grad_tol, rel_grad_tol·‖g₀‖)`. Otherwise
 //!   the run ends *not converged* with the reason: the iteration limit, μ beyond its limit (no
 //!   descent found), or steps whose predicted decrease stays below J's round-off.
-//! - **Where it is slow**: with drag (D = 10) the Gauss-Newton model misses the curvature of the
-//!   quadratic drag p|p| weighted by the costates, so the tail converges linearly (about 30
-//!   iterations to 10⁻⁸ on the long-horizon scene, against 3 without drag). Without an effort
-//!   penalty (ρ = 0) and near folding (Table 3.4 rows 1, 3, 8) the positive semi-definite
-//!   Gauss-Newton model misses the negative curvature of J and the run can end *not
-//!   converged*. Second-order stage terms (full DDP by forward-over-reverse of the stage map) are
-//!   the next step; so is a hand-written tangent step in f64 (the implicit function theorem on
-//!   the step residual with the terms' Jacobian-vector products) instead of the dual numbers.
+//! - **Where it is slow**: Gauss-Newton alone converges linearly where the residual stays
+//!   large: with drag (D = 10) it misses the costate-weighted curvature of the quadratic drag
+//!   p|p|, and took 31 iterations on the long-horizon scene (24 of them for the last 10⁻⁵ of J,
+//!   most with backtracking); the exact model finishes the same run in 4 Newton iterations after
+//!   6 Gauss-Newton ones, quadratically (projected gradient 0.26, 0.16, 3.5·10⁻², 2.2·10⁻⁴,
+//!   then 4·10⁻⁸). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1, 3, 8)
+//!   Gauss-Newton alone could end *not converged*; with the exact model all ten rows converge.
+//!   An exact iteration costs about 3× the stage Jacobians again (a forward and a reverse dual
+//!   step per chunk); a hand-written tangent step in f64 (the implicit function theorem on the
+//!   step residual with the terms' Jacobian-vector products) instead of the dual numbers, and
+//!   a costate sweep that does not need the Jacobians (so that one pass computes A_k, B_k and
+//!   H_k), are the next steps.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending

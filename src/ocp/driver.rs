@@ -38,7 +38,7 @@ impl Solver {
         }
         self.gtrue.copy_from_slice(&self.riccati.grad);
         self.exact = self.second_order_on;
-        if self.exact {
+        if self.exact && !self.h_valid {
             self.hessians()?;
         }
         let jbar = self.nominal.cost;
@@ -147,6 +147,7 @@ impl Solver {
     ) -> Result<Option<Termination>> {
         std::mem::swap(&mut self.nominal, &mut self.trial);
         self.jac_range = None;
+        self.h_valid = false;
         pr.iterations += 1;
         pr.history.push(IterationRecord {
             objective: self.nominal.cost,

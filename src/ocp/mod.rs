@@ -251,18 +251,15 @@ impl<'a> SecondOrder<'a> {
     /// ½ δᵀH_kδ + ½ curv_k δφ₁² at the model point δ = (δz_k, δv_k): stage k's second-order
     /// terms in the model's value.
     fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
-        let nd = self.nz + 1;
+        let (nz, nd) = (self.nz, self.nz + 1);
         let mut v = 0.5 * self.curv[k] * dz[0] * dz[0];
         if k < self.steps {
             let h = &self.h[k * nd * nd..(k + 1) * nd * nd];
-            let x = |j: usize| if j < self.nz { dz[j] } else { dv };
-            for j in 0..nd {
-                let xj = x(j);
-                if xj != 0.0 {
-                    let hx: f64 = (0..nd).map(|r| h[j * nd + r] * x(r)).sum();
-                    v += 0.5 * xj * hx;
-                }
-            }
+            let hx = |j: usize| {
+                let c = &h[j * nd..(j + 1) * nd];
+                riccati::dot(&c[..nz], dz) + c[nz] * dv
+            };
+            v += 0.5 * ((0..nz).map(|j| dz[j] * hx(j)).sum::<f64>() + dv * hx(nz));
         }
         v
     }
@@ -325,6 +322,7 @@ pub struct Solver {
     /// (step `fixed[k]`) without feedback.
     active: Vec<bool>,
     fixed: Vec<f64>,
+
     /// The model point δ of the QP iterations (δv per stage, δz per stage) and its trial.
     dv: Vec<f64>,
     dz: Vec<f64>,
@@ -358,6 +356,8 @@ pub struct Solver {
     exact: bool,
     /// Whether the iterations from now on use the exact model ([`Curvature`]).
     second_order_on: bool,
+    /// Whether `h_store` holds H_k at the current nominal (a failed line search keeps it).
+    h_valid: bool,
     /// Whether the exact model is available: per-step controls without rate penalty (no
     /// augmented state), H_k and the Jacobians of every stage within `jacobian_memory`, and a
     /// curvature other than Gauss-Newton. Its storage is allocated at its first use.
@@ -408,6 +408,7 @@ impl Solver {
             curv: vec![0.0; steps + 1],
             exact: false,
             second_order_on: false,
+            h_valid: false,
             stepper: Stepper::new(&model)?,
             scratch: vec![[0.0; 2]; n],
             nominal: Traj::new(n, steps),
@@ -466,6 +467,7 @@ impl Solver {
             self.nominal.u[k] = theta[self.piece[k]].clamp(lo, hi);
         }
         self.jac_range = None;
+        self.h_valid = false;
         self.counts.0 += 1;
         rollout(
             (&self.model, &self.cost),
@@ -710,6 +712,7 @@ impl Solver {
             let m = self.nominal.moment[k];
             self.curv[k] = -2.0 * self.cost.weight(k) * m * m;
         }
+        self.h_valid = true;
         Ok(())
     }
 

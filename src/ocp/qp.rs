@@ -152,7 +152,11 @@ impl Solver {
             // start's, where the barrier terms z/s reach the limits of f64 (row 8 of Table 3.4
             // went on to NaN at 10⁻¹⁹ of it; the model's projected gradient had stalled at
             // its round-off three passes earlier).
-            if (it > 0 && pg <= tol)
+            // A solution must also lower the model below its value at δ = 0 (J itself): on
+            // long horizons (N = 10⁵, 40 % of the controls on a bound, curvature ρh = 10⁻⁴ along
+            // the flat directions) the projected-gradient test alone was met by points above it,
+            // whose steps no line search could accept (6 iterations of 10 failed rollouts each).
+            if (it > 0 && pg <= tol && q_plain < self.nominal.cost)
                 || !(mean_gap.is_finite())
                 || (nb > 0 && mean_gap <= GAP_FLOOR * gap0)
             {

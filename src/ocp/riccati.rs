@@ -355,20 +355,13 @@ impl Riccati {
         };
         let nd = nxi + 1;
         let col = |j: usize| &h[j * nd..(j + 1) * nd];
-        // H δ, column by column (δ = (δz, δv)).
-        let mut lu = 0.0;
-        for j in 0..nd {
-            let x = if j < nxi { inp.dz[j] } else { inp.dv };
-            if x != 0.0 {
-                for (r, hr) in col(j).iter().enumerate() {
-                    if r < nxi {
-                        self.lx[r] += hr * x;
-                    } else {
-                        lu += hr * x;
-                    }
-                }
-            }
+        // H δ by rows (H is symmetric: row r = column r), contiguous dots.
+        for r in 0..nxi {
+            let c = col(r);
+            self.lx[r] += dot(&c[..nxi], inp.dz) + c[nxi] * inp.dv;
         }
+        let cu = col(nxi);
+        let lu = dot(&cu[..nxi], inp.dz) + cu[nxi] * inp.dv;
         if !matrices {
             return (lu, 0.0);
         }
@@ -379,7 +372,7 @@ impl Riccati {
             }
             self.qux[j] += c[nxi];
         }
-        (lu, col(nxi)[nxi])
+        (lu, cu[nxi])
     }
 
     /// The dynamics' part with the augmented Ã, B̃ (held stages: u = w enters Ã): Q_xx += ÃᵀS′Ã,

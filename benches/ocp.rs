@@ -5,10 +5,14 @@
 //! - `ocp_parts/*/N`: the parts of one iteration at N = 10³ and 10⁴ — one forward simulation
 //!   (`ControlProblem::value`, the unit), a rollout plus the stage Jacobians plus the costate
 //!   sweep (`set_point` + `gradient`), and one Riccati pass with a linearised rollout
-//!   (`gauss_newton_step`). An iteration is one Jacobian pass plus a few Riccati passes (the
-//!   warm face or the interior-point QP: 125 passes in the 31 iterations of N = 10³) plus 1–3
-//!   rollouts; the ratios to `forward` are machine-independent.
-//! - `ocp_solve/riccati/1000`: time to the optimum (projected gradient ≤ 10⁻⁸‖g₀‖) from u = 0.
+//!   (`gauss_newton_step`), and the exact model's extra: the costate sweep, the second-order
+//!   terms H_k of every stage and one Riccati pass with them (`newton_step`, after the Jacobians
+//!   of `gradient`). A Gauss-Newton iteration is one Jacobian pass plus a few Riccati passes
+//!   (the warm face or the interior-point QP) plus 1–3 rollouts; an exact one adds the H_k
+//!   pass; the ratios to `forward` are machine-independent.
+//! - `ocp_solve/riccati/1000`: time to the optimum (projected gradient ≤ 10⁻⁸‖g₀‖) from u = 0
+//!   with the default curvature (Gauss-Newton, then exact), `ocp_solve/riccati_gauss_newton`
+//!   with Gauss-Newton throughout (a lower local minimum: J = 1507.4712 against 1507.4814).
 //!   With `OCP_BENCH_LONG=1` also N = 10⁴ (and 10⁵ with `OCP_BENCH_LONG=2`), and L-BFGS and the
 //!   trust region at N = 10³ (minutes: L-BFGS stops at 5000 iterations, the trust region
 //!   converges after about 225-375 s; `examples/long_horizon.rs` prints the same comparison).
@@ -22,7 +26,7 @@
 
 use std::hint::black_box;
 
-use chainbeam::ocp::{solve, OcpOptions, Solver};
+use chainbeam::ocp::{solve, Curvature, OcpOptions, Solver};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
@@ -84,6 +88,11 @@ fn bench_parts(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("riccati_pass", steps), &steps, |b, _| {
             b.iter(|| black_box(s.gauss_newton_step(black_box(1e-3)).unwrap()))
         });
+        g.bench_with_input(
+            BenchmarkId::new("costate_hessians_newton_pass", steps),
+            &steps,
+            |b, _| b.iter(|| black_box(s.newton_step(black_box(1.0)).unwrap())),
+        );
     }
     g.finish();
 }
@@ -103,14 +112,23 @@ fn bench_solve(c: &mut Criterion) {
     for steps in sizes {
         let p = problem(steps);
         let theta0 = vec![0.0; steps + 1];
-        let opts = OcpOptions::default().with_bound(5.0);
-        g.bench_with_input(BenchmarkId::new("riccati", steps), &steps, |b, _| {
-            b.iter(|| {
-                let r = solve(&p, black_box(&theta0), &opts).unwrap();
-                assert!(r.converged, "{}", r.termination);
-                black_box(r.objective)
-            })
-        });
+        let auto = OcpOptions::default().with_bound(5.0);
+        let gn = OcpOptions {
+            curvature: Curvature::GaussNewton,
+            ..auto.clone()
+        };
+        for (name, opts) in [("riccati", auto), ("riccati_gauss_newton", gn)] {
+            if name == "riccati_gauss_newton" && steps > 1000 {
+                continue;
+            }
+            g.bench_with_input(BenchmarkId::new(name, steps), &steps, |b, _| {
+                b.iter(|| {
+                    let r = solve(&p, black_box(&theta0), &opts).unwrap();
+                    assert!(r.converged, "{}", r.termination);
+                    black_box(r.objective)
+                })
+            });
+        }
     }
     if level >= 1 {
         let p = problem(1000);

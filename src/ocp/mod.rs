@@ -92,47 +92,36 @@
 //!   p₀ = p̂₀ − (h/2) u₀ P(q₀) b like every later stage ([`stage`]), so B₀ and the costate
 //!   gradient carry it (tests/start.rs: equal to the adjoint's to 10⁻¹⁴).
 //!
-//! # Measured (2-core machine shared by several builds, `examples/long_horizon.rs`)
-//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖. The machine was
-//! heavily loaded (load average ≈ 10 on 2 cores), so CPU seconds (user time of the process,
-//! both Jacobian threads summed, from `/usr/bin/time`) are the comparable measure; wall times
-//! were 5–12× longer.
+//! # Measured (2-core machine, `examples/long_horizon.rs`, `benches/ocp.rs`)
+//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖, wall time (the
+//! trust-region and L-BFGS rows: CPU seconds on a loaded machine).
 //!
-//! | N | method | CPU time | iterations | J | Σ M₀² | note |
+//! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver | 2.5 s | 31 | 1507.471209304 | 1507.2086 | converged, pg/‖g₀‖ = 8.0·10⁻⁹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.71 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 1.41 s | 31 | 1507.471209304 | 1507.2086 | another, lower local minimum; 8.0·10⁻⁹ |
 //! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
-//! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹), a higher local minimum; 50333 HVPs |
-//! | 10⁴ | this solver | 20.6 s | 20 | 1509.506391033 | 1507.2289 | converged, 7.3·10⁻⁹ |
-//! | 10⁵ | this solver | 222.7 s | 15 | 1529.756918830 | 1507.2306 | converged, 6.7·10⁻⁹; 510 MB peak |
+//! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
+//! | 10⁴ | this solver | 7.2 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 12.7 s, 20 iterations) |
+//! | 10⁵ | this solver | 88 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 887 MB peak (Gauss-Newton: 222.7 s, 15) |
 //!
-//! CPU per iteration: 81 ms (N = 10³), 1.03 s (10⁴), 14.8 s (10⁵); the larger horizons take
-//! more line-search rollouts (5.3 against 1.5 per iteration) and Riccati passes (9 against 4)
-//! per iteration, so the cost per iteration grows 1.8× faster than N from 10³ to 10⁵ while
-//! the cost per rollout, Jacobian pass and Riccati pass is linear in N.
+//! Time per iteration 71 ms, 0.72 s and 8.0 s: linear in N within 1.12×. The parts at N = 10³
+//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.69 ms; rollout + stage
+//! Jacobians + costate sweep 22.1 ms (32 simulations, two threads); one Riccati pass with its
+//! linearised rollout 3.5 ms (5 simulations); the exact model's extra — costate sweep, H_k of
+//! every stage (a forward and a reverse dual step per chunk) and a Riccati pass with them —
+//! 47 ms (68 simulations). A Gauss-Newton iteration thus costs about 45 simulations (2–7
+//! Riccati passes: the warm face, or the interior point when the active set changes), an exact
+//! one about 130 (up to 11 interior-point passes while the active set settles, then 1). The
+//! issue's targets of 0.3 s at N = 10³, 3 s at 10⁴, 30 s at 10⁵ and ≤ 20 simulations per
+//! iteration are not met; the iteration count (≤ 30) and the linear scaling are.
 //!
-//! One iteration at N = 10³ costs about 80 forward simulations: the rollout, the stage
-//! Jacobians and the costate sweep about 46 (single thread, CPU time; 60 before the Newton
-//! start at the nominal λ), and on average 4 Riccati passes of about 9 simulations each (the
-//! warm face, or the interior point when the active set changes). Later (same machine, load
-//! ≈ 2.5, `cargo bench --bench ocp -- ocp_parts`): forward simulation 0.74 ms, rollout +
-//! Jacobians + costates 39.7 ms (54 simulations on two threads), one Riccati pass with its
-//! linearised rollout 3.96 ms (5.4 simulations; 5.14 ms before the four-sum dots and the
-//! contiguous AXPYs of `riccati.rs`/`qp.rs`), and the whole N = 10³ run 2.0 s wall (31
-//! iterations), N = 10⁴ 17.2 s (20 iterations). faer's two 20 × 20 products of a stage take
-//! 1.24 µs of its ≈ 3.4 µs. With A_k used in place and the value update as one rank-one term
-//! (load ≈ 1.5, `cargo bench --bench ocp -- "ocp_parts|ocp_solve"`): forward 0.88 ms,
-//! rollout + Jacobians + costates 22.1 ms, one Riccati pass 2.95 ms (N = 10⁴: 17.1, 204,
-//! 36.0 ms), the N = 10³ run 1.46 s (31 iterations, 47 ms or 54 simulations each). Table 3.4 (per-step, N = 10,
-//! each row bounded by the thesis's largest |u_k|, `cargo bench --bench ocp -- ocp_table_3_4`):
-//! rows 2, 4, 5, 6, 7, 9, 10 converge, at equal objectives (row 2 lower: 30.09 against 32.89;
-//! row 6 1.5·10⁻⁶ relative above the trust region), rows 1 and 3 stop at the trust region's
-//! objective without meeting the gradient test, row 8 stops 10⁻⁵ relative above it; through
-//! [`minimize`](crate::optimize::minimize) (`Method::Riccati`) those three are finished by the
-//! trust region from the Gauss-Newton point and all ten converge (186 ms in all, against 249 ms
-//! for the trust region and 290 ms for L-BFGS from u = 0, loaded machine). The issue's
-//! targets (N = 10³ in 0.3 s, one iteration ≤ 20 simulations, Table 3.4 in 40 ms) are not met:
-//! see "Where it is slow".
+//! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
+//! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
+//! 3, 4, 5, 7, 9, lower on rows 2 (30.09 against 32.89) and 8 (by 5·10⁻⁹ relative), 1.5·10⁻⁶
+//! relative higher on row 6 (another local minimum, which Gauss-Newton reaches too), and both
+//! at J ≈ 0 on row 10 (4·10⁻¹⁴ against 10⁻¹⁸). About 75 ms for the ten rows
+//! ([`Condensed`], `Method::Condensed`: 23 ms, but higher objectives on rows 3, 6 and 8).
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise

@@ -119,4 +119,23 @@ fn cli_optimize_with_riccati() {
         assert!(!o.status.success());
         assert!(stderr(&o).contains("tip"), "{}", stderr(&o));
     }
+    // --curvature: each model of the Riccati solver reaches the trust region's objective here
+    // (a problem with one minimum in reach); with another method it is refused.
+    for c in ["auto", "exact", "gauss-newton"] {
+        let mut a = args("riccati").to_vec();
+        a.extend(["--curvature", c]);
+        let o = run(&a);
+        assert_success(&o);
+        let r = json(&o);
+        let (x, y) = (
+            r["objective"].as_f64().unwrap(),
+            tr["objective"].as_f64().unwrap(),
+        );
+        assert!((x - y).abs() <= 1e-9 * y, "--curvature {c}: {x} vs {y}");
+    }
+    let mut a = args("lbfgs").to_vec();
+    a.extend(["--curvature", "exact"]);
+    let o = run(&a);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--curvature"), "{}", stderr(&o));
 }

@@ -317,6 +317,10 @@ pub struct OptimOptions {
     pub polish_steps: usize,
     /// Print iteration, cost and ‖g‖ to stderr through an argmin observer. Default `false`.
     pub progress: bool,
+    /// The second-order model of [`Method::Riccati`] ([`crate::ocp::Curvature`]; ignored by
+    /// the other methods). Default [`Curvature::Auto`](crate::ocp::Curvature::Auto):
+    /// Gauss-Newton, then the exact Hessian from the first step Gauss-Newton predicts poorly.
+    pub curvature: crate::ocp::Curvature,
 }
 
 impl Default for OptimOptions {
@@ -338,6 +342,7 @@ impl Default for OptimOptions {
             max_restarts: 3,
             polish_steps: 5,
             progress: false,
+            curvature: crate::ocp::Curvature::Auto,
         }
     }
 }

@@ -16,7 +16,8 @@ use crate::error::{Error, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 
 /// The options of [`crate::ocp::solve`] that [`minimize`](super::minimize) derives from
-/// [`OptimOptions`] for [`Method::Riccati`] (the box, `max_iters`, the gradient tolerances);
+/// [`OptimOptions`] for [`Method::Riccati`] (the box, `max_iters`, the gradient tolerances,
+/// the curvature);
 /// re-exported as `optimize::riccati_options`.
 ///
 /// # Errors
@@ -32,6 +33,7 @@ pub fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
         max_iters: opts.max_iters,
         grad_tol: opts.grad_tol,
         rel_grad_tol: opts.rel_grad_tol,
+        curvature: opts.curvature,
         ..OcpOptions::default()
     })
 }

@@ -7,6 +7,7 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::multistart::{multistart, MultistartReport, StartDesign};
+use chainbeam::ocp::Curvature;
 use chainbeam::optimize::{
     minimize, Bounds, Method, Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult,
 };
@@ -80,6 +81,11 @@ pub struct SolverArgs {
     /// Optimisation method.
     #[arg(long, value_enum, default_value_t = MethodArg::Lbfgs)]
     method: MethodArg,
+    /// The model of --method riccati: auto (Gauss-Newton, then the exact Hessian of the
+    /// objective from the first step Gauss-Newton predicts poorly), exact (the exact Hessian
+    /// throughout), gauss-newton (throughout). Refused with the other methods [default: auto].
+    #[arg(long, value_enum)]
+    curvature: Option<CurvatureArg>,
     /// Largest number of iterations per start [default: 1000]. A run that reaches it has not
     /// converged (exit status 3).
     #[arg(long, value_name = "N")]
@@ -108,6 +114,16 @@ pub struct SolverArgs {
         conflicts_with = "bound"
     )]
     upper: Option<f64>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum CurvatureArg {
+    /// Gauss-Newton, then the exact Hessian (default).
+    Auto,
+    /// The exact Hessian throughout (Newton).
+    Exact,
+    /// Gauss-Newton throughout.
+    GaussNewton,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -164,6 +180,19 @@ impl SolverArgs {
             return Err(CliError::msg("--max-iters: must be at least 1"));
         }
         let defaults = OptimOptions::default();
+        let curvature = match (self.curvature, self.method) {
+            (None, _) => defaults.curvature,
+            (Some(c), MethodArg::Riccati) => match c {
+                CurvatureArg::Auto => Curvature::Auto,
+                CurvatureArg::Exact => Curvature::Exact,
+                CurvatureArg::GaussNewton => Curvature::GaussNewton,
+            },
+            (Some(_), _) => {
+                return Err(CliError::msg(
+                    "--curvature: only --method riccati has a choice of model",
+                ))
+            }
+        };
         Ok(OptimOptions {
             method: match self.method {
                 MethodArg::Lbfgs => Method::Lbfgs,
@@ -171,6 +200,7 @@ impl SolverArgs {
                 MethodArg::Riccati => Method::Riccati,
                 MethodArg::Condensed => Method::Condensed,
             },
+            curvature,
             max_iters: self.max_iters.unwrap_or(defaults.max_iters),
             grad_tol: self.gtol.unwrap_or(defaults.grad_tol),
             bound,

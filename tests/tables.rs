@@ -209,53 +209,65 @@ fn tables_example() -> std::path::PathBuf {
 
 /// `minimize` with `Method::Riccati` on every Table 3.4 row (per-step, N = 10, c_sum, no
 /// effort, bounded by the thesis row's largest |u_k| as the `tables` example does): every run
-/// converges, inside the box, and ends at most at the Gauss-Newton solver's own point. Where
-/// that solver stalls short of the tolerance (its PSD model misses negative curvature: without
-/// an effort penalty, near folding), the trust region finishes from its point and the result
-/// says so (`method`); references: the stalled `ocp::solve` result on the same row, and the
-/// bound from the thesis's printed controls.
+/// converges, inside the box, and ends at most at the Riccati solver's own point. With the
+/// default model (Gauss-Newton, then the exact Hessian) the solver itself converges on every
+/// row. With Gauss-Newton throughout it stalls short of the tolerance on some rows (its PSD
+/// model misses negative curvature: without an effort penalty, near folding); the trust region
+/// then finishes from its point and the result says so (`method`). References: the
+/// `ocp::solve` result on the same row, and the bound from the thesis's printed controls.
 #[test]
 fn table_3_4_riccati_converges_on_every_row() {
-    use chainbeam::ocp;
+    use chainbeam::ocp::{self, Curvature};
     use chainbeam::optimize::{minimize, Method, OptimOptions};
     let mut finished = 0;
-    for node in 1..=10 {
-        let p = ControlProblem::new(
-            &catalogue::riser(node),
-            Parametrisation::PerStep(PerStepControl { steps: 10 }),
-            BendingObjective::summed_moment(),
-        )
-        .unwrap();
-        let bound = thesis::TABLE_3_4[node - 1]
-            .0
-            .iter()
-            .fold(0.0f64, |m, u| m.max(u.abs()));
-        let opts = OptimOptions {
-            method: Method::Riccati,
-            bound: Some(bound),
-            max_iters: 2000,
-            ..OptimOptions::default()
-        };
-        let r = minimize(&p, &[0.0; 11], &opts).unwrap();
-        let gn = ocp::solve(
-            &p,
-            &[0.0; 11],
-            &chainbeam::optimize::riccati_options(&opts).unwrap(),
-        )
-        .unwrap();
-        println!(
-            "3.4 node {node}: J = {:.10e} ({}, {}), Gauss-Newton alone {:.10e} ({})",
-            r.objective, r.method, r.termination, gn.objective, gn.termination
-        );
-        assert!(r.converged, "node {node}: {}", r.termination);
-        assert!(r.theta.iter().all(|u| u.abs() <= bound));
-        assert!(r.objective <= gn.objective * (1.0 + 1e-12));
-        if r.method == Method::TrustRegion {
-            assert!(!gn.converged, "node {node}: handed over although converged");
-            finished += 1;
+    for curvature in [Curvature::Auto, Curvature::GaussNewton] {
+        for node in 1..=10 {
+            let p = ControlProblem::new(
+                &catalogue::riser(node),
+                Parametrisation::PerStep(PerStepControl { steps: 10 }),
+                BendingObjective::summed_moment(),
+            )
+            .unwrap();
+            let bound = thesis::TABLE_3_4[node - 1]
+                .0
+                .iter()
+                .fold(0.0f64, |m, u| m.max(u.abs()));
+            let opts = OptimOptions {
+                method: Method::Riccati,
+                bound: Some(bound),
+                max_iters: 2000,
+                curvature,
+                ..OptimOptions::default()
+            };
+            let r = minimize(&p, &[0.0; 11], &opts).unwrap();
+            let own = ocp::solve(
+                &p,
+                &[0.0; 11],
+                &chainbeam::optimize::riccati_options(&opts).unwrap(),
+            )
+            .unwrap();
+            println!(
+                "3.4 node {node} ({curvature:?}): J = {:.10e} ({}, {}), the solver alone \
+                 {:.10e} ({})",
+                r.objective, r.method, r.termination, own.objective, own.termination
+            );
+            assert!(r.converged, "node {node}: {}", r.termination);
+            assert!(r.theta.iter().all(|u| u.abs() <= bound));
+            assert!(r.objective <= own.objective * (1.0 + 1e-12));
+            if curvature == Curvature::Auto {
+                assert!(own.converged, "node {node}: {}", own.termination);
+                assert_eq!(r.method, Method::Riccati, "node {node}");
+            }
+            if r.method == Method::TrustRegion {
+                assert!(
+                    !own.converged,
+                    "node {node}: handed over although converged"
+                );
+                finished += 1;
+            }
         }
     }
-    // Measured: rows 1, 3 and 8 stall (the bench `ocp_table_3_4` prints them with `+tr`): the
-    // hand-over is exercised here, not only possible.
+    // Measured with Gauss-Newton throughout: rows 1 and 3 stall (round-off): the hand-over is
+    // exercised here, not only possible.
     assert!(finished >= 1);
 }

@@ -269,39 +269,7 @@ fn view<'a>(
 mod tests {
     use super::*;
     use crate::catalogue;
-    use crate::ocp::stage::Stepper;
-
-    /// The stage point after `k` steps of a varying control on the long-horizon scene (drag,
-    /// moving), with its chart coordinates ξ = (φ, ω).
-    struct Point {
-        q: Vec<[f64; 2]>,
-        p: Vec<[f64; 2]>,
-        omega: Vec<f64>,
-        lambda: Vec<f64>,
-        u: f64,
-    }
-
-    fn point(model: &StageModel, k: usize) -> Point {
-        let u = |k: usize| 3.0 * (0.3 * k as f64).sin() + 1.0;
-        let mut st = Stepper::<f64>::new(model).unwrap();
-        st.reset(u(0)).unwrap();
-        for j in 0..k {
-            st.advance(j, u(j)).unwrap();
-        }
-        let (q, p) = (st.state.q.clone(), st.state.p.clone());
-        let mut omega = vec![0.0; model.n];
-        let mut scratch = vec![[0.0; 2]; model.n];
-        model.rates(&q, &p, &mut scratch, &mut omega);
-        st.advance(k, u(k)).unwrap();
-        let lambda = st.state.multipliers.as_ref().unwrap().lambda.clone();
-        Point {
-            q,
-            p,
-            omega,
-            lambda,
-            u: u(k),
-        }
-    }
+    use crate::ocp::stage::fixture::point;
 
     /// [A B]ᵀν from the dual-number stage Jacobians at the chart point ξ (φ, ω) and u.
     fn jacobian_gradient(

@@ -500,6 +500,52 @@ impl JacobianWorkspace {
     }
 }
 
+/// A moving stage point for the tests of this module and of `hessian.rs`.
+#[cfg(test)]
+pub(crate) mod fixture {
+    use super::*;
+
+    /// Stage k of the long-horizon scene (drag) after k steps of a varying control: the
+    /// point, its rates, the Newton predictor μ the step starts from, the step's converged λ
+    /// and the control.
+    pub struct Point {
+        pub q: Vec<[f64; 2]>,
+        pub p: Vec<[f64; 2]>,
+        pub omega: Vec<f64>,
+        pub mu: Vec<f64>,
+        pub lambda: Vec<f64>,
+        pub u: f64,
+    }
+
+    pub fn point(model: &StageModel, k: usize) -> Point {
+        let u = |k: usize| 3.0 * (0.3 * k as f64).sin() + 1.0;
+        let mut st = Stepper::<f64>::new(model).unwrap();
+        st.reset(u(0)).unwrap();
+        for j in 0..k {
+            st.advance(j, u(j)).unwrap();
+        }
+        let mu = st
+            .state
+            .multipliers
+            .as_ref()
+            .map_or_else(Vec::new, |m| m.mu.clone());
+        let (q, p) = (st.state.q.clone(), st.state.p.clone());
+        let mut omega = vec![0.0; model.n];
+        let mut scratch = vec![[0.0; 2]; model.n];
+        model.rates(&q, &p, &mut scratch, &mut omega);
+        st.advance(k, u(k)).unwrap();
+        let lambda = st.state.multipliers.as_ref().unwrap().lambda.clone();
+        Point {
+            q,
+            p,
+            omega,
+            mu,
+            lambda,
+            u: u(k),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -515,20 +561,15 @@ mod tests {
         let scene = catalogue::long_horizon();
         let chain = Chain::<f64, 2>::from_scene(&scene).unwrap();
         let model = StageModel::new(&chain, scene.time.step).unwrap();
-        let mut st = Stepper::<f64>::new(&model).unwrap();
-        let u = |k: usize| 3.0 * (0.3 * k as f64).sin() + 1.0;
         let k = 20;
-        st.reset(u(0)).unwrap();
-        for j in 0..k {
-            st.advance(j, u(j)).unwrap();
-        }
-        let mu = st.state.multipliers.as_ref().unwrap().mu.clone();
-        let (q, p) = (st.state.q.clone(), st.state.p.clone());
-        let mut omega = vec![0.0; model.n];
-        let mut scratch = vec![[0.0; 2]; model.n];
-        model.rates(&q, &p, &mut scratch, &mut omega);
-        st.advance(k, u(k)).unwrap();
-        let lambda = st.state.multipliers.as_ref().unwrap().lambda.clone();
+        let fixture::Point {
+            q,
+            p,
+            omega,
+            mu,
+            lambda,
+            u,
+        } = fixture::point(&model, k);
         // The predictor μ is not the converged λ: the second run iterates.
         assert!(lambda
             .iter()
@@ -544,9 +585,9 @@ mod tests {
             omega: &omega,
             mu,
         };
-        ws.jacobians((&model, k), x(&lambda), u(k), (&mut a1, &mut b1))
+        ws.jacobians((&model, k), x(&lambda), u, (&mut a1, &mut b1))
             .unwrap();
-        ws.jacobians((&model, k), x(&mu), u(k), (&mut a2, &mut b2))
+        ws.jacobians((&model, k), x(&mu), u, (&mut a2, &mut b2))
             .unwrap();
         let rel = |x: &[f64], y: &[f64]| {
             let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));

@@ -130,6 +130,21 @@ impl Solver {
         step
     }
 
+    /// The exact gradient ∂J/∂θ at the nominal by the costate sweep of reverse stage steps
+    /// (no Jacobians; the exact model's sweep): equal to [`Solver::gradient`].
+    pub fn gradient_by_reverse_steps(&mut self) -> Result<Vec<f64>> {
+        if !self.second_order_possible {
+            return Err(Error::InvalidArgument {
+                name: "curvature",
+                reason: "the costate sweep by reverse steps needs per-step controls without \
+                         rate penalty"
+                    .into(),
+            });
+        }
+        self.costate_by_reverse_steps()?;
+        Ok(self.theta_gradient())
+    }
+
     fn check_in_memory(&self) -> Result<()> {
         if self.block < self.steps {
             return Err(Error::InvalidArgument {

@@ -29,8 +29,13 @@ impl Solver {
         if pr.budget_spent(&opts) {
             return Ok(Some(Termination::Budget));
         }
-        // The exact gradient at the nominal (costate sweep) and the convergence test.
-        self.costate()?;
+        // The exact gradient at the nominal (costate sweep) and the convergence test; with the
+        // exact model by reverse steps, whose H_k pass then computes the Jacobians too.
+        if self.second_order_on {
+            self.costate_by_reverse_steps()?;
+        } else {
+            self.costate()?;
+        }
         let pg = self.projected_norm();
         let (stop, target, gref) = pr.stop_test(&opts, pg, &self.riccati.grad);
         if stop.is_some() {

@@ -22,49 +22,51 @@
 //! differencing), including the chart's curvature since the chart maps are differentiated
 //! at the dual point. Three chunks of a forward and a reverse dual step for n = 10.
 
-use super::stage::{ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, CHUNK};
+use super::stage::{ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper, CHUNK};
 use crate::adjoint::{Cotangents, ReverseSweep, StateView};
 use crate::error::Result;
 use crate::model::{Chain, Scalar};
 use num_dual::DualSVec64;
 
-/// The dual buffers of the Hessian pass (per thread, sized once).
+/// The buffers of a stage's vector-Jacobian product (per thread, sized once): the chart point
+/// (q_k, ω_k), the post-kick momentum p_k, the kick's multipliers y, and scratch.
 #[derive(Clone, Debug)]
-pub(crate) struct HessianBuffers {
-    q0: Vec<[Dv; 2]>,
-    p0: Vec<[Dv; 2]>,
-    omega0: Vec<Dv>,
-    y: Vec<Dv>,
-    w: Vec<[Dv; 2]>,
-    s: Vec<[Dv; 2]>,
+pub(crate) struct VjpBuffers<D> {
+    q0: Vec<[D; 2]>,
+    p0: Vec<[D; 2]>,
+    /// The rates ω_k of the chart point (set by the caller).
+    pub omega0: Vec<D>,
+    y: Vec<D>,
+    w: Vec<[D; 2]>,
+    s: Vec<[D; 2]>,
 }
 
-impl HessianBuffers {
+impl<D: Scalar> VjpBuffers<D> {
     pub fn new(n: usize) -> Self {
-        let v = vec![[Dv::from_re(0.0); 2]; n];
-        HessianBuffers {
+        let v = vec![[D::zero(); 2]; n];
+        VjpBuffers {
             q0: v.clone(),
             p0: v.clone(),
-            omega0: vec![Dv::from_re(0.0); n],
-            y: vec![Dv::from_re(0.0); n],
+            omega0: vec![D::zero(); n],
+            y: vec![D::zero(); n],
             w: v.clone(),
             s: v,
         }
     }
 }
 
-/// The reverse step's scratch and cotangents for one thread and one pass (borrows the dual
-/// chain; created once per pass, not per stage).
-pub(crate) struct Reverse<'a> {
-    sweep: ReverseSweep<'a, Dv, 2>,
-    cot: Cotangents<Dv, 2>,
+/// The reverse step's scratch and cotangents for one thread and one pass (borrows the chain;
+/// created once per pass, not per stage).
+pub(crate) struct Reverse<'a, D> {
+    sweep: ReverseSweep<'a, D, 2>,
+    cot: Cotangents<D, 2>,
 }
 
-impl<'a> Reverse<'a> {
+impl<'a, D: Scalar> Reverse<'a, D> {
     /// For stages of `model` over a horizon of `steps` steps.
-    pub fn new(chain: &'a Chain<Dv, 2>, model: &StageModel, steps: usize) -> Self {
+    pub fn new(chain: &'a Chain<D, 2>, model: &StageModel, steps: usize) -> Self {
         let n = model.n;
-        let zero = vec![[Dv::from_re(0.0); 2]; n];
+        let zero = vec![[D::zero(); 2]; n];
         let mut sweep = ReverseSweep::new(chain, model.h, &[]);
         sweep.t0 = model.start.as_ref().map_or(0.0, |s| s.t0);
         Reverse {
@@ -72,8 +74,8 @@ impl<'a> Reverse<'a> {
             cot: Cotangents {
                 qbar: zero.clone(),
                 pbar: zero,
-                tip_bar: [Dv::from_re(0.0); 2],
-                ubar: vec![Dv::from_re(0.0); steps + 2],
+                tip_bar: [D::zero(); 2],
+                ubar: vec![D::zero(); steps + 2],
                 uxbar: Vec::new(),
                 thbar: Vec::new(),
             },
@@ -91,56 +93,156 @@ fn eps(x: &Dv, slot: usize) -> f64 {
     x.eps.0.as_ref().map_or(0.0, |v| v[slot])
 }
 
+/// ∇(ν·F̃_k) by one reverse step, for any scalar: the stage point x̂_k = (q_k, p̂_k) is in
+/// `stepper` (with its Newton start) and its rates in `hb.omega0`; afterwards
+/// [`gradient_entry`] reads the 2n + 1 entries. In `f64` this is one costate step
+/// ν_k = l_x + A_kᵀν_{k+1} without the Jacobians; in dual numbers seeded along the tangent
+/// directions its derivative parts are H_k's columns (module docs).
+pub(crate) fn stage_vjp<D: Scalar>(
+    (stepper, hb): (&mut Stepper<D>, &mut VjpBuffers<D>),
+    (model, k): (&StageModel, usize),
+    (u, nu): (D, &[f64]),
+    rev: &mut Reverse<'_, D>,
+) -> Result<()> {
+    let kicked = record_step(stepper, hb, k, u)?;
+    chart_inverse_reverse(stepper, hb, nu, rev);
+    let st = &stepper.state;
+    let m = st.multipliers.as_ref().expect("a step sets multipliers");
+    let (phalf, w) = stepper.rattle.last_half_step();
+    let sk = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
+    let sk1 = view(&st.q, &st.p, (&m.lambda, &m.mu), (phalf, w));
+    rev.cot.ubar[k] = D::zero();
+    rev.cot.ubar[k + 1] = D::zero();
+    rev.sweep
+        .step(k, (&sk, &sk1), (u, D::zero()), &mut rev.cot)?;
+    if kicked {
+        kick_reverse((stepper, hb), (model, k), rev)?;
+    }
+    model.apply_mass(&rev.cot.pbar, &mut hb.s);
+    Ok(())
+}
+
+/// Entry r of ∇(ν·F̃_k) after [`stage_vjp`]: the chart's reverse at k (m̄ = M p̂̄),
+/// φ̄ᵢ = tᵢ·q̄ᵢ − ωᵢ qᵢ·m̄ᵢ, ω̄ᵢ = tᵢ·m̄ᵢ, and ū for r = 2n.
+pub(crate) fn gradient_entry<D: Scalar>(
+    hb: &VjpBuffers<D>,
+    rev: &Reverse<'_, D>,
+    (n, k): (usize, usize),
+    r: usize,
+) -> D {
+    if r == 2 * n {
+        return rev.cot.ubar[k];
+    }
+    let i = r % n;
+    let (q, mbar) = (&hb.q0[i], &hb.s[i]);
+    let t = tangent(q);
+    if r < n {
+        dot2(&t, &rev.cot.qbar[i]) - hb.omega0[i] * dot2(q, mbar)
+    } else {
+        dot2(&t, mbar)
+    }
+}
+
+/// The stage's forward step, recording q_k, the post-kick p_k and the kick's multipliers
+/// y = −u y_b (so that p_k = (p̂_k − (h/2) u b) − Ĝᵀ y (h/2)).
+fn record_step<D: Scalar>(
+    stepper: &mut Stepper<D>,
+    hb: &mut VjpBuffers<D>,
+    k: usize,
+    u: D,
+) -> Result<bool> {
+    hb.q0.copy_from_slice(&stepper.state.q);
+    let kicked = stepper.kick(k, u)?;
+    hb.p0.copy_from_slice(&stepper.state.p);
+    if kicked {
+        for (y, yb) in hb.y.iter_mut().zip(stepper.proj.y()) {
+            *y = -(u * *yb);
+        }
+    }
+    stepper.rattle.prepare_force(&stepper.state, k, u)?;
+    stepper.rattle.step(&mut stepper.state, k, u, D::zero())?;
+    Ok(kicked)
+}
+
+/// Cotangents at k + 1 of ν·chart⁻¹(q′, p′): q̄′ᵢ = ν_φᵢ tᵢ/|qᵢ|² + ν_ωᵢ (w_z, −w_y),
+/// p̄′ = M⁻¹ Σᵢ ν_ωᵢ tᵢ eᵢ, with w = M⁻¹p′.
+fn chart_inverse_reverse<D: Scalar>(
+    stepper: &Stepper<D>,
+    hb: &mut VjpBuffers<D>,
+    nu: &[f64],
+    rev: &mut Reverse<'_, D>,
+) {
+    let st = &stepper.state;
+    let ch = stepper.rattle.chain();
+    let n = st.q.len();
+    ch.apply_inverse_mass(&st.p, &mut hb.w);
+    for i in 0..n {
+        let q = &st.q[i];
+        let t = tangent(q);
+        let r2 = dot2(q, q);
+        let (nf, nw) = (nu[i], nu[n + i]);
+        let w = &hb.w[i];
+        rev.cot.qbar[i] = [t[0] / r2 * nf + w[1] * nw, t[1] / r2 * nf - w[0] * nw];
+        hb.s[i] = [t[0] * nw, t[1] * nw];
+    }
+    ch.apply_inverse_mass(&hb.s, &mut rev.cot.pbar);
+}
+
+/// The reverse of the half-kick: c̄ by the projection's reverse, p̂̄ = c̄, ū −= (h/2) b·c̄.
+fn kick_reverse<D: Scalar>(
+    (stepper, hb): (&Stepper<D>, &VjpBuffers<D>),
+    (model, k): (&StageModel, usize),
+    rev: &mut Reverse<'_, D>,
+) -> Result<()> {
+    let s = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
+    let cbar = rev.sweep.projection_reverse(k, &s, &mut rev.cot)?;
+    let b = stepper.control_direction();
+    let mut bc = D::zero();
+    for (c, bi) in cbar.iter().zip(b) {
+        bc += c[0] * bi[0] + c[1] * bi[1];
+    }
+    rev.cot.pbar.copy_from_slice(cbar);
+    rev.cot.ubar[k] -= bc * (0.5 * model.h);
+    Ok(())
+}
+
 impl JacobianWorkspace {
     /// H_k = ∇²_{(ξ,u)} (ν·F̃_k) at x̂_k (column-major (2n + 1)², the control last, into
-    /// `hess`) and ∇(ν·F̃_k) = [A_k B_k]ᵀν (into `grad`), for the costate ν = ν_{k+1} (module
-    /// docs). The point and the Newton start are those of [`JacobianWorkspace::jacobians`].
-    pub fn lagrangian_hessian(
+    /// `hess`), ∇(ν·F̃_k) = [A_k B_k]ᵀν (into `grad`), and A_k, B_k themselves (into `a`, `b`,
+    /// as [`JacobianWorkspace::jacobians`]: the forward dual step is the same), for the costate
+    /// ν = ν_{k+1} (module docs). The point and the Newton start are those of `jacobians`.
+    pub fn second_order(
         &mut self,
         (model, k): (&StageModel, usize),
         x: StagePoint<'_>,
         (u, nu): (f64, &[f64]),
-        rev: &mut Reverse<'_>,
-        (hess, grad): (&mut [f64], &mut [f64]),
+        rev: &mut Reverse<'_, Dv>,
+        (hess, grad, a, b): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
     ) -> Result<()> {
         let nd = ndir(model.n);
         let mut start = 0;
         while start < nd {
             let end = (start + CHUNK).min(nd);
             let ud = self.seed(model, x, u, (start, end));
-            self.dual_chart_point(model, x, (start, end));
-            let kicked = self.record_step(k, ud)?;
-            self.chart_inverse_reverse(nu, rev);
-            let st = &self.stepper.state;
-            let m = st.multipliers.as_ref().expect("a step sets multipliers");
-            let (phalf, w) = self.stepper.rattle.last_half_step();
-            let hb = &self.hb;
-            let sk = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
-            let sk1 = view(&st.q, &st.p, (&m.lambda, &m.mu), (phalf, w));
-            rev.cot.ubar[k] = Dv::from_re(0.0);
-            rev.cot.ubar[k + 1] = Dv::from_re(0.0);
-            let zero = Dv::from_re(0.0);
-            rev.sweep.step(k, (&sk, &sk1), (ud, zero), &mut rev.cot)?;
-            if kicked {
-                self.kick_reverse(model, k, ud, rev)?;
+            self.seed_rates(model, x, (start, end));
+            let (stepper, hb) = (&mut self.stepper, &mut self.hb);
+            stage_vjp((stepper, hb), (model, k), (ud, nu), rev)?;
+            for r in 0..nd {
+                let e = gradient_entry(&self.hb, rev, (model.n, k), r);
+                grad[r] = e.re;
+                for j in start..end {
+                    hess[j * nd + r] = eps(&e, j - start);
+                }
             }
-            self.chart_reverse(model, (k, rev), (start, end), (hess, grad));
+            self.read_columns(model, (start, end), (a, b));
             start = end;
         }
         Ok(())
     }
 
-    /// The dual chart point at k: qᵢ, ωᵢ with their seeds (for the chart's reverse), q and p̂
-    /// are the stepper's seeded state.
-    fn dual_chart_point(
-        &mut self,
-        model: &StageModel,
-        x: StagePoint<'_>,
-        (start, end): (usize, usize),
-    ) {
+    /// The rates ωᵢ at k with their seeds (for the chart's reverse).
+    fn seed_rates(&mut self, model: &StageModel, x: StagePoint<'_>, (start, end): (usize, usize)) {
         let n = model.n;
-        let st = &self.stepper.state;
-        self.hb.q0.copy_from_slice(&st.q);
         for i in 0..n {
             let j = n + i;
             self.hb.omega0[i] = if (start..end).contains(&j) {
@@ -152,114 +254,21 @@ impl JacobianWorkspace {
             };
         }
     }
-
-    /// The stage's forward step in duals, recording the post-kick state (q_k, p_k) and the
-    /// kick's multipliers y = −u y_b (so that p_k = (p̂_k − (h/2) u b) − Ĝᵀ y (h/2)).
-    fn record_step(&mut self, k: usize, ud: Dv) -> Result<bool> {
-        let kicked = self.stepper.kick(k, ud)?;
-        self.hb.p0.copy_from_slice(&self.stepper.state.p);
-        if kicked {
-            for (y, yb) in self.hb.y.iter_mut().zip(self.stepper.proj.y()) {
-                *y = -(ud * *yb);
-            }
-        }
-        let stp = &mut self.stepper;
-        stp.rattle.prepare_force(&stp.state, k, ud)?;
-        stp.rattle.step(&mut stp.state, k, ud, Dv::from_re(0.0))?;
-        Ok(kicked)
-    }
-
-    /// Cotangents at k + 1 of ν·chart⁻¹(q′, p′): q̄′ᵢ = ν_φᵢ tᵢ/|qᵢ|² + ν_ωᵢ (w_z, −w_y),
-    /// p̄′ = M⁻¹ Σᵢ ν_ωᵢ tᵢ eᵢ, with w = M⁻¹p′.
-    fn chart_inverse_reverse(&mut self, nu: &[f64], rev: &mut Reverse<'_>) {
-        let st = &self.stepper.state;
-        let ch = self.stepper.rattle.chain();
-        let n = st.q.len();
-        ch.apply_inverse_mass(&st.p, &mut self.hb.w);
-        for i in 0..n {
-            let q = &st.q[i];
-            let t = tangent(q);
-            let r2 = dot2(q, q);
-            let (nf, nw) = (nu[i], nu[n + i]);
-            let w = &self.hb.w[i];
-            rev.cot.qbar[i] = [t[0] / r2 * nf + w[1] * nw, t[1] / r2 * nf - w[0] * nw];
-            self.hb.s[i] = [t[0] * nw, t[1] * nw];
-        }
-        ch.apply_inverse_mass(&self.hb.s, &mut rev.cot.pbar);
-    }
-
-    /// The reverse of the half-kick: c̄ by the projection's reverse, p̂̄ = c̄,
-    /// ū −= (h/2) b·c̄.
-    fn kick_reverse(
-        &mut self,
-        model: &StageModel,
-        k: usize,
-        ud: Dv,
-        rev: &mut Reverse<'_>,
-    ) -> Result<()> {
-        let _ = ud;
-        let hb = &self.hb;
-        let s = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
-        let cbar = rev.sweep.projection_reverse(k, &s, &mut rev.cot)?;
-        let b = self.stepper.control_direction();
-        let mut bc = Dv::from_re(0.0);
-        for (c, bi) in cbar.iter().zip(b) {
-            bc += c[0] * bi[0] + c[1] * bi[1];
-        }
-        rev.cot.pbar.copy_from_slice(cbar);
-        rev.cot.ubar[k] -= bc * (0.5 * model.h);
-        Ok(())
-    }
-
-    /// The chart's reverse at k (m̄ = M p̂̄): φ̄ᵢ = tᵢ·q̄ᵢ − ωᵢ qᵢ·m̄ᵢ, ω̄ᵢ = tᵢ·m̄ᵢ; real parts
-    /// into `grad`, derivative parts (slots) into the Hessian's columns start..end.
-    fn chart_reverse(
-        &mut self,
-        model: &StageModel,
-        (k, rev): (usize, &mut Reverse<'_>),
-        (start, end): (usize, usize),
-        (hess, grad): (&mut [f64], &mut [f64]),
-    ) {
-        let n = model.n;
-        let nd = ndir(n);
-        model.apply_mass(&rev.cot.pbar, &mut self.hb.s);
-        let hb = &self.hb;
-        let entry = |r: usize| -> Dv {
-            if r == 2 * n {
-                return rev.cot.ubar[k];
-            }
-            let i = r % n;
-            let (q, mbar) = (&hb.q0[i], &hb.s[i]);
-            let t = tangent(q);
-            if r < n {
-                dot2(&t, &rev.cot.qbar[i]) - hb.omega0[i] * dot2(q, mbar)
-            } else {
-                dot2(&t, mbar)
-            }
-        };
-        for r in 0..nd {
-            let e = entry(r);
-            grad[r] = e.re;
-            for j in start..end {
-                hess[j * nd + r] = eps(&e, j - start);
-            }
-        }
-    }
 }
 
-/// A state view of dual buffers (the reverse step's input).
-fn view<'a>(
-    q: &'a [[Dv; 2]],
-    p: &'a [[Dv; 2]],
-    (lambda, mu): (&'a [Dv], &'a [Dv]),
-    (phalf, w): (&'a [[Dv; 2]], &'a [[Dv; 2]]),
-) -> StateView<'a, Dv, 2> {
+/// A state view of buffers (the reverse step's input).
+fn view<'a, D: Scalar>(
+    q: &'a [[D; 2]],
+    p: &'a [[D; 2]],
+    (lambda, mu): (&'a [D], &'a [D]),
+    (phalf, w): (&'a [[D; 2]], &'a [[D; 2]]),
+) -> StateView<'a, D, 2> {
     StateView {
         q,
         p,
         lambda,
         mu,
-        tip: [Dv::from_re(0.0); 2],
+        tip: [D::zero(); 2],
         phalf,
         w,
     }
@@ -309,7 +318,8 @@ mod tests {
     /// its gradient [A_k B_k]ᵀν, the gradient taken from the dual-number stage Jacobians (an
     /// independent derivation: forward mode, no reverse step): agreement to 10⁻⁶ relative to
     /// the largest entry, and the forward-over-reverse gradient itself equal to [A B]ᵀν to
-    /// 10⁻¹² (real parts of the same computation). At a stage without the control's half-kick
+    /// 10⁻¹² (real parts of the same computation), and the pass's A_k, B_k bit for bit those of
+    /// `jacobians`. At a stage without the control's half-kick
     /// (k = 0) and with it (k = 20), on the long-horizon scene (drag, a moving state).
     #[test]
     fn hessian_matches_differenced_jacobian_gradient() {
@@ -335,8 +345,19 @@ mod tests {
             };
             let mut rev = Reverse::new(&chain_dv, &model, 40);
             let (mut h, mut g) = (vec![0.0; nd * nd], vec![0.0; nd]);
-            ws.lagrangian_hessian((&model, k), x, (pt.u, &nu), &mut rev, (&mut h, &mut g))
+            let nx = 2 * n;
+            let (mut a, mut b) = (vec![0.0; nx * nx], vec![0.0; nx]);
+            let out = (&mut h[..], &mut g[..], &mut a[..], &mut b[..]);
+            ws.second_order((&model, k), x, (pt.u, &nu), &mut rev, out)
                 .unwrap();
+            // The Jacobians of the same pass are those of `jacobians` (the same dual step).
+            let (mut a2, mut b2) = (vec![0.0; nx * nx], vec![0.0; nx]);
+            ws.jacobians((&model, k), x, pt.u, (&mut a2, &mut b2))
+                .unwrap();
+            assert!(
+                a == a2 && b == b2,
+                "k = {k}: the pass's A, B differ from jacobians'"
+            );
             let g_fwd = jacobian_gradient((&model, k), &mut ws, (&xi, pt.u, &pt.lambda), &nu);
             let gs = g_fwd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (a, b) in g.iter().zip(&g_fwd) {

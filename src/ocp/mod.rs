@@ -177,7 +177,7 @@ use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::ObjectiveKind;
-use hessian::Reverse;
+use hessian::{gradient_entry, stage_vjp, Reverse, VjpBuffers};
 use line_search::{rollout, Feedback, Traj};
 use riccati::{Riccati, StageCost, StageInput};
 use stage::{tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper};
@@ -340,6 +340,8 @@ pub struct Solver {
     /// The second-order terms (`hessian`): the dual chain of the reverse steps, H_k per stage
     /// and the cost's extra curvature per stage; `exact` when the current model uses them.
     chain_dv: Chain<Dv, 2>,
+    /// The stage map and buffers of the costate sweep by reverse steps.
+    vjp: (Stepper<f64>, VjpBuffers<f64>),
     h_store: Vec<f64>,
     curv: Vec<f64>,
     exact: bool,
@@ -392,6 +394,7 @@ impl Solver {
         let riccati = Riccati::new(nxi, aug, steps);
         Ok(Solver {
             chain_dv: model.chain.lift::<Dv>(),
+            vjp: (Stepper::new(&model)?, VjpBuffers::new(n)),
             h_store: Vec::new(),
             second_order_possible,
             curv: vec![0.0; steps + 1],
@@ -654,8 +657,9 @@ impl Solver {
         }
     }
 
-    /// H_k = ∇²(ν_{k+1}·F̃_k) for every stage at the nominal, in parallel (`hessian`), and the
-    /// cost's curvature −2c_k M₀(t_k)²; needs the costates of the last [`Solver::costate`].
+    /// H_k = ∇²(ν_{k+1}·F̃_k) and the Jacobians A_k, B_k of every stage at the nominal, in
+    /// one parallel pass of forward and reverse dual steps (`hessian`), and the cost's
+    /// curvature −2c_k M₀(t_k)²; needs the costates ν of the last costate sweep.
     fn hessians(&mut self) -> Result<()> {
         let (steps, nxi) = (self.steps, self.nxi);
         let nd = nxi + 1;
@@ -663,10 +667,15 @@ impl Solver {
         let chunk = steps.div_ceil(self.jws.len()).max(1);
         let (model, nom, chain) = (&self.model, &self.nominal, &self.chain_dv);
         let nu = &self.riccati.nu_store;
-        let work = |c: usize, hs: &mut [f64], ws: &mut JacobianWorkspace| {
+        let work = |c: usize,
+                    (hs, a, b): (&mut [f64], &mut [f64], &mut [f64]),
+                    ws: &mut JacobianWorkspace| {
             let mut rev = Reverse::new(chain, model, steps);
             let mut grad = vec![0.0; nd];
-            for (i, h) in hs.chunks_mut(per).enumerate() {
+            let stages = hs
+                .chunks_mut(per)
+                .zip(a.chunks_mut(nxi * nxi).zip(b.chunks_mut(nxi)));
+            for (i, (h, (ai, bi))) in stages.enumerate() {
                 let k = c * chunk + i;
                 let x = StagePoint {
                     q: nom.q(k),
@@ -675,33 +684,92 @@ impl Solver {
                     mu: nom.lambda(k),
                 };
                 let nu1 = &nu[(k + 1) * nxi..(k + 2) * nxi];
-                ws.lagrangian_hessian((model, k), x, (nom.u[k], nu1), &mut rev, (h, &mut grad))?;
+                let out = (h, &mut grad[..], ai, bi);
+                ws.second_order((model, k), x, (nom.u[k], nu1), &mut rev, out)?;
             }
             Ok::<(), Error>(())
         };
         let hs = &mut self.h_store[..steps * per];
+        let a = &mut self.a_store[..steps * nxi * nxi];
+        let b = &mut self.b_store[..steps * nxi];
         #[cfg(feature = "parallel")]
         if self.jws.len() > 1 {
             hs.par_chunks_mut(chunk * per)
+                .zip(a.par_chunks_mut(chunk * nxi * nxi))
+                .zip(b.par_chunks_mut(chunk * nxi))
                 .zip(self.jws.par_iter_mut())
                 .enumerate()
-                .try_for_each(|(c, (h, ws))| work(c, h, ws))?;
+                .try_for_each(|(c, (((h, a), b), ws))| work(c, (h, a, b), ws))?;
         } else {
-            work(0, hs, &mut self.jws[0])?;
+            work(0, (hs, a, b), &mut self.jws[0])?;
         }
         #[cfg(not(feature = "parallel"))]
-        for (c, (h, ws)) in hs
+        for (c, (((h, a), b), ws)) in hs
             .chunks_mut(chunk * per)
+            .zip(a.chunks_mut(chunk * nxi * nxi))
+            .zip(b.chunks_mut(chunk * nxi))
             .zip(self.jws.iter_mut())
             .enumerate()
         {
-            work(c, h, ws)?;
+            work(c, (h, a, b), ws)?;
         }
+        self.jac_range = Some((0, steps));
+        self.counts.1 += 1;
         for k in 0..=steps {
             let m = self.nominal.moment[k];
             self.curv[k] = -2.0 * self.cost.weight(k) * m * m;
         }
         self.h_valid = true;
+        Ok(())
+    }
+
+    /// The exact gradient and the costates ν_k at the nominal without the stage Jacobians:
+    /// ν_N = l_x, then ν_k = l_x + A_kᵀν_{k+1} and g_k = l_u + B_kᵀν_{k+1} as one reverse step
+    /// of each stage in f64 (`hessian::stage_vjp`: the stage recomputed from the stored x̂_k,
+    /// then the adjoint's reverse step), O(N) sequential, about two simulations. For the exact
+    /// model (no augmented state), whose H_k pass then computes A_k and B_k as well.
+    fn costate_by_reverse_steps(&mut self) -> Result<()> {
+        let (steps, nxi) = (self.steps, self.nxi);
+        let n = self.n;
+        self.dv.fill(0.0);
+        self.dz.fill(0.0);
+        self.active.fill(false);
+        self.second_order_storage();
+        let mut rev = Reverse::new(&self.model.chain, &self.model, steps);
+        let scale = self.model.moment_scale;
+        for k in (0..=steps).rev() {
+            let nom = &self.nominal;
+            let (c, u) = (self.cost.weight(k), nom.u[k]);
+            let lx0 = 2.0 * c * nom.moment[k] * nom.dmoment(k, scale);
+            let lu = 2.0 * self.cost.effort * u;
+            let (done, rest) = self.riccati.nu_store.split_at_mut((k + 1) * nxi);
+            let nu_k = &mut done[k * nxi..];
+            nu_k.fill(0.0);
+            nu_k[0] = lx0;
+            self.riccati.grad[k] = lu;
+            if k == steps {
+                continue;
+            }
+            let st = &mut self.vjp.0.state;
+            st.q.copy_from_slice(nom.q(k));
+            st.p.copy_from_slice(nom.p(k));
+            let m = st.multipliers_mut(nom.lambda(k).len());
+            m.lambda.copy_from_slice(nom.lambda(k));
+            m.mu.copy_from_slice(nom.lambda(k));
+            st.tip_target = [0.0; 2];
+            self.vjp.1.omega0.copy_from_slice(nom.omega(k));
+            let nu1 = &rest[..nxi];
+            stage_vjp(
+                (&mut self.vjp.0, &mut self.vjp.1),
+                (&self.model, k),
+                (u, nu1),
+                &mut rev,
+            )?;
+            for (r, v) in nu_k.iter_mut().enumerate() {
+                *v += gradient_entry(&self.vjp.1, &rev, (n, k), r);
+            }
+            self.riccati.grad[k] += gradient_entry(&self.vjp.1, &rev, (n, k), nxi);
+        }
         Ok(())
     }
 

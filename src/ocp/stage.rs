@@ -374,7 +374,7 @@ pub(crate) struct JacobianWorkspace {
     minv: Vec<[f64; 2]>,
     tang: Vec<[f64; 2]>,
     /// The dual buffers of the second-order terms ([`super::hessian`]).
-    pub(super) hb: super::hessian::HessianBuffers,
+    pub(super) hb: super::hessian::VjpBuffers<Dv>,
 }
 
 impl JacobianWorkspace {
@@ -388,7 +388,7 @@ impl JacobianWorkspace {
             dp: vec![[0.0; 2]; n],
             minv: vec![[0.0; 2]; n],
             tang: vec![[0.0; 2]; n],
-            hb: super::hessian::HessianBuffers::new(n),
+            hb: super::hessian::VjpBuffers::new(n),
         })
     }
 
@@ -451,6 +451,40 @@ impl JacobianWorkspace {
         }
     }
 
+    /// The columns start..end of A_k, B_k from the derivative parts of the dual step's result,
+    /// mapped by L_{k+1}: δφᵢ = tᵢ·δqᵢ, δωᵢ = tᵢ·(M⁻¹δp)ᵢ.
+    pub(super) fn read_columns(
+        &mut self,
+        model: &StageModel,
+        (start, end): (usize, usize),
+        (a, b): (&mut [f64], &mut [f64]),
+    ) {
+        let n = model.n;
+        let nx = 2 * n;
+        let st = &self.stepper.state;
+        for i in 0..n {
+            self.tang[i] = tangent(&[st.q[i][0].re, st.q[i][1].re]);
+        }
+        for j in start..end {
+            let slot = j - start;
+            let eps = |x: &Dv| x.eps.0.as_ref().map_or(0.0, |v| v[slot]);
+            for i in 0..n {
+                self.dv[i] = [eps(&st.q[i][0]), eps(&st.q[i][1])];
+                self.dp[i] = [eps(&st.p[i][0]), eps(&st.p[i][1])];
+            }
+            model.chain.apply_inverse_mass(&self.dp, &mut self.minv);
+            let col: &mut [f64] = if j < nx {
+                &mut a[j * nx..(j + 1) * nx]
+            } else {
+                &mut b[..nx]
+            };
+            for i in 0..n {
+                col[i] = dot2(&self.tang[i], &self.dv[i]);
+                col[n + i] = dot2(&self.tang[i], &self.minv[i]);
+            }
+        }
+    }
+
     /// A_k (column-major 2n × 2n, into `a`) and B_k (into `b`) at x̂_k = (q, p) with rates
     /// `omega`, Newton start `mu` and control u. With `mu` the converged λ of the nominal step
     /// the real parts are converged at once (bit for bit the nominal's) and the Newton loop does
@@ -463,37 +497,13 @@ impl JacobianWorkspace {
         u: f64,
         (a, b): (&mut [f64], &mut [f64]),
     ) -> Result<()> {
-        let n = model.n;
-        let nx = 2 * n;
-        let ndir = nx + 1;
+        let nd = ndir(model.n);
         let mut start = 0;
-        while start < ndir {
-            let end = (start + CHUNK).min(ndir);
+        while start < nd {
+            let end = (start + CHUNK).min(nd);
             let ud = self.seed(model, x, u, (start, end));
             self.stepper.advance(k, ud)?;
-            // Read out and map by L_{k+1}.
-            let st = &self.stepper.state;
-            for i in 0..n {
-                self.tang[i] = tangent(&[st.q[i][0].re, st.q[i][1].re]);
-            }
-            for j in start..end {
-                let slot = j - start;
-                let eps = |x: &Dv| x.eps.0.as_ref().map_or(0.0, |v| v[slot]);
-                for i in 0..n {
-                    self.dv[i] = [eps(&st.q[i][0]), eps(&st.q[i][1])];
-                    self.dp[i] = [eps(&st.p[i][0]), eps(&st.p[i][1])];
-                }
-                model.chain.apply_inverse_mass(&self.dp, &mut self.minv);
-                let col: &mut [f64] = if j < nx {
-                    &mut a[j * nx..(j + 1) * nx]
-                } else {
-                    &mut b[..nx]
-                };
-                for i in 0..n {
-                    col[i] = dot2(&self.tang[i], &self.dv[i]);
-                    col[n + i] = dot2(&self.tang[i], &self.minv[i]);
-                }
-            }
+            self.read_columns(model, (start, end), (&mut *a, &mut *b));
             start = end;
         }
         Ok(())

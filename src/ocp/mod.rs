@@ -100,14 +100,14 @@
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.71 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.61 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
 //! | 10³ | this solver, Gauss-Newton throughout | 1.41 s | 31 | 1507.471209304 | 1507.2086 | another, lower local minimum; 8.0·10⁻⁹ |
 //! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 7.2 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 12.7 s, 20 iterations) |
-//! | 10⁵ | this solver | 88 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 887 MB peak (Gauss-Newton: 222.7 s, 15) |
+//! | 10⁴ | this solver | 6.7 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 12.7 s, 20 iterations) |
+//! | 10⁵ | this solver | 77 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 887 MB peak (Gauss-Newton: 222.7 s, 15) |
 //!
-//! Time per iteration 71 ms, 0.72 s and 8.0 s: linear in N within 1.12×. The parts at N = 10³
+//! Time per iteration 61 ms, 0.67 s and 7.0 s: linear in N within 1.15×. The parts at N = 10³
 //! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.69 ms; rollout + stage
 //! Jacobians + costate sweep 22.1 ms (32 simulations, two threads); one Riccati pass with its
 //! linearised rollout 3.5 ms (5 simulations); the exact model's extra — costate sweep, H_k of
@@ -122,8 +122,9 @@
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
 //! 3, 4, 5, 7, 9, lower on rows 2 (30.09 against 32.89) and 8 (by 5·10⁻⁹ relative), 1.5·10⁻⁶
 //! relative higher on row 6 (another local minimum, which Gauss-Newton reaches too), and both
-//! at J ≈ 0 on row 10 (4·10⁻¹⁴ against 10⁻¹⁸). About 75 ms for the ten rows
-//! ([`Condensed`], `Method::Condensed`: 23 ms, but higher objectives on rows 3, 6 and 8).
+//! at J ≈ 0 on row 10 (4·10⁻¹⁴ against 10⁻¹⁸). 60 ms for the ten rows through `minimize`
+//! (trust region 110 ms, L-BFGS 140 ms; [`Condensed`], `Method::Condensed`: 24 ms, but higher
+//! objectives on rows 3, 6 and 8; `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise

@@ -8,6 +8,9 @@
 #[path = "../examples/tables/thesis.rs"]
 mod thesis;
 
+#[path = "common/table_3_4.rs"]
+mod table_3_4;
+
 use chainbeam::ocp::{Condensed, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
 use chainbeam::{
@@ -271,16 +274,7 @@ fn restart_equals_a_fresh_solver() {
 #[test]
 fn table_3_4_rows_with_an_inert_control_converge() {
     for node in [5usize, 7, 9] {
-        let p = ControlProblem::new(
-            &catalogue::riser(node),
-            Parametrisation::PerStep(PerStepControl { steps: 10 }),
-            BendingObjective::summed_moment(),
-        )
-        .unwrap();
-        let bound = thesis::TABLE_3_4[node - 1]
-            .0
-            .iter()
-            .fold(0.0f64, |m, u| m.max(u.abs()));
+        let (p, bound) = table_3_4::row(node);
         let o = |method| OptimOptions {
             method,
             bound: Some(bound),

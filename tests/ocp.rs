@@ -6,6 +6,9 @@
 #[path = "../examples/tables/thesis.rs"]
 mod thesis;
 
+#[path = "common/table_3_4.rs"]
+mod table_3_4;
+
 use chainbeam::ocp::{solve, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
@@ -311,11 +314,7 @@ fn newton_step_equals_dense_exact_hessian_solve() {
 #[test]
 fn table_3_4_rows_agree_with_trust_region() {
     for node in [1, 2, 3, 4, 5, 7, 8, 9, 10] {
-        let scene = catalogue::riser(node);
-        let p =
-            ControlProblem::new(&scene, per_step(10), BendingObjective::summed_moment()).unwrap();
-        let (tu, _) = thesis::TABLE_3_4[node - 1];
-        let bound = max_abs(&tu);
+        let (p, bound) = table_3_4::row(node);
         let tr = minimize(
             &p,
             &[0.0; 11],

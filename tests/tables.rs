@@ -9,6 +9,9 @@ mod compute;
 #[path = "../examples/tables/thesis.rs"]
 mod thesis;
 
+#[path = "common/table_3_4.rs"]
+mod table_3_4;
+
 use chainbeam::optimize::resolved_control_limit;
 use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 use compute::{Start, FOLD_FLAG_DEG};
@@ -222,16 +225,7 @@ fn table_3_4_riccati_converges_on_every_row() {
     let mut finished = 0;
     for curvature in [Curvature::Auto, Curvature::GaussNewton] {
         for node in 1..=10 {
-            let p = ControlProblem::new(
-                &catalogue::riser(node),
-                Parametrisation::PerStep(PerStepControl { steps: 10 }),
-                BendingObjective::summed_moment(),
-            )
-            .unwrap();
-            let bound = thesis::TABLE_3_4[node - 1]
-                .0
-                .iter()
-                .fold(0.0f64, |m, u| m.max(u.abs()));
+            let (p, bound) = table_3_4::row(node);
             let opts = OptimOptions {
                 method: Method::Riccati,
                 bound: Some(bound),

@@ -1,0 +1,20 @@
+//! The Table 3.4 problems as the tests use them (included with `#[path]` next to `mod thesis`).
+
+use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
+
+/// Row `node` of Table 3.4: the thesis riser with the control at `node`, per-step controls over
+/// N = 10 steps, c_sum without effort; and the bound the `tables` example gives it, the
+/// largest |u_k| of the thesis's printed row (examples/tables/thesis.rs).
+pub fn row(node: usize) -> (ControlProblem, f64) {
+    let p = ControlProblem::new(
+        &catalogue::riser(node),
+        Parametrisation::PerStep(PerStepControl { steps: 10 }),
+        BendingObjective::summed_moment(),
+    )
+    .unwrap();
+    let bound = crate::thesis::TABLE_3_4[node - 1]
+        .0
+        .iter()
+        .fold(0.0f64, |m, u| m.max(u.abs()));
+    (p, bound)
+}

@@ -118,11 +118,7 @@ impl Solver {
                     .into(),
             });
         }
-        let on = self.second_order_on;
-        self.second_order_on = true;
-        let grad = self.costate();
-        self.second_order_on = on;
-        grad?;
+        self.costate_by_reverse_steps()?;
         self.hessians()?;
         self.exact = true;
         let step = self.gauss_newton_step(mu);

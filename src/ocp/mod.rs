@@ -343,8 +343,10 @@ pub struct Solver {
     /// The second-order terms (`hessian`): the dual chain of the reverse steps, H_k per stage
     /// and the cost's extra curvature per stage; `exact` when the current model uses them.
     chain_dv: Chain<Dv, 2>,
-    /// The stage map and buffers of the costate sweep by reverse steps.
+    /// The stage map and buffers of the costate sweep by reverse steps, and its costates ν_k
+    /// (n_z per stage): the multipliers of the second-order terms.
     vjp: (Stepper<f64>, VjpBuffers<f64>),
+    nu_store: Vec<f64>,
     h_store: Vec<f64>,
     curv: Vec<f64>,
     exact: bool,
@@ -398,6 +400,7 @@ impl Solver {
         Ok(Solver {
             chain_dv: model.chain.lift::<Dv>(),
             vjp: (Stepper::new(&model)?, VjpBuffers::new(n)),
+            nu_store: Vec::new(),
             h_store: Vec::new(),
             second_order_possible,
             curv: vec![0.0; steps + 1],
@@ -636,19 +639,12 @@ impl Solver {
         Ok(bounded)
     }
 
-    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep, which
-    /// records the costates ν_k for the second-order terms when the exact model is on.
+    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep.
     fn costate(&mut self) -> Result<()> {
         self.dv.fill(0.0);
         self.dz.fill(0.0);
         self.active.fill(false);
-        self.riccati.record = self.second_order_on;
-        if self.second_order_on {
-            self.second_order_storage();
-        }
-        let r = self.sweep(false).map(|_| ());
-        self.riccati.record = false;
-        r
+        self.sweep(false).map(|_| ())
     }
 
     /// Allocates the exact model's storage (H_k per stage, the costates) at its first use.
@@ -656,20 +652,20 @@ impl Solver {
         let nd = self.nxi + 1;
         if self.h_store.is_empty() {
             self.h_store = vec![0.0; self.steps * nd * nd];
-            self.riccati.nu_store = vec![0.0; (self.steps + 1) * self.nz];
+            self.nu_store = vec![0.0; (self.steps + 1) * self.nz];
         }
     }
 
     /// H_k = ∇²(ν_{k+1}·F̃_k) and the Jacobians A_k, B_k of every stage at the nominal, in
     /// one parallel pass of forward and reverse dual steps (`hessian`), and the cost's
-    /// curvature −2c_k M₀(t_k)²; needs the costates ν of the last costate sweep.
+    /// curvature −2c_k M₀(t_k)²; needs the costates ν of [`Solver::costate_by_reverse_steps`].
     fn hessians(&mut self) -> Result<()> {
         let (steps, nxi) = (self.steps, self.nxi);
         let nd = nxi + 1;
         let per = nd * nd;
         let chunk = steps.div_ceil(self.jws.len()).max(1);
         let (model, nom, chain) = (&self.model, &self.nominal, &self.chain_dv);
-        let nu = &self.riccati.nu_store;
+        let nu = &self.nu_store;
         let work = |c: usize,
                     (hs, a, b): (&mut [f64], &mut [f64], &mut [f64]),
                     ws: &mut JacobianWorkspace| {
@@ -745,7 +741,7 @@ impl Solver {
             let (c, u) = (self.cost.weight(k), nom.u[k]);
             let lx0 = 2.0 * c * nom.moment[k] * nom.dmoment(k, scale);
             let lu = 2.0 * self.cost.effort * u;
-            let (done, rest) = self.riccati.nu_store.split_at_mut((k + 1) * nxi);
+            let (done, rest) = self.nu_store.split_at_mut((k + 1) * nxi);
             let nu_k = &mut done[k * nxi..];
             nu_k.fill(0.0);
             nu_k[0] = lx0;

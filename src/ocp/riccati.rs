@@ -165,10 +165,6 @@ pub(crate) struct Riccati {
     pub ff: Vec<f64>,
     /// Exact gradient of J with respect to the decision of each free stage (0 when held).
     pub grad: Vec<f64>,
-    /// The costates ν_k of the last costate sweep with `record` set (n_z per stage): the
-    /// multipliers of the second-order terms ([`super::hessian`]).
-    pub nu_store: Vec<f64>,
-    pub record: bool,
     /// Σ k Q_u and Σ ½ k² Q_uu (ΔJ(α) = α d1 + α² d2).
     pub d1: f64,
     pub d2: f64,
@@ -201,8 +197,6 @@ impl Riccati {
             gain: vec![0.0; (steps + 1) * nz],
             ff: vec![0.0; steps + 1],
             grad: vec![0.0; steps + 1],
-            nu_store: Vec::new(),
-            record: false,
             d1: 0.0,
             d2: 0.0,
             quu_sum: 0.0,
@@ -269,10 +263,6 @@ impl Riccati {
                 self.nu.copy_from_slice(&self.lx);
                 self.grad[k] = if inp.free { lu } else { 0.0 };
             }
-        }
-        if self.record {
-            let nz = self.nz;
-            self.nu_store[k * nz..(k + 1) * nz].copy_from_slice(&self.nu);
         }
         std::mem::swap(&mut self.nu, &mut self.nu_next);
     }

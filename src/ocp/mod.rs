@@ -95,36 +95,39 @@
 //!   gradient carry it (tests/start.rs: equal to the adjoint's to 10⁻¹⁴).
 //!
 //! # Measured (2-core machine, `examples/long_horizon.rs`, `benches/ocp.rs`)
-//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖, wall time (the
-//! trust-region and L-BFGS rows: CPU seconds on a loaded machine).
+//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖, wall time of the
+//! release build (fat LTO, `target-cpu=native`: README); the trust-region and L-BFGS rows are
+//! CPU seconds of an earlier build on a loaded machine.
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.61 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 1.41 s | 31 | 1507.471209304 | 1507.2086 | another, lower local minimum; 8.0·10⁻⁹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.375 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 0.85 s | 31 | 1507.471209304 | 1507.2086 | another, lower local minimum; 8.0·10⁻⁹ |
 //! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 6.7 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 12.7 s, 20 iterations) |
-//! | 10⁵ | this solver | 77 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 887 MB peak (Gauss-Newton: 222.7 s, 15) |
+//! | 10⁴ | this solver | 4.4 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 7.1 s, 20 iterations) |
+//! | 10⁵ | this solver | 55 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
 //!
-//! Time per iteration 61 ms, 0.67 s and 7.0 s: linear in N within 1.15×. The parts at N = 10³
-//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.69 ms; rollout + stage
-//! Jacobians + costate sweep 22.1 ms (32 simulations, two threads); one Riccati pass with its
-//! linearised rollout 3.5 ms (5 simulations); the exact model's extra — costate sweep, H_k of
-//! every stage (a forward and a reverse dual step per chunk) and a Riccati pass with them —
-//! 47 ms (68 simulations). A Gauss-Newton iteration thus costs about 45 simulations (2–7
-//! Riccati passes: the warm face, or the interior point when the active set changes), an exact
-//! one about 130 (up to 11 interior-point passes while the active set settles, then 1). The
-//! issue's targets of 0.3 s at N = 10³, 3 s at 10⁴, 30 s at 10⁵ and ≤ 20 simulations per
-//! iteration are not met; the iteration count (≤ 30) and the linear scaling are.
+//! Time per iteration 37.5 ms, 0.44 s and 5.0 s: linear in N within 1.35×. The parts at N = 10³
+//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.67 ms; rollout + stage
+//! Jacobians + costate sweep 15.5 ms (23 simulations, two threads); one Riccati pass 1.9 ms
+//! (3 simulations); the exact model's extra — costate sweep, A_k, B_k and H_k of every stage
+//! (a forward and a reverse dual step per chunk) and a Riccati pass with them — 35 ms (53
+//! simulations). A Gauss-Newton iteration thus costs about 30–45 simulations (2–7 Riccati
+//! passes, each with a costate sweep and linearised rollouts: the warm face, or the interior
+//! point when the active set changes), an exact one about 55–100 (up to 11 interior-point
+//! passes while the active set settles, then 1). The targets of 0.3 s at N = 10³, 3 s
+//! at 10⁴, 30 s at 10⁵ and ≤ 20 simulations per iteration are not met; the iteration count
+//! (≤ 30) and the linear scaling are.
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
-//! 3, 4, 5, 7, 9, lower on rows 2 (30.09 against 32.89) and 8 (by 5·10⁻⁹ relative), 1.5·10⁻⁶
-//! relative higher on row 6 (another local minimum, which Gauss-Newton reaches too), and both
-//! at J ≈ 0 on row 10 (4·10⁻¹⁴ against 10⁻¹⁸). 60 ms for the ten rows through `minimize`
-//! (trust region 110 ms, L-BFGS 140 ms; [`Condensed`], `Method::Condensed`: 24 ms, but higher
-//! objectives on rows 3, 6 and 8; `cargo bench --bench ocp -- ocp_table_3_4`).
+//! 4–9, lower on rows 2 (30.09 against 32.89) and 3 (10.657 against 10.673), and both at J ≈ 0
+//! on row 10 (4·10⁻¹⁴ against 10⁻¹⁸); L-BFGS finds a 1.5·10⁻⁶ relative lower minimum on row 6.
+//! 36–42 ms for the ten rows through `minimize` (four criterion runs; trust region 100 ms,
+//! L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this solver higher
+//! objectives on rows 2, 3 and 8 and a lower one on row 1, 22.93;
+//! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise

@@ -22,7 +22,9 @@
 //! differencing), including the chart's curvature since the chart maps are differentiated
 //! at the dual point. Three chunks of a forward and a reverse dual step for n = 10.
 
-use super::stage::{ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper, CHUNK};
+use super::stage::{
+    chunks, ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper, CHUNK,
+};
 use crate::adjoint::{Cotangents, ReverseSweep, StateView};
 use crate::error::Result;
 use crate::model::{Chain, Scalar};
@@ -220,9 +222,7 @@ impl JacobianWorkspace {
         (hess, grad, a, b): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
     ) -> Result<()> {
         let nd = ndir(model.n);
-        let mut start = 0;
-        while start < nd {
-            let end = (start + CHUNK).min(nd);
+        for (start, end) in chunks(nd) {
             let ud = self.seed(model, x, u, (start, end));
             self.seed_rates(model, x, (start, end));
             let (stepper, hb) = (&mut self.stepper, &mut self.hb);
@@ -234,8 +234,7 @@ impl JacobianWorkspace {
                     hess[j * nd + r] = eps(&e, j - start);
                 }
             }
-            self.read_columns(model, (start, end), (a, b));
-            start = end;
+            self.read_columns(model, (start, end), (&mut *a, &mut *b));
         }
         Ok(())
     }

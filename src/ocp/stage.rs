@@ -83,6 +83,13 @@ pub(crate) fn ndir(n: usize) -> usize {
     2 * n + 1
 }
 
+/// The direction chunks [start, end) of `nd` directions, `CHUNK` at a time (the last shorter).
+pub(crate) fn chunks(nd: usize) -> impl Iterator<Item = (usize, usize)> {
+    (0..nd)
+        .step_by(CHUNK)
+        .map(move |start| (start, (start + CHUNK).min(nd)))
+}
+
 /// The tangent tᵢ = qᵢ rotated by +90° in the (y, z) plane: ∂q/∂φ for q = (cos φ, sin φ).
 #[inline]
 pub(crate) fn tangent<D: Scalar>(q: &[D; 2]) -> [D; 2] {
@@ -497,14 +504,10 @@ impl JacobianWorkspace {
         u: f64,
         (a, b): (&mut [f64], &mut [f64]),
     ) -> Result<()> {
-        let nd = ndir(model.n);
-        let mut start = 0;
-        while start < nd {
-            let end = (start + CHUNK).min(nd);
+        for (start, end) in chunks(ndir(model.n)) {
             let ud = self.seed(model, x, u, (start, end));
             self.stepper.advance(k, ud)?;
             self.read_columns(model, (start, end), (&mut *a, &mut *b));
-            start = end;
         }
         Ok(())
     }

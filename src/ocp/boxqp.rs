@@ -8,6 +8,23 @@
 //! the control is *clamped*: its feedback gain is zero (a perturbation of the state does not
 //! move a control held at its bound, to first order).
 
+/// One component of the projected gradient θ − Π_[lo,hi](θ − g), computed without
+/// cancellation: g itself where the projection does not bind (θ − g inside the box), the
+/// distance θ − lo (θ − hi) to the bound it reaches otherwise. The textbook form
+/// θ − clamp(θ − g) loses every |g| below half an ulp of θ: on Table 3.4's rows, controls of
+/// ~10³ N with free-control gradients of 10⁻¹⁴ reported a projected gradient of exactly 0, which
+/// met even a tolerance of 0.
+#[inline]
+pub(crate) fn projected_component(theta: f64, g: f64, lo: f64, hi: f64) -> f64 {
+    if g > theta - lo {
+        theta - lo
+    } else if g < theta - hi {
+        theta - hi
+    } else {
+        g
+    }
+}
+
 /// The solution of one scalar box-QP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct BoxQpStep {

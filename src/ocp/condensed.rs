@@ -421,7 +421,7 @@ impl Condensed {
             .zip(&self.grad)
             .map(|(&k, g)| {
                 let t = self.nominal.u[k];
-                let d = t - (t - g).clamp(lo, hi);
+                let d = super::boxqp::projected_component(t, *g, lo, hi);
                 d * d
             })
             .sum::<f64>()

@@ -65,7 +65,9 @@
 //!   minimiser of the quadratic through J̄, its slope and J(α); accepted when
 //!   J̄ − J(α) ≥ c·(−ΔJ(α)) (c = [`OcpOptions::armijo`]). A Levenberg-Marquardt proximal weight
 //!   ½ μ Σ δv² (μ relative to the mean Q_uu) is lowered after full steps whose actual decrease
-//!   matched the model and raised otherwise.
+//!   matched the model and raised otherwise: ×4, and by a further 1/α after a step the line
+//!   search shortened to α (the model was trusted about 1/α times too far; with ×4 alone a
+//!   run of α = 0.1 steps needed six iterations to lift μ from 10⁻⁶ to where full steps pass).
 //! - **Rate penalty and pieces**: the state is augmented with w_k = u_{k−1}; inside a piece the
 //!   control is held (u_k = w_k, no decision), so one recursion serves per-step, piecewise and
 //!   rate-penalised problems.
@@ -75,11 +77,12 @@
 //!   descent found), or steps whose predicted decrease stays below J's round-off.
 //! - **Where it is slow**: Gauss-Newton alone converges linearly where the residual stays
 //!   large: with drag (D = 10) it misses the costate-weighted curvature of the quadratic drag
-//!   p|p|, and took 31 iterations on the long-horizon scene (24 of them for the last 10⁻⁵ of J,
-//!   most with backtracking); the exact model finishes the same run in 4 Newton iterations after
+//!   p|p|, and takes 26 iterations on the long-horizon scene (19 of them for the last 10⁻⁵ of J,
+//!   many with backtracking); the exact model finishes the same run in 4 Newton iterations after
 //!   6 Gauss-Newton ones, quadratically (projected gradient 0.26, 0.16, 3.5·10⁻², 2.2·10⁻⁴,
-//!   then 4·10⁻⁸). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1, 3, 8)
-//!   Gauss-Newton alone could end *not converged*; with the exact model all ten rows converge.
+//!   then 4·10⁻⁸). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1 and 3)
+//!   Gauss-Newton alone stalled at J's round-off while μ rose ×4 per shortened step; with the
+//!   1/α rise it converges on all ten rows, as the default does (tests/tables.rs).
 //!   In an exact iteration the costates come first, by one reverse step per stage in f64
 //!   (the same code as H_k's, `hessian::stage_vjp`: 3 ms at N = 10³ against 22.7 ms for the
 //!   Jacobian sweep), then one parallel pass of forward and reverse dual steps gives A_k, B_k
@@ -102,10 +105,10 @@
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
 //! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.375 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 0.85 s | 31 | 1507.471209304 | 1507.2086 | another, lower local minimum; 8.0·10⁻⁹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 0.62 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
 //! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 4.4 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 7.1 s, 20 iterations) |
+//! | 10⁴ | this solver | 4.4 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 6.0 s, 16 iterations) |
 //! | 10⁵ | this solver | 55 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
 //!
 //! Time per iteration 37.5 ms, 0.44 s and 5.0 s: linear in N within 1.35×. The parts at N = 10³
@@ -810,7 +813,7 @@ impl Solver {
             .iter()
             .map(|&k| {
                 let (t, g) = (self.nominal.u[k] + self.dv[k], self.riccati.grad[k]);
-                let d = t - (t - g).clamp(lo, hi);
+                let d = boxqp::projected_component(t, g, lo, hi);
                 d * d
             })
             .sum::<f64>()

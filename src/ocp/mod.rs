@@ -86,10 +86,18 @@
 //!   In an exact iteration the costates come first, by one reverse step per stage in f64
 //!   (the same code as H_k's, `hessian::stage_vjp`: 3 ms at N = 10³ against 22.7 ms for the
 //!   Jacobian sweep), then one parallel pass of forward and reverse dual steps gives A_k, B_k
-//!   and H_k together: about twice a Gauss-Newton iteration's Jacobian pass. A hand-written
-//!   tangent step in f64 (the implicit function theorem on the step residual with the terms'
-//!   Jacobian-vector products) instead of the forward dual numbers, and fewer interior-point
-//!   passes (Mehrotra's predictor-corrector), are the next steps.
+//!   and H_k together: about twice a Gauss-Newton iteration's Jacobian pass.
+//! - **Measured and dropped.** Mehrotra's predictor-corrector for the interior point (the
+//!   affine direction by a factor pass, the corrector by a solve-only pass: the recursion's
+//!   vectors with the gains and Q_uu kept, O(n_z²) per stage): 48 → 31 factor passes at
+//!   N = 10³, but its QP solutions, as inexact as allowed, led the outer iteration elsewhere:
+//!   12 iterations instead of 10 (farm-bench wall ratio 1.04), 18 instead of 12 with
+//!   ρ = 0.001 (ratio 1.29; away from the optimum the exact model's QP is not convex and the
+//!   affine step, τ = 0, aims badly), 16 instead of 18 at N = 3000, |u| ≤ 5 → 4 (ratio 0.70).
+//!   Not a clear gain; the plain path-following (σ = 0.1, 0.01 after long steps) stays. A
+//!   hand-written f64 tangent step instead of the dual numbers would save little: the dual
+//!   step costs 1.4 f64 steps per direction (11 per chunk of 8), near the floor of one
+//!   linearised step per direction that any forward-mode Jacobian of 2n + 1 directions pays.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending
@@ -121,15 +129,18 @@
 //! point when the active set changes), an exact one about 55–100 (up to 11 interior-point
 //! passes while the active set settles, then 1). The targets of 0.3 s at N = 10³, 3 s
 //! at 10⁴, 30 s at 10⁵ and ≤ 20 simulations per iteration are not met; the iteration count
-//! (≤ 30) and the linear scaling are.
+//! (≤ 30) and the linear scaling are. The yardstick is cheap (0.67 µs per step at n = 10): the
+//! Jacobians alone are 2n + 1 = 21 linearised steps per stage, about 10 simulations on two
+//! threads at the floor of forward mode, before any QP pass (≈ 3 simulations each).
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
-//! 4–9, lower on rows 2 (30.09 against 32.89) and 3 (10.657 against 10.673), and both at J ≈ 0
-//! on row 10 (4·10⁻¹⁴ against 10⁻¹⁸); L-BFGS finds a 1.5·10⁻⁶ relative lower minimum on row 6.
-//! 36–42 ms for the ten rows through `minimize` (four criterion runs; trust region 100 ms,
-//! L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this solver higher
-//! objectives on rows 2, 3 and 8 and a lower one on row 1, 22.93;
+//! 3–9, lower on row 2 (30.09 against 32.89), and both at J ≈ 0 on row 10 (4·10⁻¹⁴ against
+//! 10⁻¹⁸); L-BFGS finds lower minima on rows 3 (10.657 against 10.673, which this solver
+//! reached too before the 1/α rule of μ changed its path) and 6 (1.5·10⁻⁶ relative).
+//! 32–42 ms for the ten rows through `minimize` (four criterion runs, median 36.5 ms; trust
+//! region 100 ms, L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this
+//! solver higher objectives on rows 2 and 8 and a lower one on row 1, 22.93;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives

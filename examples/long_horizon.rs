@@ -22,6 +22,10 @@
 //! Prints Σ M₀², max |M₀| and J against no control and against the best constant control (same
 //! objective and limit), the iterations, the first-order optimality reached and the time.
 //!
+//! `--max-iters K` sets every method's iteration limit (default: the Riccati solver's 200,
+//! 5000 for L-BFGS and the trust region; a run that reaches it says *not converged*): the trust region at N = 10⁴ needs hours, and a capped run measures
+//! its cost per iteration.
+//!
 //! `--curvature auto|exact|gauss-newton` chooses the Riccati solver's model
 //! ([`chainbeam::ocp::Curvature`]; default `auto`: Gauss-Newton, then the exact Hessian from
 //! the first step Gauss-Newton predicts poorly).
@@ -97,6 +101,9 @@ struct Setup {
     rate: f64,
     history: bool,
     curvature: Curvature,
+    /// Iteration limit of every method (`--max-iters`); by default the Riccati solver's own
+    /// (200) and 5000 for L-BFGS and the trust region.
+    max_iters: Option<usize>,
 }
 
 /// Solves `problem` from θ₀ with one method.
@@ -110,6 +117,7 @@ fn solve_with(
         let opts = OcpOptions {
             rate_penalty: set.rate,
             curvature: set.curvature,
+            max_iters: set.max_iters.unwrap_or(OcpOptions::default().max_iters),
             ..OcpOptions::default().with_bound(set.umax)
         };
         let r = if method == "condensed" {
@@ -154,7 +162,7 @@ fn solve_with(
     let opts = OptimOptions {
         method: m,
         bound: Some(set.umax),
-        max_iters: 5000,
+        max_iters: set.max_iters.unwrap_or(5000),
         progress: set.history,
         ..OptimOptions::default()
     };
@@ -206,6 +214,14 @@ fn run() -> Result<()> {
         umax: arg(&args, "--umax", 5.0)?,
         rate: arg(&args, "--rate", 0.0)?,
         history: args.iter().any(|a| a == "--history"),
+        max_iters: value(&args, "--max-iters")
+            .map(|v| {
+                v.parse::<usize>().map_err(|_| Error::InvalidArgument {
+                    name: "--max-iters",
+                    reason: format!("expected a whole number of iterations, got {v:?}"),
+                })
+            })
+            .transpose()?,
         curvature: match value(&args, "--curvature") {
             None | Some("auto") => Curvature::Auto,
             Some("exact") => Curvature::Exact,

@@ -83,6 +83,23 @@ pub(crate) fn solve_scalar(a: f64, g: f64, lo: f64, hi: f64) -> Option<BoxQpStep
 mod tests {
     use super::*;
 
+    /// Reference: the definition θ − Π(θ − g) evaluated by hand. A free control of 10³ keeps a
+    /// gradient of 10⁻¹⁴ (the textbook form rounds it to exactly 0); on a bound with the
+    /// gradient pushing outward the component is 0; a step that crosses the bound is cut at it.
+    #[test]
+    fn projected_component_keeps_small_gradients() {
+        let (lo, hi) = (-2000.0, 2000.0);
+        assert_eq!(1000.0 - (1000.0f64 - 1e-14).clamp(lo, hi), 0.0);
+        assert_eq!(projected_component(1000.0, 1e-14, lo, hi), 1e-14);
+        assert_eq!(projected_component(lo, 3.0, lo, hi), 0.0);
+        assert_eq!(projected_component(hi, -3.0, lo, hi), 0.0);
+        assert_eq!(projected_component(hi, 3.0, lo, hi), 3.0);
+        assert_eq!(projected_component(1999.0, -3.0, lo, hi), -1.0);
+        assert_eq!(projected_component(-1999.5, 1.0, lo, hi), 0.5);
+        let inf = f64::INFINITY;
+        assert_eq!(projected_component(7.0, -5.0, -inf, inf), -5.0);
+    }
+
     /// Reference: the closed-form minimiser of a convex parabola on an interval.
     #[test]
     fn clamps_and_releases() {

@@ -107,17 +107,19 @@
 //!
 //! # Measured (2-core machine, `examples/long_horizon.rs`, `benches/ocp.rs`)
 //! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖, wall time of the
-//! release build (fat LTO, `target-cpu=native`: README); the trust-region and L-BFGS rows are
+//! release build (fat LTO, `target-cpu=native`: README); the trust-region row at N = 10³ is
 //! CPU seconds of an earlier build on a loaded machine.
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
 //! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.375 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
 //! | 10³ | this solver, Gauss-Newton throughout | 0.62 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
-//! | 10³ | L-BFGS | ≈ 22 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
+//! | 10³ | L-BFGS | 9.1 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
 //! | 10⁴ | this solver | 4.4 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 6.0 s, 16 iterations) |
+//! | 10⁴ | L-BFGS | 102.5 s | 5000 (limit) | 1509.698222128 | 1507.4462 | not converged, 1.6·10⁻⁴ |
 //! | 10⁵ | this solver | 55 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
+//! | 10⁵ | L-BFGS | 1164 s | 5000 (limit) | 1532.922287883 | 1510.4200 | not converged, 2.0·10⁻³; 132 MB peak |
 //!
 //! Time per iteration 37.5 ms, 0.44 s and 5.0 s: linear in N within 1.35×. The parts at N = 10³
 //! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.67 ms; rollout + stage

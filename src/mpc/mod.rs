@@ -85,26 +85,31 @@
 //! | none | 4797918.4 | 35.51 | 0 | |
 //! | best constant force | 92936.4 | 9.14 | 2.93 | |
 //! | tuned PD on M₀ (u_b = 2.80 N, K_p = −0.319 N/Nm, K_d = −0.031 Ns/Nm) | 54668.8 | 11.56 | 5.00 | |
-//! | MPC, perfect model (condensed solver) | 9256.7 | 12.16 | 5.00 | 6.2 / 17.2 |
-//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14223.4 | 11.76 | 5.00 | 6.4 / 11.4 |
-//! | MPC, perfect model, Riccati solver | 9292.1 | 12.04 | 5.00 | 16.4 / 26.5 |
+//! | MPC, perfect model (condensed solver) | 9307.5 | 12.16 | 5.00 | 4.9 / 17.4 |
+//! | MPC, drag −30 %, current +20 %, forecast without the 5.3 s component and −20 % on the 8 s wave | 14207.2 | 11.76 | 5.00 | 5.2 / 11.6 |
+//! | MPC, perfect model, Riccati solver | 9292.1 | 12.04 | 5.00 | 9.9 / 16.6 |
 //!
-//! MPC's c_sum is 10.0 % of the best constant force's and 16.9 % of the tuned PD law's (wrong
-//! model: 15.3 % and 26.0 %); the two solvers' loops differ by 0.4 % (the cold first plan, 50
-//! iterations, ends closer to its optimum with the condensed solver's secant term, and the
-//! one-iteration re-plans differ in their line searches, open loop against Riccati feedback;
-//! solved to the tolerance every plan gives the same optimum with either, tests/cli_mpc.rs).
+//! MPC's c_sum is 10.0 % of the best constant force's and 17.0 % of the tuned PD law's (wrong
+//! model: 15.3 % and 26.0 %); the two solvers' loops differ by 0.2 % (the one-iteration
+//! re-plans are not converged, and their line searches differ, open loop against Riccati
+//! feedback; solved to the tolerance every plan gives the same optimum with either,
+//! tests/cli_mpc.rs). Such a loop amplifies round-off: making the stage derivatives' Newton
+//! update use real-part matrices (commit 3b183b0, derivative parts changed at the 10⁻¹⁴ level)
+//! moved the condensed loop's c_sum from 9256.7 to 9307.5 (0.5 %) and the 1 s horizon's (both
+//! solvers) by 2–5 %: differences of that size between builds or solvers are not findings.
 //! Its max |M₀| is
 //! higher than the constant force's: the transient when the current switches on at t = 0
 //! saturates every controller, and MPC trades that peak for the sum it minimises. Without the
-//! current (the same sea alone) MPC's c_sum was 1.82 against the PD law's 61262: the current's
+//! current (the same sea alone, an earlier build: 9a0108d) MPC's c_sum was 1.82 against the
+//! PD law's 61262: the current's
 //! steady drag, which the force must cancel (≈ 2.9 N of the 5 N), is what leaves MPC a
 //! residual.
 //!
-//! Re-plan cost: the condensed solver takes 2.6× less time than the Riccati solver on this
-//! loop (mean 6.2 against 16.4 ms; worst 17.2 against 26.5 ms), real-time factor of the
-//! controller 16.1 against 6.1: the worst re-plan fits the 100 ms interval with either, and the
-//! mean ≤ 10 ms holds with the condensed solver. `cargo bench --bench mpc` (one re-plan at
+//! Re-plan cost: the condensed solver takes 2.0× less time than the Riccati solver on this
+//! loop (mean 4.9 against 9.9 ms; worst 17.4 against 16.6 ms), real-time factor of the
+//! controller 20.4 against 10.1: the worst re-plan fits the 100 ms interval with either, and the
+//! mean ≤ 10 ms holds with the condensed solver. Measured on an earlier build (9a0108d),
+//! `cargo bench --bench mpc` (one re-plan at
 //! t = 10 s; the machine's timings vary by about ±20 % from run to run): 1.7 / 4.6 / 5.5 /
 //! 8.5 ms for horizons of 1 / 2 / 3 / 4 s with the condensed solver, 5.0 / 12.1 / 14.9 /
 //! 12.8 ms with the Riccati solver; the 10 s closed loop with the 3 s horizon: mean re-plan
@@ -124,10 +129,10 @@
 //! fastest mode needs h = 0.01 s (the RATTLE Newton iteration diverges).
 //!
 //! Horizon against cost (`cargo run --release -p paper_figures -- --only mpc_horizon`, 60 s):
-//! c_sum 3457848 / 35312 / 9257 / 7590 / 7465 for horizons of 1 / 2 / 3 / 4 / 5 s at mean
-//! re-plan times of 1.7 / 3.5 / 6.6 / 11.8 / 14.7 ms (condensed; Riccati: 3703102 / 38363 /
-//! 9292 / 7592 / 7469 at 6.9 / 11.2 / 15.5 / 18.3 / 24.6 ms) ([`MpcOptions::horizon`]): 1 s is
-//! 37× worse than the best constant force (myopic), 2 s beats the PD law by 1.5×, 3 s by 5.9×.
+//! c_sum 3302921 / 35592 / 9307 / 7592 / 7466 for horizons of 1 / 2 / 3 / 4 / 5 s at mean
+//! re-plan times of 1.4 / 2.5 / 5.2 / 8.4 / 11.0 ms (condensed; Riccati: 3629881 / 38363 /
+//! 9292 / 7592 / 7469 at 4.3 / 6.5 / 9.5 / 12.3 / 15.3 ms) ([`MpcOptions::horizon`]): 1 s is
+//! 36× worse than the best constant force (myopic), 2 s beats the PD law by 1.5×, 3 s by 5.9×.
 //!
 //! # Example
 //! ```

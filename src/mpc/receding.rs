@@ -58,8 +58,8 @@ impl MpcSolver {
 pub struct MpcOptions {
     /// The horizon. Default 3 s. Measured on `mpc_riser` (its current's steady drag bends the
     /// riser slowly, through the drag's long time constant; the `mpc_horizon` figure of
-    /// `paper_figures`): closed-loop c_sum 35312 with 2 s, 9257 with 3 s, 7590 with 4 s, 7465
-    /// with 5 s, at mean re-plan times of 3.5, 6.6, 11.8 and 14.7 ms with the condensed solver
+    /// `paper_figures`): closed-loop c_sum 35592 with 2 s, 9307 with 3 s, 7592 with 4 s, 7466
+    /// with 5 s, at mean re-plan times of 2.5, 5.2, 8.4 and 11.0 ms with the condensed solver
     /// (2-core machine); 2 s is myopic there (below the best constant force only by 2.6×,
     /// 3 s by 10×), beyond 3 s the gain is small.
     pub horizon: Horizon,

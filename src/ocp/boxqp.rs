@@ -88,16 +88,18 @@ mod tests {
     /// gradient pushing outward the component is 0; a step that crosses the bound is cut at it.
     #[test]
     fn projected_component_keeps_small_gradients() {
+        // Every value here is exact in f64: compared bit for bit.
+        let same = |x: f64, y: f64| assert_eq!(x.to_bits(), y.to_bits(), "{x} vs {y}");
         let (lo, hi) = (-2000.0, 2000.0);
-        assert_eq!(1000.0 - (1000.0f64 - 1e-14).clamp(lo, hi), 0.0);
-        assert_eq!(projected_component(1000.0, 1e-14, lo, hi), 1e-14);
-        assert_eq!(projected_component(lo, 3.0, lo, hi), 0.0);
-        assert_eq!(projected_component(hi, -3.0, lo, hi), 0.0);
-        assert_eq!(projected_component(hi, 3.0, lo, hi), 3.0);
-        assert_eq!(projected_component(1999.0, -3.0, lo, hi), -1.0);
-        assert_eq!(projected_component(-1999.5, 1.0, lo, hi), 0.5);
+        same(1000.0 - (1000.0f64 - 1e-14).clamp(lo, hi), 0.0);
+        same(projected_component(1000.0, 1e-14, lo, hi), 1e-14);
+        same(projected_component(lo, 3.0, lo, hi), 0.0);
+        same(projected_component(hi, -3.0, lo, hi), 0.0);
+        same(projected_component(hi, 3.0, lo, hi), 3.0);
+        same(projected_component(1999.0, -3.0, lo, hi), -1.0);
+        same(projected_component(-1999.5, 1.0, lo, hi), 0.5);
         let inf = f64::INFINITY;
-        assert_eq!(projected_component(7.0, -5.0, -inf, inf), -5.0);
+        same(projected_component(7.0, -5.0, -inf, inf), -5.0);
     }
 
     /// Reference: the closed-form minimiser of a convex parabola on an interval.

@@ -23,8 +23,8 @@
 //! objective and limit), the iterations, the first-order optimality reached and the time.
 //!
 //! `--max-iters K` sets every method's iteration limit (default: the Riccati solver's 200,
-//! 5000 for L-BFGS and the trust region; a run that reaches it says *not converged*): the trust region at N = 10⁴ needs hours, and a capped run measures
-//! its cost per iteration.
+//! 5000 for L-BFGS and the trust region; a run that reaches it says *not converged*): it bounds
+//! the time of the slow baselines (the trust region at N = 10⁴ did not finish within an hour).
 //!
 //! `--curvature auto|exact|gauss-newton` chooses the Riccati solver's model
 //! ([`chainbeam::ocp::Curvature`]; default `auto`: Gauss-Newton, then the exact Hessian from

@@ -451,21 +451,21 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     h: Some(h),
                 });
             }
-            if extra_done > 0 && updates == 1 {
-                // The derivative-only update of first-order duals is the implicit function
-                // theorem, Δλ' = R_λ⁻¹ R': R_λ's real part suffices (its derivative multiplies the
-                // converged residual), so the matrix is assembled and factored without
-                // derivative parts and only the right-hand side carries them.
+            // The derivative-only update of first-order duals is the implicit function theorem,
+            // Δλ' = R_λ⁻¹ R': R_λ's real part suffices (its derivative multiplies the converged
+            // residual), so the matrix is assembled and factored without derivative parts and
+            // only the right-hand side carries them.
+            let (q, qn, w): (&[_], &[_], &[_]) = if extra_done > 0 && updates == 1 {
                 let [q_re, qn_re, w_re] = &mut ws.real;
                 real_parts(&state.q, q_re);
                 real_parts(&ws.qnew, qn_re);
                 real_parts(&ws.half.w, w_re);
-                let w = ch.has_drag().then_some(&w_re[..]);
-                ops.assemble_newton((q_re, qn_re), w, h, &mut ws.tri, &mut ws.scal);
+                (q_re, qn_re, w_re)
             } else {
-                let w = ch.has_drag().then_some(&ws.half.w[..]);
-                ops.assemble_newton((&state.q, &ws.qnew), w, h, &mut ws.tri, &mut ws.scal);
-            }
+                (&state.q, &ws.qnew, &ws.half.w)
+            };
+            let w = ch.has_drag().then_some(w);
+            ops.assemble_newton((q, qn), w, h, &mut ws.tri, &mut ws.scal);
             ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
             for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
                 // After convergence, Δ − re(Δ): a real part of exactly 0 keeps the real parts

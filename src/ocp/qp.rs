@@ -130,17 +130,16 @@ impl Solver {
     /// their large barrier curvature). Returns the model value without the proximal term, or
     /// `None` if a pass broke down.
     pub(super) fn solve_qp(&mut self, tol: f64) -> Result<Option<f64>> {
-        self.interior_start()?;
+        let mut q_plain = self.interior_start()?;
         let steps = self.steps;
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let nb = (0..=steps).filter(|&k| self.free[k]).count()
             * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
-        let mut q_plain = self.nominal.cost;
         let mut sigma = 0.1;
         let mut gap0 = 0.0;
         for it in 0..MAX_QP_ITERS {
-            // After the first iteration `riccati.grad` is the update of
-            // [`Solver::next_model_gradient`]; a solution is accepted on a swept gradient only.
+            // After the first iteration `riccati.grad` is the update of [`Solver::advance`];
+            // a solution is accepted on a swept gradient only.
             let mut pg = self.projected_norm();
             if it > 0 && pg <= tol && q_plain < self.nominal.cost {
                 self.sweep(false)?;
@@ -165,7 +164,7 @@ impl Solver {
             {
                 break;
             }
-            let Some((qp, ap, ad)) = self.interior_step(sigma * mean_gap)? else {
+            let Some((qp, ap, ad)) = self.interior_step(sigma * mean_gap, q_plain)? else {
                 return Ok(None);
             };
             q_plain = qp;
@@ -179,12 +178,13 @@ impl Solver {
         Ok(Some(q_plain))
     }
 
-    /// One interior-point iteration with barrier parameter τ: the Riccati pass with the
-    /// barrier terms, the direction, the step lengths to the boundary, the new point (in `dv`,
-    /// `dz`), its model gradient (in `riccati.grad`, not swept) and multipliers. Returns the
-    /// model value without the proximal term and the primal and dual step lengths, or `None`
-    /// if some stage QP was unbounded.
-    fn interior_step(&mut self, tau: f64) -> Result<Option<(f64, f64, f64)>> {
+    /// One interior-point iteration with barrier parameter τ from the current point (model
+    /// value `q_plain` without the proximal term): the Riccati pass with the barrier terms, the
+    /// direction Δ (one linearised rollout), the step lengths to the boundary, and the new
+    /// point with its model gradient and value ([`Solver::advance`]) and multipliers. Returns
+    /// the new model value and the primal and dual step lengths, or `None` if some stage QP
+    /// was unbounded.
+    fn interior_step(&mut self, tau: f64, q_plain: f64) -> Result<Option<(f64, f64, f64)>> {
         self.barrier_terms(tau);
         self.barrier = true;
         let ok = self.sweep(true);
@@ -194,38 +194,57 @@ impl Solver {
         }
         self.linear_rollout(1.0, Arc::Direction);
         let (ap, ad) = self.fraction_to_boundary(tau);
-        let (_, q_plain) = self.linear_rollout(ap, Arc::ClosedLoop);
-        std::mem::swap(&mut self.dv, &mut self.dv_t);
-        std::mem::swap(&mut self.dz, &mut self.dz_t);
-        self.next_model_gradient(ap);
+        let q_next = self.advance(ap, q_plain);
         self.step_multipliers(ad);
-        Ok(Some((q_plain, ap, ad)))
+        Ok(Some((q_next, ap, ad)))
     }
 
-    /// The model gradient at the new iterate δ + αΔ without a costate sweep. The Riccati pass
-    /// at δ left g(δ) + l_b in `riccati.grad` (l_b = −τ/s + τ/s′ the barrier gradient it adds
-    /// to l_u), and its step Δ is the Newton step of the model plus the barrier's quadratic
-    /// l_bΔv + ½ q_bΔv² (q_b = z/s + z′/s′): the gradient of that sum vanishes at δ + Δ, so
-    /// g(δ + Δ) = −l_b − q_bΔv. The model's gradient is affine in the decisions (a quadratic
-    /// model over linear dynamics), hence, with G = g(δ) + l_b the pass's gradient,
-    /// g(δ + αΔ) = (1 − α) g(δ) + α g(δ + Δ) = (G − l_b) − α (G + q_bΔv). One pass over the stages instead of a
-    /// backward sweep through every Jacobian (at N = 10⁴ a sweep streams the 32 MB of A_k and,
-    /// for the exact model, 35 MB of H_k from memory). Exact up to the Riccati solve's
-    /// round-off; [`Solver::solve_qp`] confirms a solution with a swept gradient.
-    fn next_model_gradient(&mut self, alpha: f64) {
+    /// Moves the model point to δ + αΔ (Δ = the Direction rollout's `dv_t − dv`,
+    /// `dz_t − dz`: the state's response is linear in the decisions, and no control meets a
+    /// bound for α within the fraction to the boundary, so this is the closed-loop rollout at
+    /// α without one), with its model gradient and value, and returns that value q(α) without
+    /// the proximal term.
+    ///
+    /// Gradient: the Riccati pass at δ left G = g(δ) + l_b in `riccati.grad` (l_b = −τ/s + τ/s′
+    /// the barrier gradient it adds to l_u), and Δ is the Newton step of the model plus the
+    /// barrier's quadratic l_bΔv + ½ q_bΔv² (q_b = z/s + z′/s′): the gradient of that sum
+    /// vanishes at δ + Δ, so g(δ + Δ) = −l_b − q_bΔv. The model's gradient is affine in the
+    /// decisions (a quadratic model over linear dynamics), hence
+    /// g(δ + αΔ) = (1 − α) g(δ) + α g(δ + Δ) = (G − l_b) − α (G + q_bΔv).
+    /// Value: q is quadratic along Δ with slopes s₀ = (g(δ) − μδv)·Δv at α = 0 and
+    /// s₁ = (g(δ + Δ) − μ(δv + Δv))·Δv at α = 1 (μ the proximal weight, which g includes and q
+    /// does not), so q(α) = q(0) + α s₀ + ½ α² (s₁ − s₀).
+    ///
+    /// No backward sweep and no second rollout through the Jacobians (at N = 10⁴ each streams
+    /// the 32 MB of A_k and, for the exact model, 35 MB of H_k from memory): exact up to the
+    /// Riccati solve's round-off; [`Solver::solve_qp`] confirms a solution with a swept
+    /// gradient.
+    fn advance(&mut self, alpha: f64, q0: f64) -> f64 {
+        let (mut s0, mut s1) = (0.0, 0.0);
         for k in 0..=self.steps {
             if self.free[k] {
-                let g = self.riccati.grad[k];
+                let (g, dv, step) = (self.riccati.grad[k], self.dv[k], self.dir[k]);
                 let (lb, qb) = (self.ip_lu[k], self.ip_quu[k]);
-                self.riccati.grad[k] = (g - lb) - alpha * (g + qb * self.dir[k]);
+                let g1 = -lb - qb * step;
+                s0 += (g - lb - self.prox * dv) * step;
+                s1 += (g1 - self.prox * (dv + step)) * step;
+                self.riccati.grad[k] = (g - lb) - alpha * (g + qb * step);
             }
         }
+        for (x, t) in self.dv.iter_mut().zip(&self.dv_t) {
+            *x += alpha * (t - *x);
+        }
+        for (x, t) in self.dz.iter_mut().zip(&self.dz_t) {
+            *x += alpha * (t - *x);
+        }
+        q0 + alpha * s0 + 0.5 * alpha * alpha * (s1 - s0)
     }
 
     /// The interior point's start: the nominal moved 1 % of the box width inside (strictly
     /// interior), its linearised rollout, the model gradient there (one Riccati sweep) and the
-    /// bound multipliers z = z′ = max |g| (0 for an infinite bound).
-    fn interior_start(&mut self) -> Result<()> {
+    /// bound multipliers z = z′ = max |g| (0 for an infinite bound). Returns the model value
+    /// there without the proximal term.
+    fn interior_start(&mut self) -> Result<f64> {
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let kappa = 1e-2 * width;
@@ -249,7 +268,7 @@ impl Solver {
         }
         self.dv.fill(0.0);
         self.dz.fill(0.0);
-        self.linear_rollout(1.0, Arc::Projected);
+        let (_, q_plain) = self.linear_rollout(1.0, Arc::Projected);
         std::mem::swap(&mut self.dv, &mut self.dv_t);
         std::mem::swap(&mut self.dz, &mut self.dz_t);
         self.active.fill(false);
@@ -264,7 +283,7 @@ impl Solver {
             self.zl[k] = if lo.is_finite() { gscale } else { 0.0 };
             self.zh[k] = if hi.is_finite() { gscale } else { 0.0 };
         }
-        Ok(())
+        Ok(q_plain)
     }
 
     /// The complementarity gap Σ (v − lo) z + (hi − v) z′ over the free stages.
@@ -400,16 +419,18 @@ impl Solver {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{OcpOptions, Solver};
+    use super::super::{Arc, OcpOptions, Solver};
     use crate::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 
-    /// The gradient update of [`Solver::next_model_gradient`] against the costate sweep at the
-    /// same point (the reference: the discrete adjoint of the linearised model), over the
-    /// first interior-point iterations of a Gauss-Newton QP on the long-horizon scene shortened
-    /// to N = 80 with |u| ≤ 0.5 N, where the first QP's step reaches the bounds. Agreement to
-    /// round-off of the Riccati solve (1e-10 of the largest entry).
+    /// The new iterate of [`Solver::advance`] against the costate sweep and the linearised
+    /// rollout at the same point (the references: the discrete adjoint of the linearised model
+    /// and the model's value summed stage by stage), over the first interior-point iterations
+    /// of a Gauss-Newton QP on the long-horizon scene shortened to N = 80 with |u| ≤ 0.5 N,
+    /// where the QP's steps reach the bounds (some shortened by the fraction to the boundary).
+    /// Agreement to the round-off of the Riccati solve: 10⁻¹⁰ of the gradient's largest entry,
+    /// 10⁻¹² of the value.
     #[test]
-    fn updated_model_gradient_equals_the_swept_one() {
+    fn interior_step_gradient_and_value_equal_the_swept_ones() {
         let steps = 80;
         let mut scene = catalogue::long_horizon();
         scene.time.steps = steps;
@@ -424,11 +445,13 @@ mod tests {
         s.set_point(&vec![0.0; steps + 1]).unwrap();
         s.costate().unwrap();
         s.prox = 1e-6 * s.quu_scale;
-        s.interior_start().unwrap();
-        let mut sigma = 0.1;
+        let mut q = s.interior_start().unwrap();
+        let (mut sigma, mut shortened) = (0.1, 0);
         for _ in 0..6 {
             let tau = sigma * s.complementarity() / (2 * (steps + 1)) as f64;
-            let (_, ap, ad) = s.interior_step(tau).unwrap().expect("bounded QP");
+            let (q_next, ap, ad) = s.interior_step(tau, q).unwrap().expect("bounded QP");
+            q = q_next;
+            shortened += usize::from(ap < 1.0);
             sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
             let updated = s.riccati.grad.clone();
             s.sweep(false).unwrap();
@@ -441,7 +464,13 @@ mod tests {
                 scale > 0.0 && err <= 1e-10 * scale,
                 "error {err:e}, scale {scale:e}"
             );
+            let (_, q_rollout) = s.linear_rollout(0.0, Arc::Projected);
+            assert!(
+                (q - q_rollout).abs() <= 1e-12 * q_rollout.abs(),
+                "{q} against {q_rollout}"
+            );
         }
+        assert!(shortened > 0, "no step was shortened: α < 1 untested");
         let on_bound = (0..=steps)
             .filter(|&k| (s.nominal.u[k] + s.dv[k]).abs() > 0.45)
             .count();

@@ -229,6 +229,20 @@ enum Arc {
     Projected,
 }
 
+/// How many stages ahead of the current one the passes over the stored Jacobians prefetch
+/// ([`riccati::prefetch`]).
+const PREFETCH_AHEAD: usize = 4;
+
+/// Prefetches A_k (in store slot `i`) and, when given, H_k of stage `k`.
+fn prefetch_stage(a_store: &[f64], h_store: Option<&[f64]>, nxi: usize, (i, k): (usize, usize)) {
+    let per = nxi * nxi;
+    riccati::prefetch(&a_store[i * per..(i + 1) * per]);
+    if let Some(h) = h_store {
+        let nd = (nxi + 1) * (nxi + 1);
+        riccati::prefetch(&h[k * nd..(k + 1) * nd]);
+    }
+}
+
 /// Interior-point iterations of one QP solve.
 const MAX_QP_ITERS: usize = 40;
 
@@ -632,8 +646,13 @@ impl Solver {
         while top > 0 {
             let bottom = top.saturating_sub(self.block);
             self.jacobians(bottom, top)?;
+            let h_store = self.exact.then_some(&self.h_store[..]);
             for k in (bottom..top).rev() {
                 let i = k - bottom;
+                if i >= PREFETCH_AHEAD {
+                    let ahead = (i - PREFETCH_AHEAD, k - PREFETCH_AHEAD);
+                    prefetch_stage(&self.a_store, h_store, nxi, ahead);
+                }
                 let mut inp = self.stage_input(k, true);
                 inp.a = Some(&self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi]);
                 inp.b = Some(&self.b_store[i * nxi..(i + 1) * nxi]);

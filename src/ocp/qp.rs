@@ -65,6 +65,11 @@ impl Solver {
             if self.free[k] {
                 prox += 0.5 * self.prox * self.dv_t[k] * self.dv_t[k];
             }
+            if k + PREFETCH_AHEAD < steps {
+                let h_store = self.exact.then_some(&self.h_store[..]);
+                let ahead = k + PREFETCH_AHEAD;
+                prefetch_stage(&self.a_store, h_store, nxi, (ahead, ahead));
+            }
             if k < steps {
                 let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
                 let b = &self.b_store[k * nxi..(k + 1) * nxi];

@@ -60,6 +60,32 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[2]) + (acc[1] + acc[3]) + tail
 }
 
+/// Asks the CPU to bring `x` into its level-2 cache ahead of use: a hint, without effect on
+/// any result. The passes over the stages read each stage's A_k and H_k (3.2 and 3.5 kB at
+/// n = 10) once; beyond the last-level cache (N ≥ 10⁴: 32 MB of A_k) every stage began with
+/// misses that the hardware prefetcher, which follows the ascending reads inside a block but
+/// not the jump to the next stage's block, did not hide. Prefetching four stages ahead
+/// ([`super::PREFETCH_AHEAD`]): `cargo bench --bench ocp -- ocp_parts/riccati_pass/10000`
+/// 19.6–20.0 ms against 25.8–26.2 ms without (one stage ahead into L1: 22.3–23.1 ms), the
+/// long-horizon solve at N = 10⁴ and 10⁵ 0.89 of the time (farm-bench wall ratios), N = 10³
+/// unchanged. No-op off x86-64.
+#[inline(always)]
+pub(crate) fn prefetch(x: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
+        // One address per 64-byte line, and the last element (a slice need not start on a
+        // line).
+        for line in x.chunks(8).chain(x.last().map(std::slice::from_ref)) {
+            // SAFETY: a prefetch is a hint without architectural effect (it cannot fault or
+            // change memory), and the address is that of an element of a live slice.
+            unsafe { _mm_prefetch::<_MM_HINT_T1>(line.as_ptr().cast()) }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 /// The cost weights of the stage cost.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageCost {

@@ -101,7 +101,12 @@
 //!   12 iterations instead of 10 (farm-bench wall ratio 1.04), 18 instead of 12 with
 //!   ρ = 0.001 (ratio 1.29; away from the optimum the exact model's QP is not convex and the
 //!   affine step, τ = 0, aims badly), 16 instead of 18 at N = 3000, |u| ≤ 5 → 4 (ratio 0.70).
-//!   Not a clear gain; the plain path-following (σ = 0.1, 0.01 after long steps) stays. A
+//!   Not a clear gain; the plain path-following (σ = 0.1, 0.01 after long steps) stays. So
+//!   did it against the step-length form of Mehrotra's centering rule, σ = (1 − α)³ in
+//!   [0.001, 0.1] (α the shorter of the primal and dual steps): 11 % fewer Riccati passes and
+//!   10 % less time summed over 14 variants of the long-horizon scene (`--umax`, `--rho`,
+//!   `--rate`, `--steps`, `--pieces`, `--curvature`), N = 10³ 38 passes instead of 48, but
+//!   N = 10⁴ one iteration more (3.39 s against 2.98 s) and N = 10⁵ no faster. A
 //!   hand-written f64 tangent step instead of the dual numbers would save little: the dual
 //!   step costs 1.4 f64 steps per direction (11 per chunk of 8), near the floor of one
 //!   linearised step per direction that any forward-mode Jacobian of 2n + 1 directions pays.
@@ -119,35 +124,41 @@
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.375 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 0.62 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.29–0.32 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 0.58–0.61 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
 //! | 10³ | L-BFGS | 9.1 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 4.4 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 6.0 s, 16 iterations) |
+//! | 10⁴ | this solver | 2.82–2.98 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 4.3 s, 16 iterations) |
 //! | 10⁴ | L-BFGS | 102.5 s | 5000 (limit) | 1509.698222128 | 1507.4462 | not converged, 1.6·10⁻⁴ |
-//! | 10⁵ | this solver | 55 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
+//! | 10⁵ | this solver | 34.6 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
 //! | 10⁵ | L-BFGS | 1164 s | 5000 (limit) | 1532.922287883 | 1510.4200 | not converged, 2.0·10⁻³; 132 MB peak |
 //!
-//! Time per iteration 37.5 ms, 0.44 s and 5.0 s: linear in N within 1.35×. The parts at N = 10³
-//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.67 ms; rollout + stage
-//! Jacobians + costate sweep 15.5 ms (23 simulations, two threads); one Riccati pass 1.9 ms
-//! (3 simulations); the exact model's extra — costate sweep, A_k, B_k and H_k of every stage
-//! (a forward and a reverse dual step per chunk) and a Riccati pass with them — 35 ms (53
-//! simulations). A Gauss-Newton iteration thus costs about 30–45 simulations (2–7 Riccati
-//! passes, each with a costate sweep and linearised rollouts: the warm face, or the interior
-//! point when the active set changes), an exact one about 55–100 (up to 11 interior-point
-//! passes while the active set settles, then 1). The targets of 0.3 s at N = 10³, 3 s
-//! at 10⁴, 30 s at 10⁵ and ≤ 20 simulations per iteration are not met; the iteration count
-//! (≤ 30) and the linear scaling are. The yardstick is cheap (0.67 µs per step at n = 10): the
-//! Jacobians alone are 2n + 1 = 21 linearised steps per stage, about 10 simulations on two
-//! threads at the floor of forward mode, before any QP pass (≈ 3 simulations each).
+//! The times are those `long_horizon` prints (the solve alone; the machine's speed drifts by
+//! 10–20 % over minutes: `cargo bench --bench ocp -- ocp_solve/riccati/1000` gave medians of
+//! 312–319 ms in the same hour as the example's 0.289–0.318 s). Time per iteration 31 ms,
+//! 0.29 s and 3.1 s: linear in N within 1.02× (the passes over the stored Jacobians prefetch
+//! them; without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts at N = 10³
+//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.66 ms; rollout + stage
+//! Jacobians + costate sweep 12.2 ms (18.5 simulations, two threads); one Riccati pass
+//! 1.76 ms (2.7 simulations; 19.96 ms at N = 10⁴, 3.1 simulations of 6.49 ms); the exact
+//! model's extra — costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse
+//! dual step per chunk) and a Riccati pass with them — 30 ms (45 simulations). A Gauss-Newton
+//! iteration thus costs about 25–40 simulations (2–7 interior-point iterations, each a
+//! Riccati pass and a linearised rollout, or one pass on the warm face), an exact one about
+//! 50–90 (up to 11 interior-point iterations while the active set settles, then 1); the
+//! default run averages 47. Of the targets, 3 s at N = 10⁴, ≤ 30 iterations and the
+//! linear scaling are met; 0.3 s at N = 10³ only when the machine is in its faster phase;
+//! 30 s at 10⁵ (34.6 s) and ≤ 20 simulations per iteration are not. The yardstick is cheap
+//! (0.66 µs per step at n = 10): the Jacobians alone are 2n + 1 = 21 linearised steps per
+//! stage, about 10 simulations on two threads at the floor of forward mode, before any QP
+//! pass (≈ 3 simulations each).
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
 //! 3–9, lower on row 2 (30.09 against 32.89), and both at J ≈ 0 on row 10 (4·10⁻¹⁴ against
 //! 10⁻¹⁸); L-BFGS finds lower minima on rows 3 (10.657 against 10.673, which this solver
 //! reached too before the 1/α rule of μ changed its path) and 6 (1.5·10⁻⁶ relative).
-//! 32–42 ms for the ten rows through `minimize` (four criterion runs, median 36.5 ms; trust
+//! 32–42 ms for the ten rows through `minimize` (five criterion runs, the latest 32.7 ms; trust
 //! region 100 ms, L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this
 //! solver higher objectives on rows 2 and 8 and a lower one on row 1, 22.93;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).

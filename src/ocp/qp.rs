@@ -12,17 +12,37 @@ impl Solver {
     /// A closed-loop rollout of the *linearised* dynamics from the model point δ with the gains
     /// of the last Riccati pass and step length α: Δv_k = clamp(α k_k + K_k Δz_k) (clamped to
     /// the box about the model point), Δz_{k+1} = Ã_k Δz_k + B̃_k Δv_k, written to `dv_t`,
-    /// `dz_t` as δ + Δ. Returns the Gauss-Newton model of J at δ + Δ with and without the
-    /// proximal term: Σ ℓ_k(M₀ + ∂M₀/∂φ₁ δφ₁, u + δu, w + δw) (+ ½ μ Σ δv²). Needs every stage
-    /// Jacobian in memory.
-    pub(super) fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> (f64, f64) {
+    /// `dz_t` as δ + Δ. Returns the model of J at δ + Δ without the proximal term:
+    /// Σ ℓ_k(M₀ + ∂M₀/∂φ₁ δφ₁, u + δu, w + δw) (+ the second-order terms of the exact model).
+    /// Needs every stage Jacobian in memory. For the direction alone see
+    /// [`Solver::direction_rollout`].
+    pub(super) fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> f64 {
+        debug_assert!(
+            mode != Arc::Direction,
+            "no value for a direction: direction_rollout"
+        );
+        self.linearised(alpha, mode)
+    }
+
+    /// The interior point's direction: the rollout of [`Solver::linear_rollout`] in
+    /// [`Arc::Direction`] mode at α = 1, without the model value (its caller gets the value
+    /// from the Newton step, [`Solver::advance`]; with the exact model the value would read
+    /// every H_k once more).
+    pub(super) fn direction_rollout(&mut self) {
+        self.linearised(1.0, Arc::Direction);
+    }
+
+    /// The rollout of [`Solver::linear_rollout`], with the model value except for
+    /// [`Arc::Direction`] (0).
+    fn linearised(&mut self, alpha: f64, mode: Arc) -> f64 {
+        let value = mode != Arc::Direction;
         let (nz, nxi, steps) = (self.nz, self.nxi, self.steps);
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let nom = &self.nominal;
         let scale = self.model.moment_scale;
         let (dz, next) = (&mut self.lin_dz, &mut self.lin_next);
         dz.fill(0.0);
-        let (mut q, mut prox) = (0.0, 0.0);
+        let mut q = 0.0;
         for k in 0..=steps {
             let u0 = nom.u[k] + self.dv[k];
             let d = if self.free[k] {
@@ -50,20 +70,19 @@ impl Solver {
             zt.iter_mut()
                 .zip(z0.iter().zip(dz.iter()))
                 .for_each(|(t, (a, b))| *t = a + b);
-            let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
-            let u = nom.u[k] + self.dv_t[k];
-            let w = if k > 0 {
-                nom.u[k - 1] + self.dv_t[k - 1]
-            } else {
-                0.0
-            };
-            q += self.cost.value(k, m, u, w);
-            if self.exact {
-                let so = SecondOrder::of(true, (steps, nz), (&self.h_store, &self.curv, &[]));
-                q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
-            }
-            if self.free[k] {
-                prox += 0.5 * self.prox * self.dv_t[k] * self.dv_t[k];
+            if value {
+                let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
+                let u = nom.u[k] + self.dv_t[k];
+                let w = if k > 0 {
+                    nom.u[k - 1] + self.dv_t[k - 1]
+                } else {
+                    0.0
+                };
+                q += self.cost.value(k, m, u, w);
+                if self.exact {
+                    let so = SecondOrder::of(true, (steps, nz), (&self.h_store, &self.curv, &[]));
+                    q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
+                }
             }
             if k + PREFETCH_AHEAD < steps {
                 let h_store = self.exact.then_some(&self.h_store[..]);
@@ -85,7 +104,7 @@ impl Solver {
                 std::mem::swap(dz, next);
             }
         }
-        (q + prox, q)
+        q
     }
 
     /// The QP's solution on a guessed face: the controls of the nominal that sit exactly on a
@@ -111,7 +130,7 @@ impl Solver {
         if !any || !self.sweep(true)? {
             return Ok(None);
         }
-        let (_, q_plain) = self.linear_rollout(1.0, Arc::ClosedLoop);
+        let q_plain = self.linear_rollout(1.0, Arc::ClosedLoop);
         std::mem::swap(&mut self.dv, &mut self.dv_t);
         std::mem::swap(&mut self.dz, &mut self.dz_t);
         // The model gradient at the new point (the gains of the Riccati pass are kept).
@@ -197,7 +216,7 @@ impl Solver {
         if !ok? {
             return Ok(None);
         }
-        self.linear_rollout(1.0, Arc::Direction);
+        self.direction_rollout();
         let (ap, ad) = self.fraction_to_boundary(tau);
         let q_next = self.advance(ap, q_plain);
         self.step_multipliers(ad);
@@ -273,7 +292,7 @@ impl Solver {
         }
         self.dv.fill(0.0);
         self.dz.fill(0.0);
-        let (_, q_plain) = self.linear_rollout(1.0, Arc::Projected);
+        let q_plain = self.linear_rollout(1.0, Arc::Projected);
         std::mem::swap(&mut self.dv, &mut self.dv_t);
         std::mem::swap(&mut self.dz, &mut self.dz_t);
         self.active.fill(false);
@@ -469,7 +488,7 @@ mod tests {
                 scale > 0.0 && err <= 1e-10 * scale,
                 "error {err:e}, scale {scale:e}"
             );
-            let (_, q_rollout) = s.linear_rollout(0.0, Arc::Projected);
+            let q_rollout = s.linear_rollout(0.0, Arc::Projected);
             assert!(
                 (q - q_rollout).abs() <= 1e-12 * q_rollout.abs(),
                 "{q} against {q_rollout}"

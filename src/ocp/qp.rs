@@ -85,7 +85,8 @@ impl Solver {
                 }
             }
             if k + PREFETCH_AHEAD < steps {
-                let h_store = self.exact.then_some(&self.h_store[..]);
+                // H_k is read only for the value.
+                let h_store = (value && self.exact).then_some(&self.h_store[..]);
                 let ahead = k + PREFETCH_AHEAD;
                 prefetch_stage(&self.a_store, h_store, nxi, (ahead, ahead));
             }

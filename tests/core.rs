@@ -485,6 +485,46 @@ fn spring_function_is_exact_at_zero_angle() {
     assert!(!spring_s(Dual64::new(1.0 + 1e-16, 1.0)).eps.is_nan());
 }
 
+/// For first-order duals s(x) is lifted from its f64 value and slope (`spring_s_ds`); the
+/// reference is the generic evaluation (the series by Horner in dual arithmetic, or
+/// arccos(x)/√(1 − x²)), which second-order duals still take: their first derivative must equal
+/// the lifted one to round-off, on both branches and on both sides of the switch, for the scalar
+/// dual and the vector dual of the stage Jacobians alike, with the real part bit for bit f64's.
+#[test]
+fn spring_function_lift_equals_the_generic_dual_evaluation() {
+    use chainbeam::model::spring_s;
+    use num_dual::{Dual2_64, DualSVec64};
+    for x in [
+        1.0,
+        0.999,
+        0.99,
+        0.98 + 1e-9,
+        0.98 - 1e-9,
+        0.95,
+        0.7,
+        0.0,
+        -0.6,
+    ] {
+        let generic = spring_s(Dual2_64::new(x, 1.0, 0.0));
+        let lifted = spring_s(Dual64::new(x, 1.0));
+        assert_eq!(lifted.re.to_bits(), spring_s(x).to_bits(), "x = {x}");
+        let rel = (lifted.eps - generic.v1).abs() / generic.v1.abs();
+        assert!(
+            rel <= 1e-13,
+            "x = {x}: {} vs {} ({rel:.1e})",
+            lifted.eps,
+            generic.v1
+        );
+        let seeds = nalgebra::SVector::<f64, 2>::new(1.0, -2.5);
+        let vec = spring_s(DualSVec64::new(x, num_dual::Derivative::some(seeds)));
+        let eps = vec
+            .eps
+            .unwrap_generic(nalgebra::Const::<2>, nalgebra::Const::<1>);
+        assert!((eps[0] - lifted.eps).abs() <= 1e-15 * lifted.eps.abs());
+        assert!((eps[1] + 2.5 * lifted.eps).abs() <= 1e-15 * lifted.eps.abs());
+    }
+}
+
 /// A folded configuration (θ → π) is a typed error, not NaN.
 #[test]
 fn folding_is_a_typed_error() {

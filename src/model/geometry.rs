@@ -33,7 +33,7 @@ pub(crate) fn e2<D: Scalar, const DIM: usize>() -> [D; DIM] {
 }
 
 /// Dot product.
-#[inline]
+#[inline(always)]
 pub(crate) fn dot<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DIM]) -> D {
     let mut s = a[0] * b[0];
     for i in 1..DIM {

@@ -641,7 +641,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The tridiagonal entries of M̄⁻¹ in row i (0-based): `(diag_i, off_i)` with
     /// off_i = M̄⁻¹_{i,i+1} = −1/(lᵢ l_{i+1} mᵢ) and M̄⁻¹_{ii} = (1/lᵢ²)(1/mᵢ + 1/m_{i−1}) (no
     /// m₀ term for the first pendulum). From M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn minv_entries(&self, i: usize) -> (D, D) {
         let li = self.inv_lengths[i];
         let mi = self.inv_masses[i];

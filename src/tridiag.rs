@@ -43,6 +43,7 @@ pub struct BorderedTridiag<D> {
     /// Whether the border is present.
     pub bordered: bool,
     cp: Vec<D>,
+    /// Reciprocals of the pivots.
     piv: Vec<D>,
     x2: Vec<D>,
 }
@@ -92,9 +93,11 @@ impl<D: Scalar> BorderedTridiag<D> {
                     pivot: m.re(),
                 });
             }
-            self.piv[i] = m;
+            // The pivot's reciprocal, stored for the sweeps (one reciprocal per pivot).
+            let inv = m.recip();
+            self.piv[i] = inv;
             self.cp[i] = if i + 1 < n {
-                sup.unwrap_or(D::zero()) * m.recip()
+                sup.unwrap_or(D::zero()) * inv
             } else {
                 D::zero()
             };
@@ -115,7 +118,7 @@ impl<D: Scalar> BorderedTridiag<D> {
                 self.lower[i]
             };
             let prev = if i > 0 { sub * x[i - 1] } else { D::zero() };
-            x[i] = (x[i] - prev) * self.piv[i].recip();
+            x[i] = (x[i] - prev) * self.piv[i];
         }
         for i in (0..n.saturating_sub(1)).rev() {
             let next = x[i + 1];

@@ -8,8 +8,17 @@
 //!
 //! Divisions are written as multiplications by reciprocals: num-dual divides that way, so the
 //! `f64` and dual-number runs then agree bit for bit in their real parts.
+//!
+//! **First-order dual numbers** (`D::NDERIV == 1`: the stage Jacobians and the forward-over-
+//! reverse Hessians of [`crate::ocp`]) are solved by the implicit function theorem instead of
+//! factorising in dual arithmetic: with T = T₀ + εT′ and r = r₀ + εr′, the real solution
+//! y₀ = T₀⁻¹r₀ comes from the `f64` factorisation of the real parts (the same arithmetic as the
+//! `f64` run, so the real parts stay bit for bit), and the derivative parts from one more solve
+//! with the same real factors, y′ = T₀⁻¹(r′ − T′y₀) (the residual r − T y₀ carries them). The
+//! dual-arithmetic factorisation's derivative parts are the same quantities to round-off.
 
 use crate::model::Scalar;
+use std::ops::Mul;
 
 /// A zero pivot met while factorising.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,27 +51,203 @@ pub struct BorderedTridiag<D> {
     pub corner: D,
     /// Whether the border is present.
     pub bordered: bool,
-    cp: Vec<D>,
-    /// Reciprocals of the pivots.
-    piv: Vec<D>,
-    x2: Vec<D>,
+    factors: Factors<D>,
+    /// The real parts' matrix, factors and solution (first-order duals only).
+    real: Box<RealSolve>,
+}
+
+/// A Thomas factorisation of the tridiagonal part (or of its transpose) and the border's Schur
+/// complement: cp the eliminated super-diagonal, piv the pivots' reciprocals, x2 = T⁻¹b (or
+/// T⁻ᵀc) and the Schur complement's reciprocal.
+#[derive(Clone, Debug)]
+struct Factors<M> {
+    cp: Vec<M>,
+    piv: Vec<M>,
+    x2: Vec<M>,
+    schur_inv: M,
+}
+
+/// The f64 copy of a dual matrix's real parts, its factors and the real solution y₀.
+#[derive(Clone, Debug)]
+struct RealSolve {
+    lower: Vec<f64>,
+    diag: Vec<f64>,
+    upper: Vec<f64>,
+    col: Vec<f64>,
+    row: Vec<f64>,
+    factors: Factors<f64>,
+    y: Vec<f64>,
+}
+
+/// The matrix entries the factorisation reads, in the orientation solved: (sub, sup) of row i
+/// and the border (column, row).
+#[derive(Clone, Copy)]
+struct Entries<'a, M> {
+    lower: &'a [M],
+    diag: &'a [M],
+    upper: &'a [M],
+    col: &'a [M],
+    row: &'a [M],
+    corner: M,
+    bordered: bool,
+    transpose: bool,
+}
+
+impl<M: Scalar> Entries<'_, M> {
+    /// T_{i,i−1} of the solved orientation (0 for i = 0).
+    #[inline]
+    fn sub(&self, i: usize) -> M {
+        if self.transpose {
+            if i > 0 {
+                self.upper[i - 1]
+            } else {
+                M::zero()
+            }
+        } else {
+            self.lower[i]
+        }
+    }
+
+    /// T_{i,i+1} of the solved orientation (`None` past the end).
+    #[inline]
+    fn sup(&self, i: usize) -> Option<M> {
+        if self.transpose {
+            self.lower.get(i + 1).copied()
+        } else {
+            self.upper.get(i).copied()
+        }
+    }
+
+    /// The border (column, row) of the solved orientation (Aᵀ has column c and row b).
+    fn border(&self) -> (&[M], &[M]) {
+        if self.transpose {
+            (self.row, self.col)
+        } else {
+            (self.col, self.row)
+        }
+    }
+}
+
+impl<M: Scalar> Factors<M> {
+    fn new(n: usize) -> Self {
+        let z = vec![M::zero(); n];
+        Factors {
+            cp: z.clone(),
+            piv: z.clone(),
+            x2: z,
+            schur_inv: M::zero(),
+        }
+    }
+
+    /// Factorises `a`: the tridiagonal part, then (bordered) x2 and the Schur complement.
+    fn factor(&mut self, a: &Entries<'_, M>) -> Result<(), ZeroPivot> {
+        let n = a.diag.len();
+        for i in 0..n {
+            let m = if i > 0 {
+                a.diag[i] - a.sub(i) * self.cp[i - 1]
+            } else {
+                a.diag[i]
+            };
+            check_pivot(i, m)?;
+            // The pivot's reciprocal, stored for the sweeps (one reciprocal per pivot).
+            let inv = m.recip();
+            self.piv[i] = inv;
+            self.cp[i] = if i + 1 < n {
+                a.sup(i).unwrap_or(M::zero()) * inv
+            } else {
+                M::zero()
+            };
+        }
+        if a.bordered {
+            let (col, row) = a.border();
+            let mut x2 = std::mem::take(&mut self.x2);
+            x2.copy_from_slice(col);
+            self.sweep(a, &mut x2);
+            let mut cx2 = M::zero();
+            for i in 0..n {
+                cx2 += row[i] * x2[i];
+            }
+            self.x2 = x2;
+            let schur = a.corner - cx2;
+            check_pivot(n, schur)?;
+            self.schur_inv = schur.recip();
+        }
+        Ok(())
+    }
+
+    /// Forward and back substitution of the tridiagonal part on `x` (length n).
+    fn sweep<R: Scalar + Mul<M, Output = R>>(&self, a: &Entries<'_, M>, x: &mut [R]) {
+        let n = a.diag.len();
+        for i in 0..n {
+            let prev = if i > 0 {
+                x[i - 1] * a.sub(i)
+            } else {
+                R::zero()
+            };
+            x[i] = (x[i] - prev) * self.piv[i];
+        }
+        for i in (0..n.saturating_sub(1)).rev() {
+            let next = x[i + 1];
+            x[i] -= next * self.cp[i];
+        }
+    }
+
+    /// Solves with the factors in place (`rhs.len()` = n, or n + 1 when bordered).
+    fn apply<R: Scalar + Mul<M, Output = R>>(&self, a: &Entries<'_, M>, rhs: &mut [R]) {
+        let n = a.diag.len();
+        self.sweep(a, &mut rhs[..n]);
+        if a.bordered {
+            let (_, row) = a.border();
+            let mut cx1 = R::zero();
+            for i in 0..n {
+                cx1 += rhs[i] * row[i];
+            }
+            let y = (rhs[n] - cx1) * self.schur_inv;
+            for i in 0..n {
+                rhs[i] -= y * self.x2[i];
+            }
+            rhs[n] = y;
+        }
+    }
+}
+
+/// A zero or non-finite pivot is an error (its index: n for the Schur complement).
+#[inline]
+fn check_pivot<M: Scalar>(index: usize, m: M) -> Result<(), ZeroPivot> {
+    if m.re() == 0.0 || !m.re().is_finite() {
+        return Err(ZeroPivot {
+            index,
+            pivot: m.re(),
+        });
+    }
+    Ok(())
 }
 
 impl<D: Scalar> BorderedTridiag<D> {
     /// Storage for an n×n tridiagonal part, with or without the border.
     pub fn new(n: usize, bordered: bool) -> Self {
         let z = vec![D::zero(); n];
+        // The real mirror is needed by first-order duals only (empty otherwise).
+        let m = if D::NDERIV == 1 { n } else { 0 };
+        let r = vec![0.0; m];
         BorderedTridiag {
             lower: z.clone(),
             diag: z.clone(),
             upper: z.clone(),
             col: z.clone(),
-            row: z.clone(),
+            row: z,
             corner: D::zero(),
             bordered,
-            cp: z.clone(),
-            piv: z.clone(),
-            x2: z,
+            factors: Factors::new(n),
+            real: Box::new(RealSolve {
+                lower: r.clone(),
+                diag: r.clone(),
+                upper: r.clone(),
+                col: r.clone(),
+                row: r,
+                factors: Factors::new(m),
+                y: vec![0.0; m + usize::from(bordered)],
+            }),
         }
     }
 
@@ -71,59 +256,19 @@ impl<D: Scalar> BorderedTridiag<D> {
         self.diag.len()
     }
 
-    fn factor(&mut self, transpose: bool) -> Result<(), ZeroPivot> {
-        let n = self.n();
-        for i in 0..n {
-            let (sub, sup) = if transpose {
-                (
-                    if i > 0 { self.upper[i - 1] } else { D::zero() },
-                    self.lower.get(i + 1).copied(),
-                )
-            } else {
-                (self.lower[i], self.upper.get(i).copied())
-            };
-            let m = if i > 0 {
-                self.diag[i] - sub * self.cp[i - 1]
-            } else {
-                self.diag[i]
-            };
-            if m.re() == 0.0 || !m.re().is_finite() {
-                return Err(ZeroPivot {
-                    index: i,
-                    pivot: m.re(),
-                });
-            }
-            // The pivot's reciprocal, stored for the sweeps (one reciprocal per pivot).
-            let inv = m.recip();
-            self.piv[i] = inv;
-            self.cp[i] = if i + 1 < n {
-                sup.unwrap_or(D::zero()) * inv
-            } else {
-                D::zero()
-            };
-        }
-        Ok(())
-    }
-
-    fn sweep(&self, transpose: bool, x: &mut [D]) {
-        let n = self.n();
-        for i in 0..n {
-            let sub = if transpose {
-                if i > 0 {
-                    self.upper[i - 1]
-                } else {
-                    D::zero()
-                }
-            } else {
-                self.lower[i]
-            };
-            let prev = if i > 0 { sub * x[i - 1] } else { D::zero() };
-            x[i] = (x[i] - prev) * self.piv[i];
-        }
-        for i in (0..n.saturating_sub(1)).rev() {
-            let next = x[i + 1];
-            x[i] -= self.cp[i] * next;
-        }
+    /// The solved orientation's entries, and the factors' storage (disjoint borrows).
+    fn parts(&mut self, transpose: bool) -> (Entries<'_, D>, &mut Factors<D>, &mut RealSolve) {
+        let a = Entries {
+            lower: &self.lower,
+            diag: &self.diag,
+            upper: &self.upper,
+            col: &self.col,
+            row: &self.row,
+            corner: self.corner,
+            bordered: self.bordered,
+            transpose,
+        };
+        (a, &mut self.factors, &mut self.real)
     }
 
     /// Solves A x = rhs in place (`rhs.len()` = n, or n + 1 when bordered).
@@ -137,36 +282,194 @@ impl<D: Scalar> BorderedTridiag<D> {
     }
 
     fn solve_impl(&mut self, rhs: &mut [D], transpose: bool) -> Result<(), ZeroPivot> {
-        let n = self.n();
-        self.factor(transpose)?;
-        self.sweep(transpose, &mut rhs[..n]);
-        if self.bordered {
-            // The border of Aᵀ is (column c, row b).
-            let mut x2 = std::mem::take(&mut self.x2);
-            x2.copy_from_slice(if transpose { &self.row } else { &self.col });
-            self.sweep(transpose, &mut x2);
-            let crow = if transpose { &self.col } else { &self.row };
-            let mut cx1 = D::zero();
-            let mut cx2 = D::zero();
-            for i in 0..n {
-                cx1 += crow[i] * rhs[i];
-                cx2 += crow[i] * x2[i];
-            }
-            let schur = self.corner - cx2;
-            if schur.re() == 0.0 || !schur.re().is_finite() {
-                self.x2 = x2;
-                return Err(ZeroPivot {
-                    index: n,
-                    pivot: schur.re(),
-                });
-            }
-            let y = (rhs[n] - cx1) * schur.recip();
-            for i in 0..n {
-                rhs[i] -= y * x2[i];
-            }
-            rhs[n] = y;
-            self.x2 = x2;
+        let (a, factors, real) = self.parts(transpose);
+        if D::NDERIV == 1 {
+            return solve_first_order(&a, real, rhs);
         }
+        factors.factor(&a)?;
+        factors.apply(&a, rhs);
         Ok(())
+    }
+}
+
+/// First-order duals (module docs): y₀ from the real parts' `f64` factors, then the derivative
+/// parts from the residual, y = y₀ − T₀⁻¹(T y₀ − r) with the real part of the correction
+/// removed (so that the result's real part is exactly y₀).
+fn solve_first_order<D: Scalar>(
+    a: &Entries<'_, D>,
+    real: &mut RealSolve,
+    rhs: &mut [D],
+) -> Result<(), ZeroPivot> {
+    let re = |src: &[D], dst: &mut [f64]| {
+        dst.iter_mut().zip(src).for_each(|(d, s)| *d = s.re());
+    };
+    re(a.lower, &mut real.lower);
+    re(a.diag, &mut real.diag);
+    re(a.upper, &mut real.upper);
+    if a.bordered {
+        re(a.col, &mut real.col);
+        re(a.row, &mut real.row);
+    }
+    let a0 = Entries {
+        lower: &real.lower,
+        diag: &real.diag,
+        upper: &real.upper,
+        col: &real.col,
+        row: &real.row,
+        corner: a.corner.re(),
+        bordered: a.bordered,
+        transpose: a.transpose,
+    };
+    real.factors.factor(&a0)?;
+    let y = &mut real.y;
+    y.iter_mut().zip(rhs.iter()).for_each(|(y, r)| *y = r.re());
+    real.factors.apply(&a0, y);
+    // rhs ← T y₀ − r (dual), then T₀⁻¹ of it, then y₀ minus its derivative parts.
+    a.residual(y, rhs);
+    real.factors.apply(&a0, rhs);
+    for (r, &y0) in rhs.iter_mut().zip(y.iter()) {
+        let correction = *r - r.re();
+        *r = D::from(y0) - correction;
+    }
+    Ok(())
+}
+
+impl<D: Scalar> Entries<'_, D> {
+    /// rhs ← A y − rhs (A in the solved orientation) for a real y.
+    fn residual(&self, y: &[f64], rhs: &mut [D]) {
+        let n = self.diag.len();
+        for i in 0..n {
+            let mut t = self.diag[i] * y[i];
+            if i > 0 {
+                t += self.sub(i) * y[i - 1];
+            }
+            if let Some(sup) = self.sup(i).filter(|_| i + 1 < n) {
+                t += sup * y[i + 1];
+            }
+            rhs[i] = t - rhs[i];
+        }
+        if self.bordered {
+            let (col, row) = self.border();
+            let mut t = self.corner * y[n];
+            for i in 0..n {
+                rhs[i] += col[i] * y[n];
+                t += row[i] * y[i];
+            }
+            rhs[n] = t - rhs[n];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+    use num_dual::{Derivative, Dual2_64, DualSVec64};
+
+    /// A bordered system whose entries depend smoothly on a parameter t (diagonally dominant
+    /// tridiagonal part, as G M⁻¹ Gᵀ is), and its right-hand side.
+    fn system<D: Scalar>(n: usize, bordered: bool, t: D) -> (BorderedTridiag<D>, Vec<D>) {
+        let mut a = BorderedTridiag::new(n, bordered);
+        for i in 0..n {
+            let x = i as f64;
+            a.diag[i] = (t * (0.3 + 0.1 * x)).sin() + 4.0 + x * 0.2;
+            a.lower[i] = (t * 0.7 + x).cos() * 0.9;
+            a.upper[i] = (t * 1.3 - x).sin() * 1.1;
+            a.col[i] = (t + x * 0.5).cos() * 0.2;
+            a.row[i] = (t * 0.4 + x).sin() * 0.3;
+        }
+        a.corner = t.cos() + 2.0;
+        let m = n + usize::from(bordered);
+        let rhs = (0..m).map(|i| (t * 2.0 + i as f64).sin() + 0.5).collect();
+        (a, rhs)
+    }
+
+    fn dense(a: &BorderedTridiag<f64>, transpose: bool) -> DMatrix<f64> {
+        let n = a.n();
+        let m = n + usize::from(a.bordered);
+        let mut d = DMatrix::zeros(m, m);
+        for i in 0..n {
+            d[(i, i)] = a.diag[i];
+            if i > 0 {
+                d[(i, i - 1)] = a.lower[i];
+            }
+            if i + 1 < n {
+                d[(i, i + 1)] = a.upper[i];
+            }
+            if a.bordered {
+                d[(i, n)] = a.col[i];
+                d[(n, i)] = a.row[i];
+            }
+        }
+        if a.bordered {
+            d[(n, n)] = a.corner;
+        }
+        if transpose {
+            d.transpose()
+        } else {
+            d
+        }
+    }
+
+    fn solve<D: Scalar>(a: &mut BorderedTridiag<D>, rhs: &mut [D], transpose: bool) {
+        let r = if transpose {
+            a.solve_transpose(rhs)
+        } else {
+            a.solve(rhs)
+        };
+        r.expect("non-singular test system");
+    }
+
+    /// The O(n) solve against nalgebra's dense LU (both orientations, with and without border).
+    #[test]
+    fn solves_equal_dense_lu() {
+        for (bordered, transpose) in [(false, false), (false, true), (true, false), (true, true)] {
+            let (mut a, mut x) = system(7, bordered, 0.4);
+            let b = nalgebra::DVector::from_vec(x.clone());
+            let reference = dense(&a, transpose).lu().solve(&b).expect("regular");
+            solve(&mut a, &mut x, transpose);
+            for (xi, ri) in x.iter().zip(reference.iter()) {
+                assert!((xi - ri).abs() <= 1e-13 * ri.abs().max(1.0), "{xi} vs {ri}");
+            }
+        }
+    }
+
+    /// First-order duals (the implicit-function-theorem path): real parts bit for bit those of
+    /// the f64 solve; derivative parts equal to the dual-arithmetic factorisation's, which
+    /// second-order duals (`Dual2_64`, first derivative v1) still take, to 1e-13 relative, and to
+    /// central finite differences (step 1e-6) to 1e-8.
+    #[test]
+    fn first_order_duals_equal_dual_arithmetic_and_differences() {
+        let t = 0.4;
+        for (bordered, transpose) in [(false, false), (false, true), (true, false), (true, true)] {
+            let seeds = nalgebra::SVector::<f64, 2>::new(1.0, -0.5);
+            let td = DualSVec64::<2>::new(t, Derivative::some(seeds));
+            let (mut a, mut x) = system(6, bordered, td);
+            solve(&mut a, &mut x, transpose);
+            let (mut a2, mut x2) = system(6, bordered, Dual2_64::new(t, 1.0, 0.0));
+            solve(&mut a2, &mut x2, transpose);
+            let (mut af, mut xf) = system(6, bordered, t);
+            solve(&mut af, &mut xf, transpose);
+            let fd = |s: f64| {
+                let (mut a, mut x) = system(6, bordered, t + s);
+                solve(&mut a, &mut x, transpose);
+                x
+            };
+            let (xp, xm) = (fd(1e-6), fd(-1e-6));
+            for i in 0..x.len() {
+                assert_eq!(x[i].re.to_bits(), xf[i].to_bits(), "real part {i}");
+                let eps = x[i]
+                    .eps
+                    .unwrap_generic(nalgebra::Const::<2>, nalgebra::Const::<1>);
+                let (d, d2) = (eps[0], x2[i].v1);
+                assert!((d - d2).abs() <= 1e-13 * d2.abs().max(1.0), "{d} vs {d2}");
+                assert!((eps[1] + 0.5 * d).abs() <= 1e-15 * d.abs().max(1.0));
+                let central = (xp[i] - xm[i]) / 2e-6;
+                assert!(
+                    (d - central).abs() <= 1e-8 * central.abs().max(1.0),
+                    "{d} vs {central}"
+                );
+            }
+        }
     }
 }

@@ -155,9 +155,10 @@
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
-//! 3–9, lower on row 2 (30.09 against 32.89), and both at J ≈ 0 on row 10 (4·10⁻¹⁴ against
-//! 10⁻¹⁸); L-BFGS finds lower minima on rows 3 (10.657 against 10.673, which this solver
-//! reached too before the 1/α rule of μ changed its path) and 6 (1.5·10⁻⁶ relative).
+//! 4, 5, 7–9, lower on row 2 (30.09 against 32.89), and both at J ≈ 0 on row 10 (4·10⁻¹⁴
+//! against 10⁻¹⁸); the trust region and L-BFGS find lower minima on rows 3 (10.657 against
+//! 10.673, which this solver reached too before the 1/α rule of μ changed its path; the trust
+//! region reaches one or the other depending on round-off) and 6 (1.5·10⁻⁶ relative).
 //! 32–42 ms for the ten rows through `minimize` (five criterion runs, the latest 32.7 ms; trust
 //! region 100 ms, L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this
 //! solver higher objectives on rows 2 and 8 and a lower one on row 1, 22.93;

@@ -400,7 +400,8 @@ fn current_scene(spatial: bool, table: bool) -> Scene {
 ///   differences of F with θ set on the model (step 1e-5·θ; 1e-7 relative), and θ it does not
 ///   read give 0;
 /// * the closed-form implicit half step = the trait's default Newton solve ([`DefaultSolve`],
-///   1e-14), and solves p − (h/2)F(p) = c.
+///   1e-14), and solves p − (h/2)F(p) = c;
+/// * the closed-form (F, ∂F/∂p) = the trait's default `Dual<D>` evaluation (1e-15).
 fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
     let chain = Chain::<D, DIM>::from_scene(scene).unwrap();
     let term = chain.dissipation().expect("the scene has drag");
@@ -420,7 +421,17 @@ fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
     for i in 0..chain.n() {
         for d in 0..DIM {
             for p in [-3.0, -0.4, 0.3, 2.2] {
-                let (_, slope) = term.force_and_slope(i, d, D::from(p), &ctx);
+                let (f, slope) = term.force_and_slope(i, d, D::from(p), &ctx);
+                // The closed-form override = the trait's `Dual<D>` default (same rounding).
+                let (f2, slope2) = generic.force_and_slope(i, d, D::from(p), &ctx);
+                close("F override", f.re(), f2.re(), f2.re().abs().max(1.0), 1e-15);
+                close(
+                    "F' override",
+                    slope.re(),
+                    slope2.re(),
+                    slope2.re().abs().max(1.0),
+                    1e-15,
+                );
                 let hp = 1e-5;
                 let fd = (force(&chain, i, d, p + hp) - force(&chain, i, d, p - hp)) / (2.0 * hp);
                 close("dF/dp", slope.re(), fd, fd.abs().max(1.0), 1e-8);

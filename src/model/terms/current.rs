@@ -197,6 +197,16 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for CurrentDrag<D, DIM> {
         }
     }
 
+    /// Closed form with r = p − P: (F, F′) = (−D r|r|, −2D|r|), equal to the default's
+    /// `Dual<D>` evaluation (tested).
+    #[inline]
+    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
+        let plain = Ctx { seed: None, ..*ctx };
+        let r = p - self.momentum(i, d, &plain);
+        let a = r.abs();
+        (-(self.d * r * a), -(self.d * (a * 2.0)))
+    }
+
     /// Closed form: r = p − P solves r + (hD/2) r|r| = c − P, the still-water root
     /// ([`super::Drag`]) shifted by P; W = ∂p/∂c = 1/(1 + hD|r|) (tested equal to the default
     /// Newton solve).

@@ -41,6 +41,14 @@ impl<D: Scalar> DissipativeTerm<D> for Drag<D> {
         p == Parameter::Drag
     }
 
+    /// Closed form (F, F′) = (−D p|p|, −2D|p|), equal to the default's `Dual<D>` evaluation
+    /// (tested; it avoids nested dual arithmetic in the reverse step of the dual Hessians).
+    #[inline]
+    fn force_and_slope(&self, _i: usize, _d: usize, p: D, _ctx: &Ctx<D>) -> (D, D) {
+        let a = p.abs();
+        (-(self.d * p * a), -(self.d * (a * 2.0)))
+    }
+
     /// Closed-form root of p + (hD/2) p|p| = c: p = 2c / (1 + √(1 + 2hD|c|)), and
     /// W = 1/(1 + hD|p|) (tested equal to the default Newton solve).
     #[inline]

@@ -427,6 +427,14 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for Dissipation<'_, D, DIM>
             Self::Current(t) => t.implicit_half_step(i, d, c, h, ctx),
         }
     }
+
+    #[inline]
+    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
+        match self {
+            Self::StillWater(t) => t.force_and_slope(i, d, p, ctx),
+            Self::Current(t) => t.force_and_slope(i, d, p, ctx),
+        }
+    }
 }
 
 /// Visits every term of a chain (see [`crate::Chain::visit_terms`]): the one place that lists them.

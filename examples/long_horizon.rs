@@ -32,13 +32,13 @@
 //!
 //! Measured (2-core machine, the solve's time as printed, release build, all from u = 0):
 //! N = 1000, the Riccati solver converges in 10 iterations (6 Gauss-Newton, 4 Newton) and
-//! 0.29–0.32 s to J = 1507.481361068 (Σ M₀² = 1507.2286), the optimum the trust region
+//! 0.27–0.30 s to J = 1507.481361068 (Σ M₀² = 1507.2286), the optimum the trust region
 //! reaches in 243.5 s (119 iterations, J = 1507.4813611); with Gauss-Newton throughout it
-//! takes 26 iterations and 0.6 s to another, lower local minimum, J = 1507.4712136
+//! takes 26 iterations and 0.54 s to another, lower local minimum, J = 1507.4712136
 //! (Σ M₀² = 1507.2089); L-BFGS stops at its 5000-iteration limit (9.1 s, projected gradient
-//! 1.0·10⁻⁵ ‖g₀‖, J = 1507.4899744). N = 10⁴: 2.8–3.0 s, 10 iterations, J = 1509.506385425
-//! (Gauss-Newton throughout: 4.3 s, 16 iterations, J = 1509.5064535); N = 10⁵: 34.6 s, 11
-//! iterations, J = 1529.756629004, 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15
+//! 1.0·10⁻⁵ ‖g₀‖, J = 1507.4899744). N = 10⁴: 2.6–3.0 s, 10 iterations, J = 1509.506385425
+//! (Gauss-Newton throughout: 3.8 s, 16 iterations, J = 1509.5064535); N = 10⁵: 30.8 s, 11
+//! iterations, J = 1529.756629004, 880 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15
 //! iterations, J = 1529.7569188). See the module docs of
 //! `chainbeam::ocp` for the method and the limits.
 //!

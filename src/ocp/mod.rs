@@ -108,8 +108,18 @@
 //!   `--rate`, `--steps`, `--pieces`, `--curvature`), N = 10³ 38 passes instead of 48, but
 //!   N = 10⁴ one iteration more (3.39 s against 2.98 s) and N = 10⁵ no faster. A
 //!   hand-written f64 tangent step instead of the dual numbers would save little: the dual
-//!   step costs 1.4 f64 steps per direction (11 per chunk of 8), near the floor of one
+//!   step costs about 1.3 f64 steps per direction (10 per chunk of 8), near the floor of one
 //!   linearised step per direction that any forward-mode Jacobian of 2n + 1 directions pays.
+//!   What the dual steps did spend beyond arithmetic was removed instead, each change
+//!   keeping every real part bit for bit: the spring function and the tridiagonal solves of
+//!   first-order duals from their real parts (`spring_s` lifted by its slope; [`crate::tridiag`]
+//!   by the implicit function theorem on the real factors), the drag's slope in closed form
+//!   (no nested duals in the reverse step), and two tiny helpers inlined (out-of-line calls
+//!   with AVX-512 state transitions): Jacobians 13.4 → 11.4 ms, the exact model's pass
+//!   32.5 → 23.3 ms at N = 10³ (`ocp_parts`), the solve at N = 10⁴ and 10⁵ 0.90 of the time
+//!   (farm-bench). A dynamic split of the stages over the threads (16 chunks per thread
+//!   instead of one half each, whose H_k times differed by 4–10 %) and fusing the Riccati
+//!   stage's three products with Ãᵀ measured no faster.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending
@@ -124,34 +134,39 @@
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.29–0.32 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 0.58–0.61 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.27–0.30 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 0.53–0.54 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
 //! | 10³ | L-BFGS | 9.1 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 2.82–2.98 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 4.3 s, 16 iterations) |
+//! | 10⁴ | this solver | 2.62–2.99 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 3.8 s, 16 iterations) |
 //! | 10⁴ | L-BFGS | 102.5 s | 5000 (limit) | 1509.698222128 | 1507.4462 | not converged, 1.6·10⁻⁴ |
-//! | 10⁵ | this solver | 34.6 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 886 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
+//! | 10⁵ | this solver | 30.8 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 31.8 s wall, 880 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
 //! | 10⁵ | L-BFGS | 1164 s | 5000 (limit) | 1532.922287883 | 1510.4200 | not converged, 2.0·10⁻³; 132 MB peak |
 //!
 //! The times are those `long_horizon` prints (the solve alone; the machine's speed drifts by
-//! 10–20 % over minutes: `cargo bench --bench ocp -- ocp_solve/riccati/1000` gave medians of
-//! 312–319 ms in the same hour as the example's 0.289–0.318 s). Time per iteration 31 ms,
-//! 0.29 s and 3.1 s: linear in N within 1.02× (the passes over the stored Jacobians prefetch
-//! them; without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts at N = 10³
-//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.66 ms; rollout + stage
-//! Jacobians + costate sweep 12.2 ms (18.5 simulations, two threads); one Riccati pass
-//! 1.76 ms (2.7 simulations; 19.96 ms at N = 10⁴, 3.1 simulations of 6.49 ms); the exact
+//! 10–20 % over minutes: `cargo bench --bench ocp -- ocp_solve/riccati/1000` gave a median of
+//! 290 ms in the same hour as the example's 0.27–0.30 s). Time per iteration 29 ms, 0.28 s
+//! and 2.8 s: linear in N within 1.02× (the passes over the stored Jacobians prefetch them;
+//! without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts at N = 10³
+//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.65 ms; rollout + stage
+//! Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass
+//! 1.75 ms (2.7 simulations; 19.8 ms at N = 10⁴, 3.0 simulations of 6.49 ms); the exact
 //! model's extra — costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse
-//! dual step per chunk) and a Riccati pass with them — 30 ms (45 simulations). A Gauss-Newton
-//! iteration thus costs about 25–40 simulations (2–7 interior-point iterations, each a
-//! Riccati pass and a linearised rollout, or one pass on the warm face), an exact one about
-//! 50–90 (up to 11 interior-point iterations while the active set settles, then 1); the
-//! default run averages 47. Of the targets, 3 s at N = 10⁴, ≤ 30 iterations and the
-//! linear scaling are met; 0.3 s at N = 10³ only when the machine is in its faster phase;
-//! 30 s at 10⁵ (34.6 s) and ≤ 20 simulations per iteration are not. The yardstick is cheap
-//! (0.66 µs per step at n = 10): the Jacobians alone are 2n + 1 = 21 linearised steps per
-//! stage, about 10 simulations on two threads at the floor of forward mode, before any QP
-//! pass (≈ 3 simulations each).
+//! dual step per chunk) and a Riccati pass with them — 23.3 ms (36 simulations; 246 ms at
+//! N = 10⁴). A Gauss-Newton iteration thus costs about 25–40 simulations (2–7 interior-point
+//! iterations, each a Riccati pass and a linearised rollout, or one pass on the warm face),
+//! an exact one about 40–80 (up to 11 interior-point iterations while the active set
+//! settles, then 1); the default run averages 45. Of the targets, 0.3 s at N = 10³,
+//! 3 s at N = 10⁴, ≤ 30 iterations and the linear scaling are met; 30 s at 10⁵ (30.8 s) and
+//! ≤ 20 simulations per iteration are not. N = 10⁵ needs an 11th iteration because its 10th
+//! ends just above the tolerance (projected gradient 1.8·10⁻³ against 10⁻⁸‖g₀‖ = 1.0·10⁻³):
+//! near the optimum the exact Newton steps on the warm face (model gradient solved to 10⁻¹³)
+//! reduce the true projected gradient only 3–4× per step, spread evenly over the ~10⁵
+//! controls of the horizon's static middle, where the beam is at rest against the constant
+//! load (the final step then lands at 2·10⁻⁷). The yardstick is cheap (0.65 µs per step at
+//! n = 10): the Jacobians alone are 2n + 1 = 21 linearised steps per stage, about 10
+//! simulations on two threads at the floor of forward mode, before any QP pass (≈ 3
+//! simulations each).
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
@@ -159,8 +174,8 @@
 //! against 10⁻¹⁸); the trust region and L-BFGS find lower minima on rows 3 (10.657 against
 //! 10.673, which this solver reached too before the 1/α rule of μ changed its path; the trust
 //! region reaches one or the other depending on round-off) and 6 (1.5·10⁻⁶ relative).
-//! 32–42 ms for the ten rows through `minimize` (five criterion runs, the latest 32.7 ms; trust
-//! region 100 ms, L-BFGS 135 ms; [`Condensed`], `Method::Condensed`: 16–18 ms, against this
+//! 30–42 ms for the ten rows through `minimize` (six criterion runs, the latest 29.7 ms; trust
+//! region 101 ms, L-BFGS 126 ms; [`Condensed`], `Method::Condensed`: 14–18 ms, against this
 //! solver higher objectives on rows 2 and 8 and a lower one on row 1, 22.93;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!

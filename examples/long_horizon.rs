@@ -39,7 +39,10 @@
 //! 1.0·10⁻⁵ ‖g₀‖, J = 1507.4899744). N = 10⁴: 2.6–3.0 s, 10 iterations, J = 1509.506385425
 //! (Gauss-Newton throughout: 3.8 s, 16 iterations, J = 1509.5064535); N = 10⁵: 30.8 s, 11
 //! iterations, J = 1529.756629004, 880 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15
-//! iterations, J = 1529.7569188). See the module docs of
+//! iterations, J = 1529.7569188). The Riccati rows also print the time per iteration in
+//! forward simulations of the same horizon at the solution (the fastest of five; 53 at
+//! N = 1000, 69 at 10⁴: at the optimum the beam rests in the middle of the horizon and a
+//! simulation is cheap). See the module docs of
 //! `chainbeam::ocp` for the method and the limits.
 //!
 //! ```text
@@ -58,12 +61,26 @@ use chainbeam::{
     catalogue, simulate_with_controls, BendingObjective, ControlProblem, Error, Parametrisation,
     PerStepControl, PiecewiseControl, Result, Scene,
 };
+use std::time::Instant;
 
 fn moments(scene: &Scene, u: &[f64]) -> Result<(f64, f64)> {
     let t = simulate_with_controls(scene, u)?;
     let sum: f64 = t.moment().iter().map(|m| m * m).sum();
     let max = t.moment().iter().fold(0.0f64, |a, m| a.max(m.abs()));
     Ok((sum, max))
+}
+
+/// The time of one forward simulation of the horizon with the objective (the yardstick of the
+/// issue's "cost per iteration in simulations"): the fastest of five, as the machine's speed
+/// drifts.
+fn simulation_seconds(problem: &ControlProblem, theta: &[f64]) -> Result<f64> {
+    let mut best = f64::INFINITY;
+    for _ in 0..5 {
+        let t = Instant::now();
+        std::hint::black_box(problem.value(std::hint::black_box(theta))?);
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    Ok(best)
 }
 
 fn value<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
@@ -137,6 +154,8 @@ fn solve_with(
                 );
             }
         }
+        let sim = simulation_seconds(problem, &r.controls)?;
+        let per_iteration = r.seconds / r.iterations.max(1) as f64 / sim;
         return Ok(Outcome {
             controls: r.controls.clone(),
             objective: r.objective,
@@ -145,11 +164,13 @@ fn solve_with(
             ratio: r.projected_gradient_norm / r.initial_gradient_norm,
             converged: r.converged,
             note: format!(
-                "{} rollouts, {} Jacobian passes, {} backward passes, {} active bounds; {}",
+                "{} rollouts, {} Jacobian passes, {} backward passes, {} active bounds; \
+                 {per_iteration:.1} simulations per iteration (one: {:.3} ms); {}",
                 r.rollouts,
                 r.jacobian_passes,
                 r.backward_passes,
                 r.active_bounds.len(),
+                sim * 1e3,
                 r.termination
             ),
         });

@@ -51,9 +51,10 @@ pub struct BorderedTridiag<D> {
     pub corner: D,
     /// Whether the border is present.
     pub bordered: bool,
+    /// The factors of a solve in `D` arithmetic (`f64`, higher-order duals).
     factors: Factors<D>,
-    /// The real parts' matrix, factors and solution (first-order duals only).
-    real: Box<RealSolve>,
+    /// The real parts' matrix, factors and solution (first-order duals).
+    real: RealSolve,
 }
 
 /// A Thomas factorisation of the tridiagonal part (or of its transpose) and the border's Schur
@@ -227,8 +228,9 @@ impl<D: Scalar> BorderedTridiag<D> {
     /// Storage for an n×n tridiagonal part, with or without the border.
     pub fn new(n: usize, bordered: bool) -> Self {
         let z = vec![D::zero(); n];
-        // The real mirror is needed by first-order duals only (empty otherwise).
-        let m = if D::NDERIV == 1 { n } else { 0 };
+        // First-order duals solve with the real mirror, everything else in `D` (the other
+        // storage stays empty).
+        let (m, nd) = if D::NDERIV == 1 { (n, 0) } else { (0, n) };
         let r = vec![0.0; m];
         BorderedTridiag {
             lower: z.clone(),
@@ -238,16 +240,16 @@ impl<D: Scalar> BorderedTridiag<D> {
             row: z,
             corner: D::zero(),
             bordered,
-            factors: Factors::new(n),
-            real: Box::new(RealSolve {
+            factors: Factors::new(nd),
+            real: RealSolve {
                 lower: r.clone(),
                 diag: r.clone(),
                 upper: r.clone(),
                 col: r.clone(),
                 row: r,
                 factors: Factors::new(m),
-                y: vec![0.0; m + usize::from(bordered)],
-            }),
+                y: vec![0.0; m + usize::from(bordered && m > 0)],
+            },
         }
     }
 

@@ -556,3 +556,35 @@ fn reaction_tip_reverse_is_the_transposed_dual_jacobian() {
         );
     }
 }
+
+/// The closed-form (F, ∂F/∂p) of the still-water drag and of the current's drag also carry the
+/// derivative parts of a dual p (the forward-over-reverse Hessians of `ocp` differentiate the
+/// slope): with p = p₀ + ε, the override's ε-parts equal the trait default's (its `Dual<D>`
+/// evaluation, [`DefaultSolve`]) to 1e-15, and F's ε-part is the slope itself.
+#[test]
+fn drag_slope_overrides_carry_derivatives() {
+    let scenes = [
+        (all_terms_scene(false), "drag"),
+        (current_scene(false, false), "current drag"),
+        (current_scene(false, true), "current drag"),
+    ];
+    for (scene, name) in scenes {
+        let chain = Chain::<Dual64, 2>::from_scene(&scene).unwrap();
+        let term = chain.dissipation().expect("the scene has drag");
+        assert_eq!(term.name(), name);
+        let generic = DefaultSolve(chain.clone());
+        let ctx = Ctx::new(1.0, Dual64::from(-0.7), 0);
+        for i in 0..chain.n() {
+            for d in 0..2 {
+                for p in [-3.0, -0.4, 0.3, 2.2] {
+                    let x = Dual64::new(p, 1.0);
+                    let (f, s) = term.force_and_slope(i, d, x, &ctx);
+                    let (f2, s2) = generic.force_and_slope(i, d, x, &ctx);
+                    close("F eps", f.eps, f2.eps, f2.eps.abs().max(1.0), 1e-15);
+                    close("F' eps", s.eps, s2.eps, s2.eps.abs().max(1.0), 1e-15);
+                    close("F eps = F'", f.eps, s.re, s.re.abs().max(1.0), 1e-15);
+                }
+            }
+        }
+    }
+}

@@ -119,7 +119,12 @@
 //!   32.5 → 23.3 ms at N = 10³ (`ocp_parts`), the solve at N = 10⁴ and 10⁵ 0.90 of the time
 //!   (farm-bench). A dynamic split of the stages over the threads (16 chunks per thread
 //!   instead of one half each, whose H_k times differed by 4–10 %) and fusing the Riccati
-//!   stage's three products with Ãᵀ measured no faster.
+//!   stage's three products with Ãᵀ measured no faster. Nor was reusing the previous
+//!   iteration's H_k (A_k, B_k and the gradient recomputed exactly, half the H pass's cost)
+//!   after a full warm-face step the model predicted within 10 % adopted: neutral at
+//!   N = 10³–5·10³, 10 iterations instead of 11 at 10⁵ (its 10th step happened to end below
+//!   the tolerance), but 39 iterations instead of 34 with [`Curvature::Exact`], where it also
+//!   fired far from the optimum.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending

@@ -119,7 +119,13 @@
 //!   32.5 → 23.3 ms at N = 10³ (`ocp_parts`), the solve at N = 10⁴ and 10⁵ 0.90 of the time
 //!   (farm-bench). A dynamic split of the stages over the threads (16 chunks per thread
 //!   instead of one half each, whose H_k times differed by 4–10 %) and fusing the Riccati
-//!   stage's three products with Ãᵀ measured no faster. Nor was reusing the previous
+//!   stage's three products with Ãᵀ into one hand-written loop measured no faster (as extra
+//!   columns of the faer product they are: one pass 1.75 → 1.65 ms at N = 10³, unchanged
+//!   beyond the caches). Splitting each Riccati stage's products over the two threads (half
+//!   of the columns each, one spin barrier per stage) ran at 0.8–0.9× the single thread's
+//!   speed in a microbenchmark of the pass's products: every stage hands half of S to the
+//!   other core, which costs more than the halved product saves, so the interior point's
+//!   passes stay on one thread. Nor was reusing the previous
 //!   iteration's H_k (A_k, B_k and the gradient recomputed exactly, half the H pass's cost)
 //!   after a full warm-face step the model predicted within 10 % adopted: neutral at
 //!   N = 10³–5·10³, 10 iterations instead of 11 at 10⁵ (its 10th step happened to end below
@@ -154,8 +160,11 @@
 //! and 2.8 s: linear in N within 1.02× (the passes over the stored Jacobians prefetch them;
 //! without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts at N = 10³
 //! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.65 ms; rollout + stage
-//! Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass
-//! 1.75 ms (2.7 simulations; 19.8 ms at N = 10⁴, 3.0 simulations of 6.49 ms); the exact
+//! Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass with
+//! its linearised rollout 1.65 ms (2.5 simulations; 19.5 ms at N = 10⁴, 3.0 simulations of
+//! 6.49 ms: beyond the caches the pass streams 3.2 kB of A_k per stage, twice per
+//! interior-point iteration, and huge pages for them did not help, `GLIBC_TUNABLES=
+//! glibc.malloc.hugetlb=1` at N = 10⁵: farm-bench wall ratio 1.00); the exact
 //! model's extra — costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse
 //! dual step per chunk) and a Riccati pass with them — 23.3 ms (36 simulations; 246 ms at
 //! N = 10⁴). A Gauss-Newton iteration thus costs about 25–40 simulations (2–7 interior-point

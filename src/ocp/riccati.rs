@@ -91,10 +91,13 @@ pub(crate) fn prefetch(x: &[f64]) {
 }
 
 /// dst = (src + srcᵀ)/2 for a square `src`, by 4 × 4 blocks: each pair of mirrored blocks is
-/// read once as columns and transposed in registers (an element-wise loop reads one triangle
-/// across the columns, which the compiler vectorises into gathers: 11 % of a Riccati pass at
-/// n = 10). Both triangles take the same sum, so `dst` is symmetric bit for bit.
-pub(crate) fn symmetrise(dst: &mut Mat<f64>, src: &Mat<f64>) {
+/// read once as columns and transposed in registers. Both triangles take the same sum, so
+/// `dst` is symmetric bit for bit. Symmetrising is about a tenth of a Riccati pass at n = 10
+/// (`ocp_parts/riccati_pass/1000` without it 1.49 ms against 1.66 ms); of the forms measured
+/// in the pass this was the fastest (the pairwise loop in place 1.75–1.82 ms against
+/// 1.63–1.72 ms; an element-wise loop into a second matrix, which the compiler vectorises
+/// into gathers, in between).
+fn symmetrise(dst: &mut Mat<f64>, src: &Mat<f64>) {
     let n = src.nrows();
     let nb = n / 4 * 4;
     for jb in (0..nb).step_by(4) {

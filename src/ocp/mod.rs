@@ -186,14 +186,15 @@
 //! simulations each).
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
-//! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows 1,
-//! 4, 5, 7–9, lower on row 2 (30.09 against 32.89), and both at J ≈ 0 on row 10 (4·10⁻¹⁴
-//! against 10⁻¹⁸); the trust region and L-BFGS find lower minima on rows 3 (10.657 against
-//! 10.673, which this solver reached too before the 1/α rule of μ changed its path; the trust
-//! region reaches one or the other depending on round-off) and 6 (1.5·10⁻⁶ relative).
-//! 30–42 ms for the ten rows through `minimize` (six criterion runs, the latest 29.7 ms; trust
-//! region 101 ms, L-BFGS 126 ms; [`Condensed`], `Method::Condensed`: 14–18 ms, against this
-//! solver higher objectives on rows 2 and 8 and a lower one on row 1, 22.93;
+//! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows
+//! 1–7, lower on row 8 (1.5·10⁻⁹ relative), both at J ≈ 0 on row 10 (3·10⁻¹³ against
+//! 5·10⁻²¹), and higher on row 9 (6.0236·10⁻⁶ against 6.0208·10⁻⁶, another local minimum,
+//! which the exact Hessian from the start avoids). Which local minimum a row ends in follows
+//! the solver's path: before the interior point started centred ([`Solver`]'s QP) rows 3 and
+//! 6 ended above the trust region's minima and row 2 below (30.09 against 32.89).
+//! 29–31 ms for the ten rows through `minimize` (four criterion runs; trust region 101 ms,
+//! L-BFGS 126 ms; [`Condensed`], `Method::Condensed`: 14–18 ms, against this solver higher
+//! objectives on rows 3, 6 and 8 and lower ones on rows 1 (22.93) and 9;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives

@@ -31,18 +31,19 @@
 //! the first step Gauss-Newton predicts poorly).
 //!
 //! Measured (2-core machine, the solve's time as printed, release build, all from u = 0):
-//! N = 1000, the Riccati solver converges in 10 iterations (6 Gauss-Newton, 4 Newton) and
-//! 0.27–0.30 s to J = 1507.481361068 (Σ M₀² = 1507.2286), the optimum the trust region
-//! reaches in 243.5 s (119 iterations, J = 1507.4813611); with Gauss-Newton throughout it
-//! takes 26 iterations and 0.54 s to another, lower local minimum, J = 1507.4712136
-//! (Σ M₀² = 1507.2089); L-BFGS stops at its 5000-iteration limit (9.1 s, projected gradient
-//! 1.0·10⁻⁵ ‖g₀‖, J = 1507.4899744). N = 10⁴: 2.6–3.0 s, 10 iterations, J = 1509.506385425
-//! (Gauss-Newton throughout: 3.8 s, 16 iterations, J = 1509.5064535); N = 10⁵: 30.8 s, 11
-//! iterations, J = 1529.756629004, 880 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15
-//! iterations, J = 1529.7569188). The Riccati rows also print the time per iteration in
-//! forward simulations of the same horizon at the solution (the fastest of five; 53 at
-//! N = 1000, 69 at 10⁴: at the optimum the beam rests in the middle of the horizon and a
-//! simulation is cheap). See the module docs of
+//! N = 1000, the Riccati solver converges in 11 iterations (7 Gauss-Newton, 4 Newton) and
+//! 0.29–0.36 s (criterion median 289 ms) to J = 1507.481361068 (Σ M₀² = 1507.2286), the
+//! optimum the trust region reaches in 243.5 s (119 iterations, J = 1507.4813611); with
+//! Gauss-Newton throughout it takes 23 iterations and 0.54 s to the same optimum
+//! (J = 1507.4813624 at its tolerance); L-BFGS stops at its 5000-iteration limit (9.1 s,
+//! projected gradient 1.0·10⁻⁵ ‖g₀‖, J = 1507.4899744). N = 10⁴: 2.8–2.9 s, 11 iterations,
+//! J = 1509.506385425 (Gauss-Newton throughout: 3.2 s, 14 iterations, J = 1509.5064804);
+//! N = 10⁵: 26.4–30.2 s, 11 iterations, J = 1529.756629004, 900 MB peak (Gauss-Newton, an
+//! earlier build: 222.7 s, 15 iterations, J = 1529.7569188). The machine's speed drifts by
+//! 10–20 % over minutes, which these ranges include. The Riccati rows also print the time
+//! per iteration in forward simulations of the same horizon at the solution (the fastest of
+//! five; 46 at N = 1000, 62–65 at 10⁴, 69 at 10⁵: at the optimum the beam rests in the
+//! middle of the horizon and a simulation is cheap). See the module docs of
 //! `chainbeam::ocp` for the method and the limits.
 //!
 //! ```text

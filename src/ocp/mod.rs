@@ -84,10 +84,10 @@
 //!   descent found), or steps whose predicted decrease stays below J's round-off.
 //! - **Where it is slow**: Gauss-Newton alone converges linearly where the residual stays
 //!   large: with drag (D = 10) it misses the costate-weighted curvature of the quadratic drag
-//!   p|p|, and takes 26 iterations on the long-horizon scene (19 of them for the last 10⁻⁵ of J,
-//!   many with backtracking); the exact model finishes the same run in 4 Newton iterations after
-//!   6 Gauss-Newton ones, quadratically (projected gradient 0.26, 0.16, 3.5·10⁻², 2.2·10⁻⁴,
-//!   then 4·10⁻⁸). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1 and 3)
+//!   p|p|, and takes 23 iterations on the long-horizon scene (16 of them for the last 10⁻⁵ of J,
+//!   many with backtracking or a raised μ); the exact model finishes the same run in 4 Newton
+//!   iterations after 7 Gauss-Newton ones (projected gradient 0.52, 4.8·10⁻³, 2.2·10⁻²,
+//!   2.5·10⁻⁴, then 2·10⁻⁶). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1 and 3)
 //!   Gauss-Newton alone stalled at J's round-off while μ rose ×4 per shortened step; with the
 //!   1/α rise it converges on all ten rows, as the default does (tests/tables.rs).
 //!   In an exact iteration the costates come first, by one reverse step per stage in f64
@@ -145,45 +145,52 @@
 //!
 //! | N | method | time | iterations | J | Σ M₀² | note |
 //! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.27–0.30 s | 10 (6 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 2.7·10⁻¹¹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 0.53–0.54 s | 26 | 1507.471213591 | 1507.2089 | another, lower local minimum; 4.8·10⁻⁹ |
+//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.29–0.36 s (criterion 289 ms) | 11 (7 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 1.5·10⁻⁹ |
+//! | 10³ | this solver, Gauss-Newton throughout | 0.54 s | 23 | 1507.481362441 | 1507.2287 | the same optimum at the tolerance; 4.5·10⁻⁹ |
 //! | 10³ | L-BFGS | 9.1 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
 //! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 2.62–2.99 s | 10 | 1509.506385425 | 1507.2286 | 7.7·10⁻⁹ (Gauss-Newton: 3.8 s, 16 iterations) |
+//! | 10⁴ | this solver | 2.83–2.91 s | 11 | 1509.506385425 | 1507.2286 | 3.7·10⁻⁹ (Gauss-Newton: 3.2 s, 14 iterations) |
 //! | 10⁴ | L-BFGS | 102.5 s | 5000 (limit) | 1509.698222128 | 1507.4462 | not converged, 1.6·10⁻⁴ |
-//! | 10⁵ | this solver | 30.8 s | 11 | 1529.756629004 | 1507.2286 | 2.1·10⁻¹²; 31.8 s wall, 880 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
+//! | 10⁵ | this solver | 26.4–30.2 s | 11 | 1529.756629004 | 1507.2286 | 9.2·10⁻¹⁰; 31.6 s wall at 30.2 s, 900 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
 //! | 10⁵ | L-BFGS | 1164 s | 5000 (limit) | 1532.922287883 | 1510.4200 | not converged, 2.0·10⁻³; 132 MB peak |
 //!
 //! The times are those `long_horizon` prints (the solve alone; the machine's speed drifts by
-//! 10–20 % over minutes: `cargo bench --bench ocp -- ocp_solve/riccati/1000` gave a median of
-//! 290 ms in the same hour as the example's 0.27–0.30 s). Time per iteration 29 ms, 0.28 s
-//! and 2.8 s: linear in N within 1.02× (the passes over the stored Jacobians prefetch them;
-//! without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts at N = 10³
-//! (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.65 ms; rollout + stage
-//! Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass with
-//! its linearised rollout 1.65 ms (2.5 simulations; 19.5 ms at N = 10⁴, 3.0 simulations of
-//! 6.49 ms: beyond the caches the pass streams 3.2 kB of A_k per stage, twice per
+//! 10–30 % over minutes, which the ranges include: N = 10⁵ printed 26.4, 30.1, 30.2 and, in a
+//! slow phase, 38.2 s; `farm-bench` pairs against the uniform interior-point start of the
+//! previous build gave wall ratios 0.94, 1.00 and 0.86 at N = 10³, 10⁴, 10⁵, and
+//! `cargo bench --bench ocp -- ocp_solve/riccati/1000` a median of 289 ms for both). Time per
+//! iteration 26 ms, 0.26 s and 2.7 s: linear in N within 1.05× (the passes over the stored
+//! Jacobians prefetch them; without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts
+//! at N = 10³ (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.65 ms; rollout +
+//! stage Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass
+//! with its linearised rollout 1.65 ms (2.5 simulations; 19.5 ms at N = 10⁴, 3.0 simulations
+//! of 6.49 ms: beyond the caches the pass streams 3.2 kB of A_k per stage, twice per
 //! interior-point iteration, and huge pages for them did not help, `GLIBC_TUNABLES=
-//! glibc.malloc.hugetlb=1` at N = 10⁵: farm-bench wall ratio 1.00); the exact
-//! model's extra — costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse
-//! dual step per chunk) and a Riccati pass with them — 23.3 ms (36 simulations; 246 ms at
-//! N = 10⁴). A Gauss-Newton iteration thus costs about 25–40 simulations (2–7 interior-point
-//! iterations, each a Riccati pass and a linearised rollout, or one pass on the warm face),
-//! an exact one about 40–80 (up to 11 interior-point iterations while the active set
-//! settles, then 1); the default run averages 45 of these simulations (a sinusoidal control,
-//! `ocp_parts/forward`). Against a simulation at the optimum, where the beam rests in the
-//! middle of the horizon and RATTLE's Newton needs one iteration per step (0.50 ms at
-//! N = 10³, 4.1 ms at 10⁴), the ratio `long_horizon` prints is 53 and 69. Of the targets, 0.3 s at N = 10³,
-//! 3 s at N = 10⁴, ≤ 30 iterations and the linear scaling are met; 30 s at 10⁵ (30.8 s) and
-//! ≤ 20 simulations per iteration are not. N = 10⁵ needs an 11th iteration because its 10th
-//! ends just above the tolerance (projected gradient 1.8·10⁻³ against 10⁻⁸‖g₀‖ = 1.0·10⁻³):
-//! near the optimum the exact Newton steps on the warm face (model gradient solved to 10⁻¹³)
-//! reduce the true projected gradient only 3–4× per step, spread evenly over the ~10⁵
-//! controls of the horizon's static middle, where the beam is at rest against the constant
-//! load (the final step then lands at 2·10⁻⁷). The yardstick is cheap (0.65 µs per step at
-//! n = 10): the Jacobians alone are 2n + 1 = 21 linearised steps per stage, about 10
-//! simulations on two threads at the floor of forward mode, before any QP pass (≈ 3
-//! simulations each).
+//! glibc.malloc.hugetlb=1` at N = 10⁵: farm-bench wall ratio 1.00); the exact model's extra —
+//! costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse dual step per
+//! chunk) and a Riccati pass with them — 23.3 ms (36 simulations; 246 ms at N = 10⁴). A
+//! Gauss-Newton iteration thus costs about 22–35 simulations (one pass on the warm face, or
+//! 2–7 interior-point iterations, each a Riccati pass and a linearised rollout), an exact one
+//! about 40–70; the default run averages 40 of these simulations at N = 10³ (36 Riccati
+//! passes in 11 iterations; a sinusoidal control, `ocp_parts/forward`). Against a simulation
+//! at the optimum, where the beam rests in the middle of the horizon and RATTLE's Newton
+//! needs one iteration per step (0.50 ms at N = 10³, 4.1 ms at 10⁴), the ratio
+//! `long_horizon` prints is 46, 62–65 and 69 at N = 10³, 10⁴, 10⁵. Of the targets,
+//! 3 s at N = 10⁴, ≤ 30 iterations, the linear scaling and Table 3.4's time are met; 0.3 s at
+//! N = 10³ and 30 s at 10⁵ are met in the machine's fast phases and missed by up to 20 % and
+//! 27 % in its slow ones; ≤ 20 simulations per iteration is not met: the cheapest iteration
+//! this design has (Gauss-Newton, one pass on the warm face, one rollout) is ≈ 22 of them,
+//! and it reaches the time targets by spending more per iteration (interior-point passes
+//! while the active set settles, the exact model near the end) on fewer iterations. The
+//! yardstick is cheap (0.65 µs per step at n = 10): the Jacobians alone are 2n + 1 = 21
+//! linearised steps per stage, about 10 simulations on two threads at the floor of forward
+//! mode, before any QP pass (≈ 3 simulations each). N = 10⁵ needs an 11th iteration because
+//! its 10th ends just above the tolerance (projected gradient 2.1·10⁻³ against
+//! 10⁻⁸‖g₀‖ = 1.0·10⁻³): near the optimum the exact Newton steps on the warm face (model
+//! gradient solved to 10⁻¹³, decrease predicted to 1.000000 of the actual one) reduce the
+//! true projected gradient slowly where J is curved by ρh = 10⁻⁴ alone, spread evenly over
+//! the ~10⁵ controls of the horizon's static middle, where the beam is at rest against the
+//! constant load.
 //!
 //! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
 //! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows

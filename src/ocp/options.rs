@@ -46,7 +46,7 @@ pub struct OcpOptions {
 /// Gauss-Newton keeps from the Hessian of J only what the linearised trajectory gives
 /// (Σ 2c ∇M₀∇M₀ᵀ + effort and rate terms): always positive semidefinite, fast from far away,
 /// but only linearly convergent where the residual M₀ stays large at the optimum (the long
-/// riser: 19 of 26 iterations for the last 10⁻⁵ of J). The exact model adds the stage maps'
+/// riser: 16 of 23 iterations for the last 10⁻⁵ of J). The exact model adds the stage maps'
 /// curvature weighted by the costates and the moment's own curvature (`ocp::hessian`): the
 /// Newton step of J(u), quadratically convergent near a minimum, computed by forward-over-
 /// reverse dual numbers through the same step (about the cost of the stage Jacobians again).

@@ -155,7 +155,7 @@ fn solve_with(
                 );
             }
         }
-        let sim = simulation_seconds(problem, &r.controls)?;
+        let sim = simulation_seconds(problem, &r.theta)?;
         let per_iteration = r.seconds / r.iterations.max(1) as f64 / sim;
         return Ok(Outcome {
             controls: r.controls.clone(),

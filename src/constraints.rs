@@ -6,7 +6,8 @@
 //! block. Because M̄⁻¹ is tridiagonal, Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ is tridiagonal in the length constraints,
 //! bordered by the tip row and column; the tip row is sparse, since Σᵢ lᵢ M̄⁻¹ᵢⱼ = δ_{jn}/(mₙ lₙ).
 
-use crate::model::{dot, zi, Chain, Scalar};
+use crate::base::Scalar;
+use crate::model::{dot, zi, Chain};
 use crate::tridiag::BorderedTridiag;
 
 /// Ĝ(q) of a chain: apply, transposed apply, residual and the bordered-tridiagonal assemblies.

@@ -31,7 +31,7 @@ pub enum Error {
         residual: f64,
         /// Newton iterations performed.
         iterations: usize,
-        /// The tolerance the residual had to reach ([`crate::rattle::RattleOptions::tolerance`]).
+        /// The tolerance the residual had to reach ([`crate::steppers::rattle::RattleOptions::tolerance`]).
         tolerance: f64,
         /// The time step h \[s\] of the failing step (`None` for a solve without a time step).
         h: Option<f64>,
@@ -156,7 +156,7 @@ pub enum Error {
         /// The scene's support.
         support: crate::scene::Support,
         /// How the model holds the tip.
-        tip: crate::model::TipCondition,
+        tip: crate::base::TipCondition,
     },
     /// The planar model (`Chain<_, 2>`) was asked for a scene with a load out of the yz-plane,
     /// which needs the spatial model (`Chain<_, 3>`; [`crate::simulate()`] chooses it itself).
@@ -193,7 +193,7 @@ pub enum Error {
     #[error("{parameter:?} is not a parameter of this scene: {reason}")]
     NoSuchParameter {
         /// The parameter.
-        parameter: crate::model::Parameter,
+        parameter: crate::base::Parameter,
         /// Why (e.g. "the support has no base spring").
         reason: &'static str,
     },

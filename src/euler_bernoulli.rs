@@ -55,7 +55,7 @@ use std::ops::RangeInclusive;
 
 use nalgebra::DMatrix;
 
-use crate::Error;
+use crate::error::Error;
 
 /// Static cantilever under a tip load F (thesis eq. 2.4.5):
 ///

@@ -15,8 +15,9 @@
 //! ([`crate::TipCondition::Reaction`]) is only supported by RATTLE; SHAKE and projected RK4
 //! refuse it at construction.
 
+use crate::base::Scalar;
 use crate::error::{Error, Result};
-use crate::model::{Chain, Scalar};
+use crate::model::Chain;
 use crate::scene::{ControlKind, Scene};
 use crate::steppers::{check_finite, ProjectedRk4, Rattle, Shake, StepStats, Stepper};
 

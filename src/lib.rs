@@ -130,6 +130,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod adjoint;
+pub mod base;
 pub mod catalogue;
 pub mod constraints;
 pub mod error;

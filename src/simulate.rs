@@ -6,10 +6,12 @@
 //! fallibly: a trajectory that does not fit is [`Error::TrajectoryTooLarge`], naming the bytes and
 //! the scene keys to change, never an allocation abort.
 
+use crate::base::Scalar;
 use crate::error::{Error, Result};
-use crate::model::{Chain, Scalar};
-use crate::rattle::{Rattle, State, StepStats};
+use crate::model::Chain;
+pub use crate::scene::{max_trajectory_steps, trajectory_bytes};
 use crate::scene::{ControlKind, Scene, MAX_TRAJECTORY_BYTES};
+use crate::steppers::rattle::{Rattle, State, StepStats};
 
 /// A simulated trajectory on the grid t_k = k h, k = 0..=N.
 #[derive(Clone, Debug)]
@@ -153,34 +155,22 @@ fn expand_controls(kind: ControlKind, values: &[f64], steps: usize) -> Vec<f64> 
     }
 }
 
-/// Bytes [`simulate_chain`] stores for a trajectory of N = `steps` steps of n pendulums with
-/// `n_constraints` multipliers in scalar `D` and dimension `DIM`: per time t_k (N + 1 of them) q
-/// and p (2·n·DIM scalars), λ and μ (2·n_c scalars), energy, moment, control and tip target
-/// (4 scalars; 6 in the spatial model, with M₀ₓ and u_x); per step its [`StepStats`]; plus the n lengths. Saturates at `u64::MAX`.
-pub fn trajectory_bytes<D, const DIM: usize>(n: usize, n_constraints: usize, steps: usize) -> u64 {
-    let per_time = per_time_bytes::<D, DIM>(n, n_constraints);
-    let total = (steps as u128 + 1) * per_time
-        + steps as u128 * std::mem::size_of::<StepStats>() as u128
-        + n as u128 * std::mem::size_of::<f64>() as u128;
-    u64::try_from(total).unwrap_or(u64::MAX)
-}
-
-fn per_time_bytes<D, const DIM: usize>(n: usize, n_constraints: usize) -> u128 {
-    let d = std::mem::size_of::<D>() as u128;
-    let extra = if DIM == 3 { 2 } else { 0 };
-    (2 * n as u128 * DIM as u128 + 2 * n_constraints as u128 + 4 + extra) * d
-}
-
-/// The largest N whose trajectory ([`trajectory_bytes`]) fits [`MAX_TRAJECTORY_BYTES`].
-pub fn max_trajectory_steps<D, const DIM: usize>(n: usize, n_constraints: usize) -> usize {
-    let per_step =
-        per_time_bytes::<D, DIM>(n, n_constraints) + std::mem::size_of::<StepStats>() as u128;
-    let fixed = per_time_bytes::<D, DIM>(n, n_constraints) + 8 * n as u128;
-    let budget = MAX_TRAJECTORY_BYTES as u128;
-    if budget < fixed {
-        return 0;
+/// Checks that `u` has N + 1 finite values.
+pub(crate) fn check_controls<D: Scalar>(u: &[D], steps: usize) -> Result<()> {
+    if u.len() != steps + 1 {
+        return Err(Error::WrongLength {
+            name: "controls",
+            expected: steps + 1,
+            got: u.len(),
+        });
     }
-    usize::try_from((budget - fixed) / per_step).unwrap_or(usize::MAX)
+    match u.iter().position(|x| !x.re().is_finite()) {
+        Some(index) => Err(Error::NotFinite {
+            name: "controls",
+            index,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// An empty vector with room for `len` values, or [`Error::TrajectoryTooLarge`] if the allocator
@@ -338,7 +328,7 @@ pub fn simulate_with_controls_xz(
     controls_x: &[f64],
     controls: &[f64],
 ) -> Result<SceneTrajectory> {
-    crate::adjoint::check_controls(controls_x, scene.time.steps)?;
+    check_controls(controls_x, scene.time.steps)?;
     let mut chain = Chain::<f64, 3>::from_scene(scene)?;
     if chain.control_node().is_none() {
         chain.set_control_node(Some(scene.n()))?;
@@ -389,7 +379,7 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     steps: usize,
     controls: &[D],
 ) -> Result<Trajectory<D, DIM>> {
-    crate::adjoint::check_controls(controls, steps)?;
+    check_controls(controls, steps)?;
     let n = chain.n();
     let nc = chain.n_constraints();
     // The size check and the fallible allocation come before anything of size N is allocated.

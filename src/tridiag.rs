@@ -17,7 +17,7 @@
 //! with the same real factors, y′ = T₀⁻¹(r′ − T′y₀) (the residual r − T y₀ carries them). The
 //! dual-arithmetic factorisation's derivative parts are the same quantities to round-off.
 
-use crate::model::Scalar;
+use crate::base::Scalar;
 use std::ops::Mul;
 
 /// A zero pivot met while factorising.

@@ -1,6 +1,6 @@
 //! Control parametrisations θ ↦ (u_0, …, u_N) with their transposes (docs/conventions.md).
 
-use crate::model::Scalar;
+use crate::base::Scalar;
 
 /// A control parametrisation θ ↦ (u_0, …, u_N) with its transpose product.
 pub trait ControlMap: Send + Sync {

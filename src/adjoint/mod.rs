@@ -51,9 +51,11 @@ pub use objective::{
 pub use problem::ControlProblem;
 pub use tape::{AdjointResult, Checkpointing, AUTO_MEMORY_BUDGET};
 
+use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::{Error, Result};
-use crate::model::{Chain, Parameter, Scalar, TipCondition};
-use crate::rattle::{Rattle, State};
+use crate::model::Chain;
+use crate::simulate::check_controls;
+use crate::steppers::rattle::{Rattle, State};
 use num_dual::Dual;
 use objective::StageEval;
 
@@ -71,24 +73,6 @@ fn check_parameters<D: Scalar, const DIM: usize>(
             reason: "mass needs uniform masses, drag needs D > 0, end stiffnesses need an end \
                      spring, loads need that load",
         }),
-    }
-}
-
-/// Checks that `u` has N + 1 finite values.
-pub(crate) fn check_controls<D: Scalar>(u: &[D], steps: usize) -> Result<()> {
-    if u.len() != steps + 1 {
-        return Err(Error::WrongLength {
-            name: "controls",
-            expected: steps + 1,
-            got: u.len(),
-        });
-    }
-    match u.iter().position(|x| !x.re().is_finite()) {
-        Some(index) => Err(Error::NotFinite {
-            name: "controls",
-            index,
-        }),
-        None => Ok(()),
     }
 }
 

@@ -2,7 +2,8 @@
 //! their evaluation with partial derivatives by nested dual numbers (thesis §3.3, eq. 3.3.2/3.3.4).
 
 use super::reverse::Cotangents;
-use crate::model::{zi, Chain, Scalar};
+use crate::base::Scalar;
+use crate::model::{zi, Chain};
 use crate::scene::ObjectiveKind;
 use num_dual::Dual;
 

@@ -5,10 +5,11 @@ use super::{
     adjoint_gradient_from, forward_value_from, AdjointResult, BendingObjective, Checkpointing,
     ControlMap, Objective, Parametrisation, PerStepControl, PiecewiseControl, Start, StartKick,
 };
+use crate::base::{Parameter, Scalar};
 use crate::error::{Error, Result};
-use crate::model::{Chain, Parameter, Scalar};
-use crate::rattle::State;
+use crate::model::Chain;
 use crate::scene::{ControlKind, ObjectiveKind, Scene};
+use crate::steppers::rattle::State;
 use num_dual::Dual64;
 
 /// An optimal-control problem on a scene: J(θ) = Σ ℓ_k(M₀(t_k), u_k(θ)) over the RATTLE

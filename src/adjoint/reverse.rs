@@ -3,11 +3,9 @@
 //! constraint operator). See the module docs of [`crate::adjoint`] for the equations.
 
 use super::tape::StateView;
+use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::Result;
-use crate::model::{
-    Chain, Ctx, Dissipation, DissipativeTerm, DualScratch, Parameter, ReactionTip, Scalar,
-    TipCondition,
-};
+use crate::model::{Chain, Ctx, Dissipation, DissipativeTerm, DualScratch, ReactionTip};
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 

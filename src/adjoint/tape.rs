@@ -6,8 +6,8 @@
 //! enter the adjoint and W = I): the reverse step then reads them instead of recomputing the
 //! forward step's force and drag root.
 
-use crate::model::Scalar;
-use crate::rattle::State;
+use crate::base::Scalar;
+use crate::steppers::rattle::State;
 
 /// How the reverse sweep gets the forward states.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! Geometry of the chain written once over [`Scalar`]: the undeformed direction, dot and cross
 //! products, the spring function s(x) = arccos(x)/√(1 − x²) (thesis eq. 2.2.1) and the joint angle.
 
-use super::Scalar;
+use crate::base::Scalar;
 
 /// How many derivative-only Newton updates a solve over `D` needs after its real part has
 /// converged: `D::NDERIV` (0 for `f64`, 1 for first-order duals, 2 for second-order or nested

@@ -23,67 +23,9 @@ pub use terms::{
     TermVisitor,
 };
 
+pub use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::{Error, Result};
 use crate::scene::{Scene, Support};
-use num_dual::DualNum;
-
-/// The scalar type every model term is written over: `f64`, `Dual64`, `DualSVec64<N>`, … .
-///
-/// This is `num_dual::DualNum<Primitive = f64> + Copy` with the thread-safety bounds the
-/// multistart code needs; it is implemented for every such type.
-pub trait Scalar: DualNum<Primitive = f64> + Copy + Send + Sync + 'static {}
-impl<T: DualNum<Primitive = f64> + Copy + Send + Sync + 'static> Scalar for T {}
-
-/// What holds the tip's z coordinate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TipCondition {
-    /// The tip is free (cantilever, riser).
-    Free,
-    /// The tip's z is locked by l(q) = Σ lᵢ e₃ᵀqᵢ = 0 (fixed-fixed, pinned-pinned; eq. 2.4.1).
-    Locked,
-    /// Reaction-force variant (eq. 3.2.1/3.2.2): the reaction λ_l cancels every force on the tip's
-    /// z except the control, so m_n z̈_n = −u. Discretised as a rheonomic tip constraint
-    /// l(q_k) = ζ_k whose target ζ follows the control by Störmer–Verlet (see [`crate::rattle`]).
-    Reaction,
-}
-
-/// A physical parameter of the chain, for parameter derivatives (seeded with dual numbers or
-/// differentiated by the adjoint).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Parameter {
-    /// All interior spring constants k₂..kₙ, set to one common value.
-    InteriorStiffness,
-    /// The base spring k₁ (also the k₁ of the bending moment, eq. 3.1.3).
-    BaseStiffness,
-    /// The tip spring k_{n+1}.
-    TipStiffness,
-    /// All masses m₁..mₙ, set to one common value.
-    Mass,
-    /// The drag constant D (eq. 2.4.4).
-    Drag,
-    /// The z component F_z of the constant force of the `i`-th point load of the scene (0-based,
-    /// in scene order): the thesis's F.
-    LoadForce(usize),
-    /// The x component F_x of the constant force of the `i`-th point load (spatial model only).
-    LoadForceX(usize),
-    /// The amplitude Aⱼ of harmonic `harmonic` of point load `load` (0-based, in scene order).
-    LoadAmplitude {
-        /// The load's index in the scene.
-        load: usize,
-        /// The harmonic's index in the load.
-        harmonic: usize,
-    },
-    /// The phase φⱼ \[rad\] of harmonic `harmonic` of point load `load`.
-    LoadPhase {
-        /// The load's index in the scene.
-        load: usize,
-        /// The harmonic's index in the load.
-        harmonic: usize,
-    },
-    /// The `speed` of the current's profile (`[loads.current]`: uniform, linear or power law;
-    /// a table has none).
-    CurrentSpeed,
-}
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
 /// term of docs/conventions.md ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,

@@ -5,8 +5,8 @@ use num_dual::DualSVec64;
 
 use super::{interval_steps, Controller, Observation, Plant};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
+use crate::base::Scalar;
 use crate::error::{Error, Result};
-use crate::model::Scalar;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult};
 use crate::scene::Scene;

@@ -166,8 +166,8 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
-use crate::rattle::State;
 use crate::scene::Scene;
+use crate::steppers::rattle::State;
 
 /// What a controller sees at the start t_k of a control interval.
 #[derive(Clone, Copy, Debug)]

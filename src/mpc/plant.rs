@@ -1,9 +1,10 @@
 //! The plant: a scene simulated interval by interval by RATTLE with the control the loop applies.
 
+use crate::base::Scalar;
 use crate::error::{Error, Result};
-use crate::model::{Chain, Scalar};
-use crate::rattle::{Rattle, State};
+use crate::model::Chain;
 use crate::scene::Scene;
+use crate::steppers::rattle::{Rattle, State};
 
 /// The true system of a closed loop: the planar RATTLE map (thesis eq. 1.6.1) of a scene, from
 /// the straight beam at rest at t = 0, advanced step by step with the control force u_k at the

@@ -26,8 +26,9 @@ use super::stage::{
     chunks, ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper, CHUNK,
 };
 use crate::adjoint::{Cotangents, ReverseSweep, StateView};
+use crate::base::Scalar;
 use crate::error::Result;
-use crate::model::{Chain, Scalar};
+use crate::model::Chain;
 use num_dual::DualSVec64;
 
 /// The buffers of a stage's vector-Jacobian product (per thread, sized once): the chart point

@@ -51,9 +51,10 @@
 //! real parts are those of the `f64` stage map bit for bit.
 
 use crate::adjoint::{Start, StartKick};
+use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, Result};
-use crate::model::{Chain, Scalar, TipCondition};
-use crate::rattle::{Rattle, State};
+use crate::model::Chain;
+use crate::steppers::rattle::{Rattle, State};
 use crate::tridiag::BorderedTridiag;
 use nalgebra::SVector;
 use num_dual::{Derivative, DualSVec64};

@@ -1,7 +1,7 @@
 //! [`SceneBuilder`]: scenes in code, with the file format's defaults and validation.
 
-use super::raw::NumOrArray;
-use super::validate::{check_size, check_spring, support_name};
+use super::validate::{check_size, check_spring, end_springs, support_name};
+use super::values::NumOrArray;
 use super::{
     Beam, Control, ControlKind, Current, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
     SceneErrorKind, Support, TimeGrid,
@@ -251,15 +251,6 @@ impl SceneBuilder {
         };
         scene.validate()?;
         Ok(scene)
-    }
-}
-
-/// Whether the support has a base spring k₁ / a tip spring k_{n+1}.
-pub(super) fn end_springs(support: Support) -> (bool, bool) {
-    match support {
-        Support::Cantilever => (true, false),
-        Support::Riser | Support::FixedFixed => (true, true),
-        Support::PinnedPinned => (false, false),
     }
 }
 

@@ -22,6 +22,7 @@ mod error;
 mod raw;
 pub(crate) mod series;
 mod validate;
+mod values;
 
 use std::path::Path;
 
@@ -29,7 +30,8 @@ use serde::{Deserialize, Serialize};
 
 pub use builder::SceneBuilder;
 pub use current::{
-    direction_of_angle, Current, CurrentProfile, DEFAULT_POWER_EXPONENT, MAX_POWER_EXPONENT,
+    current_velocity, direction_of_angle, Current, CurrentProfile, DEFAULT_POWER_EXPONENT,
+    MAX_POWER_EXPONENT,
 };
 pub use error::{SceneError, SceneErrorKind};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
@@ -38,6 +40,7 @@ pub use validate::{
     LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES,
     PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
+pub use validate::{max_trajectory_steps, trajectory_bytes};
 
 use raw::RawScene;
 

@@ -1,18 +1,17 @@
 //! The file-shaped (TOML) structures, their conversion to and from [`Scene`], and the mapping of
 //! serde's errors to keyed [`SceneError`]s.
 
-use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use serde::de::{SeqAccess, Visitor};
-use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use serde::{Deserialize, Serialize};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
 use super::builder::assemble_beam;
 use super::current::RawCurrent;
 use super::validate::{check_size, node_index, positive_count};
+use super::values::{to_i64, NumOrArray};
 use super::{
     Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
     SceneErrorKind, Support, TimeGrid,
@@ -22,74 +21,6 @@ use super::{
 pub(super) fn parse(text: &str) -> Result<RawScene, SceneError> {
     let doc = DeTable::parse(text).map_err(|e| syntax_error(text, &e))?;
     toml::from_str(text).map_err(|e| classify(text, &e, &doc))
-}
-
-/// A number, or an array of numbers (`length`, `mass`, `stiffness`).
-#[derive(Clone, Debug, PartialEq)]
-pub(super) enum NumOrArray {
-    Number(f64),
-    Array(Vec<f64>),
-}
-
-impl<'de> Deserialize<'de> for NumOrArray {
-    // Hand-written rather than `#[serde(untagged)]`: a bad element of an array is then reported at
-    // its own index, and a bad value says what the key takes.
-    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
-        struct NumOrArrayVisitor;
-        impl<'de> Visitor<'de> for NumOrArrayVisitor {
-            type Value = NumOrArray;
-            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-                f.write_str("a number or an array of numbers")
-            }
-            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<NumOrArray, E> {
-                Ok(NumOrArray::Number(v))
-            }
-            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<NumOrArray, E> {
-                Ok(NumOrArray::Number(v as f64))
-            }
-            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<NumOrArray, E> {
-                Ok(NumOrArray::Number(v as f64))
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<NumOrArray, A::Error> {
-                let mut values = Vec::new();
-                while let Some(v) = seq.next_element::<f64>()? {
-                    values.push(v);
-                }
-                Ok(NumOrArray::Array(values))
-            }
-        }
-        deserializer.deserialize_any(NumOrArrayVisitor)
-    }
-}
-
-impl Serialize for NumOrArray {
-    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        match self {
-            Self::Number(x) => serializer.serialize_f64(*x),
-            Self::Array(v) => serializer.collect_seq(v),
-        }
-    }
-}
-
-impl NumOrArray {
-    /// A number if all values are bitwise equal (and there is at least one), else an array.
-    pub(super) fn compact(values: &[f64]) -> Self {
-        match values.first() {
-            Some(first) if values.iter().all(|v| v.to_bits() == first.to_bits()) => {
-                Self::Number(*first)
-            }
-            _ => Self::Array(values.to_vec()),
-        }
-    }
-
-    /// `count` values: the number repeated, or the array if it has exactly `count` values.
-    pub(super) fn expand(self, key: &str, count: usize) -> Result<Vec<f64>, SceneError> {
-        match self {
-            Self::Number(x) => Ok(vec![x; count]),
-            Self::Array(v) if v.len() == count => Ok(v),
-            Self::Array(v) => Err(SceneError::count(key, count, v.len())),
-        }
-    }
 }
 
 fn is_false(b: &bool) -> bool {
@@ -363,10 +294,6 @@ impl RawControl {
 #[serde(deny_unknown_fields)]
 struct RawObjective {
     kind: ObjectiveKind,
-}
-
-pub(super) fn to_i64(x: usize) -> i64 {
-    i64::try_from(x).unwrap_or(i64::MAX)
 }
 
 impl RawScene {

@@ -1,8 +1,9 @@
 //! Validation of a [`Scene`]: value ranges, counts, nodes, the step numbers and the size limits
 //! (docs/scene-format.md, "Valid ranges" and "Size limits").
 
-use super::raw::{to_i64, NumOrArray};
+use super::values::{to_i64, NumOrArray};
 use super::{ControlKind, PointLoad, Scene, SceneError, SceneErrorKind, Support};
+use crate::base::StepStats;
 
 /// Largest number of pendulums n a scene may have.
 pub const MAX_PENDULUMS: usize = 1_000_000;
@@ -10,7 +11,7 @@ pub const MAX_PENDULUMS: usize = 1_000_000;
 pub const MAX_STEPS: usize = 10_000_000;
 /// Memory budget of a stored trajectory: 8 GiB, a third of a 24 GiB machine (the rest is left
 /// for the operating system, the optimiser's vectors and the output). A scene whose planar `f64`
-/// trajectory ([`crate::simulate::trajectory_bytes`]) needs more is rejected by
+/// trajectory ([`trajectory_bytes`]) needs more is rejected by
 /// [`Scene::validate`] naming `time.steps`; [`crate::simulate::simulate_chain`] checks every
 /// scalar type and dimension against the same budget and allocates fallibly.
 pub const MAX_TRAJECTORY_BYTES: u64 = 8 << 30;
@@ -229,7 +230,7 @@ impl Scene {
         let b = &self.beam;
         let n = self.n();
         let h = self.time.step;
-        let (has_base, has_tip) = super::builder::end_springs(b.support);
+        let (has_base, has_tip) = end_springs(b.support);
         let spring = |j: usize| -> f64 {
             // spring j = 0..=n couples pendulums j and j + 1 (1-based), k₁ = base, k_{n+1} = tip
             if j == 0 {
@@ -474,9 +475,9 @@ pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(),
         ));
     }
     let nc = n_constraints(n, support);
-    let bytes = crate::simulate::trajectory_bytes::<f64, 2>(n, nc, steps);
+    let bytes = trajectory_bytes::<f64, 2>(n, nc, steps);
     if bytes > MAX_TRAJECTORY_BYTES {
-        let max_steps = crate::simulate::max_trajectory_steps::<f64, 2>(n, nc);
+        let max_steps = max_trajectory_steps::<f64, 2>(n, nc);
         return Err(SceneError::invalid(
             "time.steps",
             format!(
@@ -489,6 +490,15 @@ pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(),
         ));
     }
     Ok(())
+}
+
+/// Whether the support has a base spring k₁ / a tip spring k_{n+1}.
+pub(super) fn end_springs(support: Support) -> (bool, bool) {
+    match support {
+        Support::Cantilever => (true, false),
+        Support::Riser | Support::FixedFixed => (true, true),
+        Support::PinnedPinned => (false, false),
+    }
 }
 
 pub(super) fn support_name(support: Support) -> &'static str {
@@ -584,4 +594,34 @@ fn check_all(
         }
     }
     Ok(())
+}
+
+/// Bytes [`crate::simulate::simulate_chain`] stores for a trajectory of N = `steps` steps of n pendulums with
+/// `n_constraints` multipliers in scalar `D` and dimension `DIM`: per time t_k (N + 1 of them) q
+/// and p (2·n·DIM scalars), λ and μ (2·n_c scalars), energy, moment, control and tip target
+/// (4 scalars; 6 in the spatial model, with M₀ₓ and u_x); per step its [`StepStats`]; plus the n lengths. Saturates at `u64::MAX`.
+pub fn trajectory_bytes<D, const DIM: usize>(n: usize, n_constraints: usize, steps: usize) -> u64 {
+    let per_time = per_time_bytes::<D, DIM>(n, n_constraints);
+    let total = (steps as u128 + 1) * per_time
+        + steps as u128 * std::mem::size_of::<StepStats>() as u128
+        + n as u128 * std::mem::size_of::<f64>() as u128;
+    u64::try_from(total).unwrap_or(u64::MAX)
+}
+
+fn per_time_bytes<D, const DIM: usize>(n: usize, n_constraints: usize) -> u128 {
+    let d = std::mem::size_of::<D>() as u128;
+    let extra = if DIM == 3 { 2 } else { 0 };
+    (2 * n as u128 * DIM as u128 + 2 * n_constraints as u128 + 4 + extra) * d
+}
+
+/// The largest N whose trajectory ([`trajectory_bytes`]) fits [`MAX_TRAJECTORY_BYTES`].
+pub fn max_trajectory_steps<D, const DIM: usize>(n: usize, n_constraints: usize) -> usize {
+    let per_step =
+        per_time_bytes::<D, DIM>(n, n_constraints) + std::mem::size_of::<StepStats>() as u128;
+    let fixed = per_time_bytes::<D, DIM>(n, n_constraints) + 8 * n as u128;
+    let budget = MAX_TRAJECTORY_BYTES as u128;
+    if budget < fixed {
+        return 0;
+    }
+    usize::try_from((budget - fixed) / per_step).unwrap_or(usize::MAX)
 }

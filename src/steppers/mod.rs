@@ -38,9 +38,10 @@ pub mod rattle;
 pub mod rk4;
 pub mod shake;
 
+use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{Chain, Ctx, DissipativeTerm, Scalar, TipCondition};
+use crate::model::{Chain, Ctx, DissipativeTerm};
 use crate::tridiag::{BorderedTridiag, ZeroPivot};
 
 pub use rattle::{Rattle, RattleOptions, StepStats};

@@ -36,10 +36,13 @@
 //! u = 0 this is exactly the locked beam. The control then needs no potential term: its force lies
 //! along Lᵀ and would be absorbed by the tip multiplier.
 
+pub use crate::base::StepStats;
+
 use super::{refuse_reaction_tip, singular, Stepper};
+use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{e2, Chain, Ctx, DissipativeTerm, Scalar};
+use crate::model::{e2, Chain, Ctx, DissipativeTerm};
 use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
@@ -127,15 +130,6 @@ impl<D: Scalar, const DIM: usize> State<D, DIM> {
             ],
         }
     }
-}
-
-/// Statistics of one step.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct StepStats {
-    /// Newton iterations (linear solves) for λ.
-    pub iterations: usize,
-    /// Final max-norm constraint residual.
-    pub residual: f64,
 }
 
 /// Scratch memory of a step, allocated once per chain.

@@ -20,9 +20,10 @@ use super::{
     check_finite, check_len, check_step, refuse_reaction_tip, singular, total_force, PositionSolve,
     PositionStage, Stepper,
 };
+use crate::base::Scalar;
 use crate::error::Result;
-use crate::model::{e2, Chain, Ctx, Scalar};
-use crate::rattle::{RattleOptions, StepStats};
+use crate::model::{e2, Chain, Ctx};
+use crate::steppers::rattle::{RattleOptions, StepStats};
 use crate::tridiag::BorderedTridiag;
 
 /// Projected RK4's state at t_k: (q_k, p_k) on the constraint manifold.

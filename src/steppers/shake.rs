@@ -23,9 +23,10 @@ use super::{
     check_finite, check_len, check_step, refuse_reaction_tip, total_force, PositionSolve,
     PositionStage, Stepper,
 };
+use crate::base::Scalar;
 use crate::error::Result;
-use crate::model::{e2, Chain, Ctx, Scalar};
-use crate::rattle::{RattleOptions, StepStats};
+use crate::model::{e2, Chain, Ctx};
+use crate::steppers::rattle::{RattleOptions, StepStats};
 
 /// SHAKE's state at t_k: the reported (q_k, p_k) and what the recursion carries forward. SHAKE
 /// runs one configuration ahead of the reported state.

@@ -2,9 +2,9 @@
 //! with an x component u_x for a 2-axis control in the spatial model.
 
 use super::{Ctx, DualScratch, Embed, ForceTerm};
+use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use crate::model::geometry::zi;
-use crate::model::{Parameter, Scalar};
 
 /// The control force u(t) = (u_x, u_z) at node c: U = Σ_{j≤c} l_j (u_z e₃ᵀq_j + u_x e₁ᵀq_j), so
 /// pendulums j ≤ c feel l_j (u_x, u_z) (the same sign convention as a point load: u = −F cancels

@@ -26,54 +26,9 @@
 
 use super::drag::quadratic_root;
 use super::{Ctx, DissipativeTerm, Embed};
+use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
-use crate::model::{Parameter, Scalar};
-use crate::scene::{direction_of_angle, Current, CurrentProfile};
-
-/// The current's velocity at height y above the base, split as U(y) = s·a(y) + b(y) with s the
-/// speed parameter ([`Parameter::CurrentSpeed`]): returns (a, b), each as (U_x, U_z). `surface`
-/// is the height y_s of the free surface; above it (y > y_s) there is no current.
-pub fn current_velocity(current: &Current, y: f64, surface: f64) -> ([f64; 2], [f64; 2]) {
-    let depth = surface - y;
-    if depth < 0.0 {
-        return ([0.0; 2], [0.0; 2]);
-    }
-    let [dx, dz] = current.direction;
-    let norm = dx.hypot(dz);
-    let dir = [dx / norm, dz / norm];
-    let scaled = |f: f64| [f * dir[0], f * dir[1]];
-    let xi = depth / surface;
-    match &current.profile {
-        CurrentProfile::Uniform { .. } => (dir, [0.0; 2]),
-        CurrentProfile::Linear { bottom_speed, .. } => {
-            (scaled(1.0 - xi), scaled(bottom_speed * xi))
-        }
-        CurrentProfile::PowerLaw { exponent, .. } => {
-            (scaled((y / surface).powf(*exponent)), [0.0; 2])
-        }
-        CurrentProfile::Table { rows } => ([0.0; 2], table_velocity(rows, depth)),
-    }
-}
-
-/// Linear interpolation in depth of the rows' velocities (U sin ψ, U cos ψ), constant beyond
-/// the first and last rows.
-fn table_velocity(rows: &[[f64; 3]], depth: f64) -> [f64; 2] {
-    let vel = |r: &[f64; 3]| {
-        let [sx, sz] = direction_of_angle(r[2]);
-        [r[1] * sx, r[1] * sz]
-    };
-    let j = rows.partition_point(|r| r[0] <= depth);
-    if j == 0 {
-        return vel(&rows[0]);
-    }
-    if j == rows.len() {
-        return vel(&rows[j - 1]);
-    }
-    let (a, b) = (&rows[j - 1], &rows[j]);
-    let w = (depth - a[0]) / (b[0] - a[0]);
-    let (va, vb) = (vel(a), vel(b));
-    [va[0] + w * (vb[0] - va[0]), va[1] + w * (vb[1] - va[1])]
-}
+use crate::scene::{current_velocity, Current};
 
 /// Drag relative to a current (module docs): F(p) = −D (p − P)⊙|p − P| with
 /// Pᵢ = lᵢ Σ_{k≥i} m_k U(y_k), componentwise, added to ṗ. It replaces [`super::Drag`] when the

@@ -1,7 +1,7 @@
 //! Still-water drag on the conjugate momenta (thesis eq. 2.4.4, docs/conventions.md).
 
 use super::{Ctx, DissipativeTerm, Embed};
-use crate::model::{Parameter, Scalar};
+use crate::base::{Parameter, Scalar};
 
 /// F_D(p) = −D p ⊙ |p| (eq. 2.4.4), componentwise, added to ṗ.
 #[derive(Clone, Debug)]

@@ -1,9 +1,9 @@
 //! Gravity on the point masses (thesis §2.2.2, docs/conventions.md).
 
 use super::{Ctx, Embed, ForceTerm};
+use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use crate::model::geometry::zi;
-use crate::model::{Parameter, Scalar};
 
 /// Gravity g along −z on the masses: U = Σᵢ mᵢ g Σ_{j≤i} l_j (e₃ᵀq_j + 1), so pendulum j feels
 /// l_j g (Σ_{i≥j} mᵢ) e₃. Reads the masses as [`Parameter::Mass`] (all seeded together: the

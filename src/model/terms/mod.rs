@@ -34,15 +34,16 @@ mod point_load;
 mod reaction_tip;
 mod spring;
 
+pub use crate::scene::current_velocity;
 pub use control::ControlForce;
-pub use current::{current_velocity, CurrentDrag};
+pub use current::CurrentDrag;
 pub use drag::Drag;
 pub use gravity::Gravity;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;
 
-use super::{Parameter, Scalar};
+use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use num_dual::Dual;
 

@@ -5,9 +5,9 @@
 use std::sync::Arc;
 
 use super::{Ctx, Embed, ForceTerm};
+use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use crate::model::geometry::zi;
-use crate::model::{Parameter, Scalar};
 use crate::scene::series::interpolate;
 
 /// One harmonic A sin(2π t/T + φ) of a point load, with A and φ read as the parameters

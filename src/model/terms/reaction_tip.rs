@@ -1,7 +1,7 @@
 //! The reaction-force tip drive (thesis §3.2, eq. 3.2.1/3.2.2): the tip's height follows the
 //! control alone.
 
-use crate::model::Scalar;
+use crate::base::Scalar;
 
 /// The "move and lock" variant of a fixed-fixed or pinned-pinned beam: the tip's z-coordinate
 /// ζ is not held at 0 but driven by the control through the tip mass, m_n ζ̈ = −u (the reaction

@@ -2,9 +2,9 @@
 //! 2.2.2-2.2.3, docs/conventions.md).
 
 use super::{Ctx, DualScratch, Embed, ForceTerm};
+use crate::base::{Parameter, Scalar};
 use crate::error::{Error, Result};
 use crate::model::geometry::{arccos_squared, dot, e2, spring_s, spring_s_ds};
-use crate::model::{Parameter, Scalar};
 
 /// The springs k₁..k_{n+1} (index 0..=n) with θᵢ = ∠(q_{i−1}, qᵢ), q₀ = q_{n+1} = e₂; only the
 /// springs the support has are present (k₁: cantilever, riser, fixed-fixed; k_{n+1}: riser,

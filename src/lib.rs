@@ -119,6 +119,9 @@
 //!   control on the [`ocp`] solver (real-time iterations, warm starts, plant/model mismatch),
 //!   and the baselines (no control, best constant force, tuned PD law on M₀).
 //! - [`statics`]: static equilibrium, solved directly (planar and spatial scenes).
+//! - [`fatigue`]: wellhead fatigue: hot-spot stress from M₀, rainflow counting (ASTM E1049-85),
+//!   DNV-RP-C203 S-N curves, Miner's rule, annual damage and life, scatter diagrams, and the
+//!   damage's gradient with respect to the stress history.
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).
 //!
@@ -135,6 +138,7 @@ pub mod catalogue;
 pub mod constraints;
 pub mod error;
 pub mod euler_bernoulli;
+pub mod fatigue;
 pub mod integrators;
 pub mod model;
 pub mod mpc;

@@ -32,7 +32,7 @@
 //! ∂D/∂M₀ₓ = c sin θ ∂D/∂σ_k, ∂D/∂M₀_z = c cos θ ∂D/∂σ_k) per time step, which is what the
 //! adjoint takes as the objective's derivative with respect to the moment at step k.
 
-use crate::model::Scalar;
+use crate::base::Scalar;
 
 use super::rainflow::{rainflow_visit, Cycle, RainflowWorkspace};
 use super::sn::SnCurve;

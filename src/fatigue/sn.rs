@@ -22,7 +22,7 @@
 use std::fmt;
 use std::str::FromStr;
 
-use crate::model::Scalar;
+use crate::base::Scalar;
 
 use super::FatigueError;
 

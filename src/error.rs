@@ -3,7 +3,15 @@
 
 use thiserror::Error;
 
+mod model;
+mod start;
+mod stepper;
+
+pub use crate::euler_bernoulli::EulerBernoulliError;
 pub use crate::scene::SceneError;
+pub use model::ModelError;
+pub use start::StartError;
+pub use stepper::StepperError;
 
 /// Errors from simulation, differentiation and optimisation.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -12,6 +20,18 @@ pub enum Error {
     /// The scene is invalid (names the key and the reason).
     #[error(transparent)]
     Scene(#[from] SceneError),
+    /// A chain's configuration the model cannot take (the control node, the fold limit).
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// An input a stepper or a comparison integrator refuses (the step, the state, the tip).
+    #[error(transparent)]
+    Stepper(#[from] StepperError),
+    /// A horizon's start state the adjoint cannot begin from.
+    #[error(transparent)]
+    Start(#[from] StartError),
+    /// An argument of the Euler-Bernoulli reference beam out of its range.
+    #[error(transparent)]
+    EulerBernoulli(#[from] EulerBernoulliError),
     /// The Newton iteration for the constraint multipliers λ of one step (RATTLE's implicit first
     /// half step, eq. 1.6.1; SHAKE's position step) did not reach its tolerance. Almost always the
     /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at

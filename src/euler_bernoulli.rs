@@ -55,7 +55,9 @@ use std::ops::RangeInclusive;
 
 use nalgebra::DMatrix;
 
-use crate::error::Error;
+mod error;
+
+pub use error::EulerBernoulliError;
 
 /// Static cantilever under a tip load F (thesis eq. 2.4.5):
 ///
@@ -154,21 +156,11 @@ pub struct EulerBernoulli {
 /// the band storage is O(n)).
 pub const MAX_SEGMENTS: usize = 10_000_000;
 
-fn invalid(name: &'static str, reason: impl Into<String>) -> Error {
-    Error::InvalidArgument {
-        name,
-        reason: reason.into(),
-    }
-}
-
-fn positive_finite(name: &'static str, value: f64) -> Result<(), Error> {
+fn positive_finite(name: &'static str, value: f64) -> Result<(), EulerBernoulliError> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(invalid(
-            name,
-            format!("must be positive and finite, got {value}"),
-        ))
+        Err(EulerBernoulliError::NotPositive { name, value })
     }
 }
 
@@ -180,7 +172,7 @@ impl EulerBernoulli {
     /// node add up).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] if `n_segments < 2` (the five-point stencil with its ghost nodes
+    /// [`EulerBernoulliError`] if `n_segments < 2` (the five-point stencil with its ghost nodes
     /// needs nodes 0..=2 at least) or `n_segments >` [`MAX_SEGMENTS`], if `length`, `ei` or
     /// `mass_per_node` is not positive and finite, if the stiffness scale EI/d³ overflows, if a load's
     /// node is outside 0..=n or is held by the support (z = 0 there, so the load would have no
@@ -192,21 +184,15 @@ impl EulerBernoulli {
         mass_per_node: f64,
         support: EbSupport,
         loads: &[(usize, f64)],
-    ) -> Result<Self, Error> {
+    ) -> Result<Self, EulerBernoulliError> {
         if n_segments < 2 {
-            return Err(invalid(
-                "n_segments",
-                format!(
-                    "the five-point stencil with ghost nodes needs at least 2 segments, got \
-                     {n_segments}"
-                ),
-            ));
+            return Err(EulerBernoulliError::TooFewSegments { n_segments });
         }
         if n_segments > MAX_SEGMENTS {
-            return Err(invalid(
-                "n_segments",
-                format!("at most {MAX_SEGMENTS} segments are supported, got {n_segments}"),
-            ));
+            return Err(EulerBernoulliError::TooManySegments {
+                n_segments,
+                max: MAX_SEGMENTS,
+            });
         }
         positive_finite("length", length)?;
         positive_finite("ei", ei)?;
@@ -215,13 +201,7 @@ impl EulerBernoulli {
         let d = length / n as f64;
         let scale = ei / (d * d * d);
         if !(scale.is_finite() && scale > 0.0 && (16.0 * scale / mass_per_node).is_finite()) {
-            return Err(invalid(
-                "ei",
-                format!(
-                    "the stiffness scale EI/d³ = {scale:e} (d = {d:e}) is not a usable finite \
-                     positive number"
-                ),
-            ));
+            return Err(EulerBernoulliError::StiffnessScale { scale, d });
         }
         let last = match support {
             EbSupport::Cantilever => n,
@@ -230,32 +210,21 @@ impl EulerBernoulli {
         let mut nodal_force = vec![0.0; n + 1];
         for &(node, force) in loads {
             if node > n {
-                return Err(invalid(
-                    "loads",
-                    format!("load node {node} is outside the nodes 0..={n}"),
-                ));
+                return Err(EulerBernoulliError::LoadNodeOutside { node, n });
             }
             if node == 0 || node > last {
-                return Err(invalid(
-                    "loads",
-                    format!(
-                        "load node {node} is held by the {support:?} support (z = 0 there); \
-                         loads must act on the free nodes 1..={last}"
-                    ),
-                ));
+                return Err(EulerBernoulliError::LoadNodeHeld {
+                    node,
+                    support,
+                    last,
+                });
             }
             if !force.is_finite() {
-                return Err(invalid(
-                    "loads",
-                    format!("the force at node {node} is not finite ({force})"),
-                ));
+                return Err(EulerBernoulliError::NonFiniteForce { node, force });
             }
             nodal_force[node] -= force;
             if !nodal_force[node].is_finite() {
-                return Err(invalid(
-                    "loads",
-                    format!("the forces at node {node} add up to a non-finite value"),
-                ));
+                return Err(EulerBernoulliError::NonFiniteForceSum { node });
             }
         }
 
@@ -532,14 +501,15 @@ impl EulerBernoulli {
     /// ignored.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] if `z` or `v` does not have n + 1 entries.
-    pub fn energy(&self, z: &[f64], v: &[f64]) -> Result<f64, Error> {
+    /// [`EulerBernoulliError`] if `z` or `v` does not have n + 1 entries.
+    pub fn energy(&self, z: &[f64], v: &[f64]) -> Result<f64, EulerBernoulliError> {
         for (name, x) in [("z", z), ("v", v)] {
             if x.len() != self.n + 1 {
-                return Err(invalid(
+                return Err(EulerBernoulliError::WrongNodeCount {
                     name,
-                    format!("expected {} node values, got {}", self.n + 1, x.len()),
-                ));
+                    expected: self.n + 1,
+                    got: x.len(),
+                });
             }
         }
         let zf = &z[self.free_nodes()];
@@ -563,9 +533,9 @@ impl EulerBernoulli {
     /// Returns the node deflections z₀..zₙ at t_k = k h, k = 0..=`steps` (`steps` + 1 rows).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] if `h` is not positive and finite, if h ≥ [`Self::stability_limit`]
+    /// [`EulerBernoulliError`] if `h` is not positive and finite, if h ≥ [`Self::stability_limit`]
     /// (the method is unstable for h ≥ 2/√λ_max), or if `steps` + 1 rows cannot be allocated.
-    pub fn simulate(&self, h: f64, steps: usize) -> Result<Vec<Vec<f64>>, Error> {
+    pub fn simulate(&self, h: f64, steps: usize) -> Result<Vec<Vec<f64>>, EulerBernoulliError> {
         Ok(self.integrate(h, steps, false)?.0)
     }
 
@@ -574,7 +544,11 @@ impl EulerBernoulli {
     ///
     /// # Errors
     /// As [`Self::simulate`].
-    pub fn simulate_states(&self, h: f64, steps: usize) -> Result<EbTrajectory, Error> {
+    pub fn simulate_states(
+        &self,
+        h: f64,
+        steps: usize,
+    ) -> Result<EbTrajectory, EulerBernoulliError> {
         let (z, v) = self.integrate(h, steps, true)?;
         Ok(EbTrajectory { step: h, z, v })
     }
@@ -585,28 +559,20 @@ impl EulerBernoulli {
         h: f64,
         steps: usize,
         keep_v: bool,
-    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), Error> {
+    ) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), EulerBernoulliError> {
         positive_finite("h", h)?;
         let limit = self.stability_limit();
         if h >= limit {
-            return Err(invalid(
-                "h",
-                format!(
-                    "Störmer–Verlet is unstable for h ≥ 2/√λ_max; h = {h} exceeds the limit \
-                     {limit:.6e} (Gershgorin bound λ_max ≤ {:.6e})",
-                    self.max_eigenvalue_bound()
-                ),
-            ));
+            return Err(EulerBernoulliError::Unstable {
+                h,
+                limit,
+                lambda_max: self.max_eigenvalue_bound(),
+            });
         }
         let rows = steps
             .checked_add(1)
-            .ok_or_else(|| invalid("steps", format!("{steps} steps overflow the row count")))?;
-        let too_many = |_| {
-            invalid(
-                "steps",
-                format!("cannot allocate {rows} rows of node values"),
-            )
-        };
+            .ok_or(EulerBernoulliError::StepsOverflow { steps })?;
+        let too_many = |_| EulerBernoulliError::RowsNotAllocated { rows };
         let mut zs: Vec<Vec<f64>> = Vec::new();
         zs.try_reserve_exact(rows).map_err(too_many)?;
         let mut vs: Vec<Vec<f64>> = Vec::new();

@@ -16,10 +16,12 @@
 //! refuse it at construction.
 
 use crate::base::Scalar;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::model::Chain;
 use crate::scene::{ControlKind, Scene};
-use crate::steppers::{check_finite, ProjectedRk4, Rattle, Shake, StepStats, Stepper};
+use crate::steppers::{
+    check_finite, ProjectedRk4, Rattle, Shake, StepStats, Stepper, StepperError,
+};
 
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -93,14 +95,11 @@ impl<D: Scalar, const DIM: usize, S: Stepper<D, DIM>> Run<D, DIM, S> {
     /// The stepper's initial state ([`Stepper::initial_state`]) with the constant control `u`.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] if `u` is not finite; the errors of the initial state's set-up
+    /// [`StepperError::NonFiniteControl`] if `u` is not finite; the errors of the initial state's set-up
     /// (SHAKE's starter).
     pub fn new(mut stepper: S, u: D) -> Result<Self> {
         if !u.re().is_finite() {
-            return Err(Error::InvalidArgument {
-                name: "u",
-                reason: format!("the control must be finite, got {}", u.re()),
-            });
+            return Err(StepperError::NonFiniteControl { u: u.re() }.into());
         }
         let state = stepper.initial_state(u)?;
         Ok(Run {
@@ -178,7 +177,7 @@ impl<D: Scalar, const DIM: usize, S: Stepper<D, DIM>> Run<D, DIM, S> {
     /// Advances the state by one step.
     ///
     /// # Errors
-    /// The stepper's typed errors (naming the step), and [`Error::NonFinite`] for a non-finite
+    /// The stepper's typed errors (naming the step), and [`crate::Error::NonFinite`] for a non-finite
     /// new state.
     pub fn step(&mut self) -> Result<StepStats> {
         let s = self.stepper.step(&mut self.state, self.k, self.u, self.u)?;
@@ -228,10 +227,7 @@ fn constant_control(scene: &Scene) -> Result<f64> {
     match &scene.control {
         None => Ok(0.0),
         Some(c) if c.kind == ControlKind::Constant => Ok(c.values[0]),
-        Some(_) => Err(Error::InvalidArgument {
-            name: "control",
-            reason: "the comparison integrators support a constant control only".into(),
-        }),
+        Some(_) => Err(StepperError::NonConstantControl.into()),
     }
 }
 
@@ -241,8 +237,10 @@ impl Integrator {
     /// ignored.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] if `h` is not positive and finite, if the scene has a per-step
-    /// control, or if `method` is not RATTLE and the scene uses the reaction-force tip; the
+    /// [`StepperError::StepNotPositive`] if `h` is not positive and finite,
+    /// [`StepperError::NonConstantControl`] if the scene has a per-step control,
+    /// [`StepperError::ReactionTipUnsupported`] if `method` is not RATTLE and the scene uses the
+    /// reaction-force tip; the
     /// scene's own validation errors; and any error of the first step's set-up (SHAKE's starter).
     pub fn new(scene: &Scene, method: Method, h: f64) -> Result<Self> {
         let mut chain = Chain::<f64, 2>::from_scene(scene)?;
@@ -256,7 +254,7 @@ impl Integrator {
     /// As [`Integrator::new`], from a chain and a constant control `u`.
     ///
     /// # Errors
-    /// As [`Integrator::new`], and [`Error::InvalidArgument`] for a non-finite `u`.
+    /// As [`Integrator::new`], and [`StepperError::NonFiniteControl`] for a non-finite `u`.
     pub fn from_chain(chain: Chain<f64, 2>, method: Method, h: f64, u: f64) -> Result<Self> {
         Ok(match method {
             Method::Rattle => Integrator::Rattle(Box::new(Run::new(Rattle::new(chain, h)?, u)?)),
@@ -324,7 +322,7 @@ impl Integrator {
     /// Advances the state by one step.
     ///
     /// # Errors
-    /// A typed [`Error`] naming the step: Newton not converged, folded joint, singular system,
+    /// A typed [`Error`](crate::Error) naming the step: Newton not converged, folded joint, singular system,
     /// or a non-finite state.
     pub fn step(&mut self) -> Result<StepStats> {
         each!(self, r => r.step())

@@ -162,7 +162,7 @@ pub fn static_equilibrium_at(scene: &Scene, t: f64, u: f64) -> Result<StaticSolu
 ///
 /// # Errors
 /// As [`static_equilibrium`]; [`Error::StaticNotIsolated`] for a beam without end springs
-/// (pinned-pinned), [`Error::InvalidArgument`] for u_x ≠ 0 in a scene without a control.
+/// (pinned-pinned), [`crate::model::ModelError::NoControlNode`] for u_x ≠ 0 in a scene without a control.
 pub fn static_equilibrium_spatial(scene: &Scene, t: f64, u: [f64; 2]) -> Result<StaticSolution> {
     spatial::solve(scene, t, u)
 }

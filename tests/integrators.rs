@@ -5,7 +5,7 @@
 
 use chainbeam::catalogue;
 use chainbeam::integrators::{integrate, Integrator, Method};
-use chainbeam::steppers::{ProjectedRk4, Rattle, Shake, Stepper};
+use chainbeam::steppers::{ProjectedRk4, Rattle, Shake, Stepper, StepperError};
 use chainbeam::{Chain, Error, Parameter, Scalar, Scene};
 use num_dual::Dual64;
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -200,12 +200,14 @@ fn reaction_tip_and_bad_step_are_rejected() {
     scene.beam.reaction_force = true;
     assert!(matches!(
         Integrator::new(&scene, Method::Shake, 0.01),
-        Err(Error::InvalidArgument { .. })
+        Err(Error::Stepper(StepperError::ReactionTipUnsupported {
+            method: "SHAKE"
+        }))
     ));
     assert!(Integrator::new(&scene, Method::Rattle, 0.01).is_ok());
     assert!(matches!(
         Integrator::new(&catalogue::thesis_cantilever(), Method::ProjectedRk4, -1.0),
-        Err(Error::InvalidArgument { .. })
+        Err(Error::Stepper(StepperError::StepNotPositive { h: -1.0 }))
     ));
 }
 
@@ -431,7 +433,10 @@ fn a_state_of_another_chain_is_a_typed_error() {
         .unwrap();
     assert!(matches!(
         shake5.step(&mut state10, 0, 0.0, 0.0),
-        Err(Error::InvalidArgument { name: "state", .. })
+        Err(Error::Stepper(StepperError::StateSize {
+            got: 10,
+            expected: 5
+        }))
     ));
     let mut rk5 = ProjectedRk4::new(five, 0.01).unwrap();
     let mut state10 = ProjectedRk4::new(ten, 0.01)
@@ -440,6 +445,9 @@ fn a_state_of_another_chain_is_a_typed_error() {
         .unwrap();
     assert!(matches!(
         rk5.step(&mut state10, 0, 0.0, 0.0),
-        Err(Error::InvalidArgument { name: "state", .. })
+        Err(Error::Stepper(StepperError::StateSize {
+            got: 10,
+            expected: 5
+        }))
     ));
 }

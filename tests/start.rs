@@ -10,7 +10,7 @@
 //! sides of t_m, as the tail's u₀ now does, so the *whole* tail gradient is the run's), forward-
 //! mode dual numbers through the same forward value, and central differences.
 
-use chainbeam::adjoint::forward_value_from;
+use chainbeam::adjoint::{forward_value_from, StartError};
 use chainbeam::ocp::{OcpOptions, Solver};
 use chainbeam::{
     catalogue, BendingObjective, Chain, Control, ControlKind, ControlMap, ControlProblem, Error,
@@ -197,13 +197,7 @@ fn bad_starts_are_refused() {
     off.q[2] = [1.01, 0.0];
     let e = problem(10).starting_from(off, 0.0).unwrap_err();
     assert!(
-        matches!(
-            e,
-            Error::InvalidArgument {
-                name: "initial state",
-                ..
-            }
-        ),
+        matches!(e, Error::Start(StartError::OffManifold { .. })),
         "{e}"
     );
     // Multipliers of the wrong length (n + 1 where the free tip has n).
@@ -229,13 +223,7 @@ fn bad_starts_are_refused() {
     assert!(p.clone().starting_from(good.clone(), 0.0).is_ok());
     let e = p.starting_before_kick(good, 0.0).unwrap_err();
     assert!(
-        matches!(
-            e,
-            Error::InvalidArgument {
-                name: "start kick",
-                ..
-            }
-        ),
+        matches!(e, Error::Start(StartError::PendingKickWithReactionTip)),
         "{e}"
     );
 }

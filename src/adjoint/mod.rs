@@ -52,6 +52,7 @@ pub use problem::ControlProblem;
 pub use tape::{AdjointResult, Checkpointing, AUTO_MEMORY_BUDGET};
 
 use crate::base::{Parameter, Scalar, TipCondition};
+pub use crate::error::StartError;
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::simulate::check_controls;
@@ -172,12 +173,7 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
             }
         }
         if self.kick == StartKick::Pending && chain.tip_condition() == TipCondition::Reaction {
-            return Err(Error::InvalidArgument {
-                name: "start kick",
-                reason: "a pending control half-kick needs the control as a force term; the \
-                         reaction-force tip's control drives the tip target (eq. 3.2.1)"
-                    .into(),
-            });
+            return Err(StartError::PendingKickWithReactionTip.into());
         }
         self.check_manifold(chain)
     }
@@ -197,13 +193,12 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
         let vmax = v.iter().flatten().fold(0.0f64, |m, x| m.max(x.re().abs()));
         let velocity = r.iter().fold(0.0f64, |m, x| m.max(x.re().abs())) / (1.0 + vmax);
         if position > START_TOLERANCE || velocity > START_TOLERANCE {
-            return Err(Error::InvalidArgument {
-                name: "initial state",
-                reason: format!(
-                    "not on the constraint manifold: position residual {position:.3e}, \
-                     velocity residual {velocity:.3e} (relative), tolerance {START_TOLERANCE:e}"
-                ),
-            });
+            return Err(StartError::OffManifold {
+                position,
+                velocity,
+                tolerance: START_TOLERANCE,
+            }
+            .into());
         }
         Ok(())
     }

@@ -135,7 +135,7 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     ///
     /// # Errors
     /// [`Error::WrongLength`] / [`Error::NotFinite`] naming the part of the state (or the start
-    /// time), [`Error::InvalidArgument`] when the state is off the constraint manifold
+    /// time), [`StartError::OffManifold`](super::StartError::OffManifold) when the state is off the constraint manifold
     /// (ĝ(q) = 0 and Ĝ(q) M⁻¹ p = 0 to [`crate::adjoint::START_TOLERANCE`]).
     pub fn starting_from(self, state: State<f64, DIM>, t0: f64) -> Result<Self> {
         self.with_start(state, t0, StartKick::Included)
@@ -155,7 +155,7 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     /// solver [`crate::ocp`] all honour it.
     ///
     /// # Errors
-    /// As [`ControlProblem::starting_from`]; [`Error::InvalidArgument`] (`start kick`) for a
+    /// As [`ControlProblem::starting_from`]; [`StartError::PendingKickWithReactionTip`](super::StartError::PendingKickWithReactionTip) for a
     /// reaction-force tip, whose control is not a force term.
     pub fn starting_before_kick(self, state_hat: State<f64, DIM>, t0: f64) -> Result<Self> {
         self.with_start(state_hat, t0, StartKick::Pending)

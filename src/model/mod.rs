@@ -13,6 +13,7 @@
 //! (`cargo bench --bench step -- step_dim`).
 
 pub mod geometry;
+mod mass;
 pub mod terms;
 
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
@@ -24,6 +25,7 @@ pub use terms::{
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
+pub use crate::error::ModelError;
 use crate::error::{Error, Result};
 use crate::scene::{Scene, Support};
 
@@ -152,13 +154,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let control_node = scene.control.as_ref().map(|c| c.node);
         if let (TipCondition::Reaction, Some(c)) = (tip, control_node) {
             if c != n {
-                return Err(Error::InvalidArgument {
-                    name: "control.node",
-                    reason: format!(
-                        "the reaction-force variant moves the tip: the control must act at \
-                         node {n}, not {c}"
-                    ),
-                });
+                return Err(ModelError::ReactionTipControlNode { node: c, n }.into());
             }
         }
         let springs = Self::springs_of(scene);
@@ -362,10 +358,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     pub fn set_control_node(&mut self, node: Option<usize>) -> Result<()> {
         if let Some(c) = node {
             if c == 0 || c > self.n {
-                return Err(Error::InvalidArgument {
-                    name: "control node",
-                    reason: format!("must be in 1..={}, got {c}", self.n),
-                });
+                return Err(ModelError::ControlNodeOutOfRange { node: c, n: self.n }.into());
             }
         }
         self.control = node.map(|node| ControlForce {
@@ -384,7 +377,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     ///
     /// # Errors
     /// [`Error::NeedsSpatialModel`] for the planar model (`DIM = 2`) with a nonempty slice;
-    /// [`Error::InvalidArgument`] without a control node; [`Error::NotFinite`] for a non-finite
+    /// [`ModelError::NoControlNode`] without a control node; [`Error::NotFinite`] for a non-finite
     /// value.
     pub fn set_control_x(&mut self, ux: &[D]) -> Result<()> {
         if !ux.is_empty() {
@@ -394,10 +387,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 });
             }
             if self.control.is_none() {
-                return Err(Error::InvalidArgument {
-                    name: "control_x",
-                    reason: "the model has no control node".to_string(),
-                });
+                return Err(ModelError::NoControlNode.into());
             }
             if let Some(index) = ux.iter().position(|x| !x.re().is_finite()) {
                 return Err(Error::NotFinite {
@@ -433,10 +423,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// it is reported as [`Error::Folded`].
     pub fn set_fold_limit_deg(&mut self, deg: f64) -> Result<()> {
         if !(deg > 0.0 && deg < 180.0) {
-            return Err(Error::InvalidArgument {
-                name: "fold limit",
-                reason: format!("must be in (0, 180) degrees, got {deg}"),
-            });
+            return Err(ModelError::FoldLimitOutOfRange { deg }.into());
         }
         self.springs.fold_cos = deg.to_radians().cos();
         Ok(())
@@ -529,75 +516,6 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 self.loads.as_ref().is_some_and(|ls| ls.reads(p, DIM == 3))
             }
         }
-    }
-
-    /// Applies M⁻¹ = M̄⁻¹ ⊗ I in O(n): M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l) with Δ the
-    /// lower-bidiagonal difference matrix (docs/conventions.md). `out` may not alias `v`.
-    #[inline]
-    pub fn apply_inverse_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
-        let n = self.n;
-        // u = diag(1/m) Δᵀ diag(1/l) v, stored in out; then out = diag(1/l) Δ u.
-        let mut next = [D::zero(); DIM];
-        for i in (0..n).rev() {
-            let mut cur = v[i];
-            for c in cur.iter_mut() {
-                *c *= self.inv_lengths[i];
-            }
-            for d in 0..DIM {
-                out[i][d] = (cur[d] - next[d]) * self.inv_masses[i];
-            }
-            next = cur;
-        }
-        let mut prev = [D::zero(); DIM];
-        for i in 0..n {
-            let cur = out[i];
-            for d in 0..DIM {
-                out[i][d] = (cur[d] - prev[d]) * self.inv_lengths[i];
-            }
-            prev = cur;
-        }
-    }
-
-    /// Applies M = M̄ ⊗ I in O(n): M̄ = diag(l) Tᵀ diag(m) T diag(l) with T the lower-triangular
-    /// matrix of ones (docs/conventions.md; the inverse of [`Chain::apply_inverse_mass`]): a forward prefix sum
-    /// of lᵢvᵢ weighted by mᵢ, then a backward suffix sum weighted by lᵢ. `out` may not alias `v`.
-    #[inline]
-    pub fn apply_mass(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
-        let n = self.n;
-        let mut acc = [D::zero(); DIM];
-        for i in 0..n {
-            for d in 0..DIM {
-                acc[d] += self.lengths[i] * v[i][d];
-                out[i][d] = self.masses[i] * acc[d];
-            }
-        }
-        let mut rev = [D::zero(); DIM];
-        for i in (0..n).rev() {
-            for d in 0..DIM {
-                rev[d] += out[i][d];
-                out[i][d] = self.lengths[i] * rev[d];
-            }
-        }
-    }
-
-    /// The tridiagonal entries of M̄⁻¹ in row i (0-based): `(diag_i, off_i)` with
-    /// off_i = M̄⁻¹_{i,i+1} = −1/(lᵢ l_{i+1} mᵢ) and M̄⁻¹_{ii} = (1/lᵢ²)(1/mᵢ + 1/m_{i−1}) (no
-    /// m₀ term for the first pendulum). From M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l).
-    #[inline(always)]
-    pub(crate) fn minv_entries(&self, i: usize) -> (D, D) {
-        let li = self.inv_lengths[i];
-        let mi = self.inv_masses[i];
-        let d = if i > 0 {
-            li * li * (mi + self.inv_masses[i - 1])
-        } else {
-            li * li * mi
-        };
-        let off = if i + 1 < self.n {
-            -(li * self.inv_lengths[i + 1] * mi)
-        } else {
-            D::zero()
-        };
-        (d, off)
     }
 
     /// ∂U/∂q at time t with control u: the sum of every term's force ([`ForceTerm::force`];

@@ -39,6 +39,7 @@ pub mod rk4;
 pub mod shake;
 
 use crate::base::{Scalar, TipCondition};
+pub use crate::error::StepperError;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
 use crate::model::{Chain, Ctx, DissipativeTerm};
@@ -85,13 +86,10 @@ pub(crate) fn singular(step: usize, zp: ZeroPivot) -> Error {
 /// not implement its rheonomic tip constraint.
 pub(crate) fn refuse_reaction_tip<D: Scalar, const DIM: usize>(
     chain: &Chain<D, DIM>,
-    method: &str,
+    method: &'static str,
 ) -> Result<()> {
     if chain.tip_condition() == TipCondition::Reaction {
-        return Err(Error::InvalidArgument {
-            name: "tip condition",
-            reason: format!("{method} does not support the reaction-force tip; use RATTLE"),
-        });
+        return Err(StepperError::ReactionTipUnsupported { method }.into());
     }
     Ok(())
 }
@@ -99,10 +97,7 @@ pub(crate) fn refuse_reaction_tip<D: Scalar, const DIM: usize>(
 /// Checks that the step h is positive and finite.
 pub(crate) fn check_step(h: f64) -> Result<()> {
     if !(h > 0.0 && h.is_finite()) {
-        return Err(Error::InvalidArgument {
-            name: "h",
-            reason: format!("the step must be positive and finite, got {h}"),
-        });
+        return Err(StepperError::StepNotPositive { h }.into());
     }
     Ok(())
 }
@@ -110,10 +105,11 @@ pub(crate) fn check_step(h: f64) -> Result<()> {
 /// Checks that a state passed to a stepper has the chain's n blocks.
 pub(crate) fn check_len<T>(v: &[T], n: usize) -> Result<()> {
     if v.len() != n {
-        return Err(Error::InvalidArgument {
-            name: "state",
-            reason: format!("the state has {} blocks, the chain {n}", v.len()),
-        });
+        return Err(StepperError::StateSize {
+            got: v.len(),
+            expected: n,
+        }
+        .into());
     }
     Ok(())
 }

@@ -309,7 +309,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// next step are untouched.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`tip condition`) for the reaction-force tip, whose control
+    /// [`StepperError::ReactionTipUnsupported`](super::StepperError::ReactionTipUnsupported) for the reaction-force tip, whose control
     /// drives the tip target (eq. 3.2.1) instead of acting as a force term;
     /// [`Error::SingularSystem`] (reported at step 0).
     pub fn control_half_kick(

@@ -137,8 +137,9 @@ impl<D: Scalar, const DIM: usize> ProjectedRk4<D, DIM> {
     /// [`RattleOptions::default`].
     ///
     /// # Errors
-    /// [`crate::Error::InvalidArgument`] if `h` is not positive and finite or the chain has the
-    /// reaction-force tip (only RATTLE supports it).
+    /// [`super::StepperError::StepNotPositive`] if `h` is not positive and finite,
+    /// [`super::StepperError::ReactionTipUnsupported`] if the chain has the reaction-force tip
+    /// (only RATTLE supports it).
     pub fn new(chain: Chain<D, DIM>, h: f64) -> Result<Self> {
         check_step(h)?;
         refuse_reaction_tip(&chain, "projected RK4")?;
@@ -228,7 +229,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for ProjectedRk4<D, DIM> {
     /// # Errors
     /// [`crate::Error::NonFinite`] when the explicit step blows up, [`crate::Error::Folded`],
     /// [`crate::Error::NewtonNotConverged`] (projection), [`crate::Error::SingularSystem`], and
-    /// [`crate::Error::InvalidArgument`] for a state of another chain's size. After an error q
+    /// [`super::StepperError::StateSize`] for a state of another chain's size. After an error q
     /// may already be q_{k+1} while p is still p_k: restart from a stored state.
     fn step(
         &mut self,

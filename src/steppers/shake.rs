@@ -88,8 +88,9 @@ impl<D: Scalar, const DIM: usize> Shake<D, DIM> {
     /// SHAKE with step `h` and the Newton options of [`RattleOptions::default`].
     ///
     /// # Errors
-    /// [`crate::Error::InvalidArgument`] if `h` is not positive and finite or the chain has the
-    /// reaction-force tip (only RATTLE supports it).
+    /// [`super::StepperError::StepNotPositive`] if `h` is not positive and finite,
+    /// [`super::StepperError::ReactionTipUnsupported`] if the chain has the reaction-force tip
+    /// (only RATTLE supports it).
     pub fn new(chain: Chain<D, DIM>, h: f64) -> Result<Self> {
         check_step(h)?;
         refuse_reaction_tip(&chain, "SHAKE")?;
@@ -180,7 +181,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Shake<D, DIM> {
     /// # Errors
     /// [`crate::Error::Folded`], [`crate::Error::NewtonNotConverged`],
     /// [`crate::Error::SingularSystem`], [`crate::Error::NonFinite`] (at step k + 1), and
-    /// [`crate::Error::InvalidArgument`] for a state of another chain's size. After an error q_k,
+    /// [`super::StepperError::StateSize`] for a state of another chain's size. After an error q_k,
     /// p_k and q_{k+1} are unchanged (the Newton predictor λ may not be).
     fn step(
         &mut self,

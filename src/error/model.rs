@@ -1,0 +1,39 @@
+//! Errors of building and configuring a [`Chain`](crate::model::Chain).
+
+use thiserror::Error;
+
+/// A chain's configuration a caller asked for that the model cannot take.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// The reaction-force tip (eq. 3.2.1) moves the tip node by the control, so the control must
+    /// act at the tip node n (`control.node`).
+    #[error(
+        "invalid argument `control.node`: the reaction-force variant moves the tip: the control \
+         must act at node {n}, not {node}"
+    )]
+    ReactionTipControlNode {
+        /// The control node given.
+        node: usize,
+        /// The number of pendulums n (the tip node).
+        n: usize,
+    },
+    /// A control node outside 1..=n ([`Chain::set_control_node`](crate::model::Chain::set_control_node)).
+    #[error("invalid argument `control node`: must be in 1..={n}, got {node}")]
+    ControlNodeOutOfRange {
+        /// The node given.
+        node: usize,
+        /// The number of pendulums n.
+        n: usize,
+    },
+    /// x components of a control ([`Chain::set_control_x`](crate::model::Chain::set_control_x))
+    /// for a chain without a control node.
+    #[error("invalid argument `control_x`: the model has no control node")]
+    NoControlNode,
+    /// A fold limit outside (0°, 180°) ([`Chain::set_fold_limit_deg`](crate::model::Chain::set_fold_limit_deg)).
+    #[error("invalid argument `fold limit`: must be in (0, 180) degrees, got {deg}")]
+    FoldLimitOutOfRange {
+        /// The limit given \[°\].
+        deg: f64,
+    },
+}

@@ -59,8 +59,8 @@ use num_dual::Derivative;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use super::globalise::{backtrack, next_mu, raise_mu, Accepted, Progress};
-use super::line_search::{rollout, Traj};
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, LineSearch, ModelChange, Progress};
+use super::line_search::{Shooting, Simulator, Traj};
 use super::riccati::StageCost;
 use super::stage::{Dv, StageModel, Stepper, CHUNK};
 use super::{
@@ -83,8 +83,7 @@ pub struct Condensed {
     theta_stage: Vec<usize>,
     nominal: Traj,
     trial: Traj,
-    stepper: Stepper<f64>,
-    scratch: Vec<[f64; 2]>,
+    sim: Simulator,
     chunks: Vec<SensChunk>,
     threads: usize,
     /// H (np × np, row-major, lower triangle filled) and g at the nominal.
@@ -160,8 +159,7 @@ impl Condensed {
         };
         let n = model.n;
         Ok(Condensed {
-            stepper: Stepper::new(&model)?,
-            scratch: vec![[0.0; 2]; n],
+            sim: Simulator::new(&model)?,
             nominal: Traj::new(n, steps),
             trial: Traj::new(n, steps),
             hess: vec![0.0; np * np],
@@ -215,7 +213,7 @@ impl Condensed {
         }
         let start = problem.start();
         self.model.start = start.cloned();
-        self.stepper.set_start(start);
+        self.sim.stepper.set_start(start);
         for c in &mut self.chunks {
             c.stepper.set_start(start);
         }
@@ -247,15 +245,14 @@ impl Condensed {
             out.u[k] = theta[self.piece[k]].clamp(lo, hi);
         }
         self.counts.0 += 1;
-        rollout(
-            (&self.model, &self.cost),
-            &mut self.stepper,
-            &self.free,
-            (lo, hi),
-            None,
-            out,
-            &mut self.scratch,
-        )?;
+        let shooting = Shooting {
+            model: &self.model,
+            cost: &self.cost,
+            free: &self.free,
+            lower: lo,
+            upper: hi,
+        };
+        self.sim.rollout(&shooting, None, out)?;
         Ok(out.cost)
     }
 
@@ -485,7 +482,7 @@ impl Condensed {
 
     /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
     /// `None` with μ beyond its limit.
-    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<(Accepted, (f64, f64))> {
+    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<(Accepted, ModelChange)> {
         let theta = self.theta();
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         let np = self.np;
@@ -496,9 +493,22 @@ impl Condensed {
             1.0
         };
         loop {
-            let bounds = (&theta[..], lo, hi);
-            if let Some(model) = self.qp.solve(&self.hess, &self.grad, bounds, *mu * scale) {
-                let (jbar, search) = (self.nominal.cost, (self.opts.armijo, self.opts.backtracks));
+            let qp = DenseQp {
+                h: &self.hess,
+                g: &self.grad,
+                theta: &theta,
+                lower: lo,
+                upper: hi,
+                lambda: *mu * scale,
+            };
+            if let Some(model) = self.qp.solve(&qp) {
+                let search = LineSearch {
+                    jbar: self.nominal.cost,
+                    j0,
+                    model,
+                    armijo: self.opts.armijo,
+                    tries: self.opts.backtracks,
+                };
                 let mut trial = theta.clone();
                 let mut rollout = |alpha: f64| {
                     for ((t, th), d) in trial.iter_mut().zip(&theta).zip(&self.qp.delta) {
@@ -506,7 +516,7 @@ impl Condensed {
                     }
                     self.simulate(&trial, true).ok()
                 };
-                if let Some(acc) = backtrack((jbar, j0), model, search, &mut rollout) {
+                if let Some(acc) = backtrack(search, &mut rollout) {
                     return Some((acc, model));
                 }
             }
@@ -521,14 +531,14 @@ impl Condensed {
     /// secant term A when, for the step just taken (`acc`, model change (d1, d2) of the model
     /// used), the model with A predicted the actual change of J better than the Gauss-Newton
     /// model without it.
-    fn choose_model(&mut self, acc: &Accepted, (d1, d2): (f64, f64)) {
+    fn choose_model(&mut self, acc: &Accepted, model: ModelChange) {
         let (np, a) = (self.np, acc.alpha);
         let d = &self.qp.delta;
         let dad: f64 = (0..np)
             .map(|i| d[i] * (0..np).map(|j| self.secant[i * np + j] * d[j]).sum::<f64>())
             .sum();
         let qa = 0.5 * a * a * dad;
-        let used = a * d1 + a * a * d2;
+        let used = model.at(a);
         let gn = if self.use_secant { used - qa } else { used };
         let actual = self.trial.cost - self.nominal.cost;
         self.use_secant = (actual - (gn + qa)).abs() < (actual - gn).abs();
@@ -677,6 +687,18 @@ fn balanced(mut chunks: Vec<SensChunk>) -> Vec<SensChunk> {
 /// inert controls ([`super::boxqp`]).
 const INERT: i8 = 2;
 
+/// The data of one dense box QP: H (lower triangle, row-major), g, the shift λ, and the box
+/// lower ≤ θ + δ ≤ upper about the point θ.
+#[derive(Clone, Copy, Debug)]
+struct DenseQp<'a> {
+    h: &'a [f64],
+    g: &'a [f64],
+    theta: &'a [f64],
+    lower: f64,
+    upper: f64,
+    lambda: f64,
+}
+
 #[derive(Clone, Debug)]
 struct BoxQp {
     delta: Vec<f64>,
@@ -710,13 +732,15 @@ impl BoxQp {
 
     /// Solves the QP with the box lo − θ ≤ δ ≤ hi − θ; returns the model change (gᵀδ, ½δᵀHδ)
     /// without λ, or `None` when H + λI is not positive definite on a free set.
-    fn solve(
-        &mut self,
-        h: &[f64],
-        g: &[f64],
-        (theta, lo, hi): (&[f64], f64, f64),
-        lambda: f64,
-    ) -> Option<(f64, f64)> {
+    fn solve(&mut self, qp: &DenseQp<'_>) -> Option<ModelChange> {
+        let DenseQp {
+            h,
+            g,
+            theta,
+            lower: lo,
+            upper: hi,
+            lambda,
+        } = *qp;
         let np = g.len();
         let bounds = |i: usize| (lo - theta[i], hi - theta[i]);
         self.delta.fill(0.0);
@@ -805,7 +829,7 @@ impl BoxQp {
     }
 
     /// (gᵀδ, ½δᵀHδ).
-    fn model_change(&self, h: &[f64], g: &[f64]) -> (f64, f64) {
+    fn model_change(&self, h: &[f64], g: &[f64]) -> ModelChange {
         let np = g.len();
         let mut quad = 0.0;
         for i in 0..np {
@@ -814,7 +838,10 @@ impl BoxQp {
             }
         }
         let lin = g.iter().zip(&self.delta).map(|(a, b)| a * b).sum();
-        (lin, 0.5 * quad)
+        ModelChange {
+            d1: lin,
+            d2: 0.5 * quad,
+        }
     }
 }
 

@@ -25,7 +25,17 @@ impl Solver {
             omega: nom.omega(k),
             mu: nom.lambda(k),
         };
-        self.jws[0].jacobians((&self.model, k), x, nom.u[k], (&mut a, &mut b))?;
+        let at = StageAt {
+            model: &self.model,
+            k,
+            x,
+            u: nom.u[k],
+        };
+        let out = JacobiansMut {
+            a: &mut a,
+            b: &mut b,
+        };
+        self.jws[0].jac.jacobians(at, out)?;
         Ok((Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]), b))
     }
 
@@ -67,18 +77,19 @@ impl Solver {
                 [xi[n + i] * t[0], xi[n + i] * t[1]]
             })
             .collect();
-        let st = &mut self.stepper.state;
+        let st = &mut self.sim.stepper.state;
         self.model.apply_mass(&v, &mut st.p);
         st.q.copy_from_slice(&q);
         let mu = self.nominal.mu(k);
         let m = st.multipliers_mut(mu.len());
         m.mu.copy_from_slice(mu);
         m.lambda.copy_from_slice(mu);
-        self.stepper.advance(k, u)?;
-        let st = &self.stepper.state;
+        self.sim.stepper.advance(k, u)?;
+        let st = &self.sim.stepper.state;
         let mut out: Vec<f64> = st.q.iter().map(|q| q[1].atan2(q[0])).collect();
         let mut w = vec![0.0; n];
-        self.model.rates(&st.q, &st.p, &mut self.scratch, &mut w);
+        self.model
+            .rates(&st.q, &st.p, &mut self.sim.scratch, &mut w);
         out.extend_from_slice(&w);
         Ok(out)
     }

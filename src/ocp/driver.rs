@@ -1,7 +1,7 @@
 //! The iteration: start, Gauss-Newton QP, closed-loop line search, regularisation schedule,
 //! convergence and failure reports (module docs, "Globalisation", "Convergence").
 
-use super::globalise::{backtrack, next_mu, raise_mu, Accepted, Progress};
+use super::globalise::{backtrack, next_mu, raise_mu, Accepted, LineSearch, ModelChange, Progress};
 use super::*;
 
 impl Solver {
@@ -47,15 +47,21 @@ impl Solver {
             self.hessians()?;
         }
         let jbar = self.nominal.cost;
-        let Some(model) = self.model_step(pr, (pg, gref))? else {
+        let Some(model) = self.model_step(pr, pg, gref)? else {
             return Ok(Some(Termination::RegularisationLimit));
         };
-        let search = (opts.armijo, opts.backtracks);
+        let search = LineSearch {
+            jbar,
+            j0: pr.j0,
+            model,
+            armijo: opts.armijo,
+            tries: opts.backtracks,
+        };
         let trial = |alpha| self.trial_rollout(alpha).then_some(self.trial.cost);
-        match backtrack((jbar, pr.j0), model, search, trial) {
+        match backtrack(search, trial) {
             Some(acc) => {
                 self.switch_curvature(acc.alpha >= 1.0 && acc.ratio >= 0.5);
-                self.accept(pr, acc, (pg, target))
+                self.accept(pr, acc, pg, target)
             }
             None => {
                 self.switch_curvature(false);
@@ -70,11 +76,7 @@ impl Solver {
     /// without every Jacobian in memory, one Riccati pass on the ε-active set. Raises μ until
     /// the model is solvable; returns the predicted change ΔJ(α) = α d1 + α² d2 as (d1, d2), or
     /// `None` with μ beyond its limit.
-    fn model_step(
-        &mut self,
-        pr: &mut Progress,
-        (pg, gref): (f64, f64),
-    ) -> Result<Option<(f64, f64)>> {
+    fn model_step(&mut self, pr: &mut Progress, pg: f64, gref: f64) -> Result<Option<ModelChange>> {
         let opts = self.opts.clone();
         let (lo, hi) = (opts.lower, opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
@@ -94,13 +96,19 @@ impl Solver {
                         .filter(|&k| self.free[k])
                         .map(|k| self.gtrue[k] * self.dv[k])
                         .sum();
-                    return Ok(Some((a, (q - jbar) - a)));
+                    return Ok(Some(ModelChange {
+                        d1: a,
+                        d2: (q - jbar) - a,
+                    }));
                 }
             } else {
                 self.set_active((1e-3 * width).min(pg));
                 if self.sweep(true)? {
                     self.ff_out.copy_from_slice(&self.riccati.ff);
-                    return Ok(Some((self.riccati.d1, self.riccati.d2)));
+                    return Ok(Some(ModelChange {
+                        d1: self.riccati.d1,
+                        d2: self.riccati.d2,
+                    }));
                 }
             }
             pr.mu = raise_mu(pr.mu);
@@ -128,17 +136,17 @@ impl Solver {
             alpha,
             nz: self.nz,
         };
+        let shooting = Shooting {
+            model: &self.model,
+            cost: &self.cost,
+            free: &self.free,
+            lower: self.opts.lower,
+            upper: self.opts.upper,
+        };
         self.counts.0 += 1;
-        rollout(
-            (&self.model, &self.cost),
-            &mut self.stepper,
-            &self.free,
-            (self.opts.lower, self.opts.upper),
-            Some(&fb),
-            &mut self.trial,
-            &mut self.scratch,
-        )
-        .is_ok()
+        self.sim
+            .rollout(&shooting, Some(&fb), &mut self.trial)
+            .is_ok()
     }
 
     /// Takes the accepted step: the trial becomes the nominal, the history grows, the
@@ -148,7 +156,8 @@ impl Solver {
         &mut self,
         pr: &mut Progress,
         acc: Accepted,
-        (pg, target): (f64, f64),
+        pg: f64,
+        target: f64,
     ) -> Result<Option<Termination>> {
         std::mem::swap(&mut self.nominal, &mut self.trial);
         self.jac_range = None;

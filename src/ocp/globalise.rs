@@ -18,22 +18,56 @@ pub(crate) struct Accepted {
     pub ratio: f64,
 }
 
-/// Backtracking on J(α) = `trial(α)` (`None`: the trial failed) from J̄ = `jbar` with the
-/// predicted change ΔJ(α) = α d1 + α² d2: α = 1 first, then the minimiser of the quadratic
-/// through J̄, d1 and J(α), kept in [α/10, α/2]; accepted when J̄ − J(α) ≥ c·(−ΔJ(α))
-/// (c = `armijo`), or, where −ΔJ is below J's round-off (relative to max(|J̄|, 10⁻⁶ |J₀|)),
-/// when J does not rise beyond it. At most `tries` trials.
+/// The change of J a model predicts along its step: ΔJ(α) = α d1 + α² d2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ModelChange {
+    /// The slope at α = 0 (gᵀδ).
+    pub d1: f64,
+    /// The curvature term (½ δᵀHδ).
+    pub d2: f64,
+}
+
+impl ModelChange {
+    /// ΔJ(α).
+    #[inline]
+    pub fn at(&self, alpha: f64) -> f64 {
+        alpha * self.d1 + alpha * alpha * self.d2
+    }
+}
+
+/// One line search: from J̄ = `jbar` (J₀ = `j0` at the start of the run) along a step whose
+/// model predicts `model`, with the acceptance fraction `armijo` and at most `tries` trials.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LineSearch {
+    pub jbar: f64,
+    pub j0: f64,
+    pub model: ModelChange,
+    pub armijo: f64,
+    pub tries: usize,
+}
+
+/// Backtracking on J(α) = `trial(α)` (`None`: the trial failed) from J̄ with the predicted
+/// change ΔJ(α) = α d1 + α² d2: α = 1 first, then the minimiser of the quadratic through J̄,
+/// d1 and J(α), kept in [α/10, α/2]; accepted when J̄ − J(α) ≥ c·(−ΔJ(α)) (c = `armijo`), or,
+/// where −ΔJ is below J's round-off (relative to max(|J̄|, 10⁻⁶ |J₀|)), when J does not rise
+/// beyond it. At most `tries` trials.
 pub(crate) fn backtrack(
-    (jbar, j0): (f64, f64),
-    (d1, d2): (f64, f64),
-    (armijo, tries): (f64, usize),
+    search: LineSearch,
     mut trial: impl FnMut(f64) -> Option<f64>,
 ) -> Option<Accepted> {
+    let LineSearch {
+        jbar,
+        j0,
+        model,
+        armijo,
+        tries,
+    } = search;
+    let d1 = model.d1;
     let jscale = jbar.abs().max(1e-6 * j0.abs());
     let tiny = ROUNDOFF * jscale;
     let mut alpha = 1.0;
     for _ in 0..tries {
-        let dj = alpha * d1 + alpha * alpha * d2;
+        let dj = model.at(alpha);
         let mut next = 0.5 * alpha;
         if let Some(jt) = trial(alpha) {
             if -dj <= tiny {

@@ -23,13 +23,15 @@
 //! at the dual point. Three chunks of a forward and a reverse dual step for n = 10.
 
 use super::stage::{
-    chunks, ndir, tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper, CHUNK,
+    chunks, eps, ndir, tangent, Dv, JacobianWorkspace, JacobiansMut, StageAt, StageModel, Stepper,
+    CHUNK,
 };
 use crate::adjoint::{Cotangents, ReverseSweep, StateView};
 use crate::base::Scalar;
 use crate::error::Result;
 use crate::model::Chain;
 use num_dual::DualSVec64;
+use std::ops::Range;
 
 /// The buffers of a stage's vector-Jacobian product (per thread, sized once): the chart point
 /// (q_k, ω_k), the post-kick momentum p_k, the kick's multipliers y, and scratch.
@@ -91,9 +93,69 @@ fn dot2<D: Scalar>(a: &[D; 2], b: &[D; 2]) -> D {
     a[0] * b[0] + a[1] * b[1]
 }
 
-#[inline]
-fn eps(x: &Dv, slot: usize) -> f64 {
-    x.eps.0.as_ref().map_or(0.0, |v| v[slot])
+/// One stage's vector-Jacobian product ∇(ν·F̃_k): stage k of `model` with the control u_k = `u`
+/// and the costate ν = ν_{k+1} (2n entries).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct VjpStage<'a, D> {
+    /// The stage maps.
+    pub model: &'a StageModel,
+    /// The stage index k.
+    pub k: usize,
+    /// u_k (seeded along the control's direction in dual numbers).
+    pub u: D,
+    /// ν_{k+1}.
+    pub nu: &'a [f64],
+}
+
+/// A stage map with the buffers of its vector-Jacobian product, sized once: the f64 costate
+/// sweep by reverse steps.
+#[derive(Clone, Debug)]
+pub(crate) struct VjpWorkspace<D> {
+    /// The stage map (x̂_k and its Newton start are loaded by the caller).
+    pub stepper: Stepper<D>,
+    /// The product's buffers (the rates ω_k set by the caller).
+    pub bufs: VjpBuffers<D>,
+}
+
+impl<D: Scalar> VjpWorkspace<D> {
+    /// For the stages of `model`.
+    pub fn new(model: &StageModel) -> Result<Self> {
+        Ok(VjpWorkspace {
+            stepper: Stepper::new(model)?,
+            bufs: VjpBuffers::new(model.n),
+        })
+    }
+}
+
+/// Per-thread workspace of the stage derivatives: the dual-number stage Jacobians
+/// ([`JacobianWorkspace`]) and the dual buffers of the second-order terms.
+#[derive(Clone, Debug)]
+pub(crate) struct HessianWorkspace {
+    /// The forward dual step (A_k, B_k alone: [`JacobianWorkspace::jacobians`]).
+    pub jac: JacobianWorkspace,
+    hb: VjpBuffers<Dv>,
+}
+
+impl HessianWorkspace {
+    /// For the stages of `model`.
+    pub fn new(model: &StageModel) -> Result<Self> {
+        Ok(HessianWorkspace {
+            jac: JacobianWorkspace::new(model)?,
+            hb: VjpBuffers::new(model.n),
+        })
+    }
+}
+
+/// Where [`HessianWorkspace::second_order`] writes: H_k (column-major (2n + 1)², the control
+/// last), ∇(ν·F̃_k) = [A_k B_k]ᵀν (2n + 1) and A_k, B_k.
+#[derive(Debug)]
+pub(crate) struct SecondOrderMut<'a> {
+    /// H_k = ∇²_{(ξ,u)}(ν·F̃_k).
+    pub hess: &'a mut [f64],
+    /// ∇(ν·F̃_k).
+    pub grad: &'a mut [f64],
+    /// A_k and B_k.
+    pub jac: JacobiansMut<'a>,
 }
 
 /// ∇(ν·F̃_k) by one reverse step, for any scalar: the stage point x̂_k = (q_k, p̂_k) is in
@@ -102,37 +164,47 @@ fn eps(x: &Dv, slot: usize) -> f64 {
 /// ν_k = l_x + A_kᵀν_{k+1} without the Jacobians; in dual numbers seeded along the tangent
 /// directions its derivative parts are H_k's columns (module docs).
 pub(crate) fn stage_vjp<D: Scalar>(
-    (stepper, hb): (&mut Stepper<D>, &mut VjpBuffers<D>),
-    (model, k): (&StageModel, usize),
-    (u, nu): (D, &[f64]),
+    stepper: &mut Stepper<D>,
+    hb: &mut VjpBuffers<D>,
+    stage: VjpStage<'_, D>,
     rev: &mut Reverse<'_, D>,
 ) -> Result<()> {
+    let VjpStage { model, k, u, nu } = stage;
     let kicked = record_step(stepper, hb, k, u)?;
     chart_inverse_reverse(stepper, hb, nu, rev);
     let st = &stepper.state;
     let m = st.multipliers.as_ref().expect("a step sets multipliers");
     let (phalf, w) = stepper.rattle.last_half_step();
-    let sk = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
-    let sk1 = view(&st.q, &st.p, (&m.lambda, &m.mu), (phalf, w));
+    let sk = kick_view(hb);
+    let sk1 = StateView {
+        q: &st.q,
+        p: &st.p,
+        lambda: &m.lambda,
+        mu: &m.mu,
+        tip: [D::zero(); 2],
+        phalf,
+        w,
+    };
     rev.cot.ubar[k] = D::zero();
     rev.cot.ubar[k + 1] = D::zero();
     rev.sweep
         .step(k, (&sk, &sk1), (u, D::zero()), &mut rev.cot)?;
     if kicked {
-        kick_reverse((stepper, hb), (model, k), rev)?;
+        kick_reverse(stepper, hb, stage, rev)?;
     }
     model.apply_mass(&rev.cot.pbar, &mut hb.s);
     Ok(())
 }
 
-/// Entry r of ∇(ν·F̃_k) after [`stage_vjp`]: the chart's reverse at k (m̄ = M p̂̄),
+/// Entry r of ∇(ν·F̃_k) after [`stage_vjp`] of stage k: the chart's reverse at k (m̄ = M p̂̄),
 /// φ̄ᵢ = tᵢ·q̄ᵢ − ωᵢ qᵢ·m̄ᵢ, ω̄ᵢ = tᵢ·m̄ᵢ, and ū for r = 2n.
 pub(crate) fn gradient_entry<D: Scalar>(
     hb: &VjpBuffers<D>,
     rev: &Reverse<'_, D>,
-    (n, k): (usize, usize),
+    k: usize,
     r: usize,
 ) -> D {
+    let n = hb.q0.len();
     if r == 2 * n {
         return rev.cot.ubar[k];
     }
@@ -193,11 +265,13 @@ fn chart_inverse_reverse<D: Scalar>(
 
 /// The reverse of the half-kick: c̄ by the projection's reverse, p̂̄ = c̄, ū −= (h/2) b·c̄.
 fn kick_reverse<D: Scalar>(
-    (stepper, hb): (&Stepper<D>, &VjpBuffers<D>),
-    (model, k): (&StageModel, usize),
+    stepper: &Stepper<D>,
+    hb: &VjpBuffers<D>,
+    stage: VjpStage<'_, D>,
     rev: &mut Reverse<'_, D>,
 ) -> Result<()> {
-    let s = view(&hb.q0, &hb.p0, (&hb.y, &hb.y), (&[], &[]));
+    let VjpStage { model, k, .. } = stage;
+    let s = kick_view(hb);
     let cbar = rev.sweep.projection_reverse(k, &s, &mut rev.cot)?;
     let b = stepper.control_direction();
     let mut bc = D::zero();
@@ -209,45 +283,51 @@ fn kick_reverse<D: Scalar>(
     Ok(())
 }
 
-impl JacobianWorkspace {
+impl HessianWorkspace {
     /// H_k = ∇²_{(ξ,u)} (ν·F̃_k) at x̂_k (column-major (2n + 1)², the control last, into
-    /// `hess`), ∇(ν·F̃_k) = [A_k B_k]ᵀν (into `grad`), and A_k, B_k themselves (into `a`, `b`,
-    /// as [`JacobianWorkspace::jacobians`]: the forward dual step is the same), for the costate
-    /// ν = ν_{k+1} (module docs). The point and the Newton start are those of `jacobians`.
+    /// `out.hess`), ∇(ν·F̃_k) = [A_k B_k]ᵀν (into `out.grad`), and A_k, B_k themselves (into
+    /// `out.jac`, as [`JacobianWorkspace::jacobians`]: the forward dual step is the same), for
+    /// the costate ν = ν_{k+1} (module docs). The point and the Newton start are those of
+    /// `jacobians`.
     pub fn second_order(
         &mut self,
-        (model, k): (&StageModel, usize),
-        x: StagePoint<'_>,
-        (u, nu): (f64, &[f64]),
+        at: StageAt<'_>,
+        nu: &[f64],
         rev: &mut Reverse<'_, Dv>,
-        (hess, grad, a, b): (&mut [f64], &mut [f64], &mut [f64], &mut [f64]),
+        out: SecondOrderMut<'_>,
     ) -> Result<()> {
+        let SecondOrderMut {
+            hess,
+            grad,
+            mut jac,
+        } = out;
+        let (model, k) = (at.model, at.k);
         let nd = ndir(model.n);
-        for (start, end) in chunks(nd) {
-            let ud = self.seed(model, x, u, (start, end));
-            self.seed_rates(model, x, (start, end));
-            let (stepper, hb) = (&mut self.stepper, &mut self.hb);
-            stage_vjp((stepper, hb), (model, k), (ud, nu), rev)?;
+        for cols in chunks(nd) {
+            let u = self.jac.seed(&at, cols.clone());
+            self.seed_rates(&at, cols.clone());
+            let stage = VjpStage { model, k, u, nu };
+            stage_vjp(&mut self.jac.stepper, &mut self.hb, stage, rev)?;
             for r in 0..nd {
-                let e = gradient_entry(&self.hb, rev, (model.n, k), r);
+                let e = gradient_entry(&self.hb, rev, k, r);
                 grad[r] = e.re;
-                for j in start..end {
-                    hess[j * nd + r] = eps(&e, j - start);
+                for j in cols.clone() {
+                    hess[j * nd + r] = eps(&e, j - cols.start);
                 }
             }
-            self.read_columns(model, (start, end), (&mut *a, &mut *b));
+            self.jac.read_columns(model, cols, &mut jac);
         }
         Ok(())
     }
 
-    /// The rates ωᵢ at k with their seeds (for the chart's reverse).
-    fn seed_rates(&mut self, model: &StageModel, x: StagePoint<'_>, (start, end): (usize, usize)) {
-        let n = model.n;
+    /// The rates ωᵢ at k with their seeds in the directions `cols` (for the chart's reverse).
+    fn seed_rates(&mut self, at: &StageAt<'_>, cols: Range<usize>) {
+        let (n, x) = (at.model.n, at.x);
         for i in 0..n {
             let j = n + i;
-            self.hb.omega0[i] = if (start..end).contains(&j) {
+            self.hb.omega0[i] = if cols.contains(&j) {
                 let mut e = [0.0; CHUNK];
-                e[j - start] = 1.0;
+                e[j - cols.start] = 1.0;
                 DualSVec64::new(x.omega[i], num_dual::Derivative::some(e.into()))
             } else {
                 Dv::from_re(x.omega[i])
@@ -256,21 +336,17 @@ impl JacobianWorkspace {
     }
 }
 
-/// A state view of buffers (the reverse step's input).
-fn view<'a, D: Scalar>(
-    q: &'a [[D; 2]],
-    p: &'a [[D; 2]],
-    (lambda, mu): (&'a [D], &'a [D]),
-    (phalf, w): (&'a [[D; 2]], &'a [[D; 2]]),
-) -> StateView<'a, D, 2> {
+/// The state x_k of the reverse step's input: q_k, the post-kick p_k and the kick's
+/// multipliers y (as both λ and μ; no half step).
+fn kick_view<D: Scalar>(hb: &VjpBuffers<D>) -> StateView<'_, D, 2> {
     StateView {
-        q,
-        p,
-        lambda,
-        mu,
+        q: &hb.q0,
+        p: &hb.p0,
+        lambda: &hb.y,
+        mu: &hb.y,
         tip: [D::zero(); 2],
-        phalf,
-        w,
+        phalf: &[],
+        w: &[],
     }
 }
 
@@ -279,14 +355,25 @@ mod tests {
     use super::*;
     use crate::catalogue;
     use crate::ocp::stage::fixture::point;
+    use crate::ocp::stage::StagePoint;
 
-    /// [A B]ᵀν from the dual-number stage Jacobians at the chart point ξ (φ, ω) and u.
+    /// A chart point of stage k: ξ = (φ, ω), the control u and the Newton start λ.
+    struct ChartPoint<'a> {
+        k: usize,
+        xi: Vec<f64>,
+        u: f64,
+        lambda: &'a [f64],
+    }
+
+    /// [A B]ᵀν from the dual-number stage Jacobians at the chart point.
     fn jacobian_gradient(
-        (model, k): (&StageModel, usize),
+        model: &StageModel,
         ws: &mut JacobianWorkspace,
-        (xi, u, lambda): (&[f64], f64, &[f64]),
+        at: ChartPoint<'_>,
         nu: &[f64],
     ) -> Vec<f64> {
+        let ChartPoint { k, xi, u, lambda } = at;
+        let xi = &xi[..];
         let n = model.n;
         let nx = 2 * n;
         let q: Vec<[f64; 2]> = (0..n).map(|i| [xi[i].cos(), xi[i].sin()]).collect();
@@ -306,7 +393,12 @@ mod tests {
             omega,
             mu: lambda,
         };
-        ws.jacobians((model, k), x, u, (&mut a, &mut b)).unwrap();
+        let at = StageAt { model, k, x, u };
+        let out = JacobiansMut {
+            a: &mut a,
+            b: &mut b,
+        };
+        ws.jacobians(at, out).unwrap();
         let mut g: Vec<f64> = (0..nx)
             .map(|j| (0..nx).map(|r| a[j * nx + r] * nu[r]).sum())
             .collect();
@@ -329,7 +421,7 @@ mod tests {
         let n = model.n;
         let nd = ndir(n);
         let chain_dv = chain.lift::<Dv>();
-        let mut ws = JacobianWorkspace::new(&model).unwrap();
+        let mut ws = HessianWorkspace::new(&model).unwrap();
         let nu: Vec<f64> = (0..2 * n)
             .map(|i| ((i as f64 + 1.0) * 0.7).sin() * 10f64.powi(-((i % 3) as i32)))
             .collect();
@@ -347,18 +439,39 @@ mod tests {
             let (mut h, mut g) = (vec![0.0; nd * nd], vec![0.0; nd]);
             let nx = 2 * n;
             let (mut a, mut b) = (vec![0.0; nx * nx], vec![0.0; nx]);
-            let out = (&mut h[..], &mut g[..], &mut a[..], &mut b[..]);
-            ws.second_order((&model, k), x, (pt.u, &nu), &mut rev, out)
-                .unwrap();
+            let at = StageAt {
+                model: &model,
+                k,
+                x,
+                u: pt.u,
+            };
+            let out = SecondOrderMut {
+                hess: &mut h,
+                grad: &mut g,
+                jac: JacobiansMut {
+                    a: &mut a,
+                    b: &mut b,
+                },
+            };
+            ws.second_order(at, &nu, &mut rev, out).unwrap();
             // The Jacobians of the same pass are those of `jacobians` (the same dual step).
             let (mut a2, mut b2) = (vec![0.0; nx * nx], vec![0.0; nx]);
-            ws.jacobians((&model, k), x, pt.u, (&mut a2, &mut b2))
-                .unwrap();
+            let out2 = JacobiansMut {
+                a: &mut a2,
+                b: &mut b2,
+            };
+            ws.jac.jacobians(at, out2).unwrap();
             assert!(
                 a == a2 && b == b2,
                 "k = {k}: the pass's A, B differ from jacobians'"
             );
-            let g_fwd = jacobian_gradient((&model, k), &mut ws, (&xi, pt.u, &pt.lambda), &nu);
+            let chart = |xi: &'_ [f64], u| ChartPoint {
+                k,
+                xi: xi.to_vec(),
+                u,
+                lambda: &pt.lambda,
+            };
+            let g_fwd = jacobian_gradient(&model, &mut ws.jac, chart(&xi, pt.u), &nu);
             let gs = g_fwd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (a, b) in g.iter().zip(&g_fwd) {
                 assert!((a - b).abs() <= 1e-12 * gs, "k = {k}: gradient {a} vs {b}");
@@ -375,7 +488,7 @@ mod tests {
                     } else {
                         u += s;
                     }
-                    jacobian_gradient((&model, k), &mut ws, (&z, u, &pt.lambda), &nu)
+                    jacobian_gradient(&model, &mut ws.jac, chart(&z, u), &nu)
                 };
                 let gp = shifted(eps);
                 let gm = shifted(-eps);

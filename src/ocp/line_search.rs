@@ -83,18 +83,68 @@ pub(crate) struct Feedback<'a> {
     pub nz: usize,
 }
 
+/// What every rollout of one problem shares: the stage maps, the stage costs, which stages
+/// hold a decision and the box of the controls.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Shooting<'a> {
+    /// The stage maps (and the start).
+    pub model: &'a StageModel,
+    /// ℓ_k.
+    pub cost: &'a StageCost,
+    /// Whether stage k has a decision (the first stage of a piece); held stages copy u_{k−1}.
+    pub free: &'a [bool],
+    /// The box lower ≤ u_k ≤ upper.
+    pub lower: f64,
+    pub upper: f64,
+}
+
+/// The simulator of the rollouts, sized once: the stage map and the scratch of the rates.
+#[derive(Clone, Debug)]
+pub(crate) struct Simulator {
+    /// The stage map in f64.
+    pub stepper: Stepper<f64>,
+    /// n blocks of scratch (M⁻¹p for the rates).
+    pub scratch: Vec<[f64; 2]>,
+}
+
+impl Simulator {
+    /// For the stages of `model`.
+    pub fn new(model: &StageModel) -> Result<Self> {
+        Ok(Simulator {
+            stepper: Stepper::new(model)?,
+            scratch: vec![[0.0; 2]; model.n],
+        })
+    }
+
+    /// Rolls out the stage maps of `shooting` from the initial state, writing `out` and its
+    /// cost: [`rollout`].
+    pub fn rollout(
+        &mut self,
+        shooting: &Shooting<'_>,
+        fb: Option<&Feedback<'_>>,
+        out: &mut Traj,
+    ) -> Result<()> {
+        rollout(shooting, &mut self.stepper, fb, out, &mut self.scratch)
+    }
+}
+
 /// Rolls out the stage maps from the initial state, writing `out` and its cost. With `fb`
 /// the free controls follow the feedback law; without it they are `out.u` as given. Held stages
-/// copy the previous control. Controls stay in the box `(lo, hi)`. `scratch` has length n.
-pub(crate) fn rollout(
-    (model, cost): (&StageModel, &StageCost),
+/// copy the previous control. Controls stay in the box. `scratch` has length n.
+fn rollout(
+    shooting: &Shooting<'_>,
     stepper: &mut Stepper<f64>,
-    free: &[bool],
-    (lo, hi): (f64, f64),
     fb: Option<&Feedback<'_>>,
     out: &mut Traj,
     scratch: &mut [[f64; 2]],
 ) -> Result<()> {
+    let Shooting {
+        model,
+        cost,
+        free,
+        lower: lo,
+        upper: hi,
+    } = *shooting;
     let n = model.n;
     let steps = cost.steps;
     let mut total = 0.0;

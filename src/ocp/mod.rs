@@ -258,10 +258,12 @@ use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::ObjectiveKind;
-use hessian::{gradient_entry, stage_vjp, Reverse, VjpBuffers};
-use line_search::{rollout, Feedback, Traj};
-use riccati::{Riccati, StageCost, StageInput};
-use stage::{tangent, Dv, JacobianWorkspace, StageModel, StagePoint, Stepper};
+use hessian::{
+    gradient_entry, stage_vjp, HessianWorkspace, Reverse, SecondOrderMut, VjpStage, VjpWorkspace,
+};
+use line_search::{Feedback, Shooting, Simulator, Traj};
+use riccati::{Riccati, StageCost, StageInput, StageJacobians};
+use stage::{tangent, Dv, JacobiansMut, StageAt, StageModel, StagePoint};
 
 /// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
 /// the run stops ([`Termination::RoundOff`]).
@@ -293,7 +295,7 @@ enum Arc {
 const PREFETCH_AHEAD: usize = 4;
 
 /// Prefetches A_k (in store slot `i`) and, when given, H_k of stage `k`.
-fn prefetch_stage(a_store: &[f64], h_store: Option<&[f64]>, nxi: usize, (i, k): (usize, usize)) {
+fn prefetch_stage(a_store: &[f64], h_store: Option<&[f64]>, nxi: usize, i: usize, k: usize) {
     let per = nxi * nxi;
     riccati::prefetch(&a_store[i * per..(i + 1) * per]);
     if let Some(h) = h_store {
@@ -316,22 +318,6 @@ struct SecondOrder<'a> {
 }
 
 impl<'a> SecondOrder<'a> {
-    /// The terms in the stores (`on`: the exact model is in use).
-    fn of(
-        on: bool,
-        (steps, nz): (usize, usize),
-        (h, curv, dz): (&'a [f64], &'a [f64], &'a [f64]),
-    ) -> Self {
-        SecondOrder {
-            on,
-            steps,
-            nz,
-            h,
-            curv,
-            dz,
-        }
-    }
-
     /// ½ δᵀH_kδ + ½ curv_k δφ₁² at the model point δ = (δz_k, δv_k): stage k's second-order
     /// terms in the model's value.
     fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
@@ -393,9 +379,8 @@ pub struct Solver {
     theta_stage: Vec<usize>,
     nominal: Traj,
     trial: Traj,
-    stepper: Stepper<f64>,
-    scratch: Vec<[f64; 2]>,
-    jws: Vec<JacobianWorkspace>,
+    sim: Simulator,
+    jws: Vec<HessianWorkspace>,
     a_store: Vec<f64>,
     b_store: Vec<f64>,
     block: usize,
@@ -437,7 +422,7 @@ pub struct Solver {
     chain_dv: Chain<Dv, 2>,
     /// The stage map and buffers of the costate sweep by reverse steps, and its costates ν_k
     /// (n_z per stage): the multipliers of the second-order terms.
-    vjp: (Stepper<f64>, VjpBuffers<f64>),
+    vjp: VjpWorkspace<f64>,
     nu_store: Vec<f64>,
     h_store: Vec<f64>,
     curv: Vec<f64>,
@@ -479,7 +464,7 @@ impl Solver {
         }
         .clamp(1, steps.max(1));
         let jws = (0..threads)
-            .map(|_| JacobianWorkspace::new(&model))
+            .map(|_| HessianWorkspace::new(&model))
             .collect::<Result<Vec<_>>>()?;
         let stage_bytes = 8 * (nxi * nxi + nxi);
         let block = (options.jacobian_memory / stage_bytes).clamp(1, steps.max(1));
@@ -491,7 +476,7 @@ impl Solver {
         let riccati = Riccati::new(nxi, aug, steps);
         Ok(Solver {
             chain_dv: model.chain.lift::<Dv>(),
-            vjp: (Stepper::new(&model)?, VjpBuffers::new(n)),
+            vjp: VjpWorkspace::new(&model)?,
             nu_store: Vec::new(),
             h_store: Vec::new(),
             second_order_possible,
@@ -499,8 +484,7 @@ impl Solver {
             exact: false,
             second_order_on: false,
             h_valid: false,
-            stepper: Stepper::new(&model)?,
-            scratch: vec![[0.0; 2]; n],
+            sim: Simulator::new(&model)?,
             nominal: Traj::new(n, steps),
             trial: Traj::new(n, steps),
             a_store: vec![0.0; block * nxi * nxi],
@@ -559,15 +543,14 @@ impl Solver {
         self.jac_range = None;
         self.h_valid = false;
         self.counts.0 += 1;
-        rollout(
-            (&self.model, &self.cost),
-            &mut self.stepper,
-            &self.free,
-            (lo, hi),
-            None,
-            &mut self.nominal,
-            &mut self.scratch,
-        )?;
+        let shooting = Shooting {
+            model: &self.model,
+            cost: &self.cost,
+            free: &self.free,
+            lower: lo,
+            upper: hi,
+        };
+        self.sim.rollout(&shooting, None, &mut self.nominal)?;
         Ok(self.nominal.cost)
     }
 
@@ -593,7 +576,7 @@ impl Solver {
         let per_a = nxi * nxi;
         let chunk = count.div_ceil(self.jws.len()).max(1);
         let (model, nom) = (&self.model, &self.nominal);
-        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut JacobianWorkspace| {
+        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace| {
             for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(nxi)).enumerate() {
                 let k = lo + c * chunk + i;
                 let x = StagePoint {
@@ -602,7 +585,13 @@ impl Solver {
                     omega: nom.omega(k),
                     mu: nom.lambda(k),
                 };
-                ws.jacobians((model, k), x, nom.u[k], (ai, bi))?;
+                let at = StageAt {
+                    model,
+                    k,
+                    x,
+                    u: nom.u[k],
+                };
+                ws.jac.jacobians(at, JacobiansMut { a: ai, b: bi })?;
             }
             Ok::<(), Error>(())
         };
@@ -671,8 +660,7 @@ impl Solver {
                 0.0
             },
             quu_shift: qs,
-            a: None,
-            b: None,
+            jac: None,
             hess: None,
             curv: 0.0,
             dz: &[],
@@ -688,12 +676,15 @@ impl Solver {
         let (steps, nxi, mu) = (self.steps, self.nxi, self.prox);
         self.riccati.begin();
         let mut last = self.stage_input(steps, true);
-        SecondOrder::of(
-            self.exact,
-            (self.steps, self.nz),
-            (&self.h_store, &self.curv, &self.dz),
-        )
-        .attach(&mut last);
+        let so = SecondOrder {
+            on: self.exact,
+            steps,
+            nz: self.nz,
+            h: &self.h_store,
+            curv: &self.curv,
+            dz: &self.dz,
+        };
+        so.attach(&mut last);
         let mut bounded = if riccati {
             self.counts.2 += 1;
             self.riccati.stage(&last, &self.cost, mu)
@@ -709,18 +700,23 @@ impl Solver {
             for k in (bottom..top).rev() {
                 let i = k - bottom;
                 if i >= PREFETCH_AHEAD {
-                    let ahead = (i - PREFETCH_AHEAD, k - PREFETCH_AHEAD);
-                    prefetch_stage(&self.a_store, h_store, nxi, ahead);
+                    let (slot, ahead) = (i - PREFETCH_AHEAD, k - PREFETCH_AHEAD);
+                    prefetch_stage(&self.a_store, h_store, nxi, slot, ahead);
                 }
                 let mut inp = self.stage_input(k, true);
-                inp.a = Some(&self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi]);
-                inp.b = Some(&self.b_store[i * nxi..(i + 1) * nxi]);
-                SecondOrder::of(
-                    self.exact,
-                    (self.steps, self.nz),
-                    (&self.h_store, &self.curv, &self.dz),
-                )
-                .attach(&mut inp);
+                inp.jac = Some(StageJacobians {
+                    a: &self.a_store[i * nxi * nxi..(i + 1) * nxi * nxi],
+                    b: &self.b_store[i * nxi..(i + 1) * nxi],
+                });
+                let so = SecondOrder {
+                    on: self.exact,
+                    steps,
+                    nz: self.nz,
+                    h: &self.h_store,
+                    curv: &self.curv,
+                    dz: &self.dz,
+                };
+                so.attach(&mut inp);
                 if riccati {
                     bounded &= self.riccati.stage(&inp, &self.cost, mu);
                 } else {
@@ -763,28 +759,37 @@ impl Solver {
         let chunk = steps.div_ceil(self.jws.len()).max(1);
         let (model, nom, chain) = (&self.model, &self.nominal, &self.chain_dv);
         let nu = &self.nu_store;
-        let work = |c: usize,
-                    (hs, a, b): (&mut [f64], &mut [f64], &mut [f64]),
-                    ws: &mut JacobianWorkspace| {
-            let mut rev = Reverse::new(chain, model, steps);
-            let mut grad = vec![0.0; nd];
-            let stages = hs
-                .chunks_mut(per)
-                .zip(a.chunks_mut(nxi * nxi).zip(b.chunks_mut(nxi)));
-            for (i, (h, (ai, bi))) in stages.enumerate() {
-                let k = c * chunk + i;
-                let x = StagePoint {
-                    q: nom.q(k),
-                    p: nom.p(k),
-                    omega: nom.omega(k),
-                    mu: nom.lambda(k),
-                };
-                let nu1 = &nu[(k + 1) * nxi..(k + 2) * nxi];
-                let out = (h, &mut grad[..], ai, bi);
-                ws.second_order((model, k), x, (nom.u[k], nu1), &mut rev, out)?;
-            }
-            Ok::<(), Error>(())
-        };
+        let work =
+            |c: usize, hs: &mut [f64], a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace| {
+                let mut rev = Reverse::new(chain, model, steps);
+                let mut grad = vec![0.0; nd];
+                let stages = hs
+                    .chunks_mut(per)
+                    .zip(a.chunks_mut(nxi * nxi).zip(b.chunks_mut(nxi)));
+                for (i, (h, (ai, bi))) in stages.enumerate() {
+                    let k = c * chunk + i;
+                    let x = StagePoint {
+                        q: nom.q(k),
+                        p: nom.p(k),
+                        omega: nom.omega(k),
+                        mu: nom.lambda(k),
+                    };
+                    let nu1 = &nu[(k + 1) * nxi..(k + 2) * nxi];
+                    let at = StageAt {
+                        model,
+                        k,
+                        x,
+                        u: nom.u[k],
+                    };
+                    let out = SecondOrderMut {
+                        hess: h,
+                        grad: &mut grad[..],
+                        jac: JacobiansMut { a: ai, b: bi },
+                    };
+                    ws.second_order(at, nu1, &mut rev, out)?;
+                }
+                Ok::<(), Error>(())
+            };
         let hs = &mut self.h_store[..steps * per];
         let a = &mut self.a_store[..steps * nxi * nxi];
         let b = &mut self.b_store[..steps * nxi];
@@ -795,9 +800,9 @@ impl Solver {
                 .zip(b.par_chunks_mut(chunk * nxi))
                 .zip(self.jws.par_iter_mut())
                 .enumerate()
-                .try_for_each(|(c, (((h, a), b), ws))| work(c, (h, a, b), ws))?;
+                .try_for_each(|(c, (((h, a), b), ws))| work(c, h, a, b, ws))?;
         } else {
-            work(0, (hs, a, b), &mut self.jws[0])?;
+            work(0, hs, a, b, &mut self.jws[0])?;
         }
         #[cfg(not(feature = "parallel"))]
         for (c, (((h, a), b), ws)) in hs
@@ -807,7 +812,7 @@ impl Solver {
             .zip(self.jws.iter_mut())
             .enumerate()
         {
-            work(c, (h, a, b), ws)?;
+            work(c, h, a, b, ws)?;
         }
         self.jac_range = Some((0, steps));
         self.counts.1 += 1;
@@ -826,7 +831,6 @@ impl Solver {
     /// model (no augmented state), whose H_k pass then computes A_k and B_k as well.
     fn costate_by_reverse_steps(&mut self) -> Result<()> {
         let (steps, nxi) = (self.steps, self.nxi);
-        let n = self.n;
         self.dv.fill(0.0);
         self.dz.fill(0.0);
         self.active.fill(false);
@@ -846,25 +850,25 @@ impl Solver {
             if k == steps {
                 continue;
             }
-            let st = &mut self.vjp.0.state;
+            let st = &mut self.vjp.stepper.state;
             st.q.copy_from_slice(nom.q(k));
             st.p.copy_from_slice(nom.p(k));
             let m = st.multipliers_mut(nom.lambda(k).len());
             m.lambda.copy_from_slice(nom.lambda(k));
             m.mu.copy_from_slice(nom.lambda(k));
             st.tip_target = [0.0; 2];
-            self.vjp.1.omega0.copy_from_slice(nom.omega(k));
-            let nu1 = &rest[..nxi];
-            stage_vjp(
-                (&mut self.vjp.0, &mut self.vjp.1),
-                (&self.model, k),
-                (u, nu1),
-                &mut rev,
-            )?;
+            self.vjp.bufs.omega0.copy_from_slice(nom.omega(k));
+            let stage = VjpStage {
+                model: &self.model,
+                k,
+                u,
+                nu: &rest[..nxi],
+            };
+            stage_vjp(&mut self.vjp.stepper, &mut self.vjp.bufs, stage, &mut rev)?;
             for (r, v) in nu_k.iter_mut().enumerate() {
-                *v += gradient_entry(&self.vjp.1, &rev, (n, k), r);
+                *v += gradient_entry(&self.vjp.bufs, &rev, k, r);
             }
-            self.riccati.grad[k] += gradient_entry(&self.vjp.1, &rev, (n, k), nxi);
+            self.riccati.grad[k] += gradient_entry(&self.vjp.bufs, &rev, k, nxi);
         }
         Ok(())
     }

@@ -80,7 +80,14 @@ impl Solver {
                 };
                 q += self.cost.value(k, m, u, w);
                 if self.exact {
-                    let so = SecondOrder::of(true, (steps, nz), (&self.h_store, &self.curv, &[]));
+                    let so = SecondOrder {
+                        on: true,
+                        steps,
+                        nz,
+                        h: &self.h_store,
+                        curv: &self.curv,
+                        dz: &[],
+                    };
                     q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
                 }
             }
@@ -88,7 +95,7 @@ impl Solver {
                 // H_k is read only for the value.
                 let h_store = (value && self.exact).then_some(&self.h_store[..]);
                 let ahead = k + PREFETCH_AHEAD;
-                prefetch_stage(&self.a_store, h_store, nxi, (ahead, ahead));
+                prefetch_stage(&self.a_store, h_store, nxi, ahead, ahead);
             }
             if k < steps {
                 let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];

@@ -167,6 +167,15 @@ impl StageCost {
     }
 }
 
+/// A stage's Jacobians in the tangent coordinates: A_k (column-major 2n × 2n) and B_k (2n).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StageJacobians<'a> {
+    /// A_k = ∂ξ_{k+1}/∂ξ_k.
+    pub a: &'a [f64],
+    /// B_k = ∂ξ_{k+1}/∂u_k.
+    pub b: &'a [f64],
+}
+
 /// What the backward pass needs of stage k.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageInput<'a> {
@@ -186,9 +195,8 @@ pub(crate) struct StageInput<'a> {
     pub lu_shift: f64,
     /// Added to Q_uu at a free stage (interior-point barrier curvature z/s).
     pub quu_shift: f64,
-    /// A_k (column-major 2n × 2n) and B_k (2n); `None` at the last stage.
-    pub a: Option<&'a [f64]>,
-    pub b: Option<&'a [f64]>,
+    /// A_k and B_k; `None` at the last stage.
+    pub jac: Option<StageJacobians<'a>>,
     /// The exact second-order term of the stage map, H_k = ∇²(ν_{k+1}·F̃_k) over (ξ, u)
     /// (column-major (2n + 1)², [`super::hessian`]); `None` for Gauss-Newton. Only without an
     /// augmented state.
@@ -306,8 +314,8 @@ impl Riccati {
             self.lx[wi] = 2.0 * cost.effort * inp.w;
         }
         lu += self.second_order(inp, false).0;
-        match (inp.a, inp.b) {
-            (Some(a), Some(b)) => {
+        match inp.jac {
+            Some(StageJacobians { a, b }) => {
                 let nu1 = &self.nu_next;
                 for j in 0..nxi {
                     let col = &a[j * nxi..(j + 1) * nxi];
@@ -343,8 +351,8 @@ impl Riccati {
     /// `mu`). The costate and the gradient are computed either way.
     pub fn stage(&mut self, inp: &StageInput<'_>, cost: &StageCost, mu: f64) -> bool {
         let local = self.stage_costs(inp, cost);
-        let q = match (inp.a, inp.b) {
-            (Some(a), Some(b)) => self.propagate(inp, (a, b), local),
+        let q = match inp.jac {
+            Some(jac) => self.propagate(inp, jac, local),
             _ => {
                 self.qx.copy_from_slice(&self.lx);
                 self.nu.copy_from_slice(&self.lx);
@@ -443,10 +451,10 @@ impl Riccati {
     /// All of it from two faer products over the stage's E = [Ã B̃] (B̃ only at a free stage):
     /// R = [S′E  s′  ν′], then Eᵀ R, whose blocks are every term above (the vector terms ride
     /// along as three extra columns of the matrix kernel instead of 4n_z dot products).
-    fn propagate(&mut self, inp: &StageInput<'_>, (a, b): (&[f64], &[f64]), q: QuTerms) -> QuTerms {
+    fn propagate(&mut self, inp: &StageInput<'_>, jac: StageJacobians<'_>, q: QuTerms) -> QuTerms {
         let nz = self.nz;
         let m = nz + usize::from(inp.free);
-        self.fill_stage_matrix(inp, (a, b));
+        self.fill_stage_matrix(inp, jac);
         let e = self.ab.as_ref().subcols(0, m);
         matmul(
             self.rhs.as_mut().subcols_mut(0, m),
@@ -494,7 +502,8 @@ impl Riccati {
 
     /// E = [Ã B̃] of the stage into `ab` (module docs: free Ã = [A 0; 0 0], B̃ = [B; 1]; held
     /// Ã = [A B; 0 1], no B̃).
-    fn fill_stage_matrix(&mut self, inp: &StageInput<'_>, (a, b): (&[f64], &[f64])) {
+    fn fill_stage_matrix(&mut self, inp: &StageInput<'_>, jac: StageJacobians<'_>) {
+        let StageJacobians { a, b } = jac;
         let (nxi, nz) = (self.nxi, self.nz);
         let wi = nxi;
         for j in 0..nxi {

@@ -56,6 +56,8 @@ use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::steppers::rattle::{Rattle, State};
 use crate::tridiag::BorderedTridiag;
+use std::ops::Range;
+
 use nalgebra::SVector;
 use num_dual::{Derivative, DualSVec64};
 
@@ -73,6 +75,29 @@ pub struct StagePoint<'a> {
     pub mu: &'a [f64],
 }
 
+/// Stage k of a model linearised at the point x̂_k = `x` with the control u_k = `u`: what
+/// [`JacobianWorkspace::jacobians`] and the second-order pass of `hessian.rs` differentiate.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct StageAt<'a> {
+    /// The stage maps.
+    pub model: &'a StageModel,
+    /// The stage index k.
+    pub k: usize,
+    /// x̂_k with its rates and Newton start.
+    pub x: StagePoint<'a>,
+    /// u_k.
+    pub u: f64,
+}
+
+/// Where a stage's Jacobians go: A_k (column-major 2n × 2n) and B_k (2n).
+#[derive(Debug)]
+pub(crate) struct JacobiansMut<'a> {
+    /// A_k = ∂ξ_{k+1}/∂ξ_k.
+    pub a: &'a mut [f64],
+    /// B_k = ∂ξ_{k+1}/∂u_k.
+    pub b: &'a mut [f64],
+}
+
 /// Directions per dual-number chunk (`DualSVec64<8>`: measured 11 f64-steps per dual step, the
 /// best cost per direction of the sizes 8, 10, 12, 16; 7 and 11, which fit the 2n + 1 = 21
 /// directions of n = 10 exactly, measured no better).
@@ -85,10 +110,16 @@ pub(crate) fn ndir(n: usize) -> usize {
 }
 
 /// The direction chunks [start, end) of `nd` directions, `CHUNK` at a time (the last shorter).
-pub(crate) fn chunks(nd: usize) -> impl Iterator<Item = (usize, usize)> {
+pub(crate) fn chunks(nd: usize) -> impl Iterator<Item = Range<usize>> {
     (0..nd)
         .step_by(CHUNK)
-        .map(move |start| (start, (start + CHUNK).min(nd)))
+        .map(move |start| start..(start + CHUNK).min(nd))
+}
+
+/// The derivative of `x` along the direction in `slot` of its chunk (0 without derivatives).
+#[inline]
+pub(crate) fn eps(x: &Dv, slot: usize) -> f64 {
+    x.eps.0.as_ref().map_or(0.0, |v| v[slot])
 }
 
 /// The tangent tᵢ = qᵢ rotated by +90° in the (y, z) plane: ∂q/∂φ for q = (cos φ, sin φ).
@@ -381,8 +412,6 @@ pub(crate) struct JacobianWorkspace {
     dp: Vec<[f64; 2]>,
     minv: Vec<[f64; 2]>,
     tang: Vec<[f64; 2]>,
-    /// The dual buffers of the second-order terms ([`super::hessian`]).
-    pub(super) hb: super::hessian::VjpBuffers<Dv>,
 }
 
 impl JacobianWorkspace {
@@ -396,7 +425,6 @@ impl JacobianWorkspace {
             dp: vec![[0.0; 2]; n],
             minv: vec![[0.0; 2]; n],
             tang: vec![[0.0; 2]; n],
-            hb: super::hessian::VjpBuffers::new(n),
         })
     }
 
@@ -404,13 +432,10 @@ impl JacobianWorkspace {
     /// (ξ_j for j < 2n, u for j = 2n) seeded into the slots 0..end − start (E e_j on x̂_k:
     /// δqᵢ = tᵢ δφᵢ, δp = M δv with δvᵢ = tᵢ δωᵢ − qᵢ ωᵢ δφᵢ), the Newton start μ, and returns
     /// the dual control.
-    pub(super) fn seed(
-        &mut self,
-        model: &StageModel,
-        StagePoint { q, p, omega, mu }: StagePoint<'_>,
-        u: f64,
-        (start, end): (usize, usize),
-    ) -> Dv {
+    pub(super) fn seed(&mut self, at: &StageAt<'_>, cols: Range<usize>) -> Dv {
+        let StagePoint { q, p, omega, mu } = at.x;
+        let (model, u) = (at.model, at.u);
+        let (start, end) = (cols.start, cols.end);
         let n = model.n;
         let nx = 2 * n;
         // Seeds: direction j in slot j − start.
@@ -464,27 +489,27 @@ impl JacobianWorkspace {
     pub(super) fn read_columns(
         &mut self,
         model: &StageModel,
-        (start, end): (usize, usize),
-        (a, b): (&mut [f64], &mut [f64]),
+        cols: Range<usize>,
+        out: &mut JacobiansMut<'_>,
     ) {
+        let start = cols.start;
         let n = model.n;
         let nx = 2 * n;
         let st = &self.stepper.state;
         for i in 0..n {
             self.tang[i] = tangent(&[st.q[i][0].re, st.q[i][1].re]);
         }
-        for j in start..end {
+        for j in cols {
             let slot = j - start;
-            let eps = |x: &Dv| x.eps.0.as_ref().map_or(0.0, |v| v[slot]);
             for i in 0..n {
-                self.dv[i] = [eps(&st.q[i][0]), eps(&st.q[i][1])];
-                self.dp[i] = [eps(&st.p[i][0]), eps(&st.p[i][1])];
+                self.dv[i] = [eps(&st.q[i][0], slot), eps(&st.q[i][1], slot)];
+                self.dp[i] = [eps(&st.p[i][0], slot), eps(&st.p[i][1], slot)];
             }
             model.chain.apply_inverse_mass(&self.dp, &mut self.minv);
             let col: &mut [f64] = if j < nx {
-                &mut a[j * nx..(j + 1) * nx]
+                &mut out.a[j * nx..(j + 1) * nx]
             } else {
-                &mut b[..nx]
+                &mut out.b[..nx]
             };
             for i in 0..n {
                 col[i] = dot2(&self.tang[i], &self.dv[i]);
@@ -498,17 +523,11 @@ impl JacobianWorkspace {
     /// the real parts are converged at once (bit for bit the nominal's) and the Newton loop does
     /// only its derivative-only update: the implicit function theorem, one bordered-tridiagonal
     /// solve with 8 right-hand sides per chunk.
-    pub fn jacobians(
-        &mut self,
-        (model, k): (&StageModel, usize),
-        x: StagePoint<'_>,
-        u: f64,
-        (a, b): (&mut [f64], &mut [f64]),
-    ) -> Result<()> {
-        for (start, end) in chunks(ndir(model.n)) {
-            let ud = self.seed(model, x, u, (start, end));
-            self.stepper.advance(k, ud)?;
-            self.read_columns(model, (start, end), (&mut *a, &mut *b));
+    pub fn jacobians(&mut self, at: StageAt<'_>, mut out: JacobiansMut<'_>) -> Result<()> {
+        for cols in chunks(ndir(at.model.n)) {
+            let ud = self.seed(&at, cols.clone());
+            self.stepper.advance(at.k, ud)?;
+            self.read_columns(at.model, cols, &mut out);
         }
         Ok(())
     }
@@ -593,16 +612,20 @@ mod tests {
         let mut ws = JacobianWorkspace::new(&model).unwrap();
         let (mut a1, mut b1) = (vec![0.0; nx * nx], vec![0.0; nx]);
         let (mut a2, mut b2) = (a1.clone(), b1.clone());
-        let x = |mu| StagePoint {
-            q: &q,
-            p: &p,
-            omega: &omega,
-            mu,
+        let at = |mu| StageAt {
+            model: &model,
+            k,
+            x: StagePoint {
+                q: &q,
+                p: &p,
+                omega: &omega,
+                mu,
+            },
+            u,
         };
-        ws.jacobians((&model, k), x(&lambda), u, (&mut a1, &mut b1))
-            .unwrap();
-        ws.jacobians((&model, k), x(&mu), u, (&mut a2, &mut b2))
-            .unwrap();
+        let out = |a, b| JacobiansMut { a, b };
+        ws.jacobians(at(&lambda), out(&mut a1, &mut b1)).unwrap();
+        ws.jacobians(at(&mu), out(&mut a2, &mut b2)).unwrap();
         let rel = |x: &[f64], y: &[f64]| {
             let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             x.iter()

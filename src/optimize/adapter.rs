@@ -11,22 +11,13 @@ use argmin_math::ArgminDot;
 
 use super::bounds::{self, Bounds};
 use super::observers::Relay;
+use super::point::{same_bits, Point};
 use super::problem::OptimProblem;
 use super::ArgminError;
 use crate::error::{Error, Result};
 
 /// HVP products remembered by one [`HessianOperator`] (Steihaug asks for d·(H d) and then H d).
 const HVP_CACHE: usize = 4;
-
-/// One evaluated point.
-#[derive(Clone, Debug)]
-pub(crate) struct Point {
-    pub(crate) phi: Vec<f64>,
-    pub(crate) theta: Vec<f64>,
-    pub(crate) value: f64,
-    pub(crate) grad_theta: Vec<f64>,
-    pub(crate) grad_phi: Vec<f64>,
-}
 
 /// Evaluation counts of an [`ArgminAdapter`] (shared with its Hessian operators).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -77,10 +68,6 @@ impl Shared {
     pub(crate) fn observing(&self) -> bool {
         self.relay.borrow().is_some()
     }
-}
-
-pub(crate) fn same_bits(a: &[f64], b: &[f64]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
 /// An [`OptimProblem`] as an argmin problem over `Vec<f64>`, in the solver variables φ (φ = θ

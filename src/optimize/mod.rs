@@ -152,6 +152,7 @@
 pub mod adapter;
 pub mod bounds;
 pub mod observers;
+mod point;
 pub mod polish;
 pub mod problem;
 mod riccati;
@@ -641,7 +642,7 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
 /// `polish_steps` Newton steps on ∇J = 0 while the gradient test is unmet, each shown to the
 /// observers.
 struct Polish {
-    point: adapter::Point,
+    point: point::Point,
     termination: Termination,
     /// Accepted polish steps.
     steps: usize,
@@ -657,7 +658,7 @@ impl Polish {
         gnorm0: f64,
     ) {
         let grad_test =
-            |p: &adapter::Point| supervisor::gradient_test(opts, gnorm0, norm(&p.grad_phi));
+            |p: &point::Point| supervisor::gradient_test(opts, gnorm0, norm(&p.grad_phi));
         if !(grad_test(&self.point).is_none() && opts.target_cost < self.point.value) {
             return;
         }
@@ -720,7 +721,7 @@ fn checked_controls<Q: OptimProblem + ?Sized>(
 /// Shows an accepted polish step to the observers; the message of an observer that stopped.
 fn relay_iter<Q: OptimProblem + ?Sized>(
     adapter: &ArgminAdapter<'_, Q>,
-    point: &adapter::Point,
+    point: &point::Point,
 ) -> Option<String> {
     let mut relay = adapter.shared.relay.borrow_mut();
     let relay = relay.as_mut()?;

@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex};
 use argmin::core::observers::{Observe, ObserverMode, Observers};
 use argmin::core::{IterState, KvValue, State, TerminationReason, KV};
 
-use super::adapter::{Point, Shared};
+use super::point::Point;
 use super::{norm, ArgminError, Termination};
 
 /// The state observers see: parameter θ, cost J(θ), gradient ∇_θJ(θ), iteration number over
@@ -100,36 +100,6 @@ fn grad_kv(p: &Point) -> KV {
     let mut kv = KV::new();
     kv.insert("grad_norm", KvValue::Float(norm(&p.grad_theta)));
     kv
-}
-
-/// The one observer [`minimize`](super::minimize) adds to each argmin executor: relays the
-/// solver's iterations to the user's observers in θ and J (module docs). The point comes from
-/// the supervisor, which keeps the current iterate in the shared state.
-pub(crate) struct Bridge {
-    pub(crate) shared: std::rc::Rc<Shared>,
-}
-
-impl<G, J, H, R> Observe<IterState<Vec<f64>, G, J, H, R, f64>> for Bridge {
-    fn observe_iter(
-        &mut self,
-        _state: &IterState<Vec<f64>, G, J, H, R, f64>,
-        kv: &KV,
-    ) -> Result<(), ArgminError> {
-        let Some(p) = self.shared.current.borrow().clone() else {
-            return Ok(());
-        };
-        let out = match self.shared.relay.borrow_mut().as_mut() {
-            Some(relay) => relay.iter(&p, kv),
-            None => Ok(()),
-        };
-        if let Err(e) = &out {
-            self.shared
-                .observer_stop
-                .borrow_mut()
-                .get_or_insert_with(|| e.to_string());
-        }
-        out
-    }
 }
 
 /// Prints the start, then iteration, J and ‖∇J‖ after each iteration to stderr (what

@@ -2,8 +2,9 @@
 //! ∇J = 0 with the gradient norm as merit, after cost-based globalisation stalls at J's
 //! round-off.
 
-use super::adapter::{ArgminAdapter, Point};
+use super::adapter::ArgminAdapter;
 use super::norm;
+use super::point::Point;
 use super::problem::OptimProblem;
 use crate::error::Result;
 

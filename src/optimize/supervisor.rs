@@ -5,7 +5,7 @@
 use std::fmt;
 use std::rc::Rc;
 
-use argmin::core::observers::ObserverMode;
+use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::{
     Executor, IterState, LineSearch, Problem, Solver, State, TerminationReason, TerminationStatus,
     KV,
@@ -15,8 +15,8 @@ use argmin::solver::newton::NewtonCG;
 use argmin::solver::quasinewton::LBFGS;
 use argmin::solver::trustregion::{Steihaug, TrustRegion};
 
-use super::adapter::{same_bits, ArgminAdapter, Point, Shared};
-use super::observers::Bridge;
+use super::adapter::{ArgminAdapter, Shared};
+use super::point::{same_bits, Point};
 use super::problem::OptimProblem;
 use super::{norm, ArgminError, Method, OptimOptions};
 use crate::error::{Error, Result};
@@ -596,4 +596,34 @@ pub(crate) fn supervise<Q: OptimProblem + ?Sized>(
         polish,
         restarts,
     })
+}
+
+/// The one observer [`minimize`](super::minimize) adds to each argmin executor: relays the
+/// solver's iterations to the user's observers in θ and J (module docs). The point comes from
+/// the supervisor, which keeps the current iterate in the shared state.
+pub(crate) struct Bridge {
+    pub(crate) shared: Rc<Shared>,
+}
+
+impl<G, J, H, R> Observe<IterState<Vec<f64>, G, J, H, R, f64>> for Bridge {
+    fn observe_iter(
+        &mut self,
+        _state: &IterState<Vec<f64>, G, J, H, R, f64>,
+        kv: &KV,
+    ) -> Result<(), ArgminError> {
+        let Some(p) = self.shared.current.borrow().clone() else {
+            return Ok(());
+        };
+        let out = match self.shared.relay.borrow_mut().as_mut() {
+            Some(relay) => relay.iter(&p, kv),
+            None => Ok(()),
+        };
+        if let Err(e) = &out {
+            self.shared
+                .observer_stop
+                .borrow_mut()
+                .get_or_insert_with(|| e.to_string());
+        }
+        out
+    }
 }

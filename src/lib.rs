@@ -143,6 +143,7 @@ pub mod integrators;
 pub mod model;
 pub mod mpc;
 pub mod multistart;
+pub mod ocean;
 pub mod ocp;
 pub mod optimize;
 pub mod scene;

@@ -1,0 +1,59 @@
+//! Irregular seas (OCEAN.md §2; DNV-RP-C205 §3.5): wave spectra, the finite-depth dispersion
+//! relation, a seeded realisation of a sea state and its linear (Airy) kinematics over a whole
+//! record, evaluated by inverse FFT.
+//!
+//! - [`spectrum`]: Pierson-Moskowitz and JONSWAP spectral densities S(ω) \[m² s/rad\].
+//! - [`dispersion`]: the wavenumber k of ω² = g k tanh(k d), by Newton.
+//! - [`waves`]: [`Sea`], the components η(x', t) = Σⱼ aⱼ cos(ωⱼ t − kⱼ x' + φⱼ) with
+//!   aⱼ = √(2 S(ωⱼ) Δω) and seeded phases φⱼ, and [`WaveRecord`], the horizontal particle
+//!   velocity and acceleration at given heights above the seabed at every time step, ready for a
+//!   load term to read per node and step without allocating.
+//!
+//! Conventions (docs/conventions.md, "Waves"): heights y are measured up from the seabed
+//! (y = 0) to the mean surface (y = d); the mean wave direction is an angle in the horizontal
+//! (x, z) plane, in degrees from +z toward +x; the record's times are t_k = k h from t = 0; the
+//! riser's nodes are evaluated at their undisplaced horizontal position x = z = 0.
+
+pub mod dispersion;
+pub mod spectrum;
+pub mod waves;
+
+pub use dispersion::wavenumber;
+pub use spectrum::{Spectrum, SpectrumKind};
+pub use waves::{depth_profile, Sea, SeaSpec, WaveRecord};
+
+use thiserror::Error;
+
+/// Standard gravity g \[m/s²\] (ISO 80000-3), the default of [`SeaSpec::gravity`].
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Why a sea state or its record could not be built: the quantity, its value and what it must
+/// be, so that a scene reader can name its key.
+#[derive(Clone, Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum SeaError {
+    /// A quantity is out of its range (or not finite).
+    #[error("{quantity} = {value} is invalid: it must be {expected}")]
+    Invalid {
+        /// The quantity's name (`hs`, `tp`, `gamma`, `depth`, `direction`, `components`,
+        /// `step`, `duration`, `gravity`, `height`).
+        quantity: &'static str,
+        /// The value given.
+        value: f64,
+        /// The valid range, in words.
+        expected: &'static str,
+    },
+    /// The record (or its FFT) would need more memory than the limit.
+    #[error(
+        "the wave record needs {needed} {what}, over the limit of {limit}; use a larger time \
+         step, fewer steps or fewer components"
+    )]
+    TooLarge {
+        /// What is counted (`FFT points`, `bytes`).
+        what: &'static str,
+        /// How many are needed.
+        needed: u64,
+        /// The limit.
+        limit: u64,
+    },
+}

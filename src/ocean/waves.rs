@@ -1,0 +1,431 @@
+//! A seeded realisation of a sea state and its linear (Airy) kinematics (OCEAN.md §2).
+//!
+//! The realisation is a sum of N components at equally spaced frequencies
+//! ωⱼ = j Δω, j = 1..N, Δω = 2π/T_r:
+//! η(x', t) = Σⱼ aⱼ cos(ωⱼ t − kⱼ x' + φⱼ), aⱼ = √(2 S(ωⱼ) Δω), with x' the horizontal
+//! coordinate along the mean wave direction and kⱼ the finite-depth wavenumber
+//! ([`super::wavenumber`]). The sea repeats after T_r. T_r is a whole number M of time steps
+//! h, so that on the step grid tₖ = k h the sum is an inverse discrete Fourier transform of
+//! length M: the record of every node costs one FFT, O(M log M), instead of N·M cosines.
+//!
+//! **The seed's promise**: the phases are φⱼ = 2π uⱼ with uⱼ = ⌊r/2¹¹⌋ 2⁻⁵³ from the 64-bit
+//! words r of the ChaCha20 stream (`rand_chacha::ChaCha20Rng`, RFC 8439 block function) keyed
+//! by the seed's 8 little-endian bytes followed by 24 zero bytes, taken in order j = 1, 2, ….
+//! The spectrum, the wavenumbers, the profiles and the phasors use the pure-Rust `libm`, and the
+//! FFT is `rustfft`'s scalar code: the same scene (spectrum, seed, depth, components, step)
+//! gives the same sea and the same record bit for bit on every machine.
+
+use super::spectrum::Spectrum;
+use super::{wavenumber, SeaError, STANDARD_GRAVITY};
+use rand_chacha::rand_core::{RngCore, SeedableRng};
+use rand_chacha::ChaCha20Rng;
+use rustfft::num_complex::Complex;
+use rustfft::FftPlanner;
+use std::f64::consts::PI;
+
+/// The shortest repeat period T_r \[s\] of a realisation with the default number of components:
+/// three hours, the standard duration of a sea state (DNV-RP-C205 §3.5.1).
+pub const MIN_REPEAT_PERIOD: f64 = 3.0 * 3600.0;
+
+/// The largest FFT length M (repeat period over time step) accepted.
+pub const MAX_FFT_LEN: u64 = 1 << 25;
+
+/// The largest record accepted, in bytes (velocity, acceleration and elevation).
+pub const MAX_RECORD_BYTES: u64 = 4 << 30;
+
+/// The largest number of components accepted.
+pub const MAX_COMPONENTS: usize = 10_000_000;
+
+/// What defines a sea: its spectrum, the water, the direction and the realisation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaSpec {
+    /// The spectrum S(ω).
+    pub spectrum: Spectrum,
+    /// Water depth d \[m\] (seabed at y = 0, mean surface at y = d).
+    pub depth: f64,
+    /// Gravity g \[m/s²\] of the dispersion relation (default [`STANDARD_GRAVITY`]).
+    pub gravity: f64,
+    /// Mean wave direction \[degrees\] in the horizontal plane, from +z toward +x.
+    pub direction_deg: f64,
+    /// The seed of the phases (see the module docs for what it promises).
+    pub seed: u64,
+    /// The number of components N; `None`: enough that the sea repeats only after
+    /// max(3 h, the record's duration).
+    pub components: Option<usize>,
+}
+
+impl SeaSpec {
+    /// A sea with standard gravity, direction 0 (along +z) and the default components.
+    pub fn new(spectrum: Spectrum, depth: f64, seed: u64) -> Self {
+        Self {
+            spectrum,
+            depth,
+            gravity: STANDARD_GRAVITY,
+            direction_deg: 0.0,
+            seed,
+            components: None,
+        }
+    }
+}
+
+/// The depth profile of the horizontal particle velocity of a component of wavenumber k at
+/// height y above the seabed in depth d: cosh(k y)/sinh(k d) (DNV-RP-C205 Table 3-1), evaluated
+/// as (e^{k(y−d)} + e^{−k(y+d)}) / (1 − e^{−2kd}) so that it neither overflows in deep water
+/// nor loses digits in shallow water. y is clamped to [0, d]: above the mean surface the
+/// surface's kinematics are used (no stretching).
+pub fn depth_profile(k: f64, y: f64, depth: f64) -> f64 {
+    let y = y.clamp(0.0, depth);
+    (libm::exp(k * (y - depth)) + libm::exp(-k * (y + depth))) / -libm::expm1(-2.0 * k * depth)
+}
+
+/// A realisation of a sea state on the time grid tₖ = k h (module docs).
+#[derive(Clone, Debug)]
+pub struct Sea {
+    spec: SeaSpec,
+    h: f64,
+    /// FFT length M = T_r / h.
+    fft_len: usize,
+    dw: f64,
+    omega: Vec<f64>,
+    k: Vec<f64>,
+    amplitude: Vec<f64>,
+    phase: Vec<f64>,
+    /// aⱼ e^{iφⱼ}.
+    phasor: Vec<Complex<f64>>,
+    direction: [f64; 2],
+}
+
+fn invalid(quantity: &'static str, value: f64, expected: &'static str) -> SeaError {
+    SeaError::Invalid {
+        quantity,
+        value,
+        expected,
+    }
+}
+
+/// The phases φⱼ = 2π uⱼ of `count` components from the seed (module docs).
+fn phases(seed: u64, count: usize) -> Vec<f64> {
+    let mut key = [0u8; 32];
+    key[..8].copy_from_slice(&seed.to_le_bytes());
+    let mut rng = ChaCha20Rng::from_seed(key);
+    let scale = 2.0 * PI / (1u64 << 53) as f64;
+    (0..count)
+        .map(|_| (rng.next_u64() >> 11) as f64 * scale)
+        .collect()
+}
+
+impl Sea {
+    /// Realises `spec` for a record of `duration` seconds at step `h`: the repeat period T_r is
+    /// the smallest whole number of steps not shorter than 2πN/ω_c for a given N = `components`
+    /// (ω_c = [`Spectrum::cutoff`]), or than max([`MIN_REPEAT_PERIOD`], `duration`) by default,
+    /// with then N = ⌊ω_c/Δω⌋. With h dividing 3 h (0.01, 0.05, 0.1 s, …) and a record of at
+    /// most 3 h, T_r = 3 h exactly and the sea does not depend on h.
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `depth`, `gravity`, `direction`, `components`, `step` or
+    /// `duration`; [`SeaError::TooLarge`] when T_r/h exceeds [`MAX_FFT_LEN`].
+    pub fn new(spec: &SeaSpec, h: f64, duration: f64) -> Result<Self, SeaError> {
+        let ok = |x: f64, c: bool| x.is_finite() && c;
+        if !ok(spec.depth, spec.depth > 0.0) {
+            return Err(invalid("depth", spec.depth, "positive and finite [m]"));
+        }
+        if !ok(spec.gravity, spec.gravity > 0.0) {
+            return Err(invalid(
+                "gravity",
+                spec.gravity,
+                "positive and finite [m/s²]",
+            ));
+        }
+        if !spec.direction_deg.is_finite() {
+            return Err(invalid("direction", spec.direction_deg, "finite [degrees]"));
+        }
+        if !ok(h, h > 0.0) {
+            return Err(invalid("step", h, "positive and finite [s]"));
+        }
+        if !ok(duration, duration >= 0.0) {
+            return Err(invalid("duration", duration, "non-negative and finite [s]"));
+        }
+        if let Some(c) = spec.components {
+            if c == 0 || c > MAX_COMPONENTS {
+                return Err(invalid("components", c as f64, "in 1..=10000000"));
+            }
+        }
+        let wc = spec.spectrum.cutoff();
+        let target = match spec.components {
+            Some(c) => 2.0 * PI * c as f64 / wc,
+            None => MIN_REPEAT_PERIOD.max(duration),
+        };
+        // The smallest M with M h ≥ target, forgiving the round-off of target/h.
+        let m = (target / h * (1.0 - 4.0 * f64::EPSILON)).ceil().max(1.0);
+        if m > MAX_FFT_LEN as f64 {
+            return Err(SeaError::TooLarge {
+                what: "FFT points",
+                needed: m as u64,
+                limit: MAX_FFT_LEN,
+            });
+        }
+        let fft_len = m as usize;
+        let dw = 2.0 * PI / (fft_len as f64 * h);
+        let count = spec
+            .components
+            .unwrap_or(((wc / dw).floor() as usize).max(1));
+        let omega: Vec<f64> = (1..=count).map(|j| j as f64 * dw).collect();
+        let k = omega
+            .iter()
+            .map(|&w| wavenumber(w, spec.depth, spec.gravity))
+            .collect();
+        let amplitude: Vec<f64> = omega
+            .iter()
+            .map(|&w| (2.0 * spec.spectrum.density(w) * dw).sqrt())
+            .collect();
+        let phase = phases(spec.seed, count);
+        let phasor = amplitude
+            .iter()
+            .zip(&phase)
+            .map(|(&a, &p)| Complex::new(a * libm::cos(p), a * libm::sin(p)))
+            .collect();
+        let theta = spec.direction_deg.to_radians();
+        Ok(Self {
+            spec: *spec,
+            h,
+            fft_len,
+            dw,
+            omega,
+            k,
+            amplitude,
+            phase,
+            phasor,
+            direction: [libm::sin(theta), libm::cos(theta)],
+        })
+    }
+
+    /// The specification realised.
+    pub fn spec(&self) -> &SeaSpec {
+        &self.spec
+    }
+
+    /// The frequency spacing Δω = 2π/T_r \[rad/s\].
+    pub fn frequency_step(&self) -> f64 {
+        self.dw
+    }
+
+    /// The repeat period T_r = M h \[s\].
+    pub fn repeat_period(&self) -> f64 {
+        self.fft_len as f64 * self.h
+    }
+
+    /// The time step h \[s\] of the grid tₖ = k h.
+    pub fn step(&self) -> f64 {
+        self.h
+    }
+
+    /// The components' frequencies ωⱼ = j Δω \[rad/s\], j = 1..N.
+    pub fn frequencies(&self) -> &[f64] {
+        &self.omega
+    }
+
+    /// The components' wavenumbers kⱼ \[rad/m\] (ωⱼ² = g kⱼ tanh(kⱼ d)).
+    pub fn wavenumbers(&self) -> &[f64] {
+        &self.k
+    }
+
+    /// The components' amplitudes aⱼ = √(2 S(ωⱼ) Δω) \[m\].
+    pub fn amplitudes(&self) -> &[f64] {
+        &self.amplitude
+    }
+
+    /// The components' phases φⱼ ∈ [0, 2π) from the seed.
+    pub fn phases(&self) -> &[f64] {
+        &self.phase
+    }
+
+    /// The mean direction's unit vector (x, z) = (sin θ, cos θ) in the horizontal plane.
+    pub fn direction(&self) -> [f64; 2] {
+        self.direction
+    }
+
+    /// The surface elevation η(0, t) = Σⱼ aⱼ cos(ωⱼ t + φⱼ) \[m\] at x = z = 0, by the direct
+    /// sum (O(N); the reference for [`Sea::record`]).
+    pub fn elevation(&self, t: f64) -> f64 {
+        (0..self.omega.len())
+            .map(|j| self.amplitude[j] * libm::cos(self.omega[j] * t + self.phase[j]))
+            .sum()
+    }
+
+    /// The horizontal particle velocity along the mean direction at height y and x = z = 0,
+    /// u(y, t) = Σⱼ ωⱼ aⱼ cosh(kⱼ y)/sinh(kⱼ d) cos(ωⱼ t + φⱼ) \[m/s\] (linear Airy theory,
+    /// DNV-RP-C205 Table 3-1), by the direct sum.
+    pub fn velocity(&self, y: f64, t: f64) -> f64 {
+        (0..self.omega.len())
+            .map(|j| {
+                let w = self.omega[j];
+                let g = depth_profile(self.k[j], y, self.spec.depth);
+                w * self.amplitude[j] * g * libm::cos(w * t + self.phase[j])
+            })
+            .sum()
+    }
+
+    /// Its time derivative, the horizontal particle acceleration
+    /// u̇(y, t) = −Σⱼ ωⱼ² aⱼ cosh(kⱼ y)/sinh(kⱼ d) sin(ωⱼ t + φⱼ) \[m/s²\], by the direct sum.
+    pub fn acceleration(&self, y: f64, t: f64) -> f64 {
+        (0..self.omega.len())
+            .map(|j| {
+                let w = self.omega[j];
+                let g = depth_profile(self.k[j], y, self.spec.depth);
+                -w * w * self.amplitude[j] * g * libm::sin(w * t + self.phase[j])
+            })
+            .sum()
+    }
+
+    /// The record of `steps + 1` times tₖ = k h (k = 0..=steps) at the given heights above the
+    /// seabed \[m\]: one inverse FFT of length M per height (velocity and acceleration together
+    /// as the real and imaginary parts of one transform) and one for η, O((n + 1) M log M).
+    /// Beyond T_r the record repeats (k is taken modulo M).
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `height` for a negative or non-finite height;
+    /// [`SeaError::TooLarge`] when the record exceeds [`MAX_RECORD_BYTES`] or its memory is
+    /// refused.
+    pub fn record(&self, heights: &[f64], steps: usize) -> Result<WaveRecord, SeaError> {
+        if let Some(&y) = heights.iter().find(|y| !(y.is_finite() && **y >= 0.0)) {
+            return Err(invalid("height", y, "non-negative and finite [m]"));
+        }
+        let n = heights.len();
+        let len = steps.saturating_add(1);
+        let bytes = (len as u64)
+            .saturating_mul(2 * n as u64 + 1)
+            .saturating_mul(8)
+            .saturating_add(self.fft_len as u64 * 32);
+        let too_large = || SeaError::TooLarge {
+            what: "bytes",
+            needed: bytes,
+            limit: MAX_RECORD_BYTES,
+        };
+        if bytes > MAX_RECORD_BYTES {
+            return Err(too_large());
+        }
+        let alloc = |size: usize| -> Result<Vec<f64>, SeaError> {
+            let mut v = Vec::new();
+            v.try_reserve_exact(size).map_err(|_| too_large())?;
+            v.resize(size, 0.0);
+            Ok(v)
+        };
+        let mut rec = WaveRecord {
+            n,
+            len,
+            h: self.h,
+            direction: self.direction,
+            velocity: alloc(len * n)?,
+            acceleration: alloc(len * n)?,
+            elevation: alloc(len)?,
+        };
+        let m = self.fft_len;
+        let fft = FftPlanner::<f64>::new().plan_fft_inverse(m);
+        let mut buf = vec![Complex::new(0.0, 0.0); m];
+        let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        let i = Complex::new(0.0, 1.0);
+        // η = Re Σ aⱼ e^{iφⱼ} e^{iωⱼt}.
+        self.fill(&mut buf, |j| (self.phasor[j], Complex::new(0.0, 0.0)));
+        fft.process_with_scratch(&mut buf, &mut scratch);
+        for (k, e) in rec.elevation.iter_mut().enumerate() {
+            *e = buf[k % m].re;
+        }
+        for (node, &y) in heights.iter().enumerate() {
+            // u = Re Σ Vⱼ e^{iωⱼt}, Vⱼ = ωⱼ Gⱼ(y) aⱼ e^{iφⱼ}, and u̇ = Re Σ i ωⱼ Vⱼ e^{iωⱼt}.
+            self.fill(&mut buf, |j| {
+                let w = self.omega[j];
+                let v = self.phasor[j] * (w * depth_profile(self.k[j], y, self.spec.depth));
+                (v, i * w * v)
+            });
+            fft.process_with_scratch(&mut buf, &mut scratch);
+            for k in 0..len {
+                let z = buf[k % m];
+                rec.velocity[k * n + node] = z.re;
+                rec.acceleration[k * n + node] = z.im;
+            }
+        }
+        Ok(rec)
+    }
+
+    /// Fills the input of the inverse FFT so that its output is xₘ + i yₘ with the two real
+    /// series xₘ = Re Σⱼ Xⱼ e^{2πi j m/M} and yₘ = Re Σⱼ Yⱼ e^{2πi j m/M}, where
+    /// `coef(j) = (Xⱼ, Yⱼ)` for component j (frequency (j + 1) Δω): bin j + 1 gets (Xⱼ + i Yⱼ)/2
+    /// and bin M − j − 1 gets (X̄ⱼ + i Ȳⱼ)/2 (indices modulo M: components beyond M fold onto
+    /// the same roots of unity, exactly).
+    fn fill(&self, buf: &mut [Complex<f64>], coef: impl Fn(usize) -> (Complex<f64>, Complex<f64>)) {
+        let m = buf.len();
+        let i = Complex::new(0.0, 1.0);
+        buf.fill(Complex::new(0.0, 0.0));
+        for j in 0..self.omega.len() {
+            let (x, y) = coef(j);
+            let bin = (j + 1) % m;
+            buf[bin] += (x + i * y) * 0.5;
+            buf[(m - bin) % m] += (x.conj() + i * y.conj()) * 0.5;
+        }
+    }
+}
+
+/// The wave kinematics of a record: at each time tₖ = k h (k = 0..=steps) and each node, the
+/// horizontal particle velocity u and acceleration u̇ along the mean direction, and the surface
+/// elevation η at x = z = 0 ([`Sea::record`]). Stored time-major (the n values of one step are
+/// contiguous), read by a load term per node and step without allocating.
+#[derive(Clone, Debug)]
+pub struct WaveRecord {
+    n: usize,
+    len: usize,
+    h: f64,
+    direction: [f64; 2],
+    velocity: Vec<f64>,
+    acceleration: Vec<f64>,
+    elevation: Vec<f64>,
+}
+
+impl WaveRecord {
+    /// Number of nodes (heights) n.
+    pub fn nodes(&self) -> usize {
+        self.n
+    }
+
+    /// Number of times, steps + 1.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the record has no times (never: it has at least t₀).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The time step h \[s\].
+    pub fn step(&self) -> f64 {
+        self.h
+    }
+
+    /// The mean direction's unit vector (x, z) in the horizontal plane.
+    pub fn direction(&self) -> [f64; 2] {
+        self.direction
+    }
+
+    /// The horizontal particle velocities u(yᵢ, tₖ) \[m/s\] of every node at step k.
+    #[inline]
+    pub fn velocity(&self, k: usize) -> &[f64] {
+        &self.velocity[k * self.n..(k + 1) * self.n]
+    }
+
+    /// The horizontal particle accelerations u̇(yᵢ, tₖ) \[m/s²\] of every node at step k.
+    #[inline]
+    pub fn acceleration(&self, k: usize) -> &[f64] {
+        &self.acceleration[k * self.n..(k + 1) * self.n]
+    }
+
+    /// The surface elevation η(0, tₖ) \[m\] at step k.
+    #[inline]
+    pub fn elevation(&self, k: usize) -> f64 {
+        self.elevation[k]
+    }
+
+    /// The whole elevation series η(0, tₖ), k = 0..=steps.
+    pub fn elevations(&self) -> &[f64] {
+        &self.elevation
+    }
+}

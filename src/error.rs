@@ -4,12 +4,14 @@
 use thiserror::Error;
 
 mod model;
+mod multistart;
 mod start;
 mod stepper;
 
 pub use crate::euler_bernoulli::EulerBernoulliError;
 pub use crate::scene::SceneError;
 pub use model::ModelError;
+pub use multistart::MultistartError;
 pub use start::StartError;
 pub use stepper::StepperError;
 
@@ -29,6 +31,9 @@ pub enum Error {
     /// A horizon's start state the adjoint cannot begin from.
     #[error(transparent)]
     Start(#[from] StartError),
+    /// An input of the multistart, the certificate or a landscape out of its range.
+    #[error(transparent)]
+    Multistart(#[from] MultistartError),
     /// An argument of the Euler-Bernoulli reference beam out of its range.
     #[error(transparent)]
     EulerBernoulli(#[from] EulerBernoulliError),

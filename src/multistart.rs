@@ -49,6 +49,7 @@ use nalgebra::DMatrix;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
+pub use crate::error::MultistartError;
 use crate::error::{Error, Result};
 use crate::optimize::{minimize, Bounds, OptimOptions, OptimProblem, OptimResult};
 
@@ -291,8 +292,8 @@ const TAG_PERMUTATION: u64 = 2;
 /// before clamping into a force bound).
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for an empty or non-finite range, a negative radius, or a center of
-/// the wrong length.
+/// [`MultistartError::EmptyBox`] for an empty or non-finite range, [`MultistartError::BadRadius`]
+/// for a negative radius, [`MultistartError::BadCenter`] for a center of the wrong length.
 pub fn start_points(
     design: &StartDesign,
     n: usize,
@@ -303,10 +304,7 @@ pub fn start_points(
         if lo.is_finite() && hi.is_finite() && lo < hi {
             Ok(())
         } else {
-            Err(Error::InvalidArgument {
-                name: "design",
-                reason: format!("the box needs finite lo < hi, got [{lo}, {hi}]"),
-            })
+            Err(MultistartError::EmptyBox { lo, hi })
         }
     };
     match design {
@@ -344,19 +342,14 @@ pub fn start_points(
         }
         StartDesign::Perturb { center, radius } => {
             if center.len() != n || center.iter().any(|x| !x.is_finite()) {
-                return Err(Error::InvalidArgument {
-                    name: "design",
-                    reason: format!(
-                        "the center needs {n} finite values, got {} values",
-                        center.len()
-                    ),
-                });
+                return Err(MultistartError::BadCenter {
+                    expected: n,
+                    got: center.len(),
+                }
+                .into());
             }
             if !(radius.is_finite() && *radius >= 0.0) {
-                return Err(Error::InvalidArgument {
-                    name: "design",
-                    reason: format!("the radius must be finite and >= 0, got {radius}"),
-                });
+                return Err(MultistartError::BadRadius { radius: *radius }.into());
             }
             Ok((0..starts)
                 .map(|i| {
@@ -387,19 +380,19 @@ where
     F: Fn(usize) -> T + Sync + Send,
 {
     if threads > MAX_THREADS {
-        return Err(Error::InvalidArgument {
-            name: "threads",
-            reason: format!("at most {MAX_THREADS} threads, got {threads}"),
-        });
+        return Err(MultistartError::TooManyThreads {
+            threads,
+            max: MAX_THREADS,
+        }
+        .into());
     }
     #[cfg(feature = "parallel")]
     {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
-            .map_err(|e| Error::InvalidArgument {
-                name: "threads",
-                reason: e.to_string(),
+            .map_err(|e| MultistartError::ThreadPool {
+                message: e.to_string(),
             })?;
         Ok(pool.install(|| (0..n).into_par_iter().map(f).collect()))
     }
@@ -433,8 +426,8 @@ where
 /// Deterministic: see the module docs.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for an invalid design, options, `starts = 0`, more than
-/// [`MAX_THREADS`] threads, or a thread pool that cannot be built; [`Error::NoEffect`] when every
+/// [`MultistartError`] for an invalid design, `starts = 0` ([`MultistartError::NoStarts`]), more
+/// than [`MAX_THREADS`] threads, or a thread pool that cannot be built; the options' errors; [`Error::NoEffect`] when every
 /// start failed with it; the certificate's HVP error. Any other failing start does not fail the
 /// run: it is listed in [`MultistartReport::failures`].
 pub fn multistart<Q: OptimProblem + Sync + ?Sized>(
@@ -448,10 +441,7 @@ pub fn multistart<Q: OptimProblem + Sync + ?Sized>(
     let clock = std::time::Instant::now();
     opts.validate()?;
     if starts == 0 {
-        return Err(Error::InvalidArgument {
-            name: "starts",
-            reason: "at least one start is needed".into(),
-        });
+        return Err(MultistartError::NoStarts.into());
     }
     let mut points = start_points(design, problem.n_params(), starts, seed)?;
     if let Some(b) = opts.force_bounds()? {
@@ -560,8 +550,8 @@ pub fn cluster(
 /// `parallel` feature), symmetrised, restricted to the components not on the force bound.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] if n exceeds [`MAX_CERTIFICATE_PARAMS`], θ is invalid, or the
-/// problem has no Hessian-vector products; the simulation's or HVP's error.
+/// [`MultistartError::CertificateTooLarge`] if n exceeds [`MAX_CERTIFICATE_PARAMS`],
+/// [`MultistartError::NoHessian`] if the problem has no Hessian-vector products; θ's errors; the simulation's or HVP's error.
 pub fn certify<Q: OptimProblem + Sync + ?Sized>(
     problem: &Q,
     theta: &[f64],
@@ -569,19 +559,14 @@ pub fn certify<Q: OptimProblem + Sync + ?Sized>(
 ) -> Result<Certificate> {
     let n = problem.n_params();
     if problem.hessian().is_none() {
-        return Err(Error::InvalidArgument {
-            name: "problem",
-            reason: "a certificate needs Hessian-vector products (OptimProblem::hessian)".into(),
-        });
+        return Err(MultistartError::NoHessian.into());
     }
     if n > MAX_CERTIFICATE_PARAMS {
-        return Err(Error::InvalidArgument {
-            name: "theta",
-            reason: format!(
-                "a certificate needs a dense {n} x {n} Hessian; at most {MAX_CERTIFICATE_PARAMS} \
-                 parameters are supported"
-            ),
-        });
+        return Err(MultistartError::CertificateTooLarge {
+            n,
+            max: MAX_CERTIFICATE_PARAMS,
+        }
+        .into());
     }
     let objective = problem.value(theta)?;
     let indices: Vec<usize> = (0..n).collect();
@@ -648,10 +633,12 @@ pub fn axis(n: usize, i: usize) -> Vec<f64> {
 fn grid(range: (f64, f64), points: usize, name: &'static str) -> Result<Vec<f64>> {
     let (a, b) = range;
     if !(a.is_finite() && b.is_finite()) || points == 0 {
-        return Err(Error::InvalidArgument {
+        return Err(MultistartError::BadGrid {
             name,
-            reason: format!("needs a finite range and at least one point, got {range:?}, {points}"),
-        });
+            range,
+            points,
+        }
+        .into());
     }
     Ok(if points == 1 {
         vec![a]
@@ -664,10 +651,12 @@ fn grid(range: (f64, f64), points: usize, name: &'static str) -> Result<Vec<f64>
 
 fn check_dir(n: usize, d: &[f64], name: &'static str) -> Result<()> {
     if d.len() != n || d.iter().any(|x| !x.is_finite()) {
-        return Err(Error::InvalidArgument {
+        return Err(MultistartError::BadVector {
             name,
-            reason: format!("needs {n} finite values, got {}", d.len()),
-        });
+            expected: n,
+            got: d.len(),
+        }
+        .into());
     }
     Ok(())
 }
@@ -677,7 +666,8 @@ fn check_dir(n: usize, d: &[f64], name: &'static str) -> Result<()> {
 /// this is the landscape along parameter i (Fig. 3.7, 3.10: J against a constant u).
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for mismatched lengths, a non-finite range or no points; the first
+/// [`MultistartError::BadVector`] for mismatched lengths, [`MultistartError::BadGrid`] for a
+/// non-finite range or no points; the first
 /// simulation error along the slice.
 pub fn landscape_1d<Q: OptimProblem + Sync + ?Sized>(
     problem: &Q,

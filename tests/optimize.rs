@@ -3,8 +3,8 @@
 //! second solver on the same problem.
 
 use chainbeam::multistart::{
-    axis, certify, landscape_1d, landscape_2d, multistart, start_points, MultistartReport,
-    StartDesign,
+    axis, certify, landscape_1d, landscape_2d, multistart, start_points, MultistartError,
+    MultistartReport, StartDesign,
 };
 use chainbeam::optimize::{
     ineffective_params, minimize, resolved_control_limit, Bounds, HessianVec, History, Method,
@@ -915,10 +915,10 @@ fn multistart_equals_sequential_minimize() {
     }
     assert!(matches!(
         multistart(&p, &design, 2, 1, 100_000, &opts),
-        Err(Error::InvalidArgument {
-            name: "threads",
+        Err(Error::Multistart(MultistartError::TooManyThreads {
+            threads: 100_000,
             ..
-        })
+        }))
     ));
 }
 

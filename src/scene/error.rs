@@ -3,8 +3,8 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-/// What is wrong with a scene. Every variant except [`Syntax`](Self::Syntax) and
-/// [`Io`](Self::Io) names the offending key in TOML notation (`beam.length[3]`,
+/// What is wrong with a scene. Every variant except [`Syntax`](Self::Syntax),
+/// [`Io`](Self::Io) and [`Read`](Self::Read) names the offending key in TOML notation (`beam.length[3]`,
 /// `loads.point[0].node`, `control.values`).
 #[derive(Clone, Debug, PartialEq)]
 #[non_exhaustive]
@@ -94,6 +94,14 @@ pub enum SceneErrorKind {
         /// The operating system's message.
         message: String,
     },
+    /// The scene file is not an input the bounded reader accepts
+    /// ([`read_text_file`](super::read_text_file)): a directory, over the size limit, or not
+    /// UTF-8 text (the reason gives the line).
+    Read {
+        /// What is wrong ([`ReadErrorKind::Io`](super::ReadErrorKind::Io) is reported as
+        /// [`SceneErrorKind::Io`]).
+        reason: super::ReadErrorKind,
+    },
 }
 
 impl SceneErrorKind {
@@ -108,7 +116,7 @@ impl SceneErrorKind {
             | Self::WrongCount { key, .. }
             | Self::DuplicateKey { key, .. }
             | Self::SeriesFile { key, .. } => Some(key),
-            Self::Syntax { .. } | Self::Io { .. } => None,
+            Self::Syntax { .. } | Self::Io { .. } | Self::Read { .. } => None,
         }
     }
 }
@@ -208,6 +216,7 @@ impl fmt::Display for SceneErrorKind {
                 write!(f, ": {reason}")
             }
             Self::Io { message } => write!(f, "cannot read scene file: {message}"),
+            Self::Read { reason } => write!(f, "{reason}"),
         }
     }
 }

@@ -19,6 +19,7 @@
 mod builder;
 mod current;
 mod error;
+mod input;
 mod raw;
 pub(crate) mod series;
 mod validate;
@@ -34,6 +35,9 @@ pub use current::{
     MAX_POWER_EXPONENT,
 };
 pub use error::{SceneError, SceneErrorKind};
+pub use input::{
+    read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
+};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
     human_bytes, ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,
@@ -362,14 +366,17 @@ impl Scene {
     }
 
     /// Reads, parses and validates a scene file; errors name the file. A load's `series` file
-    /// name is relative to the scene file's directory.
+    /// name is relative to the scene file's directory. The file is read by the bounded
+    /// [`read_text_file`] (at most [`MAX_INPUT_BYTES`], UTF-8 text; a FIFO blocks until a writer
+    /// comes).
     pub fn from_file(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            SceneError::new(SceneErrorKind::Io {
-                message: e.to_string(),
-            })
-            .with_file(path)
+        let text = read_text_file(path).map_err(|e| {
+            let kind = match e.kind {
+                ReadErrorKind::Io { message, .. } => SceneErrorKind::Io { message },
+                reason => SceneErrorKind::Read { reason },
+            };
+            SceneError::new(kind).with_file(path)
         })?;
         let dir = path.parent().unwrap_or(Path::new(""));
         Self::parse_in(&text, Some(dir)).map_err(|e| e.with_file(path))

@@ -1,15 +1,16 @@
 //! Time series of a point load, (t, F_x, F_z) rows read from a CSV file and linearly interpolated
 //! (docs/scene-format.md, "Time series files").
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
+
+use super::input::{read_text_file, ReadErrorKind, MAX_INPUT_BYTES};
 
 use super::validate::FORCE_RANGE;
 use super::{SceneError, SceneErrorKind};
 
-/// Largest series file read (1 GiB), so that a wrong file name fails at once instead of filling
-/// memory.
-pub const MAX_SERIES_BYTES: u64 = 1 << 30;
+/// Largest series file read (1 GiB, the limit [`MAX_INPUT_BYTES`] of every input file), so that
+/// a wrong file name fails at once instead of filling memory.
+pub const MAX_SERIES_BYTES: u64 = MAX_INPUT_BYTES;
 
 /// A load's time series: rows (t, F_x, F_z) with strictly increasing times, the force at other
 /// times interpolated linearly between neighbouring rows (and held at the first and last rows
@@ -58,39 +59,24 @@ impl LoadSeries {
         Self::read_at("series", path, path)
     }
 
-    /// Reads the file `resolved`, reporting errors under `key` and the name `written`.
+    /// Reads the file `resolved`, reporting errors under `key` and the name `written`. The file
+    /// goes through the bounded [`read_text_file`] (a regular file or a stream, at most
+    /// [`MAX_SERIES_BYTES`], UTF-8 text: a bad byte is reported with its line).
     pub(super) fn read_at(key: &str, written: &Path, resolved: &Path) -> Result<Self, SceneError> {
-        let fail = |e: RowError| series_error(key, written, e);
-        let too_big = |len: u64| {
-            row_error(
-                None,
-                format!(
-                    "the file has {} bytes or more, over the {} a series may have",
-                    len,
-                    super::human_bytes(MAX_SERIES_BYTES)
-                ),
-            )
-        };
-        let cannot = |e: std::io::Error| fail(row_error(None, format!("cannot read it: {e}")));
-        let meta = std::fs::metadata(resolved).map_err(cannot)?;
-        if !meta.is_file() {
-            // a directory, a FIFO or a device (/dev/zero) would never end or never parse
-            return Err(fail(row_error(
-                None,
-                "is not a regular file (a directory, pipe or device); give a CSV file",
-            )));
-        }
-        if meta.len() > MAX_SERIES_BYTES {
-            return Err(fail(too_big(meta.len())));
-        }
-        // Bounded even if the file grows while it is read.
-        let mut text = String::new();
-        std::fs::File::open(resolved)
-            .and_then(|f| f.take(MAX_SERIES_BYTES + 1).read_to_string(&mut text))
-            .map_err(cannot)?;
-        if text.len() as u64 > MAX_SERIES_BYTES {
-            return Err(fail(too_big(text.len() as u64)));
-        }
+        let text = read_text_file(resolved).map_err(|e| {
+            let line = e.line();
+            let reason = match e.kind {
+                // The line is reported by the error's own field.
+                ReadErrorKind::NotUtf8 { offset, .. } => {
+                    format!("invalid UTF-8 (byte {offset}): the file must be UTF-8 text")
+                }
+                ReadErrorKind::NulByte { offset, .. } => {
+                    format!("a NUL byte (byte {offset}): binary data, not a CSV file")
+                }
+                other => other.to_string(),
+            };
+            series_error(key, written, row_error(line, reason))
+        })?;
         Self::parse_at(key, written, &text)
     }
 

@@ -7,12 +7,10 @@ use serde::Serialize;
 
 use chainbeam::optimize::OptimProblem;
 
-use crate::output::Output;
+use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, Values};
 use crate::progress::Progress;
-use crate::{
-    check_finite, controls_io, inputs, lib_error, load_scene, series_files, to_json, CliError,
-};
+use crate::{check_finite, controls_io, lib_error, load_scene, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `gradient --help`.
@@ -75,11 +73,16 @@ struct GradientReport {
 
 /// Runs `gradient`.
 pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
-    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, a.controls.as_ref()))?;
+    let out = Output::prepare(a.output.as_deref())?;
     problem::check_effort(a.problem.effort)?;
     let scene = load_scene(&a.scene)?;
-    out.refuse_inputs(&series_files(&a.scene, &scene))?;
     let file = a.controls.as_deref().map(controls_io::read).transpose()?;
+    let mut inputs = Inputs::new();
+    inputs.scene(&a.scene, &scene);
+    if let Some(c) = &a.controls {
+        inputs.file(c);
+    }
+    refuse_overwrite(&[("--output", &out)], &inputs)?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), file.as_ref())?;
     let n = sp.theta0.len();
     let spinner = progress.spinner(format!(

@@ -8,16 +8,17 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, MpcSolver,
-    NoControl, PdLaw, PdTuning, Summary,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon, Mpc, MpcOptions,
+    MpcSolver, NoControl, Observation, PdLaw, PdTuning, Summary,
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
+use chainbeam::scene::MAX_STEPS;
 use chainbeam::Scene;
 
-use crate::output::{push_f64, Output};
+use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
-use crate::{check_finite, lib_error, load_scene, series_files, to_json, CliError};
+use crate::{check_finite, check_force_flag, lib_error, load_scene, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `mpc --help`.
@@ -143,25 +144,23 @@ struct Baselines {
 
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
-    let mut inputs: Vec<&Path> = vec![&a.scene];
-    inputs.extend(a.model.as_deref());
-    if a.summary.is_some() && a.summary == a.output {
-        return Err(CliError::msg(
-            "--summary: must be another file than --output",
-        ));
+    if a.bound.is_finite() {
+        check_force_flag("--bound", a.bound)?;
     }
-    let out = Output::prepare(a.output.as_deref(), &inputs)?;
-    let summary_out = a
-        .summary
-        .as_deref()
-        .map(|s| Output::prepare(Some(s), &inputs))
-        .transpose()?;
+    let out = Output::prepare(a.output.as_deref())?;
+    let summary_out = Output::prepare(a.summary.as_deref())?;
     let scene = load_scene(&a.scene)?;
-    out.refuse_inputs(&series_files(&a.scene, &scene))?;
+    let mut inputs = Inputs::new();
+    inputs.scene(&a.scene, &scene);
     let model = match &a.model {
-        Some(path) => load_scene(path)?,
+        Some(path) => {
+            let model = load_scene(path)?;
+            inputs.scene(path, &model);
+            model
+        }
         None => scene.clone(),
     };
+    refuse_overwrite(&[("--output", &out), ("--summary", &summary_out)], &inputs)?;
     let options = MpcOptions {
         horizon: Horizon::Seconds(a.horizon),
         iterations: a.iterations,
@@ -178,17 +177,24 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         },
         ..MpcOptions::default()
     };
-    let flag_error = |e| lib_error(a.model.as_deref().unwrap_or(&a.scene), e);
-    let mut mpc = Mpc::new(&model, a.interval, options).map_err(flag_error)?;
+    let model_file = a.model.as_deref().unwrap_or(&a.scene);
+    check_plan_length(a, model_file, &model)?;
+    let mut mpc = Mpc::new(&model, a.interval, options).map_err(|e| mpc_error(a, model_file, e))?;
     let spinner = progress.spinner(format!(
         "closed loop: {} s, a plan every {} s over {} s",
         scene.time.steps as f64 * scene.time.step,
         a.interval,
         a.horizon
     ));
-    let closed = run_closed_loop(&scene, a.interval, &mut mpc);
+    let mut blamed = Blamed {
+        inner: &mut mpc,
+        failed: false,
+    };
+    let closed = run_closed_loop(&scene, a.interval, &mut blamed);
     spinner.finish_and_clear();
-    let closed = closed.map_err(|e| lib_error(&a.scene, e))?;
+    // The controller's failures are the model's (its scene, its step); the others the plant's.
+    let failed_file = if blamed.failed { model_file } else { &a.scene };
+    let closed = closed.map_err(|e| mpc_error(a, failed_file, e))?;
     let baselines = if a.baselines {
         Some(run_baselines(a, &scene, &progress)?)
     } else {
@@ -202,14 +208,87 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         return Err(sink.error(&e));
     }
     sink.finish()?;
-    match summary_out {
-        Some(s) => s.write_all(&json),
-        None => Ok(()),
+    if a.summary.is_some() {
+        summary_out.write_all(&json)?;
+    }
+    Ok(())
+}
+
+/// The controller, remembering whether it failed: its errors come from the `--model` scene, the
+/// loop's other errors from the plant's.
+struct Blamed<'a> {
+    inner: &'a mut Mpc,
+    failed: bool,
+}
+
+impl Controller for Blamed<'_> {
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+
+    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<f64> {
+        let u = self.inner.control(obs);
+        self.failed = u.is_err();
+        u
+    }
+
+    fn last_iterations(&self) -> Option<usize> {
+        self.inner.last_iterations()
     }
 }
 
+/// The flag of an option of [`MpcOptions`] or of the loop (the library's argument name).
+fn flag_of(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "interval" => "--interval",
+        "horizon" => "--horizon",
+        "iterations" => "--iterations",
+        "first_iterations" => "--first-iterations",
+        "effort" => "--effort",
+        "bound" => "--bound",
+        "rate_penalty" => "--rate-penalty",
+        _ => return None,
+    })
+}
+
+/// A library error of the run, naming `file` (the plant's scene or the controller's model) or,
+/// for a quantity the flags set, the flags.
+fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
+    match &e {
+        chainbeam::Error::InvalidArgument { name, reason } => match flag_of(name) {
+            Some(flag) => CliError::msg(format!("{}: {flag}: {reason}", file.display())),
+            None => lib_error(file, e),
+        },
+        // The plan's scene has the model's beam and a length set by the flags.
+        chainbeam::Error::Scene(se) if se.key() == Some("time.steps") => CliError::msg(format!(
+            "{}: --horizon {} s (plans of --horizon/--interval intervals of {} s): the plan {}",
+            file.display(),
+            a.horizon,
+            a.interval,
+            se.kind
+        )),
+        _ => lib_error(file, e),
+    }
+}
+
+/// Refuses a horizon whose plans would have more steps than a scene may (`--horizon`/
+/// `--interval` intervals of the model's `time.step`), before any plan is built.
+fn check_plan_length(a: &MpcArgs, model_file: &Path, model: &Scene) -> Result<(), CliError> {
+    let steps = (a.horizon / model.time.step).round();
+    if steps.is_finite() && steps <= MAX_STEPS as f64 {
+        return Ok(());
+    }
+    Err(CliError::msg(format!(
+        "{}: --horizon {} s: a plan of {steps:e} steps of the model's time.step = {} s, over the \
+         {MAX_STEPS} steps a plan may have; give a shorter --horizon",
+        model_file.display(),
+        a.horizon,
+        model.time.step
+    )))
+}
+
 fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Baselines, CliError> {
-    let err = |e| lib_error(&a.scene, e);
+    let err = |e| mpc_error(a, &a.scene, e);
     let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
     let none = run_closed_loop(scene, a.interval, &mut NoControl).map_err(err)?;
     let (mut constant, _) = ConstantForce::best(scene, a.bound, a.effort).map_err(err)?;

@@ -12,12 +12,12 @@ use chainbeam::optimize::{
     minimize, Bounds, Method, Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult,
 };
 
-use crate::output::Output;
+use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::problem::{
     self, kind_report, objective_name, AnyProblem, KindReport, ProblemArgs, SceneProblem, Values,
 };
 use crate::progress::{IterationProgress, Progress};
-use crate::{check_finite, inputs, lib_error, load_scene, series_files, to_json, CliError};
+use crate::{check_finite, check_force_flag, lib_error, load_scene, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `optimize --help`.
@@ -143,6 +143,16 @@ enum MethodArg {
 impl SolverArgs {
     /// The symmetric limit (--bound) or the box (--lower/--upper), checked.
     fn limits(&self) -> Result<(Option<f64>, Option<Bounds>), CliError> {
+        for (flag, v) in [
+            ("--bound", self.bound),
+            ("--lower", self.lower),
+            ("--upper", self.upper),
+        ] {
+            match v {
+                Some(v) if v.is_finite() => check_force_flag(flag, v)?,
+                _ => {}
+            }
+        }
         let one_sided = |given: String, missing: &str| {
             CliError::msg(format!(
                 "{given} without {missing}: one-sided force limits are not supported (the bounded \
@@ -274,6 +284,8 @@ impl DesignArgs {
                         self.lo, self.hi
                     )));
                 }
+                check_force_flag("--lo", self.lo)?;
+                check_force_flag("--hi", self.hi)?;
                 Ok(if self.design == DesignArg::Latin {
                     StartDesign::LatinHypercube {
                         lo: self.lo,
@@ -293,6 +305,7 @@ impl DesignArgs {
                         self.radius
                     )));
                 }
+                check_force_flag("--radius", self.radius)?;
                 Ok(StartDesign::Perturb {
                     center: theta0.to_vec(),
                     radius: self.radius,
@@ -521,7 +534,7 @@ struct OptimizeReport {
 
 /// Runs `optimize`.
 pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError> {
-    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, None))?;
+    let out = Output::prepare(a.output.as_deref())?;
     let opts = a.solver.options()?;
     problem::check_effort(a.problem.effort)?;
     let starts = a.starts as usize;
@@ -532,7 +545,7 @@ pub fn run_optimize(a: &OptimizeArgs, progress: Progress) -> Result<(), CliError
         ));
     }
     let scene = load_scene(&a.scene)?;
-    out.refuse_inputs(&series_files(&a.scene, &scene))?;
+    refuse_overwrite(&[("--output", &out)], Inputs::new().scene(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
     let design = a.design.design(&sp.theta0)?;
@@ -831,11 +844,11 @@ fn certificate_report(
 
 /// Runs `explore`.
 pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> {
-    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, None))?;
+    let out = Output::prepare(a.output.as_deref())?;
     let opts = a.solver.options()?;
     problem::check_effort(a.problem.effort)?;
     let scene = load_scene(&a.scene)?;
-    out.refuse_inputs(&series_files(&a.scene, &scene))?;
+    refuse_overwrite(&[("--output", &out)], Inputs::new().scene(&a.scene, &scene))?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
     refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
     let design = a.design.design(&sp.theta0)?;

@@ -9,9 +9,9 @@ use chainbeam::{
     simulate, simulate_with_controls, simulate_with_controls_xz, ControlMap, Scene, SceneTrajectory,
 };
 
-use crate::output::{push_f64, Output};
+use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
-use crate::{controls_io, inputs, lib_error, load_scene, npy, series_files, CliError};
+use crate::{controls_io, lib_error, load_scene, npy, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `simulate --help`.
@@ -86,7 +86,7 @@ impl Format {
 /// Runs `simulate`.
 pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     let format = Format::choose(a.format, a.output.as_deref());
-    let out = Output::prepare(a.output.as_deref(), &inputs(&a.scene, a.controls.as_ref()))?;
+    let out = Output::prepare(a.output.as_deref())?;
     if format == Format::Npy && out.is_stdout() && std::io::stdout().is_terminal() {
         return Err(CliError::msg(
             "--format npy: refusing to write binary data to a terminal; give --output FILE.npy \
@@ -94,11 +94,17 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         ));
     }
     let scene = load_scene(&a.scene)?;
-    out.refuse_inputs(&series_files(&a.scene, &scene))?;
+    let mut inputs = Inputs::new();
+    inputs.scene(&a.scene, &scene);
     let controls = match &a.controls {
-        Some(path) => Some(controls_u(&scene, &controls_io::read(path)?)?),
+        Some(path) => {
+            let file = controls_io::read(path)?;
+            inputs.file(path);
+            Some(controls_u(&scene, &file)?)
+        }
         None => None,
     };
+    refuse_overwrite(&[("--output", &out)], &inputs)?;
     let steps = scene.time.steps;
     let spinner = progress.spinner(format!(
         "simulating {steps} steps of a {}-pendulum beam",

@@ -18,9 +18,9 @@
 //! forces u_0..u_N (N = `time.steps`); anything else is an error naming the file and both counts.
 //! Every value must be finite.
 
-use std::fs;
 use std::path::{Path, PathBuf};
 
+use chainbeam::scene::ReadErrorKind;
 use chainbeam::{Parametrisation, PerStepControl, PiecewiseControl, Scene};
 
 use crate::CliError;
@@ -54,10 +54,19 @@ fn err(path: &Path, what: impl std::fmt::Display) -> CliError {
     CliError::msg(format!("{}: {what}", path.display()))
 }
 
-/// Reads and checks (non-empty, finite) a controls file.
+/// Reads (by the bounded reader [`chainbeam::scene::read_text_file`]: at most 1 GiB, a regular
+/// file or a stream, UTF-8 text) and checks (non-empty, finite) a controls file.
 pub fn read(path: &Path) -> Result<ControlsFile, CliError> {
-    let text = fs::read_to_string(path)
-        .map_err(|e| err(path, format_args!("cannot read the controls file: {e}")))?;
+    let text = chainbeam::scene::read_text_file(path).map_err(|e| {
+        let reason = match e.kind {
+            ReadErrorKind::Io { message, .. } => message,
+            other => other.to_string(),
+        };
+        err(
+            path,
+            format_args!("cannot read the controls file: {reason}"),
+        )
+    })?;
     let trimmed = text.trim_start();
     let ((values, values_x), declared) = if trimmed.starts_with('{') || trimmed.starts_with('[') {
         from_json(path, &text)?

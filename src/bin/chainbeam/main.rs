@@ -103,8 +103,9 @@ pub const OUTPUT_HELP: &str = "\
 Write the result to FILE instead of standard output. A regular file is replaced atomically (a \
 temporary file in its directory, renamed over it at the end) and keeps its permissions; a file \
 with several hard links, a FIFO or a device is written in place; a symbolic link is followed. \
-FILE must not be an input (the scene or the --controls file). An interrupted or failed run \
-leaves FILE as it was and no temporary file behind";
+FILE must not be any input of the run (the scene, its series files, --controls, --model and its \
+series), under any name: a link or another path to an input is refused. An interrupted or \
+failed run leaves FILE as it was and no temporary file behind";
 
 #[derive(Parser)]
 #[command(
@@ -219,6 +220,21 @@ pub fn check_finite(path: &Path, key: &str, values: &[f64]) -> Result<(), CliErr
     }
 }
 
+/// Refuses a force given by `flag` outside the forces a scene may have
+/// ([`chainbeam::scene::FORCE_RANGE`]): beyond it every derived quantity (a bounded map, a start
+/// box) would overflow, and the message would otherwise name an internal quantity.
+pub fn check_force_flag(flag: &str, value: f64) -> Result<(), CliError> {
+    let range = chainbeam::scene::FORCE_RANGE;
+    if range.contains(value) {
+        return Ok(());
+    }
+    Err(CliError::msg(format!(
+        "{flag} {value:e}: outside the supported force range [{:e}, {:e}] N (docs/scene-format.md, \
+         \"Valid ranges\")",
+        range.min, range.max
+    )))
+}
+
 /// Pretty JSON with a final newline.
 pub fn to_json<T: serde::Serialize>(value: &T) -> Result<String, CliError> {
     serde_json::to_string_pretty(value)
@@ -227,13 +243,6 @@ pub fn to_json<T: serde::Serialize>(value: &T) -> Result<String, CliError> {
             s
         })
         .map_err(|e| CliError::msg(format!("cannot format the JSON output: {e}")))
-}
-
-/// The inputs an `--output` must not overwrite: the scene and the `--controls` file.
-pub fn inputs<'a>(scene: &'a Path, controls: Option<&'a PathBuf>) -> Vec<&'a Path> {
-    let mut v = vec![scene];
-    v.extend(controls.map(PathBuf::as_path));
-    v
 }
 
 fn main() -> ExitCode {

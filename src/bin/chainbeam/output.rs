@@ -11,9 +11,16 @@
 //! | a FIFO, a character or block device | in place, opened for writing without truncation (a FIFO waits for its reader); never replaced by a regular file |
 //! | a symbolic link                   | followed: the rules above apply to the file it points to (a dangling link is written through, creating its target) |
 //! | a directory                       | refused                                                   |
-//! | an input (the scene, the `--controls` file), also through a link | refused            |
+//! | an input of the run, through any name | refused ([`refuse_overwrite`])                |
 //!
-//! The temporary file is named `.FILE.PID.I.tmp` and is removed on every error and, on Unix, on
+//! The inputs of a run are the scene, its load series files, the `--controls` file, the
+//! `--model` scene and its series files; every subcommand checks all its outputs (`--output`,
+//! `--summary`) against all of them with the one function [`refuse_overwrite`], by identity
+//! (device and inode after following links), after the inputs are read and before anything is
+//! written. Two outputs of one run must be different files too.
+//!
+//! The temporary file is named `.FILE.PID.I.tmp` (FILE cut to its first 200 bytes, so the name
+//! fits the 255-byte limit of a file name whatever FILE is) and is removed on every error and, on Unix, on
 //! SIGINT, SIGTERM and SIGHUP ([`remove_temporary_files_on_signal`]); a SIGKILL cannot be caught
 //! and leaves it behind (the PID in its name tells which run it was).
 
@@ -63,6 +70,24 @@ pub fn remove_temporary_files_on_signal() {
     }
 }
 
+/// The longest part of the output's name kept in its temporary name: `.` + 200 bytes +
+/// `.PID.I.tmp` (at most 1 + 10 + 1 + 2 + 4 bytes) stays under the 255-byte limit of a file name.
+const TEMP_STEM_BYTES: usize = 200;
+
+/// The output's file name, cut to [`TEMP_STEM_BYTES`] at a character boundary.
+fn temp_stem(target: &Path) -> String {
+    let mut name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    let mut end = name.len().min(TEMP_STEM_BYTES);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    name.truncate(end);
+    name
+}
+
 /// A temporary file that is removed unless [`TempFile::persist`]ed.
 pub struct TempFile {
     path: PathBuf,
@@ -73,10 +98,7 @@ impl TempFile {
     /// Creates a fresh temporary file beside `target` (in `dir`), mode `mode` (exactly, not
     /// reduced by the umask) or the usual 0666 less the umask when `None`.
     fn create(dir: &Path, target: &Path, mode: Option<u32>) -> io::Result<(TempFile, File)> {
-        let name = target
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_else(|| "output".into());
+        let name = temp_stem(target);
         let mut last = None;
         for attempt in 0..100u32 {
             let path = dir.join(format!(".{name}.{}.{attempt}.tmp", process::id()));
@@ -176,39 +198,104 @@ fn write_error(target: &Path, e: &io::Error) -> CliError {
     ))
 }
 
-/// The error for an output `target` (metadata `meta`, named `shown`) that is one of `inputs`.
-fn refuse_clash(
-    shown: &Path,
-    target: &Path,
-    meta: &fs::Metadata,
-    inputs: &[&Path],
-) -> Result<(), CliError> {
-    // Unix compares device and inode (`meta`), elsewhere canonical paths (`target`).
-    let _ = (target, meta);
-    for input in inputs {
-        let clash = match fs::metadata(input) {
-            #[cfg(unix)]
-            Ok(im) => same_file(&im, meta),
-            #[cfg(not(unix))]
-            Ok(_) => fs::canonicalize(input).is_ok_and(|p| p == target),
-            Err(_) => false,
-        };
-        if clash {
-            return Err(CliError::msg(format!(
-                "{}: refusing to write the output onto the input file {}; choose another \
-                 --output",
-                shown.display(),
-                input.display()
-            )));
-        }
-    }
-    Ok(())
+/// What makes two names the same file: device and inode (Unix), else the canonical path; for a
+/// file that does not exist yet, its canonical directory and its name.
+#[derive(Debug, PartialEq, Eq)]
+enum Identity {
+    #[cfg(unix)]
+    Inode(u64, u64),
+    Path(PathBuf),
 }
 
-#[cfg(unix)]
-fn same_file(a: &fs::Metadata, b: &fs::Metadata) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    a.dev() == b.dev() && a.ino() == b.ino()
+/// The identity of the existing file `path` (links followed), `None` if it cannot be seen.
+fn identity(path: &Path) -> Option<Identity> {
+    let meta = fs::metadata(path).ok()?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some(Identity::Inode(meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        fs::canonicalize(path).ok().map(Identity::Path)
+    }
+}
+
+/// The identity of an output's target: the file if it exists, else where it will be created.
+fn future_identity(target: &Path) -> Option<Identity> {
+    identity(target).or_else(|| {
+        let dir = match target.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => Path::new("."),
+        };
+        let real = fs::canonicalize(dir).ok()?;
+        Some(Identity::Path(real.join(target.file_name()?)))
+    })
+}
+
+/// Every file a run reads: what its outputs must never land on.
+#[derive(Default)]
+pub struct Inputs {
+    files: Vec<PathBuf>,
+}
+
+impl Inputs {
+    /// No inputs yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// An input file (`--controls`, ...), as named on the command line.
+    pub fn file(&mut self, path: &Path) -> &mut Self {
+        self.files.push(path.to_path_buf());
+        self
+    }
+
+    /// A scene file read from `path` and the time-series files its loads read.
+    pub fn scene(&mut self, path: &Path, scene: &chainbeam::Scene) -> &mut Self {
+        self.file(path);
+        self.files.extend(crate::series_files(path, scene));
+        self
+    }
+}
+
+/// The one check every subcommand makes before it writes: no output (`--output`, `--summary`;
+/// each given with its flag) is any of the run's `inputs`, through any name (a symbolic link,
+/// `./`, a hard link: files are compared by identity), and no two outputs are the same file.
+/// The error is one line naming the output, the flag and the input.
+pub fn refuse_overwrite(outputs: &[(&str, &Output)], inputs: &Inputs) -> Result<(), CliError> {
+    let mut seen: Vec<(&str, &Path, Identity)> = Vec::new();
+    for &(flag, out) in outputs {
+        let (target, shown) = match out {
+            Output::Stdout => continue,
+            Output::InPlace { target, shown, .. } | Output::Replace { target, shown, .. } => {
+                (target, shown)
+            }
+        };
+        let Some(id) = future_identity(target) else {
+            continue;
+        };
+        for input in &inputs.files {
+            if identity(input).as_ref() == Some(&id) {
+                return Err(CliError::msg(format!(
+                    "{}: refusing to write the output ({flag}) onto the input file {}; choose \
+                     another {flag}",
+                    shown.display(),
+                    input.display()
+                )));
+            }
+        }
+        if let Some((other, other_shown, _)) = seen.iter().find(|(_, _, i)| *i == id) {
+            return Err(CliError::msg(format!(
+                "{}: {flag} and {other} name the same file ({}); give two different files",
+                shown.display(),
+                other_shown.display()
+            )));
+        }
+        seen.push((flag, shown, id));
+    }
+    Ok(())
 }
 
 #[cfg(unix)]
@@ -234,9 +321,9 @@ fn mode(_: &fs::Metadata) -> Option<u32> {
 }
 
 impl Output {
-    /// Resolves `output` (module docs); `None` is standard output. `inputs` are the files the
-    /// command reads, which the output must not be.
-    pub fn prepare(output: Option<&Path>, inputs: &[&Path]) -> Result<Output, CliError> {
+    /// Resolves `output` (module docs); `None` is standard output. Whether it is an input is
+    /// checked by [`refuse_overwrite`] once the inputs are known.
+    pub fn prepare(output: Option<&Path>) -> Result<Output, CliError> {
         let Some(shown) = output else {
             return Ok(Output::Stdout);
         };
@@ -272,7 +359,6 @@ impl Output {
                 shown.display()
             )));
         }
-        refuse_clash(shown, &target, &meta, inputs)?;
         if !meta.is_file() {
             // FIFO, character or block device, socket: never replaced by a regular file.
             return in_place(target, false);
@@ -318,23 +404,6 @@ impl Output {
             target,
             shown: shown.to_path_buf(),
         })
-    }
-
-    /// Refuses an output that is one of `inputs`, for inputs known only once the scene is read
-    /// (a load's time-series file); [`Output::prepare`] checked the others.
-    pub fn refuse_inputs<P: AsRef<Path>>(&self, inputs: &[P]) -> Result<(), CliError> {
-        let (target, shown) = match self {
-            Output::Stdout => return Ok(()),
-            Output::InPlace { target, shown, .. } | Output::Replace { target, shown, .. } => {
-                (target, shown)
-            }
-        };
-        // A target that does not exist yet is no input.
-        let Ok(meta) = fs::metadata(target) else {
-            return Ok(());
-        };
-        let inputs: Vec<&Path> = inputs.iter().map(AsRef::as_ref).collect();
-        refuse_clash(shown, target, &meta, &inputs)
     }
 
     /// Whether the output is standard output.

@@ -573,13 +573,14 @@ fn bad_loads_name_the_key_and_the_file() {
             "series = \"/dev/zero\"\n",
             &[],
             "loads.point[0].series",
-            &["series file `/dev/zero`", "not a regular file"],
+            // read as a stream (the bounded reader), refused at its first byte
+            &["series file `/dev/zero`", "line 1", "a NUL byte (byte 0)"],
         ),
         (
             "series = \".\"\n",
             &[],
             "loads.point[0].series",
-            &["not a regular file"],
+            &["cannot read it: it is a directory"],
         ),
         (
             "direction = [0.0, 0.0]\n[[loads.point.harmonic]]\namplitude = 1.0\nperiod = 1.0\n",

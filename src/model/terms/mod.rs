@@ -22,9 +22,11 @@
 //! returns the one the model has as a [`Dissipation`].
 //!
 //! **Adding a term**: write one type implementing [`ForceTerm`] (or [`DissipativeTerm`]), add it as
-//! a field of [`crate::Chain`] built from its scene entry, and list it in
-//! [`crate::Chain::visit_terms`]. Every integrator, the adjoint, the statics and the Hessian-vector
-//! products then see it with all its derivatives.
+//! a field of [`crate::Chain`] (set in `from_scene` and `lift`), list it in
+//! [`crate::Chain::visit_terms`] (a dissipative term: in [`Dissipation`] and
+//! [`crate::Chain::dissipation`]), and give it its scene entry, documentation and checks: README.md,
+//! "Adding a force term", lists every place. Every integrator, the adjoint, the statics and the
+//! Hessian-vector products then see it with all its derivatives.
 
 mod control;
 mod current;

@@ -59,31 +59,25 @@ use num_dual::Derivative;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
-use super::globalise::{backtrack, next_mu, raise_mu, Accepted, LineSearch, ModelChange, Progress};
-use super::line_search::{Shooting, Simulator, Traj};
-use super::riccati::StageCost;
-use super::stage::{Dv, StageModel, Stepper, CHUNK};
-use super::{
-    available_threads, check_theta, IterationRecord, OcpOptions, OcpResult, Setup, Termination,
+use super::dense_qp::{BoxQp, DenseQp};
+use super::globalise::{
+    backtrack, raise_mu, Accepted, LineSearch, ModelChange, Outer, Progress, Step,
 };
+use super::horizon::{available_threads, ControlHorizon};
+use super::line_search::Traj;
+use super::options::{OcpOptions, OcpResult, Termination};
+use super::stage::{Dv, StageModel, Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
 
 /// Gauss-Newton on the condensed problem (module docs), with its buffers.
 #[derive(Clone, Debug)]
 pub struct Condensed {
-    model: StageModel,
-    cost: StageCost,
-    opts: OcpOptions,
+    /// The problem, its structure and trajectories.
+    horizon: ControlHorizon,
+    /// N and the number of decisions.
     steps: usize,
     np: usize,
-    piece: Vec<usize>,
-    free: Vec<bool>,
-    /// First stage of θ_j.
-    theta_stage: Vec<usize>,
-    nominal: Traj,
-    trial: Traj,
-    sim: Simulator,
     chunks: Vec<SensChunk>,
     threads: usize,
     /// H (np × np, row-major, lower triangle filled) and g at the nominal.
@@ -100,7 +94,8 @@ pub struct Condensed {
     /// Whether the model of the next step adds A (chosen after each step by which model
     /// predicted its decrease better).
     use_secant: bool,
-    counts: (usize, usize),
+    /// Linearisations run (sensitivity passes).
+    linearisations: usize,
 }
 
 /// The first nonzero relative Levenberg weight after a failed step with μ = 0. The dense
@@ -130,23 +125,16 @@ impl Condensed {
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,
     ) -> Result<Self> {
-        let Setup {
-            model,
-            cost,
-            steps,
-            n_params: np,
-            piece,
-            free,
-            theta_stage,
-        } = Setup::new(problem, options, "the condensed Gauss-Newton solver")?;
-        check_memory(steps, np)?;
+        let solver = "the condensed Gauss-Newton solver";
+        let horizon = ControlHorizon::new(problem, options, solver, check_memory)?;
+        let (model, steps, np) = (&horizon.model, horizon.steps, horizon.n_params);
         let chunks = (0..np)
             .step_by(CHUNK)
             .map(|first| {
                 Ok(SensChunk {
                     first,
                     len: CHUNK.min(np - first),
-                    stepper: Stepper::new(&model)?,
+                    stepper: Stepper::new(model)?,
                     rows: vec![[0.0; CHUNK]; steps + 1],
                 })
             })
@@ -157,11 +145,7 @@ impl Condensed {
         } else {
             options.threads
         };
-        let n = model.n;
         Ok(Condensed {
-            sim: Simulator::new(&model)?,
-            nominal: Traj::new(n, steps),
-            trial: Traj::new(n, steps),
             hess: vec![0.0; np * np],
             grad: vec![0.0; np],
             qp: BoxQp::new(np),
@@ -170,17 +154,12 @@ impl Condensed {
             prev_theta: vec![0.0; np],
             has_prev: false,
             use_secant: false,
-            model,
-            cost,
-            opts: options.clone(),
+            horizon,
             steps,
             np,
-            piece,
-            free,
-            theta_stage,
             chunks,
             threads,
-            counts: (0, 0),
+            linearisations: 0,
         })
     }
 
@@ -194,7 +173,8 @@ impl Condensed {
         &mut self,
         problem: &ControlProblem<P, O>,
     ) -> Result<()> {
-        let (steps, h, np, n) = (self.steps, self.model.h, self.np, self.model.n);
+        let model = &self.horizon.model;
+        let (steps, h, np, n) = (self.steps, model.h, self.np, model.n);
         let other = (
             problem.steps(),
             problem.time_step(),
@@ -212,8 +192,7 @@ impl Condensed {
             });
         }
         let start = problem.start();
-        self.model.start = start.cloned();
-        self.sim.stepper.set_start(start);
+        self.horizon.set_start(start);
         for c in &mut self.chunks {
             c.stepper.set_start(start);
         }
@@ -222,38 +201,12 @@ impl Condensed {
 
     /// Changes the iteration limit [`OcpOptions::max_iters`] of later solves (at least 1).
     pub fn set_max_iters(&mut self, max_iters: usize) {
-        self.opts.max_iters = max_iters.max(1);
+        self.horizon.opts.max_iters = max_iters.max(1);
     }
 
     /// θ of the nominal.
     pub fn theta(&self) -> Vec<f64> {
-        self.theta_stage
-            .iter()
-            .map(|&k| self.nominal.u[k])
-            .collect()
-    }
-
-    /// Simulates θ (projected onto the box) into `out` and returns J.
-    fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let out = if into_trial {
-            &mut self.trial
-        } else {
-            &mut self.nominal
-        };
-        for k in 0..=self.steps {
-            out.u[k] = theta[self.piece[k]].clamp(lo, hi);
-        }
-        self.counts.0 += 1;
-        let shooting = Shooting {
-            model: &self.model,
-            cost: &self.cost,
-            free: &self.free,
-            lower: lo,
-            upper: hi,
-        };
-        self.sim.rollout(&shooting, None, out)?;
-        Ok(out.cost)
+        self.horizon.theta()
     }
 
     /// Sets the nominal to θ (projected onto the box); returns J.
@@ -262,15 +215,15 @@ impl Condensed {
     /// [`Error::InvalidArgument`] (`theta`) for a wrong length or a non-finite entry; the
     /// simulation's errors.
     pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
-        check_theta(theta, self.np)?;
-        self.simulate(theta, false)
+        self.horizon.set_point(theta)
     }
 
     /// The sensitivities S of every chunk at the nominal (in parallel over the chunks), then
     /// the Gauss-Newton Hessian and the exact gradient.
     fn linearise(&mut self) -> Result<()> {
-        let (model, nominal) = (&self.model, &self.nominal);
-        let (piece, stage) = (&self.piece[..], &self.theta_stage[..]);
+        let hz = &self.horizon;
+        let (model, nominal) = (&hz.model, &hz.nominal);
+        let (piece, stage) = (&hz.piece[..], &hz.theta_stage[..]);
         let work = |c: &mut SensChunk| c.sweep(model, nominal, piece, stage[c.first]);
         if self.threads > 1 {
             #[cfg(feature = "parallel")]
@@ -280,7 +233,7 @@ impl Condensed {
         } else {
             self.chunks.iter_mut().try_for_each(work)?;
         }
-        self.counts.1 += 1;
+        self.linearisations += 1;
         if self.has_prev {
             self.update_secant();
         }
@@ -326,12 +279,12 @@ impl Condensed {
         let mut y = vec![0.0; np];
         let mut row = vec![0.0; np];
         for k in 0..=self.steps {
-            let c = self.cost.weight(k);
+            let c = self.horizon.cost.weight(k);
             if c == 0.0 {
                 continue;
             }
             sens_row(&self.chunks, k, &mut row);
-            let r = self.nominal.moment[k];
+            let r = self.horizon.nominal.moment[k];
             for j in 0..np {
                 y[j] += 2.0 * c * r * (row[j] - self.prev_rows[k * np + j]);
             }
@@ -366,12 +319,12 @@ impl Condensed {
         self.grad.fill(0.0);
         let mut s = vec![0.0; np];
         for k in 0..=self.steps {
-            let c = self.cost.weight(k);
+            let c = self.horizon.cost.weight(k);
             if c != 0.0 {
                 sens_row(&self.chunks, k, &mut s);
                 // Decisions after stage k do not act on M₀(t_k).
-                let last = self.piece[k.saturating_sub(1)].min(np - 1) + 1;
-                let r = self.nominal.moment[k];
+                let last = self.horizon.piece[k.saturating_sub(1)].min(np - 1) + 1;
+                let r = self.horizon.nominal.moment[k];
                 for i in 0..last {
                     self.grad[i] += 2.0 * c * r * s[i];
                     let row = &mut self.hess[i * np..i * np + i + 1];
@@ -388,20 +341,22 @@ impl Condensed {
     /// The exact effort and rate terms of stage k in H and g.
     fn control_terms(&mut self, k: usize) {
         let np = self.np;
-        let (p, u) = (self.piece[k], self.nominal.u[k]);
-        self.grad[p] += 2.0 * self.cost.effort * u;
-        self.hess[p * np + p] += 2.0 * self.cost.effort;
+        let hz = &self.horizon;
+        let (p, u) = (hz.piece[k], hz.nominal.u[k]);
+        self.grad[p] += 2.0 * hz.cost.effort * u;
+        self.hess[p * np + p] += 2.0 * hz.cost.effort;
         self.rate_terms(k);
     }
 
     /// The rate penalty's terms of stage k in H and g.
     fn rate_terms(&mut self, k: usize) {
         let np = self.np;
-        let (p, u) = (self.piece[k], self.nominal.u[k]);
-        let r = self.cost.rate;
-        if k > 0 && r > 0.0 && self.piece[k - 1] != p {
-            let q = self.piece[k - 1];
-            let du = u - self.nominal.u[k - 1];
+        let hz = &self.horizon;
+        let (p, u) = (hz.piece[k], hz.nominal.u[k]);
+        let r = hz.cost.rate;
+        if k > 0 && r > 0.0 && hz.piece[k - 1] != p {
+            let q = hz.piece[k - 1];
+            let du = u - hz.nominal.u[k - 1];
             self.grad[p] += 2.0 * r * du;
             self.grad[q] -= 2.0 * r * du;
             self.hess[p * np + p] += 2.0 * r;
@@ -413,12 +368,13 @@ impl Condensed {
 
     /// ‖θ − Π_box(θ − g)‖₂ at the nominal.
     fn projected_norm(&self) -> f64 {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        self.theta_stage
+        let hz = &self.horizon;
+        let (lo, hi) = (hz.opts.lower, hz.opts.upper);
+        hz.theta_stage
             .iter()
             .zip(&self.grad)
             .map(|(&k, g)| {
-                let t = self.nominal.u[k];
+                let t = hz.nominal.u[k];
                 let d = super::boxqp::projected_component(t, *g, lo, hi);
                 d * d
             })
@@ -431,60 +387,14 @@ impl Condensed {
     /// # Errors
     /// As [`Condensed::set_point`]; a failed simulation of the nominal.
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
-        self.run(theta0)
-    }
-
-    fn run(&mut self, theta0: &[f64]) -> Result<OcpResult> {
-        let t0 = Instant::now();
-        self.counts = (0, 0);
-        self.secant.fill(0.0);
-        self.has_prev = false;
-        self.use_secant = false;
-        let mut pr = Progress::new(self.set_point(theta0)?);
-        let termination = loop {
-            if let Some(t) = self.iterate(&mut pr)? {
-                break t;
-            }
-        };
-        Ok(self.report(termination, pr, t0))
-    }
-
-    /// One iteration: linearisation, stopping tests, the QP step and its line search, the
-    /// regularisation schedule. `Some` ends the run.
-    fn iterate(&mut self, pr: &mut Progress) -> Result<Option<Termination>> {
-        if pr.budget_spent(&self.opts) {
-            return Ok(Some(Termination::Budget));
-        }
-        self.linearise()?;
-        let pg = self.projected_norm();
-        let (stop, _, _) = pr.stop_test(&self.opts, pg, &self.grad);
-        if stop.is_some() {
-            return Ok(stop);
-        }
-        let Some((acc, model)) = self.step(&mut pr.mu, pr.j0) else {
-            return Ok(Some(Termination::RegularisationLimit));
-        };
-        self.choose_model(&acc, model);
-        std::mem::swap(&mut self.nominal, &mut self.trial);
-        pr.iterations += 1;
-        pr.history.push(IterationRecord {
-            objective: self.nominal.cost,
-            projected_gradient_norm: pg,
-            alpha: acc.alpha,
-            regularisation: pr.mu,
-        });
-        if pr.roundoff.stalled(acc.roundoff, pg) {
-            return Ok(Some(Termination::RoundOff));
-        }
-        pr.mu = next_mu(pr.mu, &acc);
-        Ok(None)
+        super::globalise::run(self, theta0)
     }
 
     /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
     /// `None` with μ beyond its limit.
-    fn step(&mut self, mu: &mut f64, j0: f64) -> Option<(Accepted, ModelChange)> {
+    fn search(&mut self, mu: &mut f64, j0: f64) -> Option<(Accepted, ModelChange)> {
         let theta = self.theta();
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let np = self.np;
         let scale = (0..np).map(|i| self.hess[i * np + i]).sum::<f64>() / np as f64;
         let scale = if scale > 0.0 && scale.is_finite() {
@@ -502,26 +412,27 @@ impl Condensed {
                 lambda: *mu * scale,
             };
             if let Some(model) = self.qp.solve(&qp) {
+                let hz = &mut self.horizon;
                 let search = LineSearch {
-                    jbar: self.nominal.cost,
+                    jbar: hz.nominal.cost,
                     j0,
                     model,
-                    armijo: self.opts.armijo,
-                    tries: self.opts.backtracks,
+                    armijo: hz.opts.armijo,
+                    tries: hz.opts.backtracks,
                 };
                 let mut trial = theta.clone();
                 let mut rollout = |alpha: f64| {
                     for ((t, th), d) in trial.iter_mut().zip(&theta).zip(&self.qp.delta) {
                         *t = th + alpha * d;
                     }
-                    self.simulate(&trial, true).ok()
+                    hz.simulate(&trial, true).ok()
                 };
                 if let Some(acc) = backtrack(search, &mut rollout) {
                     return Some((acc, model));
                 }
             }
             *mu = if *mu == 0.0 { MU_FIRST } else { raise_mu(*mu) };
-            if *mu > self.opts.max_regularisation {
+            if *mu > self.horizon.opts.max_regularisation {
                 return None;
             }
         }
@@ -540,34 +451,8 @@ impl Condensed {
         let qa = 0.5 * a * a * dad;
         let used = model.at(a);
         let gn = if self.use_secant { used - qa } else { used };
-        let actual = self.trial.cost - self.nominal.cost;
+        let actual = self.horizon.trial.cost - self.horizon.nominal.cost;
         self.use_secant = (actual - (gn + qa)).abs() < (actual - gn).abs();
-    }
-
-    fn report(&self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
-        let theta = self.theta();
-        let gn = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        OcpResult {
-            objective: self.nominal.cost,
-            initial_objective: pr.j0,
-            controls: self.nominal.u.clone(),
-            active_bounds: (0..self.np)
-                .filter(|&i| theta[i] <= lo || theta[i] >= hi)
-                .collect(),
-            theta,
-            gradient_norm: gn,
-            projected_gradient_norm: pr.last_pg,
-            initial_gradient_norm: pr.g0.unwrap_or(gn),
-            iterations: pr.iterations,
-            rollouts: self.counts.0,
-            jacobian_passes: self.counts.1,
-            backward_passes: 0,
-            seconds: t0.elapsed().as_secs_f64(),
-            converged: termination == Termination::Converged,
-            termination,
-            history: pr.history,
-        }
     }
 
     /// The Gauss-Newton Hessian (full, symmetric) and the gradient at the nominal (for tests).
@@ -581,6 +466,81 @@ impl Condensed {
         let np = self.np;
         let h = Mat::from_fn(np, np, |i, j| self.hess[i.max(j) * np + i.min(j)]);
         Ok((h, self.grad.clone()))
+    }
+}
+
+impl Outer for Condensed {
+    fn begin(&mut self) {
+        self.horizon.rollouts = 0;
+        self.linearisations = 0;
+        self.secant.fill(0.0);
+        self.has_prev = false;
+        self.use_secant = false;
+    }
+
+    fn horizon(&self) -> &ControlHorizon {
+        &self.horizon
+    }
+
+    fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+        Condensed::set_point(self, theta)
+    }
+
+    /// The sensitivities, H and the exact gradient at the nominal.
+    fn linearise(&mut self) -> Result<f64> {
+        Condensed::linearise(self)?;
+        Ok(self.projected_norm())
+    }
+
+    fn gradient(&self) -> &[f64] {
+        &self.grad
+    }
+
+    /// The QP step and its open-loop line search (raising μ until one is accepted), and the
+    /// model of the next step chosen on this one.
+    fn step(&mut self, pr: &mut Progress, _pg: f64, _gref: f64) -> Result<Step> {
+        Ok(match self.search(&mut pr.mu, pr.j0) {
+            Some((acc, model)) => {
+                self.choose_model(&acc, model);
+                Step::Accepted(acc)
+            }
+            None => Step::NoModel,
+        })
+    }
+
+    fn take_step(&mut self) {
+        self.horizon.take_trial();
+    }
+
+    fn stalled(&mut self, _target: f64) -> Result<Termination> {
+        Ok(Termination::RoundOff)
+    }
+
+    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
+        let theta = self.theta();
+        let gn = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let hz = &self.horizon;
+        let (lo, hi) = (hz.opts.lower, hz.opts.upper);
+        OcpResult {
+            objective: hz.nominal.cost,
+            initial_objective: pr.j0,
+            controls: hz.nominal.u.clone(),
+            active_bounds: (0..self.np)
+                .filter(|&i| theta[i] <= lo || theta[i] >= hi)
+                .collect(),
+            theta,
+            gradient_norm: gn,
+            projected_gradient_norm: pr.last_pg,
+            initial_gradient_norm: pr.g0.unwrap_or(gn),
+            iterations: pr.iterations,
+            rollouts: hz.rollouts,
+            jacobian_passes: self.linearisations,
+            backward_passes: 0,
+            seconds: t0.elapsed().as_secs_f64(),
+            converged: termination == Termination::Converged,
+            termination,
+            history: pr.history,
+        }
     }
 }
 
@@ -678,173 +638,6 @@ fn balanced(mut chunks: Vec<SensChunk>) -> Vec<SensChunk> {
     out
 }
 
-/// A dense convex box QP min ½ δᵀ(H + λI)δ + gᵀδ, lo ≤ δ ≤ hi (lo ≤ 0 ≤ hi), by a primal
-/// active-set method from δ = 0 (Nocedal & Wright, *Numerical Optimization*, Alg. 16.3):
-/// Newton steps on the free set (Cholesky of its block), a ratio test that fixes the first
-/// blocking bound, and the release of the bound whose multiplier has the wrong sign.
-/// A decision without effect (a zero row of H and a zero gradient: u_N of a per-step control
-/// without effort penalty acts on nothing J sees) stays where it is, as the Riccati solver's
-/// inert controls ([`super::boxqp`]).
-const INERT: i8 = 2;
-
-/// The data of one dense box QP: H (lower triangle, row-major), g, the shift λ, and the box
-/// lower ≤ θ + δ ≤ upper about the point θ.
-#[derive(Clone, Copy, Debug)]
-struct DenseQp<'a> {
-    h: &'a [f64],
-    g: &'a [f64],
-    theta: &'a [f64],
-    lower: f64,
-    upper: f64,
-    lambda: f64,
-}
-
-#[derive(Clone, Debug)]
-struct BoxQp {
-    delta: Vec<f64>,
-    /// 0 free, −1 at its lower bound, +1 at its upper bound, [`INERT`].
-    fixed: Vec<i8>,
-    free: Vec<usize>,
-    resid: Vec<f64>,
-}
-
-impl BoxQp {
-    fn new(np: usize) -> Self {
-        BoxQp {
-            delta: vec![0.0; np],
-            fixed: vec![0; np],
-            free: Vec::with_capacity(np),
-            resid: vec![0.0; np],
-        }
-    }
-
-    /// (H + λI)δ + g into `resid` (H: lower triangle, row-major).
-    fn residual(&mut self, h: &[f64], g: &[f64], lambda: f64) {
-        let np = g.len();
-        for i in 0..np {
-            let mut r = g[i] + lambda * self.delta[i];
-            for j in 0..np {
-                r += h[i.max(j) * np + i.min(j)] * self.delta[j];
-            }
-            self.resid[i] = r;
-        }
-    }
-
-    /// Solves the QP with the box lo − θ ≤ δ ≤ hi − θ; returns the model change (gᵀδ, ½δᵀHδ)
-    /// without λ, or `None` when H + λI is not positive definite on a free set.
-    fn solve(&mut self, qp: &DenseQp<'_>) -> Option<ModelChange> {
-        let DenseQp {
-            h,
-            g,
-            theta,
-            lower: lo,
-            upper: hi,
-            lambda,
-        } = *qp;
-        let np = g.len();
-        let bounds = |i: usize| (lo - theta[i], hi - theta[i]);
-        self.delta.fill(0.0);
-        for i in 0..np {
-            let inert = g[i] == 0.0 && (0..np).all(|j| h[i.max(j) * np + i.min(j)] == 0.0);
-            let (l, u) = bounds(i);
-            self.fixed[i] = if inert {
-                INERT
-            } else if l >= 0.0 && g[i] > 0.0 {
-                -1
-            } else if u <= 0.0 && g[i] < 0.0 {
-                1
-            } else {
-                0
-            };
-        }
-        for _ in 0..10 * np + 10 {
-            let p = self.free_newton_step(h, g, lambda)?;
-            // The first bound the full step crosses, if any, joins the working set.
-            let (alpha, block) = self.ratio_test(&p, bounds);
-            for (a, &i) in self.free.iter().enumerate() {
-                self.delta[i] += alpha * p[(a, 0)];
-            }
-            if let Some((i, side, to)) = block {
-                self.delta[i] = to;
-                self.fixed[i] = side;
-                continue;
-            }
-            // A minimiser on the working set: release the worst wrong-signed multiplier.
-            self.residual(h, g, lambda);
-            let worst = (0..np)
-                .filter(|&i| self.fixed[i] == -1 || self.fixed[i] == 1)
-                .map(|i| (i, -f64::from(self.fixed[i]) * self.resid[i]))
-                .filter(|&(_, m)| m < 0.0)
-                .min_by(|a, b| a.1.total_cmp(&b.1));
-            match worst {
-                Some((i, _)) => self.fixed[i] = 0,
-                None => return Some(self.model_change(h, g)),
-            }
-        }
-        None
-    }
-
-    /// The Newton step p on the free set (the others held): (H + λI)_FF p = −((H + λI)δ + g)_F,
-    /// by faer's Cholesky; `None` when the free block is not positive definite.
-    fn free_newton_step(&mut self, h: &[f64], g: &[f64], lambda: f64) -> Option<Mat<f64>> {
-        let np = g.len();
-        self.free.clear();
-        self.free.extend((0..np).filter(|&i| self.fixed[i] == 0));
-        self.residual(h, g, lambda);
-        let nf = self.free.len();
-        if nf == 0 {
-            return Some(Mat::zeros(0, 1));
-        }
-        let hf = Mat::from_fn(nf, nf, |a, b| {
-            let (i, j) = (self.free[a], self.free[b]);
-            h[i.max(j) * np + i.min(j)] + if a == b { lambda } else { 0.0 }
-        });
-        let rhs = Mat::from_fn(nf, 1, |a, _| -self.resid[self.free[a]]);
-        let llt = hf.llt(faer::Side::Lower).ok()?;
-        Some(faer::linalg::solvers::Solve::solve(&llt, &rhs))
-    }
-
-    /// The largest α ≤ 1 that keeps δ + α p in the box (bounds of decision i: `bounds(i)`), and
-    /// the bound that stops it (decision, side, value).
-    fn ratio_test(
-        &self,
-        p: &Mat<f64>,
-        bounds: impl Fn(usize) -> (f64, f64),
-    ) -> (f64, Option<(usize, i8, f64)>) {
-        let (mut alpha, mut block) = (1.0, None);
-        for (a, &i) in self.free.iter().enumerate() {
-            let (d, pi) = (self.delta[i], p[(a, 0)]);
-            let (l, u) = bounds(i);
-            let (to, side) = if pi < 0.0 { (l, -1) } else { (u, 1) };
-            let crosses = (pi < 0.0 && d + pi < to) || (pi > 0.0 && d + pi > to);
-            if crosses {
-                let a_i = ((to - d) / pi).max(0.0);
-                if a_i < alpha {
-                    alpha = a_i;
-                    block = Some((i, side, to));
-                }
-            }
-        }
-        (alpha, block)
-    }
-
-    /// (gᵀδ, ½δᵀHδ).
-    fn model_change(&self, h: &[f64], g: &[f64]) -> ModelChange {
-        let np = g.len();
-        let mut quad = 0.0;
-        for i in 0..np {
-            for j in 0..np {
-                quad += self.delta[i] * h[i.max(j) * np + i.min(j)] * self.delta[j];
-            }
-        }
-        let lin = g.iter().zip(&self.delta).map(|(a, b)| a * b).sum();
-        ModelChange {
-            d1: lin,
-            d2: 0.5 * quad,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -873,7 +666,7 @@ mod tests {
         let np = 11;
         let mut y = vec![0.0; np];
         for k in 0..=10 {
-            let m = c.nominal.moment[k];
+            let m = c.horizon.nominal.moment[k];
             for j in 0..np {
                 y[j] += 2.0 * m * (s2[k * np + j] - s1[k * np + j]);
             }

@@ -2,7 +2,13 @@
 //! and the stage map in tangent coordinates, one Gauss-Newton step and the dense Gauss-Newton
 //! Hessian it is checked against.
 
-use super::*;
+use faer::Mat;
+
+use super::iterate::Arc;
+use super::riccati::StageJacobians;
+use super::solver::Solver;
+use super::stage::{tangent, JacobiansMut, StageAt, StagePoint};
+use crate::error::{Error, Result};
 
 impl Solver {
     /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
@@ -18,7 +24,7 @@ impl Solver {
         let nxi = self.nxi;
         let mut a = vec![0.0; nxi * nxi];
         let mut b = vec![0.0; nxi];
-        let nom = &self.nominal;
+        let nom = &self.horizon.nominal;
         let x = StagePoint {
             q: nom.q(k),
             p: nom.p(k),
@@ -26,7 +32,7 @@ impl Solver {
             mu: nom.lambda(k),
         };
         let at = StageAt {
-            model: &self.model,
+            model: &self.horizon.model,
             k,
             x,
             u: nom.u[k],
@@ -35,15 +41,15 @@ impl Solver {
             a: &mut a,
             b: &mut b,
         };
-        self.jws[0].jac.jacobians(at, out)?;
+        self.store.ws[0].jac.jacobians(at, out)?;
         Ok((Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]), b))
     }
 
     fn check_stage(&self, k: usize) -> Result<()> {
-        if k >= self.steps {
+        if k >= self.horizon.steps {
             return Err(Error::InvalidArgument {
                 name: "stage",
-                reason: format!("must be below N = {}, got {k}", self.steps),
+                reason: format!("must be below N = {}, got {k}", self.horizon.steps),
             });
         }
         Ok(())
@@ -52,9 +58,9 @@ impl Solver {
     /// The tangent coordinates ξ = (φ₁..φₙ, ω₁..ωₙ) of the nominal x̂_k (absolute angles from e₂
     /// and angular rates).
     pub fn coordinates(&self, k: usize) -> Vec<f64> {
-        let q = self.nominal.q(k);
+        let q = self.horizon.nominal.q(k);
         let mut x: Vec<f64> = q.iter().map(|q| q[1].atan2(q[0])).collect();
-        x.extend_from_slice(self.nominal.omega(k));
+        x.extend_from_slice(self.horizon.nominal.omega(k));
         x
     }
 
@@ -63,7 +69,7 @@ impl Solver {
     /// predictor is the nominal's. (For finite-difference checks of [`Solver::stage_jacobians`].)
     pub fn stage_map(&mut self, k: usize, xi: &[f64], u: f64) -> Result<Vec<f64>> {
         self.check_stage(k)?;
-        let n = self.n;
+        let n = self.horizon.model.n;
         if xi.len() != 2 * n {
             return Err(Error::InvalidArgument {
                 name: "xi",
@@ -77,19 +83,19 @@ impl Solver {
                 [xi[n + i] * t[0], xi[n + i] * t[1]]
             })
             .collect();
-        let st = &mut self.sim.stepper.state;
-        self.model.apply_mass(&v, &mut st.p);
+        let hz = &mut self.horizon;
+        let st = &mut hz.sim.stepper.state;
+        hz.model.apply_mass(&v, &mut st.p);
         st.q.copy_from_slice(&q);
-        let mu = self.nominal.mu(k);
+        let mu = hz.nominal.mu(k);
         let m = st.multipliers_mut(mu.len());
         m.mu.copy_from_slice(mu);
         m.lambda.copy_from_slice(mu);
-        self.sim.stepper.advance(k, u)?;
-        let st = &self.sim.stepper.state;
+        hz.sim.stepper.advance(k, u)?;
+        let st = &hz.sim.stepper.state;
         let mut out: Vec<f64> = st.q.iter().map(|q| q[1].atan2(q[0])).collect();
         let mut w = vec![0.0; n];
-        self.model
-            .rates(&st.q, &st.p, &mut self.sim.scratch, &mut w);
+        hz.model.rates(&st.q, &st.p, &mut hz.sim.scratch, &mut w);
         out.extend_from_slice(&w);
         Ok(out)
     }
@@ -100,9 +106,8 @@ impl Solver {
     /// Gauss-Newton model). Needs the Jacobians of the whole horizon in memory.
     pub fn gauss_newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
         self.check_in_memory()?;
-        self.dv.fill(0.0);
-        self.dz.fill(0.0);
-        self.active.fill(false);
+        self.qp.at_nominal();
+        self.qp.active.fill(false);
         self.prox = mu;
         if !self.sweep(true)? {
             return Err(Error::InvalidArgument {
@@ -111,7 +116,8 @@ impl Solver {
             });
         }
         self.linear_rollout(1.0, Arc::ClosedLoop);
-        Ok(self.theta_stage.iter().map(|&k| self.dv_t[k]).collect())
+        let stages = &self.horizon.theta_stage;
+        Ok(stages.iter().map(|&k| self.qp.dv_t[k]).collect())
     }
 
     /// The exact Newton step δθ at the nominal with a proximal weight `mu`: as
@@ -121,7 +127,7 @@ impl Solver {
     /// bounded). Per-step controls without rate penalty, every Jacobian in memory.
     pub fn newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
         self.check_in_memory()?;
-        if !self.second_order_possible {
+        if !self.second.possible {
             return Err(Error::InvalidArgument {
                 name: "curvature",
                 reason: "the exact model needs per-step controls without rate penalty and a \
@@ -131,16 +137,16 @@ impl Solver {
         }
         self.costate_by_reverse_steps()?;
         self.hessians()?;
-        self.exact = true;
+        self.second.exact = true;
         let step = self.gauss_newton_step(mu);
-        self.exact = false;
+        self.second.exact = false;
         step
     }
 
     /// The exact gradient ∂J/∂θ at the nominal by the costate sweep of reverse stage steps
     /// (no Jacobians; the exact model's sweep): equal to [`Solver::gradient`].
     pub fn gradient_by_reverse_steps(&mut self) -> Result<Vec<f64>> {
-        if !self.second_order_possible {
+        if !self.second.possible {
             return Err(Error::InvalidArgument {
                 name: "curvature",
                 reason: "the costate sweep by reverse steps needs per-step controls without \
@@ -153,12 +159,12 @@ impl Solver {
     }
 
     fn check_in_memory(&self) -> Result<()> {
-        if self.block < self.steps {
+        if !self.store.holds_all(self.horizon.steps) {
             return Err(Error::InvalidArgument {
                 name: "jacobian_memory",
                 reason: format!(
                     "the linearised rollout needs every stage Jacobian in memory ({} bytes)",
-                    self.steps * 8 * (self.nxi * self.nxi + self.nxi)
+                    self.horizon.steps * 8 * (self.nxi * self.nxi + self.nxi)
                 ),
             });
         }
@@ -170,25 +176,26 @@ impl Solver {
     /// ∇_u r_k = ∂M₀/∂φ₁ · e₁ᵀ A_{k−1}⋯A_{j+1} B_j (r_k = M₀(t_k)) and P = ∂u/∂θ. O(N² n²):
     /// for checking [`Solver::gauss_newton_step`] on small horizons.
     pub fn dense_gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
-        let (steps, nxi) = (self.steps, self.nxi);
+        let (steps, nxi) = (self.horizon.steps, self.nxi);
         let m = steps + 1;
         let mut x = Mat::<f64>::zeros(nxi, m);
         let mut hu = Mat::<f64>::zeros(m, m);
         let mut gu = vec![0.0; m];
-        let scale = self.model.moment_scale;
+        let scale = self.horizon.model.moment_scale;
         for k in 0..=steps {
+            let hz = &self.horizon;
             if k > 0 {
-                self.jacobians(k - 1, k)?;
-                let (a, b) = (&self.a_store[..nxi * nxi], &self.b_store[..nxi]);
+                self.store.fill(&hz.model, &hz.nominal, k - 1..k)?;
+                let StageJacobians { a, b } = self.store.stage(0);
                 let xa = Mat::from_fn(nxi, nxi, |i, j| a[j * nxi + i]) * &x;
                 x = xa;
                 for i in 0..nxi {
                     x[(i, k - 1)] += b[i];
                 }
             }
-            let c = self.cost.weight(k);
-            let d = self.nominal.dmoment(k, scale);
-            let mk = self.nominal.moment[k];
+            let c = hz.cost.weight(k);
+            let d = hz.nominal.dmoment(k, scale);
+            let mk = hz.nominal.moment[k];
             for i in 0..m {
                 let ri = d * x[(0, i)];
                 gu[i] += 2.0 * c * mk * ri;
@@ -196,12 +203,12 @@ impl Solver {
                     hu[(i, j)] += 2.0 * c * ri * d * x[(0, j)];
                 }
             }
-            let u = self.nominal.u[k];
-            gu[k] += 2.0 * self.cost.effort * u;
-            hu[(k, k)] += 2.0 * self.cost.effort;
-            if k > 0 && self.cost.rate > 0.0 {
-                let r = self.cost.rate;
-                let du = u - self.nominal.u[k - 1];
+            let u = hz.nominal.u[k];
+            gu[k] += 2.0 * hz.cost.effort * u;
+            hu[(k, k)] += 2.0 * hz.cost.effort;
+            if k > 0 && hz.cost.rate > 0.0 {
+                let r = hz.cost.rate;
+                let du = u - hz.nominal.u[k - 1];
                 gu[k] += 2.0 * r * du;
                 gu[k - 1] -= 2.0 * r * du;
                 hu[(k, k)] += 2.0 * r;
@@ -210,14 +217,15 @@ impl Solver {
                 hu[(k - 1, k)] -= 2.0 * r;
             }
         }
-        self.jac_range = None;
-        let p = self.n_params;
+        self.store.invalidate();
+        let hz = &self.horizon;
+        let p = hz.n_params;
         let mut h = Mat::<f64>::zeros(p, p);
         let mut g = vec![0.0; p];
         for k in 0..m {
-            g[self.piece[k]] += gu[k];
+            g[hz.piece[k]] += gu[k];
             for l in 0..m {
-                h[(self.piece[k], self.piece[l])] += hu[(k, l)];
+                h[(hz.piece[k], hz.piece[l])] += hu[(k, l)];
             }
         }
         Ok((h, g))

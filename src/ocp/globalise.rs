@@ -1,12 +1,119 @@
-//! What the Riccati solver ([`super::Solver`]) and the condensed solver ([`super::Condensed`])
-//! share to turn a model step into an accepted one: the backtracking rule on actual against
+//! The outer iteration the Riccati solver ([`super::Solver`]) and the condensed solver
+//! ([`super::Condensed`]) share ([`run`], module docs "Globalisation" and "Convergence"), and
+//! what turns a model step into an accepted one: the backtracking rule on actual against
 //! predicted decrease (with J's round-off), the Levenberg schedule, and the stall test for
-//! steps below J's resolution. Each solver supplies only its own trial (a closed-loop rollout
-//! with Riccati feedback, or an open-loop rollout of θ + αδ).
+//! steps below J's resolution. Each solver supplies its own linearisation, model step and
+//! trial (a closed-loop rollout with Riccati feedback, or an open-loop rollout of θ + αδ)
+//! through [`Outer`].
 
-use super::{
-    IterationRecord, OcpOptions, Termination, MAX_ROUNDOFF_STEPS, MU_MIN, NOISE, ROUNDOFF,
-};
+use std::time::Instant;
+
+use super::horizon::ControlHorizon;
+use super::options::{IterationRecord, OcpOptions, OcpResult, Termination};
+use crate::error::Result;
+
+/// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
+/// the run stops ([`Termination::RoundOff`]).
+const MAX_ROUNDOFF_STEPS: usize = 10;
+/// Predicted decreases below this fraction of max(|J|, 10⁻⁶ J₀) are not resolved by J: J's
+/// noise is its floating-point round-off (2·10⁻¹³ relative on the thesis riser, see
+/// [`crate::optimize`]) and the RATTLE Newton tolerance (10⁻¹⁴ on the constraints, ~4·10⁻¹¹ in
+/// M₀ = 4000 z₁; about 10⁻¹⁰ relative at J ≈ 6·10⁻⁴, Table 3.4 row 8). Such steps are taken
+/// unless J rises by more than [`NOISE`] of it, and the projected gradient alone decides
+/// convergence.
+const ROUNDOFF: f64 = 1e-10;
+/// The rise of J (relative to max(|J|, 10⁻⁶ J₀)) tolerated for a step below J's resolution.
+const NOISE: f64 = 1e-11;
+/// Smallest nonzero relative regularisation.
+const MU_MIN: f64 = 1e-6;
+
+/// What a solver's step ended with.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Step {
+    /// The line search accepted a trial (in the horizon's trial trajectory).
+    Accepted(Accepted),
+    /// The line search failed: μ rises for the next iteration.
+    Rejected,
+    /// No solvable model below μ's limit.
+    NoModel,
+}
+
+/// A solver the shared outer iteration ([`run`]) drives: the Riccati solver and the condensed
+/// one differ in how they linearise, model and try a step, not in the iteration around it.
+pub(crate) trait Outer {
+    /// Resets the counters (and whatever else a run starts from).
+    fn begin(&mut self);
+    /// The problem and its trajectories.
+    fn horizon(&self) -> &ControlHorizon;
+    /// Makes θ (projected onto the box) the nominal; J.
+    fn set_point(&mut self, theta: &[f64]) -> Result<f64>;
+    /// The exact gradient at the nominal; returns the projected gradient norm.
+    fn linearise(&mut self) -> Result<f64>;
+    /// The gradient of the last [`Outer::linearise`] (its norm is ‖g₀‖ at the first).
+    fn gradient(&self) -> &[f64];
+    /// The model's step and its line search from the nominal (projected gradient `pg`,
+    /// ‖g₀‖ = `gref`), raising `pr.mu` as the model needs.
+    fn step(&mut self, pr: &mut Progress, pg: f64, gref: f64) -> Result<Step>;
+    /// The accepted trial becomes the nominal.
+    fn take_step(&mut self);
+    /// How a run ends whose steps below J's round-off stopped lowering the projected gradient
+    /// (tolerance `target`).
+    fn stalled(&mut self, target: f64) -> Result<Termination>;
+    /// The result at the final nominal.
+    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult;
+}
+
+/// Runs a solver from θ₀ (projected onto the box): iterations of linearisation, stopping tests,
+/// the model's step with its line search and the Levenberg schedule until one ends the run.
+pub(crate) fn run<S: Outer>(solver: &mut S, theta0: &[f64]) -> Result<OcpResult> {
+    let t0 = Instant::now();
+    solver.begin();
+    let mut pr = Progress::new(solver.set_point(theta0)?);
+    let termination = loop {
+        if let Some(t) = iterate(solver, &mut pr)? {
+            break t;
+        }
+    };
+    Ok(solver.report(termination, pr, t0))
+}
+
+/// One iteration: the exact gradient and the stopping tests, the model's step and its line
+/// search, the history and the regularisation schedule. `Some` ends the run.
+fn iterate<S: Outer>(solver: &mut S, pr: &mut Progress) -> Result<Option<Termination>> {
+    let opts = solver.horizon().opts.clone();
+    if pr.budget_spent(&opts) {
+        return Ok(Some(Termination::Budget));
+    }
+    let pg = solver.linearise()?;
+    let (stop, target, gref) = pr.stop_test(&opts, pg, solver.gradient());
+    if stop.is_some() {
+        return Ok(stop);
+    }
+    let acc = match solver.step(pr, pg, gref)? {
+        Step::Accepted(acc) => acc,
+        Step::Rejected => {
+            pr.mu = raise_mu(pr.mu);
+            let limit = pr.mu > opts.max_regularisation;
+            return Ok(limit.then_some(Termination::RegularisationLimit));
+        }
+        Step::NoModel => return Ok(Some(Termination::RegularisationLimit)),
+    };
+    solver.take_step();
+    pr.iterations += 1;
+    pr.history.push(IterationRecord {
+        objective: solver.horizon().nominal.cost,
+        projected_gradient_norm: pg,
+        alpha: acc.alpha,
+        regularisation: pr.mu,
+    });
+    // Below J's resolution only the projected gradient shows progress: stop when it has not
+    // fallen by 10 % over several such steps.
+    if pr.roundoff.stalled(acc.roundoff, pg) {
+        return solver.stalled(target).map(Some);
+    }
+    pr.mu = next_mu(pr.mu, &acc);
+    Ok(None)
+}
 
 /// The step the line search accepted.
 #[derive(Clone, Copy, Debug)]

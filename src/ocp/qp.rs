@@ -1,21 +1,57 @@
-//! The Gauss-Newton QP of one iteration: linearised rollouts, the warm face and the
-//! primal-dual interior-point method whose Newton systems are Riccati passes (module docs,
-//! "The step").
+//! The Gauss-Newton QP of one iteration (module docs, "The step"): the warm face and the
+//! primal-dual interior-point method whose Newton systems are Riccati passes, run over the
+//! solver's parts — the QP iterate ([`super::iterate`]), the interior point
+//! ([`super::interior`]) and the backward pass.
 
-use super::riccati::dot;
-use super::*;
+use super::horizon::ControlHorizon;
+use super::interior::{Controls, StepLengths};
+use super::iterate::{Arc, LinearModel};
+use super::solver::Solver;
+use crate::error::Result;
 
 /// The interior point stops at this fraction of its starting mean complementarity.
 const GAP_FLOOR: f64 = 1e-15;
+/// Interior-point iterations of one QP solve.
+const MAX_QP_ITERS: usize = 40;
+
+/// The controls at the model point δv of the horizon's nominal.
+fn controls<'a>(hz: &'a ControlHorizon, dv: &'a [f64]) -> Controls<'a> {
+    Controls {
+        nominal: &hz.nominal.u,
+        dv,
+        free: &hz.free,
+        lower: hz.opts.lower,
+        upper: hz.opts.upper,
+    }
+}
+
+/// One interior-point iteration's outcome: the new model value without the proximal term and
+/// the step lengths taken.
+struct InteriorStep {
+    value: f64,
+    lengths: StepLengths,
+}
 
 impl Solver {
-    /// A closed-loop rollout of the *linearised* dynamics from the model point δ with the gains
-    /// of the last Riccati pass and step length α: Δv_k = clamp(α k_k + K_k Δz_k) (clamped to
-    /// the box about the model point), Δz_{k+1} = Ã_k Δz_k + B̃_k Δv_k, written to `dv_t`,
-    /// `dz_t` as δ + Δ. Returns the model of J at δ + Δ without the proximal term:
-    /// Σ ℓ_k(M₀ + ∂M₀/∂φ₁ δφ₁, u + δu, w + δw) (+ the second-order terms of the exact model).
-    /// Needs every stage Jacobian in memory. For the direction alone see
-    /// [`Solver::direction_rollout`].
+    /// The linearised rollout of [`super::iterate::QpIterate::linearised`] on the current
+    /// nominal, stored Jacobians and Riccati pass.
+    fn linearised(&mut self, alpha: f64, mode: Arc) -> f64 {
+        let (steps, nz) = (self.horizon.steps, self.nz);
+        let second = &self.second;
+        let lm = LinearModel {
+            horizon: &self.horizon,
+            store: &self.store,
+            gain: &self.riccati.gain,
+            ff: &self.riccati.ff,
+            second: second.exact.then(|| second.view(&[], steps, nz)),
+        };
+        self.qp.linearised(&lm, alpha, mode)
+    }
+
+    /// A closed-loop (or projected) rollout of the *linearised* dynamics from the model point
+    /// with step length α, written to the iterate's trial; returns the model of J there
+    /// without the proximal term. Needs every stage Jacobian in memory. For the direction
+    /// alone see [`Solver::direction_rollout`].
     pub(super) fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> f64 {
         debug_assert!(
             mode != Arc::Direction,
@@ -28,91 +64,8 @@ impl Solver {
     /// [`Arc::Direction`] mode at α = 1, without the model value (its caller gets the value
     /// from the Newton step, [`Solver::advance`]; with the exact model the value would read
     /// every H_k once more).
-    pub(super) fn direction_rollout(&mut self) {
+    fn direction_rollout(&mut self) {
         self.linearised(1.0, Arc::Direction);
-    }
-
-    /// The rollout of [`Solver::linear_rollout`], with the model value except for
-    /// [`Arc::Direction`] (0).
-    fn linearised(&mut self, alpha: f64, mode: Arc) -> f64 {
-        let value = mode != Arc::Direction;
-        let (nz, nxi, steps) = (self.nz, self.nxi, self.steps);
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let nom = &self.nominal;
-        let scale = self.model.moment_scale;
-        let (dz, next) = (&mut self.lin_dz, &mut self.lin_next);
-        dz.fill(0.0);
-        let mut q = 0.0;
-        for k in 0..=steps {
-            let u0 = nom.u[k] + self.dv[k];
-            let d = if self.free[k] {
-                match mode {
-                    Arc::Projected => (u0 + alpha * self.dir[k]).clamp(lo, hi) - u0,
-                    _ => {
-                        let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-                        let x = alpha * self.riccati.ff[k] + dot(g, dz);
-                        if mode == Arc::Direction {
-                            self.dir[k] = x;
-                            x
-                        } else {
-                            (u0 + x).clamp(lo, hi) - u0
-                        }
-                    }
-                }
-            } else {
-                dz[nxi]
-            };
-            self.dv_t[k] = self.dv[k] + d;
-            let (zt, z0) = (
-                &mut self.dz_t[k * nz..(k + 1) * nz],
-                &self.dz[k * nz..(k + 1) * nz],
-            );
-            zt.iter_mut()
-                .zip(z0.iter().zip(dz.iter()))
-                .for_each(|(t, (a, b))| *t = a + b);
-            if value {
-                let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
-                let u = nom.u[k] + self.dv_t[k];
-                let w = if k > 0 {
-                    nom.u[k - 1] + self.dv_t[k - 1]
-                } else {
-                    0.0
-                };
-                q += self.cost.value(k, m, u, w);
-                if self.exact {
-                    let so = SecondOrder {
-                        on: true,
-                        steps,
-                        nz,
-                        h: &self.h_store,
-                        curv: &self.curv,
-                        dz: &[],
-                    };
-                    q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
-                }
-            }
-            if k + PREFETCH_AHEAD < steps {
-                // H_k is read only for the value.
-                let h_store = (value && self.exact).then_some(&self.h_store[..]);
-                let ahead = k + PREFETCH_AHEAD;
-                prefetch_stage(&self.a_store, h_store, nxi, ahead, ahead);
-            }
-            if k < steps {
-                let a = &self.a_store[k * nxi * nxi..(k + 1) * nxi * nxi];
-                let b = &self.b_store[k * nxi..(k + 1) * nxi];
-                // δz' = A δz + B δv, column by column (contiguous AXPYs, no bounds checks).
-                let head = &mut next[..nxi];
-                head.iter_mut().zip(b).for_each(|(y, bi)| *y = bi * d);
-                for (col, &x) in a.chunks_exact(nxi).zip(&dz[..nxi]) {
-                    head.iter_mut().zip(col).for_each(|(y, c)| *y += c * x);
-                }
-                if nz > nxi {
-                    next[nxi] = d;
-                }
-                std::mem::swap(dz, next);
-            }
-        }
-        q
     }
 
     /// The QP's solution on a guessed face: the controls of the nominal that sit exactly on a
@@ -122,32 +75,30 @@ impl Solver {
     /// has settled: 1 pass instead of the interior point's 5–15). Returns the model value
     /// without the proximal term, or `None` (then [`Solver::solve_qp`] runs).
     pub(super) fn warm_qp(&mut self, tol: f64) -> Result<Option<f64>> {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         if !(lo.is_finite() || hi.is_finite()) {
             return Ok(None);
         }
-        self.dv.fill(0.0);
-        self.dz.fill(0.0);
+        self.qp.at_nominal();
         let mut any = false;
-        for k in 0..=self.steps {
-            let u = self.nominal.u[k];
-            self.active[k] = self.free[k] && (u <= lo || u >= hi);
-            self.fixed[k] = 0.0;
-            any |= self.active[k];
+        for k in 0..=self.horizon.steps {
+            let u = self.horizon.nominal.u[k];
+            self.qp.active[k] = self.horizon.free[k] && (u <= lo || u >= hi);
+            self.qp.fixed[k] = 0.0;
+            any |= self.qp.active[k];
         }
         if !any || !self.sweep(true)? {
             return Ok(None);
         }
         let q_plain = self.linear_rollout(1.0, Arc::ClosedLoop);
-        std::mem::swap(&mut self.dv, &mut self.dv_t);
-        std::mem::swap(&mut self.dz, &mut self.dz_t);
+        self.qp.take_trial();
         // The model gradient at the new point (the gains of the Riccati pass are kept).
-        self.active.fill(false);
+        self.qp.active.fill(false);
         self.sweep(false)?;
         if !(q_plain.is_finite() && self.projected_norm() <= tol) {
             return Ok(None);
         }
-        self.store_feedforward();
+        self.qp.store_feedforward(&self.riccati.gain);
         Ok(Some(q_plain))
     }
 
@@ -163,9 +114,9 @@ impl Solver {
     /// `None` if a pass broke down.
     pub(super) fn solve_qp(&mut self, tol: f64) -> Result<Option<f64>> {
         let mut q_plain = self.interior_start()?;
-        let steps = self.steps;
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let nb = (0..=steps).filter(|&k| self.free[k]).count()
+        let steps = self.horizon.steps;
+        let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
+        let nb = (0..=steps).filter(|&k| self.horizon.free[k]).count()
             * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
         let mut sigma = 0.1;
         let mut gap0 = 0.0;
@@ -173,7 +124,7 @@ impl Solver {
             // After the first iteration `riccati.grad` is the update of [`Solver::advance`];
             // a solution is accepted on a swept gradient only.
             let mut pg = self.projected_norm();
-            if it > 0 && pg <= tol && q_plain < self.nominal.cost {
+            if it > 0 && pg <= tol && q_plain < self.horizon.nominal.cost {
                 self.sweep(false)?;
                 pg = self.projected_norm();
             }
@@ -190,24 +141,32 @@ impl Solver {
             // long horizons (N = 10⁵, 40 % of the controls on a bound, curvature ρh = 10⁻⁴ along
             // the flat directions) the projected-gradient test alone was met by points above it,
             // whose steps no line search could accept (6 iterations of 10 failed rollouts each).
-            if (it > 0 && pg <= tol && q_plain < self.nominal.cost)
+            if (it > 0 && pg <= tol && q_plain < self.horizon.nominal.cost)
                 || !(mean_gap.is_finite())
                 || (nb > 0 && mean_gap <= GAP_FLOOR * gap0)
             {
                 break;
             }
-            let Some((qp, ap, ad)) = self.interior_step(sigma * mean_gap, q_plain)? else {
+            let Some(step) = self.interior_step(sigma * mean_gap, q_plain)? else {
                 return Ok(None);
             };
-            q_plain = qp;
-            sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
+            q_plain = step.value;
+            let StepLengths { primal, dual } = step.lengths;
+            sigma = if primal.min(dual) > 0.9 { 0.01 } else { 0.1 };
         }
-        if !(q_plain.is_finite() && self.dv.iter().chain(&self.dz).all(|x| x.is_finite())) {
+        let finite = self.qp.dv.iter().chain(&self.qp.dz).all(|x| x.is_finite());
+        if !(q_plain.is_finite() && finite) {
             return Ok(None);
         }
         self.snap_to_bounds();
-        self.store_feedforward();
+        self.qp.store_feedforward(&self.riccati.gain);
         Ok(Some(q_plain))
+    }
+
+    /// The complementarity gap of the interior point at the model point.
+    pub(super) fn complementarity(&self) -> f64 {
+        self.ip
+            .complementarity(&controls(&self.horizon, &self.qp.dv))
     }
 
     /// One interior-point iteration with barrier parameter τ from the current point (model
@@ -216,19 +175,22 @@ impl Solver {
     /// point with its model gradient and value ([`Solver::advance`]) and multipliers. Returns
     /// the new model value and the primal and dual step lengths, or `None` if some stage QP
     /// was unbounded.
-    fn interior_step(&mut self, tau: f64, q_plain: f64) -> Result<Option<(f64, f64, f64)>> {
-        self.barrier_terms(tau);
-        self.barrier = true;
+    fn interior_step(&mut self, tau: f64, q_plain: f64) -> Result<Option<InteriorStep>> {
+        self.ip
+            .barrier_terms(&controls(&self.horizon, &self.qp.dv), tau);
+        self.ip.on = true;
         let ok = self.sweep(true);
-        self.barrier = false;
+        self.ip.on = false;
         if !ok? {
             return Ok(None);
         }
         self.direction_rollout();
-        let (ap, ad) = self.fraction_to_boundary(tau);
-        let q_next = self.advance(ap, q_plain);
-        self.step_multipliers(ad);
-        Ok(Some((q_next, ap, ad)))
+        let c = controls(&self.horizon, &self.qp.dv);
+        let lengths = self.ip.fraction_to_boundary(&c, &self.qp.dir, tau);
+        let value = self.advance(lengths.primal, q_plain);
+        let c = controls(&self.horizon, &self.qp.dv);
+        self.ip.step_multipliers(&c, lengths.dual);
+        Ok(Some(InteriorStep { value, lengths }))
     }
 
     /// Moves the model point to δ + αΔ (Δ = the Direction rollout's `dv_t − dv`,
@@ -253,20 +215,21 @@ impl Solver {
     /// gradient.
     fn advance(&mut self, alpha: f64, q0: f64) -> f64 {
         let (mut s0, mut s1) = (0.0, 0.0);
-        for k in 0..=self.steps {
-            if self.free[k] {
-                let (g, dv, step) = (self.riccati.grad[k], self.dv[k], self.dir[k]);
-                let (lb, qb) = (self.ip_lu[k], self.ip_quu[k]);
+        let qp = &mut self.qp;
+        for k in 0..=self.horizon.steps {
+            if self.horizon.free[k] {
+                let (g, dv, step) = (self.riccati.grad[k], qp.dv[k], qp.dir[k]);
+                let (lb, qb) = (self.ip.lu[k], self.ip.quu[k]);
                 let g1 = -lb - qb * step;
                 s0 += (g - lb - self.prox * dv) * step;
                 s1 += (g1 - self.prox * (dv + step)) * step;
                 self.riccati.grad[k] = (g - lb) - alpha * (g + qb * step);
             }
         }
-        for (x, t) in self.dv.iter_mut().zip(&self.dv_t) {
+        for (x, t) in qp.dv.iter_mut().zip(&qp.dv_t) {
             *x += alpha * (t - *x);
         }
-        for (x, t) in self.dz.iter_mut().zip(&self.dz_t) {
+        for (x, t) in qp.dz.iter_mut().zip(&qp.dz_t) {
             *x += alpha * (t - *x);
         }
         q0 + alpha * s0 + 0.5 * alpha * alpha * (s1 - s0)
@@ -288,13 +251,13 @@ impl Solver {
     /// instead of 40; the outer iterations change by −5 to +2 across the variants (the
     /// inexact QP solutions differ), one more at N = 10³–10⁴, where time is unchanged or
     /// lower (farm-bench 0.94 and 1.00).
-    fn interior_start(&mut self) -> Result<f64> {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
+    pub(super) fn interior_start(&mut self) -> Result<f64> {
+        let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let kappa = 1e-2 * width;
-        for k in 0..=self.steps {
-            let u = self.nominal.u[k];
-            self.dir[k] = if self.free[k] {
+        for k in 0..=self.horizon.steps {
+            let u = self.horizon.nominal.u[k];
+            self.qp.dir[k] = if self.horizon.free[k] {
                 let (l, h) = (lo - u, hi - u);
                 let c = if h - l > 2.0 * kappa {
                     0.0f64.clamp(l + kappa, h - kappa)
@@ -310,12 +273,10 @@ impl Solver {
                 0.0
             };
         }
-        self.dv.fill(0.0);
-        self.dz.fill(0.0);
+        self.qp.at_nominal();
         let q_plain = self.linear_rollout(1.0, Arc::Projected);
-        std::mem::swap(&mut self.dv, &mut self.dv_t);
-        std::mem::swap(&mut self.dz, &mut self.dz_t);
-        self.active.fill(false);
+        self.qp.take_trial();
+        self.qp.active.fill(false);
         self.sweep(false)?;
         let gscale = self
             .riccati
@@ -324,156 +285,38 @@ impl Solver {
             .fold(0.0f64, |m, g| m.max(g.abs()))
             .max(1e-12);
         let tau0 = kappa * gscale;
-        for k in 0..=self.steps {
-            let u = self.nominal.u[k] + self.dv[k];
-            self.zl[k] = if lo.is_finite() {
-                tau0 / (u - lo).max(kappa)
-            } else {
-                0.0
-            };
-            self.zh[k] = if hi.is_finite() {
-                tau0 / (hi - u).max(kappa)
-            } else {
-                0.0
-            };
-        }
+        self.ip
+            .centre(&controls(&self.horizon, &self.qp.dv), tau0, kappa);
         Ok(q_plain)
-    }
-
-    /// The complementarity gap Σ (v − lo) z + (hi − v) z′ over the free stages.
-    fn complementarity(&self) -> f64 {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let mut gap = 0.0;
-        for k in 0..=self.steps {
-            if self.free[k] {
-                let u = self.nominal.u[k] + self.dv[k];
-                if lo.is_finite() {
-                    gap += (u - lo) * self.zl[k];
-                }
-                if hi.is_finite() {
-                    gap += (hi - u) * self.zh[k];
-                }
-            }
-        }
-        gap
-    }
-
-    /// The barrier terms of the next Riccati pass: Q_uu += z/s + z′/s′, l_u += −τ/s + τ/s′.
-    fn barrier_terms(&mut self, tau: f64) {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        for k in 0..=self.steps {
-            let (mut qs, mut ls) = (0.0, 0.0);
-            if self.free[k] {
-                let u = self.nominal.u[k] + self.dv[k];
-                if lo.is_finite() {
-                    let s = u - lo;
-                    qs += self.zl[k] / s;
-                    ls -= tau / s;
-                }
-                if hi.is_finite() {
-                    let s = hi - u;
-                    qs += self.zh[k] / s;
-                    ls += tau / s;
-                }
-            }
-            self.ip_quu[k] = qs;
-            self.ip_lu[k] = ls;
-        }
-    }
-
-    /// The multipliers' steps (in `dzl`, `dzh`) and the primal and dual step lengths that keep
-    /// 0.5 % of the distance to the boundary.
-    fn fraction_to_boundary(&mut self, tau: f64) -> (f64, f64) {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        let (mut ap, mut ad) = (1.0f64, 1.0f64);
-        for k in 0..=self.steps {
-            if !self.free[k] {
-                continue;
-            }
-            let u = self.nominal.u[k] + self.dv[k];
-            let dx = self.dir[k];
-            if lo.is_finite() {
-                let s = u - lo;
-                if dx < 0.0 {
-                    ap = ap.min(-0.995 * s / dx);
-                }
-                let dzl = tau / s - self.zl[k] - self.zl[k] / s * dx;
-                if dzl < 0.0 {
-                    ad = ad.min(-0.995 * self.zl[k] / dzl);
-                }
-                self.dzl[k] = dzl;
-            }
-            if hi.is_finite() {
-                let s = hi - u;
-                if dx > 0.0 {
-                    ap = ap.min(0.995 * s / dx);
-                }
-                let dzh = tau / s - self.zh[k] + self.zh[k] / s * dx;
-                if dzh < 0.0 {
-                    ad = ad.min(-0.995 * self.zh[k] / dzh);
-                }
-                self.dzh[k] = dzh;
-            }
-        }
-        (ap, ad)
-    }
-
-    /// z += α_d Δz, z′ += α_d Δz′.
-    fn step_multipliers(&mut self, ad: f64) {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
-        for k in 0..=self.steps {
-            if self.free[k] {
-                if lo.is_finite() {
-                    self.zl[k] += ad * self.dzl[k];
-                }
-                if hi.is_finite() {
-                    self.zh[k] += ad * self.dzh[k];
-                }
-            }
-        }
     }
 
     /// Controls the interior point left within 10⁻⁶ of the box width of a bound whose
     /// multiplier exceeds the slack go exactly onto the bound, without feedback: bounds are then
     /// met with equality, not approached.
     fn snap_to_bounds(&mut self) {
-        let (lo, hi) = (self.opts.lower, self.opts.upper);
+        let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let nz = self.nz;
-        for k in 0..=self.steps {
-            if !self.free[k] {
+        for k in 0..=self.horizon.steps {
+            if !self.horizon.free[k] {
                 continue;
             }
-            let u = self.nominal.u[k];
-            let v = u + self.dv[k];
-            let snap = if lo.is_finite() && v - lo <= 1e-6 * width && self.zl[k] > v - lo {
-                Some(lo)
-            } else if hi.is_finite() && hi - v <= 1e-6 * width && self.zh[k] > hi - v {
-                Some(hi)
-            } else {
-                None
-            };
+            let snap = self
+                .ip
+                .snap(&controls(&self.horizon, &self.qp.dv), k, width);
             if let Some(b) = snap {
-                self.dv[k] = b - u;
+                self.qp.dv[k] = b - self.horizon.nominal.u[k];
                 self.riccati.gain[k * nz..(k + 1) * nz].fill(0.0);
             }
-        }
-    }
-
-    /// The feedforward of the closed-loop rollouts: k_k = δv_k − K_k δz_k, so that
-    /// u_k = ū_k + α k_k + K_k δz_k reproduces the QP's step at α = 1.
-    fn store_feedforward(&mut self) {
-        let nz = self.nz;
-        for k in 0..=self.steps {
-            let g = &self.riccati.gain[k * nz..(k + 1) * nz];
-            self.ff_out[k] = self.dv[k] - dot(g, &self.dz[k * nz..(k + 1) * nz]);
         }
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Arc, OcpOptions, Solver};
+    use super::super::iterate::Arc;
+    use super::super::{OcpOptions, Solver};
+    use super::InteriorStep;
     use crate::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 
     /// The new iterate of [`Solver::advance`] against the costate sweep and the linearised
@@ -503,7 +346,9 @@ mod tests {
         let (mut sigma, mut shortened) = (0.1, 0);
         for _ in 0..6 {
             let tau = sigma * s.complementarity() / (2 * (steps + 1)) as f64;
-            let (q_next, ap, ad) = s.interior_step(tau, q).unwrap().expect("bounded QP");
+            let InteriorStep { value, lengths } =
+                s.interior_step(tau, q).unwrap().expect("bounded QP");
+            let (q_next, ap, ad) = (value, lengths.primal, lengths.dual);
             q = q_next;
             shortened += usize::from(ap < 1.0);
             sigma = if ap.min(ad) > 0.9 { 0.01 } else { 0.1 };
@@ -526,7 +371,7 @@ mod tests {
         }
         assert!(shortened > 0, "no step was shortened: α < 1 untested");
         let on_bound = (0..=steps)
-            .filter(|&k| (s.nominal.u[k] + s.dv[k]).abs() > 0.45)
+            .filter(|&k| (s.horizon.nominal.u[k] + s.qp.dv[k]).abs() > 0.45)
             .count();
         assert!(
             on_bound > 0,

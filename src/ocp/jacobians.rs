@@ -1,0 +1,183 @@
+//! The Jacobian store: the stage Jacobians A_k, B_k at the nominal ([`super::stage`]),
+//! computed in parallel (one dual-number workspace per thread: stages are independent given the
+//! trajectory) into a store of at most `OcpOptions::jacobian_memory` bytes — the whole horizon,
+//! or blocks of stages that the backward pass computes ahead of itself.
+
+use std::ops::Range;
+
+#[cfg(feature = "parallel")]
+use rayon::prelude::*;
+
+use super::hessian::HessianWorkspace;
+use super::horizon::available_threads;
+use super::line_search::Traj;
+use super::options::OcpOptions;
+use super::riccati::{self, StageJacobians};
+use super::stage::{JacobiansMut, StageAt, StageModel, StagePoint};
+use crate::error::{Error, Result};
+
+/// How many stages ahead of the current one the passes over the stored Jacobians prefetch
+/// ([`riccati::prefetch`]).
+pub(crate) const PREFETCH_AHEAD: usize = 4;
+
+/// The stage Jacobians at the nominal and the workspaces that compute them.
+#[derive(Clone, Debug)]
+pub(crate) struct JacobianStore {
+    nxi: usize,
+    /// One workspace per thread (the second-order pass uses them too).
+    pub ws: Vec<HessianWorkspace>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    /// Stages per block of the store.
+    pub block: usize,
+    /// The stages whose Jacobians at the nominal are in the store.
+    range: Option<Range<usize>>,
+    /// Passes run (blocks of stages, or the second-order pass).
+    pub passes: usize,
+}
+
+/// The whole store for a pass that writes every stage's Jacobians (the second-order pass):
+/// the per-thread workspaces and A_k, B_k of stages 0..N.
+pub(crate) struct WholeStore<'a> {
+    pub ws: &'a mut [HessianWorkspace],
+    pub a: &'a mut [f64],
+    pub b: &'a mut [f64],
+}
+
+impl JacobianStore {
+    /// The store of a horizon of `steps` stages of `model` (2n tangent coordinates `nxi`):
+    /// `options.threads` workspaces (0: the thread pool's), as many stages as
+    /// `options.jacobian_memory` holds.
+    pub fn new(model: &StageModel, options: &OcpOptions, steps: usize) -> Result<Self> {
+        let nxi = model.nx();
+        let threads = if options.threads == 0 {
+            available_threads()
+        } else {
+            options.threads
+        }
+        .clamp(1, steps.max(1));
+        let ws = (0..threads)
+            .map(|_| HessianWorkspace::new(model))
+            .collect::<Result<Vec<_>>>()?;
+        let block = (options.jacobian_memory / Self::stage_bytes(nxi)).clamp(1, steps.max(1));
+        Ok(JacobianStore {
+            nxi,
+            ws,
+            a: vec![0.0; block * nxi * nxi],
+            b: vec![0.0; block * nxi],
+            block,
+            range: None,
+            passes: 0,
+        })
+    }
+
+    /// Bytes of one stage's A_k and B_k.
+    pub fn stage_bytes(nxi: usize) -> usize {
+        8 * (nxi * nxi + nxi)
+    }
+
+    /// Whether every stage of a horizon of `steps` fits in the store.
+    pub fn holds_all(&self, steps: usize) -> bool {
+        self.block >= steps
+    }
+
+    /// The nominal moved: nothing in the store is valid.
+    pub fn invalidate(&mut self) {
+        self.range = None;
+    }
+
+    /// The Jacobians of the stages `stages` at the nominal `nom` into the store (slot i holds
+    /// stage `stages.start + i`), in parallel; nothing when they are there already.
+    pub fn fill(&mut self, model: &StageModel, nom: &Traj, stages: Range<usize>) -> Result<()> {
+        if self.range.as_ref() == Some(&stages) {
+            return Ok(());
+        }
+        let (nxi, count, lo) = (self.nxi, stages.len(), stages.start);
+        let per_a = nxi * nxi;
+        let chunk = count.div_ceil(self.ws.len()).max(1);
+        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace| {
+            for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(nxi)).enumerate() {
+                let k = lo + c * chunk + i;
+                let x = StagePoint {
+                    q: nom.q(k),
+                    p: nom.p(k),
+                    omega: nom.omega(k),
+                    mu: nom.lambda(k),
+                };
+                let at = StageAt {
+                    model,
+                    k,
+                    x,
+                    u: nom.u[k],
+                };
+                ws.jac.jacobians(at, JacobiansMut { a: ai, b: bi })?;
+            }
+            Ok::<(), Error>(())
+        };
+        let a = &mut self.a[..count * per_a];
+        let b = &mut self.b[..count * nxi];
+        #[cfg(feature = "parallel")]
+        if self.ws.len() > 1 {
+            a.par_chunks_mut(chunk * per_a)
+                .zip(b.par_chunks_mut(chunk * nxi))
+                .zip(self.ws.par_iter_mut())
+                .enumerate()
+                .try_for_each(|(c, ((a, b), ws))| work(c, a, b, ws))?;
+        } else {
+            work(0, a, b, &mut self.ws[0])?;
+        }
+        #[cfg(not(feature = "parallel"))]
+        for (c, ((a, b), ws)) in a
+            .chunks_mut(chunk * per_a)
+            .zip(b.chunks_mut(chunk * nxi))
+            .zip(self.ws.iter_mut())
+            .enumerate()
+        {
+            work(c, a, b, ws)?;
+        }
+        self.range = Some(stages);
+        self.passes += 1;
+        Ok(())
+    }
+
+    /// The workspaces and the store of stages 0..`steps` (every stage in memory), for a pass
+    /// that writes them all; [`JacobianStore::filled_whole`] marks them valid afterwards.
+    pub fn whole(&mut self, steps: usize) -> WholeStore<'_> {
+        let nxi = self.nxi;
+        WholeStore {
+            ws: &mut self.ws,
+            a: &mut self.a[..steps * nxi * nxi],
+            b: &mut self.b[..steps * nxi],
+        }
+    }
+
+    /// Stages 0..`steps` hold the Jacobians at the nominal (after a pass over
+    /// [`JacobianStore::whole`]).
+    pub fn filled_whole(&mut self, steps: usize) {
+        self.range = Some(0..steps);
+        self.passes += 1;
+    }
+
+    /// A_k and B_k in store slot `slot`.
+    #[inline]
+    pub fn stage(&self, slot: usize) -> StageJacobians<'_> {
+        let nxi = self.nxi;
+        StageJacobians {
+            a: &self.a[slot * nxi * nxi..(slot + 1) * nxi * nxi],
+            b: &self.b[slot * nxi..(slot + 1) * nxi],
+        }
+    }
+
+    /// Prefetches A_k (in store slot `slot`) and, when given, H_k of stage `k` from the
+    /// second-order store `h` ((2n + 1)² per stage).
+    #[inline]
+    pub fn prefetch(&self, slot: usize, h: Option<&[f64]>, k: usize) {
+        let nxi = self.nxi;
+        let per = nxi * nxi;
+        riccati::prefetch(&self.a[slot * per..(slot + 1) * per]);
+        if let Some(h) = h {
+            let nd = (nxi + 1) * (nxi + 1);
+            riccati::prefetch(&h[k * nd..(k + 1) * nd]);
+        }
+    }
+}

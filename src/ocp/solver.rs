@@ -1,0 +1,422 @@
+//! The Riccati solver (module docs): its parts — the horizon and its trajectories, the Jacobian
+//! store, the second-order model, the QP iterate, the interior point and the backward pass —
+//! and the steps of the outer iteration it runs ([`super::globalise::Outer`]).
+
+use std::time::Instant;
+
+use super::boxqp;
+use super::globalise::{backtrack, raise_mu, LineSearch, ModelChange, Outer, Progress, Step};
+use super::horizon::ControlHorizon;
+use super::interior::InteriorPoint;
+use super::iterate::QpIterate;
+use super::jacobians::{JacobianStore, PREFETCH_AHEAD};
+use super::options::{OcpOptions, OcpResult, Termination};
+use super::riccati::{Riccati, StageInput};
+use super::second_order::SecondOrderModel;
+use crate::adjoint::{ControlMap, ControlProblem, Objective};
+use crate::error::Result;
+
+/// The solver with all its buffers, reusable for several starts (and the linearisation
+/// diagnostics the tests use).
+#[derive(Clone, Debug)]
+pub struct Solver {
+    pub(super) horizon: ControlHorizon,
+    pub(super) store: JacobianStore,
+    pub(super) second: SecondOrderModel,
+    pub(super) qp: QpIterate,
+    pub(super) ip: InteriorPoint,
+    pub(super) riccati: Riccati,
+    /// The exact gradient at the nominal (per stage).
+    gtrue: Vec<f64>,
+    /// Proximal weight μ (absolute) of the current model, and the mean Q_uu it is relative to.
+    pub(super) prox: f64,
+    pub(super) quu_scale: f64,
+    /// Riccati passes run.
+    backward_passes: usize,
+    pub(super) nxi: usize,
+    pub(super) nz: usize,
+}
+
+impl Solver {
+    /// Builds the solver for `problem` (validates the options, the model, the objective — a
+    /// [`BendingObjective`](crate::BendingObjective) — and the control map).
+    pub fn new<P: ControlMap, O: Objective>(
+        problem: &ControlProblem<P, O>,
+        options: &OcpOptions,
+    ) -> Result<Self> {
+        let horizon = ControlHorizon::new(problem, options, "the Riccati solver", |_, _| Ok(()))?;
+        let (model, steps) = (&horizon.model, horizon.steps);
+        let nxi = model.nx();
+        let aug = usize::from(options.rate_penalty > 0.0 || horizon.free.iter().any(|f| !f));
+        let nz = nxi + aug;
+        let store = JacobianStore::new(model, options, steps)?;
+        let second = SecondOrderModel::new(model, options, steps, aug)?;
+        Ok(Solver {
+            store,
+            second,
+            qp: QpIterate::new(steps, nz),
+            ip: InteriorPoint::new(steps),
+            riccati: Riccati::new(nxi, aug, steps),
+            gtrue: vec![0.0; steps + 1],
+            prox: 0.0,
+            quu_scale: 1.0,
+            backward_passes: 0,
+            nxi,
+            nz,
+            horizon,
+        })
+    }
+
+    /// Number of parameters θ.
+    pub fn n_params(&self) -> usize {
+        self.horizon.n_params
+    }
+
+    /// Simulates θ (projected onto the box) as the new nominal trajectory and returns J.
+    pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+        let j = self.horizon.set_point(theta);
+        self.store.invalidate();
+        self.second.valid = false;
+        j
+    }
+
+    /// θ of the nominal trajectory.
+    pub fn theta(&self) -> Vec<f64> {
+        self.horizon.theta()
+    }
+
+    /// J of the nominal trajectory.
+    pub fn objective(&self) -> f64 {
+        self.horizon.nominal.cost
+    }
+
+    /// Runs the solver from θ₀ (projected onto the box): Gauss-Newton SQP iterations whose
+    /// box-constrained QP is solved by Riccati-based projected Newton, globalised by closed-loop
+    /// rollouts with backtracking and a proximal (Levenberg) weight (module docs).
+    pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
+        super::globalise::run(self, theta0)
+    }
+
+    /// What the backward pass needs of stage k at the model point δ (the current inner
+    /// iterate: `dv`, `dz`; δ = 0 is the nominal) without its Jacobians: the linearised moment
+    /// M₀ + ∂M₀/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
+    /// gradient. With `with_active`, a control of the ε-active set gets its fixed step.
+    fn stage_input(&self, k: usize, with_active: bool) -> StageInput<'static> {
+        let (hz, qp) = (&self.horizon, &self.qp);
+        let nom = &hz.nominal;
+        let d = nom.dmoment(k, hz.model.moment_scale);
+        let u = nom.u[k] + qp.dv[k];
+        let (lo, hi) = if self.ip.on {
+            (f64::NEG_INFINITY, f64::INFINITY)
+        } else if with_active && qp.active[k] {
+            (qp.fixed[k], qp.fixed[k])
+        } else {
+            (hz.opts.lower - u, hz.opts.upper - u)
+        };
+        let (qs, ls) = if self.ip.on && hz.free[k] {
+            (self.ip.quu[k], self.ip.lu[k])
+        } else {
+            (0.0, 0.0)
+        };
+        StageInput {
+            k,
+            free: hz.free[k],
+            moment: nom.moment[k] + d * qp.dz[k * self.nz],
+            dmoment: d,
+            u,
+            w: if k > 0 {
+                nom.u[k - 1] + qp.dv[k - 1]
+            } else {
+                0.0
+            },
+            lo,
+            hi,
+            lu_shift: if hz.free[k] {
+                self.prox * qp.dv[k] + ls
+            } else {
+                0.0
+            },
+            quu_shift: qs,
+            jac: None,
+            hess: None,
+            curv: 0.0,
+            dz: &[],
+            dv: qp.dv[k],
+        }
+    }
+
+    /// One sweep k = N … 0 over the stages, with the Jacobians computed block by block ahead
+    /// of it: the Riccati recursion (`riccati = true`, proximal weight `self.prox`; returns
+    /// whether every stage QP was bounded) or the costate sweep alone (the gradient into
+    /// `riccati.grad`).
+    pub(super) fn sweep(&mut self, riccati: bool) -> Result<bool> {
+        let (steps, nz, mu) = (self.horizon.steps, self.nz, self.prox);
+        self.riccati.begin();
+        let mut last = self.stage_input(steps, true);
+        self.second.view(&self.qp.dz, steps, nz).attach(&mut last);
+        let cost = &self.horizon.cost;
+        let mut bounded = if riccati {
+            self.backward_passes += 1;
+            self.riccati.stage(&last, cost, mu)
+        } else {
+            self.riccati.costate(&last, cost);
+            true
+        };
+        let mut top = steps;
+        while top > 0 {
+            let bottom = top.saturating_sub(self.store.block);
+            let hz = &self.horizon;
+            self.store.fill(&hz.model, &hz.nominal, bottom..top)?;
+            let h_store = self.second.exact.then_some(&self.second.h[..]);
+            for k in (bottom..top).rev() {
+                let i = k - bottom;
+                if i >= PREFETCH_AHEAD {
+                    self.store
+                        .prefetch(i - PREFETCH_AHEAD, h_store, k - PREFETCH_AHEAD);
+                }
+                let mut inp = self.stage_input(k, true);
+                inp.jac = Some(self.store.stage(i));
+                self.second.view(&self.qp.dz, steps, nz).attach(&mut inp);
+                if riccati {
+                    bounded &= self.riccati.stage(&inp, &self.horizon.cost, mu);
+                } else {
+                    self.riccati.costate(&inp, &self.horizon.cost);
+                }
+            }
+            top = bottom;
+        }
+        if riccati && self.riccati.quu_count > 0 {
+            let m = self.riccati.quu_sum / self.riccati.quu_count as f64;
+            self.quu_scale = if m > 0.0 && m.is_finite() { m } else { 1.0 };
+        }
+        Ok(bounded)
+    }
+
+    /// The exact gradient at the nominal (δ = 0, no active set): the costate sweep.
+    pub(super) fn costate(&mut self) -> Result<()> {
+        self.qp.at_nominal();
+        self.qp.active.fill(false);
+        self.sweep(false).map(|_| ())
+    }
+
+    /// The exact gradient and the costates ν_k at the nominal by one reverse step per stage
+    /// ([`SecondOrderModel::costates`]), for the exact model.
+    pub(super) fn costate_by_reverse_steps(&mut self) -> Result<()> {
+        self.qp.at_nominal();
+        self.qp.active.fill(false);
+        self.second.costates(&self.horizon, &mut self.riccati.grad)
+    }
+
+    /// H_k and the Jacobians of every stage at the nominal, and the cost's curvature
+    /// ([`SecondOrderModel::compute`]); needs the costates of
+    /// [`Solver::costate_by_reverse_steps`].
+    pub(super) fn hessians(&mut self) -> Result<()> {
+        self.second.compute(&self.horizon, &mut self.store)
+    }
+
+    /// ∂J/∂θ from the per-stage gradient of the last costate sweep.
+    pub(super) fn theta_gradient(&self) -> Vec<f64> {
+        self.horizon
+            .theta_stage
+            .iter()
+            .map(|&k| self.riccati.grad[k])
+            .collect()
+    }
+
+    /// ‖θ − Π_box(θ − g)‖₂ at the model point with the gradient of the last costate sweep.
+    pub(super) fn projected_norm(&self) -> f64 {
+        let hz = &self.horizon;
+        let (lo, hi) = (hz.opts.lower, hz.opts.upper);
+        hz.theta_stage
+            .iter()
+            .map(|&k| {
+                let (t, g) = (hz.nominal.u[k] + self.qp.dv[k], self.riccati.grad[k]);
+                let d = boxqp::projected_component(t, g, lo, hi);
+                d * d
+            })
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    /// The step: the box-constrained QP of the Gauss-Newton model, solved to a relative
+    /// accuracy η = min(0.1, √(‖pg‖/‖g₀‖)) (inexact Newton with a vanishing forcing term);
+    /// without every Jacobian in memory, one Riccati pass on the ε-active set. Raises μ until
+    /// the model is solvable; returns the predicted change ΔJ(α), or `None` with μ beyond its
+    /// limit.
+    fn model_step(&mut self, pr: &mut Progress, pg: f64, gref: f64) -> Result<Option<ModelChange>> {
+        let opts = self.horizon.opts.clone();
+        let (lo, hi) = (opts.lower, opts.upper);
+        let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
+        let jbar = self.horizon.nominal.cost;
+        let steps = self.horizon.steps;
+        loop {
+            self.prox = pr.mu * self.quu_scale;
+            if self.store.holds_all(steps) {
+                let eta = (pg / gref).sqrt().min(0.1);
+                let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
+                let tol = (eta * pg).max(0.1 * target);
+                let q = match self.warm_qp(tol)? {
+                    Some(q) => Some(q),
+                    None => self.solve_qp(tol)?,
+                };
+                if let Some(q) = q {
+                    let a: f64 = (0..=steps)
+                        .filter(|&k| self.horizon.free[k])
+                        .map(|k| self.gtrue[k] * self.qp.dv[k])
+                        .sum();
+                    return Ok(Some(ModelChange {
+                        d1: a,
+                        d2: (q - jbar) - a,
+                    }));
+                }
+            } else {
+                let eps = (1e-3 * width).min(pg);
+                self.qp.set_active(&self.horizon, &self.riccati.grad, eps);
+                if self.sweep(true)? {
+                    self.qp.ff.copy_from_slice(&self.riccati.ff);
+                    return Ok(Some(ModelChange {
+                        d1: self.riccati.d1,
+                        d2: self.riccati.d2,
+                    }));
+                }
+            }
+            pr.mu = raise_mu(pr.mu);
+            if pr.mu > opts.max_regularisation {
+                return Ok(None);
+            }
+        }
+    }
+}
+
+impl Outer for Solver {
+    fn begin(&mut self) {
+        self.horizon.rollouts = 0;
+        self.store.passes = 0;
+        self.backward_passes = 0;
+        self.second.begin(self.horizon.opts.curvature);
+    }
+
+    fn horizon(&self) -> &ControlHorizon {
+        &self.horizon
+    }
+
+    fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+        Solver::set_point(self, theta)
+    }
+
+    /// The exact gradient at the nominal (costate sweep); with the exact model by reverse
+    /// steps, whose H_k pass then computes the Jacobians too.
+    fn linearise(&mut self) -> Result<f64> {
+        if self.second.on {
+            self.costate_by_reverse_steps()?;
+        } else {
+            self.costate()?;
+        }
+        Ok(self.projected_norm())
+    }
+
+    fn gradient(&self) -> &[f64] {
+        &self.riccati.grad
+    }
+
+    /// The model step and its closed-loop line search; the curvature of the next iterations
+    /// follows how well the model predicted this one.
+    fn step(&mut self, pr: &mut Progress, pg: f64, gref: f64) -> Result<Step> {
+        self.gtrue.copy_from_slice(&self.riccati.grad);
+        self.second.exact = self.second.on;
+        if self.second.exact && !self.second.valid {
+            self.hessians()?;
+        }
+        let jbar = self.horizon.nominal.cost;
+        let Some(model) = self.model_step(pr, pg, gref)? else {
+            return Ok(Step::NoModel);
+        };
+        let opts = &self.horizon.opts;
+        let curvature = opts.curvature;
+        let search = LineSearch {
+            jbar,
+            j0: pr.j0,
+            model,
+            armijo: opts.armijo,
+            tries: opts.backtracks,
+        };
+        let (hz, gain, ff, nz) = (&mut self.horizon, &self.riccati.gain, &self.qp.ff, self.nz);
+        let trial = |alpha| {
+            hz.closed_loop_trial(gain, ff, alpha, nz)
+                .then_some(hz.trial.cost)
+        };
+        Ok(match backtrack(search, trial) {
+            Some(acc) => {
+                self.second
+                    .switch(curvature, acc.alpha >= 1.0 && acc.ratio >= 0.5);
+                Step::Accepted(acc)
+            }
+            None => {
+                self.second.switch(curvature, false);
+                Step::Rejected
+            }
+        })
+    }
+
+    fn take_step(&mut self) {
+        self.horizon.take_trial();
+        self.store.invalidate();
+        self.second.valid = false;
+    }
+
+    /// Steps below J's round-off stopped lowering the projected gradient: converged if the
+    /// swept gradient meets the tolerance.
+    fn stalled(&mut self, target: f64) -> Result<Termination> {
+        self.costate()?;
+        Ok(if self.projected_norm() <= target {
+            Termination::Converged
+        } else {
+            Termination::RoundOff
+        })
+    }
+
+    /// The result at the final nominal.
+    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
+        // The true gradient at the final nominal (the QP iterations overwrite the costates).
+        let stale = termination == Termination::Budget;
+        if termination == Termination::RegularisationLimit || stale {
+            self.riccati.grad.copy_from_slice(&self.gtrue);
+        }
+        self.qp.at_nominal();
+        let theta = self.theta();
+        let g = self.theta_gradient();
+        let gn = g.iter().map(|x| x * x).sum::<f64>().sqrt();
+        // With the budget spent (no final gradient), the measure of the last evaluation.
+        let pg = if stale {
+            pr.last_pg
+        } else {
+            self.projected_norm()
+        };
+        let hz = &self.horizon;
+        let (lo, hi) = (hz.opts.lower, hz.opts.upper);
+        let active_bounds = theta
+            .iter()
+            .enumerate()
+            .filter(|(_, &t)| t <= lo || t >= hi)
+            .map(|(i, _)| i)
+            .collect();
+        OcpResult {
+            objective: hz.nominal.cost,
+            initial_objective: pr.j0,
+            controls: hz.nominal.u.clone(),
+            theta,
+            gradient_norm: gn,
+            projected_gradient_norm: pg,
+            initial_gradient_norm: pr.g0.unwrap_or(gn),
+            active_bounds,
+            iterations: pr.iterations,
+            rollouts: hz.rollouts,
+            jacobian_passes: self.store.passes,
+            backward_passes: self.backward_passes,
+            seconds: t0.elapsed().as_secs_f64(),
+            converged: termination == Termination::Converged,
+            termination,
+            history: pr.history,
+        }
+    }
+}

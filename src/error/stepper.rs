@@ -42,4 +42,11 @@ pub enum StepperError {
         "invalid argument `control`: the comparison integrators support a constant control only"
     )]
     NonConstantControl,
+    /// The method's step does not end with the control's half-kick
+    /// ([`crate::steppers::Stepper::control_kick`]): only RATTLE's does.
+    #[error("invalid argument `method`: {method} has no closing control half-kick; use RATTLE")]
+    ControlKickUnsupported {
+        /// The method's type.
+        method: &'static str,
+    },
 }

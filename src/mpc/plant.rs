@@ -1,10 +1,13 @@
-//! The plant: a scene simulated interval by interval by RATTLE with the control the loop applies.
+//! The plant: a scene simulated interval by interval by RATTLE with the control the loop applies,
+//! stepped through the [`Stepper`] trait (its steps, its restart from a stored state and its
+//! closing control half-kick).
 
 use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::Scene;
 use crate::steppers::rattle::{Rattle, State};
+use crate::steppers::Stepper;
 
 /// The true system of a closed loop: the planar RATTLE map (thesis eq. 1.6.1) of a scene, from
 /// the straight beam at rest at t = 0, advanced step by step with the control force u_k at the
@@ -30,14 +33,14 @@ use crate::steppers::rattle::{Rattle, State};
 /// where p̂_k, the momentum of the step into t_k taken with zero control in its second
 /// half-kick, does not depend on u_k. [`Plant::state_before_kick`] is (q_k, p̂_k), computed as
 /// p̂_k = p_k + (h/2) u P(q_k) b from the state and the control u its step took
-/// ([`crate::Rattle::control_half_kick`]); a controller that plans from it with the kick
+/// ([`Stepper::control_kick`]); a controller that plans from it with the kick
 /// pending ([`crate::ControlProblem::starting_before_kick`]) lets its first force act on both
 /// sides of t_k exactly as the plant then applies it. At k = 0 there is no step into t₀ (the
 /// beam is at rest, p_0 = 0 whatever u_0) and there is no such state; nor for a reaction-force
 /// tip, whose control is not a force term.
 #[derive(Clone, Debug)]
 pub struct Plant<D: Scalar> {
-    rattle: Rattle<D, 2>,
+    stepper: Rattle<D, 2>,
     state: State<D, 2>,
     /// The state at t_{k−1}, from which the last step is re-taken.
     prev: State<D, 2>,
@@ -64,22 +67,20 @@ impl<D: Scalar> Plant<D> {
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }
-        let rattle = Rattle::new(chain.lift::<D>(), scene.time.step)?;
-        let state = rattle.straight_state();
-        let mut plant = Plant {
+        let mut stepper = Rattle::new(chain.lift::<D>(), scene.time.step)?;
+        let state = stepper.initial_state(D::zero())?;
+        Ok(Plant {
             prev: state.clone(),
             before_kick: state.clone(),
             state,
-            rattle,
+            stepper,
             k: 0,
             steps: scene.time.steps,
             u: D::zero(),
             u_prev: D::zero(),
             velocity: vec![[D::zero(); 2]; scene.n()],
             before_kick_at: None,
-        };
-        plant.rattle.prepare(&mut plant.state, 0, D::zero())?;
-        Ok(plant)
+        })
     }
 
     /// The current step index k.
@@ -94,12 +95,12 @@ impl<D: Scalar> Plant<D> {
 
     /// The step h.
     pub fn h(&self) -> f64 {
-        self.rattle.h()
+        Stepper::h(&self.stepper)
     }
 
     /// t_k = k h.
     pub fn time(&self) -> f64 {
-        self.k as f64 * self.rattle.h()
+        self.k as f64 * self.h()
     }
 
     /// The state at t_k.
@@ -133,8 +134,7 @@ impl<D: Scalar> Plant<D> {
             (h, m) => h.clone_from(m),
         }
         let p = &mut self.before_kick.p;
-        self.rattle
-            .control_half_kick(&self.state.q, (self.u, D::zero()), p)?;
+        self.stepper.control_kick(&self.state, self.u, p)?;
         for (ph, pk) in p.iter_mut().zip(&self.state.p) {
             // p̂ = p_k − (−(h/2) u P(q_k) b)
             *ph = [pk[0] - ph[0], pk[1] - ph[1]];
@@ -153,7 +153,7 @@ impl<D: Scalar> Plant<D> {
 
     /// The model.
     pub fn chain(&self) -> &Chain<D, 2> {
-        self.rattle.chain()
+        Stepper::chain(&self.stepper)
     }
 
     /// The control u_k applied at t_k.
@@ -168,7 +168,7 @@ impl<D: Scalar> Plant<D> {
 
     /// Its rate Ṁ₀ = 2 k₁ ż₁ / l₁² with q̇ = M⁻¹p (M₀ is linear in z₁).
     pub fn moment_rate(&mut self) -> D {
-        let ch = self.rattle.chain();
+        let ch = Stepper::chain(&self.stepper);
         ch.apply_inverse_mass(&self.state.p, &mut self.velocity);
         ch.base_moment(&self.velocity)
     }
@@ -193,8 +193,8 @@ impl<D: Scalar> Plant<D> {
         }
         self.u = u;
         if self.k == 0 {
-            self.state = self.rattle.straight_state();
-            self.rattle.prepare(&mut self.state, 0, u)
+            self.state = self.stepper.initial_state(u)?;
+            Ok(())
         } else {
             self.retake()
         }
@@ -204,8 +204,8 @@ impl<D: Scalar> Plant<D> {
     fn retake(&mut self) -> Result<()> {
         let k = self.k - 1;
         self.state.clone_from(&self.prev);
-        self.rattle.prepare_force(&self.state, k, self.u_prev)?;
-        self.rattle.step(&mut self.state, k, self.u_prev, self.u)?;
+        self.stepper.resume(&self.state, k, self.u_prev)?;
+        Stepper::step(&mut self.stepper, &mut self.state, k, self.u_prev, self.u)?;
         Ok(())
     }
 
@@ -221,7 +221,7 @@ impl<D: Scalar> Plant<D> {
             });
         }
         self.prev.clone_from(&self.state);
-        self.rattle.step(&mut self.state, self.k, self.u, self.u)?;
+        Stepper::step(&mut self.stepper, &mut self.state, self.k, self.u, self.u)?;
         self.u_prev = self.u;
         self.k += 1;
         Ok(())

@@ -71,6 +71,35 @@ pub trait Stepper<D: Scalar, const DIM: usize> {
 
     /// The momenta pᵢ of a state.
     fn p<'s>(&self, state: &'s Self::State) -> &'s [[D; DIM]];
+
+    /// Makes `state`, a state of this method at t_k restored by the caller, the start of the
+    /// next step with the control u_k: what a method carries from one step to the next besides
+    /// the state (RATTLE: the force U_q(q_k; u_k)) is recomputed from it, so that a step
+    /// re-taken from a stored state repeats bit for bit the step first taken from it. Methods
+    /// that carry nothing keep this default.
+    ///
+    /// # Errors
+    /// The force's errors.
+    fn resume(&mut self, state: &Self::State, k: usize, u_k: D) -> Result<()> {
+        let _ = (state, k, u_k);
+        Ok(())
+    }
+
+    /// The control's half-kick at the attitudes of `state`: the part of a step's p_{k+1} that
+    /// the control u_{k+1} = `u` contributes, −(h/2) P(q) u ∂U_q/∂u with the projection
+    /// P(q) = I − Ĝᵀ(Ĝ M⁻¹ Ĝᵀ)⁻¹ Ĝ M⁻¹ (eq. 3.1.1's control direction), into `out` (n blocks).
+    /// For a method whose step ends with such a kick (RATTLE: [`Rattle::control_half_kick`]).
+    ///
+    /// # Errors
+    /// [`StepperError::ControlKickUnsupported`] for a method without one (the default); the
+    /// method's own errors.
+    fn control_kick(&mut self, state: &Self::State, u: D, out: &mut [[D; DIM]]) -> Result<()> {
+        let _ = (state, u, out);
+        Err(StepperError::ControlKickUnsupported {
+            method: std::any::type_name::<Self>(),
+        }
+        .into())
+    }
 }
 
 /// The typed error of a zero pivot met at step `step`.

@@ -553,6 +553,14 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Rattle<D, DIM> {
     fn p<'s>(&self, state: &'s State<D, DIM>) -> &'s [[D; DIM]] {
         &state.p
     }
+
+    fn resume(&mut self, state: &State<D, DIM>, k: usize, u_k: D) -> Result<()> {
+        self.prepare_force(state, k, u_k)
+    }
+
+    fn control_kick(&mut self, state: &State<D, DIM>, u: D, out: &mut [[D; DIM]]) -> Result<()> {
+        self.control_half_kick(&state.q, (u, D::zero()), out)
+    }
 }
 
 /// `out` = the real parts of `x` (no derivative parts).

@@ -61,6 +61,10 @@ pub enum Parameter {
     /// The `speed` of the current's profile (`[loads.current]`: uniform, linear or power law;
     /// a table has none).
     CurrentSpeed,
+    /// The top tension T \[N\] at the tip (`[loads] tension`).
+    Tension,
+    /// The axial (submerged) weight w \[N/m\] (`[loads] axial_weight`).
+    AxialWeight,
 }
 
 /// Statistics of one step.

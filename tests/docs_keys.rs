@@ -173,7 +173,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 36, "number of documented keys");
+    assert_eq!(checked, 38, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -191,6 +191,8 @@ fn every_documented_key_is_read() {
         ("beam", "reaction_force", "true"),
         ("loads", "gravity", "2.0"),
         ("loads", "drag", "3.0"),
+        ("loads", "tension", "50.0"),
+        ("loads", "axial_weight", "4.0"),
         ("loads.point", "node", "3"),
         ("loads.point", "force", "4.0"),
         ("loads.point", "start", "0.5"),

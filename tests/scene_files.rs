@@ -55,6 +55,7 @@ fn spec_scene() -> Scene {
             drag: 0.0,
             points: vec![PointLoad::new(5, 2.0)],
             current: None,
+            ..Loads::default()
         },
         time: TimeGrid {
             step: 0.01,

@@ -54,6 +54,8 @@ fn all_terms_scene(spatial: bool) -> Scene {
         .base_stiffness(2100.0)
         .tip_stiffness(1700.0)
         .gravity(9.81)
+        .tension(350.0)
+        .axial_weight(40.0)
         .drag(10.0)
         .point_load_vector(3, [0.5 * x, 2.0])
         .point_load_window(6, -1.5, 0.0, 5.0)
@@ -212,6 +214,8 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
             (Parameter::BaseStiffness, 2100.0),
             (Parameter::TipStiffness, 1700.0),
             (Parameter::Mass, 1.0),
+            (Parameter::Tension, 350.0),
+            (Parameter::AxialWeight, 40.0),
             (Parameter::LoadForce(0), 2.0),
             (Parameter::LoadForceX(0), 0.5),
             (Parameter::LoadForce(1), -1.5),
@@ -314,7 +318,14 @@ fn check_all_terms<D: Scalar, const DIM: usize>() {
     chain.visit_terms(&mut check).unwrap();
     assert_eq!(
         check.checked,
-        ["springs", "point loads", "gravity", "control"],
+        [
+            "springs",
+            "point loads",
+            "gravity",
+            "tension",
+            "axial_weight",
+            "control"
+        ],
         "every conservative term of the scene was checked"
     );
 }

@@ -146,6 +146,8 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         }
         Parameter::LoadPhase { load, harmonic } => s.loads.points[load].harmonics[harmonic].phase,
         Parameter::CurrentSpeed => s.loads.current.as_ref().and_then(|c| c.speed()).unwrap(),
+        Parameter::Tension => s.loads.tension,
+        Parameter::AxialWeight => s.loads.axial_weight,
     }
 }
 
@@ -593,6 +595,35 @@ fn gravity_windowed_loads_and_non_uniform_chains() {
             Parameter::LoadForce(0),
             Parameter::LoadForce(1),
             Parameter::LoadForce(2),
+        ],
+    );
+
+    // Axial loads (`[loads] tension`, `axial_weight`): their parameter gradients.
+    let tensioned = Scene::builder(6)
+        .lengths(vec![0.8, 1.2, 1.0, 0.9, 1.1, 1.3])
+        .mass(1.1)
+        .stiffness(40.0)
+        .base_stiffness(80.0)
+        .tip_stiffness(60.0)
+        .support(Support::Riser)
+        .tension(300.0)
+        .axial_weight(25.0)
+        .drag(5.0)
+        .point_load(4, 30.0)
+        .control_per_step(6, per_step(steps, 3.0))
+        .steps(steps)
+        .build()
+        .unwrap();
+    check_scene(
+        "riser, tension and axial weight, drag",
+        &tensioned,
+        &BendingObjective::summed_moment(),
+        &[
+            Parameter::Tension,
+            Parameter::AxialWeight,
+            Parameter::InteriorStiffness,
+            Parameter::Mass,
+            Parameter::Drag,
         ],
     );
 

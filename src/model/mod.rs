@@ -19,9 +19,9 @@ pub mod terms;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    ControlForce, Ctx, CurrentDrag, Dissipation, DissipativeTerm, Drag, DualScratch, Embed,
-    ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads, ReactionTip, ReactionTipBar, Springs,
-    TermVisitor,
+    AxialWeight, ControlForce, Ctx, CurrentDrag, Dissipation, DissipativeTerm, Drag, DualScratch,
+    Embed, ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads, ReactionTip, ReactionTipBar,
+    Springs, TermVisitor, TopTension,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -45,6 +45,10 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) springs: Springs<D>,
     pub(crate) loads: Option<PointLoads<D>>,
     pub(crate) gravity: Option<Gravity<D>>,
+    /// The top tension along +y at the tip (`[loads] tension`).
+    pub(crate) tension: Option<TopTension<D>>,
+    /// The axial weight along −y on every node (`[loads] axial_weight`).
+    pub(crate) axial_weight: Option<AxialWeight<D>>,
     pub(crate) control: Option<ControlForce<D>>,
     /// The x components u_{x,0..N} of a 2-axis control, indexed by step (empty: a 1-axis control
     /// along z, u_x = 0). Read into [`Ctx::ux`] by [`Chain::ctx`].
@@ -196,6 +200,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 lengths: lengths.clone(),
                 masses: masses.clone(),
             }),
+            tension: (scene.loads.tension != 0.0).then(|| TopTension {
+                tension: D::from(scene.loads.tension),
+                lengths: lengths.clone(),
+            }),
+            axial_weight: (scene.loads.axial_weight != 0.0).then(|| AxialWeight {
+                weight: D::from(scene.loads.axial_weight),
+                lengths: lengths.clone(),
+            }),
             control: control_node.map(|node| ControlForce {
                 node,
                 lengths: lengths.clone(),
@@ -267,6 +279,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             springs: self.springs.lift(),
             loads: self.loads.as_ref().map(|t| t.lift()),
             gravity: self.gravity.as_ref().map(|t| t.lift()),
+            tension: self.tension.as_ref().map(|t| t.lift()),
+            axial_weight: self.axial_weight.as_ref().map(|t| t.lift()),
             control: self.control.as_ref().map(|t| t.lift()),
             control_x: self.control_x.iter().map(|x| D2::from(x.re())).collect(),
             drag: self.drag.as_ref().map(|t| t.lift()),
@@ -282,6 +296,12 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             v.visit(t)?;
         }
         if let Some(t) = &self.gravity {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.tension {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.axial_weight {
             v.visit(t)?;
         }
         if let Some(t) = &self.control {
@@ -464,6 +484,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 (None, Some(c)) => c.d = value,
                 (None, None) => return Err(missing(p, "the scene has no drag (D = 0)")),
             },
+            Parameter::Tension => match &mut self.tension {
+                Some(t) => t.tension = value,
+                None => return Err(missing(p, "the scene has no tension (T = 0)")),
+            },
+            Parameter::AxialWeight => match &mut self.axial_weight {
+                Some(t) => t.weight = value,
+                None => return Err(missing(p, "the scene has no axial weight (w = 0)")),
+            },
             Parameter::CurrentSpeed => match &mut self.current {
                 Some(c) if c.has_parameter(p) => c.speed = value,
                 Some(_) => return Err(missing(p, "a table profile has no single speed")),
@@ -509,6 +537,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::BaseStiffness => self.springs.present[0],
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,
+            Parameter::Tension => self.tension.is_some(),
+            Parameter::AxialWeight => self.axial_weight.is_some(),
             Parameter::LoadForce(_)
             | Parameter::LoadForceX(_)
             | Parameter::LoadAmplitude { .. }

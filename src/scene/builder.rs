@@ -131,6 +131,18 @@ impl SceneBuilder {
         self
     }
 
+    /// Top tension T \[N\] along +y at the tip (`[loads] tension`).
+    pub fn tension(mut self, t: f64) -> Self {
+        self.loads.tension = t;
+        self
+    }
+
+    /// Axial weight w \[N/m\] along −y on every node (`[loads] axial_weight`).
+    pub fn axial_weight(mut self, w: f64) -> Self {
+        self.loads.axial_weight = w;
+        self
+    }
+
     /// Drag constant D \[kg/m\].
     pub fn drag(mut self, d: f64) -> Self {
         self.loads.drag = d;

@@ -40,9 +40,9 @@ pub use input::{
 };
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
-    human_bytes, ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,
-    LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES,
-    PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
+    GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER,
+    MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, trajectory_bytes};
 
@@ -215,6 +215,12 @@ pub struct Loads {
     pub gravity: f64,
     /// Drag constant D \[kg/m\] of F_D(p) = −D p ⊙ |p| (eq. 2.4.4); 0 means no drag is computed.
     pub drag: f64,
+    /// Top tension T \[N\] along +y at the tip (`tension`; docs/conventions.md "Axial loads");
+    /// 0 means no tension term is computed.
+    pub tension: f64,
+    /// Axial (submerged) weight w \[N/m\] along −y on every node (`axial_weight`, lumped as the
+    /// masses: half a cell at the tip); 0 means no axial-weight term is computed.
+    pub axial_weight: f64,
     /// Point loads.
     pub points: Vec<PointLoad>,
     /// A steady current along the depth (`[loads.current]`); with it the drag acts on the

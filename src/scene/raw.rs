@@ -67,6 +67,10 @@ struct RawLoads {
     gravity: f64,
     #[serde(default)]
     drag: f64,
+    #[serde(default, skip_serializing_if = "is_positive_zero")]
+    tension: f64,
+    #[serde(default, skip_serializing_if = "is_positive_zero")]
+    axial_weight: f64,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     point: Vec<RawPoint>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -313,6 +317,8 @@ impl RawScene {
             loads: Some(RawLoads {
                 gravity: s.loads.gravity,
                 drag: s.loads.drag,
+                tension: s.loads.tension,
+                axial_weight: s.loads.axial_weight,
                 point: s.loads.points.iter().map(RawPoint::from_load).collect(),
                 current: s.loads.current.as_ref().map(RawCurrent::from_current),
             }),
@@ -369,6 +375,8 @@ impl RawScene {
             loads: Loads {
                 gravity: raw_loads.gravity,
                 drag: raw_loads.drag,
+                tension: raw_loads.tension,
+                axial_weight: raw_loads.axial_weight,
                 points,
                 current: raw_loads
                     .current

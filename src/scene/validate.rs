@@ -76,6 +76,13 @@ pub const GRAVITY_RANGE: ValueRange = ValueRange {
     unit: "m/s²",
     why: "g·m·l enters the generalised force",
 };
+/// Axial weight w \[N/m\] (`loads.axial_weight`): |w| ≤ 10¹² N/m.
+pub const AXIAL_WEIGHT_RANGE: ValueRange = ValueRange {
+    min: -1e12,
+    max: 1e12,
+    unit: "N/m",
+    why: "w·l² enters the generalised force",
+};
 /// Drag constant D \[kg/m\]: 0 to 10¹².
 pub const DRAG_RANGE: ValueRange = ValueRange {
     min: 0.0,
@@ -173,6 +180,14 @@ impl Scene {
         }
         check_finite("loads.gravity", self.loads.gravity)?;
         check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
+        check_finite("loads.tension", self.loads.tension)?;
+        check_range("loads.tension", self.loads.tension, &FORCE_RANGE)?;
+        check_finite("loads.axial_weight", self.loads.axial_weight)?;
+        check_range(
+            "loads.axial_weight",
+            self.loads.axial_weight,
+            &AXIAL_WEIGHT_RANGE,
+        )?;
         check_nonnegative("loads.drag", self.loads.drag)?;
         check_range("loads.drag", self.loads.drag, &DRAG_RANGE)?;
         for (i, p) in self.loads.points.iter().enumerate() {

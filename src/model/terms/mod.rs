@@ -28,6 +28,7 @@
 //! "Adding a force term", lists every place. Every integrator, the adjoint, the statics and the
 //! Hessian-vector products then see it with all its derivatives.
 
+mod axial;
 mod control;
 mod current;
 mod drag;
@@ -37,6 +38,7 @@ mod reaction_tip;
 mod spring;
 
 pub use crate::scene::current_velocity;
+pub use axial::{AxialWeight, TopTension};
 pub use control::ControlForce;
 pub use current::CurrentDrag;
 pub use drag::Drag;

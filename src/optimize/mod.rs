@@ -150,6 +150,7 @@
 //! (Alg. 7.1). F. James, M. Roos, MINUIT, CERN (the sine transformation for bounded parameters).
 
 pub mod adapter;
+pub mod any;
 pub mod bounds;
 pub mod observers;
 mod point;
@@ -169,6 +170,7 @@ pub use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::KV;
 
 pub use adapter::{ArgminAdapter, EvalCounts, HessianOperator};
+pub use any::{scene_start, AnyProblem, SpatialProblem, Values, RICCATI_PLANAR};
 pub use bounds::{Bounds, ACTIVE_BOUND_TOL};
 pub use observers::{History, ObservedState, ProgressObserver, Record};
 pub use polish::POLISH_COST_TOL;

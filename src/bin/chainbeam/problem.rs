@@ -7,11 +7,8 @@ use std::path::Path;
 use clap::Args;
 use serde::Serialize;
 
-use chainbeam::ocp::{OcpOptions, OcpResult};
-use chainbeam::optimize::{HessianVec, OptimProblem};
 use chainbeam::{
-    BendingObjective, ControlMap, ControlProblem, ObjectiveKind, Parametrisation, PiecewiseControl,
-    Scene,
+    BendingObjective, ControlMap, ObjectiveKind, Parametrisation, PiecewiseControl, Scene,
 };
 
 use crate::controls_io::ControlsFile;
@@ -31,150 +28,9 @@ pub struct ProblemArgs {
     pub effort: Option<f64>,
 }
 
-/// The spatial control problem (`DIM = 3`), with a control along z or a 2-axis control.
-pub type SpatialProblem = ControlProblem<Parametrisation, BendingObjective, 3>;
-
-/// A control problem in the model its scene needs: "model no more than a scene needs".
-pub enum AnyProblem {
-    /// Every force lies in the yz-plane: the planar model (`DIM = 2`), as in the thesis.
-    Planar(ControlProblem),
-    /// A load, the current or the control has an x component (or the controls are 2-axis): the
-    /// spatial model (`DIM = 3`).
-    Spatial(SpatialProblem),
-}
-
-impl AnyProblem {
-    /// The planar problem, unless the scene needs the spatial model ([`Scene::spatial_key`]) or
-    /// the control is 2-axis (`two_axis`: θ = (θ_x; θ_z), 2m parameters for a map of m).
-    pub fn new(
-        scene: &Scene,
-        map: Parametrisation,
-        objective: BendingObjective,
-        two_axis: bool,
-    ) -> chainbeam::Result<Self> {
-        Ok(if two_axis || scene.spatial_key().is_some() {
-            AnyProblem::Spatial(ControlProblem::spatial(scene, map, objective, two_axis)?)
-        } else {
-            AnyProblem::Planar(ControlProblem::new(scene, map, objective)?)
-        })
-    }
-
-    /// The parametrisation (of each component, for a 2-axis control).
-    pub fn map(&self) -> &Parametrisation {
-        match self {
-            AnyProblem::Planar(p) => p.map(),
-            AnyProblem::Spatial(p) => p.map(),
-        }
-    }
-
-    /// Whether the control is 2-axis (θ = (θ_x; θ_z)).
-    pub fn is_two_axis(&self) -> bool {
-        matches!(self, AnyProblem::Spatial(p) if p.is_two_axis())
-    }
-
-    /// The model's name in the JSON (`model`): "planar" or "spatial".
-    pub fn model_name(&self) -> &'static str {
-        match self {
-            AnyProblem::Planar(_) => "planar",
-            AnyProblem::Spatial(_) => "spatial",
-        }
-    }
-
-    /// θ (or a gradient with respect to θ) as the JSON reports it: laid out as `control.values`,
-    /// numbers, or pairs [x, z] for a 2-axis control.
-    pub fn layout(&self, theta: &[f64]) -> Values {
-        if !self.is_two_axis() {
-            return Values::Numbers(theta.to_vec());
-        }
-        let (x, z) = theta.split_at(theta.len() / 2);
-        Values::Pairs(x.iter().zip(z).map(|(a, b)| [*a, *b]).collect())
-    }
-
-    /// The problem as the optimisers see it.
-    fn optim(&self) -> &(dyn OptimProblem + Sync) {
-        match self {
-            AnyProblem::Planar(p) => p,
-            AnyProblem::Spatial(p) => p,
-        }
-    }
-}
-
-/// The optimisers' view: every method delegates to the planar or spatial problem, except the
-/// Riccati solver, which is planar only and refuses the spatial problem with a message that says
-/// so.
-impl OptimProblem for AnyProblem {
-    fn n_params(&self) -> usize {
-        self.optim().n_params()
-    }
-    fn value(&self, theta: &[f64]) -> chainbeam::Result<f64> {
-        self.optim().value(theta)
-    }
-    fn value_and_gradient(&self, theta: &[f64]) -> chainbeam::Result<(f64, Vec<f64>)> {
-        self.optim().value_and_gradient(theta)
-    }
-    fn gradient(&self, theta: &[f64]) -> chainbeam::Result<Vec<f64>> {
-        self.optim().gradient(theta)
-    }
-    fn hessian(&self) -> Option<&dyn HessianVec> {
-        match self {
-            AnyProblem::Planar(p) => Some(p),
-            AnyProblem::Spatial(p) => Some(p),
-        }
-    }
-    fn controls(&self, theta: &[f64]) -> Option<chainbeam::Result<Vec<f64>>> {
-        self.optim().controls(theta)
-    }
-    fn param_scales(&self) -> Vec<f64> {
-        self.optim().param_scales()
-    }
-    fn check_range(&self, theta: &[f64]) -> chainbeam::Result<()> {
-        self.optim().check_range(theta)
-    }
-    fn riccati(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-    ) -> Option<chainbeam::Result<OcpResult>> {
-        match self {
-            AnyProblem::Planar(p) => p.riccati(theta0, options),
-            AnyProblem::Spatial(_) => Some(Err(planar_only())),
-        }
-    }
-    fn condensed(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-    ) -> Option<chainbeam::Result<OcpResult>> {
-        match self {
-            AnyProblem::Planar(p) => p.condensed(theta0, options),
-            AnyProblem::Spatial(_) => Some(Err(planar_only())),
-        }
-    }
-}
-
-/// The refusal of a structured solver on a spatial problem.
-fn planar_only() -> chainbeam::Error {
-    chainbeam::Error::InvalidArgument {
-        name: "method",
-        reason: RICCATI_PLANAR.into(),
-    }
-}
-
-/// Why `--method riccati` (or `condensed`) cannot run a spatial problem.
-pub const RICCATI_PLANAR: &str = "the structured solvers (riccati, condensed) are planar only \
-                                  (their tangent coordinates are those of the yz-plane); use \
-                                  --method lbfgs (the default) or trust-region";
-
-/// Numbers as the JSON reports them: one per value, or pairs [x, z] of a 2-axis control (the
-/// layout of a scene file's `control.values`).
-#[derive(Serialize)]
-#[serde(untagged)]
-pub enum Values {
-    /// One number per value (a control along z).
-    Numbers(Vec<f64>),
-    /// One pair [x component, z component] per value (a 2-axis control).
-    Pairs(Vec<[f64; 2]>),
-}
+/// The problem in the model the scene needs, its Riccati refusal and the JSON layout of θ live in
+/// the library (shared with the Python bindings).
+pub use chainbeam::optimize::{AnyProblem, Values, RICCATI_PLANAR};
 
 /// The control problem of a scene and the parameters θ₀ to evaluate it at (or start from).
 pub struct SceneProblem {
@@ -246,30 +102,7 @@ fn scene_parametrisation(
     path: &Path,
     scene: &Scene,
 ) -> Result<(Parametrisation, Vec<f64>), CliError> {
-    let map = if scene.spatial_key().is_some() {
-        *ControlProblem::spatial_from_scene(scene)
-            .map_err(|e| lib_error(path, e))?
-            .map()
-    } else {
-        *ControlProblem::from_scene(scene)
-            .map_err(|e| lib_error(path, e))?
-            .map()
-    };
-    let (values, values_x) = match &scene.control {
-        Some(c) => (c.values.clone(), c.values_x.clone()),
-        None => (vec![0.0], None),
-    };
-    if values.len() != map.n_params() {
-        return Err(CliError::msg(format!(
-            "{}: key `control.values`: expected {} values, got {}",
-            path.display(),
-            map.n_params(),
-            values.len()
-        )));
-    }
-    let mut theta0 = values_x.unwrap_or_default();
-    theta0.extend(values);
-    Ok((map, theta0))
+    chainbeam::optimize::scene_start(scene).map_err(|e| lib_error(path, e))
 }
 
 /// θ of a piecewise control whose pieces hold the means of `u` over them.

@@ -1,0 +1,67 @@
+"""chainbeam: a differentiable simulator of slender beams as a chain of rigid pendulums
+(RATTLE, exact discrete adjoint, optimal control, MPC), from Python.
+
+Quickstart::
+
+    import chainbeam as cb
+    scene = cb.Scene.from_file("examples/scenes/riser_5.toml")
+    traj = cb.simulate(scene)                  # traj.t, traj.moment, traj.positions (N+1, n, 3)
+    c, g = cb.gradient(scene)                  # objective and exact adjoint gradient
+    best = cb.optimize(scene)                  # best.controls, best.objective, best.converged
+    drag = scene.replace({"loads.drag": 12.0}) # a changed copy (errors name the key)
+
+Every call runs the Rust library's code (the command line's, bit for bit) with the GIL released:
+two threads simulate at once. Ctrl-C raises ``KeyboardInterrupt`` promptly. Scenes and results
+pickle, so they travel to process pools and clusters; :func:`sweep` runs parameter studies on any
+executor (``ProcessPoolExecutor``, ``dask.distributed.Client``).
+
+Fork safety: the calls that use threads (``optimize`` with ``starts`` > 1 or a structured method,
+``mpc``) start a thread pool of their own per call instead of rayon's global pool, so a process
+forked after such a call (``multiprocessing`` with the ``fork`` start method, a
+``ProcessPoolExecutor`` on Linux) runs them normally (python/tests/test_fork.py).
+
+The fatigue assessment over a scatter diagram (``fatigue(scene, scatter=None, controllers=...,
+executor=None)``) will be bound here once the library's fatigue module exists; it is not yet.
+"""
+
+from __future__ import annotations
+
+from ._api import (
+    MpcResult,
+    OptimizeResult,
+    Trajectory,
+    gradient,
+    mpc,
+    optimize,
+    simulate,
+)
+from ._chainbeam import Scene, __version__
+from ._errors import (
+    ChainbeamError,
+    ConvergenceError,
+    InvalidArgumentError,
+    SceneError,
+    SimulationError,
+    TrajectoryTooLargeError,
+)
+from ._sweep import sweep, to_parquet
+
+__all__ = [
+    "Scene",
+    "simulate",
+    "gradient",
+    "optimize",
+    "mpc",
+    "sweep",
+    "to_parquet",
+    "Trajectory",
+    "OptimizeResult",
+    "MpcResult",
+    "ChainbeamError",
+    "SceneError",
+    "InvalidArgumentError",
+    "SimulationError",
+    "ConvergenceError",
+    "TrajectoryTooLargeError",
+    "__version__",
+]

@@ -1,0 +1,72 @@
+"""Type stubs of the extension module ``chainbeam._chainbeam`` (crates/chainbeam-py); checked
+against the built module by ``python -m mypy.stubtest chainbeam`` (scripts/test-all)."""
+
+from os import PathLike
+from typing import Any, final
+
+import numpy as np
+from numpy.typing import NDArray
+
+__version__: str
+__all__ = ["Scene", "_scene_from_state", "simulate", "gradient", "optimize", "mpc", "__version__"]
+
+@final
+class Scene:
+    """A validated beam scene (the scene file format of docs/scene-format.md)."""
+
+    @staticmethod
+    def from_file(path: str | PathLike[str]) -> Scene: ...
+    @staticmethod
+    def from_toml(text: str, dir: str | PathLike[str] | None = None) -> Scene: ...
+    def to_toml(self) -> str: ...
+    def replace(self, changes: dict[str, Any]) -> Scene: ...
+    @property
+    def n(self) -> int: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def step(self) -> float: ...
+    @property
+    def is_spatial(self) -> bool: ...
+    def __eq__(self, value: object, /) -> bool: ...
+    def __reduce__(self) -> tuple[Any, tuple[str, str | None]]: ...
+
+def _scene_from_state(text: str, dir: str | PathLike[str] | None = None) -> Scene: ...
+def simulate(
+    scene: Scene,
+    controls: NDArray[np.float64] | None = None,
+    controls_x: NDArray[np.float64] | None = None,
+) -> dict[str, NDArray[np.float64]]: ...
+def gradient(
+    scene: Scene,
+    controls: NDArray[np.float64] | None = None,
+    controls_x: NDArray[np.float64] | None = None,
+    effort: float = 0.0,
+) -> tuple[float, NDArray[np.float64], bool]: ...
+def optimize(
+    scene: Scene,
+    method: str = "lbfgs",
+    bound: float | None = None,
+    lower: float | None = None,
+    upper: float | None = None,
+    starts: int = 1,
+    seed: int = 0,
+    max_iters: int | None = None,
+    gtol: float | None = None,
+    effort: float = 0.0,
+    controls: NDArray[np.float64] | None = None,
+    controls_x: NDArray[np.float64] | None = None,
+) -> dict[str, Any]: ...
+def mpc(
+    scene: Scene,
+    model: Scene | None = None,
+    horizon: float = 3.0,
+    interval: float = 0.1,
+    iterations: int = 1,
+    solver: str = "auto",
+    first_iterations: int = 50,
+    bound: float = 5.0,
+    effort: float = 0.01,
+    rate_penalty: float = 0.0,
+    baselines: bool = False,
+) -> dict[str, Any]: ...

@@ -1,0 +1,122 @@
+"""The Python calls equal the command line's outputs bit for bit (reference: `chainbeam
+simulate` CSV, `chainbeam gradient` / `optimize` JSON; their numbers are the shortest decimals
+that read back to the same doubles, so float() recovers every bit)."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import chainbeam as cb
+
+
+def run(cli: str, *args: str, status: int = 0) -> str:
+    p = subprocess.run([cli, "--quiet", *args], capture_output=True, text=True)
+    assert p.returncode == status, p.stderr
+    return p.stdout
+
+
+def bits(a: object) -> np.ndarray:
+    return np.ascontiguousarray(np.asarray(a, dtype=np.float64)).view(np.int64)
+
+
+def read_csv(text: str) -> dict[str, np.ndarray]:
+    rows = list(csv.reader(io.StringIO(text)))
+    header, body = rows[0], rows[1:]
+    cols = np.array([[float(v) for v in r] for r in body])
+    return {h: cols[:, j] for j, h in enumerate(header)}
+
+
+def assert_trajectory_equal(traj: cb.Trajectory, cols: dict[str, np.ndarray]) -> None:
+    n = traj.positions.shape[1]
+    for name in ("t", "energy", "moment", "control"):
+        assert np.array_equal(bits(getattr(traj, name)), bits(cols[name])), name
+    for i in range(n):
+        for c, axis in zip("xyz", range(3)):
+            assert np.array_equal(bits(traj.positions[:, i, axis]), bits(cols[f"{c}{i + 1}"]))
+    if "moment_x" in cols:
+        assert traj.moment_x is not None and traj.control_x is not None
+        assert np.array_equal(bits(traj.moment_x), bits(cols["moment_x"]))
+        assert np.array_equal(bits(traj.control_x), bits(cols["control_x"]))
+    else:
+        assert traj.moment_x is None
+
+
+@pytest.mark.parametrize(
+    "name", ["riser_5.toml", "thesis_cantilever.toml", "oblique_riser.toml", "wave_series.toml"]
+)
+def test_simulate_equals_cli_csv(cli: str, scenes: Path, name: str) -> None:
+    path = scenes / name
+    cols = read_csv(run(cli, "simulate", str(path)))
+    traj = cb.simulate(cb.Scene.from_file(path))
+    assert traj.positions.shape == (len(cols["t"]), traj.positions.shape[1], 3)
+    assert_trajectory_equal(traj, cols)
+
+
+def test_simulate_with_controls_equals_cli(cli: str, scenes: Path, tmp_path: Path) -> None:
+    path = scenes / "riser_5.toml"
+    scene = cb.Scene.from_file(path)
+    u = np.linspace(-3.0, 1.0, scene.steps + 1)
+    f = tmp_path / "u.json"
+    f.write_text(json.dumps({"controls": u.tolist()}))
+    cols = read_csv(run(cli, "simulate", str(path), "--controls", str(f)))
+    assert_trajectory_equal(cb.simulate(scene, u), cols)
+
+
+@pytest.mark.parametrize("name", ["riser_5.toml", "oblique_control.toml"])
+def test_gradient_equals_cli_json(cli: str, scenes: Path, name: str) -> None:
+    path = scenes / name
+    ref = json.loads(run(cli, "gradient", str(path)))
+    c, g = cb.gradient(cb.Scene.from_file(path))
+    assert bits(c) == bits(ref["objective"])
+    assert np.array_equal(bits(g), bits(ref["gradient"]))
+
+
+def test_gradient_with_effort_and_controls_equals_cli(
+    cli: str, scenes: Path, tmp_path: Path
+) -> None:
+    path = scenes / "riser_5.toml"
+    scene = cb.Scene.from_file(path)
+    u = np.cos(np.arange(scene.steps + 1.0))
+    f = tmp_path / "u.json"
+    f.write_text(json.dumps({"controls": u.tolist()}))
+    ref = json.loads(run(cli, "gradient", str(path), "--controls", str(f), "--effort", "0.5"))
+    c, g = cb.gradient(scene, u, effort=0.5)
+    assert bits(c) == bits(ref["objective"])
+    assert np.array_equal(bits(g), bits(ref["gradient"]))
+
+
+def test_optimize_equals_cli_json(cli: str, scenes: Path) -> None:
+    path = scenes / "riser_5.toml"
+    ref = json.loads(run(cli, "optimize", str(path), "--bound", "100"))
+    r = cb.optimize(cb.Scene.from_file(path), bound=100.0)
+    assert r.converged and ref["converged"]
+    assert bits(r.objective) == bits(ref["objective"])
+    assert np.array_equal(bits(r.controls), bits(ref["controls"]))
+    assert r.termination == ref["termination"] and r.iterations == ref["iterations"]
+
+
+def test_optimize_multistart_equals_cli_json(cli: str, scenes: Path) -> None:
+    path = scenes / "riser_7.toml"
+    ref = json.loads(run(cli, "optimize", str(path), "--starts", "4", "--seed", "3"))
+    r = cb.optimize(cb.Scene.from_file(path), starts=4, seed=3)
+    assert bits(r.objective) == bits(ref["objective"])
+    assert np.array_equal(bits(r.controls), bits(ref["controls"]))
+    assert r.minima_found == ref["minima_found"]
+
+
+def test_mpc_equals_cli_csv(cli: str, scenes: Path, tmp_path: Path) -> None:
+    # A short closed loop of the MPC scene (its first 2 s), so the test stays quick.
+    scene = cb.Scene.from_file(scenes / "mpc_riser.toml").replace({"time.steps": 200})
+    path = tmp_path / "short.toml"
+    path.write_text(scene.to_toml())
+    cols = read_csv(run(cli, "mpc", str(path), "--horizon", "1.0"))
+    r = cb.mpc(scene, horizon=1.0)
+    for name in ("t", "moment", "control", "tip"):
+        assert np.array_equal(bits(getattr(r, name)), bits(cols[name])), name

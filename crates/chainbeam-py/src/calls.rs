@@ -252,3 +252,18 @@ pub fn gradient<'py>(
     )?;
     Ok((c, PyArray1::from_vec(py, g), two_axis))
 }
+
+/// Seconds of the library call `chainbeam::simulate(scene)` alone (the trajectory dropped), with
+/// the GIL released: the yardstick of `python/benchmarks/overhead.py`, which compares it with
+/// `chainbeam.simulate` (same compiled code, plus the copies into numpy).
+#[pyfunction]
+pub fn _time_library_simulate(py: Python<'_>, scene: &Scene) -> PyResult<f64> {
+    let s = scene.inner.clone();
+    let (seconds, r) = py.detach(move || {
+        let t0 = std::time::Instant::now();
+        let r = lib_simulate(&s).map(drop);
+        (t0.elapsed().as_secs_f64(), r)
+    });
+    r.map_err(|e| crate::errors::lib(py, e))?;
+    Ok(seconds)
+}

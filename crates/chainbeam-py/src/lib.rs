@@ -26,6 +26,7 @@ fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::_scene_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(calls::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(calls::gradient, m)?)?;
+    m.add_function(wrap_pyfunction!(calls::_time_library_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(optim::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(optim::mpc, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -381,6 +381,52 @@ fn scaled_cantilever_static(n: usize, length: f64, ei: f64, mass: f64) -> Res<Sc
         .build()?)
 }
 
+/// Static tip deflections z_n of the scaled cantilever chain for each n (Newton statics).
+fn static_tips(ns: &[usize], l_total: f64) -> Res<Vec<(usize, f64)>> {
+    let mut tips = Vec::new();
+    for &n in ns {
+        let eq = static_equilibrium(&scaled_cantilever_static(n, l_total, 1000.0, 10.0)?)?;
+        tips.push((n, eq.positions[n - 1][1]));
+    }
+    Ok(tips)
+}
+
+/// The tip's z at 101 equally spaced times of [0, `t_end`] for each n, with h shrinking as n².
+fn dynamic_tips(dyn_ns: &[usize], l_total: f64, t_end: f64) -> Res<Vec<(usize, Vec<f64>)>> {
+    let mut trajs = Vec::new();
+    for &n in dyn_ns {
+        let s = catalogue::scaled_cantilever(n, l_total, 1000.0, 10.0, 2.0);
+        let h = 0.01 * (10.0 / n as f64).powi(2).min(1.0) * 0.25;
+        let tr = simulate(&retime(s, h, t_end))?;
+        let samples: Vec<f64> = (0..=100)
+            .map(|j| {
+                let k = ((j as f64 / 100.0) * tr.steps() as f64).round() as usize;
+                tr.positions(k)[n - 1][2]
+            })
+            .collect();
+        trajs.push((n, samples));
+    }
+    Ok(trajs)
+}
+
+/// The finite-difference Euler-Bernoulli beam's static tip error against eq. 2.4.5, per n.
+fn fd_errors(ns: &[usize], l_total: f64, eb_tip: f64) -> Vec<(f64, f64)> {
+    ns.iter()
+        .filter_map(|&n| {
+            EulerBernoulli::new(
+                n,
+                l_total,
+                1000.0,
+                10.0 / n as f64,
+                EbSupport::Cantilever,
+                &[(n, 2.0)],
+            )
+            .ok()
+            .map(|b| (n as f64, (b.static_solution()[n] - eb_tip).abs()))
+        })
+        .collect()
+}
+
 fn convergence(ctx: &Ctx) -> Res<Made> {
     let ns: Vec<usize> = if ctx.quick {
         vec![5, 10, 20]
@@ -390,11 +436,7 @@ fn convergence(ctx: &Ctx) -> Res<Made> {
     let l_total = 10.0;
     let eb_tip = static_cantilever(l_total, 2.0, 1000.0, l_total);
     // static tip deflection of the chain vs eq. 2.4.5, and vs the finest chain (self-convergence)
-    let mut tips = Vec::new();
-    for &n in &ns {
-        let eq = static_equilibrium(&scaled_cantilever_static(n, l_total, 1000.0, 10.0)?)?;
-        tips.push((n, eq.positions[n - 1][1]));
-    }
+    let tips = static_tips(&ns, l_total)?;
     let finest = tips.last().map_or(0.0, |t| t.1);
     let vs_eb: Vec<(f64, f64)> = tips
         .iter()
@@ -412,19 +454,7 @@ fn convergence(ctx: &Ctx) -> Res<Made> {
     } else {
         vec![5, 10, 20, 40, 80]
     };
-    let mut trajs = Vec::new();
-    for &n in &dyn_ns {
-        let s = catalogue::scaled_cantilever(n, l_total, 1000.0, 10.0, 2.0);
-        let h = 0.01 * (10.0 / n as f64).powi(2).min(1.0) * 0.25;
-        let tr = simulate(&retime(s, h, t_end))?;
-        let samples: Vec<f64> = (0..=100)
-            .map(|j| {
-                let k = ((j as f64 / 100.0) * tr.steps() as f64).round() as usize;
-                tr.positions(k)[n - 1][2]
-            })
-            .collect();
-        trajs.push((n, samples));
-    }
+    let trajs = dynamic_tips(&dyn_ns, l_total, t_end)?;
     let fine_dyn = trajs.last().map(|t| t.1.clone()).unwrap_or_default();
     let dyn_err: Vec<(f64, f64)> = trajs[..trajs.len() - 1]
         .iter()
@@ -440,21 +470,7 @@ fn convergence(ctx: &Ctx) -> Res<Made> {
         .collect();
     let dyn_rate = fit_slope(&dyn_err);
     // the FD Euler-Bernoulli beam for comparison
-    let fd: Vec<(f64, f64)> = ns
-        .iter()
-        .filter_map(|&n| {
-            EulerBernoulli::new(
-                n,
-                l_total,
-                1000.0,
-                10.0 / n as f64,
-                EbSupport::Cantilever,
-                &[(n, 2.0)],
-            )
-            .ok()
-            .map(|b| (n as f64, (b.static_solution()[n] - eb_tip).abs()))
-        })
-        .collect();
+    let fd = fd_errors(&ns, l_total, eb_tip);
     let fd_rate = fit_slope(&fd);
     let p = Panel::new(
         "Cantilever L = 10 m, EI = 1000 Nm², M = 10 kg, k = EI/l, k₁ = 2k, m = M/n",

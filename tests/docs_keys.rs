@@ -90,6 +90,10 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
     ("time", &[("step", "0.01"), ("steps", "5")]),
     ("control", &[("kind", "\"constant\""), ("values", "[0.0]")]),
     ("objective", &[("kind", "\"final\"")]),
+    (
+        "fatigue",
+        &[("outer_diameter", "0.5"), ("wall_thickness", "0.025")],
+    ),
 ];
 
 /// The scene of [`SECTIONS`] with `set` = (table, key, value): the key's value replaced, or the
@@ -173,7 +177,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 38, "number of documented keys");
+    assert_eq!(checked, 46, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -219,6 +223,14 @@ fn every_documented_key_is_read() {
         ("control", "kind", "\"piecewise\""),
         ("control", "values", "[1.0]"),
         ("objective", "kind", "\"sum\""),
+        ("fatigue", "outer_diameter", "0.6"),
+        ("fatigue", "wall_thickness", "0.03"),
+        ("fatigue", "scf", "1.5"),
+        ("fatigue", "curve", "\"F1\""),
+        ("fatigue", "environment", "\"air\""),
+        ("fatigue", "thickness_exponent", "0.1"),
+        ("fatigue", "reference_thickness", "0.032"),
+        ("fatigue", "dff", "3.0"),
     ];
     let doc = documented();
     let mut seen = BTreeSet::new();

@@ -583,3 +583,31 @@ fn hot_spot_stress_and_worst_point() {
     assert!((planar.life_years - 1.0 / planar.damage_per_year).abs() <= 1e-12 * planar.life_years);
     assert!(planar.cycles.iter().all(|c| c.range < 236.95 * 1.0));
 }
+
+/// The `[fatigue]` scene table: defaults (scf 1, curve D, seawater with CP, the class's k,
+/// t_ref = 25 mm, DFF 1), written back by `to_toml_string` and read again unchanged.
+#[test]
+fn fatigue_table_defaults_and_round_trip() {
+    let text = "[beam]\npendulums = 3\nlength = 1.0\nmass = 1.0\nstiffness = 100.0\n\
+                support = \"cantilever\"\n[time]\nstep = 0.01\nsteps = 10\n\
+                [fatigue]\nouter_diameter = 0.5\nwall_thickness = 0.03\n";
+    let scene = chainbeam::Scene::from_toml_str(text).unwrap();
+    let spec = scene.fatigue.unwrap();
+    assert_eq!(spec, FatigueSpec::new(0.5, 0.03));
+    assert_eq!(
+        (spec.scf, spec.dff, spec.reference_thickness),
+        (1.0, 1.0, 0.025)
+    );
+    assert_eq!(
+        (spec.curve, spec.environment),
+        (DnvClass::D, Environment::SeawaterCp)
+    );
+    let k = DnvClass::D.thickness_exponent();
+    let s = spec.sn_curve().unwrap().thickness_factor;
+    assert!((s - (0.03_f64 / 0.025).powf(k)).abs() < 1e-15 && k == 0.2);
+    let again = chainbeam::Scene::from_toml_str(&scene.to_toml_string()).unwrap();
+    assert_eq!(again, scene);
+    let bad = text.replace("0.03\n", "0.03\nreference_thickness = -1.0\n");
+    let err = chainbeam::Scene::from_toml_str(&bad).unwrap_err();
+    assert_eq!(err.key(), Some("fatigue.reference_thickness"), "{err}");
+}

@@ -68,6 +68,7 @@ fn spec_scene() -> Scene {
             values_x: None,
         }),
         objective: Some(ObjectiveKind::Final),
+        fatigue: None,
     }
 }
 

@@ -177,6 +177,25 @@ impl FatigueSpec {
         }
     }
 
+    /// Checks every value (the error names the `[fatigue]` key): D_o, t, SCF, t_ref and DFF
+    /// positive and finite, t ≤ D_o/2, k finite and ≥ 0, at least one circumference point.
+    ///
+    /// # Errors
+    /// [`FatigueError::InvalidSpec`] naming the key.
+    pub fn validate(&self) -> Result<(), FatigueError> {
+        self.hot_spot()?;
+        self.sn_curve()?;
+        check_positive("dff", self.dff)?;
+        if self.circumference_points == 0 {
+            return Err(FatigueError::InvalidSpec {
+                key: "circumference_points",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        Ok(())
+    }
+
     /// The validated hot spot (section and SCF).
     ///
     /// # Errors
@@ -238,9 +257,9 @@ pub struct Assessment {
 /// Any [`FatigueError`] of the spec (naming its key), of the history (length mismatch,
 /// non-finite sample) or of the duration.
 pub fn assess(spec: &FatigueSpec, history: MomentHistory<'_>) -> Result<Assessment, FatigueError> {
+    spec.validate()?;
     let hot_spot = spec.hot_spot()?;
     let curve = spec.sn_curve()?;
-    check_positive("dff", spec.dff)?;
     check_positive("duration", history.duration_s)?;
     check_finite("moment", history.moment)?;
     if let Some(mx) = history.moment_x {

@@ -260,6 +260,7 @@ impl SceneBuilder {
             time: self.time,
             control: self.control,
             objective: self.objective,
+            fatigue: None,
         };
         scene.validate()?;
         Ok(scene)

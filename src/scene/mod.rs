@@ -19,6 +19,7 @@
 mod builder;
 mod current;
 mod error;
+mod fatigue;
 mod input;
 mod raw;
 pub(crate) mod series;
@@ -290,6 +291,8 @@ pub struct Scene {
     pub control: Option<Control>,
     /// Optional objective.
     pub objective: Option<ObjectiveKind>,
+    /// Optional `[fatigue]` table: the wellhead's section and S-N curve (`chainbeam fatigue`).
+    pub fatigue: Option<crate::fatigue::FatigueSpec>,
 }
 
 impl Scene {

@@ -10,6 +10,7 @@ use toml::Spanned;
 
 use super::builder::assemble_beam;
 use super::current::RawCurrent;
+use super::fatigue::RawFatigue;
 use super::validate::{check_size, node_index, positive_count};
 use super::values::{to_i64, NumOrArray};
 use super::{
@@ -42,6 +43,8 @@ pub(super) struct RawScene {
     control: Option<RawControl>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     objective: Option<RawObjective>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    fatigue: Option<RawFatigue>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -332,6 +335,7 @@ impl RawScene {
                 values: RawControl::join_values(c),
             }),
             objective: s.objective.map(|kind| RawObjective { kind }),
+            fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
         }
     }
 
@@ -389,6 +393,7 @@ impl RawScene {
             },
             control,
             objective: self.objective.map(|o| o.kind),
+            fatigue: self.fatigue.map(RawFatigue::into_spec).transpose()?,
         })
     }
 }

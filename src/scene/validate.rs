@@ -231,6 +231,9 @@ impl Scene {
                 check_range(&key, u, &FORCE_RANGE)?;
             }
         }
+        if let Some(f) = &self.fatigue {
+            f.validate().map_err(super::fatigue::scene_error)?;
+        }
         self.check_step_numbers()
     }
 

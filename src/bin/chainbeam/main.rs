@@ -8,6 +8,7 @@
 //! chainbeam explore  SCENE.toml [--starts K] [--design latin|random|perturb] [--output FILE]
 //! chainbeam mpc      SCENE.toml [--horizon S] [--interval S] [--iterations K] [--bound U]
 //!                               [--model MODEL.toml] [--baselines] [--summary FILE] [--output FILE]
+//! chainbeam fatigue  SCENE.toml [--series FILE] [--output FILE]
 //! ```
 //!
 //! The full contract (every flag, the CSV columns, the `.npy` layout, the JSON keys and the exit
@@ -21,10 +22,11 @@
 //! the process by that signal.
 //!
 //! Module map: [`cmd_simulate`], [`cmd_gradient`], [`cmd_optimize`] (optimize and explore),
-//! [`cmd_mpc`] run the subcommands; [`problem`] builds the control problem from the scene and the flags;
+//! [`cmd_mpc`], [`cmd_fatigue`] run the subcommands; [`problem`] builds the control problem from the scene and the flags;
 //! [`controls_io`] reads `--controls` files; [`output`] writes results safely; [`npy`] is the
 //! NumPy writer; [`progress`] draws spinners.
 
+mod cmd_fatigue;
 mod cmd_gradient;
 mod cmd_mpc;
 mod cmd_optimize;
@@ -141,6 +143,9 @@ enum Command {
     /// Receding-horizon (MPC) control in closed loop, with baselines (CSV and JSON).
     #[command(long_about = cmd_mpc::LONG_ABOUT)]
     Mpc(cmd_mpc::MpcArgs),
+    /// Fatigue damage and life of the wellhead (rainflow, DNV-RP-C203 S-N curves; JSON).
+    #[command(long_about = cmd_fatigue::LONG_ABOUT)]
+    Fatigue(cmd_fatigue::FatigueArgs),
 }
 
 /// A failure reported to the user: one line on stderr and a non-zero exit status.
@@ -271,5 +276,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Optimize(a) => cmd_optimize::run_optimize(&a, progress),
         Command::Explore(a) => cmd_optimize::run_explore(&a, progress),
         Command::Mpc(a) => cmd_mpc::run(&a, progress),
+        Command::Fatigue(a) => cmd_fatigue::run(&a, progress),
     }
 }

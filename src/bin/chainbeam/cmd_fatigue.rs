@@ -1,0 +1,205 @@
+//! `chainbeam fatigue`: the wellhead's fatigue damage and life from the base moment (JSON).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+use serde::Serialize;
+
+use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
+use chainbeam::scene::read_text_file;
+use chainbeam::{simulate, Scene};
+
+use crate::output::{refuse_overwrite, Inputs, Output};
+use crate::progress::Progress;
+use crate::{check_finite, lib_error, load_scene, to_json, CliError};
+use crate::{OUTPUT_HELP, SCENE_HELP};
+
+/// `fatigue --help`.
+pub const LONG_ABOUT: &str = "\
+Fatigue damage and life of the wellhead from the base bending moment M₀: simulate the scene (or \
+read a moment history with --series FILE) and count the hot-spot stress per ASTM E1049-85 \
+(rainflow), with the DNV-RP-C203 S-N curve of the scene's [fatigue] table (docs/scene-format.md).
+
+Stress: σ(t) = SCF · M₀(t) · (D_o/2)/I in MPa, I = π/64 (D_o⁴ − D_i⁴), D_i = D_o − 2t. A spatial \
+history (moment_x) is checked at 8 points θ = 0°, 22.5°, …, 157.5° around the circumference, \
+σ_θ = SCF · (M₀ₓ sin θ + M₀ cos θ) · (D_o/2)/I, and the worst point is reported (the other half of \
+the circumference has the same ranges).
+
+S-N curve (DNV-RP-C203 April 2016, Tables 2-1 air, 2-2 seawater-cp, 2-3 free-corrosion): \
+N = ā · (Δσ (t/t_ref)^k)^(−m), two slopes (m₂ = 5 below the knee) except under free corrosion. \
+Miner's sum D = Σ n_i/N_i over the cycles (n = 0.5 for a half cycle of the residue).
+
+Output (JSON):
+  cycles           [[stress_range_MPa, mean_MPa, count], …] in the order counted, count 1 or 0.5
+  damage           Miner's sum D over the record
+  duration_s       the record's duration T [s] (N·h, or the last t minus the first of --series)
+  damage_per_year  D · Y/T, Y = 365.25 · 86400 s
+  life_years       1/(DFF · damage_per_year); null when the record does no damage (infinite life)
+
+--series FILE: a CSV with a header line naming its columns, among them t [s] and moment [Nm] (and \
+moment_x [Nm] for a spatial history); other columns are ignored, so a `chainbeam simulate` CSV \
+is a valid series. Times must increase strictly; blank lines and lines starting with # are \
+skipped.";
+
+/// `fatigue`'s flags.
+#[derive(Args)]
+pub struct FatigueArgs {
+    #[arg(value_name = "SCENE.toml", help = SCENE_HELP)]
+    pub scene: PathBuf,
+    /// Read the moment history from this CSV (columns t, moment[, moment_x]; a `simulate` CSV is
+    /// one) instead of simulating the scene; the scene gives the [fatigue] table.
+    #[arg(long, value_name = "FILE")]
+    pub series: Option<PathBuf>,
+    #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
+    pub output: Option<PathBuf>,
+}
+
+#[derive(Serialize)]
+struct FatigueReport {
+    cycles: Vec<[f64; 3]>,
+    damage: f64,
+    duration_s: f64,
+    damage_per_year: f64,
+    life_years: Option<f64>,
+}
+
+/// A moment history: M₀, M₀ₓ of a spatial one, and the duration.
+struct History {
+    moment: Vec<f64>,
+    moment_x: Option<Vec<f64>>,
+    duration_s: f64,
+}
+
+/// Runs `fatigue`.
+pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
+    let out = Output::prepare(a.output.as_deref())?;
+    let scene = load_scene(&a.scene)?;
+    let mut inputs = Inputs::new();
+    inputs.scene(&a.scene, &scene);
+    if let Some(s) = &a.series {
+        inputs.file(s);
+    }
+    refuse_overwrite(&[("--output", &out)], &inputs)?;
+    let spec = fatigue_spec(&a.scene, &scene)?;
+    let history = match &a.series {
+        Some(path) => read_series(path)?,
+        None => simulated(&a.scene, &scene, &progress)?,
+    };
+    let assessment = assess(
+        &spec,
+        MomentHistory {
+            duration_s: history.duration_s,
+            moment: &history.moment,
+            moment_x: history.moment_x.as_deref(),
+        },
+    )
+    .map_err(|e| {
+        let file = a.series.as_deref().unwrap_or(&a.scene);
+        CliError::msg(format!("{}: {e}", file.display()))
+    })?;
+    let cycles: Vec<[f64; 3]> = assessment
+        .cycles
+        .iter()
+        .map(|c| [c.range, c.mean, c.count])
+        .collect();
+    check_finite(&a.scene, "cycles", cycles.as_flattened())?;
+    let totals = [
+        assessment.damage,
+        assessment.duration_s,
+        assessment.damage_per_year,
+    ];
+    check_finite(&a.scene, "damage", &totals)?;
+    let report = FatigueReport {
+        cycles,
+        damage: assessment.damage,
+        duration_s: assessment.duration_s,
+        damage_per_year: assessment.damage_per_year,
+        life_years: Some(assessment.life_years).filter(|l| l.is_finite()),
+    };
+    out.write_all(&to_json(&report)?)
+}
+
+fn fatigue_spec(path: &Path, scene: &Scene) -> Result<FatigueSpec, CliError> {
+    scene.fatigue.ok_or_else(|| {
+        CliError::msg(format!(
+            "{}: key `fatigue`: the fatigue command needs a [fatigue] table with outer_diameter \
+             and wall_thickness (docs/scene-format.md)",
+            path.display()
+        ))
+    })
+}
+
+fn simulated(path: &Path, scene: &Scene, progress: &Progress) -> Result<History, CliError> {
+    let spinner = progress.spinner(format!(
+        "simulating {} steps of a {}-pendulum beam",
+        scene.time.steps,
+        scene.n()
+    ));
+    let traj = simulate(scene);
+    spinner.finish_and_clear();
+    let traj = traj.map_err(|e| lib_error(path, e))?;
+    Ok(History {
+        moment: traj.moment().to_vec(),
+        moment_x: traj.is_spatial().then(|| traj.moment_x().to_vec()),
+        duration_s: traj.steps() as f64 * traj.h(),
+    })
+}
+
+fn series_error(path: &Path, what: impl std::fmt::Display) -> CliError {
+    CliError::msg(format!("{}: {what}", path.display()))
+}
+
+/// Reads a `--series` CSV (the library's bounded reader, then the `csv` crate).
+fn read_series(path: &Path) -> Result<History, CliError> {
+    let text = read_text_file(path).map_err(|e| CliError::msg(e.to_string()))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let header = reader.headers().map_err(|e| series_error(path, e))?.clone();
+    let column = |name: &str| header.iter().position(|h| h == name);
+    let missing = |name: &str| {
+        series_error(
+            path,
+            format!("no column `{name}` in the header (a CSV with columns t, moment[, moment_x])"),
+        )
+    };
+    let t_col = column("t").ok_or_else(|| missing("t"))?;
+    let m_col = column("moment").ok_or_else(|| missing("moment"))?;
+    let x_col = column("moment_x");
+    let (mut t, mut moment, mut moment_x) = (Vec::new(), Vec::new(), Vec::new());
+    for record in reader.records() {
+        let record = record.map_err(|e| series_error(path, e))?;
+        let line = record.position().map_or(0, |p| p.line());
+        let value = |col: usize, name: &str| -> Result<f64, CliError> {
+            let field = record.get(col).unwrap_or("");
+            match field.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                _ => Err(series_error(
+                    path,
+                    format!("line {line}: column `{name}`: not a finite number: `{field}`"),
+                )),
+            }
+        };
+        let tk = value(t_col, "t")?;
+        if t.last().is_some_and(|&prev| tk <= prev) {
+            return Err(series_error(
+                path,
+                format!("line {line}: t must increase strictly"),
+            ));
+        }
+        t.push(tk);
+        moment.push(value(m_col, "moment")?);
+        if let Some(c) = x_col {
+            moment_x.push(value(c, "moment_x")?);
+        }
+    }
+    if t.len() < 2 {
+        return Err(series_error(path, "needs at least 2 rows"));
+    }
+    Ok(History {
+        duration_s: t[t.len() - 1] - t[0],
+        moment,
+        moment_x: x_col.map(|_| moment_x),
+    })
+}

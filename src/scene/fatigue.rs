@@ -1,0 +1,86 @@
+//! The `[fatigue]` table: the wellhead's pipe section, stress concentration, DNV-RP-C203 S-N
+//! curve and design fatigue factor, read into a [`FatigueSpec`] (docs/scene-format.md).
+
+use serde::{Deserialize, Serialize};
+
+use crate::fatigue::{
+    DnvClass, Environment, FatigueError, FatigueSpec, DEFAULT_CIRCUMFERENCE_POINTS,
+    DNV_REFERENCE_THICKNESS_M,
+};
+
+use super::SceneError;
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawFatigue {
+    outer_diameter: f64,
+    wall_thickness: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    scf: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    curve: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    environment: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    thickness_exponent: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reference_thickness: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    dff: Option<f64>,
+}
+
+/// A [`FatigueError`] of the table as a scene error naming `fatigue.<key>`.
+pub(super) fn scene_error(e: FatigueError) -> SceneError {
+    match e {
+        FatigueError::InvalidSpec { key, value, reason } => {
+            SceneError::invalid(format!("fatigue.{key}"), format!("{reason}, got {value}"))
+        }
+        FatigueError::UnknownCurve { .. } => SceneError::invalid("fatigue.curve", e.to_string()),
+        FatigueError::UnknownEnvironment { .. } => {
+            SceneError::invalid("fatigue.environment", e.to_string())
+        }
+        other => SceneError::invalid("fatigue", other.to_string()),
+    }
+}
+
+impl RawFatigue {
+    pub(super) fn from_spec(f: &FatigueSpec) -> Self {
+        RawFatigue {
+            outer_diameter: f.outer_diameter,
+            wall_thickness: f.wall_thickness,
+            scf: Some(f.scf),
+            curve: Some(f.curve.name().to_string()),
+            environment: Some(f.environment.name().to_string()),
+            thickness_exponent: f.thickness_exponent,
+            reference_thickness: Some(f.reference_thickness),
+            dff: Some(f.dff),
+        }
+    }
+
+    /// The validated spec; an invalid value names its key (`fatigue.wall_thickness`).
+    pub(super) fn into_spec(self) -> Result<FatigueSpec, SceneError> {
+        let curve = match self.curve {
+            Some(name) => name.parse::<DnvClass>().map_err(scene_error)?,
+            None => DnvClass::D,
+        };
+        let environment = match self.environment {
+            Some(name) => name.parse::<Environment>().map_err(scene_error)?,
+            None => Environment::SeawaterCp,
+        };
+        let spec = FatigueSpec {
+            outer_diameter: self.outer_diameter,
+            wall_thickness: self.wall_thickness,
+            scf: self.scf.unwrap_or(1.0),
+            curve,
+            environment,
+            thickness_exponent: self.thickness_exponent,
+            reference_thickness: self
+                .reference_thickness
+                .unwrap_or(DNV_REFERENCE_THICKNESS_M),
+            dff: self.dff.unwrap_or(1.0),
+            circumference_points: DEFAULT_CIRCUMFERENCE_POINTS,
+        };
+        spec.validate().map_err(scene_error)?;
+        Ok(spec)
+    }
+}

@@ -7,7 +7,7 @@
 //! bordered by the tip row and column; the tip row is sparse, since Σᵢ lᵢ M̄⁻¹ᵢⱼ = δ_{jn}/(mₙ lₙ).
 
 use crate::base::Scalar;
-use crate::model::{dot, zi, Chain};
+use crate::model::{dot, zi, BlockSym, Chain};
 use crate::tridiag::BorderedTridiag;
 
 /// Ĝ(q) of a chain: apply, transposed apply, residual and the bordered-tridiagonal assemblies.
@@ -119,13 +119,15 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
     }
 
     /// Assembles the RATTLE Newton matrix J = ∂ĝ(q_{k+1}(λ))/∂λ = −h²/2 Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ into
-    /// `tri`: J_{ij} = −h²/2 M̄⁻¹_{ij} q′ᵢ·(W_j ⊙ q_j) (|i − j| ≤ 1); tip column
-    /// −h²/2 q′_{i,z} (M̄⁻¹(l ⊙ W_z))ᵢ; tip row −h²/2 δ_{jn} (W_n ⊙ q_n)_z/(mₙ lₙ); corner
-    /// −h²/2 W_{n,z}/mₙ. `w` = None means W = I (no drag). `scal` is scratch of length n.
+    /// `tri`: J_{ij} = −h²/2 M̄⁻¹_{ij} q′ᵢ·(W_j q_j) (|i − j| ≤ 1); tip column
+    /// −h²/2 q′ᵢ·(M̄⁻¹(l ⊙ W e_z))ᵢ; tip row −h²/2 δ_{jn} (W_n q_n)_z/(mₙ lₙ); corner
+    /// −h²/2 (W_n)_{zz}/mₙ. W is block-symmetric ([`BlockSym`]: diagonal, and the (x, z) entry of
+    /// the spatial model); `w` = None means W = I (no dissipative term). `scal` is scratch of
+    /// length n.
     pub fn assemble_newton(
         &self,
         (q, qnew): (&[[D; DIM]], &[[D; DIM]]),
-        w: Option<&[[D; DIM]]>,
+        w: Option<&[BlockSym<D, DIM>]>,
         h: f64,
         tri: &mut BorderedTridiag<D>,
         scal: &mut [D],
@@ -136,7 +138,7 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
         let s = -(h * h * 0.5);
         let wq = |i: usize| -> [D; DIM] {
             match w {
-                Some(w) => std::array::from_fn(|d| q[i][d] * w[i][d]),
+                Some(w) => w[i].apply(&q[i]),
                 None => q[i],
             }
         };
@@ -152,9 +154,36 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
         if !self.bordered() {
             return;
         }
-        let wz = |j: usize| w.map_or(D::one(), |w| w[j][z]);
+        let wz = |j: usize| w.map_or(D::one(), |w| w[j].diag[z]);
+        self.tip_column(qnew, (z, s), wz, scal, &mut tri.col);
+        if let Some(w) = w.filter(|_| DIM == 3) {
+            // The (x, z) entries of a spatial W add −h²/2 q′_{i,x} (M̄⁻¹(l ⊙ W_xz))ᵢ; `row`
+            // (overwritten below) is the scratch.
+            self.tip_column(qnew, (0, s), |j| w[j].xz, scal, &mut tri.row);
+            for (c, x) in tri.col.iter_mut().zip(&tri.row) {
+                *c += *x;
+            }
+        }
+        tri.row.iter_mut().for_each(|r| *r = D::zero());
+        let inv_mn = ch.inv_masses[n - 1];
+        let wqn = wq(n - 1);
+        tri.row[n - 1] = wqn[z] * inv_mn * ch.inv_lengths[n - 1] * s;
+        tri.corner = wz(n - 1) * inv_mn * s;
+    }
+
+    /// col_i = s q′_{i,c} (M̄⁻¹(l ⊙ ω))ᵢ with ω_j = `weight`(j) (component c of q′).
+    fn tip_column(
+        &self,
+        qnew: &[[D; DIM]],
+        (c, s): (usize, f64),
+        weight: impl Fn(usize) -> D,
+        scal: &mut [D],
+        col: &mut [D],
+    ) {
+        let ch = self.ch;
+        let n = ch.n();
         for j in 0..n {
-            scal[j] = ch.lengths[j] * wz(j);
+            scal[j] = ch.lengths[j] * weight(j);
         }
         for i in 0..n {
             let (dii, off) = ch.minv_entries(i);
@@ -165,11 +194,7 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
             if i > 0 {
                 v += ch.minv_entries(i - 1).1 * scal[i - 1];
             }
-            tri.col[i] = qnew[i][z] * v * s;
-            tri.row[i] = D::zero();
+            col[i] = qnew[i][c] * v * s;
         }
-        let inv_mn = ch.inv_masses[n - 1];
-        tri.row[n - 1] = wz(n - 1) * q[n - 1][z] * inv_mn * ch.inv_lengths[n - 1] * s;
-        tri.corner = wz(n - 1) * inv_mn * s;
     }
 }

@@ -68,7 +68,7 @@
 mod spatial;
 
 use crate::error::{Error, Result};
-use crate::model::{dot, Chain, Ctx, DissipativeTerm, DualScratch};
+use crate::model::{dot, Chain, Ctx, DualScratch};
 use crate::scene::Scene;
 use crate::simulate::{scene_controls, scene_controls_x};
 use nalgebra::{DMatrix, DVector};
@@ -307,12 +307,10 @@ impl Work {
             self.t[j] = [-s, c];
         }
         chain.potential_gradient(&self.q, t, u, 0, &mut self.f)?;
-        if let Some(drag) = chain.dissipation() {
-            let ctx = Ctx::new(t, u, 0);
-            for (i, f) in self.f.iter_mut().enumerate() {
-                for (d, fd) in f.iter_mut().enumerate() {
-                    *fd -= drag.force_component(i, d, 0.0, &ctx);
-                }
+        let ctx = Ctx::new(t, u, 0);
+        for (i, f) in self.f.iter_mut().enumerate() {
+            if let Some(fd) = chain.dissipative_force(i, &[0.0; 2], &ctx) {
+                f.iter_mut().zip(fd).for_each(|(f, fd)| *f -= fd);
             }
         }
         let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());

@@ -20,7 +20,7 @@ const H: f64 = 0.01;
 /// The thesis riser (n = 10, l = 1 m, m = 1 kg, k = 1000, k₁ = k₁₁ = 2000) without drag, h =
 /// 0.01 s, N = `steps`, and a load of 2 N at node 5 at angle `alpha` from z toward x:
 /// [F_x, F_z] = 2 (sin α, cos α). Without drag the model is symmetric under rotations about y
-/// (the still-water drag acts per component).
+/// (as it is with drag, whose transverse part uses the Euclidean norm).
 fn riser(steps: usize, alpha: f64) -> SceneBuilder {
     SceneBuilder::new(10)
         .support(Support::Riser)

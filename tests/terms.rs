@@ -13,7 +13,9 @@
 //! The configurations are away from the straight beam and cover both branches of the spring
 //! function (the series for θ ≲ 11.5° and the closed form beyond) and joint angles above 90°.
 
-use chainbeam::model::{Ctx, DissipativeTerm, DualScratch, Embed, ForceTerm, TermVisitor};
+use chainbeam::model::{
+    BlockSym, Ctx, DissipationVisitor, DissipativeTerm, DualScratch, Embed, ForceTerm, TermVisitor,
+};
 use chainbeam::{
     catalogue, Chain, Current, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene,
     SceneBuilder, Support,
@@ -350,8 +352,9 @@ fn every_force_term_spatial_dual64() {
     check_all_terms::<Dual64, 3>();
 }
 
-/// The drag term: F(p) = −D p|p| (eq. 2.4.4); its slope and parameter derivative from duals equal
-/// the closed forms −2D|p| and −p|p| (the general checks of every dissipative term follow).
+/// The drag term: F(p) = −D p|p| (eq. 2.4.4) per component in the planar model; its slope and
+/// parameter derivative from duals equal the closed forms −2D|p| and −p|p| (the general checks
+/// of every dissipative term follow).
 #[test]
 fn drag_term_closed_forms() {
     let chain = Chain::<f64, 2>::from_scene(&all_terms_scene(false)).unwrap();
@@ -359,29 +362,77 @@ fn drag_term_closed_forms() {
     let ctx = Ctx::new(0.0, 0.0, 0);
     let d = 10.0;
     for p in [-3.0, -0.2, 0.0, 0.05, 1.7] {
-        let (f, slope) = drag.force_and_slope(0, 0, p, &ctx);
-        close("F_D", f, -d * p * f64::abs(p), 1.0, 1e-15);
-        close("F_D'", slope, -2.0 * d * f64::abs(p), 1.0, 1e-15);
-        let dd = drag.parameter_derivative(0, 0, p, &ctx, Parameter::Drag);
-        close("dF_D/dD", dd, -p * f64::abs(p), 1.0, 1e-15);
+        let x = [0.4 - p, p];
+        let (f, slope) = DissipativeTerm::<f64, 2>::force_and_slope(&drag, 0, &x, &ctx);
+        let dd =
+            DissipativeTerm::<f64, 2>::parameter_derivative(&drag, 0, &x, &ctx, Parameter::Drag);
+        for c in 0..2 {
+            close("F_D", f[c], -d * x[c] * f64::abs(x[c]), 1.0, 1e-15);
+            close("F_D'", slope.diag[c], -2.0 * d * f64::abs(x[c]), 1.0, 1e-15);
+            close("dF_D/dD", dd[c], -x[c] * f64::abs(x[c]), 1.0, 1e-15);
+        }
     }
 }
 
-/// The trait's default implicit solve (Newton on the dual-derived slope) of the chain's
-/// dissipative term, for comparison with the term's closed-form override.
+/// Σ_T F_T of a chain's dissipative terms evaluated in any scalar `E` (through the visitor).
+struct ForceIn<'a, E, const DIM: usize> {
+    i: usize,
+    p: &'a [E; DIM],
+    ctx: &'a Ctx<E>,
+    sum: [E; DIM],
+}
+
+impl<D: Scalar, E: Embed<D>, const DIM: usize> DissipationVisitor<D, DIM> for ForceIn<'_, E, DIM> {
+    fn visit<T: DissipativeTerm<D, DIM>>(&mut self, term: &T) {
+        let f = term.force(self.i, self.p, self.ctx);
+        self.sum = std::array::from_fn(|d| self.sum[d] + f[d]);
+    }
+}
+
+/// Whether some term of the chain reads a parameter.
+struct Reads(Parameter, bool);
+
+impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for Reads {
+    fn visit<T: DissipativeTerm<D, DIM>>(&mut self, term: &T) {
+        self.1 |= term.has_parameter(self.0);
+    }
+}
+
+/// The trait's defaults (the `Dual<D>` slope and parameter derivative, the Newton implicit
+/// solve) applied to the sum of the chain's dissipative terms, for comparison with the closed
+/// forms the chain's methods use.
 #[derive(Clone, Debug)]
 struct DefaultSolve<D: Scalar, const DIM: usize>(Chain<D, DIM>);
 
-impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for DefaultSolve<D, DIM> {
+impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for DefaultSolve<D, DIM> {
     fn name(&self) -> &'static str {
         "default solve"
     }
-    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E {
-        let t = self.0.dissipation().unwrap();
-        t.force_component(i, d, p, ctx)
+    fn force<E: Embed<D>>(&self, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
+        let mut v = ForceIn {
+            i,
+            p,
+            ctx,
+            sum: [E::zero(); DIM],
+        };
+        self.0.visit_dissipation(&mut v);
+        v.sum
     }
     fn has_parameter(&self, p: Parameter) -> bool {
-        self.0.dissipation().unwrap().has_parameter(p)
+        let mut v = Reads(p, false);
+        self.0.visit_dissipation(&mut v);
+        v.1
+    }
+}
+
+/// Entry (r, c) of a block.
+fn entry<D: Scalar, const DIM: usize>(b: &BlockSym<D, DIM>, r: usize, c: usize) -> D {
+    if r == c {
+        b.diag[r]
+    } else if DIM == 3 && r + c == 2 && r != 1 {
+        b.xz
+    } else {
+        D::zero()
     }
 }
 
@@ -402,26 +453,39 @@ fn current_scene(spatial: bool, table: bool) -> Scene {
     s
 }
 
+/// Momenta (block samples) on both sides of the current's, with transverse components of both
+/// signs and of different sizes.
+const MOMENTA: [[f64; 3]; 4] = [
+    [-3.0, 0.3, 2.2],
+    [0.4, -0.4, -3.0],
+    [2.2, 1.0, 0.3],
+    [-0.7, 2.2, -0.4],
+];
+
+fn block<const DIM: usize>(v: &[f64; 3]) -> [f64; DIM] {
+    std::array::from_fn(|d| if DIM == 3 { v[d] } else { v[d + 1] })
+}
+
 /// Every dissipative term a scene can have (still-water drag; a current, linear and tabulated),
-/// through [`Chain::dissipation`], for every pendulum and component at momenta on both sides of
-/// the current's:
-/// * ∂F/∂p (dual-derived) = central differences of F (step 1e-5; F is piecewise quadratic, so the
-///   FD error is round-off, 1e-8 relative);
-/// * ∂F/∂θ for each parameter the term reads (D, the current's speed, the mass) = central
-///   differences of F with θ set on the model (step 1e-5·θ; 1e-7 relative), and θ it does not
+/// summed as the solvers sum them ([`Chain::dissipative_slope`] and friends), for every pendulum
+/// at momenta on both sides of the current's:
+/// * ∂F/∂p (closed form) = central differences of F in each component (step 1e-5; F is
+///   piecewise quadratic, so the FD error is round-off, 1e-8 relative), the block symmetric;
+/// * ∂F/∂θ for each parameter the terms read (D, the current's speed, the mass) = central
+///   differences of F with θ set on the model (step 1e-5·θ; 1e-7 relative), and θ they do not
 ///   read give 0;
 /// * the closed-form implicit half step = the trait's default Newton solve ([`DefaultSolve`],
 ///   1e-14), and solves p − (h/2)F(p) = c;
 /// * the closed-form (F, ∂F/∂p) = the trait's default `Dual<D>` evaluation (1e-15).
-fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
+fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &[&str]) {
     let chain = Chain::<D, DIM>::from_scene(scene).unwrap();
-    let term = chain.dissipation().expect("the scene has drag");
-    assert_eq!(term.name(), expect);
+    assert_eq!(chain.dissipation_names(), expect);
     let ctx = Ctx::new(1.0, D::from(-0.7), 0);
     let generic = DefaultSolve(chain.clone());
-    let force = |ch: &Chain<D, DIM>, i, d, p: f64| {
-        let t = ch.dissipation().unwrap();
-        t.force_component(i, d, D::from(p), &ctx).re()
+    let force = |ch: &Chain<D, DIM>, i, p: &[f64; DIM]| {
+        ch.dissipative_force(i, &p.map(D::from), &ctx)
+            .unwrap()
+            .map(|x| x.re())
     };
     let params = [
         (Parameter::Drag, 10.0),
@@ -430,57 +494,76 @@ fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
     ];
     let mut exercised = 0;
     for i in 0..chain.n() {
-        for d in 0..DIM {
-            for p in [-3.0, -0.4, 0.3, 2.2] {
-                let (f, slope) = term.force_and_slope(i, d, D::from(p), &ctx);
-                // The closed-form override = the trait's `Dual<D>` default (same rounding).
-                let (f2, slope2) = generic.force_and_slope(i, d, D::from(p), &ctx);
-                close("F override", f.re(), f2.re(), f2.re().abs().max(1.0), 1e-15);
+        for p in MOMENTA.iter().map(block::<DIM>) {
+            let pd = p.map(D::from);
+            let (f, slope) = chain.dissipative_slope(i, &pd, &ctx).unwrap();
+            // The closed-form override = the trait's `Dual<D>` default (same rounding).
+            let (f2, slope2) = generic.force_and_slope(i, &pd, &ctx);
+            for r in 0..DIM {
                 close(
-                    "F' override",
-                    slope.re(),
-                    slope2.re(),
-                    slope2.re().abs().max(1.0),
+                    "F override",
+                    f[r].re(),
+                    f2[r].re(),
+                    f2[r].re().abs().max(1.0),
                     1e-15,
                 );
-                let hp = 1e-5;
-                let fd = (force(&chain, i, d, p + hp) - force(&chain, i, d, p - hp)) / (2.0 * hp);
-                close("dF/dp", slope.re(), fd, fd.abs().max(1.0), 1e-8);
-                for (param, value) in params {
-                    let got = term
-                        .parameter_derivative(i, d, D::from(p), &ctx, param)
-                        .re();
-                    if !term.has_parameter(param) {
-                        assert_eq!(got, 0.0, "{param:?} not read");
-                        continue;
-                    }
-                    if param == Parameter::Mass && !chain.has_parameter(param) {
-                        continue;
-                    }
-                    let hstep = 1e-5 * value;
-                    let (mut cp, mut cm) = (chain.clone(), chain.clone());
-                    cp.set_parameter(param, D::from(value + hstep)).unwrap();
-                    cm.set_parameter(param, D::from(value - hstep)).unwrap();
-                    let fd = (force(&cp, i, d, p) - force(&cm, i, d, p)) / (2.0 * hstep);
-                    let label = format!("{expect} dF[{i}][{d}]/d{param:?} at p = {p}");
-                    close(&label, got, fd, fd.abs().max(1.0), 1e-7);
-                    exercised += usize::from(got.abs() > 1e-3);
+                for c in 0..DIM {
+                    let (a, b) = (entry(&slope, r, c).re(), entry(&slope2, r, c).re());
+                    close("F' override", a, b, b.abs().max(1.0), 1e-15);
+                    let hp = 1e-5;
+                    let (mut pp, mut pm) = (p, p);
+                    pp[c] += hp;
+                    pm[c] -= hp;
+                    let fd = (force(&chain, i, &pp)[r] - force(&chain, i, &pm)[r]) / (2.0 * hp);
+                    close(&format!("dF[{r}]/dp[{c}]"), a, fd, fd.abs().max(1.0), 1e-8);
                 }
             }
-            for c in [-40.0, -1.0, -1e-3, 0.0, 2e-2, 3.0, 55.0] {
+            for (param, value) in params {
+                let got = chain.dissipative_parameter_derivative(i, &pd, &ctx, param);
+                if !chain.dissipation_has_parameter(param) {
+                    assert!(got.iter().all(|g| g.re() == 0.0), "{param:?} not read");
+                    continue;
+                }
+                if param == Parameter::Mass && !chain.has_parameter(param) {
+                    continue;
+                }
+                let hstep = 1e-5 * value;
+                let (mut cp, mut cm) = (chain.clone(), chain.clone());
+                cp.set_parameter(param, D::from(value + hstep)).unwrap();
+                cm.set_parameter(param, D::from(value - hstep)).unwrap();
+                let (fp, fm) = (force(&cp, i, &p), force(&cm, i, &p));
+                for (r, g) in got.iter().enumerate() {
+                    let fd = (fp[r] - fm[r]) / (2.0 * hstep);
+                    let label = format!("{expect:?} dF[{i}][{r}]/d{param:?} at p = {p:?}");
+                    close(&label, g.re(), fd, fd.abs().max(1.0), 1e-7);
+                    exercised += usize::from(g.re().abs() > 1e-3);
+                }
+            }
+        }
+        for scale in [-40.0, -1.0, -1e-3, 0.0, 2e-2, 3.0, 55.0] {
+            for v in &MOMENTA {
+                let c = block::<DIM>(v).map(|x| D::from(x * scale));
                 let h = 0.01;
-                let (p1, w1) = term.implicit_half_step(i, d, D::from(c), h, &ctx);
-                let (p2, w2) = generic.implicit_half_step(i, d, D::from(c), h, &ctx);
-                close("implicit p", p1.re(), p2.re(), f64::abs(c).max(1.0), 1e-14);
-                close("implicit W", w1.re(), w2.re(), 1.0, 1e-14);
-                let f = term.force_component(i, d, p1, &ctx);
-                close(
-                    "residual",
-                    (p1 - f * (0.5 * h)).re(),
-                    c,
-                    c.abs().max(1.0),
-                    1e-14,
-                );
+                let terms = chain.dissipation_count();
+                let (p1, w1) = chain.dissipative_half_step(terms, i, &c, h, &ctx);
+                let (p2, w2) = generic.implicit_half_step(i, &c, h, &ctx);
+                let f = chain.dissipative_force(i, &p1, &ctx).unwrap();
+                for r in 0..DIM {
+                    let cr = c[r].re();
+                    close(
+                        "implicit p",
+                        p1[r].re(),
+                        p2[r].re(),
+                        cr.abs().max(1.0),
+                        1e-14,
+                    );
+                    for col in 0..DIM {
+                        let (a, b) = (entry(&w1, r, col).re(), entry(&w2, r, col).re());
+                        close("implicit W", a, b, 1.0, 1e-14);
+                    }
+                    let res = (p1[r] - f[r] * (0.5 * h)).re();
+                    close("residual", res, cr, cr.abs().max(1.0), 1e-14);
+                }
             }
         }
     }
@@ -489,9 +572,9 @@ fn check_dissipation<D: Scalar, const DIM: usize>(scene: &Scene, expect: &str) {
 
 fn check_every_dissipation<D: Scalar, const DIM: usize>() {
     let spatial = DIM == 3;
-    check_dissipation::<D, DIM>(&all_terms_scene(spatial), "drag");
-    check_dissipation::<D, DIM>(&current_scene(spatial, false), "current drag");
-    check_dissipation::<D, DIM>(&current_scene(spatial, true), "current drag");
+    check_dissipation::<D, DIM>(&all_terms_scene(spatial), &["drag"]);
+    check_dissipation::<D, DIM>(&current_scene(spatial, false), &["current drag"]);
+    check_dissipation::<D, DIM>(&current_scene(spatial, true), &["current drag"]);
 }
 
 #[test]
@@ -570,8 +653,9 @@ fn reaction_tip_reverse_is_the_transposed_dual_jacobian() {
 
 /// The closed-form (F, ∂F/∂p) of the still-water drag and of the current's drag also carry the
 /// derivative parts of a dual p (the forward-over-reverse Hessians of `ocp` differentiate the
-/// slope): with p = p₀ + ε, the override's ε-parts equal the trait default's (its `Dual<D>`
-/// evaluation, [`DefaultSolve`]) to 1e-15, and F's ε-part is the slope itself.
+/// slope): with p = p₀ + ε e_s (each component s in turn), the override's ε-parts equal the
+/// trait default's (its `Dual<D>` evaluation, [`DefaultSolve`]) to 1e-15, and F's ε-part is
+/// column s of the slope itself.
 #[test]
 fn drag_slope_overrides_carry_derivatives() {
     let scenes = [
@@ -581,19 +665,29 @@ fn drag_slope_overrides_carry_derivatives() {
     ];
     for (scene, name) in scenes {
         let chain = Chain::<Dual64, 2>::from_scene(&scene).unwrap();
-        let term = chain.dissipation().expect("the scene has drag");
-        assert_eq!(term.name(), name);
+        assert_eq!(chain.dissipation_names(), [name]);
         let generic = DefaultSolve(chain.clone());
         let ctx = Ctx::new(1.0, Dual64::from(-0.7), 0);
         for i in 0..chain.n() {
-            for d in 0..2 {
-                for p in [-3.0, -0.4, 0.3, 2.2] {
-                    let x = Dual64::new(p, 1.0);
-                    let (f, s) = term.force_and_slope(i, d, x, &ctx);
-                    let (f2, s2) = generic.force_and_slope(i, d, x, &ctx);
-                    close("F eps", f.eps, f2.eps, f2.eps.abs().max(1.0), 1e-15);
-                    close("F' eps", s.eps, s2.eps, s2.eps.abs().max(1.0), 1e-15);
-                    close("F eps = F'", f.eps, s.re, s.re.abs().max(1.0), 1e-15);
+            for p in MOMENTA.iter().map(block::<2>) {
+                for s in 0..2 {
+                    let x: [Dual64; 2] =
+                        std::array::from_fn(|d| Dual64::new(p[d], if d == s { 1.0 } else { 0.0 }));
+                    let (f, j) = chain.dissipative_slope(i, &x, &ctx).unwrap();
+                    let (f2, j2) = generic.force_and_slope(i, &x, &ctx);
+                    for r in 0..2 {
+                        close(
+                            "F eps",
+                            f[r].eps,
+                            f2[r].eps,
+                            f2[r].eps.abs().max(1.0),
+                            1e-15,
+                        );
+                        let (a, b) = (entry(&j, r, r).eps, entry(&j2, r, r).eps);
+                        close("F' eps", a, b, b.abs().max(1.0), 1e-15);
+                        let col = entry(&j, r, s).re;
+                        close("F eps = F'", f[r].eps, col, col.abs().max(1.0), 1e-15);
+                    }
                 }
             }
         }

@@ -15,9 +15,9 @@
 //! ```text
 //! projection:  A ŷ = Ĝ(q′) p̄′          (A = Ĝ M⁻¹ Ĝᵀ at q′, symmetric bordered tridiagonal)
 //!              b̄ = p̄′ − M⁻¹ Ĝᵀ ŷ,   q̄′ᵢ += −(h/2) μᵢ b̄ᵢ − ŷᵢ (M⁻¹p′)ᵢ
-//! 2nd half:    p̄½ = b̄ ⊙ (1 − hD|p½|),  q̄′ += −h/2 K(q′) b̄
-//! Newton:      Jᵀ ν = λ̄,  λ̄ = −h/2 Ĝ(q_k)(W ⊙ (p̄½ + h M⁻¹ q̄′))   (implicit function theorem)
-//!              q̄′ ← q̄′ − Ĝ(q′)ᵀ ν,   c̄ = W ⊙ (p̄½ + h M⁻¹ q̄′)
+//! 2nd half:    p̄½ = (I + h/2 ∂F/∂p)ᵀ b̄ (planar drag: b̄ ⊙ (1 − hD|p½|)),  q̄′ += −h/2 K(q′) b̄
+//! Newton:      Jᵀ ν = λ̄,  λ̄ = −h/2 Ĝ(q_k)(Wᵀ(p̄½ + h M⁻¹ q̄′))   (implicit function theorem)
+//!              q̄′ ← q̄′ − Ĝ(q′)ᵀ ν,   c̄ = Wᵀ(p̄½ + h M⁻¹ q̄′)   (W block-symmetric)
 //! 1st half:    p̄_k = c̄,   q̄_k = q̄′ − h/2 K(q_k) c̄ − h/2 λᵢ c̄ᵢ
 //! ```
 //! with K = ∂²U/∂q² (block-tridiagonal, [`crate::Chain::force_jacobian_product`]) and J the
@@ -316,7 +316,7 @@ fn forward_sweep<D: Scalar, O: Objective, const DIM: usize>(
     (kk, mut state): (usize, State<D, DIM>),
 ) -> Result<(D, StateStore<D, DIM>)> {
     let (chain, u, steps) = (hz.chain, hz.controls, hz.steps);
-    let half = chain.has_drag();
+    let half = chain.has_dissipation();
     rattle.prepare(&mut state, 0, u[0])?;
     let mut value = stage.value(chain, 0, &state.q, u[0]);
     let (n, nc) = (chain.n(), chain.n_constraints());
@@ -384,7 +384,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     check_controls(u, steps)?;
     check_parameters(chain, params)?;
     let (n, nc) = (chain.n(), chain.n_constraints());
-    let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.has_drag());
+    let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.has_dissipation());
     let kk = checkpointing.interval(steps, state_size);
     let mut stage = StageEval {
         obj: objective,
@@ -420,7 +420,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     stage.accumulate(chain, (steps, last, u[steps]), &mut cot, k1_param);
     let mut sweep = ReverseSweep::new(chain, h, params);
     sweep.t0 = start.map_or(0.0, |s| s.t0);
-    let half = chain.has_drag();
+    let half = chain.has_dissipation();
     let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
     for seg in (0..n_segments).rev() {
         let (a, b) = (seg * kk, (seg * kk + kk).min(steps));

@@ -5,7 +5,7 @@
 use super::tape::StateView;
 use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::Result;
-use crate::model::{Chain, Ctx, Dissipation, DissipativeTerm, DualScratch, ReactionTip};
+use crate::model::{BlockSym, Chain, Ctx, DualScratch, ReactionTip};
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 
@@ -28,7 +28,7 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     h: f64,
     params: &'a [Parameter],
     mass_param: Option<usize>,
-    /// The requested parameters the dissipative term reads (drag D, current speed, mass).
+    /// The requested parameters some dissipative term reads (drag D, current speed, mass).
     drag_params: Vec<(usize, Parameter)>,
     tmp: Vec<[D; DIM]>,
     tmp2: Vec<[D; DIM]>,
@@ -54,15 +54,12 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             t0: 0.0,
             params,
             mass_param: params.iter().position(|p| *p == Parameter::Mass),
-            drag_params: match ch.dissipation() {
-                Some(t) => params
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, p)| t.has_parameter(**p))
-                    .map(|(i, p)| (i, *p))
-                    .collect(),
-                None => Vec::new(),
-            },
+            drag_params: params
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| ch.dissipation_has_parameter(**p))
+                .map(|(i, p)| (i, *p))
+                .collect(),
             tmp: v.clone(),
             tmp2: v.clone(),
             bbar: v.clone(),
@@ -147,7 +144,8 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         Ok(())
     }
 
-    /// Second half-step b = p½ − h/2 U_q(q′; u_{k+1}) + h/2 F_D(p½): p̄½ = b̄ ⊙ (1 + h/2 F_D′),
+    /// Second half-step b = p½ − h/2 U_q(q′; u_{k+1}) + h/2 F(p½) (F = Σ_T F_T, block by
+    /// block): p̄½ = (I + h/2 ∂F/∂p)ᵀ b̄ (each block symmetric, [`BlockSym`]),
     /// q̄′ −= h/2 K(q′) b̄, and the control and parameter contractions of b̄.
     fn second_half(
         &mut self,
@@ -157,16 +155,14 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     ) -> Result<()> {
         let (ch, hh) = (self.ch, 0.5 * self.h);
         self.phbar.copy_from_slice(&self.bbar);
-        if let Some(drag) = ch.dissipation() {
+        if ch.has_dissipation() {
             for i in 0..ch.n() {
-                for d in 0..DIM {
-                    let p = sk1.phalf[i][d];
-                    let (_, slope) = drag.force_and_slope(i, d, p, ctx1);
-                    self.phbar[i][d] = self.bbar[i][d] * (slope * hh + 1.0);
+                if let Some((_, slope)) = ch.dissipative_slope(i, &sk1.phalf[i], ctx1) {
+                    self.phbar[i] = slope.identity_plus_scaled_apply(hh, &self.bbar[i]);
                 }
             }
             dissipation_contraction(
-                &drag,
+                ch,
                 &self.drag_params,
                 (sk1.phalf, &self.bbar),
                 ctx1,
@@ -204,8 +200,8 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         Ok(())
     }
 
-    /// Newton system (implicit function theorem): λ̄ = −h/2 Ĝ(q_k)(W ⊙ S), S = p̄½ + h M⁻¹ q̄′;
-    /// Jᵀν = λ̄; q̄′ −= Ĝ(q′)ᵀν; then c̄ = W ⊙ (p̄½ + h M⁻¹ q̄′) into `cbar`.
+    /// Newton system (implicit function theorem): λ̄ = −h/2 Ĝ(q_k)(Wᵀ S), S = p̄½ + h M⁻¹ q̄′;
+    /// Jᵀν = λ̄; q̄′ −= Ĝ(q′)ᵀν; then c̄ = Wᵀ(p̄½ + h M⁻¹ q̄′) into `cbar`.
     fn newton(
         &mut self,
         k: usize,
@@ -214,7 +210,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         cot: &mut Cotangents<D, DIM>,
     ) -> Result<()> {
         let (ch, ops, h, hh) = (self.ch, self.ch.constraints(), self.h, 0.5 * self.h);
-        let w = ch.has_drag().then_some(sk1.w);
+        let w = ch.has_dissipation().then_some(sk1.w);
         self.w_times_s(&cot.qbar, w);
         ops.apply(q, &self.tmp, &mut self.rhs);
         self.rhs.iter_mut().for_each(|r| *r = -*r * hh);
@@ -238,10 +234,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         }
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
-        if let Some(drag) = ch.dissipation() {
+        if ch.has_dissipation() {
             let ctx = Ctx::new(self.t0 + k as f64 * h, D::zero(), k);
             dissipation_contraction(
-                &drag,
+                ch,
                 &self.drag_params,
                 (sk1.phalf, &self.cbar),
                 &ctx,
@@ -252,18 +248,16 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         Ok(())
     }
 
-    /// tmp = W ⊙ (p̄½ + h M⁻¹ q̄′) (W = I when `w` is None).
-    fn w_times_s(&mut self, qbar: &[[D; DIM]], w: Option<&[[D; DIM]]>) {
+    /// tmp = Wᵀ (p̄½ + h M⁻¹ q̄′) (W = I when `w` is None; each block of W is symmetric).
+    fn w_times_s(&mut self, qbar: &[[D; DIM]], w: Option<&[BlockSym<D, DIM>]>) {
         let h = self.h;
         self.ch.apply_inverse_mass(qbar, &mut self.tmp);
         for i in 0..self.ch.n() {
-            for d in 0..DIM {
-                let s = self.phbar[i][d] + self.tmp[i][d] * h;
-                self.tmp[i][d] = match w {
-                    Some(w) => s * w[i][d],
-                    None => s,
-                };
-            }
+            let s: [D; DIM] = std::array::from_fn(|d| self.phbar[i][d] + self.tmp[i][d] * h);
+            self.tmp[i] = match w {
+                Some(w) => w[i].apply(&s),
+                None => s,
+            };
         }
     }
 
@@ -307,10 +301,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     }
 }
 
-/// θ̄ += h/2 Σᵢ_d w_{i,d} ∂F_{i,d}(p½)/∂θ for each requested parameter θ the dissipative term
-/// reads (`params`: (index in the request, θ)); w = b̄ (second half) or c̄ (first half).
+/// θ̄ += h/2 Σᵢ_d w_{i,d} ∂F_{i,d}(p½)/∂θ (F = Σ_T F_T) for each requested parameter θ a
+/// dissipative term reads (`params`: (index in the request, θ)); w = b̄ (second half) or c̄
+/// (first half).
 fn dissipation_contraction<D: Scalar, const DIM: usize>(
-    drag: &Dissipation<'_, D, DIM>,
+    ch: &Chain<D, DIM>,
     params: &[(usize, Parameter)],
     (phalf, w): (&[[D; DIM]], &[[D; DIM]]),
     ctx: &Ctx<D>,
@@ -320,8 +315,9 @@ fn dissipation_contraction<D: Scalar, const DIM: usize>(
     for &(ip, param) in params {
         let mut s = D::zero();
         for (i, (p, w)) in phalf.iter().zip(w).enumerate() {
+            let g = ch.dissipative_parameter_derivative(i, p, ctx, param);
             for d in 0..DIM {
-                s += w[d] * drag.parameter_derivative(i, d, p[d], ctx, param);
+                s += w[d] * g[d];
             }
         }
         cot.thbar[ip] += s * hh;

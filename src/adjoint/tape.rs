@@ -7,6 +7,7 @@
 //! forward step's force and drag root.
 
 use crate::base::Scalar;
+use crate::model::BlockSym;
 use crate::steppers::rattle::State;
 
 /// How the reverse sweep gets the forward states.
@@ -73,7 +74,7 @@ pub(crate) struct StateStore<D, const DIM: usize> {
     has_multipliers: Vec<bool>,
     tip: Vec<[D; 2]>,
     phalf: Vec<[D; DIM]>,
-    w: Vec<[D; DIM]>,
+    w: Vec<BlockSym<D, DIM>>,
 }
 
 /// A stored state, borrowed, with the half-step record of the step that produced it (empty
@@ -89,7 +90,7 @@ pub(crate) struct StateView<'a, D, const DIM: usize> {
     /// p_{k−½} of the step into this state.
     pub phalf: &'a [[D; DIM]],
     /// W of the step into this state.
-    pub w: &'a [[D; DIM]],
+    pub w: &'a [BlockSym<D, DIM>],
 }
 
 impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
@@ -114,13 +115,18 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
 
     /// Bytes of one stored state.
     pub fn state_bytes(n: usize, nc: usize, records_half_step: bool) -> usize {
-        let blocks = if records_half_step { 4 } else { 2 };
-        (blocks * n * DIM + 2 * nc + 2) * std::mem::size_of::<D>()
+        let blocks = if records_half_step { 3 } else { 2 };
+        let w = if records_half_step {
+            n * std::mem::size_of::<BlockSym<D, DIM>>()
+        } else {
+            0
+        };
+        (blocks * n * DIM + 2 * nc + 2) * std::mem::size_of::<D>() + w
     }
 
     /// Appends a state and the half-step record (p_{k−½}, W) of the step that produced it (any
     /// slices at k = 0, where there is none; ignored unless the store records half steps).
-    pub fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[[D; DIM]])) {
+    pub fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[BlockSym<D, DIM>])) {
         self.q.extend_from_slice(&s.q);
         self.p.extend_from_slice(&s.p);
         match &s.multipliers {
@@ -140,7 +146,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
                 // The initial state: no step produced it.
                 let z = [D::zero(); DIM];
                 self.phalf.extend(std::iter::repeat_n(z, self.n));
-                self.w.extend(std::iter::repeat_n(z, self.n));
+                self.w.extend(std::iter::repeat_n(BlockSym::zero(), self.n));
             } else {
                 self.phalf.extend_from_slice(half.0);
                 self.w.extend_from_slice(half.1);

@@ -19,9 +19,9 @@ pub mod terms;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    AxialWeight, ControlForce, Ctx, CurrentDrag, Dissipation, DissipativeTerm, Drag, DualScratch,
-    Embed, ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads, ReactionTip, ReactionTipBar,
-    Springs, TermVisitor, TopTension,
+    AxialWeight, BlockSym, ControlForce, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm,
+    Drag, DualScratch, Embed, ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads,
+    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -353,14 +353,16 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.current.as_ref()
     }
 
-    /// The dissipative term the model has, if any: **the one place that lists them** (the
-    /// still-water drag, or the drag relative to a current, which replaces it).
+    /// Visits every dissipative term the model has: **the one place that lists them** (the
+    /// still-water drag, or the drag relative to a current, which replaces it; a new term is
+    /// added here and nowhere else in the solvers, which sum what they visit).
     #[inline]
-    pub fn dissipation(&self) -> Option<Dissipation<'_, D, DIM>> {
-        match (&self.current, &self.drag) {
-            (Some(c), _) => Some(Dissipation::Current(c)),
-            (None, Some(d)) => Some(Dissipation::StillWater(d)),
-            (None, None) => None,
+    pub fn visit_dissipation<V: DissipationVisitor<D, DIM>>(&self, v: &mut V) {
+        if let Some(t) = &self.drag {
+            v.visit(t);
+        }
+        if let Some(t) = &self.current {
+            v.visit(t);
         }
     }
 

@@ -214,7 +214,8 @@ pub struct Harmonic {
 pub struct Loads {
     /// Gravitational acceleration g \[m/s²\] (§2.2.2); 0 means no gravity term is computed.
     pub gravity: f64,
-    /// Drag constant D \[kg/m\] of F_D(p) = −D p ⊙ |p| (eq. 2.4.4); 0 means no drag is computed.
+    /// Drag constant D \[kg/m\] of F_D(p) = −D p ⊙ |p| (eq. 2.4.4; in the spatial model the
+    /// transverse part is −D |p_⊥| p_⊥, docs/conventions.md); 0 means no drag is computed.
     pub drag: f64,
     /// Top tension T \[N\] along +y at the tip (`tension`; docs/conventions.md "Axial loads");
     /// 0 means no tension term is computed.

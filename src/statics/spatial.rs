@@ -3,7 +3,7 @@
 
 use super::{record_residual, residual_scale, StaticSolution, MAX_ITERATIONS, TOLERANCE};
 use crate::error::{Error, Result};
-use crate::model::{dot, Chain, Ctx, DissipativeTerm, DualScratch};
+use crate::model::{dot, Chain, Ctx, DualScratch};
 use crate::scene::Scene;
 use nalgebra::{DMatrix, DVector};
 
@@ -123,11 +123,9 @@ impl Work {
         ctx: &Ctx<f64>,
     ) -> Result<()> {
         chain.potential_gradient(&self.q, ctx.t, ctx.u, 0, &mut self.f)?;
-        if let Some(drag) = chain.dissipation() {
-            for (i, f) in self.f.iter_mut().enumerate() {
-                for (d, fd) in f.iter_mut().enumerate() {
-                    *fd -= drag.force_component(i, d, 0.0, ctx);
-                }
+        for (i, f) in self.f.iter_mut().enumerate() {
+            if let Some(fd) = chain.dissipative_force(i, &[0.0; 3], ctx) {
+                f.iter_mut().zip(fd).for_each(|(f, fd)| *f -= fd);
             }
         }
         if chain.has_tip_constraint() {

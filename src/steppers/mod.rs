@@ -42,7 +42,7 @@ use crate::base::{Scalar, TipCondition};
 pub use crate::error::StepperError;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{Chain, Ctx, DissipativeTerm};
+use crate::model::{Chain, Ctx};
 use crate::tridiag::{BorderedTridiag, ZeroPivot};
 
 pub use rattle::{Rattle, RattleOptions, StepStats};
@@ -160,8 +160,8 @@ pub(crate) fn check_finite<D: Scalar, const DIM: usize>(
 }
 
 /// f(q, p) = U_q(q; t, u) − F_D(p): the generalised force with the sign of U_q, the conservative
-/// terms from [`Chain::potential_gradient`] and the drag term (eq. 2.4.4) from
-/// [`DissipativeTerm::force_component`], into `out`. The ODE is ṗ = −f − Ĝᵀλ.
+/// terms from [`Chain::potential_gradient`] and the dissipative terms (eq. 2.4.4) from
+/// [`Chain::dissipative_force`], into `out`. The ODE is ṗ = −f − Ĝᵀλ.
 pub(crate) fn total_force<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     (q, p): (&[[D; DIM]], &[[D; DIM]]),
@@ -169,10 +169,12 @@ pub(crate) fn total_force<D: Scalar, const DIM: usize>(
     out: &mut [[D; DIM]],
 ) -> Result<()> {
     ch.potential_gradient(q, ctx.t, ctx.u, ctx.step, out)?;
-    if let Some(drag) = ch.dissipation() {
+    if ch.has_dissipation() {
         for (i, (o, pi)) in out.iter_mut().zip(p).enumerate() {
-            for d in 0..DIM {
-                o[d] -= drag.force_component(i, d, pi[d], ctx);
+            if let Some(f) = ch.dissipative_force(i, pi, ctx) {
+                for d in 0..DIM {
+                    o[d] -= f[d];
+                }
             }
         }
     }

@@ -3,15 +3,17 @@
 //!
 //! One step (q_k, p_k) → (q_{k+1}, p_{k+1}) with controls u_k, u_{k+1}:
 //! ```text
-//! p_{k+½} = p_k − h/2 (U_q(q_k; u_k) + Ĝ(q_k)ᵀ λ_k) − h/2 D p_{k+½} ⊙ |p_{k+½}|
+//! p_{k+½} = p_k − h/2 (U_q(q_k; u_k) + Ĝ(q_k)ᵀ λ_k) + h/2 F(p_{k+½})
 //! q_{k+1} = q_k + h M⁻¹ p_{k+½},                 ĝ(q_{k+1}) = 0
-//! p_{k+1} = p_{k+½} − h/2 (U_q(q_{k+1}; u_{k+1}) + Ĝ(q_{k+1})ᵀ μ_k) − h/2 D p_{k+½} ⊙ |p_{k+½}|
+//! p_{k+1} = p_{k+½} − h/2 (U_q(q_{k+1}; u_{k+1}) + Ĝ(q_{k+1})ᵀ μ_k) + h/2 F(p_{k+½})
 //! 0       = Ĝ(q_{k+1}) M⁻¹ p_{k+1}
 //! ```
 //! ĝ stacks the length constraints gᵢ = ½(‖qᵢ‖² − 1) and, for locked tips, l(q) = Σ lᵢ e₃ᵀqᵢ.
-//! The drag term is evaluated at p_{k+½} in both halves (docs/conventions.md); in the first half it is
-//! implicit, and each component solves p + (hD/2) p|p| = c in closed form,
-//! p = 2c / (1 + √(1 + 2hD|c|)).
+//! F = Σ_T F_T is the sum of the dissipative terms (the drag F_D(p) = −D p ⊙ |p| of eq. 2.4.4 in the
+//! planar model, [`crate::model::DissipativeTerm`]), evaluated at p_{k+½} in both halves
+//! (docs/conventions.md); in the first half it is implicit, and each pendulum's block solves
+//! p − (h/2) F(p) = c ([`Chain::dissipative_half_step`]: for the drag in closed form,
+//! p = 2c / (1 + √(1 + 2hD|c|)) per planar component).
 //!
 //! **Newton solve for λ.** q_{k+1}(λ) is explicit, so Newton runs on ĝ(q_{k+1}(λ)) = 0 only. Its
 //! Jacobian −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ (W = ∂p_{k+½}/∂c, the identity without drag) is
@@ -42,7 +44,7 @@ use super::{refuse_reaction_tip, singular, Stepper};
 use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{e2, Chain, Ctx, DissipativeTerm};
+use crate::model::{e2, BlockSym, Chain, Ctx};
 use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
@@ -149,8 +151,10 @@ struct Workspace<D, const DIM: usize> {
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
     force_ready: bool,
-    /// Real parts of q_k, q_{k+1} and W for the Newton matrix of the derivative-only update.
-    real: [Vec<[D; DIM]>; 3],
+    /// Real parts of q_k, q_{k+1} for the Newton matrix of the derivative-only update.
+    real: [Vec<[D; DIM]>; 2],
+    /// Real parts of W, likewise.
+    real_w: Vec<BlockSym<D, DIM>>,
 }
 
 /// RATTLE for a [`Chain`], with its workspace. `step` does not allocate.
@@ -178,7 +182,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             half: HalfStep {
                 c: v.clone(),
                 phalf: v.clone(),
-                w: vec![[D::one(); DIM]; n],
+                w: vec![BlockSym::identity(); n],
             },
             qnew: v.clone(),
             tmp: v.clone(),
@@ -189,7 +193,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             scal: vec![D::zero(); n],
             tri: BorderedTridiag::new(n, chain.has_tip_constraint()),
             force_ready: false,
-            real: [v.clone(), v.clone(), v.clone()],
+            real: [v.clone(), v.clone()],
+            real_w: vec![BlockSym::identity(); n],
         };
         Ok(Rattle {
             chain,
@@ -341,7 +346,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
 
     /// The half-step momentum p_{k+½} and W = ∂p_{k+½}/∂c of the last step (W = 1 without
     /// drag): what the adjoint records from the forward step ([`crate::adjoint`]).
-    pub(crate) fn last_half_step(&self) -> (&[[D; DIM]], &[[D; DIM]]) {
+    pub(crate) fn last_half_step(&self) -> (&[[D; DIM]], &[BlockSym<D, DIM>]) {
         (&self.ws.half.phalf, &self.ws.half.w)
     }
 
@@ -450,15 +455,17 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             // residual), so the matrix is assembled and factored without derivative parts and
             // only the right-hand side carries them.
             let (q, qn, w): (&[_], &[_], &[_]) = if extra_done > 0 && updates == 1 {
-                let [q_re, qn_re, w_re] = &mut ws.real;
+                let [q_re, qn_re] = &mut ws.real;
                 real_parts(&state.q, q_re);
                 real_parts(&ws.qnew, qn_re);
-                real_parts(&ws.half.w, w_re);
-                (q_re, qn_re, w_re)
+                for (o, w) in ws.real_w.iter_mut().zip(&ws.half.w) {
+                    *o = w.real_part();
+                }
+                (q_re, qn_re, &ws.real_w)
             } else {
                 (&state.q, &ws.qnew, &ws.half.w)
             };
-            let w = ch.has_drag().then_some(w);
+            let w = ch.has_dissipation().then_some(w);
             ops.assemble_newton((q, qn), w, h, &mut ws.tri, &mut ws.scal);
             ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
             for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
@@ -486,12 +493,13 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let t1 = self.t0 + (k + 1) as f64 * h;
         ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
         let ctx = Ctx::new(t1, u_k1, k + 1);
-        let drag = ch.dissipation();
         for i in 0..ch.n() {
+            let ph = &ws.half.phalf[i];
+            let f = ch.dissipative_force(i, ph, &ctx);
             for d in 0..DIM {
-                let mut b = ws.half.phalf[i][d] - ws.force[i][d] * hh;
-                if let Some(drag) = &drag {
-                    b += drag.force_component(i, d, ws.half.phalf[i][d], &ctx) * hh;
+                let mut b = ph[d] - ws.force[i][d] * hh;
+                if let Some(f) = &f {
+                    b += f[d] * hh;
                 }
                 ws.a[i][d] = b;
             }
@@ -575,12 +583,12 @@ fn real_parts<D: Scalar, const DIM: usize>(x: &[[D; DIM]], out: &mut [[D; DIM]])
 struct HalfStep<D, const DIM: usize> {
     c: Vec<[D; DIM]>,
     phalf: Vec<[D; DIM]>,
-    w: Vec<[D; DIM]>,
+    w: Vec<BlockSym<D, DIM>>,
 }
 
-/// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p − (h/2) F_D(p) = c componentwise
-/// ([`DissipativeTerm::implicit_half_step`]; p = c without drag), with W = ∂p_{k+½}/∂c (left at 1
-/// without drag).
+/// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p − (h/2) Σ_T F_T(p) = c block by block
+/// ([`Chain::dissipative_half_step`]; p = c without dissipative terms), with W = ∂p_{k+½}/∂c
+/// (left at I without them).
 fn half_step_momentum<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     q: &[[D; DIM]],
@@ -591,17 +599,15 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
     out.c.copy_from_slice(a);
     ch.constraints()
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
-    match ch.dissipation() {
-        Some(drag) => {
+    match ch.dissipation_count() {
+        0 => out.phalf.copy_from_slice(&out.c),
+        terms => {
             let ctx = Ctx::new(0.0, D::zero(), 0);
             let pw = out.phalf.iter_mut().zip(&mut out.w);
             for (i, (c, (p, w))) in out.c.iter().zip(pw).enumerate() {
-                for d in 0..DIM {
-                    (p[d], w[d]) = drag.implicit_half_step(i, d, c[d], h, &ctx);
-                }
+                (*p, *w) = ch.dissipative_half_step(terms, i, c, h, &ctx);
             }
         }
-        None => out.phalf.copy_from_slice(&out.c),
     }
 }
 

@@ -204,7 +204,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Shake<D, DIM> {
         ch.apply_mass(&ws.vel, &mut ws.phalf);
         // drag momentum at t_{k+1}: extrapolated p_{k+½} + (p_{k+½} − p_{k−½})/2
         ws.pd.copy_from_slice(&ws.phalf);
-        if ch.has_drag() {
+        if ch.has_dissipation() {
             for i in 0..n {
                 for d in 0..DIM {
                     ws.pd[i][d] += (ws.phalf[i][d] - state.phalf_prev[i][d]) * 0.5;

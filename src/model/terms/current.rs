@@ -12,26 +12,27 @@
 //!
 //! ```text
 //! Pᵢ = lᵢ Σ_{k≥i} m_k U_k        (the momenta the chain would have moving with the water),
-//! F(p) = −D (p − P)⊙|p − P| .
+//! F(p) = F_D(p − P)      (Morison's drag of [`super::Drag`] on the relative momentum) .
 //! ```
 //!
 //! p − P = lᵢ Σ_{k≥i} m_k (v_k − U_k) is linear in the relative velocities, so this is the
 //! Morison-type drag on v − U in the thesis's momentum form: with U = 0 it *is* eq. 2.4.4 (P = 0
 //! and p − 0 = p exactly, so the simulation is equal in IEEE arithmetic, tests/current.rs), and
-//! at rest (p = 0) it is the steady force D P⊙|P| along the current.
+//! at rest (p = 0) it is the steady force D |P_⊥| P_⊥ along the current (transversally).
 //!
 //! The depth of node k is taken on the undeformed beam, y_k = l₁ + … + l_k (small deflections:
 //! the node's height changes only to second order in the angles), so P is a constant of the
-//! model, F stays componentwise in p, and RATTLE's implicit half step keeps its closed form.
+//! model, F stays a function of each pendulum's own momentum, and RATTLE's implicit half step
+//! keeps its closed form.
 
-use super::drag::quadratic_root;
-use super::{Ctx, DissipativeTerm, Embed};
+use super::drag::{morison, root_of, slope_of};
+use super::{BlockSym, Ctx, DissipativeTerm, Embed};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
 use crate::scene::{current_velocity, Current};
 
-/// Drag relative to a current (module docs): F(p) = −D (p − P)⊙|p − P| with
-/// Pᵢ = lᵢ Σ_{k≥i} m_k U(y_k), componentwise, added to ṗ. It replaces [`super::Drag`] when the
+/// Drag relative to a current (module docs): F(p) = F_D(p − P) (Morison's form of
+/// [`super::Drag`]) with Pᵢ = lᵢ Σ_{k≥i} m_k U(y_k), added to ṗ. It replaces [`super::Drag`] when the
 /// scene has a current. P = s·A + B is stored as its two parts (s the speed parameter), so that
 /// the speed, the drag constant and the (uniform) mass are parameters with dual-number
 /// derivatives.
@@ -133,15 +134,15 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
     }
 }
 
-impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for CurrentDrag<D, DIM> {
+impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM> {
     fn name(&self) -> &'static str {
         "current drag"
     }
 
     #[inline]
-    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E {
-        let r = p - self.momentum(i, d, ctx);
-        -(ctx.param(Parameter::Drag, self.d) * r * r.abs())
+    fn force<E: Embed<D>>(&self, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
+        let r: [E; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, ctx));
+        morison(ctx.param(Parameter::Drag, self.d), &r)
     }
 
     fn has_parameter(&self, p: Parameter) -> bool {
@@ -155,20 +156,31 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for CurrentDrag<D, DIM> {
     /// Closed form with r = p − P: (F, F′) = (−D r|r|, −2D|r|), equal to the default's
     /// `Dual<D>` evaluation (tested).
     #[inline]
-    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
+    fn force_and_slope(
+        &self,
+        i: usize,
+        p: &[D; DIM],
+        ctx: &Ctx<D>,
+    ) -> ([D; DIM], BlockSym<D, DIM>) {
         let plain = Ctx { seed: None, ..*ctx };
-        let r = p - self.momentum(i, d, &plain);
-        let a = r.abs();
-        (-(self.d * r * a), -(self.d * (a * 2.0)))
+        let r: [D; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, &plain));
+        slope_of(self.d, &r)
     }
 
     /// Closed form: r = p − P solves r + (hD/2) r|r| = c − P, the still-water root
     /// ([`super::Drag`]) shifted by P; W = ∂p/∂c = 1/(1 + hD|r|) (tested equal to the default
     /// Newton solve).
     #[inline]
-    fn implicit_half_step(&self, i: usize, d: usize, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
-        let big = self.momentum(i, d, ctx);
-        let (r, w) = quadratic_root(self.d, c - big, h);
-        (r + big, w)
+    fn implicit_half_step(
+        &self,
+        i: usize,
+        c: &[D; DIM],
+        h: f64,
+        ctx: &Ctx<D>,
+    ) -> ([D; DIM], BlockSym<D, DIM>) {
+        let big: [D; DIM] = std::array::from_fn(|d| self.momentum(i, d, ctx));
+        let shifted: [D; DIM] = std::array::from_fn(|d| c[d] - big[d]);
+        let (r, w) = root_of(self.d, &shifted, h);
+        (std::array::from_fn(|d| r[d] + big[d]), w)
     }
 }

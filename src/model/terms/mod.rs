@@ -17,20 +17,23 @@
 //! against the dual-derived default to 1e-12, and every force against the dual gradient of the
 //! energy, for every term in both dimensions and for `f64` and `Dual64` chains.
 //!
-//! A momentum-dependent (dissipative) term implements [`DissipativeTerm`] (thesis eq. 2.4.4): the
-//! still-water [`Drag`], or [`CurrentDrag`] when the scene has a current; [`crate::Chain::dissipation`]
-//! returns the one the model has as a [`Dissipation`].
+//! A momentum-dependent (dissipative) term implements [`DissipativeTerm`] (thesis eq. 2.4.4,
+//! [`dissipation`](DissipativeTerm)): the still-water [`Drag`], or [`CurrentDrag`] when the scene
+//! has a current. They are an open set: [`crate::Chain::visit_dissipation`] lists them and every
+//! consumer sums them ([`crate::Chain::dissipative_force`], [`crate::Chain::dissipative_slope`],
+//! [`crate::Chain::dissipative_half_step`], [`crate::Chain::dissipative_parameter_derivative`]).
 //!
 //! **Adding a term**: write one type implementing [`ForceTerm`] (or [`DissipativeTerm`]), add it as
 //! a field of [`crate::Chain`] (set in `from_scene` and `lift`), list it in
-//! [`crate::Chain::visit_terms`] (a dissipative term: in [`Dissipation`] and
-//! [`crate::Chain::dissipation`]), and give it its scene entry, documentation and checks: README.md,
-//! "Adding a force term", lists every place. Every integrator, the adjoint, the statics and the
-//! Hessian-vector products then see it with all its derivatives.
+//! [`crate::Chain::visit_terms`] (a dissipative term: in [`crate::Chain::visit_dissipation`]), and
+//! give it its scene entry, documentation and checks: README.md, "Adding a force term", lists
+//! every place. Every integrator, the adjoint, the statics and the Hessian-vector products then
+//! see it with all its derivatives.
 
 mod axial;
 mod control;
 mod current;
+mod dissipation;
 mod drag;
 mod gravity;
 mod point_load;
@@ -41,6 +44,7 @@ pub use crate::scene::current_velocity;
 pub use axial::{AxialWeight, TopTension};
 pub use control::ControlForce;
 pub use current::CurrentDrag;
+pub use dissipation::{block_newton, BlockSym, DissipationVisitor, DissipativeTerm};
 pub use drag::Drag;
 pub use gravity::Gravity;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
@@ -323,123 +327,6 @@ fn control_seeded<D: Scalar, T: ForceTerm<D, DIM>, const DIM: usize>(
     };
     term.force(&scratch.q, &c, &mut scratch.f)?;
     Ok(scratch.contract(w))
-}
-
-/// A momentum-dependent force F(p) added to ṗ (thesis eq. 2.4.4), acting componentwise
-/// (component d of pendulum i, Fᵢ_d, depends on pᵢ_d only, and may depend on (i, d) through
-/// constants: the current's momenta of [`CurrentDrag`]), written once over the evaluation scalar.
-///
-/// RATTLE evaluates it at p_{k+½} in both half-steps (docs/conventions.md), so the first half-step solves
-/// p − (h/2) F(p) = c per component; [`DissipativeTerm::implicit_half_step`] does so by Newton on
-/// the dual-derived derivative, and a term with a closed-form root may override it (tested equal).
-pub trait DissipativeTerm<D: Scalar>: Clone + std::fmt::Debug + Send + Sync {
-    /// A short name for diagnostics and tests.
-    fn name(&self) -> &'static str;
-
-    /// The force component Fᵢ_d(pᵢ_d) of pendulum `i` (0-based), component `d` (parameters read
-    /// through [`Ctx::param`]).
-    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E;
-
-    /// Whether the term reads the physical parameter `p`.
-    fn has_parameter(&self, p: Parameter) -> bool;
-
-    /// (Fᵢ_d, ∂Fᵢ_d/∂pᵢ_d) by one `Dual<D>` evaluation.
-    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::from_re(ctx.u),
-            ux: Dual::from_re(ctx.ux),
-            step: ctx.step,
-            seed: None,
-        };
-        let f = self.force_component(i, d, Dual::new(p, D::one()), &c);
-        (f.re, f.eps)
-    }
-
-    /// ∂Fᵢ_d/∂θ for a physical parameter θ, by one `Dual<D>` evaluation with θ seeded.
-    fn parameter_derivative(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>, param: Parameter) -> D {
-        if !self.has_parameter(param) {
-            return D::zero();
-        }
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::from_re(ctx.u),
-            ux: Dual::from_re(ctx.ux),
-            step: ctx.step,
-            seed: Some(param),
-        };
-        self.force_component(i, d, Dual::from_re(p), &c).eps
-    }
-
-    /// Solves p − (h/2) Fᵢ_d(p) = c for one component and returns (p, W) with W = ∂p/∂c =
-    /// 1/(1 − (h/2) F′(p)). Default: Newton from p = c, to round-off, with the slope from
-    /// [`DissipativeTerm::force_and_slope`].
-    fn implicit_half_step(&self, i: usize, d: usize, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
-        let hh = 0.5 * h;
-        let mut p = c;
-        for _ in 0..50 {
-            let (f, df) = self.force_and_slope(i, d, p, ctx);
-            let r = p - f * hh - c;
-            let step = r * (-(df * hh) + 1.0).recip();
-            p -= step;
-            if step.re().abs() <= 1e-15 * (1.0 + p.re().abs()) {
-                break;
-            }
-        }
-        let (_, df) = self.force_and_slope(i, d, p, ctx);
-        (p, (-(df * hh) + 1.0).recip())
-    }
-}
-
-/// The dissipative term a chain has ([`crate::Chain::dissipation`]): the thesis's still-water
-/// drag, or the drag relative to a current, which replaces it when the scene has a current. Each
-/// method forwards to the term (including its overrides).
-#[derive(Clone, Copy, Debug)]
-pub enum Dissipation<'a, D, const DIM: usize> {
-    /// F = −D p⊙|p| (eq. 2.4.4).
-    StillWater(&'a Drag<D>),
-    /// F = −D (p − P)⊙|p − P| with P the momenta of the current ([`CurrentDrag`]).
-    Current(&'a CurrentDrag<D, DIM>),
-}
-
-impl<D: Scalar, const DIM: usize> DissipativeTerm<D> for Dissipation<'_, D, DIM> {
-    fn name(&self) -> &'static str {
-        match self {
-            Self::StillWater(t) => t.name(),
-            Self::Current(t) => t.name(),
-        }
-    }
-
-    #[inline]
-    fn force_component<E: Embed<D>>(&self, i: usize, d: usize, p: E, ctx: &Ctx<E>) -> E {
-        match self {
-            Self::StillWater(t) => t.force_component(i, d, p, ctx),
-            Self::Current(t) => t.force_component(i, d, p, ctx),
-        }
-    }
-
-    fn has_parameter(&self, p: Parameter) -> bool {
-        match self {
-            Self::StillWater(t) => t.has_parameter(p),
-            Self::Current(t) => t.has_parameter(p),
-        }
-    }
-
-    #[inline]
-    fn implicit_half_step(&self, i: usize, d: usize, c: D, h: f64, ctx: &Ctx<D>) -> (D, D) {
-        match self {
-            Self::StillWater(t) => t.implicit_half_step(i, d, c, h, ctx),
-            Self::Current(t) => t.implicit_half_step(i, d, c, h, ctx),
-        }
-    }
-
-    #[inline]
-    fn force_and_slope(&self, i: usize, d: usize, p: D, ctx: &Ctx<D>) -> (D, D) {
-        match self {
-            Self::StillWater(t) => t.force_and_slope(i, d, p, ctx),
-            Self::Current(t) => t.force_and_slope(i, d, p, ctx),
-        }
-    }
 }
 
 /// Visits every term of a chain (see [`crate::Chain::visit_terms`]): the one place that lists them.

@@ -1210,8 +1210,10 @@ fn adjoint_sweeps_per_gradient() {
     let theta = vec![-1.5; steps + 1];
     let n1 = steps + 1;
     let (n, nc, dim) = (10, 10, 2);
-    // q, p, λ, μ, tip target, and (drag) the recorded p_{k+1/2} and W.
-    let state = (4 * n * dim + 2 * nc + 2) * std::mem::size_of::<f64>();
+    // q, p, λ, μ, tip target, and (drag) the recorded p_{k+1/2} and W (a block-symmetric
+    // `BlockSym` per pendulum: its diagonal and the (x, z) entry of the spatial model).
+    let w = std::mem::size_of::<chainbeam::model::BlockSym<f64, 2>>();
+    let state = (3 * n * dim + 2 * nc + 2) * std::mem::size_of::<f64>() + n * w;
     let k = (steps as f64).sqrt().ceil() as usize;
     for (c, expected_states) in [
         (Checkpointing::StoreAll, steps + 2),

@@ -3,7 +3,7 @@
 use super::{BlockSym, Ctx, DissipativeTerm, Embed};
 use crate::base::{Parameter, Scalar};
 
-/// Still-water drag added to ṗ, Morison's form on the momenta ([`morison`]): transversally
+/// Still-water drag added to ṗ, Morison's form on the momenta (`morison` in `drag.rs`): transversally
 /// F_⊥ = −D |p_⊥| p_⊥ (rotation-invariant about the beam's axis), axially −D p_y|p_y|; in the
 /// planar model exactly the thesis's F_D(p) = −D p ⊙ |p| (eq. 2.4.4).
 #[derive(Clone, Debug)]
@@ -43,7 +43,7 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
         p == Parameter::Drag
     }
 
-    /// Closed form ([`slope_of`]; planar: (F, F′) = (−D p|p|, −2D|p|) per component), equal to
+    /// Closed form (`slope_of`; planar: (F, F′) = (−D p|p|, −2D|p|) per component), equal to
     /// the default's `Dual<D>` evaluation (tested; it avoids nested dual arithmetic in the
     /// reverse step of the dual Hessians).
     #[inline]
@@ -56,7 +56,7 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
         slope_of(self.d, p)
     }
 
-    /// Closed-form root ([`root_of`]; planar: p + (hD/2) p|p| = c per component,
+    /// Closed-form root (`root_of`; planar: p + (hD/2) p|p| = c per component,
     /// p = 2c / (1 + √(1 + 2hD|c|)), W = 1/(1 + hD|p|)), tested equal to the default Newton
     /// solve.
     #[inline]

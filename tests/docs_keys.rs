@@ -77,6 +77,7 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
             ("support", "\"fixed-fixed\""),
         ],
     ),
+    ("water", &[("density", "1025.0")]),
     ("loads", &[("gravity", "1.0"), ("drag", "1.0")]),
     ("loads.point", &[("node", "2"), ("force", "1.0")]),
     (
@@ -125,6 +126,10 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
             }
         }
         text.push('\n');
+    }
+    // `[pipe]` excludes `beam.length`, `mass`, `stiffness`: rendered only when one of its keys is set.
+    if let Some(("pipe", k, v)) = set {
+        text.push_str(&format!("[pipe]\n{k} = {v}\n"));
     }
     text
 }
@@ -177,7 +182,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 46, "number of documented keys");
+    assert_eq!(checked, 56, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -195,6 +200,8 @@ fn every_documented_key_is_read() {
         ("beam", "reaction_force", "true"),
         ("loads", "gravity", "2.0"),
         ("loads", "drag", "3.0"),
+        ("water", "depth", "30.0"),
+        ("water", "density", "1000.0"),
         ("loads", "tension", "50.0"),
         ("loads", "axial_weight", "4.0"),
         ("loads.point", "node", "3"),
@@ -251,6 +258,47 @@ fn every_documented_key_is_read() {
         let text = render(None).replace(base_current, &format!("[loads.current]\n{current}"));
         let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_ne!(scene, base, "loads.current.{key} changed nothing");
+    }
+    // `[pipe]` replaces `beam.length`, `mass` and `stiffness` (exclusive keys).
+    let pipe_base = |set: Option<(&str, &str)>| {
+        let mut pipe = vec![
+            ("length", "10.0"),
+            ("outer_diameter", "0.5"),
+            ("wall_thickness", "0.02"),
+        ];
+        match set {
+            Some((k, v)) if pipe.iter().any(|(key, _)| *key == k) => pipe
+                .iter_mut()
+                .filter(|(key, _)| *key == k)
+                .for_each(|e| e.1 = v),
+            Some(kv) => pipe.push(kv),
+            None => {}
+        }
+        let body: String = pipe.iter().map(|(k, v)| format!("{k} = {v}\n")).collect();
+        let text = render(None)
+            .replace("length = 1.0\n", "")
+            .replace("mass = 1.0\n", "")
+            .replace("stiffness = 100.0\n", "");
+        Scene::from_toml_str(&format!("{text}[pipe]\n{body}")).unwrap()
+    };
+    let with_pipe = pipe_base(None);
+    for (key, value) in [
+        ("length", "12.0"),
+        ("outer_diameter", "0.6"),
+        ("wall_thickness", "0.03"),
+        ("youngs_modulus", "2e11"),
+        ("steel_density", "7800.0"),
+        ("contents_density", "1000.0"),
+        ("drag_coefficient", "1.2"),
+        ("added_mass_coefficient", "0.9"),
+    ] {
+        assert!(doc["pipe"].contains_key(key), "pipe.{key} not documented");
+        seen.insert(format!("pipe.{key}"));
+        assert_ne!(
+            pipe_base(Some((key, value))),
+            with_pipe,
+            "pipe.{key} changed nothing"
+        );
     }
     for &(table, key, value) in settings {
         assert!(doc[table].contains_key(key), "{table}.{key} not documented");

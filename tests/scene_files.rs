@@ -50,6 +50,8 @@ fn spec_scene() -> Scene {
             support: Support::Riser,
             reaction_force: false,
         },
+        pipe: None,
+        water: Default::default(),
         loads: Loads {
             gravity: 0.0,
             drag: 0.0,

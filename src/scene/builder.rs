@@ -256,6 +256,8 @@ impl SceneBuilder {
         )?;
         let scene = Scene {
             beam,
+            pipe: None,
+            water: super::Water::default(),
             loads: self.loads,
             time: self.time,
             control: self.control,

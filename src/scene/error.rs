@@ -18,6 +18,15 @@ pub enum SceneErrorKind {
         /// The parser's description.
         message: String,
     },
+    /// Two ways of giving the same quantities were both used (`beam.length` with `[pipe]`).
+    ExclusiveKeys {
+        /// The key given with `other`.
+        key: String,
+        /// The key or table it excludes.
+        other: String,
+        /// What to give instead.
+        note: String,
+    },
     /// A key that the format does not have.
     UnknownKey {
         /// The full key, e.g. `beam.lenght`.
@@ -110,6 +119,7 @@ impl SceneErrorKind {
         match self {
             Self::UnknownKey { key, .. }
             | Self::MissingKey { key, .. }
+            | Self::ExclusiveKeys { key, .. }
             | Self::WrongType { key, .. }
             | Self::InvalidValue { key, .. }
             | Self::NodeOutOfRange { key, .. }
@@ -150,6 +160,11 @@ impl fmt::Display for SceneErrorKind {
                 }
                 Ok(())
             }
+            Self::ExclusiveKeys { key, other, note } => write!(
+                f,
+                "key `{}` cannot be given together with `{other}`: {note}",
+                show_key(key)
+            ),
             Self::MissingKey { key, note } => {
                 write!(f, "key `{}`: missing required key", show_key(key))?;
                 if let Some(note) = note {

@@ -21,6 +21,7 @@ mod current;
 mod error;
 mod fatigue;
 mod input;
+mod pipe;
 mod raw;
 pub(crate) mod series;
 mod validate;
@@ -39,6 +40,7 @@ pub use error::{SceneError, SceneErrorKind};
 pub use input::{
     read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
+pub use pipe::{Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
     human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
@@ -286,6 +288,11 @@ pub struct Scene {
     pub beam: Beam,
     /// External loads.
     pub loads: Loads,
+    /// The beam described as a pipe (`[pipe]`), from which `beam`'s lengths, masses and spring
+    /// constants were derived; `None` when they were given directly.
+    pub pipe: Option<Pipe>,
+    /// The water (`[water]`): depth and density.
+    pub water: Water,
     /// Time grid.
     pub time: TimeGrid,
     /// Optional control.

@@ -8,7 +8,6 @@ use serde::{Deserialize, Serialize};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
-use super::builder::assemble_beam;
 use super::current::RawCurrent;
 use super::fatigue::RawFatigue;
 use super::validate::{check_size, node_index, positive_count};
@@ -37,6 +36,10 @@ fn is_positive_zero(x: &f64) -> bool {
 pub(super) struct RawScene {
     beam: RawBeam,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pipe: Option<super::Pipe>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    water: Option<super::Water>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     loads: Option<RawLoads>,
     time: RawTime,
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -51,9 +54,12 @@ pub(super) struct RawScene {
 #[serde(deny_unknown_fields)]
 struct RawBeam {
     pendulums: i64,
-    length: NumOrArray,
-    mass: NumOrArray,
-    stiffness: NumOrArray,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    length: Option<NumOrArray>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mass: Option<NumOrArray>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stiffness: Option<NumOrArray>,
     support: Support,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     base_stiffness: Option<f64>,
@@ -309,14 +315,16 @@ impl RawScene {
         RawScene {
             beam: RawBeam {
                 pendulums: to_i64(s.n()),
-                length: NumOrArray::compact(&b.lengths),
-                mass: NumOrArray::compact(&b.masses),
-                stiffness: NumOrArray::compact(&b.stiffness),
+                length: s.pipe.is_none().then(|| NumOrArray::compact(&b.lengths)),
+                mass: s.pipe.is_none().then(|| NumOrArray::compact(&b.masses)),
+                stiffness: s.pipe.is_none().then(|| NumOrArray::compact(&b.stiffness)),
                 support: b.support,
                 base_stiffness: Some(b.base_stiffness),
                 tip_stiffness: Some(b.tip_stiffness),
                 reaction_force: b.reaction_force,
             },
+            pipe: s.pipe,
+            water: (!s.water.is_default()).then_some(s.water),
             loads: Some(RawLoads {
                 gravity: s.loads.gravity,
                 drag: s.loads.drag,
@@ -345,15 +353,17 @@ impl RawScene {
         let steps = positive_count("time.steps", self.time.steps)?;
         check_size(n, steps, self.beam.support)?;
         let b = self.beam;
-        let beam = assemble_beam(
+        let water = self.water.unwrap_or_default();
+        let beam = super::pipe::BeamKeys {
             n,
-            b.length,
-            b.mass,
-            b.stiffness,
-            (b.base_stiffness, b.tip_stiffness),
-            b.support,
-            b.reaction_force,
-        )?;
+            length: b.length,
+            mass: b.mass,
+            stiffness: b.stiffness,
+            end_springs: (b.base_stiffness, b.tip_stiffness),
+            support: b.support,
+            reaction_force: b.reaction_force,
+        }
+        .into_beam(self.pipe.as_ref(), &water)?;
         let raw_loads = self.loads.unwrap_or_default();
         let mut points = Vec::with_capacity(raw_loads.point.len());
         for (i, p) in raw_loads.point.into_iter().enumerate() {
@@ -374,18 +384,22 @@ impl RawScene {
                 })
             }
         };
+        let mut current = raw_loads
+            .current
+            .map(RawCurrent::into_current)
+            .transpose()?;
+        super::pipe::reconcile_surface(&water, current.as_mut())?;
         Ok(Scene {
             beam,
+            pipe: self.pipe,
+            water,
             loads: Loads {
                 gravity: raw_loads.gravity,
                 drag: raw_loads.drag,
                 tension: raw_loads.tension,
                 axial_weight: raw_loads.axial_weight,
                 points,
-                current: raw_loads
-                    .current
-                    .map(RawCurrent::into_current)
-                    .transpose()?,
+                current,
             },
             time: TimeGrid {
                 step: self.time.step,

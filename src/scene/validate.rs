@@ -180,6 +180,10 @@ impl Scene {
         }
         check_finite("loads.gravity", self.loads.gravity)?;
         check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
+        if let Some(pipe) = &self.pipe {
+            pipe.check()?;
+        }
+        self.water.check()?;
         check_finite("loads.tension", self.loads.tension)?;
         check_range("loads.tension", self.loads.tension, &FORCE_RANGE)?;
         check_finite("loads.axial_weight", self.loads.axial_weight)?;

@@ -131,6 +131,10 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
     if let Some(("pipe", k, v)) = set {
         text.push_str(&format!("[pipe]\n{k} = {v}\n"));
     }
+    // `[loads.waves]` needs `[pipe]` (see `waves_scene`): rendered only when one of its keys is set.
+    if let Some(("loads.waves", k, v)) = set {
+        text.push_str(&format!("[loads.waves]\n{k} = {v}\n"));
+    }
     text
 }
 
@@ -182,7 +186,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 56, "number of documented keys");
+    assert_eq!(checked, 64, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -299,6 +303,47 @@ fn every_documented_key_is_read() {
             with_pipe,
             "pipe.{key} changed nothing"
         );
+    }
+    // `[loads.waves]` on a pipe (it needs its diameter), JONSWAP by default.
+    let waves = |set: Option<(&str, &str)>| {
+        let mut w = vec![
+            ("spectrum", "\"jonswap\""),
+            ("hs", "2.0"),
+            ("tp", "8.0"),
+            ("components", "64"),
+        ];
+        match set {
+            Some((k, v)) if w.iter().any(|(key, _)| *key == k) => w
+                .iter_mut()
+                .filter(|(key, _)| *key == k)
+                .for_each(|e| e.1 = v),
+            Some(kv) => w.push(kv),
+            None => {}
+        }
+        let body: String = w.iter().map(|(k, v)| format!("{k} = {v}\n")).collect();
+        let text = render(None)
+            .replace("length = 1.0\n", "")
+            .replace("mass = 1.0\n", "")
+            .replace("stiffness = 100.0\n", "");
+        let text = format!(
+            "{text}[pipe]\nlength = 10.0\nouter_diameter = 0.5\nwall_thickness = 0.02\n\n\
+             [loads.waves]\n{body}"
+        );
+        Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"))
+    };
+    let with_waves = waves(None);
+    for (key, value) in [
+        ("spectrum", "\"pierson-moskowitz\""),
+        ("hs", "3.0"),
+        ("tp", "9.0"),
+        ("gamma", "2.0"),
+        ("seed", "5"),
+        ("direction", "180.0"),
+        ("components", "65"),
+    ] {
+        assert!(doc["loads.waves"].contains_key(key), "loads.waves.{key}");
+        seen.insert(format!("loads.waves.{key}"));
+        assert_ne!(waves(Some((key, value))), with_waves, "loads.waves.{key}");
     }
     for &(table, key, value) in settings {
         assert!(doc[table].contains_key(key), "{table}.{key} not documented");

@@ -156,8 +156,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         let (ch, hh) = (self.ch, 0.5 * self.h);
         self.phbar.copy_from_slice(&self.bbar);
         if ch.has_dissipation() {
+            // The dissipative force of step k → k + 1 is read at its midpoint (both halves).
+            let k = ctx1.step - 1;
+            let dctx = ch.dissipation_ctx(self.t0 + k as f64 * self.h, self.h, k);
             for i in 0..ch.n() {
-                if let Some((_, slope)) = ch.dissipative_slope(i, &sk1.phalf[i], ctx1) {
+                if let Some((_, slope)) = ch.dissipative_slope(i, &sk1.phalf[i], &dctx) {
                     self.phbar[i] = slope.identity_plus_scaled_apply(hh, &self.bbar[i]);
                 }
             }
@@ -165,7 +168,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 ch,
                 &self.drag_params,
                 (sk1.phalf, &self.bbar),
-                ctx1,
+                &dctx,
                 hh,
                 cot,
             );
@@ -235,7 +238,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
         if ch.has_dissipation() {
-            let ctx = Ctx::new(self.t0 + k as f64 * h, D::zero(), k);
+            let ctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
             dissipation_contraction(
                 ch,
                 &self.drag_params,

@@ -21,7 +21,8 @@ pub(crate) use geometry::{dot, e2};
 pub use terms::{
     AxialWeight, BlockSym, ControlForce, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm,
     Drag, DualScratch, Embed, ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads,
-    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension,
+    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia,
+    WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -54,8 +55,10 @@ pub struct Chain<D, const DIM: usize> {
     /// along z, u_x = 0). Read into [`Ctx::ux`] by [`Chain::ctx`].
     pub(crate) control_x: Vec<D>,
     pub(crate) drag: Option<Drag<D>>,
-    /// Drag relative to a current; replaces `drag` when the scene has a current.
+    /// Drag relative to the water (a current, waves or both); replaces `drag` then.
     pub(crate) current: Option<CurrentDrag<D, DIM>>,
+    /// The waves' inertia load (`[loads.waves]`).
+    pub(crate) wave_inertia: Option<WaveInertia>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -187,6 +190,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }
         });
         let loads: Vec<_> = loads.collect();
+        let waves = Self::wave_field(scene)?;
+        let water_drag =
+            scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0);
         Ok(Chain {
             n,
             inv_lengths: lengths.iter().map(|l| l.recip()).collect(),
@@ -213,17 +219,42 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 lengths: lengths.clone(),
             }),
             control_x: Vec::new(),
-            drag: (scene.loads.drag > 0.0 && scene.loads.current.is_none()).then(|| Drag {
+            drag: (scene.loads.drag > 0.0 && !water_drag).then(|| Drag {
                 d: D::from(scene.loads.drag),
             }),
-            current: scene
-                .loads
-                .current
-                .as_ref()
-                .map(|c| CurrentDrag::new(c, D::from(scene.loads.drag), &lengths, &masses)),
+            current: water_drag.then(|| {
+                let c = scene.loads.current.as_ref();
+                let d = D::from(scene.loads.drag);
+                CurrentDrag::new(c, waves.clone(), d, &lengths, &masses)
+            }),
+            wave_inertia: waves.map(WaveInertia::new),
             lengths,
             masses,
         })
+    }
+
+    /// The waves' field of a scene with `[loads.waves]` ([`WaveField`]; the scene is valid):
+    /// its sea realised on the scene's grid, the pipe's inertia coefficient
+    /// ρ_w (1 + C_a) A_o and the nodes' masses.
+    fn wave_field(scene: &Scene) -> Result<Option<std::sync::Arc<WaveField>>> {
+        let (Some(w), Some(pipe)) = (&scene.loads.waves, &scene.pipe) else {
+            return Ok(None);
+        };
+        let spec = w.sea_spec(scene.wave_depth())?;
+        let t = scene.time;
+        let err = |e| Error::from(crate::scene::sea_error(e, w.components));
+        let sea = crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step).map_err(err)?;
+        let inputs = WaveInputs {
+            lengths: scene.beam.lengths.clone(),
+            masses: scene.beam.masses.clone(),
+            inertia_per_length: scene.water.density
+                * (1.0 + pipe.added_mass_coefficient)
+                * pipe.outer_area(),
+            direction: w.unit_direction(),
+            rows: t.steps + 1,
+        };
+        let field = WaveField::new(std::sync::Arc::new(sea), inputs).map_err(err)?;
+        Ok(Some(std::sync::Arc::new(field)))
     }
 
     /// The springs a scene's support has (docs/conventions.md): interior k₂..kₙ always, k₁ except for
@@ -285,6 +316,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             control_x: self.control_x.iter().map(|x| D2::from(x.re())).collect(),
             drag: self.drag.as_ref().map(|t| t.lift()),
             current: self.current.as_ref().map(|t| t.lift()),
+            wave_inertia: self.wave_inertia.clone(),
         }
     }
 
@@ -305,6 +337,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             v.visit(t)?;
         }
         if let Some(t) = &self.control {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.wave_inertia {
             v.visit(t)?;
         }
         Ok(())
@@ -346,6 +381,17 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The still-water drag term, if the scene has drag and no current.
     pub fn drag(&self) -> Option<&Drag<D>> {
         self.drag.as_ref()
+    }
+
+    /// The waves' field (kinematics over the record), if the scene has waves.
+    pub fn waves(&self) -> Option<&WaveField> {
+        self.wave_inertia.as_ref().map(WaveInertia::field)
+    }
+
+    /// The surface elevation η(0, t) \[m\] of the scene's waves at x = z = 0 (`None` without
+    /// waves).
+    pub fn wave_elevation(&self, t: f64) -> Option<f64> {
+        self.waves().map(|w| w.elevation(t))
     }
 
     /// The drag relative to the current, if the scene has a current.
@@ -477,7 +523,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     g.masses.iter_mut().for_each(|m| *m = value);
                 }
                 if let Some(c) = &mut self.current {
-                    c.refresh(&self.lengths, &self.masses);
+                    c.refresh(&self.lengths, &self.masses)
+                        .map_err(|e| crate::scene::sea_error(e, None))?;
                 }
                 self.refresh_inverses();
             }

@@ -19,8 +19,10 @@ pub mod spectrum;
 pub mod waves;
 
 pub use dispersion::wavenumber;
+/// The complex numbers of the amplitudes (`rustfft`'s `num_complex`).
+pub use rustfft::num_complex::Complex;
 pub use spectrum::{Spectrum, SpectrumKind};
-pub use waves::{depth_profile, Sea, SeaSpec, WaveRecord};
+pub use waves::{depth_profile, Sea, SeaSpec, Synthesis, WaveRecord};
 
 use thiserror::Error;
 

@@ -347,6 +347,72 @@ impl Sea {
         Ok(rec)
     }
 
+    /// The complex amplitudes of the horizontal particle velocity at height y above the seabed,
+    /// Vⱼ = ωⱼ aⱼ e^{iφⱼ} cosh(kⱼ y)/sinh(kⱼ d), written into `out` (one per component):
+    /// u(y, t) = Re Σⱼ Vⱼ e^{iωⱼ t} and u̇(y, t) = Re Σⱼ i ωⱼ Vⱼ e^{iωⱼ t} (linear Airy theory,
+    /// DNV-RP-C205 Table 3-1; [`Sea::velocity`]).
+    pub fn velocity_amplitudes(&self, y: f64, out: &mut [Complex<f64>]) {
+        for (j, o) in out.iter_mut().enumerate().take(self.omega.len()) {
+            let w = self.omega[j];
+            *o = self.phasor[j] * (w * depth_profile(self.k[j], y, self.spec.depth));
+        }
+    }
+
+    /// The complex amplitudes aⱼ e^{iφⱼ} of the elevation: η(0, t) = Re Σⱼ aⱼ e^{iφⱼ} e^{iωⱼ t}.
+    pub fn elevation_amplitudes(&self) -> &[Complex<f64>] {
+        &self.phasor
+    }
+
+    /// Re Σⱼ Xⱼ e^{iωⱼ t} at any time t by the direct sum, O(N) (the reference for
+    /// [`Sea::synthesize`], and its continuation beyond a synthesised record).
+    pub fn sum_at(&self, x: &[Complex<f64>], t: f64) -> f64 {
+        let mut s = 0.0;
+        for (j, c) in x.iter().enumerate().take(self.omega.len()) {
+            let a = self.omega[j] * t;
+            s += c.re * libm::cos(a) - c.im * libm::sin(a);
+        }
+        s
+    }
+
+    /// A reusable inverse FFT of length M for [`Sea::synthesize`].
+    pub fn synthesis(&self) -> Synthesis {
+        let m = self.fft_len;
+        let fft = FftPlanner::<f64>::new().plan_fft_inverse(m);
+        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        Synthesis {
+            fft,
+            buf: vec![Complex::new(0.0, 0.0); m],
+            scratch,
+        }
+    }
+
+    /// Two real series at once on the grid tₖ = k h, k = 0..`rows`, by one inverse FFT of length
+    /// M: `out(k, xₖ, yₖ)` with xₖ = Re Σⱼ Xⱼ e^{iωⱼ tₖ} and yₖ = Re Σⱼ Yⱼ e^{iωⱼ tₖ} (one
+    /// amplitude per component; k is taken modulo M beyond the repeat period). O(M log M)
+    /// instead of the direct sum's O(N) per time.
+    pub fn synthesize(
+        &self,
+        (x, y): (&[Complex<f64>], &[Complex<f64>]),
+        rows: usize,
+        plan: &mut Synthesis,
+        mut out: impl FnMut(usize, f64, f64),
+    ) {
+        let zero = Complex::new(0.0, 0.0);
+        self.fill(&mut plan.buf, |j| {
+            (
+                x.get(j).copied().unwrap_or(zero),
+                y.get(j).copied().unwrap_or(zero),
+            )
+        });
+        plan.fft
+            .process_with_scratch(&mut plan.buf, &mut plan.scratch);
+        let m = plan.buf.len();
+        for k in 0..rows {
+            let z = plan.buf[k % m];
+            out(k, z.re, z.im);
+        }
+    }
+
     /// Fills the input of the inverse FFT so that its output is xₘ + i yₘ with the two real
     /// series xₘ = Re Σⱼ Xⱼ e^{2πi j m/M} and yₘ = Re Σⱼ Yⱼ e^{2πi j m/M}, where
     /// `coef(j) = (Xⱼ, Yⱼ)` for component j (frequency (j + 1) Δω): bin j + 1 gets (Xⱼ + i Yⱼ)/2
@@ -362,6 +428,21 @@ impl Sea {
             buf[bin] += (x + i * y) * 0.5;
             buf[(m - bin) % m] += (x.conj() + i * y.conj()) * 0.5;
         }
+    }
+}
+
+/// A planned inverse FFT with its buffers ([`Sea::synthesis`], [`Sea::synthesize`]).
+pub struct Synthesis {
+    fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    buf: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl std::fmt::Debug for Synthesis {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Synthesis")
+            .field("len", &self.buf.len())
+            .finish()
     }
 }
 

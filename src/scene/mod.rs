@@ -26,6 +26,7 @@ mod raw;
 pub(crate) mod series;
 mod validate;
 mod values;
+mod waves;
 
 use std::path::Path;
 
@@ -48,6 +49,7 @@ pub use validate::{
     MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, trajectory_bytes};
+pub use waves::{sea_error, WaveSpectrum, Waves, DEFAULT_GAMMA};
 
 use raw::RawScene;
 
@@ -230,6 +232,9 @@ pub struct Loads {
     /// A steady current along the depth (`[loads.current]`); with it the drag acts on the
     /// velocity relative to the water.
     pub current: Option<Current>,
+    /// An irregular sea state (`[loads.waves]`): the water velocity is the current's plus the
+    /// waves' particle velocity, and the waves add their inertia load.
+    pub waves: Option<Waves>,
 }
 
 /// The time grid t_k = k h, k = 0..=N.
@@ -320,6 +325,19 @@ impl Scene {
                 .as_ref()
                 .is_some_and(|c| c.spatial_key().is_some())
             || self.has_two_axis_control()
+            || self
+                .loads
+                .waves
+                .is_some_and(|w| w.unit_direction()[0] != 0.0)
+    }
+
+    /// The water depth d \[m\] of the waves (and the current): `[water] depth`, else the
+    /// current's `surface`, else the beam's length (its top at the mean surface).
+    pub fn wave_depth(&self) -> f64 {
+        self.water
+            .depth
+            .or_else(|| self.loads.current.as_ref().and_then(|c| c.surface))
+            .unwrap_or_else(|| self.beam.lengths.iter().sum())
     }
 
     /// Whether the scene's control is 2-axis (`values` written as pairs [u_x, u_z]).
@@ -345,7 +363,12 @@ impl Scene {
             Some(format!("loads.point[{i}].{key}"))
         });
         let current = self.loads.current.as_ref().and_then(Current::spatial_key);
-        points.or_else(|| current.map(String::from))
+        let waves = self
+            .loads
+            .waves
+            .is_some_and(|w| w.unit_direction()[0] != 0.0)
+            .then_some("loads.waves.direction");
+        points.or_else(|| current.or(waves).map(String::from))
     }
 }
 

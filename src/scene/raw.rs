@@ -84,6 +84,8 @@ struct RawLoads {
     point: Vec<RawPoint>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     current: Option<RawCurrent>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    waves: Option<super::waves::RawWaves>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -332,6 +334,11 @@ impl RawScene {
                 axial_weight: s.loads.axial_weight,
                 point: s.loads.points.iter().map(RawPoint::from_load).collect(),
                 current: s.loads.current.as_ref().map(RawCurrent::from_current),
+                waves: s
+                    .loads
+                    .waves
+                    .as_ref()
+                    .map(super::waves::RawWaves::from_waves),
             }),
             time: RawTime {
                 step: s.time.step,
@@ -400,6 +407,10 @@ impl RawScene {
                 axial_weight: raw_loads.axial_weight,
                 points,
                 current,
+                waves: raw_loads
+                    .waves
+                    .map(super::waves::RawWaves::into_waves)
+                    .transpose()?,
             },
             time: TimeGrid {
                 step: self.time.step,

@@ -202,6 +202,9 @@ impl Scene {
         }
         check_positive("time.step", self.time.step)?;
         check_range("time.step", self.time.step, &STEP_RANGE)?;
+        if let Some(w) = &self.loads.waves {
+            w.check(self)?;
+        }
         let t_end = self.time.steps as f64 * self.time.step;
         for (i, p) in self.loads.points.iter().enumerate() {
             check_series_coverage(i, p, t_end)?;

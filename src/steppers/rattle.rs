@@ -414,7 +414,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let mut iterations = 0;
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
-            half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), h, &mut ws.half);
+            let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
+            half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), (h, &dctx), &mut ws.half);
             ch.apply_inverse_mass(&ws.half.phalf, &mut ws.tmp);
             for i in 0..ch.n() {
                 ws.qnew[i] = std::array::from_fn(|d| state.q[i][d] + ws.tmp[i][d] * h);
@@ -492,10 +493,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let ws = &mut self.ws;
         let t1 = self.t0 + (k + 1) as f64 * h;
         ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
-        let ctx = Ctx::new(t1, u_k1, k + 1);
+        let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
         for i in 0..ch.n() {
             let ph = &ws.half.phalf[i];
-            let f = ch.dissipative_force(i, ph, &ctx);
+            let f = ch.dissipative_force(i, ph, &dctx);
             for d in 0..DIM {
                 let mut b = ph[d] - ws.force[i][d] * hh;
                 if let Some(f) = &f {
@@ -593,7 +594,7 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     q: &[[D; DIM]],
     (a, lam): (&[[D; DIM]], &[D]),
-    h: f64,
+    (h, ctx): (f64, &Ctx<D>),
     out: &mut HalfStep<D, DIM>,
 ) {
     out.c.copy_from_slice(a);
@@ -602,10 +603,9 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
     match ch.dissipation_count() {
         0 => out.phalf.copy_from_slice(&out.c),
         terms => {
-            let ctx = Ctx::new(0.0, D::zero(), 0);
             let pw = out.phalf.iter_mut().zip(&mut out.w);
             for (i, (c, (p, w))) in out.c.iter().zip(pw).enumerate() {
-                (*p, *w) = ch.dissipative_half_step(terms, i, c, h, &ctx);
+                (*p, *w) = ch.dissipative_half_step(terms, i, c, h, ctx);
             }
         }
     }

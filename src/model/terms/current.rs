@@ -25,7 +25,10 @@
 //! model, F stays a function of each pendulum's own momentum, and RATTLE's implicit half step
 //! keeps its closed form.
 
+use std::sync::Arc;
+
 use super::drag::{morison, root_of, slope_of};
+use super::waves::WaveField;
 use super::{BlockSym, Ctx, DissipativeTerm, Embed};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
@@ -36,6 +39,10 @@ use crate::scene::{current_velocity, Current};
 /// scene has a current. P = s·A + B is stored as its two parts (s the speed parameter), so that
 /// the speed, the drag constant and the (uniform) mass are parameters with dual-number
 /// derivatives.
+///
+/// With waves (`[loads.waves]`) the water velocity is the current's plus the waves' particle
+/// velocity, U_k(t) = U(y_k) + u_k(t) e, and P gains the time-dependent share Wᵢ(t) e
+/// ([`WaveField::momentum`], read at the context's time): one term, the same drag.
 #[derive(Clone, Debug)]
 pub struct CurrentDrag<D, const DIM: usize> {
     pub(crate) d: D,
@@ -50,11 +57,27 @@ pub struct CurrentDrag<D, const DIM: usize> {
     offset: Vec<[D; DIM]>,
     /// m₁, for the mass seed (P ∝ m for uniform masses).
     mass: D,
+    /// The waves' share of P, if the scene has waves.
+    waves: Option<Arc<WaveField>>,
+    /// The waves' direction e in the model's components.
+    wave_unit: [f64; DIM],
+    /// m₁ / re(m₁): the derivative of the waves' share under a dual mass.
+    wave_scale: D,
 }
 
 impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
-    /// The term for `current` with drag constant `drag` on a chain with these lengths and masses.
-    pub(crate) fn new(current: &Current, drag: D, lengths: &[D], masses: &[D]) -> Self {
+    /// The term for `current` (none: still water) and `waves` (none: no waves) with drag
+    /// constant `drag` on a chain with these lengths and masses.
+    pub(crate) fn new(
+        current: Option<&Current>,
+        waves: Option<Arc<WaveField>>,
+        drag: D,
+        lengths: &[D],
+        masses: &[D],
+    ) -> Self {
+        let still = Current::uniform(0.0, [0.0, 1.0]);
+        let reads_speed = current.is_some_and(|c| c.speed().is_some());
+        let current = current.unwrap_or(&still);
         let total: f64 = lengths.iter().map(|l| l.re()).sum();
         let surface = current.surface.unwrap_or(total);
         let embed = |v: [f64; 2]| {
@@ -74,22 +97,51 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             fixed.push(embed(b));
         }
         let n = lengths.len();
+        let wave_unit = waves.as_ref().map_or([0.0; DIM], |w| embed(w.direction()));
         let mut term = CurrentDrag {
             d: drag,
             speed: D::from(current.speed().unwrap_or(0.0)),
-            reads_speed: current.speed().is_some(),
+            reads_speed,
             unit,
             fixed,
             per_speed: vec![[D::zero(); DIM]; n],
             offset: vec![[D::zero(); DIM]; n],
             mass: masses[0],
+            waves,
+            wave_unit,
+            wave_scale: D::one(),
         };
-        term.refresh(lengths, masses);
+        let (mut sa, mut sb) = ([D::zero(); DIM], [D::zero(); DIM]);
+        for i in (0..n).rev() {
+            for d in 0..DIM {
+                sa[d] += masses[i] * term.unit[i][d];
+                sb[d] += masses[i] * term.fixed[i][d];
+                term.per_speed[i][d] = lengths[i] * sa[d];
+                term.offset[i][d] = lengths[i] * sb[d];
+            }
+        }
         term
     }
 
-    /// Recomputes A and B for new lengths and masses (O(n): suffix sums).
-    pub(crate) fn refresh(&mut self, lengths: &[D], masses: &[D]) {
+    /// Recomputes A and B for new lengths and masses (O(n): suffix sums), and the waves' share
+    /// (an FFT per pendulum, [`WaveField::with_masses`]).
+    ///
+    /// # Errors
+    /// [`crate::ocean::SeaError::TooLarge`] when the new record's memory is refused.
+    pub(crate) fn refresh(
+        &mut self,
+        lengths: &[D],
+        masses: &[D],
+    ) -> std::result::Result<(), crate::ocean::SeaError> {
+        if let Some(w) = &self.waves {
+            let m: Vec<f64> = masses.iter().map(|m| m.re()).collect();
+            if m != w.masses() {
+                self.waves = Some(Arc::new(w.with_masses(&m)?));
+            }
+            // The series are computed with the masses' real parts; their derivative enters
+            // through P ∝ m (uniform masses, the only ones the mass parameter sets).
+            self.wave_scale = masses[0] / D::from(masses[0].re());
+        }
         let (mut sa, mut sb) = ([D::zero(); DIM], [D::zero(); DIM]);
         for i in (0..lengths.len()).rev() {
             for d in 0..DIM {
@@ -100,6 +152,7 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             }
         }
         self.mass = masses[0];
+        Ok(())
     }
 
     /// The same term over another scalar (real parts).
@@ -118,14 +171,27 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             per_speed: l(&self.per_speed),
             offset: l(&self.offset),
             mass: D2::from(self.mass.re()),
+            waves: self.waves.clone(),
+            wave_unit: self.wave_unit,
+            wave_scale: D2::from(self.wave_scale.re()),
         }
+    }
+
+    /// The waves' field, if the scene has waves.
+    pub fn waves(&self) -> Option<&WaveField> {
+        self.waves.as_deref()
     }
 
     /// The current's momentum Pᵢ_d = s·Aᵢ_d + Bᵢ_d, its parameters read through [`Ctx::param`].
     #[inline]
     pub fn momentum<E: Embed<D>>(&self, i: usize, d: usize, ctx: &Ctx<E>) -> E {
         let s = ctx.param(Parameter::CurrentSpeed, self.speed);
-        let p = s * E::embed(self.per_speed[i][d]) + E::embed(self.offset[i][d]);
+        let mut p = s * E::embed(self.per_speed[i][d]) + E::embed(self.offset[i][d]);
+        if let Some(w) = &self.waves {
+            if self.wave_unit[d] != 0.0 {
+                p += E::embed(self.wave_scale) * (w.momentum(i, ctx.t) * self.wave_unit[d]);
+            }
+        }
         if ctx.seed == Some(Parameter::Mass) {
             // P ∝ m for uniform masses: P(m) = P · m/m₁ with m seeded.
             return p * ctx.param(Parameter::Mass, self.mass) / E::embed(self.mass);
@@ -136,7 +202,11 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
 
 impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM> {
     fn name(&self) -> &'static str {
-        "current drag"
+        if self.waves.is_some() {
+            "water drag"
+        } else {
+            "current drag"
+        }
     }
 
     #[inline]

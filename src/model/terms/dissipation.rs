@@ -397,6 +397,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         v.sum
     }
 
+    /// The context of the dissipative terms in RATTLE's step k → k + 1 from t_k (forward and
+    /// reverse alike): both half steps read F at p_{k+½}, so they read a time-dependent term
+    /// (the waves' water momentum) at the midpoint t_k + h/2; u = 0 (no term reads it).
+    #[inline]
+    pub fn dissipation_ctx(&self, t_k: f64, h: f64, k: usize) -> Ctx<D> {
+        Ctx::new(t_k + 0.5 * h, D::zero(), k)
+    }
+
     /// Σ_T ∂F_T(pᵢ)/∂θ on pendulum `i` (zero when no term reads θ).
     pub fn dissipative_parameter_derivative(
         &self,

@@ -39,6 +39,7 @@ mod gravity;
 mod point_load;
 mod reaction_tip;
 mod spring;
+mod waves;
 
 pub use crate::scene::current_velocity;
 pub use axial::{AxialWeight, TopTension};
@@ -50,6 +51,7 @@ pub use gravity::Gravity;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;
+pub use waves::{WaveField, WaveInertia, WaveInputs};
 
 use crate::base::{Parameter, Scalar};
 use crate::error::Result;

@@ -238,3 +238,25 @@ impl RawWaves {
         })
     }
 }
+
+impl Scene {
+    /// The surface elevation η(0, t_k) \[m\] at x = z = 0 of the scene's waves at every time of
+    /// its grid, k = 0..=N (`None` without `[loads.waves]`), by one inverse FFT: the same sea,
+    /// bit for bit, as the model's ([`crate::model::WaveField::elevation`]).
+    ///
+    /// # Errors
+    /// The waves' [`SceneError`]s (see [`Waves::spectrum`]; the scene is normally validated).
+    pub fn wave_elevation(&self) -> Result<Option<Vec<f64>>, SceneError> {
+        let Some(w) = &self.loads.waves else {
+            return Ok(None);
+        };
+        let spec = w.sea_spec(self.wave_depth())?;
+        let t = self.time;
+        let sea = Sea::new(&spec, t.step, t.steps as f64 * t.step)
+            .map_err(|e| sea_error(e, w.components))?;
+        let record = sea
+            .record(&[], t.steps)
+            .map_err(|e| sea_error(e, w.components))?;
+        Ok(Some(record.elevations().to_vec()))
+    }
+}

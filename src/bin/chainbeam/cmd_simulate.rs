@@ -32,12 +32,17 @@ A spatial scene (a load or a 2-axis control with an x component) has two more co
   moment_x the x component M₀ₓ(t_k) = 2·k₁·x₁/l₁² [Nm] of the base moment vector (M₀ₓ, M₀); the
            objectives use |M₀|² = M₀ₓ² + M₀²
   control_x the x component u_x,k [N] of a 2-axis control (0 for a control along z)
+  eta      the surface elevation η(t_k) [m] at x = z = 0 of a scene with [loads.waves] (only
+           then; before control)
   control  the control force u_k [N] applied at t_k (0 without a control; its z component for a
            2-axis control); always the last column
+--columns t,eta,moment writes those columns only, in that order (any of the above names);
+--every K writes the rows k = 0, K, 2K, … only (both for CSV and .npy).
 Numbers are written as the shortest decimal that reads back to the same double.
 
 NumPy (--format npy, or an --output name ending in .npy): one C-ordered float64 array of shape \
-(N + 1, 3n + 4), or (N + 1, 3n + 6) for a spatial scene, with the same columns in the same order \
+(N + 1, 3n + 4), or (N + 1, 3n + 6) for a spatial scene (one more with waves), with the same \
+columns in the same order (and the same --columns and --every) \
 (np.load(FILE); positions are a[:, 3:3 + 3n].reshape(-1, n, 3), the control a[:, -1]).
 
 Sign convention: a load F > 0 enters H as +F·z and pushes toward −z (and F_x > 0 of a vector load \
@@ -63,6 +68,13 @@ pub struct SimulateArgs {
     pub format: Option<Format>,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     pub output: Option<PathBuf>,
+    /// Write only these columns, in this order (comma-separated names of the CSV's header, e.g.
+    /// `t,eta,moment`) [default: all].
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub columns: Option<Vec<String>>,
+    /// Write every K-th row only: t_k for k = 0, K, 2K, … (K ≥ 1) [default: 1, every row].
+    #[arg(long, value_name = "K", default_value_t = std::num::NonZeroUsize::MIN)]
+    pub every: std::num::NonZeroUsize,
 }
 
 /// The trajectory's file format.
@@ -94,6 +106,11 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         ));
     }
     let scene = load_scene(&a.scene)?;
+    let eta = scene
+        .wave_elevation()
+        .map_err(|e| lib_error(&a.scene, e.into()))?;
+    let names = csv_names(scene.n(), scene.is_spatial(), eta.is_some());
+    let select = select_columns(&names, a.columns.as_deref())?;
     let mut inputs = Inputs::new();
     inputs.scene(&a.scene, &scene);
     let controls = match &a.controls {
@@ -118,12 +135,28 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     spinner.finish_and_clear();
     let traj = traj.map_err(|e| lib_error(&a.scene, e))?;
     check_trajectory(&a.scene, &traj)?;
-
+    if let Some(k) = eta
+        .as_ref()
+        .and_then(|e| e.iter().position(|v| !v.is_finite()))
+    {
+        return Err(CliError::msg(format!(
+            "{}: the wave elevation is not finite in column `eta` at step {k}; nothing was \
+             written",
+            a.scene.display()
+        )));
+    }
+    let table = Table {
+        traj: &traj,
+        eta: eta.as_deref(),
+        names: &names,
+        select: &select,
+        every: a.every.get(),
+    };
     let mut sink = out.open()?;
     let bar = progress.bar(traj.steps() as u64 + 1, "writing rows");
     let written = match format {
-        Format::Csv => write_csv(sink.writer(), &traj, &bar),
-        Format::Npy => write_npy(sink.writer(), &traj, &bar),
+        Format::Csv => write_csv(sink.writer(), &table, &bar),
+        Format::Npy => write_npy(sink.writer(), &table, &bar),
     };
     bar.finish_and_clear();
     if let Err(e) = written {
@@ -185,50 +218,111 @@ fn check_trajectory(path: &Path, traj: &SceneTrajectory) -> Result<(), CliError>
     Ok(())
 }
 
-/// The CSV header: `t,energy,moment,x1,y1,z1,...,xn,yn,zn,control`; a spatial scene
-/// (`spatial`) has `moment_x,control_x` before `control`, which stays the last column.
-pub fn csv_header(n: usize, spatial: bool) -> String {
-    let mut h = String::from("t,energy,moment");
+/// The names of the CSV's columns (see [`LONG_ABOUT`]): `t,energy,moment`, the positions,
+/// `moment_x,control_x` for a spatial scene, `eta` for a scene with waves, `control` last.
+fn csv_names(n: usize, spatial: bool, waves: bool) -> Vec<String> {
+    let mut h: Vec<String> = ["t", "energy", "moment"].map(String::from).to_vec();
     for i in 1..=n {
-        h.push_str(&format!(",x{i},y{i},z{i}"));
+        h.extend([format!("x{i}"), format!("y{i}"), format!("z{i}")]);
     }
     if spatial {
-        h.push_str(",moment_x,control_x");
+        h.extend(["moment_x".to_string(), "control_x".to_string()]);
     }
-    h.push_str(",control\n");
+    if waves {
+        h.push("eta".to_string());
+    }
+    h.push("control".to_string());
     h
 }
 
-/// The number of columns of [`csv_header`]: 3n + 4 (planar) or 3n + 6 (spatial).
-fn columns(traj: &SceneTrajectory) -> usize {
-    4 + 3 * traj.n() + if traj.is_spatial() { 2 } else { 0 }
+/// The indices of `--columns` in `names` (all columns without the flag); an unknown or
+/// repeated name is an error naming the flag.
+fn select_columns(names: &[String], wanted: Option<&[String]>) -> Result<Vec<usize>, CliError> {
+    let Some(wanted) = wanted else {
+        return Ok((0..names.len()).collect());
+    };
+    let mut out = Vec::with_capacity(wanted.len());
+    for w in wanted {
+        let w = w.trim();
+        let Some(i) = names.iter().position(|n| n == w) else {
+            let hint = if w == "eta" {
+                " (`eta` needs [loads.waves] in the scene)"
+            } else {
+                ""
+            };
+            return Err(CliError::msg(format!(
+                "--columns: no column `{w}` in this scene's output{hint}; the columns are {}",
+                names.join(",")
+            )));
+        };
+        if out.contains(&i) {
+            return Err(CliError::msg(format!("--columns: `{w}` is given twice")));
+        }
+        out.push(i);
+    }
+    if out.is_empty() {
+        return Err(CliError::msg("--columns: give at least one column name"));
+    }
+    Ok(out)
 }
 
-/// One row of the trajectory at step k, in the column order of [`csv_header`].
-fn row(traj: &SceneTrajectory, k: usize, out: &mut Vec<f64>) {
-    out.clear();
-    out.extend([traj.time(k), traj.energy()[k], traj.moment()[k]]);
-    for r in traj.positions(k) {
-        out.extend(r);
+/// What is written: the trajectory's columns (and η), the selected columns, every K-th row.
+struct Table<'a> {
+    traj: &'a SceneTrajectory,
+    eta: Option<&'a [f64]>,
+    names: &'a [String],
+    select: &'a [usize],
+    every: usize,
+}
+
+impl Table<'_> {
+    /// The steps written: k = 0, K, 2K, … ≤ N.
+    fn steps(&self) -> impl Iterator<Item = usize> {
+        (0..=self.traj.steps()).step_by(self.every)
     }
-    if traj.is_spatial() {
-        out.push(traj.moment_x()[k]);
-        out.push(traj.controls_x().get(k).copied().unwrap_or(0.0));
+
+    fn rows(&self) -> usize {
+        self.traj.steps() / self.every + 1
     }
-    out.push(traj.controls()[k]);
+
+    /// The selected values of row k (`all`: scratch for the full row).
+    fn row(&self, k: usize, all: &mut Vec<f64>, out: &mut Vec<f64>) {
+        let traj = self.traj;
+        all.clear();
+        all.extend([traj.time(k), traj.energy()[k], traj.moment()[k]]);
+        for r in traj.positions(k) {
+            all.extend(r);
+        }
+        if traj.is_spatial() {
+            all.push(traj.moment_x()[k]);
+            all.push(traj.controls_x().get(k).copied().unwrap_or(0.0));
+        }
+        if let Some(eta) = self.eta {
+            all.push(eta[k]);
+        }
+        all.push(traj.controls()[k]);
+        out.clear();
+        out.extend(self.select.iter().map(|&i| all[i]));
+    }
 }
 
 fn write_csv(
     w: &mut dyn Write,
-    traj: &SceneTrajectory,
+    table: &Table<'_>,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
-    w.write_all(csv_header(traj.n(), traj.is_spatial()).as_bytes())?;
-    let mut values = Vec::with_capacity(columns(traj));
-    let mut line = Vec::with_capacity(24 * columns(traj));
+    let header: Vec<&str> = table
+        .select
+        .iter()
+        .map(|&i| table.names[i].as_str())
+        .collect();
+    w.write_all(header.join(",").as_bytes())?;
+    w.write_all(b"\n")?;
+    let (mut all, mut values) = (Vec::with_capacity(table.names.len()), Vec::new());
+    let mut line = Vec::with_capacity(24 * table.select.len());
     let mut buf = zmij::Buffer::new();
-    for k in 0..=traj.steps() {
-        row(traj, k, &mut values);
+    for k in table.steps() {
+        table.row(k, &mut all, &mut values);
         line.clear();
         for (j, v) in values.iter().enumerate() {
             if j > 0 {
@@ -247,15 +341,15 @@ fn write_csv(
 
 fn write_npy(
     w: &mut dyn Write,
-    traj: &SceneTrajectory,
+    table: &Table<'_>,
     bar: &indicatif::ProgressBar,
 ) -> std::io::Result<()> {
-    let columns = columns(traj);
-    w.write_all(&npy::header(&[traj.steps() + 1, columns]))?;
-    let mut values = Vec::with_capacity(columns);
+    let columns = table.select.len();
+    w.write_all(&npy::header(&[table.rows(), columns]))?;
+    let (mut all, mut values) = (Vec::with_capacity(table.names.len()), Vec::new());
     let mut bytes = Vec::with_capacity(8 * columns);
-    for k in 0..=traj.steps() {
-        row(traj, k, &mut values);
+    for k in table.steps() {
+        table.row(k, &mut all, &mut values);
         npy::write_row(w, &mut bytes, &values)?;
         if k % 1024 == 0 {
             bar.set_position(k as u64);

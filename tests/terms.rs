@@ -301,8 +301,33 @@ impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Check<D, DIM> {
     }
 }
 
+/// [`all_terms_scene`] described as a pipe (for the inertia coefficient) in irregular waves
+/// (`[loads.waves]`, issue 30) at 40° (spatial) or 180° (planar), with a current in the spatial
+/// case: the wave inertia load joins the conservative terms and the drag is relative to the
+/// water (current + waves).
+fn waves_scene(spatial: bool) -> Scene {
+    let mut s = all_terms_scene(spatial);
+    s.pipe = Some(chainbeam::scene::Pipe::new(6.0, 0.05, 0.005));
+    s.water.depth = Some(5.5);
+    let mut w = chainbeam::scene::Waves::jonswap(1.5, 4.0);
+    w.direction = if spatial { 40.0 } else { 180.0 };
+    w.components = Some(120);
+    s.loads.waves = Some(w);
+    if spatial {
+        s.loads.current = Some(Current::linear(0.8, 0.3, [0.6, 0.8]));
+    }
+    s.validate().unwrap();
+    assert_eq!(s.is_spatial(), spatial);
+    s
+}
+
 fn check_all_terms<D: Scalar, const DIM: usize>() {
-    let scene = all_terms_scene(DIM == 3);
+    check_terms_of::<D, DIM>(&all_terms_scene(DIM == 3), &[]);
+    check_terms_of::<D, DIM>(&waves_scene(DIM == 3), &["wave inertia"]);
+}
+
+fn check_terms_of<D: Scalar, const DIM: usize>(scene: &Scene, more: &[&str]) {
+    let scene = scene.clone();
     assert_eq!(scene.is_spatial(), DIM == 3);
     let chain = Chain::<D, DIM>::from_scene(&scene).unwrap();
     let n = chain.n();
@@ -318,16 +343,17 @@ fn check_all_terms<D: Scalar, const DIM: usize>() {
     // A joint above 90° (the a·b ≤ 0 branch of the joint angle) is among the configurations.
     assert!(chain.max_joint_angle(&check.q) > std::f64::consts::FRAC_PI_2);
     chain.visit_terms(&mut check).unwrap();
+    let mut expect = vec![
+        "springs",
+        "point loads",
+        "gravity",
+        "tension",
+        "axial_weight",
+        "control",
+    ];
+    expect.extend_from_slice(more);
     assert_eq!(
-        check.checked,
-        [
-            "springs",
-            "point loads",
-            "gravity",
-            "tension",
-            "axial_weight",
-            "control"
-        ],
+        check.checked, expect,
         "every conservative term of the scene was checked"
     );
 }
@@ -575,6 +601,7 @@ fn check_every_dissipation<D: Scalar, const DIM: usize>() {
     check_dissipation::<D, DIM>(&all_terms_scene(spatial), &["drag"]);
     check_dissipation::<D, DIM>(&current_scene(spatial, false), &["current drag"]);
     check_dissipation::<D, DIM>(&current_scene(spatial, true), &["current drag"]);
+    check_dissipation::<D, DIM>(&waves_scene(spatial), &["water drag"]);
 }
 
 #[test]

@@ -59,10 +59,34 @@
 use chainbeam::ocp::{self, Curvature, OcpOptions};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
-    catalogue, simulate_with_controls, BendingObjective, ControlProblem, Error, Parametrisation,
+    catalogue, simulate_with_controls, BendingObjective, ControlProblem, Parametrisation,
     PerStepControl, PiecewiseControl, Result, Scene,
 };
 use std::time::Instant;
+
+/// Why the example stopped: a command-line flag it cannot use, or the library's error.
+#[derive(Debug, thiserror::Error)]
+enum RunError {
+    /// A flag's value that does not parse or is not one of the choices.
+    #[error("invalid argument `{flag}`: expected {expected}, got {got:?}")]
+    Flag {
+        /// The flag, e.g. `--method`.
+        flag: &'static str,
+        /// What it takes.
+        expected: &'static str,
+        /// The value given.
+        got: String,
+    },
+    /// `--rate` with a method other than the Riccati solver.
+    #[error(
+        "invalid argument `--rate`: the rate penalty is a term of the Riccati solver's objective \
+         only"
+    )]
+    RateNeedsRiccati,
+    /// The library's error.
+    #[error(transparent)]
+    Lib(#[from] chainbeam::Error),
+}
 
 fn moments(scene: &Scene, u: &[f64]) -> Result<(f64, f64)> {
     let t = simulate_with_controls(scene, u)?;
@@ -91,12 +115,13 @@ fn value<'a>(args: &'a [String], name: &str) -> Option<&'a str> {
         .map(String::as_str)
 }
 
-fn arg(args: &[String], name: &'static str, default: f64) -> Result<f64> {
-    match value(args, name) {
+fn arg(args: &[String], flag: &'static str, default: f64) -> Result<f64, RunError> {
+    match value(args, flag) {
         None => Ok(default),
-        Some(v) => v.parse().map_err(|_| Error::InvalidArgument {
-            name,
-            reason: format!("expected a number, got {v:?}"),
+        Some(v) => v.parse().map_err(|_| RunError::Flag {
+            flag,
+            expected: "a number",
+            got: v.into(),
         }),
     }
 }
@@ -205,7 +230,7 @@ fn solve_with(
 
 /// The methods to run: `--method a,b`, or `--compare` (all three) minus `--skip-lbfgs` /
 /// `--skip-trust-region`.
-fn methods(args: &[String]) -> Result<Vec<String>> {
+fn methods(args: &[String]) -> Result<Vec<String>, RunError> {
     let list = if args.iter().any(|a| a == "--compare") {
         "riccati,lbfgs,trust-region"
     } else {
@@ -221,15 +246,16 @@ fn methods(args: &[String]) -> Result<Vec<String>> {
         .iter()
         .find(|m| !["riccati", "condensed", "lbfgs", "trust-region"].contains(&m.as_str()))
     {
-        Some(m) => Err(Error::InvalidArgument {
-            name: "--method",
-            reason: format!("expected riccati, condensed, lbfgs or trust-region, got {m:?}"),
+        Some(m) => Err(RunError::Flag {
+            flag: "--method",
+            expected: "riccati, condensed, lbfgs or trust-region",
+            got: m.clone(),
         }),
         None => Ok(out),
     }
 }
 
-fn run() -> Result<()> {
+fn run() -> Result<(), RunError> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let rho = arg(&args, "--rho", 0.01)?;
     let set = Setup {
@@ -238,9 +264,10 @@ fn run() -> Result<()> {
         history: args.iter().any(|a| a == "--history"),
         max_iters: value(&args, "--max-iters")
             .map(|v| {
-                v.parse::<usize>().map_err(|_| Error::InvalidArgument {
-                    name: "--max-iters",
-                    reason: format!("expected a whole number of iterations, got {v:?}"),
+                v.parse::<usize>().map_err(|_| RunError::Flag {
+                    flag: "--max-iters",
+                    expected: "a whole number of iterations",
+                    got: v.into(),
                 })
             })
             .transpose()?,
@@ -249,9 +276,10 @@ fn run() -> Result<()> {
             Some("exact") => Curvature::Exact,
             Some("gauss-newton") => Curvature::GaussNewton,
             Some(other) => {
-                return Err(Error::InvalidArgument {
-                    name: "--curvature",
-                    reason: format!("expected auto, exact or gauss-newton, got {other:?}"),
+                return Err(RunError::Flag {
+                    flag: "--curvature",
+                    expected: "auto, exact or gauss-newton",
+                    got: other.into(),
                 })
             }
         },
@@ -260,10 +288,7 @@ fn run() -> Result<()> {
     let pieces = arg(&args, "--pieces", 0.0)? as usize;
     let methods = methods(&args)?;
     if set.rate > 0.0 && methods.iter().any(|m| m != "riccati") {
-        return Err(Error::InvalidArgument {
-            name: "--rate",
-            reason: "the rate penalty is a term of the Riccati solver's objective only".into(),
-        });
+        return Err(RunError::RateNeedsRiccati);
     }
     let mut scene = catalogue::long_horizon();
     scene.time.steps = steps;

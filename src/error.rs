@@ -4,14 +4,20 @@
 use thiserror::Error;
 
 mod model;
+mod mpc;
 mod multistart;
+mod ocp;
+mod requirement;
 mod start;
 mod stepper;
 
 pub use crate::euler_bernoulli::EulerBernoulliError;
 pub use crate::scene::SceneError;
 pub use model::ModelError;
+pub use mpc::MpcError;
 pub use multistart::MultistartError;
+pub use ocp::{HorizonShape, OcpError};
+pub use requirement::Requirement;
 pub use start::StartError;
 pub use stepper::StepperError;
 
@@ -37,6 +43,15 @@ pub enum Error {
     /// An argument of the Euler-Bernoulli reference beam out of its range.
     #[error(transparent)]
     EulerBernoulli(#[from] EulerBernoulliError),
+    /// An argument of the model-predictive controller or its closed loop (the interval, the
+    /// horizon, a count or weight); [`MpcError::argument`] names it.
+    #[error("invalid argument `{}`: {}", .0.argument(), .0)]
+    Mpc(#[from] MpcError),
+    /// An option, problem or argument the structured optimal-control solvers refuse (the box,
+    /// a tolerance, the objective, the tip, a restart, the memory); [`OcpError::argument`] names
+    /// it.
+    #[error("invalid argument `{}`: {}", .0.argument(), .0)]
+    Ocp(#[from] OcpError),
     /// The Newton iteration for the constraint multipliers λ of one step (RATTLE's implicit first
     /// half step, eq. 1.6.1; SHAKE's position step) did not reach its tolerance. Almost always the
     /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at
@@ -276,6 +291,21 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+}
+
+impl Error {
+    /// The argument, option or input a caller passed wrongly, for the errors that name one
+    /// ([`Error::Mpc`], [`Error::Ocp`], [`Error::WrongLength`], [`Error::NotFinite`]); `None`
+    /// for the others (a scene's key is [`SceneError::key`]).
+    pub fn argument(&self) -> Option<&'static str> {
+        match self {
+            Error::Mpc(e) => Some(e.argument()),
+            Error::Ocp(e) => Some(e.argument()),
+            Error::WrongLength { name, .. } | Error::NotFinite { name, .. } => Some(name),
+            Error::InvalidArgument { name, .. } => Some(name),
+            _ => None,
+        }
+    }
 }
 
 /// The advice of [`Error::NewtonNotConverged`].

@@ -11,7 +11,7 @@ mod thesis;
 #[path = "common/table_3_4.rs"]
 mod table_3_4;
 
-use chainbeam::ocp::{Condensed, OcpOptions, Solver, Termination};
+use chainbeam::ocp::{Condensed, OcpError, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, PiecewiseControl,
@@ -259,7 +259,9 @@ fn restart_equals_a_fresh_solver() {
     )
     .unwrap();
     match reused.restart(&other) {
-        Err(chainbeam::Error::InvalidArgument { name, .. }) => assert_eq!(name, "problem"),
+        Err(chainbeam::Error::Ocp(OcpError::RestartMismatch { expected, got })) => {
+            assert_eq!((expected.steps, got.steps), (50, 60));
+        }
         r => panic!("expected the typed error, got {r:?}"),
     }
 }
@@ -317,9 +319,9 @@ fn a_long_per_step_horizon_is_refused_not_allocated() {
     )
     .unwrap();
     match Condensed::new(&p, &OcpOptions::default()) {
-        Err(chainbeam::Error::InvalidArgument { name, reason }) => {
-            assert_eq!(name, "method");
-            assert!(reason.contains("Riccati"), "{reason}");
+        Err(e @ chainbeam::Error::Ocp(OcpError::CondensedTooLarge { steps: 40_000, .. })) => {
+            assert_eq!(e.argument(), Some("method"));
+            assert!(e.to_string().contains("Riccati"), "{e}");
         }
         r => panic!("expected the typed refusal, got {:?}", r.map(|_| ())),
     }

@@ -3,11 +3,12 @@
 //! reproduces the open-loop optimum (to the solver's tolerance), warm starts save iterations,
 //! plant and model may differ, bounds hold, the baselines and the PD gradient, bad settings.
 
+use chainbeam::error::Requirement;
 use chainbeam::mpc::{
     pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon,
-    Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
+    Mpc, MpcError, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
 };
-use chainbeam::ocp::{self, OcpOptions};
+use chainbeam::ocp::{self, OcpError, OcpOptions};
 use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::{
     simulate_with_controls, BendingObjective, ControlMap, ControlProblem, Error, Harmonic,
@@ -354,40 +355,60 @@ fn pd_gradient_matches_central_differences() {
     assert_eq!(direct.to_bits(), j.to_bits());
 }
 
-fn invalid_name(e: Error) -> &'static str {
-    match e {
-        Error::InvalidArgument { name, .. } => name,
-        other => panic!("expected InvalidArgument, got {other:?}"),
-    }
-}
-
 #[test]
 fn bad_settings_are_typed_errors() {
     let s = scene(100);
     let o = |h| options(h, 5.0, 2);
     let new = |interval, opts| Mpc::new(&s, interval, opts).unwrap_err();
     // An interval that is not a multiple of h = 0.01 s.
-    assert_eq!(invalid_name(new(0.015, o(Horizon::ToEnd))), "interval");
+    assert!(matches!(
+        new(0.015, o(Horizon::ToEnd)),
+        Error::Mpc(MpcError::IntervalNotMultiple { interval, h }) if interval == 0.015 && h == 0.01
+    ));
     // A horizon shorter than the interval, or not a whole number of intervals.
-    assert_eq!(invalid_name(new(0.1, o(Horizon::Seconds(0.05)))), "horizon");
-    assert_eq!(invalid_name(new(0.1, o(Horizon::Seconds(0.25)))), "horizon");
-    assert_eq!(
-        invalid_name(new(0.1, o(Horizon::Seconds(f64::NAN)))),
-        "horizon"
-    );
+    for horizon in [0.05, 0.25, f64::NAN] {
+        let e = new(0.1, o(Horizon::Seconds(horizon)));
+        assert!(
+            matches!(e, Error::Mpc(MpcError::HorizonNotWhole { interval, .. }) if interval == 0.1),
+            "{e:?}"
+        );
+        assert_eq!(e.argument(), Some("horizon"));
+    }
     let mut zero = o(Horizon::ToEnd);
     zero.iterations = 0;
-    assert_eq!(invalid_name(new(0.1, zero)), "iterations");
+    assert_eq!(
+        new(0.1, zero),
+        Error::Mpc(MpcError::Zero { name: "iterations" })
+    );
     let mut rho = o(Horizon::ToEnd);
     rho.effort = -1.0;
-    assert_eq!(invalid_name(new(0.1, rho)), "effort");
+    assert_eq!(
+        new(0.1, rho),
+        Error::Mpc(MpcError::OutOfRange {
+            name: "effort",
+            requirement: Requirement::FiniteNonNegative,
+            value: -1.0
+        })
+    );
     let mut empty = o(Horizon::ToEnd);
     empty.ocp.lower = 1.0;
     empty.ocp.upper = -1.0;
-    assert_eq!(invalid_name(new(0.1, empty)), "bounds");
+    assert_eq!(
+        new(0.1, empty),
+        Error::Ocp(OcpError::EmptyBox {
+            lower: 1.0,
+            upper: -1.0
+        })
+    );
     // A run that is not a whole number of intervals.
     let e = run_closed_loop(&scene(105), INTERVAL, &mut NoControl).unwrap_err();
-    assert_eq!(invalid_name(e), "interval");
+    assert_eq!(
+        e,
+        Error::Mpc(MpcError::RunNotWhole {
+            steps: 105,
+            interval_steps: 10
+        })
+    );
     // A model with another number of pendulums than the plant.
     let mut other = scene(100);
     other.beam.lengths.pop();
@@ -397,11 +418,24 @@ fn bad_settings_are_typed_errors() {
     other.control.as_mut().unwrap().node = 3;
     let mut mpc = Mpc::new(&other, INTERVAL, o(Horizon::ToEnd)).unwrap();
     let e = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap_err();
-    assert_eq!(invalid_name(e), "model");
+    let n = s.n();
+    assert_eq!(
+        e,
+        Error::Mpc(MpcError::ModelSize {
+            model: n - 1,
+            plant: n
+        })
+    );
     // The loop's interval must be the controller's.
     let mut mpc = Mpc::new(&s, 0.2, o(Horizon::ToEnd)).unwrap();
     let e = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap_err();
-    assert_eq!(invalid_name(e), "interval");
+    assert_eq!(
+        e,
+        Error::Mpc(MpcError::IntervalMismatch {
+            controller: 0.2,
+            run: INTERVAL
+        })
+    );
 }
 
 /// The default solver picks the condensed one for short plans and the Riccati one for long ones

@@ -9,7 +9,7 @@ mod thesis;
 #[path = "common/table_3_4.rs"]
 mod table_3_4;
 
-use chainbeam::ocp::{solve, OcpOptions, Solver, Termination};
+use chainbeam::ocp::{solve, OcpError, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Error, Parametrisation, PerStepControl,
@@ -464,14 +464,19 @@ fn non_convergence_and_bad_input_are_reported() {
     };
     assert!(matches!(
         solve(&p, &vec![0.0; steps + 1], &bad),
-        Err(Error::InvalidArgument { name: "bounds", .. })
+        Err(Error::Ocp(OcpError::EmptyBox {
+            lower: 1.0,
+            upper: -1.0
+        }))
     ));
     let locked = catalogue::by_name("fixed_fixed").unwrap();
     let n = locked.time.steps;
     let pl = ControlProblem::new(&locked, per_step(n), BendingObjective::summed_moment()).unwrap();
     assert!(matches!(
         Solver::new(&pl, &OcpOptions::default()),
-        Err(Error::InvalidArgument { name: "tip", .. })
+        Err(Error::Ocp(OcpError::UnsupportedTip {
+            tip: chainbeam::TipCondition::Locked
+        }))
     ));
 }
 

@@ -6,7 +6,7 @@ use num_dual::DualSVec64;
 use super::{interval_steps, Controller, Observation, Plant};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
 use crate::base::Scalar;
-use crate::error::{Error, Result};
+use crate::error::{Error, MpcError, Requirement, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult};
 use crate::scene::Scene;
@@ -138,20 +138,22 @@ impl PdTuning {
     /// (infinite: none) and effort weight ρ = `effort`.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] naming `interval`, `bound` or `effort`.
+    /// [`MpcError::IntervalNotMultiple`]; [`MpcError::OutOfRange`] naming `bound` (not positive)
+    /// or `effort` (not finite and ≥ 0).
     pub fn new(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
         let m = interval_steps(interval, scene.time.step)?;
-        if bound.is_nan() || bound <= 0.0 {
-            return Err(Error::InvalidArgument {
-                name: "bound",
-                reason: format!("must be positive, got {bound}"),
-            });
-        }
-        if !(effort.is_finite() && effort >= 0.0) {
-            return Err(Error::InvalidArgument {
-                name: "effort",
-                reason: format!("must be finite and >= 0, got {effort}"),
-            });
+        for (name, requirement, value) in [
+            ("bound", Requirement::Positive, bound),
+            ("effort", Requirement::FiniteNonNegative, effort),
+        ] {
+            if !requirement.holds(value) {
+                return Err(MpcError::OutOfRange {
+                    name,
+                    requirement,
+                    value,
+                }
+                .into());
+            }
         }
         Ok(PdTuning {
             scene: scene.clone(),

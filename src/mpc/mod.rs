@@ -165,7 +165,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-use crate::error::{Error, Result};
+pub use crate::error::MpcError;
+use crate::error::Result;
 use crate::scene::Scene;
 use crate::steppers::rattle::State;
 
@@ -282,16 +283,13 @@ pub struct ClosedLoopResult {
 /// The number of steps m of a control interval: interval = m h exactly (to 10⁻⁹ relative).
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] (`interval`) when it is not a positive multiple of h.
+/// [`MpcError::IntervalNotMultiple`] when it is not a positive multiple of h.
 pub fn interval_steps(interval: f64, h: f64) -> Result<usize> {
     let m = (interval / h).round();
     if !(interval.is_finite() && interval > 0.0 && m >= 1.0)
         || (m * h - interval).abs() > 1e-9 * interval
     {
-        return Err(Error::InvalidArgument {
-            name: "interval",
-            reason: format!("the control interval must be a positive multiple of the step h = {h} s, got {interval} s"),
-        });
+        return Err(MpcError::IntervalNotMultiple { interval, h }.into());
     }
     Ok(m as usize)
 }
@@ -300,9 +298,9 @@ pub fn interval_steps(interval: f64, h: f64) -> Result<usize> {
 /// decision every `interval` seconds, to t_N (module docs).
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] (`interval`) when the interval is not a multiple of h or does not
-/// divide the run T = N h; the controller's and the plant's errors (a failed step, a failed
-/// solve) end the run.
+/// [`MpcError::IntervalNotMultiple`] when the interval is not a multiple of h,
+/// [`MpcError::RunNotWhole`] when it does not divide the run T = N h; the controller's and the
+/// plant's errors (a failed step, a failed solve) end the run.
 pub fn run_closed_loop(
     scene: &Scene,
     interval: f64,
@@ -313,13 +311,11 @@ pub fn run_closed_loop(
     let m = interval_steps(interval, plant.h())?;
     let steps = plant.steps();
     if steps % m != 0 {
-        return Err(Error::InvalidArgument {
-            name: "interval",
-            reason: format!(
-                "the run of N = {steps} steps is not a whole number of control intervals of \
-                 {m} steps"
-            ),
-        });
+        return Err(MpcError::RunNotWhole {
+            steps,
+            interval_steps: m,
+        }
+        .into());
     }
     let mut rec = Recorder::with_capacity(steps + 1);
     let mut decisions = Vec::with_capacity(steps / m);

@@ -3,7 +3,7 @@
 //! closing control half-kick).
 
 use crate::base::Scalar;
-use crate::error::{Error, Result};
+use crate::error::{Error, MpcError, Result};
 use crate::model::Chain;
 use crate::scene::Scene;
 use crate::steppers::rattle::{Rattle, State};
@@ -212,13 +212,10 @@ impl<D: Scalar> Plant<D> {
     /// Advances one step to t_{k+1} holding the control (u_{k+1} = u_k).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`steps`) past t_N; the step's errors.
+    /// [`MpcError::PastEnd`] past t_N; the step's errors.
     pub fn advance(&mut self) -> Result<()> {
         if self.k >= self.steps {
-            return Err(Error::InvalidArgument {
-                name: "steps",
-                reason: format!("the plant is at its last step N = {}", self.steps),
-            });
+            return Err(MpcError::PastEnd { steps: self.steps }.into());
         }
         self.prev.clone_from(&self.state);
         Stepper::step(&mut self.stepper, &mut self.state, self.k, self.u, self.u)?;

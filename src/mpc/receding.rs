@@ -3,7 +3,7 @@
 
 use super::{interval_steps, Controller, Observation};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
-use crate::error::{Error, Result};
+use crate::error::{MpcError, Requirement, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::scene::{Control, ControlKind, Scene};
 
@@ -117,19 +117,16 @@ pub struct Mpc {
     decisions: usize,
 }
 
-fn bad(name: &'static str, reason: String) -> Error {
-    Error::InvalidArgument { name, reason }
-}
-
 impl Mpc {
     /// A controller that plans on `model` (its beam, loads as the forecast, step, control node;
     /// its `[time]` length and `[control]` values are not used) with decisions every `interval`
     /// seconds.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] naming `interval` (not a multiple of the model's step),
-    /// `horizon` (not a positive whole number of intervals), `iterations`,
-    /// `first_iterations`, `effort`, or the solver option at fault; the model's errors.
+    /// [`MpcError`]: the `interval` not a multiple of the model's step, the `horizon` not a
+    /// positive whole number of intervals, zero `iterations` or `first_iterations`, an `effort`
+    /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
+    /// fault; the model's errors.
     pub fn new(model: &Scene, interval: f64, options: MpcOptions) -> Result<Self> {
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
@@ -138,13 +135,11 @@ impl Mpc {
             Horizon::Seconds(s) => {
                 let p = (s / interval).round();
                 if !(s.is_finite() && p >= 1.0) || (p * interval - s).abs() > 1e-9 * s {
-                    return Err(bad(
-                        "horizon",
-                        format!(
-                            "must be a positive whole number of control intervals of \
-                             {interval} s, got {s} s"
-                        ),
-                    ));
+                    return Err(MpcError::HorizonNotWhole {
+                        horizon: s,
+                        interval,
+                    }
+                    .into());
                 }
                 Some(p as usize)
             }
@@ -154,14 +149,17 @@ impl Mpc {
             ("first_iterations", options.first_iterations),
         ] {
             if v == 0 {
-                return Err(bad(name, "must be at least 1".into()));
+                return Err(MpcError::Zero { name }.into());
             }
         }
-        if !(options.effort.is_finite() && options.effort >= 0.0) {
-            return Err(bad(
-                "effort",
-                format!("must be finite and >= 0, got {}", options.effort),
-            ));
+        let requirement = Requirement::FiniteNonNegative;
+        if !requirement.holds(options.effort) {
+            return Err(MpcError::OutOfRange {
+                name: "effort",
+                requirement,
+                value: options.effort,
+            }
+            .into());
         }
         let mut model = model.clone();
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);
@@ -214,14 +212,11 @@ impl Mpc {
         }
         let template = &self.template.as_ref().expect("set above").1;
         if template.chain().n() != obs.state.q.len() {
-            return Err(bad(
-                "model",
-                format!(
-                    "the model has {} pendulums, the plant {}",
-                    template.chain().n(),
-                    obs.state.q.len()
-                ),
-            ));
+            return Err(MpcError::ModelSize {
+                model: template.chain().n(),
+                plant: obs.state.q.len(),
+            }
+            .into());
         }
         // The force decided now completes the half-kick of the step into t_k: plan from the
         // state before it (exact: the plan's θ₀ acts on both sides of t_k as in the plant).
@@ -252,13 +247,11 @@ impl Mpc {
     /// The pieces of the horizon at `obs`.
     fn horizon_pieces(&self, obs: &Observation<'_>) -> Result<usize> {
         if (obs.interval - self.interval).abs() > 1e-12 * self.interval {
-            return Err(bad(
-                "interval",
-                format!(
-                    "the controller plans with intervals of {} s, the loop runs {} s",
-                    self.interval, obs.interval
-                ),
-            ));
+            return Err(MpcError::IntervalMismatch {
+                controller: self.interval,
+                run: obs.interval,
+            }
+            .into());
         }
         Ok(match self.pieces {
             Some(p) => p,

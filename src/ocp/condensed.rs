@@ -68,7 +68,7 @@ use super::line_search::Traj;
 use super::options::{OcpOptions, OcpResult, Termination};
 use super::stage::{Dv, StageModel, Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
-use crate::error::{Error, Result};
+use crate::error::{HorizonShape, OcpError, Result};
 
 /// Gauss-Newton on the condensed problem (module docs), with its buffers.
 #[derive(Clone, Debug)]
@@ -120,7 +120,8 @@ impl Condensed {
     /// free tip, a bending-moment objective and per-step or piecewise-constant controls).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] naming the option, the objective, the control map or the tip.
+    /// [`OcpError`] naming the option, the objective, the control map or
+    /// the tip; [`OcpError::CondensedTooLarge`] over the memory budget.
     pub fn new<P: ControlMap, O: Objective>(
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,
@@ -167,29 +168,27 @@ impl Condensed {
     /// for, from another state (a receding horizon re-plans with one solver).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`problem`) when the horizon, the step, the number of
-    /// parameters or of pendulums differ from the solver's.
+    /// [`OcpError::RestartMismatch`] when the horizon, the step, the number of parameters or of
+    /// pendulums differ from the solver's.
     pub fn restart<P: ControlMap, O: Objective>(
         &mut self,
         problem: &ControlProblem<P, O>,
     ) -> Result<()> {
         let model = &self.horizon.model;
-        let (steps, h, np, n) = (self.steps, model.h, self.np, model.n);
-        let other = (
-            problem.steps(),
-            problem.time_step(),
-            problem.n_params(),
-            problem.chain().n(),
-        );
-        if other != (steps, h, np, n) {
-            return Err(Error::InvalidArgument {
-                name: "problem",
-                reason: format!(
-                    "a restart needs the solver's horizon (N, h, parameters, pendulums) = \
-                     {:?}, got {other:?}",
-                    (steps, h, np, n)
-                ),
-            });
+        let expected = HorizonShape {
+            steps: self.steps,
+            h: model.h,
+            params: self.np,
+            pendulums: model.n,
+        };
+        let got = HorizonShape {
+            steps: problem.steps(),
+            h: problem.time_step(),
+            params: problem.n_params(),
+            pendulums: problem.chain().n(),
+        };
+        if got != expected {
+            return Err(OcpError::RestartMismatch { expected, got }.into());
         }
         let start = problem.start();
         self.horizon.set_start(start);
@@ -212,8 +211,9 @@ impl Condensed {
     /// Sets the nominal to θ (projected onto the box); returns J.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`theta`) for a wrong length or a non-finite entry; the
-    /// simulation's errors.
+    /// [`Error::WrongLength`](crate::Error::WrongLength) or
+    /// [`Error::NotFinite`](crate::Error::NotFinite) (`theta`) for a wrong length or a
+    /// non-finite entry; the simulation's errors.
     pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
         self.horizon.set_point(theta)
     }
@@ -601,15 +601,12 @@ fn check_memory(steps: usize, np: usize) -> Result<()> {
     let bytes = 8 * (n1 * chunks * CHUNK as u128 + n1 * m + 2 * m * m);
     let budget = u128::from(crate::scene::MAX_TRAJECTORY_BYTES);
     if bytes > budget {
-        return Err(Error::InvalidArgument {
-            name: "method",
-            reason: format!(
-                "the condensed solver would store {} for N = {steps} steps and {np} parameters \
-                 (over the memory limit of {}); use the Riccati solver for long per-step horizons",
-                crate::scene::human_bytes(u64::try_from(bytes).unwrap_or(u64::MAX)),
-                crate::scene::human_bytes(crate::scene::MAX_TRAJECTORY_BYTES)
-            ),
-        });
+        return Err(OcpError::CondensedTooLarge {
+            steps,
+            params: np,
+            bytes: u64::try_from(bytes).unwrap_or(u64::MAX),
+        }
+        .into());
     }
     Ok(())
 }

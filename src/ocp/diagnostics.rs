@@ -8,7 +8,7 @@ use super::iterate::Arc;
 use super::riccati::StageJacobians;
 use super::solver::Solver;
 use super::stage::{tangent, JacobiansMut, StageAt, StagePoint};
-use crate::error::{Error, Result};
+use crate::error::{Error, OcpError, Result};
 
 impl Solver {
     /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
@@ -47,10 +47,11 @@ impl Solver {
 
     fn check_stage(&self, k: usize) -> Result<()> {
         if k >= self.horizon.steps {
-            return Err(Error::InvalidArgument {
-                name: "stage",
-                reason: format!("must be below N = {}, got {k}", self.horizon.steps),
-            });
+            return Err(OcpError::StageOutOfRange {
+                stage: k,
+                steps: self.horizon.steps,
+            }
+            .into());
         }
         Ok(())
     }
@@ -71,9 +72,10 @@ impl Solver {
         self.check_stage(k)?;
         let n = self.horizon.model.n;
         if xi.len() != 2 * n {
-            return Err(Error::InvalidArgument {
+            return Err(Error::WrongLength {
                 name: "xi",
-                reason: format!("expected 2n = {} values, got {}", 2 * n, xi.len()),
+                expected: 2 * n,
+                got: xi.len(),
             });
         }
         let q: Vec<[f64; 2]> = xi[..n].iter().map(|f| [f.cos(), f.sin()]).collect();
@@ -110,10 +112,7 @@ impl Solver {
         self.qp.active.fill(false);
         self.prox = mu;
         if !self.sweep(true)? {
-            return Err(Error::InvalidArgument {
-                name: "mu",
-                reason: format!("a stage QP is unbounded below with mu = {mu}"),
-            });
+            return Err(OcpError::UnboundedStage { mu }.into());
         }
         self.linear_rollout(1.0, Arc::ClosedLoop);
         let stages = &self.horizon.theta_stage;
@@ -128,12 +127,7 @@ impl Solver {
     pub fn newton_step(&mut self, mu: f64) -> Result<Vec<f64>> {
         self.check_in_memory()?;
         if !self.second.possible {
-            return Err(Error::InvalidArgument {
-                name: "curvature",
-                reason: "the exact model needs per-step controls without rate penalty and a \
-                         curvature other than GaussNewton"
-                    .into(),
-            });
+            return Err(OcpError::NoExactModel.into());
         }
         self.costate_by_reverse_steps()?;
         self.hessians()?;
@@ -147,12 +141,7 @@ impl Solver {
     /// (no Jacobians; the exact model's sweep): equal to [`Solver::gradient`].
     pub fn gradient_by_reverse_steps(&mut self) -> Result<Vec<f64>> {
         if !self.second.possible {
-            return Err(Error::InvalidArgument {
-                name: "curvature",
-                reason: "the costate sweep by reverse steps needs per-step controls without \
-                         rate penalty"
-                    .into(),
-            });
+            return Err(OcpError::NoReverseSweep.into());
         }
         self.costate_by_reverse_steps()?;
         Ok(self.theta_gradient())
@@ -160,13 +149,10 @@ impl Solver {
 
     fn check_in_memory(&self) -> Result<()> {
         if !self.store.holds_all(self.horizon.steps) {
-            return Err(Error::InvalidArgument {
-                name: "jacobian_memory",
-                reason: format!(
-                    "the linearised rollout needs every stage Jacobian in memory ({} bytes)",
-                    self.horizon.steps * 8 * (self.nxi * self.nxi + self.nxi)
-                ),
-            });
+            return Err(OcpError::JacobiansNotInMemory {
+                bytes: self.horizon.steps * 8 * (self.nxi * self.nxi + self.nxi),
+            }
+            .into());
         }
         Ok(())
     }

@@ -8,7 +8,7 @@ use super::options::OcpOptions;
 use super::riccati::StageCost;
 use super::stage::StageModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective, Start};
-use crate::error::{Error, Result};
+use crate::error::{Error, OcpError, Result};
 use crate::scene::ObjectiveKind;
 
 /// A problem over its horizon with its two trajectories (module docs).
@@ -47,20 +47,14 @@ impl ControlHorizon {
     pub fn new<P: ControlMap, O: Objective>(
         problem: &ControlProblem<P, O>,
         options: &OcpOptions,
-        solver: &str,
+        solver: &'static str,
         admit: fn(usize, usize) -> Result<()>,
     ) -> Result<Self> {
         options.validate()?;
         let obj = problem
             .objective()
             .bending()
-            .ok_or_else(|| Error::InvalidArgument {
-                name: "objective",
-                reason: format!(
-                    "{solver} needs a bending-moment objective (c or c_sum, with effort): it \
-                     exploits their Gauss-Newton form"
-                ),
-            })?;
+            .ok_or(OcpError::NeedsBendingObjective { solver })?;
         let steps = problem.steps();
         let h = problem.time_step();
         let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
@@ -118,8 +112,8 @@ impl ControlHorizon {
     /// Checks θ and makes it (projected onto the box) the nominal; returns J.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`theta`) for a wrong length or a non-finite entry; the
-    /// simulation's errors.
+    /// [`Error::WrongLength`] or [`Error::NotFinite`] (`theta`) for a wrong length or a
+    /// non-finite entry; the simulation's errors.
     pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
         check_theta(theta, self.n_params)?;
         self.simulate(theta, false)
@@ -169,18 +163,20 @@ impl ControlHorizon {
     }
 }
 
-/// θ has `n_params` finite entries ([`Error::InvalidArgument`] naming `theta` otherwise).
+/// θ has `n_params` finite entries ([`Error::WrongLength`] or [`Error::NotFinite`] naming
+/// `theta` otherwise).
 fn check_theta(theta: &[f64], n_params: usize) -> Result<()> {
     if theta.len() != n_params {
-        return Err(Error::InvalidArgument {
+        return Err(Error::WrongLength {
             name: "theta",
-            reason: format!("expected {n_params} values, got {}", theta.len()),
+            expected: n_params,
+            got: theta.len(),
         });
     }
     if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-        return Err(Error::InvalidArgument {
+        return Err(Error::NotFinite {
             name: "theta",
-            reason: format!("entry {i} is not finite"),
+            index: i,
         });
     }
     Ok(())
@@ -202,12 +198,7 @@ struct ControlStructure {
 /// The control structure of the controls `u` of θ_j = j: contiguous pieces 0, 1, …,
 /// n_params − 1 (per-step, piecewise or constant); `free[k]` when stage k starts a piece.
 fn control_structure(u: &[f64], n_params: usize) -> Result<ControlStructure> {
-    let not_piecewise = || Error::InvalidArgument {
-        name: "control map",
-        reason: "the Riccati solver needs controls that are per-step or piecewise constant in \
-                 time (u_k = θ_j on consecutive pieces j = 0, 1, …)"
-            .into(),
-    };
+    let not_piecewise = || Error::from(OcpError::NotPiecewise);
     let (mut piece, mut free) = (Vec::with_capacity(u.len()), Vec::with_capacity(u.len()));
     for (k, &x) in u.iter().enumerate() {
         let j = x as usize;

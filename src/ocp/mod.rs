@@ -207,7 +207,7 @@
 //! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
 //! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise
 //! constant in time. Locked and reaction-force tips are refused with
-//! [`Error::InvalidArgument`](crate::Error::InvalidArgument) (their tip constraint removes a dimension of the state manifold that
+//! [`OcpError::UnsupportedTip`] (their tip constraint removes a dimension of the state manifold that
 //! the tangent coordinates do not).
 //!
 //! # Example
@@ -251,6 +251,7 @@ mod second_order;
 mod solver;
 pub mod stage;
 
+pub use crate::error::{HorizonShape, OcpError};
 pub use condensed::Condensed;
 pub use options::{Curvature, IterationRecord, OcpOptions, OcpResult, Termination};
 pub use solver::Solver;

@@ -1,6 +1,6 @@
 //! Options and results of the Riccati solver.
 
-use crate::error::{Error, Result};
+use crate::error::{OcpError, Requirement, Result};
 
 /// Options of [`solve`](super::solve). Build with struct update syntax or [`OcpOptions::with_bound`].
 #[derive(Clone, Debug, PartialEq)]
@@ -90,49 +90,50 @@ impl OcpOptions {
         self
     }
 
-    /// Checks every field ([`Error::InvalidArgument`] naming it).
+    /// Checks every field ([`OcpError`] naming it: [`OcpError::EmptyBox`],
+    /// [`OcpError::OutOfRange`], [`OcpError::Zero`]).
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &'static str, reason: String| Err(Error::InvalidArgument { name, reason });
-        if self.lower.is_nan() || self.upper.is_nan() || self.lower >= self.upper {
-            return bad(
-                "bounds",
-                format!(
-                    "need lower < upper (not NaN), got [{}, {}]",
-                    self.lower, self.upper
-                ),
-            );
+        let (lower, upper) = (self.lower, self.upper);
+        if lower.is_nan() || upper.is_nan() || lower >= upper {
+            return Err(OcpError::EmptyBox { lower, upper }.into());
         }
-        if self.lower == f64::INFINITY || self.upper == f64::NEG_INFINITY {
-            return bad("bounds", "the box is empty".into());
+        if lower == f64::INFINITY || upper == f64::NEG_INFINITY {
+            return Err(OcpError::EmptyBox { lower, upper }.into());
         }
-        if !(self.rate_penalty.is_finite() && self.rate_penalty >= 0.0) {
-            return bad(
+        for (name, requirement, value) in [
+            (
                 "rate_penalty",
-                format!("must be finite and >= 0, got {}", self.rate_penalty),
-            );
-        }
-        for (name, v) in [
-            ("rel_grad_tol", self.rel_grad_tol),
-            ("grad_tol", self.grad_tol),
+                Requirement::FiniteNonNegative,
+                self.rate_penalty,
+            ),
+            (
+                "rel_grad_tol",
+                Requirement::FiniteNonNegative,
+                self.rel_grad_tol,
+            ),
+            ("grad_tol", Requirement::FiniteNonNegative, self.grad_tol),
+            ("armijo", Requirement::OpenUnitInterval, self.armijo),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(name, format!("must be finite and >= 0, got {v}"));
+            if !requirement.holds(value) {
+                return Err(OcpError::OutOfRange {
+                    name,
+                    requirement,
+                    value,
+                }
+                .into());
             }
         }
-        if !(self.armijo > 0.0 && self.armijo < 1.0) {
-            return bad("armijo", format!("must be in (0, 1), got {}", self.armijo));
-        }
         if self.backtracks == 0 {
-            return bad("backtracks", "must be at least 1".into());
+            return Err(OcpError::Zero { name: "backtracks" }.into());
         }
-        if !(self.max_regularisation.is_finite() && self.max_regularisation > 0.0) {
-            return bad(
-                "max_regularisation",
-                format!(
-                    "must be positive and finite, got {}",
-                    self.max_regularisation
-                ),
-            );
+        let requirement = Requirement::PositiveFinite;
+        if !requirement.holds(self.max_regularisation) {
+            return Err(OcpError::OutOfRange {
+                name: "max_regularisation",
+                requirement,
+                value: self.max_regularisation,
+            }
+            .into());
         }
         Ok(())
     }

@@ -41,7 +41,7 @@
 //! ```
 //! and A_k = L_{k+1} ∂F_k/∂x̂ E_k, B_k = L_{k+1} ∂F_k/∂u. Only free tips are supported: a locked
 //! or reaction-force tip adds a constraint (the manifold loses dimensions) that these
-//! coordinates do not remove ([`Error::InvalidArgument`] naming the tip).
+//! coordinates do not remove ([`OcpError::UnsupportedTip`]).
 //!
 //! # Jacobians by dual numbers
 //! The 2n + 1 directions (E e_j on x̂_k, and u_k) are seeded in chunks of [`CHUNK`] into
@@ -52,7 +52,7 @@
 
 use crate::adjoint::{Start, StartKick};
 use crate::base::{Scalar, TipCondition};
-use crate::error::{Error, Result};
+use crate::error::{Error, OcpError, Result};
 use crate::model::Chain;
 use crate::steppers::rattle::{Rattle, State};
 use crate::tridiag::BorderedTridiag;
@@ -153,21 +153,13 @@ impl StageModel {
     /// Checks the scene's model (planar, free tip, a control node) and precomputes M̄ and b.
     pub fn new(chain: &Chain<f64, 2>, h: f64) -> Result<Self> {
         if chain.tip_condition() != TipCondition::Free {
-            return Err(Error::InvalidArgument {
-                name: "tip",
-                reason: format!(
-                    "the Riccati solver supports free tips (cantilever, riser) only, got {:?}: \
-                     a locked or reaction-force tip removes a dimension from the state manifold \
-                     that its tangent coordinates do not",
-                    chain.tip_condition()
-                ),
-            });
+            return Err(OcpError::UnsupportedTip {
+                tip: chain.tip_condition(),
+            }
+            .into());
         }
         let Some(node) = chain.control_node() else {
-            return Err(Error::InvalidArgument {
-                name: "control node",
-                reason: "the problem has no control node".into(),
-            });
+            return Err(OcpError::NoControlNode.into());
         };
         let n = chain.n();
         let (l, m) = (chain.lengths(), chain.masses());

@@ -108,6 +108,13 @@ fn class_of(e: &Error) -> (&'static str, &'static str) {
         Error::NoEffect { .. } => ("InvalidArgumentError", "NoEffect"),
         Error::ControlOutOfRange { .. } => ("InvalidArgumentError", "ControlOutOfRange"),
         Error::InvalidArgument { .. } => ("InvalidArgumentError", "InvalidArgument"),
+        Error::Mpc(_) => ("InvalidArgumentError", "Mpc"),
+        Error::Ocp(_) => ("InvalidArgumentError", "Ocp"),
+        Error::Model(_) => ("InvalidArgumentError", "Model"),
+        Error::Stepper(_) => ("InvalidArgumentError", "Stepper"),
+        Error::Start(_) => ("InvalidArgumentError", "Start"),
+        Error::Multistart(_) => ("InvalidArgumentError", "Multistart"),
+        Error::EulerBernoulli(_) => ("InvalidArgumentError", "EulerBernoulli"),
         _ => ("ChainbeamError", "Other"),
     }
 }
@@ -117,10 +124,7 @@ fn key_of(e: &Error) -> Option<String> {
     match e {
         Error::Scene(se) => se.key().map(String::from),
         Error::NeedsSpatialModel { key } => Some(key.clone()),
-        Error::WrongLength { name, .. }
-        | Error::NotFinite { name, .. }
-        | Error::InvalidArgument { name, .. } => Some((*name).to_string()),
-        _ => None,
+        other => other.argument().map(String::from),
     }
 }
 

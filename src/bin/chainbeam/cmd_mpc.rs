@@ -254,11 +254,19 @@ fn flag_of(name: &str) -> Option<&'static str> {
 /// A library error of the run, naming `file` (the plant's scene or the controller's model) or,
 /// for a quantity the flags set, the flags.
 fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
+    // The flag that set the argument at fault, and what is wrong with it.
+    let flagged = match &e {
+        chainbeam::Error::Mpc(m) => flag_of(m.argument()).map(|f| (f, m.to_string())),
+        chainbeam::Error::Ocp(o) => flag_of(o.argument()).map(|f| (f, o.to_string())),
+        chainbeam::Error::InvalidArgument { name, reason } => {
+            flag_of(name).map(|f| (f, reason.clone()))
+        }
+        _ => None,
+    };
+    if let Some((flag, reason)) = flagged {
+        return CliError::msg(format!("{}: {flag}: {reason}", file.display()));
+    }
     match &e {
-        chainbeam::Error::InvalidArgument { name, reason } => match flag_of(name) {
-            Some(flag) => CliError::msg(format!("{}: {flag}: {reason}", file.display())),
-            None => lib_error(file, e),
-        },
         // The plan's scene has the model's beam and a length set by the flags.
         chainbeam::Error::Scene(se) if se.key() == Some("time.steps") => CliError::msg(format!(
             "{}: --horizon {} s (plans of --horizon/--interval intervals of {} s): the plan {}",

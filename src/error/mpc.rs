@@ -1,0 +1,100 @@
+//! Errors of the model-predictive controller and its closed loop ([`crate::mpc`]).
+
+use super::Requirement;
+use thiserror::Error;
+
+/// An argument of [`crate::mpc`] a caller can correct. `Display` says what is wrong;
+/// [`MpcError::argument`] names the argument, and the crate's [`Error::Mpc`](super::Error::Mpc)
+/// puts both together (e.g. "invalid argument `horizon`: must be a positive whole number of
+/// control intervals of 0.1 s, got 0.05 s"), so a command line can name its flag instead.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum MpcError {
+    /// The control interval is not a positive whole multiple m h of the scene's step
+    /// (to 10⁻⁹ relative; [`crate::mpc::interval_steps`]).
+    #[error(
+        "the control interval must be a positive multiple of the step h = {h} s, got {interval} s"
+    )]
+    IntervalNotMultiple {
+        /// The interval given \[s\].
+        interval: f64,
+        /// The scene's step h \[s\].
+        h: f64,
+    },
+    /// The run of N steps is not a whole number of control intervals of m steps
+    /// ([`crate::mpc::run_closed_loop`]).
+    #[error(
+        "the run of N = {steps} steps is not a whole number of control intervals of \
+         {interval_steps} steps"
+    )]
+    RunNotWhole {
+        /// The run's N.
+        steps: usize,
+        /// The steps m of one interval.
+        interval_steps: usize,
+    },
+    /// The closed loop's interval is not the one the controller plans with.
+    #[error("the controller plans with intervals of {controller} s, the loop runs {run} s")]
+    IntervalMismatch {
+        /// The controller's interval \[s\].
+        controller: f64,
+        /// The loop's interval \[s\].
+        run: f64,
+    },
+    /// A fixed horizon that is not a positive whole number of control intervals.
+    #[error(
+        "must be a positive whole number of control intervals of {interval} s, got {horizon} s"
+    )]
+    HorizonNotWhole {
+        /// The horizon given \[s\].
+        horizon: f64,
+        /// The control interval \[s\].
+        interval: f64,
+    },
+    /// The controller's model has another number of pendulums than the plant it observes.
+    #[error("the model has {model} pendulums, the plant {plant}")]
+    ModelSize {
+        /// The model's n.
+        model: usize,
+        /// The plant's n.
+        plant: usize,
+    },
+    /// The plant was advanced past its last step t_N ([`crate::mpc::Plant::advance`]).
+    #[error("the plant is at its last step N = {steps}")]
+    PastEnd {
+        /// The plant's N.
+        steps: usize,
+    },
+    /// A count (`iterations`, `first_iterations`) of zero.
+    #[error("must be at least 1")]
+    Zero {
+        /// The argument.
+        name: &'static str,
+    },
+    /// A number (`effort`, `bound`) outside its range.
+    #[error("must be {requirement}, got {value}")]
+    OutOfRange {
+        /// The argument.
+        name: &'static str,
+        /// What it must be.
+        requirement: Requirement,
+        /// The value given.
+        value: f64,
+    },
+}
+
+impl MpcError {
+    /// The argument at fault: `interval`, `horizon`, `model`, `steps`, or the name of a count or
+    /// a number (`iterations`, `first_iterations`, `effort`, `bound`).
+    pub fn argument(&self) -> &'static str {
+        match self {
+            MpcError::IntervalNotMultiple { .. }
+            | MpcError::RunNotWhole { .. }
+            | MpcError::IntervalMismatch { .. } => "interval",
+            MpcError::HorizonNotWhole { .. } => "horizon",
+            MpcError::ModelSize { .. } => "model",
+            MpcError::PastEnd { .. } => "steps",
+            MpcError::Zero { name } | MpcError::OutOfRange { name, .. } => name,
+        }
+    }
+}

@@ -14,7 +14,9 @@
 //! 5. [`damage_gradient`] (`gradient`): ∂D/∂σ_k, non-zero at turning points only, and the smooth
 //!    proxy Σ|σ_k|^m.
 //!
-//! [`assess`] runs 1–4 on a moment history described by a [`FatigueSpec`].
+//! [`assess`] runs 1–4 on a moment history described by a [`FatigueSpec`]; [`run_study`]
+//! (`study`) runs controllers (none, the best constant force, a PD law, MPC) on every cell of a
+//! scatter diagram and reports damage per year, life and life extension per controller.
 //!
 //! ```
 //! use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
@@ -32,6 +34,7 @@ pub mod miner;
 pub mod rainflow;
 pub mod sn;
 pub mod stress;
+pub mod study;
 
 use thiserror::Error;
 
@@ -43,6 +46,11 @@ pub use miner::{
 pub use rainflow::{rainflow, rainflow_into, rainflow_visit, Cycle, RainflowWorkspace};
 pub use sn::{DnvClass, Environment, Segment, SnCurve, DNV_REFERENCE_THICKNESS_M};
 pub use stress::HotSpot;
+pub use study::{
+    check_control_can_act, run_controller, run_study, scene_sea_state, with_sea_state,
+    CellOutcome, ControlSettings, ControlledRecord, ControllerKind, ControllerOutcome,
+    ScatterCell, SeaState, Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
+};
 
 /// Errors of the fatigue assessment; each names the quantity (and key or index) at fault.
 #[derive(Debug, Error, Clone, PartialEq)]

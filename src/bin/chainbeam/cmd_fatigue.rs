@@ -9,6 +9,8 @@ use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
 use chainbeam::scene::read_text_file;
 use chainbeam::{simulate, Scene};
 
+mod study;
+
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
 use crate::{check_finite, lib_error, load_scene, to_json, CliError};
@@ -50,6 +52,29 @@ pub struct FatigueArgs {
     /// one) instead of simulating the scene; the scene gives the [fatigue] table.
     #[arg(long, value_name = "FILE")]
     pub series: Option<PathBuf>,
+    /// Run these controllers (a comma list of none, constant, pd, mpc) and report each one's
+    /// damage per year, life and life extension over no control (`none` is always run).
+    #[arg(long, value_name = "LIST", conflicts_with = "series")]
+    pub controller: Option<String>,
+    /// A scatter diagram: a CSV with header hs,tp,probability[,direction]; the scene's
+    /// [loads.waves] sea state is run for every cell.
+    #[arg(long, value_name = "FILE", conflicts_with = "series")]
+    pub scatter: Option<PathBuf>,
+    /// Control interval [s] of the constant, pd and mpc controllers.
+    #[arg(long, value_name = "S", default_value_t = 0.1)]
+    pub interval: f64,
+    /// MPC's horizon [s], a whole number of intervals.
+    #[arg(long, value_name = "S", default_value_t = 3.0)]
+    pub horizon: f64,
+    /// MPC's Gauss-Newton iterations per re-plan.
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub iterations: usize,
+    /// Force bound |u| ≤ U [N] of the constant, pd and mpc controllers.
+    #[arg(long, value_name = "U", default_value_t = 5.0)]
+    pub bound: f64,
+    /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise.
+    #[arg(long, value_name = "RHO", default_value_t = 0.01)]
+    pub effort: f64,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     pub output: Option<PathBuf>,
 }
@@ -79,8 +104,15 @@ pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
     if let Some(s) = &a.series {
         inputs.file(s);
     }
+    if let Some(s) = &a.scatter {
+        inputs.file(s);
+    }
     refuse_overwrite(&[("--output", &out)], &inputs)?;
     let spec = fatigue_spec(&a.scene, &scene)?;
+    if a.controller.is_some() || a.scatter.is_some() {
+        let json = study::run(a, &scene, &spec, &progress)?;
+        return out.write_all(&json);
+    }
     let history = match &a.series {
         Some(path) => read_series(path)?,
         None => simulated(&a.scene, &scene, &progress)?,

@@ -1,0 +1,358 @@
+//! `chainbeam fatigue --controller LIST` and `--scatter FILE`: the study of
+//! [`chainbeam::fatigue::run_study`] from the flags, its JSON, and the scatter CSV reader.
+
+use std::path::Path;
+
+use serde::Serialize;
+
+use chainbeam::fatigue::{
+    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, FatigueSpec,
+    ScatterCell, SeaState, Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
+};
+use chainbeam::mpc::{Horizon, MpcOptions};
+use chainbeam::ocp::OcpOptions;
+use chainbeam::scene::read_text_file;
+use chainbeam::Scene;
+
+use super::FatigueArgs;
+use crate::progress::Progress;
+use crate::{check_finite, check_force_flag, CliError};
+
+/// One cell of a controller (or of the plain scatter run) in the JSON.
+#[derive(Serialize)]
+struct CellJson {
+    hs: Option<f64>,
+    tp: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    direction: Option<f64>,
+    probability: f64,
+    damage_per_year: f64,
+    damage: f64,
+    duration_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    force: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    gains: Option<[f64; 3]>,
+}
+
+/// One controller in the JSON.
+#[derive(Serialize)]
+struct ControllerJson {
+    damage_per_year: f64,
+    life_years: Option<f64>,
+    cells: Vec<CellJson>,
+}
+
+/// An object keyed by controller name, in report order (none, constant, pd, mpc).
+#[derive(Serialize)]
+struct ByController<T> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    none: Option<T>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    constant: Option<T>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pd: Option<T>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mpc: Option<T>,
+}
+
+impl<T> ByController<T> {
+    fn new() -> Self {
+        ByController {
+            none: None,
+            constant: None,
+            pd: None,
+            mpc: None,
+        }
+    }
+
+    fn slot(&mut self, kind: ControllerKind) -> Option<&mut Option<T>> {
+        match kind {
+            ControllerKind::None => Some(&mut self.none),
+            ControllerKind::Constant => Some(&mut self.constant),
+            ControllerKind::Pd => Some(&mut self.pd),
+            ControllerKind::Mpc => Some(&mut self.mpc),
+            _ => None,
+        }
+    }
+}
+
+/// The closed-loop settings in the JSON.
+#[derive(Serialize)]
+struct SettingsJson {
+    interval: f64,
+    horizon: f64,
+    iterations: usize,
+    bound: f64,
+    effort: f64,
+}
+
+/// `--controller` output.
+#[derive(Serialize)]
+struct ControllersReport {
+    controllers: ByController<ControllerJson>,
+    life_extension: ByController<Option<f64>>,
+    settings: SettingsJson,
+}
+
+/// `--scatter` output without `--controller`.
+#[derive(Serialize)]
+struct ScatterReport {
+    damage_per_year: f64,
+    life_years: Option<f64>,
+    cells: Vec<CellJson>,
+}
+
+fn cell_json(c: &CellOutcome) -> CellJson {
+    CellJson {
+        hs: c.sea.map(|s| s.hs),
+        tp: c.sea.map(|s| s.tp),
+        direction: c.sea.and_then(|s| s.direction),
+        probability: c.probability,
+        damage_per_year: c.damage_per_year,
+        damage: c.damage,
+        duration_s: c.duration_s,
+        force: c.force,
+        gains: c.gains,
+    }
+}
+
+fn controller_json(scene_file: &Path, c: &ControllerOutcome) -> Result<ControllerJson, CliError> {
+    let key = format!("controllers.{}", c.kind.name());
+    check_finite(scene_file, &key, &[c.damage_per_year])?;
+    for cell in &c.cells {
+        check_finite(scene_file, &key, &[cell.damage, cell.damage_per_year])?;
+        check_finite(scene_file, &key, cell.gains.as_ref().map_or(&[][..], |g| g))?;
+    }
+    Ok(ControllerJson {
+        damage_per_year: c.damage_per_year,
+        life_years: Some(c.life_years).filter(|l| l.is_finite()),
+        cells: c.cells.iter().map(cell_json).collect(),
+    })
+}
+
+/// The closed-loop settings of the flags (the `mpc` subcommand's defaults).
+fn settings(a: &FatigueArgs) -> Result<ControlSettings, CliError> {
+    if a.bound.is_finite() {
+        check_force_flag("--bound", a.bound)?;
+    }
+    Ok(ControlSettings {
+        interval: a.interval,
+        mpc: MpcOptions {
+            horizon: Horizon::Seconds(a.horizon),
+            iterations: a.iterations,
+            effort: a.effort,
+            ocp: OcpOptions::default().with_bound(a.bound),
+            ..MpcOptions::default()
+        },
+        ..ControlSettings::default()
+    })
+}
+
+/// The flag of a library argument name.
+fn flag_of(name: &str) -> Option<&'static str> {
+    Some(match name {
+        "interval" => "--interval",
+        "horizon" => "--horizon",
+        "iterations" => "--iterations",
+        "effort" => "--effort",
+        "bound" | "bounds" => "--bound",
+        _ => return None,
+    })
+}
+
+/// A study's error as one line naming the scene (or the scatter file) and the flag.
+fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
+    let scene = a.scene.display();
+    match &e {
+        StudyError::Run {
+            controller,
+            cell,
+            source: chainbeam::Error::InvalidArgument { name, reason },
+        } => match flag_of(name) {
+            Some(flag) => CliError::msg(format!(
+                "{scene}: controller `{controller}`, cell {cell}: {flag}: {reason}"
+            )),
+            None => CliError::msg(format!("{scene}: {e}")),
+        },
+        StudyError::UnknownController { .. }
+        | StudyError::DuplicateController { .. }
+        | StudyError::NoControllers => CliError::msg(format!("--controller: {e}")),
+        StudyError::SeaState { .. } | StudyError::NoCells | StudyError::Fatigue(_)
+            if a.scatter.is_some() =>
+        {
+            let file = a.scatter.as_deref().unwrap_or(&a.scene).display();
+            CliError::msg(format!("{file} (with {scene}): {e}"))
+        }
+        _ => CliError::msg(format!("{scene}: {e}")),
+    }
+}
+
+/// Runs the study the flags ask for and returns the JSON.
+pub fn run(
+    a: &FatigueArgs,
+    scene: &Scene,
+    spec: &FatigueSpec,
+    progress: &Progress,
+) -> Result<String, CliError> {
+    let kinds = match &a.controller {
+        Some(list) => {
+            let mut kinds = ControllerKind::parse_list(list).map_err(|e| study_error(a, e))?;
+            if !kinds.contains(&ControllerKind::None) {
+                // The reference of `life_extension`.
+                kinds.insert(0, ControllerKind::None);
+            }
+            kinds
+        }
+        None => vec![ControllerKind::Scene],
+    };
+    let cells = match &a.scatter {
+        Some(path) => Some(read_scatter(path)?),
+        None => None,
+    };
+    let settings = settings(a)?;
+    let n_cells = cells.as_ref().map_or(1, Vec::len);
+    let bar = progress.bar(
+        (n_cells * kinds.len()) as u64,
+        format!("{} cells × {} controllers", n_cells, kinds.len()),
+    );
+    let input = StudyInput {
+        scene,
+        spec,
+        cells: cells.as_deref(),
+        controllers: &kinds,
+        settings: &settings,
+    };
+    let study = run_study(&input, &|| bar.inc(1));
+    bar.finish_and_clear();
+    let study = study.map_err(|e| study_error(a, e))?;
+    match &a.controller {
+        Some(_) => controllers_json(a, &settings, &study),
+        None => {
+            let c = &study.controllers[0];
+            let c = controller_json(&a.scene, c)?;
+            crate::to_json(&ScatterReport {
+                damage_per_year: c.damage_per_year,
+                life_years: c.life_years,
+                cells: c.cells,
+            })
+        }
+    }
+}
+
+fn controllers_json(
+    a: &FatigueArgs,
+    settings: &ControlSettings,
+    study: &Study,
+) -> Result<String, CliError> {
+    let mut controllers = ByController::new();
+    let mut extension = ByController::new();
+    for c in &study.controllers {
+        if let Some(slot) = controllers.slot(c.kind) {
+            *slot = Some(controller_json(&a.scene, c)?);
+        }
+        if let Some(slot) = extension.slot(c.kind) {
+            *slot = Some(study.life_extension(c.kind));
+        }
+    }
+    crate::to_json(&ControllersReport {
+        controllers,
+        life_extension: extension,
+        settings: SettingsJson {
+            interval: settings.interval,
+            horizon: a.horizon,
+            iterations: a.iterations,
+            bound: settings.bound(),
+            effort: a.effort,
+        },
+    })
+}
+
+fn scatter_error(path: &Path, what: impl std::fmt::Display) -> CliError {
+    CliError::msg(format!("{}: {what}", path.display()))
+}
+
+/// The columns of a scatter CSV.
+const SCATTER_COLUMNS: [&str; 4] = ["hs", "tp", "probability", "direction"];
+
+/// Reads a `--scatter` CSV: header `hs,tp,probability[,direction]` (any order, no other
+/// column), one cell per row (the library's bounded reader, then the `csv` crate). Errors name
+/// the file, the line and the column.
+pub fn read_scatter(path: &Path) -> Result<Vec<ScatterCell>, CliError> {
+    let text = read_text_file(path).map_err(|e| CliError::msg(e.to_string()))?;
+    let mut reader = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let header = reader.headers().map_err(|e| scatter_error(path, e))?.clone();
+    if let Some((i, h)) = header
+        .iter()
+        .enumerate()
+        .find(|(_, h)| !SCATTER_COLUMNS.contains(h))
+    {
+        return Err(scatter_error(
+            path,
+            format!(
+                "line 1, column {}: unknown column `{h}` (the header is hs,tp,probability[,\
+                 direction])",
+                i + 1
+            ),
+        ));
+    }
+    let column = |name: &str| header.iter().position(|h| h == name);
+    let missing = |name: &str| {
+        scatter_error(
+            path,
+            format!("line 1: no column `{name}` (the header is hs,tp,probability[,direction])"),
+        )
+    };
+    let hs_col = column("hs").ok_or_else(|| missing("hs"))?;
+    let tp_col = column("tp").ok_or_else(|| missing("tp"))?;
+    let p_col = column("probability").ok_or_else(|| missing("probability"))?;
+    let dir_col = column("direction");
+    let mut cells = Vec::new();
+    for record in reader.records() {
+        let record = record.map_err(|e| scatter_error(path, e))?;
+        let line = record.position().map_or(0, |p| p.line());
+        let value = |col: usize, ok: fn(f64) -> bool, what: &str| -> Result<f64, CliError> {
+            let field = record.get(col).unwrap_or("");
+            match field.parse::<f64>() {
+                Ok(v) if ok(v) => Ok(v),
+                _ => Err(scatter_error(
+                    path,
+                    format!(
+                        "line {line}, column {} (`{}`): `{field}` is not {what}",
+                        col + 1,
+                        header.get(col).unwrap_or("")
+                    ),
+                )),
+            }
+        };
+        if cells.len() == MAX_SCATTER_CELLS {
+            return Err(scatter_error(
+                path,
+                format!("line {line}: more than {MAX_SCATTER_CELLS} cells"),
+            ));
+        }
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        cells.push(ScatterCell {
+            sea: SeaState {
+                hs: value(hs_col, positive, "a positive number (H_s, m)")?,
+                tp: value(tp_col, positive, "a positive number (T_p, s)")?,
+                direction: match dir_col {
+                    Some(c) => Some(value(c, f64::is_finite, "a finite angle (degrees)")?),
+                    None => None,
+                },
+            },
+            probability: value(
+                p_col,
+                |v| (0.0..=1.0).contains(&v),
+                "a probability in [0, 1]",
+            )?,
+        });
+    }
+    if cells.is_empty() {
+        return Err(scatter_error(path, "no cells (rows after the header)"));
+    }
+    Ok(cells)
+}

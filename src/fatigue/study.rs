@@ -1,0 +1,580 @@
+//! The wellhead's fatigue life under control, over a scatter diagram (issue 31, OCEAN.md §4):
+//! every controller run on every sea state, each run's moment history counted by rainflow and
+//! Miner's rule, the cells combined into damage per year, life and life extension.
+//!
+//! For controller c and cell s (probability p_s, a record of duration T_s with Miner's sum
+//! D_{c,s}):
+//! ```text
+//! D_y(c)  = Σ_s p_s · D_{c,s} · Y/T_s          (the cell's contribution p_s · D_{c,s} · Y/T_s)
+//! L(c)    = 1 / (DFF · D_y(c))                  years
+//! ext(c)  = L(c) / L(none)                      the life extension of c over no control
+//! ```
+//! Without a scatter diagram the scene's own sea is the one cell, of probability 1.
+//!
+//! # The controllers ([`ControllerKind`])
+//! - `scene`: the scene as written, its `[control]` values applied (what `simulate` runs);
+//!   `chainbeam fatigue` without `--controller`.
+//! - `none`: the scene with its `[control]` removed, by `simulate` (spatial scenes too).
+//! - `constant`, `pd`, `mpc`: [`crate::mpc`]'s closed loop on the (planar) plant of the cell's
+//!   scene, one decision every [`ControlSettings::interval`] seconds: the best constant force
+//!   ([`ConstantForce::best`], an offline optimum of the cell's record that knows its future),
+//!   a PD law on the measured M₀ with gains tuned on the cell's record ([`PdLaw::tune`]) and the
+//!   receding-horizon controller ([`Mpc`], a perfect model). All three minimise the thesis's
+//!   Σ M₀² + ρ h Σ u² (eq. 3.3.4), the smooth stand-in of the damage; the damage reported is
+//!   the rainflow damage of the moment they leave.
+//!
+//! A control that cannot act is refused before any run ([`StudyError::ControlCannotAct`]): a
+//! force at the tip of a beam whose supports lock it (fixed-fixed, pinned-pinned without the
+//! reaction-force tip) moves nothing, and a "life extension" of 1 would be reported as a result.
+//!
+//! # Sea states and seeds
+//! A cell's sea state is the scene's `[loads.waves]` with `hs` and `tp` (and `direction`, when
+//! the diagram gives one) replaced ([`with_sea_state`]); everything else (spectrum, γ, the
+//! number of components, the seed) stays the scene's. Every cell keeps the scene's seed: the
+//! cells then differ only in H_s, T_p and direction, not in a fresh draw of the phases (common
+//! random numbers: the difference between two cells, or two controllers in a cell, is not
+//! sampling noise), and a cell's sea does not change when rows are added, removed or reordered
+//! in the diagram (a seed derived from the row's index would). The price: the sampling error
+//! of the one realisation is shared by every cell and does not average out over the diagram;
+//! a record long against T_p (many cycles per cell) keeps it small.
+//!
+//! # Work and order
+//! The (cell, controller) runs are independent: with the `parallel` feature they run on rayon's
+//! pool, and the result (every number) is the same, in the same order, as sequentially.
+
+#[cfg(feature = "parallel")]
+use rayon::prelude::*;
+use thiserror::Error;
+
+use super::{assess, combine_scatter, CellDamage, FatigueError, FatigueSpec, MomentHistory};
+use crate::mpc::{
+    run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning,
+};
+use crate::optimize::OptimOptions;
+use crate::scene::{Scene, Support};
+use crate::simulate::simulate;
+
+/// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
+/// each cell is a simulation per controller).
+pub const MAX_SCATTER_CELLS: usize = 10_000;
+
+/// A controller of a fatigue study (module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ControllerKind {
+    /// The scene as written (its `[control]` values applied).
+    Scene,
+    /// No control: the scene without its `[control]`.
+    None,
+    /// The best constant force of the cell's record.
+    Constant,
+    /// A PD law on the measured base moment, gains tuned on the cell's record.
+    Pd,
+    /// Receding-horizon control with a perfect model.
+    Mpc,
+}
+
+impl ControllerKind {
+    /// The controllers `--controller` accepts, in their report order.
+    pub const CHOICES: [ControllerKind; 4] = [
+        ControllerKind::None,
+        ControllerKind::Constant,
+        ControllerKind::Pd,
+        ControllerKind::Mpc,
+    ];
+
+    /// The name in `--controller` and in the JSON (`scene`, `none`, `constant`, `pd`, `mpc`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::Scene => "scene",
+            ControllerKind::None => "none",
+            ControllerKind::Constant => "constant",
+            ControllerKind::Pd => "pd",
+            ControllerKind::Mpc => "mpc",
+        }
+    }
+
+    /// Whether it applies a force of its own (constant, pd, mpc).
+    pub fn is_feedback(self) -> bool {
+        matches!(
+            self,
+            ControllerKind::Constant | ControllerKind::Pd | ControllerKind::Mpc
+        )
+    }
+
+    /// A comma-separated list of names (`none,constant,pd,mpc`, any subset in any order; spaces
+    /// around names are ignored), sorted in report order.
+    ///
+    /// # Errors
+    /// [`StudyError::UnknownController`], [`StudyError::DuplicateController`], or
+    /// [`StudyError::NoControllers`] for an empty list.
+    pub fn parse_list(list: &str) -> Result<Vec<ControllerKind>, StudyError> {
+        let mut kinds = Vec::new();
+        for name in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+            let kind = Self::CHOICES
+                .into_iter()
+                .find(|k| k.name() == name)
+                .ok_or_else(|| StudyError::UnknownController {
+                    name: name.to_string(),
+                })?;
+            if kinds.contains(&kind) {
+                return Err(StudyError::DuplicateController {
+                    name: name.to_string(),
+                });
+            }
+            kinds.push(kind);
+        }
+        if kinds.is_empty() {
+            return Err(StudyError::NoControllers);
+        }
+        kinds.sort();
+        Ok(kinds)
+    }
+}
+
+/// Why a study could not be run; each names the controller, the cell or the key at fault.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum StudyError {
+    /// The assessment's own error (the `[fatigue]` table, a non-finite moment, a probability).
+    #[error(transparent)]
+    Fatigue(#[from] FatigueError),
+    /// Not a controller name.
+    #[error("unknown controller `{name}` (one of none, constant, pd, mpc)")]
+    UnknownController {
+        /// The name given.
+        name: String,
+    },
+    /// A controller named twice.
+    #[error("controller `{name}` is named twice")]
+    DuplicateController {
+        /// The name.
+        name: String,
+    },
+    /// An empty list of controllers.
+    #[error("no controller named (give a comma list of none, constant, pd, mpc)")]
+    NoControllers,
+    /// A scatter diagram without cells.
+    #[error("the scatter diagram has no cells")]
+    NoCells,
+    /// More cells than [`MAX_SCATTER_CELLS`].
+    #[error("the scatter diagram has {cells} cells, more than {MAX_SCATTER_CELLS}")]
+    TooManyCells {
+        /// The number of cells.
+        cells: usize,
+    },
+    /// The control acts at a node the supports lock: it cannot change the moment.
+    #[error(
+        "controller `{controller}` cannot act: its force is at node {node}, the tip of a \
+         {support} beam, which the supports lock (set `control.node` to a free node)"
+    )]
+    ControlCannotAct {
+        /// The controller.
+        controller: &'static str,
+        /// The control node (`control.node`, default the tip n).
+        node: usize,
+        /// The support (`beam.support`).
+        support: &'static str,
+    },
+    /// A cell's sea state cannot be set on the scene (e.g. it has no `[loads.waves]`).
+    #[error("scatter cell {cell}: {reason}")]
+    SeaState {
+        /// Index of the cell (0-based, in the diagram's order).
+        cell: usize,
+        /// Why.
+        reason: String,
+    },
+    /// A run failed (a RATTLE step, a solve, settings that do not fit the scene).
+    #[error("controller `{controller}`, cell {cell}: {source}")]
+    Run {
+        /// The controller.
+        controller: &'static str,
+        /// Index of the cell.
+        cell: usize,
+        /// The library's error.
+        source: crate::Error,
+    },
+}
+
+/// The settings of the closed-loop controllers (`constant`, `pd`, `mpc`).
+#[derive(Clone, Debug)]
+pub struct ControlSettings {
+    /// The control interval \[s\] (a multiple of the step that divides the run). Default 0.1.
+    pub interval: f64,
+    /// MPC's options; also the force bound (`mpc.ocp`'s symmetric box, upper bound used) and
+    /// the effort weight ρ of the constant force and the PD law. Default [`MpcOptions`]'s.
+    pub mpc: MpcOptions,
+    /// Iterations of the PD gains' tuning ([`PdLaw::tune`]). Default 200.
+    pub pd_max_iters: usize,
+}
+
+impl Default for ControlSettings {
+    fn default() -> Self {
+        ControlSettings {
+            interval: 0.1,
+            mpc: MpcOptions::default(),
+            pd_max_iters: 200,
+        }
+    }
+}
+
+impl ControlSettings {
+    /// The force bound u_max (the upper bound of the box).
+    pub fn bound(&self) -> f64 {
+        self.mpc.ocp.upper
+    }
+}
+
+/// A sea state: significant wave height H_s \[m\], peak period T_p \[s\] and, optionally, the
+/// mean direction \[° from +z toward +x\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaState {
+    /// H_s \[m\].
+    pub hs: f64,
+    /// T_p \[s\].
+    pub tp: f64,
+    /// Mean direction \[°\]; `None`: the scene's.
+    pub direction: Option<f64>,
+}
+
+/// A cell of a scatter diagram: a sea state and its probability of occurrence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScatterCell {
+    /// The sea state.
+    pub sea: SeaState,
+    /// Probability of occurrence p_s ∈ \[0, 1\].
+    pub probability: f64,
+}
+
+/// A controller's moment record on one scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ControlledRecord {
+    /// M₀(t_k) \[N·m\], k = 0..N.
+    pub moment: Vec<f64>,
+    /// M₀ₓ of a spatial run.
+    pub moment_x: Option<Vec<f64>>,
+    /// T = N h \[s\].
+    pub duration_s: f64,
+    /// The constant controller's force \[N\].
+    pub force: Option<f64>,
+    /// The PD law's gains (u_b \[N\], K_p \[N/(N·m)\], K_d \[N·s/(N·m)\]).
+    pub gains: Option<[f64; 3]>,
+}
+
+/// One controller's outcome in one cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellOutcome {
+    /// The cell's sea state (`None`: the scene as is, without `[loads.waves]`).
+    pub sea: Option<SeaState>,
+    /// p_s.
+    pub probability: f64,
+    /// Miner's sum D_{c,s} over the record.
+    pub damage: f64,
+    /// T_s \[s\].
+    pub duration_s: f64,
+    /// The cell's probability-weighted contribution p_s · D_{c,s} · Y/T_s per year.
+    pub damage_per_year: f64,
+    /// The constant controller's force in this cell \[N\].
+    pub force: Option<f64>,
+    /// The PD law's gains in this cell.
+    pub gains: Option<[f64; 3]>,
+}
+
+/// One controller over every cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ControllerOutcome {
+    /// The controller.
+    pub kind: ControllerKind,
+    /// D_y = Σ_s of the cells' contributions.
+    pub damage_per_year: f64,
+    /// L = 1/(DFF · D_y) years (+∞ without damage).
+    pub life_years: f64,
+    /// Per cell, in the diagram's order.
+    pub cells: Vec<CellOutcome>,
+}
+
+/// The outcome of [`run_study`]: one entry per controller, in report order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Study {
+    /// Per controller.
+    pub controllers: Vec<ControllerOutcome>,
+}
+
+impl Study {
+    /// The outcome of `kind`, if it was run.
+    pub fn get(&self, kind: ControllerKind) -> Option<&ControllerOutcome> {
+        self.controllers.iter().find(|c| c.kind == kind)
+    }
+
+    /// L(kind)/L(none) = D_y(none)/D_y(kind); `None` unless both ran and both lives are
+    /// finite and positive.
+    pub fn life_extension(&self, kind: ControllerKind) -> Option<f64> {
+        let (c, none) = (self.get(kind)?, self.get(ControllerKind::None)?);
+        let ratio = c.life_years / none.life_years;
+        (c.life_years.is_finite() && none.life_years.is_finite() && ratio.is_finite())
+            .then_some(ratio)
+    }
+}
+
+/// What [`run_study`] runs.
+#[derive(Clone, Copy, Debug)]
+pub struct StudyInput<'a> {
+    /// The scene (its `[fatigue]` table is not read: `spec` is).
+    pub scene: &'a Scene,
+    /// The assessment's section and S-N curve.
+    pub spec: &'a FatigueSpec,
+    /// The scatter diagram; `None`: the scene's own sea, probability 1.
+    pub cells: Option<&'a [ScatterCell]>,
+    /// The controllers, in report order.
+    pub controllers: &'a [ControllerKind],
+    /// The closed-loop controllers' settings.
+    pub settings: &'a ControlSettings,
+}
+
+/// The scene's support as the scene file writes it.
+fn support_name(s: Support) -> &'static str {
+    match s {
+        Support::Cantilever => "cantilever",
+        Support::Riser => "riser",
+        Support::FixedFixed => "fixed-fixed",
+        Support::PinnedPinned => "pinned-pinned",
+    }
+}
+
+/// Refuses a feedback controller whose force acts at a node the supports lock (the tip of a
+/// fixed-fixed or pinned-pinned beam without the reaction-force tip).
+///
+/// # Errors
+/// [`StudyError::ControlCannotAct`].
+pub fn check_control_can_act(scene: &Scene, kind: ControllerKind) -> Result<(), StudyError> {
+    if !kind.is_feedback() {
+        return Ok(());
+    }
+    let n = scene.n();
+    let node = scene.control.as_ref().map_or(n, |c| c.node);
+    let locked = matches!(scene.beam.support, Support::FixedFixed | Support::PinnedPinned)
+        && !scene.beam.reaction_force;
+    if locked && node == n {
+        return Err(StudyError::ControlCannotAct {
+            controller: kind.name(),
+            node,
+            support: support_name(scene.beam.support),
+        });
+    }
+    Ok(())
+}
+
+/// Runs one controller on `scene` and records M₀ (module docs, "The controllers").
+///
+/// # Errors
+/// The library's errors of the run (a planar-only controller on a spatial scene:
+/// [`crate::Error::NeedsSpatialModel`]; a failed step or solve; an interval that does not fit).
+pub fn run_controller(
+    scene: &Scene,
+    kind: ControllerKind,
+    settings: &ControlSettings,
+) -> crate::Result<ControlledRecord> {
+    let (interval, bound, effort) = (settings.interval, settings.bound(), settings.mpc.effort);
+    let closed = |c: &mut dyn Controller, force, gains| {
+        let r = run_closed_loop(scene, interval, c)?;
+        Ok(ControlledRecord {
+            duration_s: r.summary.simulated_seconds,
+            moment: r.moment,
+            moment_x: None,
+            force,
+            gains,
+        })
+    };
+    match kind {
+        ControllerKind::Scene | ControllerKind::None => {
+            let mut free;
+            let run = if kind == ControllerKind::None {
+                free = scene.clone();
+                free.control = None;
+                &free
+            } else {
+                scene
+            };
+            let traj = simulate(run)?;
+            Ok(ControlledRecord {
+                moment: traj.moment().to_vec(),
+                moment_x: traj.is_spatial().then(|| traj.moment_x().to_vec()),
+                duration_s: traj.steps() as f64 * traj.h(),
+                force: None,
+                gains: None,
+            })
+        }
+        ControllerKind::Constant => {
+            let (mut c, _) = ConstantForce::best(scene, bound, effort)?;
+            let force = c.u;
+            closed(&mut c, Some(force), None)
+        }
+        ControllerKind::Pd => {
+            let tuning = PdTuning::new(scene, interval, bound, effort)?;
+            let opts = OptimOptions {
+                max_iters: settings.pd_max_iters,
+                first_step: 0.01,
+                ..OptimOptions::default()
+            };
+            let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
+            let gains = [pd.bias, pd.kp, pd.kd];
+            closed(&mut pd, None, Some(gains))
+        }
+        ControllerKind::Mpc => {
+            let mut mpc = Mpc::new(scene, interval, settings.mpc.clone())?;
+            closed(&mut mpc, None, None)
+        }
+    }
+}
+
+/// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when
+/// given) replaced, every other key (the seed among them) kept (module docs, "Sea states and
+/// seeds").
+///
+/// # Errors
+/// [`StudyError::SeaState`] when the scene has no `[loads.waves]` to set, or the values are
+/// invalid for it (naming the key).
+pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scene, StudyError> {
+    let _ = (scene, sea);
+    Err(StudyError::SeaState {
+        cell,
+        reason: "the scene has no [loads.waves] table whose hs and tp a scatter cell could set"
+            .to_string(),
+    })
+}
+
+/// The scene's own sea state (`[loads.waves]` hs, tp, direction), if it has one.
+pub fn scene_sea_state(scene: &Scene) -> Option<SeaState> {
+    let _ = scene;
+    None
+}
+
+/// One (cell, controller) run: the cell's scene, the record, its damage.
+fn run_cell(
+    input: &StudyInput<'_>,
+    cell: usize,
+    kind: ControllerKind,
+) -> Result<CellRun, StudyError> {
+    let run_err = |source| StudyError::Run {
+        controller: kind.name(),
+        cell,
+        source,
+    };
+    let record = match input.cells {
+        Some(cells) => {
+            let scene = with_sea_state(input.scene, &cells[cell].sea, cell)?;
+            run_controller(&scene, kind, input.settings)
+        }
+        None => run_controller(input.scene, kind, input.settings),
+    }
+    .map_err(run_err)?;
+    let a = assess(
+        input.spec,
+        MomentHistory {
+            duration_s: record.duration_s,
+            moment: &record.moment,
+            moment_x: record.moment_x.as_deref(),
+        },
+    )?;
+    let probability = input.cells.map_or(1.0, |c| c[cell].probability);
+    Ok(CellRun {
+        damage: CellDamage {
+            probability,
+            damage: a.damage,
+            duration_s: a.duration_s,
+        },
+        force: record.force,
+        gains: record.gains,
+    })
+}
+
+/// What a study keeps of one (cell, controller) run (not the record: a diagram of 30 cells of
+/// hour-long records would hold gigabytes).
+struct CellRun {
+    damage: CellDamage,
+    force: Option<f64>,
+    gains: Option<[f64; 3]>,
+}
+
+/// Runs every controller on every cell and combines the cells (module docs). `on_run` is called
+/// after each (cell, controller) run, from the thread that ran it (a progress bar).
+///
+/// # Errors
+/// [`StudyError::NoControllers`], [`StudyError::NoCells`], [`StudyError::ControlCannotAct`]
+/// before any run; the first failed run's error in (cell, controller) order; the combination's
+/// [`FatigueError`] (a probability outside \[0, 1\], a sum over 1).
+pub fn run_study(
+    input: &StudyInput<'_>,
+    on_run: &(dyn Fn() + Sync),
+) -> Result<Study, StudyError> {
+    if input.controllers.is_empty() {
+        return Err(StudyError::NoControllers);
+    }
+    input.spec.validate()?;
+    for &kind in input.controllers {
+        check_control_can_act(input.scene, kind)?;
+    }
+    let n_cells = match input.cells {
+        Some([]) => return Err(StudyError::NoCells),
+        Some(cells) if cells.len() > MAX_SCATTER_CELLS => {
+            return Err(StudyError::TooManyCells { cells: cells.len() })
+        }
+        Some(cells) => {
+            // The probabilities are checked before hours of runs, not after.
+            let dummy: Vec<CellDamage> = cells
+                .iter()
+                .map(|c| CellDamage {
+                    probability: c.probability,
+                    damage: 0.0,
+                    duration_s: 1.0,
+                })
+                .collect();
+            combine_scatter(&dummy)?;
+            cells.len()
+        }
+        None => 1,
+    };
+    let jobs: Vec<(usize, ControllerKind)> = (0..n_cells)
+        .flat_map(|s| input.controllers.iter().map(move |&k| (s, k)))
+        .collect();
+    let job = |&(s, k): &(usize, ControllerKind)| {
+        let r = run_cell(input, s, k);
+        on_run();
+        r
+    };
+    #[cfg(feature = "parallel")]
+    let results: Vec<_> = jobs.par_iter().map(job).collect();
+    #[cfg(not(feature = "parallel"))]
+    let results: Vec<_> = jobs.iter().map(job).collect();
+    let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let n_ctrl = input.controllers.len();
+    let mut controllers = Vec::with_capacity(n_ctrl);
+    for (j, &kind) in input.controllers.iter().enumerate() {
+        let runs: Vec<&CellRun> = (0..n_cells).map(|s| &results[s * n_ctrl + j]).collect();
+        let damages: Vec<CellDamage> = runs.iter().map(|r| r.damage).collect();
+        let combined = combine_scatter(&damages)?;
+        let cells = runs
+            .iter()
+            .zip(&combined.cells)
+            .enumerate()
+            .map(|(s, (run, &per_year))| CellOutcome {
+                sea: match input.cells {
+                    Some(c) => Some(c[s].sea),
+                    None => scene_sea_state(input.scene),
+                },
+                probability: run.damage.probability,
+                damage: run.damage.damage,
+                duration_s: run.damage.duration_s,
+                damage_per_year: per_year,
+                force: run.force,
+                gains: run.gains,
+            })
+            .collect();
+        controllers.push(ControllerOutcome {
+            kind,
+            damage_per_year: combined.damage_per_year,
+            life_years: super::life_years(combined.damage_per_year, input.spec.dff)?,
+            cells,
+        });
+    }
+    Ok(Study { controllers })
+}

@@ -47,9 +47,9 @@ pub use rainflow::{rainflow, rainflow_into, rainflow_visit, Cycle, RainflowWorks
 pub use sn::{DnvClass, Environment, Segment, SnCurve, DNV_REFERENCE_THICKNESS_M};
 pub use stress::HotSpot;
 pub use study::{
-    check_control_can_act, run_controller, run_study, scene_sea_state, with_sea_state,
-    CellOutcome, ControlSettings, ControlledRecord, ControllerKind, ControllerOutcome,
-    ScatterCell, SeaState, Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
+    check_control_can_act, run_controller, run_study, scene_sea_state, with_sea_state, CellOutcome,
+    ControlSettings, ControlledRecord, ControllerKind, ControllerOutcome, ScatterCell, SeaState,
+    Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
 };
 
 /// Errors of the fatigue assessment; each names the quantity (and key or index) at fault.

@@ -47,9 +47,7 @@ use rayon::prelude::*;
 use thiserror::Error;
 
 use super::{assess, combine_scatter, CellDamage, FatigueError, FatigueSpec, MomentHistory};
-use crate::mpc::{
-    run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning,
-};
+use crate::mpc::{run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning};
 use crate::optimize::OptimOptions;
 use crate::scene::{Scene, Support};
 use crate::simulate::simulate;
@@ -190,8 +188,8 @@ pub enum StudyError {
         controller: &'static str,
         /// Index of the cell.
         cell: usize,
-        /// The library's error.
-        source: crate::Error,
+        /// The library's error (boxed: it is large, and this is the cold path).
+        source: Box<crate::Error>,
     },
 }
 
@@ -351,8 +349,10 @@ pub fn check_control_can_act(scene: &Scene, kind: ControllerKind) -> Result<(), 
     }
     let n = scene.n();
     let node = scene.control.as_ref().map_or(n, |c| c.node);
-    let locked = matches!(scene.beam.support, Support::FixedFixed | Support::PinnedPinned)
-        && !scene.beam.reaction_force;
+    let locked = matches!(
+        scene.beam.support,
+        Support::FixedFixed | Support::PinnedPinned
+    ) && !scene.beam.reaction_force;
     if locked && node == n {
         return Err(StudyError::ControlCannotAct {
             controller: kind.name(),
@@ -434,18 +434,40 @@ pub fn run_controller(
 /// [`StudyError::SeaState`] when the scene has no `[loads.waves]` to set, or the values are
 /// invalid for it (naming the key).
 pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scene, StudyError> {
-    let _ = (scene, sea);
-    Err(StudyError::SeaState {
+    let mut out = scene.clone();
+    let Some(waves) = out.loads.waves.as_mut() else {
+        return Err(StudyError::SeaState {
+            cell,
+            reason: "the scene has no [loads.waves] table whose hs and tp a scatter cell could \
+                     set (docs/scene-format.md)"
+                .to_string(),
+        });
+    };
+    waves.hs = sea.hs;
+    waves.tp = sea.tp;
+    if let Some(direction) = sea.direction {
+        waves.direction = direction;
+    }
+    out.validate().map_err(|e| StudyError::SeaState {
         cell,
-        reason: "the scene has no [loads.waves] table whose hs and tp a scatter cell could set"
-            .to_string(),
-    })
+        reason: format!(
+            "H_s = {} m, T_p = {} s{}: {e}",
+            sea.hs,
+            sea.tp,
+            sea.direction
+                .map_or_else(String::new, |d| format!(", direction {d}°"))
+        ),
+    })?;
+    Ok(out)
 }
 
 /// The scene's own sea state (`[loads.waves]` hs, tp, direction), if it has one.
 pub fn scene_sea_state(scene: &Scene) -> Option<SeaState> {
-    let _ = scene;
-    None
+    scene.loads.waves.map(|w| SeaState {
+        hs: w.hs,
+        tp: w.tp,
+        direction: Some(w.direction),
+    })
 }
 
 /// One (cell, controller) run: the cell's scene, the record, its damage.
@@ -457,7 +479,7 @@ fn run_cell(
     let run_err = |source| StudyError::Run {
         controller: kind.name(),
         cell,
-        source,
+        source: Box::new(source),
     };
     let record = match input.cells {
         Some(cells) => {
@@ -502,10 +524,7 @@ struct CellRun {
 /// [`StudyError::NoControllers`], [`StudyError::NoCells`], [`StudyError::ControlCannotAct`]
 /// before any run; the first failed run's error in (cell, controller) order; the combination's
 /// [`FatigueError`] (a probability outside \[0, 1\], a sum over 1).
-pub fn run_study(
-    input: &StudyInput<'_>,
-    on_run: &(dyn Fn() + Sync),
-) -> Result<Study, StudyError> {
+pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<Study, StudyError> {
     if input.controllers.is_empty() {
         return Err(StudyError::NoControllers);
     }

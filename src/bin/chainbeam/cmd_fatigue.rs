@@ -41,7 +41,19 @@ Output (JSON):
 --series FILE: a CSV with a header line naming its columns, among them t [s] and moment [Nm] (and \
 moment_x [Nm] for a spatial history); other columns are ignored, so a `chainbeam simulate` CSV \
 is a valid series. Times must increase strictly; blank lines and lines starting with # are \
-skipped.";
+skipped.
+
+--controller none,constant,pd,mpc (any comma list; none is always run): each controller on the \
+scene (or every cell) in the closed loop of `chainbeam mpc` (--interval, --horizon, --iterations, \
+--bound, --effort as there): constant = the best constant force of the record, pd = a PD law on \
+M₀ with tuned gains, mpc = receding horizon. JSON: controllers.NAME.{damage_per_year, \
+life_years, cells} and life_extension.NAME = its life over the life without control. A control \
+at a node the supports lock is refused.
+
+--scatter FILE: a CSV with header hs,tp,probability[,direction]; every cell sets the scene's \
+[loads.waves] hs, tp (direction) and keeps its seed (the same phases in every cell). JSON: \
+damage_per_year = Σ_s p_s·D_s·Y/T_s, life_years, cells [{hs, tp, probability, damage_per_year \
+(the cell's weighted contribution), damage, duration_s}]. Details: docs/cli.md.";
 
 /// `fatigue`'s flags.
 #[derive(Args)]

@@ -8,7 +8,7 @@
 //! chainbeam explore  SCENE.toml [--starts K] [--design latin|random|perturb] [--output FILE]
 //! chainbeam mpc      SCENE.toml [--horizon S] [--interval S] [--iterations K] [--bound U]
 //!                               [--model MODEL.toml] [--baselines] [--summary FILE] [--output FILE]
-//! chainbeam fatigue  SCENE.toml [--series FILE] [--output FILE]
+//! chainbeam fatigue  SCENE.toml [--series FILE | --scatter FILE] [--controller LIST] [--output FILE]
 //! ```
 //!
 //! The full contract (every flag, the CSV columns, the `.npy` layout, the JSON keys and the exit

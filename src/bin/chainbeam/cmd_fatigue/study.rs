@@ -168,12 +168,15 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
         StudyError::Run {
             controller,
             cell,
-            source: chainbeam::Error::InvalidArgument { name, reason },
-        } => match flag_of(name) {
-            Some(flag) => CliError::msg(format!(
-                "{scene}: controller `{controller}`, cell {cell}: {flag}: {reason}"
-            )),
-            None => CliError::msg(format!("{scene}: {e}")),
+            source,
+        } => match source.as_ref() {
+            chainbeam::Error::InvalidArgument { name, reason } if flag_of(name).is_some() => {
+                CliError::msg(format!(
+                    "{scene}: controller `{controller}`, cell {cell}: {}: {reason}",
+                    flag_of(name).unwrap_or_default()
+                ))
+            }
+            _ => CliError::msg(format!("{scene}: {e}")),
         },
         StudyError::UnknownController { .. }
         | StudyError::DuplicateController { .. }
@@ -284,7 +287,10 @@ pub fn read_scatter(path: &Path) -> Result<Vec<ScatterCell>, CliError> {
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
         .from_reader(text.as_bytes());
-    let header = reader.headers().map_err(|e| scatter_error(path, e))?.clone();
+    let header = reader
+        .headers()
+        .map_err(|e| scatter_error(path, e))?
+        .clone();
     if let Some((i, h)) = header
         .iter()
         .enumerate()

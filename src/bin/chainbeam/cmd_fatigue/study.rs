@@ -169,15 +169,20 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
             controller,
             cell,
             source,
-        } => match source.as_ref() {
-            chainbeam::Error::InvalidArgument { name, reason } if flag_of(name).is_some() => {
-                CliError::msg(format!(
-                    "{scene}: controller `{controller}`, cell {cell}: {}: {reason}",
-                    flag_of(name).unwrap_or_default()
-                ))
+        } => {
+            let named = match source.as_ref() {
+                chainbeam::Error::Mpc(m) => Some((m.argument(), m.to_string())),
+                chainbeam::Error::Ocp(o) => Some((o.argument(), o.to_string())),
+                chainbeam::Error::InvalidArgument { name, reason } => Some((*name, reason.clone())),
+                _ => None,
+            };
+            match named.and_then(|(name, reason)| flag_of(name).map(|f| (f, reason))) {
+                Some((flag, reason)) => CliError::msg(format!(
+                    "{scene}: controller `{controller}`, cell {cell}: {flag}: {reason}"
+                )),
+                None => CliError::msg(format!("{scene}: {e}")),
             }
-            _ => CliError::msg(format!("{scene}: {e}")),
-        },
+        }
         StudyError::UnknownController { .. }
         | StudyError::DuplicateController { .. }
         | StudyError::NoControllers => CliError::msg(format!("--controller: {e}")),

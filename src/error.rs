@@ -7,6 +7,7 @@ mod model;
 mod mpc;
 mod multistart;
 mod ocp;
+mod optimize;
 mod requirement;
 mod start;
 mod stepper;
@@ -17,6 +18,8 @@ pub use model::ModelError;
 pub use mpc::MpcError;
 pub use multistart::MultistartError;
 pub use ocp::{HorizonShape, OcpError};
+pub use optimize::OptimizeError;
+pub(crate) use optimize::PLANAR_ONLY;
 pub use requirement::Requirement;
 pub use start::StartError;
 pub use stepper::StepperError;
@@ -52,6 +55,10 @@ pub enum Error {
     /// it.
     #[error("invalid argument `{}`: {}", .0.argument(), .0)]
     Ocp(#[from] OcpError),
+    /// An option, start or problem the general-purpose optimiser refuses (a tolerance, the
+    /// method, the bounds, an infeasible θ₀); [`OptimizeError::argument`] names it.
+    #[error("invalid argument `{}`: {}", .0.argument(), .0)]
+    Optimize(#[from] OptimizeError),
     /// The Newton iteration for the constraint multipliers λ of one step (RATTLE's implicit first
     /// half step, eq. 1.6.1; SHAKE's position step) did not reach its tolerance. Almost always the
     /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at
@@ -295,12 +302,14 @@ pub enum Error {
 
 impl Error {
     /// The argument, option or input a caller passed wrongly, for the errors that name one
-    /// ([`Error::Mpc`], [`Error::Ocp`], [`Error::WrongLength`], [`Error::NotFinite`]); `None`
+    /// ([`Error::Mpc`], [`Error::Ocp`], [`Error::Optimize`], [`Error::WrongLength`],
+    /// [`Error::NotFinite`]); `None`
     /// for the others (a scene's key is [`SceneError::key`]).
     pub fn argument(&self) -> Option<&'static str> {
         match self {
             Error::Mpc(e) => Some(e.argument()),
             Error::Ocp(e) => Some(e.argument()),
+            Error::Optimize(e) => Some(e.argument()),
             Error::WrongLength { name, .. } | Error::NotFinite { name, .. } => Some(name),
             Error::InvalidArgument { name, .. } => Some(name),
             _ => None,

@@ -2,13 +2,15 @@
 //! thesis §3.3.1). Every reference number names its source: a thesis table, a closed form, or a
 //! second solver on the same problem.
 
+use chainbeam::error::Requirement;
 use chainbeam::multistart::{
     axis, certify, landscape_1d, landscape_2d, multistart, start_points, MultistartError,
     MultistartReport, StartDesign,
 };
 use chainbeam::optimize::{
     ineffective_params, minimize, resolved_control_limit, Bounds, HessianVec, History, Method,
-    Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult, Termination, NO_EFFECT_TOL,
+    Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult, OptimizeError, Termination,
+    NO_EFFECT_TOL,
 };
 use chainbeam::*;
 
@@ -309,7 +311,7 @@ fn asymmetric_box_is_respected_by_minimize_and_multistart() {
     };
     assert!(matches!(
         minimize(&p, &[0.0; 11], &both),
-        Err(Error::InvalidArgument { name: "bound", .. })
+        Err(Error::Optimize(OptimizeError::BoundAndBox))
     ));
 }
 
@@ -321,43 +323,80 @@ fn invalid_starts_and_options_are_typed_errors() {
         bound: Some(10.0),
         ..Default::default()
     };
-    let name = |r: Result<OptimResult>| match r {
-        Err(
-            Error::InvalidArgument { name, .. }
-            | Error::WrongLength { name, .. }
-            | Error::NotFinite { name, .. },
-        ) => name,
-        other => panic!("expected InvalidArgument, got {other:?}"),
+    let refused = |opts: &OptimOptions, theta0: &[f64]| {
+        minimize(&p, theta0, opts).expect_err("a typed refusal")
     };
-    assert_eq!(name(minimize(&p, &[11.0], &bounded)), "theta0");
+    let out_of_range = |name, requirement, value| {
+        Error::Optimize(OptimizeError::OutOfRange {
+            name,
+            requirement,
+            value,
+        })
+    };
     assert_eq!(
-        name(minimize(&p, &[f64::NAN], &OptimOptions::default())),
-        "theta0"
+        refused(&bounded, &[11.0]),
+        Error::Optimize(OptimizeError::InfeasibleStart {
+            index: 0,
+            value: 11.0,
+            lower: -10.0,
+            upper: 10.0
+        })
     );
     assert_eq!(
-        name(minimize(&p, &[0.0, 1.0], &OptimOptions::default())),
-        "theta0"
+        refused(&OptimOptions::default(), &[f64::NAN]),
+        Error::NotFinite {
+            name: "theta0",
+            index: 0
+        }
+    );
+    assert_eq!(
+        refused(&OptimOptions::default(), &[0.0, 1.0]),
+        Error::WrongLength {
+            name: "theta0",
+            expected: 1,
+            got: 2
+        }
     );
     let bad = OptimOptions {
         bound: Some(-1.0),
         ..Default::default()
     };
-    assert_eq!(name(minimize(&p, &[0.0], &bad)), "bound");
+    assert_eq!(
+        refused(&bad, &[0.0]),
+        out_of_range("bound", Requirement::PositiveFinite, -1.0)
+    );
     let bad = OptimOptions {
         rel_grad_tol: f64::NAN,
         ..Default::default()
     };
-    assert_eq!(name(minimize(&p, &[0.0], &bad)), "rel_grad_tol");
+    let e = refused(&bad, &[0.0]);
+    assert!(
+        matches!(
+            e,
+            Error::Optimize(OptimizeError::OutOfRange {
+                name: "rel_grad_tol",
+                requirement: Requirement::FiniteNonNegative,
+                value
+            }) if value.is_nan()
+        ),
+        "{e:?}"
+    );
     let bad = OptimOptions {
         first_step: 0.0,
         ..Default::default()
     };
-    assert_eq!(name(minimize(&p, &[0.0], &bad)), "first_step");
+    assert_eq!(
+        refused(&bad, &[0.0]),
+        out_of_range("first_step", Requirement::PositiveFinite, 0.0)
+    );
     assert_eq!(
         "trust-region".parse::<Method>().unwrap(),
         Method::TrustRegion
     );
-    assert!("bfgs".parse::<Method>().is_err());
+    assert!(matches!(
+        "bfgs".parse::<Method>(),
+        Err(Error::Optimize(OptimizeError::UnknownMethod { given, .. })) if given == "bfgs"
+    ));
     // A start on the bound is moved inside (the bound is stationary in the sine variables) and
     // the run still finds the interior minimiser u* ≈ −3.114 of Table 3.2, node 7.
     let r = minimize(&p, &[10.0], &bounded).unwrap();
@@ -863,7 +902,7 @@ fn any_optim_problem_is_minimised() {
     };
     assert!(matches!(
         minimize(&plain, &[-1.2, 1.0], &tr),
-        Err(Error::InvalidArgument { name: "method", .. })
+        Err(Error::Optimize(OptimizeError::NoHessian))
     ));
     // (Newton-CG is left out: argmin's forcing term slows it to gradient-descent-like steps in
     // Rosenbrock's valley, see `Method::NewtonCg`; it stops at the iteration limit, unconverged.)

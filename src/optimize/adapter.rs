@@ -14,7 +14,7 @@ use super::observers::Relay;
 use super::point::{same_bits, Point};
 use super::problem::OptimProblem;
 use super::ArgminError;
-use crate::error::{Error, Result};
+use crate::error::{Error, OptimizeError, Result};
 
 /// HVP products remembered by one [`HessianOperator`] (Steihaug asks for d·(H d) and then H d).
 const HVP_CACHE: usize = 4;
@@ -103,7 +103,7 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
     /// The adapter for `problem` with an optional force bound |θ_i| ≤ b (b > 0, finite).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`bound`) for a bound that is not positive and finite.
+    /// [`OptimizeError::OutOfRange`] (`bound`) for a bound that is not positive and finite.
     pub fn new(problem: &'a Q, bound: Option<f64>) -> Result<Self> {
         let bounds = bound.map(Bounds::symmetric).transpose()?;
         Ok(Self::with_bounds(problem, bounds))
@@ -164,7 +164,8 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
     /// 10⁻⁴·r to a bound are moved that far inside (the bound is stationary in φ).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`theta0`).
+    /// [`Error::NotFinite`] (`theta0`) for a non-finite entry, [`OptimizeError::InfeasibleStart`]
+    /// for one outside the bounds.
     pub fn to_phi(&self, theta: &[f64]) -> Result<Vec<f64>> {
         bounds::to_phi(self.bounds, theta)
     }
@@ -195,14 +196,11 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
         let (value, grad_theta) = self.problem.value_and_gradient(&theta)?;
         self.shared.bump(|c| c.sweeps += 1);
         if grad_theta.len() != theta.len() {
-            return Err(Error::InvalidArgument {
-                name: "problem",
-                reason: format!(
-                    "value_and_gradient returned {} gradient entries for {} parameters",
-                    grad_theta.len(),
-                    theta.len()
-                ),
-            });
+            return Err(OptimizeError::GradientLength {
+                got: grad_theta.len(),
+                expected: theta.len(),
+            }
+            .into());
         }
         if !value.is_finite() {
             return Err(Error::NonFiniteObjective {
@@ -241,8 +239,8 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
     /// The Hessian operator at φ (evaluates J and ∇J there, or takes them from the cache).
     ///
     /// # Errors
-    /// The evaluation's error; [`Error::InvalidArgument`] (`method`) if the problem has no
-    /// Hessian-vector products.
+    /// The evaluation's error; [`OptimizeError::NoHessian`] if the problem has no Hessian-vector
+    /// products.
     pub fn operator(&self, phi: &[f64]) -> Result<HessianOperator<'a, Q>> {
         if self.problem.hessian().is_none() {
             return Err(no_hessian());
@@ -263,12 +261,7 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
 }
 
 pub(crate) fn no_hessian() -> Error {
-    Error::InvalidArgument {
-        name: "method",
-        reason: "this solver needs Hessian-vector products, which the problem does not provide \
-                 (OptimProblem::hessian is None); use lbfgs"
-            .into(),
-    }
+    OptimizeError::NoHessian.into()
 }
 
 impl<Q: OptimProblem + ?Sized> CostFunction for ArgminAdapter<'_, Q> {

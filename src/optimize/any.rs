@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::adjoint::{BendingObjective, ControlMap, ControlProblem, Parametrisation};
-use crate::error::{Error, Result};
+use crate::error::{Error, OptimizeError, Result};
 use crate::ocp::{OcpOptions, OcpResult};
 use crate::scene::{Scene, SceneError, SceneErrorKind};
 
@@ -142,16 +142,11 @@ pub enum Values {
 
 /// The refusal of a structured solver on a spatial problem.
 fn planar_only() -> Error {
-    Error::InvalidArgument {
-        name: "method",
-        reason: RICCATI_PLANAR.into(),
-    }
+    OptimizeError::PlanarOnly.into()
 }
 
 /// Why `--method riccati` (or `condensed`) cannot run a spatial problem.
-pub const RICCATI_PLANAR: &str = "the structured solvers (riccati, condensed) are planar only \
-                                  (their tangent coordinates are those of the yz-plane); use \
-                                  --method lbfgs (the default) or trust-region";
+pub const RICCATI_PLANAR: &str = crate::error::PLANAR_ONLY;
 
 /// The parametrisation of a scene's own `[control]` and its θ₀: `control.values` (one constant 0
 /// without a `[control]`); for a 2-axis control θ₀ = (θ_x; θ_z), the x components first.

@@ -3,7 +3,7 @@
 //! controls"), and the first-order (KKT) measure at a bounded result. The symmetric bound
 //! |θᵢ| ≤ b is the box [−b, b] ([`Bounds::symmetric`]), where the map is θ = b sin(φ/b).
 
-use crate::error::{Error, Result};
+use crate::error::{Error, OptimizeError, Requirement, Result};
 
 /// A start closer than this fraction of the half-width r to a bound is moved this far inside
 /// (the bound is a stationary point of the sine reparametrisation).
@@ -36,15 +36,12 @@ impl Bounds {
     /// The box [lower, upper].
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`bounds`) unless both are finite and lower < upper (with
-    /// U − L finite, so the half-width is).
+    /// [`OptimizeError::EmptyBox`] unless both are finite and lower < upper (with U − L
+    /// finite, so the half-width is).
     pub fn new(lower: f64, upper: f64) -> Result<Self> {
         if !(lower.is_finite() && upper.is_finite() && lower < upper && (upper - lower).is_finite())
         {
-            return Err(Error::InvalidArgument {
-                name: "bounds",
-                reason: format!("need finite lower < upper, got lower = {lower}, upper = {upper}"),
-            });
+            return Err(OptimizeError::EmptyBox { lower, upper }.into());
         }
         Ok(Bounds { lower, upper })
     }
@@ -52,7 +49,7 @@ impl Bounds {
     /// The symmetric box [−b, b].
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`bound`) unless b is positive and finite.
+    /// [`OptimizeError::OutOfRange`] (`bound`) unless b is positive and finite.
     pub fn symmetric(b: f64) -> Result<Self> {
         check_bound(Some(b))?;
         Ok(Bounds {
@@ -91,24 +88,17 @@ impl Bounds {
         let tol = ACTIVE_BOUND_TOL * self.radius();
         (x >= self.upper - tol, x <= self.lower + tol)
     }
-
-    /// "[L, U]" for messages.
-    pub(crate) fn describe(&self) -> String {
-        if self.lower.to_bits() == (-self.upper).to_bits() {
-            format!("±{}", self.upper)
-        } else {
-            format!("[{}, {}]", self.lower, self.upper)
-        }
-    }
 }
 
 /// Checks a bound b: positive and finite.
 pub(crate) fn check_bound(bound: Option<f64>) -> Result<()> {
     match bound {
-        Some(b) if !(b.is_finite() && b > 0.0) => Err(Error::InvalidArgument {
+        Some(b) if !Requirement::PositiveFinite.holds(b) => Err(OptimizeError::OutOfRange {
             name: "bound",
-            reason: format!("must be positive and finite, got {b}"),
-        }),
+            requirement: Requirement::PositiveFinite,
+            value: b,
+        }
+        .into()),
         _ => Ok(()),
     }
 }
@@ -131,9 +121,9 @@ pub(crate) fn to_theta(bounds: Option<Bounds>, phi: &[f64]) -> Vec<f64> {
 /// than [`BOUND_PULL_IN`]·r to a bound are moved that far inside.
 pub(crate) fn to_phi(bounds: Option<Bounds>, theta: &[f64]) -> Result<Vec<f64>> {
     if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
-        return Err(Error::InvalidArgument {
+        return Err(Error::NotFinite {
             name: "theta0",
-            reason: format!("entry {i} is not finite"),
+            index: i,
         });
     }
     let Some(b) = bounds else {
@@ -146,13 +136,13 @@ pub(crate) fn to_phi(bounds: Option<Bounds>, theta: &[f64]) -> Result<Vec<f64>> 
         .enumerate()
         .map(|(i, &t)| {
             if !b.contains(t) {
-                return Err(Error::InvalidArgument {
-                    name: "theta0",
-                    reason: format!(
-                        "entry {i} = {t} lies outside the force bounds {} (infeasible start)",
-                        b.describe()
-                    ),
-                });
+                return Err(OptimizeError::InfeasibleStart {
+                    index: i,
+                    value: t,
+                    lower: b.lower,
+                    upper: b.upper,
+                }
+                .into());
             }
             Ok(c + r * ((t - c) / r).clamp(-lim, lim).asin())
         })

@@ -181,7 +181,8 @@ pub use problem::{
 pub use riccati::ocp_options as riccati_options;
 pub use supervisor::{Termination, MAX_REJECTIONS};
 
-use crate::error::{Error, Result};
+pub use crate::error::OptimizeError;
+use crate::error::{Error, Requirement, Result};
 
 type ArgminError = argmin::core::Error;
 
@@ -207,7 +208,7 @@ pub enum Method {
     /// The structured Gauss-Newton solver of [`crate::ocp`] (Riccati backward passes, box bounds
     /// handled exactly by interior-point QPs): O(N) per iteration for per-step, piecewise and
     /// constant controls of a bending-moment objective; other problems are refused with
-    /// [`Error::InvalidArgument`] (`method`). The argmin options do not apply (module
+    /// [`OptimizeError::NotStructured`]. The argmin options do not apply (module
     /// `riccati`). If its Gauss-Newton model stalls short of the tolerance (it cannot see
     /// negative curvature: no effort penalty, a chain near folding), the trust region finishes
     /// from its point and the result's `method` says [`Method::TrustRegion`].
@@ -255,13 +256,11 @@ impl FromStr for Method {
             "newton-cg" | "newtoncg" => Ok(Method::NewtonCg),
             "riccati" => Ok(Method::Riccati),
             "condensed" => Ok(Method::Condensed),
-            _ => Err(Error::InvalidArgument {
-                name: "method",
-                reason: format!(
-                    "unknown method `{s}` (expected lbfgs, trust-region, newton-cg, riccati or \
-                     condensed)"
-                ),
-            }),
+            _ => Err(OptimizeError::UnknownMethod {
+                given: s.into(),
+                expected: "lbfgs, trust-region, newton-cg, riccati or condensed",
+            }
+            .into()),
         }
     }
 }
@@ -355,74 +354,67 @@ impl OptimOptions {
     /// [`bound`](Self::bound) = b, or `None`.
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] (`bound`) for a bound that is not positive and finite, or when
-    /// both `bound` and `bounds` are set.
+    /// [`OptimizeError::OutOfRange`] (`bound`) for a bound that is not positive and finite,
+    /// [`OptimizeError::BoundAndBox`] when both `bound` and `bounds` are set.
     pub fn force_bounds(&self) -> Result<Option<Bounds>> {
         match (self.bound, self.bounds) {
-            (Some(_), Some(_)) => Err(Error::InvalidArgument {
-                name: "bound",
-                reason: "set either `bound` (symmetric) or `bounds` (a box), not both".into(),
-            }),
+            (Some(_), Some(_)) => Err(OptimizeError::BoundAndBox.into()),
             (Some(b), None) => Bounds::symmetric(b).map(Some),
             (None, bounds) => Ok(bounds),
         }
     }
 
-    /// Checks every field (an [`Error::InvalidArgument`] naming it).
+    /// Checks every field (an [`OptimizeError`] naming it).
     pub fn validate(&self) -> Result<()> {
-        let bad = |name: &'static str, reason: String| Err(Error::InvalidArgument { name, reason });
-        let nonneg = |x: f64| x.is_finite() && x >= 0.0;
-        if !nonneg(self.grad_tol) {
-            return bad(
-                "grad_tol",
-                format!("must be finite and >= 0, got {}", self.grad_tol),
-            );
-        }
-        if !nonneg(self.rel_grad_tol) {
-            return bad(
-                "rel_grad_tol",
-                format!("must be finite and >= 0, got {}", self.rel_grad_tol),
-            );
-        }
-        if !nonneg(self.cost_rel_tol) {
-            return bad(
-                "cost_rel_tol",
-                format!("must be finite and >= 0, got {}", self.cost_rel_tol),
-            );
+        let finite = Requirement::FiniteNonNegative;
+        let positive = Requirement::PositiveFinite;
+        for (name, requirement, value) in [
+            ("grad_tol", finite, self.grad_tol),
+            ("rel_grad_tol", finite, self.rel_grad_tol),
+            ("cost_rel_tol", finite, self.cost_rel_tol),
+        ] {
+            check(name, requirement, value)?;
         }
         if self.target_cost.is_nan() {
-            return bad("target_cost", "must not be NaN".into());
+            return Err(OptimizeError::TargetCostNan.into());
         }
         self.force_bounds()?;
         if self.lbfgs_memory == 0 {
-            return bad("lbfgs_memory", "must be at least 1".into());
+            return Err(OptimizeError::Zero {
+                name: "lbfgs_memory",
+            }
+            .into());
         }
-        if !(self.first_step.is_finite() && self.first_step > 0.0) {
-            return bad(
-                "first_step",
-                format!("must be positive and finite, got {}", self.first_step),
-            );
-        }
-        if !(self.trust_radius.is_finite() && self.trust_radius > 0.0) {
-            return bad(
-                "trust_radius",
-                format!("must be positive and finite, got {}", self.trust_radius),
-            );
-        }
+        check("first_step", positive, self.first_step)?;
+        check("trust_radius", positive, self.trust_radius)?;
         if !(self.max_trust_radius.is_finite() && self.max_trust_radius >= self.trust_radius) {
-            return bad(
-                "max_trust_radius",
-                format!(
-                    "must be finite and >= trust_radius = {}, got {}",
-                    self.trust_radius, self.max_trust_radius
-                ),
-            );
+            return Err(OptimizeError::MaxTrustRadius {
+                trust_radius: self.trust_radius,
+                max_trust_radius: self.max_trust_radius,
+            }
+            .into());
         }
         if self.cg_max_iters == Some(0) {
-            return bad("cg_max_iters", "must be at least 1".into());
+            return Err(OptimizeError::Zero {
+                name: "cg_max_iters",
+            }
+            .into());
         }
         Ok(())
     }
+}
+
+/// [`OptimizeError::OutOfRange`] naming the option `name` unless `value` meets `requirement`.
+fn check(name: &'static str, requirement: Requirement, value: f64) -> Result<()> {
+    if requirement.holds(value) {
+        return Ok(());
+    }
+    Err(OptimizeError::OutOfRange {
+        name,
+        requirement,
+        value,
+    }
+    .into())
 }
 
 /// The outcome of [`minimize`].
@@ -532,13 +524,15 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
     /// Minimises J from θ₀ (module docs: checks, solvers, bound, stopping, polish).
     ///
     /// # Errors
-    /// [`Error::InvalidArgument`] for invalid options, a θ₀ of the wrong length, non-finite or
-    /// outside the bound (infeasible; name `theta0`), or a method that needs Hessian-vector
-    /// products the problem lacks (`method`); the problem's range error for a θ₀ outside its
-    /// resolved range ([`Error::ControlOutOfRange`]); [`Error::NoEffect`] for parameters without
-    /// effect; the problem's error if J cannot be evaluated at θ₀; the typed error of a failed
-    /// Hessian-vector product; [`Error::InvalidArgument`] (`bound`) if the control map turned
-    /// bounded θ into forces beyond the bound.
+    /// [`OptimizeError`] for invalid options, a θ₀ outside the bound
+    /// ([`OptimizeError::InfeasibleStart`]) or a method that needs Hessian-vector products the
+    /// problem lacks ([`OptimizeError::NoHessian`]); [`Error::WrongLength`] or
+    /// [`Error::NotFinite`] (`theta0`) for a θ₀ of the wrong length or non-finite; the problem's
+    /// range error for a θ₀ outside its resolved range ([`Error::ControlOutOfRange`]);
+    /// [`Error::NoEffect`] for parameters without effect; the problem's error if J cannot be
+    /// evaluated at θ₀; the typed error of a failed Hessian-vector product;
+    /// [`OptimizeError::ControlOutsideBound`] if the control map turned bounded θ into forces
+    /// beyond the bound.
     pub fn run(&self, theta0: &[f64]) -> Result<OptimResult> {
         let clock = Instant::now();
         let (problem, opts) = (self.problem, &self.opts);
@@ -695,7 +689,8 @@ impl Polish {
 }
 
 /// The forces u(θ) of a control problem (empty for other problems), checked against the box:
-/// [`Error::InvalidArgument`] (`bound`) if the control map turned bounded θ into forces beyond it.
+/// [`OptimizeError::ControlOutsideBound`] if the control map turned bounded θ into forces beyond
+/// it.
 fn checked_controls<Q: OptimProblem + ?Sized>(
     problem: &Q,
     theta: &[f64],
@@ -707,14 +702,13 @@ fn checked_controls<Q: OptimProblem + ?Sized>(
     };
     if let Some(b) = bounds {
         if let Some(k) = controls.iter().position(|&u| !b.contains(u)) {
-            return Err(Error::InvalidArgument {
-                name: "bound",
-                reason: format!(
-                    "the control map turned bounded parameters into u_{k} = {} outside {}",
-                    controls[k],
-                    b.describe()
-                ),
-            });
+            return Err(OptimizeError::ControlOutsideBound {
+                index: k,
+                value: controls[k],
+                lower: b.lower(),
+                upper: b.upper(),
+            }
+            .into());
         }
     }
     Ok(controls)
@@ -736,22 +730,19 @@ fn relay_iter<Q: OptimProblem + ?Sized>(
 fn check_start<Q: OptimProblem + ?Sized>(problem: &Q, theta0: &[f64]) -> Result<()> {
     let n = problem.n_params();
     if theta0.len() != n {
-        return Err(Error::InvalidArgument {
+        return Err(Error::WrongLength {
             name: "theta0",
-            reason: format!("expected {n} values, got {}", theta0.len()),
+            expected: n,
+            got: theta0.len(),
         });
     }
     if let Some(i) = theta0.iter().position(|x| !x.is_finite()) {
-        return Err(Error::InvalidArgument {
+        return Err(Error::NotFinite {
             name: "theta0",
-            reason: format!("entry {i} is not finite"),
+            index: i,
         });
     }
     match problem.controls(theta0) {
-        Some(Err(Error::InvalidArgument { reason, .. })) => Err(Error::InvalidArgument {
-            name: "theta0",
-            reason,
-        }),
         Some(Err(e)) => Err(e),
         _ => Ok(()),
     }

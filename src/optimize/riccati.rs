@@ -12,7 +12,7 @@
 //! ([`finish_by_trust_region`]).
 
 use super::{Method, OptimOptions, OptimProblem, OptimResult, Termination};
-use crate::error::{Error, Result};
+use crate::error::{Error, OptimizeError, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 
 /// The options of [`crate::ocp::solve`] that [`minimize`](super::minimize) derives from
@@ -21,7 +21,7 @@ use crate::ocp::{self, OcpOptions, OcpResult};
 /// re-exported as `optimize::riccati_options`.
 ///
 /// # Errors
-/// [`Error::InvalidArgument`] for an invalid bound.
+/// [`OptimizeError`](crate::error::OptimizeError) for an invalid bound.
 pub fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
     let (lower, upper) = match opts.force_bounds()? {
         Some(b) => (b.lower(), b.upper()),
@@ -41,13 +41,10 @@ pub fn ocp_options(opts: &OptimOptions) -> Result<OcpOptions> {
 /// The error for a problem the structured solvers (`method`: riccati or condensed) do not
 /// cover.
 pub(crate) fn unsupported(method: Method) -> Error {
-    Error::InvalidArgument {
-        name: "method",
-        reason: format!(
-            "{method} needs a control problem (per-step, piecewise or constant controls) with a \
-             bending-moment objective (c or c_sum, with effort); use lbfgs or trust-region"
-        ),
+    OptimizeError::NotStructured {
+        method: method.name(),
     }
+    .into()
 }
 
 /// Runs the Riccati solver (or, with [`Method::Condensed`], the condensed one) on `problem`

@@ -19,7 +19,7 @@ use super::adapter::{ArgminAdapter, Shared};
 use super::point::{same_bits, Point};
 use super::problem::OptimProblem;
 use super::{norm, ArgminError, Method, OptimOptions};
-use crate::error::{Error, Result};
+use crate::error::{Error, OptimizeError, Result};
 
 /// Consecutive rejected trust-region steps after which the run stops for lack of progress (the
 /// radius has then shrunk by at least 4²⁰ ≈ 10¹²).
@@ -472,9 +472,10 @@ pub(crate) fn run_method<Q: OptimProblem + ?Sized>(
     let opts = setup.opts;
     let n = start.phi.len();
     let cg = opts.cg_max_iters.unwrap_or(2 * n.max(1));
-    let config = |e: ArgminError| Error::InvalidArgument {
-        name: "opts",
-        reason: e.to_string(),
+    let config = |e: ArgminError| {
+        Error::from(OptimizeError::SolverConfig {
+            message: e.to_string(),
+        })
     };
     match opts.method {
         Method::Lbfgs => {

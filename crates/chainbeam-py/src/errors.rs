@@ -110,6 +110,7 @@ fn class_of(e: &Error) -> (&'static str, &'static str) {
         Error::InvalidArgument { .. } => ("InvalidArgumentError", "InvalidArgument"),
         Error::Mpc(_) => ("InvalidArgumentError", "Mpc"),
         Error::Ocp(_) => ("InvalidArgumentError", "Ocp"),
+        Error::Optimize(_) => ("InvalidArgumentError", "Optimize"),
         Error::Model(_) => ("InvalidArgumentError", "Model"),
         Error::Stepper(_) => ("InvalidArgumentError", "Stepper"),
         Error::Start(_) => ("InvalidArgumentError", "Start"),

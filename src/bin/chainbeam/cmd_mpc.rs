@@ -258,9 +258,7 @@ fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
     let flagged = match &e {
         chainbeam::Error::Mpc(m) => flag_of(m.argument()).map(|f| (f, m.to_string())),
         chainbeam::Error::Ocp(o) => flag_of(o.argument()).map(|f| (f, o.to_string())),
-        chainbeam::Error::InvalidArgument { name, reason } => {
-            flag_of(name).map(|f| (f, reason.clone()))
-        }
+        chainbeam::Error::Optimize(o) => flag_of(o.argument()).map(|f| (f, o.to_string())),
         _ => None,
     };
     if let Some((flag, reason)) = flagged {

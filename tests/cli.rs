@@ -920,13 +920,15 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
             assert!(traj.energy()[k].is_finite() && traj.moment()[k].is_finite());
         }
     }
-    // Every shipped file is a catalogue scene.
+    // Every shipped file is a catalogue scene, except the real-scale risers written by hand from
+    // their sources (checked and run in tests/wave_riser.rs).
     for entry in fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
             let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
             assert!(
-                all.iter().any(|(name, _)| *name == stem),
+                all.iter().any(|(name, _)| *name == stem)
+                    || ["riser_300m", "riser_1000m"].contains(&stem.as_str()),
                 "{} is not a catalogue scene",
                 path.display()
             );

@@ -180,3 +180,38 @@ fn gradients_on_a_wave_scene() {
     assert!(spatial.is_spatial());
     check_gradients::<3>(&spatial, &params);
 }
+
+/// The shipped real-scale risers (`examples/scenes/riser_300m.toml`, `riser_1000m.toml`): their
+/// derived numbers are the ones their comments derive from the pipe (the submerged weight
+/// `Pipe::submerged_weight`, the tension 1.3 w L, the drag constant ½ ρ_w C_d D_o / (l μ² L),
+/// each to the digits written, 2e-4), 600 s of the sea state, and a short run (the first 20 s) is finite
+/// and bends the wellhead.
+#[test]
+fn shipped_real_scale_risers() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
+    for (file, depth) in [("riser_300m.toml", 300.0), ("riser_1000m.toml", 1000.0)] {
+        let scene = Scene::from_file(dir.join(file)).unwrap();
+        let pipe = scene.pipe.unwrap();
+        let rho = scene.water.density;
+        assert_eq!(pipe.length, depth);
+        assert_eq!(scene.wave_depth(), depth);
+        let w = pipe.submerged_weight(rho, chainbeam::ocean::STANDARD_GRAVITY);
+        let close = |a: f64, b: f64| (a / b - 1.0).abs() < 2e-4;
+        assert!(close(scene.loads.axial_weight, w), "{file}: w = {w}");
+        assert!(
+            close(scene.loads.tension, 1.3 * w * depth),
+            "{file}: tension"
+        );
+        let l = depth / scene.n() as f64;
+        let mu = pipe.mass_per_length(rho);
+        let d = pipe.drag_per_length(rho) / (l * mu * mu * depth);
+        assert!(close(scene.loads.drag, d), "{file}: D = {d:e}");
+        assert_eq!(scene.time.steps as f64 * scene.time.step, 600.0);
+        let mut short = scene.clone();
+        short.time.steps = (20.0 / scene.time.step) as usize;
+        let t = simulate(&short).unwrap();
+        assert!(t.moment().iter().all(|m| m.is_finite()));
+        let peak = t.moment().iter().fold(0.0f64, |a, m| a.max(m.abs()));
+        assert!(peak > 1e3, "{file}: wellhead moment {peak} N m");
+    }
+}

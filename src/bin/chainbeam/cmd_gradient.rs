@@ -10,7 +10,7 @@ use chainbeam::optimize::OptimProblem;
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, Values};
 use crate::progress::Progress;
-use crate::{check_finite, controls_io, lib_error, load_scene, to_json, CliError};
+use crate::{check_finite, controls_io, lib_error, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `gradient --help`.
@@ -75,10 +75,9 @@ struct GradientReport {
 pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
     let out = Output::prepare(a.output.as_deref())?;
     problem::check_effort(a.problem.effort)?;
-    let scene = load_scene(&a.scene)?;
-    let file = a.controls.as_deref().map(controls_io::read).transpose()?;
     let mut inputs = Inputs::new();
-    inputs.scene(&a.scene, &scene);
+    let scene = inputs.load_scene(&a.scene)?;
+    let file = a.controls.as_deref().map(controls_io::read).transpose()?;
     if let Some(c) = &a.controls {
         inputs.file(c);
     }

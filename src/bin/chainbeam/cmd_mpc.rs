@@ -18,7 +18,7 @@ use chainbeam::Scene;
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
-use crate::{check_finite, check_force_flag, lib_error, load_scene, to_json, CliError};
+use crate::{check_finite, check_force_flag, lib_error, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `mpc --help`.
@@ -149,15 +149,10 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     }
     let out = Output::prepare(a.output.as_deref())?;
     let summary_out = Output::prepare(a.summary.as_deref())?;
-    let scene = load_scene(&a.scene)?;
     let mut inputs = Inputs::new();
-    inputs.scene(&a.scene, &scene);
+    let scene = inputs.load_scene(&a.scene)?;
     let model = match &a.model {
-        Some(path) => {
-            let model = load_scene(path)?;
-            inputs.scene(path, &model);
-            model
-        }
+        Some(path) => inputs.load_scene(path)?,
         None => scene.clone(),
     };
     refuse_overwrite(&[("--output", &out), ("--summary", &summary_out)], &inputs)?;

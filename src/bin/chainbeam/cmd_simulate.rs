@@ -11,7 +11,7 @@ use chainbeam::{
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
-use crate::{controls_io, lib_error, load_scene, npy, CliError};
+use crate::{controls_io, lib_error, npy, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `simulate --help`.
@@ -105,14 +105,13 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
              or redirect standard output",
         ));
     }
-    let scene = load_scene(&a.scene)?;
+    let mut inputs = Inputs::new();
+    let scene = inputs.load_scene(&a.scene)?;
     let eta = scene
         .wave_elevation()
         .map_err(|e| lib_error(&a.scene, e.into()))?;
     let names = csv_names(scene.n(), scene.is_spatial(), eta.is_some());
     let select = select_columns(&names, a.columns.as_deref())?;
-    let mut inputs = Inputs::new();
-    inputs.scene(&a.scene, &scene);
     let controls = match &a.controls {
         Some(path) => {
             let file = controls_io::read(path)?;

@@ -258,6 +258,14 @@ impl Inputs {
         self.files.extend(crate::series_files(path, scene));
         self
     }
+
+    /// Reads and validates the scene file `path` ([`crate::load_scene`]) and records it and the
+    /// time-series files its loads read as inputs.
+    pub fn load_scene(&mut self, path: &Path) -> Result<chainbeam::Scene, CliError> {
+        let scene = crate::load_scene(path)?;
+        self.scene(path, &scene);
+        Ok(scene)
+    }
 }
 
 /// The one check every subcommand makes before it writes: no output (`--output`, `--summary`;

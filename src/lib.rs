@@ -169,6 +169,7 @@ pub use scene::{Current, CurrentProfile};
 pub use simulate::{
     piecewise_constant_controls, scene_controls, scene_controls_x, simulate, simulate_chain,
     simulate_with_controls, simulate_with_controls_xz, SceneTrajectory, Trajectory,
+    TrajectoryColumns,
 };
 
 /// The README's code runs as a doctest.

@@ -13,6 +13,9 @@ pub use crate::scene::{max_trajectory_steps, trajectory_bytes};
 use crate::scene::{ControlKind, Scene, MAX_TRAJECTORY_BYTES};
 use crate::steppers::rattle::{Rattle, State, StepStats};
 
+mod columns;
+pub use columns::TrajectoryColumns;
+
 /// A simulated trajectory on the grid t_k = k h, k = 0..=N.
 #[derive(Clone, Debug)]
 pub struct Trajectory<D, const DIM: usize> {
@@ -77,17 +80,9 @@ impl<D: Scalar, const DIM: usize> Trajectory<D, DIM> {
     }
     /// Node positions r₁..rₙ at step k as (x, y, z) (x = 0 in the planar model).
     pub fn positions(&self, k: usize) -> Vec<[f64; 3]> {
-        let mut r = [0.0; 3];
-        self.q(k)
-            .iter()
-            .zip(self.lengths.iter())
-            .map(|(qi, l)| {
-                for d in 0..DIM {
-                    r[3 - DIM + d] += l * qi[d].re();
-                }
-                r
-            })
-            .collect()
+        let mut r = vec![[0.0; 3]; self.n];
+        node_positions(self.q(k), &self.lengths, &mut r);
+        r
     }
     /// Total Newton iterations.
     pub fn newton_iterations(&self) -> usize {
@@ -102,6 +97,22 @@ impl<D: Scalar, const DIM: usize> Trajectory<D, DIM> {
                 mx.hypot(self.moment[k].re())
             })
             .collect()
+    }
+}
+
+/// Node positions rᵢ = Σ_{j≤i} l_j q_j (the base at the origin) as (x, y, z), x = 0 in the
+/// planar model, into `out` (one entry per pendulum).
+fn node_positions<D: Scalar, const DIM: usize>(
+    q: &[[D; DIM]],
+    lengths: &[f64],
+    out: &mut [[f64; 3]],
+) {
+    let mut r = [0.0; 3];
+    for ((qi, l), o) in q.iter().zip(lengths).zip(out) {
+        for d in 0..DIM {
+            r[3 - DIM + d] += l * qi[d].re();
+        }
+        *o = r;
     }
 }
 

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "gradient", "optimize", "mpc", "__version__"]
+__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "__version__"]
 
 @final
 class Scene:
@@ -32,7 +32,11 @@ class Scene:
     def __reduce__(self) -> tuple[Any, tuple[str, str | None]]: ...
 
 def _scene_from_state(text: str, dir: str | PathLike[str] | None = None) -> Scene: ...
-def _time_library_simulate(scene: Scene) -> float: ...
+@final
+class _LibraryTrajectory:
+    """A library trajectory held for ``_time_library_simulate`` (freed when dropped)."""
+
+def _time_library_simulate(scene: Scene) -> tuple[float, _LibraryTrajectory]: ...
 def simulate(
     scene: Scene,
     controls: NDArray[np.float64] | None = None,

@@ -82,70 +82,12 @@ impl Controls {
     }
 }
 
-/// The arrays of a trajectory, in the CSV's columns.
-struct Arrays {
-    t: Vec<f64>,
-    energy: Vec<f64>,
-    moment: Vec<f64>,
-    positions: Vec<f64>,
-    control: Vec<f64>,
-    moment_x: Option<Vec<f64>>,
-    control_x: Option<Vec<f64>>,
-    n: usize,
-}
-
-/// Copies the trajectory into flat arrays, refusing non-finite values as the command line does.
-fn arrays(traj: &SceneTrajectory) -> Result<Arrays, Failure> {
-    let (steps, n) = (traj.steps(), traj.n());
-    let mut positions = Vec::with_capacity((steps + 1) * n * 3);
-    for k in 0..=steps {
-        for r in traj.positions(k) {
-            positions.extend(r);
-        }
-    }
-    let spatial = traj.is_spatial();
-    let a = Arrays {
-        t: (0..=steps).map(|k| traj.time(k)).collect(),
-        energy: traj.energy().to_vec(),
-        moment: traj.moment().to_vec(),
-        positions,
-        control: traj.controls().to_vec(),
-        moment_x: spatial.then(|| traj.moment_x().to_vec()),
-        control_x: spatial.then(|| {
-            let ux = traj.controls_x();
-            (0..=steps)
-                .map(|k| ux.get(k).copied().unwrap_or(0.0))
-                .collect()
-        }),
-        n,
-    };
-    let columns: [(&str, Option<&Vec<f64>>); 7] = [
-        ("t", Some(&a.t)),
-        ("energy", Some(&a.energy)),
-        ("moment", Some(&a.moment)),
-        ("positions", Some(&a.positions)),
-        ("control", Some(&a.control)),
-        ("moment_x", a.moment_x.as_ref()),
-        ("control_x", a.control_x.as_ref()),
-    ];
-    for (name, col) in columns {
-        if let Some(i) = col.and_then(|c| c.iter().position(|v| !v.is_finite())) {
-            let k = if name == "positions" { i / (3 * n) } else { i };
-            return Err(Failure::Lib(chainbeam::Error::NonFinite {
-                step: k,
-                quantity: "a trajectory value handed to Python (nothing was returned)",
-            }));
-        }
-    }
-    Ok(a)
-}
-
 /// The trajectory of `scene` under its own control or `controls`.
 fn run_simulation(
     scene: &chainbeam::Scene,
     controls: Option<&Controls>,
-) -> Result<Arrays, Failure> {
-    let traj = match controls {
+) -> Result<SceneTrajectory, Failure> {
+    Ok(match controls {
         None => lib_simulate(scene)?,
         Some(c) => {
             let map = c.parametrisation(scene)?;
@@ -159,11 +101,16 @@ fn run_simulation(
                 Some(x) => simulate_with_controls_xz(scene, &expand(x), &expand(&c.z))?,
             }
         }
-    };
-    arrays(&traj)
+    })
 }
 
 /// Simulates a scene (RATTLE from the straight beam at rest); see `chainbeam.simulate`.
+///
+/// The columns are built in the trajectory's own memory on the worker thread
+/// ([`SceneTrajectory::into_columns`]: one pass over the steps, which also checks that every
+/// value is finite, as the command line does before writing) and move into numpy arrays without
+/// a copy (`PyArray1::from_vec`; the positions' (N + 1, n, 3) is a reshaped view of the same
+/// buffer).
 #[pyfunction]
 #[pyo3(signature = (scene, controls=None, controls_x=None))]
 pub fn simulate<'py>(
@@ -174,25 +121,27 @@ pub fn simulate<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let controls = Controls::from_arrays(controls, controls_x)?;
     let s = scene.inner.clone();
-    let a = check(
+    let c = check(
         py,
-        interruptible(py, move || run_simulation(&s, controls.as_ref()))?,
+        interruptible(py, move || -> Result<_, Failure> {
+            Ok(run_simulation(&s, controls.as_ref())?.into_columns()?)
+        })?,
     )?;
     let d = PyDict::new(py);
-    let steps = a.t.len();
-    d.set_item("t", PyArray1::from_vec(py, a.t))?;
-    d.set_item("energy", PyArray1::from_vec(py, a.energy))?;
-    d.set_item("moment", PyArray1::from_vec(py, a.moment))?;
+    let rows = c.t.len();
+    d.set_item("t", PyArray1::from_vec(py, c.t))?;
+    d.set_item("energy", PyArray1::from_vec(py, c.energy))?;
+    d.set_item("moment", PyArray1::from_vec(py, c.moment))?;
     d.set_item(
         "positions",
-        PyArray1::from_vec(py, a.positions).reshape([steps, a.n, 3])?,
+        PyArray1::from_vec(py, c.positions).reshape([rows, c.n, 3])?,
     )?;
-    d.set_item("control", PyArray1::from_vec(py, a.control))?;
-    if let Some(m) = a.moment_x {
+    d.set_item("control", PyArray1::from_vec(py, c.controls))?;
+    if let Some(m) = c.moment_x {
         d.set_item("moment_x", PyArray1::from_vec(py, m))?;
     }
-    if let Some(c) = a.control_x {
-        d.set_item("control_x", PyArray1::from_vec(py, c))?;
+    if let Some(u) = c.controls_x {
+        d.set_item("control_x", PyArray1::from_vec(py, u))?;
     }
     Ok(d)
 }
@@ -253,17 +202,31 @@ pub fn gradient<'py>(
     Ok((c, PyArray1::from_vec(py, g), two_axis))
 }
 
-/// Seconds of the library call `chainbeam::simulate(scene)` alone (the trajectory dropped), with
-/// the GIL released: the yardstick of `python/benchmarks/overhead.py`, which compares it with
-/// `chainbeam.simulate` (same compiled code, plus the copies into numpy).
+/// A trajectory of the library handed back by [`_time_library_simulate`] so that it is freed
+/// when Python drops it, outside the timed call (as `chainbeam.simulate`'s arrays are).
+#[pyclass(name = "_LibraryTrajectory", module = "chainbeam._chainbeam", frozen)]
+pub struct LibraryTrajectory {
+    _trajectory: SceneTrajectory,
+}
+
+/// Seconds of the library call `chainbeam::simulate(scene)` alone and the trajectory it returned
+/// (freed when Python drops it): the yardstick of `python/benchmarks/overhead.py`, which compares
+/// it with `chainbeam.simulate` (same compiled code, plus the columns handed to numpy). It runs
+/// on a worker thread like `simulate` ([`interruptible`]), so that both allocate from the same
+/// kind of malloc arena (the main thread's and a worker's differ in how they reuse memory).
 #[pyfunction]
-pub fn _time_library_simulate(py: Python<'_>, scene: &Scene) -> PyResult<f64> {
+pub fn _time_library_simulate(py: Python<'_>, scene: &Scene) -> PyResult<(f64, LibraryTrajectory)> {
     let s = scene.inner.clone();
-    let (seconds, r) = py.detach(move || {
+    let (seconds, r) = interruptible(py, move || {
         let t0 = std::time::Instant::now();
-        let r = lib_simulate(&s).map(drop);
+        let r = lib_simulate(&s);
         (t0.elapsed().as_secs_f64(), r)
-    });
-    r.map_err(|e| crate::errors::lib(py, e))?;
-    Ok(seconds)
+    })?;
+    let trajectory = r.map_err(|e| crate::errors::lib(py, e))?;
+    Ok((
+        seconds,
+        LibraryTrajectory {
+            _trajectory: trajectory,
+        },
+    ))
 }

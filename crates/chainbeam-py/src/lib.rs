@@ -23,6 +23,7 @@ mod scene;
 #[pymodule]
 fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::Scene>()?;
+    m.add_class::<calls::LibraryTrajectory>()?;
     m.add_function(wrap_pyfunction!(scene::_scene_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(calls::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(calls::gradient, m)?)?;

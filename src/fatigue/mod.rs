@@ -32,6 +32,7 @@
 pub mod gradient;
 pub mod miner;
 pub mod rainflow;
+pub mod scatter;
 pub mod sn;
 pub mod stress;
 pub mod study;

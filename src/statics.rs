@@ -65,10 +65,11 @@
 //! [`crate::tridiag`] does not apply. This is a verification tool, not a hot loop; O(n³) is fine
 //! for the n ≤ a few hundred it is used with.
 
+mod planar;
 mod spatial;
 
 use crate::error::{Error, Result};
-use crate::model::{dot, Chain, Ctx, DualScratch};
+use crate::model::Chain;
 use crate::scene::Scene;
 use crate::simulate::{scene_controls, scene_controls_x};
 use nalgebra::{DMatrix, DVector};
@@ -134,7 +135,7 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
     if scene.is_spatial() {
         static_equilibrium_spatial(scene, t, [ux, u])
     } else {
-        planar(scene, t, u)
+        planar::solve(scene, t, u)
     }
 }
 
@@ -152,7 +153,7 @@ pub fn static_equilibrium_at(scene: &Scene, t: f64, u: f64) -> Result<StaticSolu
     if scene.is_spatial() {
         static_equilibrium_spatial(scene, t, [0.0, u])
     } else {
-        planar(scene, t, u)
+        planar::solve(scene, t, u)
     }
 }
 
@@ -181,24 +182,50 @@ fn record_residual(rhs: &[f64], m: usize, scale: f64, history: &mut Vec<f64>) ->
     r.is_finite().then_some(r)
 }
 
-/// The planar solve (module docs), Newton in the absolute angles.
-fn planar(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
-    let chain = Chain::<f64, 2>::from_scene(scene)?;
-    let n = chain.n();
+/// A chart of the configuration manifold for one Newton iteration, in `D` dimensions: the
+/// planar chain's absolute angles (one coordinate per pendulum, [`planar`]) or the spatial
+/// chain's tangent planes of S² (two, [`spatial`]). [`newton`] is the one iteration over both.
+trait Chart<const D: usize> {
+    /// Coordinates per pendulum.
+    const COORDS: usize;
+
+    /// The gradient of the Lagrangian in the chart's coordinates (into `rhs`, the tip's z last
+    /// for a locked tip) and the dense Hessian, bordered by the tip constraint, at the current
+    /// iterate and tip multiplier ν.
+    fn newton_system(
+        &mut self,
+        chain: &Chain<f64, D>,
+        nu: f64,
+        rhs: &mut [f64],
+    ) -> Result<DMatrix<f64>>;
+
+    /// Moves the iterate by −δ for the Newton solution δ of H δ = ∇U (its first
+    /// `COORDS · n` entries) and re-centres the chart.
+    fn step(&mut self, delta: &[f64]);
+
+    /// The converged iterate as a [`StaticSolution`].
+    fn solution(&self, chain: &Chain<f64, D>, nu: f64, residuals: Vec<f64>) -> StaticSolution;
+}
+
+/// Newton's method on ∇U = 0 (and the tip constraint) from the chart's iterate: at most
+/// [`MAX_ITERATIONS`] dense bordered solves, stopping at the scaled residual [`TOLERANCE`].
+fn newton<const D: usize, C: Chart<D>>(
+    chain: &Chain<f64, D>,
+    chart: &mut C,
+) -> Result<StaticSolution> {
+    let m = C::COORDS * chain.n();
     let bordered = chain.has_tip_constraint();
-    let mut phi = vec![0.0f64; n];
     let mut nu = 0.0f64;
-    let mut rhs = vec![0.0; n + usize::from(bordered)];
+    let mut rhs = vec![0.0; m + usize::from(bordered)];
     let mut residuals = Vec::new();
     let scale = residual_scale(chain.springs());
-    let mut work = Work::new(n);
     for it in 0..MAX_ITERATIONS {
-        let a = work
-            .newton_system(&chain, (&phi, nu), (t, u), &mut rhs)
+        let a = chart
+            .newton_system(chain, nu, &mut rhs)
             .map_err(|e| folded_at(e, it))?;
-        let r = record_residual(&rhs, n, scale, &mut residuals);
+        let r = record_residual(&rhs, m, scale, &mut residuals);
         if r.is_some_and(|r| r < TOLERANCE) {
-            return Ok(planar_solution(&chain, phi, nu, residuals));
+            return Ok(chart.solution(chain, nu, residuals));
         }
         if r.is_none() {
             break;
@@ -207,45 +234,15 @@ fn planar(scene: &Scene, t: f64, u: f64) -> Result<StaticSolution> {
             .lu()
             .solve(&DVector::from_column_slice(&rhs))
             .ok_or(Error::StaticSingular { iteration: it })?;
-        for j in 0..n {
-            phi[j] -= sol[j];
-        }
+        chart.step(&sol.as_slice()[..m]);
         if bordered {
-            nu -= sol[n];
+            nu -= sol[m];
         }
     }
     Err(Error::StaticNotConverged {
         iterations: MAX_ITERATIONS,
         residual: residuals.last().copied().unwrap_or(f64::NAN),
     })
-}
-
-/// The converged planar iterate as a [`StaticSolution`].
-fn planar_solution(
-    chain: &Chain<f64, 2>,
-    phi: Vec<f64>,
-    nu: f64,
-    residuals: Vec<f64>,
-) -> StaticSolution {
-    let l = chain.lengths();
-    let mut positions = Vec::with_capacity(phi.len());
-    let (mut y, mut z) = (0.0, 0.0);
-    for (lj, p) in l.iter().zip(&phi) {
-        y += lj * p.cos();
-        z += lj * p.sin();
-        positions.push([y, z]);
-    }
-    StaticSolution {
-        attitudes: phi.iter().map(|p| [0.0, p.cos(), p.sin()]).collect(),
-        positions_x: vec![0.0; phi.len()],
-        angles: phi,
-        positions,
-        spatial: false,
-        tip_multiplier: nu,
-        iterations: residuals.len() - 1,
-        residual: residuals.last().copied().unwrap_or(0.0),
-        residuals,
-    }
 }
 
 /// A folded iterate as the statics' error (the terms report [`Error::Folded`] at "step 0").
@@ -263,86 +260,5 @@ pub(crate) fn folded_at(e: Error, iteration: usize) -> Error {
             limit_deg,
         },
         e => e,
-    }
-}
-
-/// Buffers of the static Newton iteration.
-struct Work {
-    q: Vec<[f64; 2]>,
-    t: Vec<[f64; 2]>,
-    f: Vec<[f64; 2]>,
-    v: Vec<[f64; 2]>,
-    kv: Vec<[f64; 2]>,
-    scratch: DualScratch<f64, 2>,
-}
-
-impl Work {
-    fn new(n: usize) -> Self {
-        let z = vec![[0.0; 2]; n];
-        Work {
-            q: z.clone(),
-            t: z.clone(),
-            f: z.clone(),
-            v: z.clone(),
-            kv: z,
-            scratch: DualScratch::new(n),
-        }
-    }
-
-    /// The gradient (into `rhs`) and the dense Hessian, bordered by the tip constraint, at
-    /// (φ, ν) for the loads at (t, u).
-    fn newton_system(
-        &mut self,
-        chain: &Chain<f64, 2>,
-        (phi, nu): (&[f64], f64),
-        (t, u): (f64, f64),
-        rhs: &mut [f64],
-    ) -> Result<DMatrix<f64>> {
-        let n = chain.n();
-        let bordered = chain.has_tip_constraint();
-        let l = chain.lengths();
-        for j in 0..n {
-            let (s, c) = phi[j].sin_cos();
-            self.q[j] = [c, s];
-            self.t[j] = [-s, c];
-        }
-        chain.potential_gradient(&self.q, t, u, 0, &mut self.f)?;
-        let ctx = Ctx::new(t, u, 0);
-        for (i, f) in self.f.iter_mut().enumerate() {
-            if let Some(fd) = chain.dissipative_force(i, &[0.0; 2], &ctx) {
-                f.iter_mut().zip(fd).for_each(|(f, fd)| *f -= fd);
-            }
-        }
-        let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
-        for j in 0..n {
-            let (s, c) = phi[j].sin_cos();
-            let tip = if bordered { nu } else { 0.0 };
-            rhs[j] = dot(&self.f[j], &self.t[j]) + tip * l[j] * c;
-            a[(j, j)] = -dot(&self.f[j], &self.q[j]) - tip * l[j] * s;
-            if bordered {
-                a[(j, n)] = l[j] * c;
-                a[(n, j)] = l[j] * c;
-            }
-        }
-        if bordered {
-            rhs[n] = (0..n).map(|j| l[j] * phi[j].sin()).sum();
-        }
-        let ctx = Ctx::new(t, u, 0);
-        for color in 0..3 {
-            for j in 0..n {
-                self.v[j] = if j % 3 == color { self.t[j] } else { [0.0; 2] };
-                self.kv[j] = [0.0; 2];
-            }
-            let s = &mut self.scratch;
-            chain.force_jacobian_product(&self.q, &self.v, &ctx, 1.0, &mut self.kv, s)?;
-            for j in 0..n {
-                for k in j.saturating_sub(1)..(j + 2).min(n) {
-                    if k % 3 == color {
-                        a[(j, k)] += dot(&self.t[j], &self.kv[j]);
-                    }
-                }
-            }
-        }
-        Ok(a)
     }
 }

@@ -1,11 +1,11 @@
 //! Newton's method on the product of spheres (qⱼ ∈ S²) for the spatial model; the equations are
 //! in the docs of [`crate::statics`].
 
-use super::{record_residual, residual_scale, StaticSolution, MAX_ITERATIONS, TOLERANCE};
+use super::{newton, Chart, StaticSolution};
 use crate::error::{Error, Result};
 use crate::model::{dot, Chain, Ctx, DualScratch};
 use crate::scene::Scene;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// The spatial static equilibrium of `scene` under its loads at time t with the control
 /// (u_x, u_z) = `u` (see [`super::static_equilibrium_spatial`]).
@@ -22,35 +22,7 @@ pub(super) fn solve(scene: &Scene, t: f64, u: [f64; 2]) -> Result<StaticSolution
         chain.set_control_x(&[u[0]])?;
     }
     let ctx = chain.ctx(t, u[1], 0);
-    let scale = residual_scale(chain.springs());
-    let mut work = Work::new(n);
-    let mut nu = 0.0f64;
-    let mut rhs = vec![0.0; 2 * n + usize::from(chain.has_tip_constraint())];
-    let mut residuals = Vec::new();
-    for it in 0..MAX_ITERATIONS {
-        let a = work
-            .newton_system(&chain, nu, &ctx, &mut rhs)
-            .map_err(|e| super::folded_at(e, it))?;
-        let r = record_residual(&rhs, 2 * n, scale, &mut residuals);
-        if r.is_some_and(|r| r < TOLERANCE) {
-            return Ok(work.solution(&chain, nu, residuals));
-        }
-        if r.is_none() {
-            break;
-        }
-        let sol = a
-            .lu()
-            .solve(&DVector::from_column_slice(&rhs))
-            .ok_or(Error::StaticSingular { iteration: it })?;
-        work.retract(sol.as_slice());
-        if chain.has_tip_constraint() {
-            nu -= sol[2 * n];
-        }
-    }
-    Err(Error::StaticNotConverged {
-        iterations: MAX_ITERATIONS,
-        residual: residuals.last().copied().unwrap_or(f64::NAN),
-    })
+    newton(&chain, &mut Spheres::new(n, ctx))
 }
 
 /// An orthonormal basis (aⱼ, bⱼ) of the tangent plane of S² at `q`, with aⱼ in the x–q plane
@@ -77,8 +49,11 @@ fn normalised(v: [f64; 3]) -> [f64; 3] {
     [v[0] / r, v[1] / r, v[2] / r]
 }
 
-/// The iterate qⱼ ∈ S², its tangent bases and the buffers of the Newton system.
-struct Work {
+/// The iterate qⱼ ∈ S², its tangent bases, the loads' context and the buffers of the Newton
+/// system.
+struct Spheres {
+    /// The time, control and step at which the loads act.
+    ctx: Ctx<f64>,
     q: Vec<[f64; 3]>,
     basis: Vec<[[f64; 3]; 2]>,
     f: Vec<[f64; 3]>,
@@ -87,12 +62,13 @@ struct Work {
     scratch: DualScratch<f64, 3>,
 }
 
-impl Work {
-    /// The straight beam qⱼ = e₂.
-    fn new(n: usize) -> Self {
+impl Spheres {
+    /// The straight beam qⱼ = e₂ under the loads of `ctx`.
+    fn new(n: usize, ctx: Ctx<f64>) -> Self {
         let z = vec![[0.0; 3]; n];
         let q = vec![[0.0, 1.0, 0.0]; n];
-        Work {
+        Spheres {
+            ctx,
             basis: q.iter().map(tangent_basis).collect(),
             q,
             f: z.clone(),
@@ -136,38 +112,6 @@ impl Work {
         Ok(())
     }
 
-    /// The Riemannian gradient Tⱼᵀgⱼ (into `rhs`, with the tip residual Σ lⱼ e₃ᵀqⱼ last) and the
-    /// dense Hessian TⱼᵀKⱼₖTₖ − δⱼₖ (gⱼ·qⱼ) I₂, bordered by the tip row lⱼ Tⱼᵀe₃.
-    fn newton_system(
-        &mut self,
-        chain: &Chain<f64, 3>,
-        nu: f64,
-        ctx: &Ctx<f64>,
-        rhs: &mut [f64],
-    ) -> Result<DMatrix<f64>> {
-        let n = chain.n();
-        self.lagrangian_gradient(chain, nu, ctx)?;
-        let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
-        for j in 0..n {
-            let curvature = dot(&self.f[j], &self.q[j]);
-            for r in 0..2 {
-                let i = 2 * j + r;
-                rhs[i] = dot(&self.basis[j][r], &self.f[j]);
-                a[(i, i)] = -curvature;
-                if chain.has_tip_constraint() {
-                    let c = chain.lengths()[j] * self.basis[j][r][2];
-                    a[(i, 2 * n)] = c;
-                    a[(2 * n, i)] = c;
-                }
-            }
-        }
-        if chain.has_tip_constraint() {
-            rhs[2 * n] = chain.tip_z(&self.q);
-        }
-        self.add_stiffness(chain, ctx, &mut a)?;
-        Ok(a)
-    }
-
     /// Adds TⱼᵀKⱼₖTₖ: K is block-tridiagonal, so seeding the tangent direction s of every third
     /// pendulum (3 colours × 2 directions = 6 products of [`Chain::force_jacobian_product`])
     /// gives every block.
@@ -197,6 +141,47 @@ impl Work {
             }
         }
         Ok(())
+    }
+}
+
+impl Chart<3> for Spheres {
+    const COORDS: usize = 2;
+
+    /// The Riemannian gradient Tⱼᵀgⱼ (into `rhs`, with the tip residual Σ lⱼ e₃ᵀqⱼ last) and the
+    /// dense Hessian TⱼᵀKⱼₖTₖ − δⱼₖ (gⱼ·qⱼ) I₂, bordered by the tip row lⱼ Tⱼᵀe₃.
+    fn newton_system(
+        &mut self,
+        chain: &Chain<f64, 3>,
+        nu: f64,
+        rhs: &mut [f64],
+    ) -> Result<DMatrix<f64>> {
+        let n = chain.n();
+        let ctx = self.ctx;
+        self.lagrangian_gradient(chain, nu, &ctx)?;
+        let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
+        for j in 0..n {
+            let curvature = dot(&self.f[j], &self.q[j]);
+            for r in 0..2 {
+                let i = 2 * j + r;
+                rhs[i] = dot(&self.basis[j][r], &self.f[j]);
+                a[(i, i)] = -curvature;
+                if chain.has_tip_constraint() {
+                    let c = chain.lengths()[j] * self.basis[j][r][2];
+                    a[(i, 2 * n)] = c;
+                    a[(2 * n, i)] = c;
+                }
+            }
+        }
+        if chain.has_tip_constraint() {
+            rhs[2 * n] = chain.tip_z(&self.q);
+        }
+        self.add_stiffness(chain, &ctx, &mut a)?;
+        Ok(a)
+    }
+
+    /// qⱼ ← normalise(qⱼ − Tⱼ δⱼ), and the new tangent bases.
+    fn step(&mut self, delta: &[f64]) {
+        self.retract(delta);
     }
 
     /// The converged iterate as a [`StaticSolution`].

@@ -20,8 +20,10 @@ Fork safety: the calls that use threads (``optimize`` with ``starts`` > 1 or a s
 forked after such a call (``multiprocessing`` with the ``fork`` start method, a
 ``ProcessPoolExecutor`` on Linux) runs them normally (python/tests/test_fork.py).
 
-The fatigue assessment over a scatter diagram (``fatigue(scene, scatter=None, controllers=...,
-executor=None)``) will be bound here once the library's fatigue module exists; it is not yet.
+The wellhead fatigue assessment (:func:`fatigue`: ``chainbeam fatigue``'s JSON as a dict) runs
+plain, over a scatter diagram and with controllers, its cells optionally spread over an executor
+(``fatigue(scene, scatter=..., controllers=..., executor=client)``), bit for bit the command
+line's numbers.
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from ._api import (
     simulate,
 )
 from ._chainbeam import Scene, __version__
+from ._fatigue import fatigue
 from ._errors import (
     ChainbeamError,
     ConvergenceError,
@@ -52,6 +55,7 @@ __all__ = [
     "gradient",
     "optimize",
     "mpc",
+    "fatigue",
     "sweep",
     "to_parquet",
     "Trajectory",

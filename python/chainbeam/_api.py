@@ -55,6 +55,8 @@ class Trajectory:
             a control).
         moment_x: the x component M₀ₓ(t_k) of the base moment (spatial scenes only, else None).
         control_x: the x component u_x,k of the control (spatial scenes only, else None).
+        eta: the surface elevation η(t_k) [m] at x = z = 0 of a scene with ``[loads.waves]``
+            (the command line's ``eta`` column), else None.
     """
 
     t: Array
@@ -64,6 +66,7 @@ class Trajectory:
     control: Array
     moment_x: Array | None = None
     control_x: Array | None = None
+    eta: Array | None = None
 
     @property
     def is_spatial(self) -> bool:

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "__version__"]
+__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "__version__"]
 
 @final
 class Scene:
@@ -74,4 +74,28 @@ def mpc(
     effort: float = 0.01,
     rate_penalty: float = 0.0,
     baselines: bool = False,
+) -> dict[str, Any]: ...
+
+_Cell = tuple[float, float, float, float | None]
+_Run = tuple[float, float, float, float | None, list[float] | None]
+
+def _fatigue(
+    scene: Scene,
+    scatter: list[_Cell] | None,
+    controllers: list[str] | None,
+    settings: dict[str, Any],
+) -> dict[str, Any]: ...
+def _fatigue_cell(
+    scene: Scene,
+    cell: _Cell,
+    index: int,
+    controllers: list[str] | None,
+    settings: dict[str, Any],
+) -> list[_Run]: ...
+def _fatigue_combine(
+    scene: Scene,
+    scatter: list[_Cell],
+    controllers: list[str] | None,
+    settings: dict[str, Any],
+    runs: list[list[_Run]],
 ) -> dict[str, Any]: ...

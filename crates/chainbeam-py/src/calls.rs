@@ -121,10 +121,11 @@ pub fn simulate<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let controls = Controls::from_arrays(controls, controls_x)?;
     let s = scene.inner.clone();
-    let c = check(
+    let (c, eta) = check(
         py,
         interruptible(py, move || -> Result<_, Failure> {
-            Ok(run_simulation(&s, controls.as_ref())?.into_columns()?)
+            let eta = wave_elevation(&s)?;
+            Ok((run_simulation(&s, controls.as_ref())?.into_columns()?, eta))
         })?,
     )?;
     let d = PyDict::new(py);
@@ -143,7 +144,27 @@ pub fn simulate<'py>(
     if let Some(u) = c.controls_x {
         d.set_item("control_x", PyArray1::from_vec(py, u))?;
     }
+    if let Some(e) = eta {
+        d.set_item("eta", PyArray1::from_vec(py, e))?;
+    }
     Ok(d)
+}
+
+/// The surface elevation η(t_k) at x = z = 0 of a scene with `[loads.waves]` (the command
+/// line's `eta` column: `Scene::wave_elevation`), checked finite where it is made, as the
+/// command line does.
+fn wave_elevation(scene: &chainbeam::Scene) -> Result<Option<Vec<f64>>, Failure> {
+    let eta = scene.wave_elevation().map_err(chainbeam::Error::from)?;
+    if let Some(k) = eta
+        .as_ref()
+        .and_then(|e| e.iter().position(|v| !v.is_finite()))
+    {
+        return Err(Failure::Lib(chainbeam::Error::NonFinite {
+            step: k,
+            quantity: "the wave elevation eta (nothing was returned)",
+        }));
+    }
+    Ok(eta)
 }
 
 /// The problem of a scene with its own control or `controls`, and θ₀ (the command line's

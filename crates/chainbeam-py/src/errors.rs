@@ -20,6 +20,13 @@ pub enum Failure {
         /// The message.
         message: String,
     },
+    /// A scene without what the call needs (`SceneError`, `.key` the scene key).
+    SceneKey {
+        /// The scene key, e.g. `fatigue`.
+        key: String,
+        /// The message.
+        message: String,
+    },
     /// A bug or an operating-system failure.
     Internal(String),
 }
@@ -51,6 +58,9 @@ impl Failure {
                 Some(&name),
                 None,
             ),
+            Failure::SceneKey { key, message } => {
+                raise(py, "SceneError", &message, "Scene", Some(&key), None)
+            }
             Failure::Internal(m) => internal(py, &m),
         }
     }

@@ -8,12 +8,13 @@
 //!
 //! Module map: [`scene`] the `Scene` class; [`run`] GIL release, interrupts and rayon pools;
 //! [`errors`] the library's errors as Python exceptions; [`calls`] simulate and gradient;
-//! [`optim`] optimize and mpc.
+//! [`optim`] optimize and mpc; [`fatigue`] the fatigue assessment and studies.
 
 use pyo3::prelude::*;
 
 mod calls;
 mod errors;
+mod fatigue;
 mod optim;
 mod run;
 mod scene;
@@ -30,6 +31,9 @@ fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(calls::_time_library_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(optim::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(optim::mpc, m)?)?;
+    m.add_function(wrap_pyfunction!(fatigue::_fatigue, m)?)?;
+    m.add_function(wrap_pyfunction!(fatigue::_fatigue_cell, m)?)?;
+    m.add_function(wrap_pyfunction!(fatigue::_fatigue_combine, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -1,0 +1,446 @@
+//! `fatigue`: the command line's `chainbeam fatigue` (plain, `--scatter`, `--controller`) on the
+//! same library calls (src/bin/chainbeam/cmd_fatigue.rs, cmd_fatigue/study.rs), returning its
+//! JSON's fields as Python dicts, lists and floats; and the two halves of a study that
+//! `chainbeam.fatigue(..., executor=...)` spreads over an executor: [`_fatigue_cell`] (every
+//! controller on one cell, `run_study` of a one-cell diagram) and [`_fatigue_combine`] (the cells
+//! combined as `run_study` combines them: `combine_scatter`, `life_years`, `life_extension`).
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use chainbeam::fatigue::{
+    assess, combine_scatter, life_years, run_study, CellDamage, CellOutcome, ControlSettings,
+    ControllerKind, ControllerOutcome, FatigueError, FatigueSpec, MomentHistory, ScatterCell,
+    SeaState, Study, StudyError, StudyInput,
+};
+use chainbeam::mpc::{Horizon, MpcOptions};
+use chainbeam::ocp::OcpOptions;
+use chainbeam::scene::FORCE_RANGE;
+
+use crate::errors::{check, Failure};
+use crate::run::{interruptible, with_pool};
+use crate::scene::Scene;
+
+/// A scatter cell as Python passes it: (hs, tp, probability, direction or None).
+type CellTuple = (f64, f64, f64, Option<f64>);
+
+/// One (cell, controller) run as it travels between processes: (probability, damage,
+/// duration_s, force, gains).
+type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>);
+
+/// The closed-loop settings (the command line's `--interval --horizon --iterations --bound
+/// --effort`; the package passes a dict with these keys and the command line's defaults).
+#[derive(Clone, Copy, FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Settings {
+    interval: f64,
+    horizon: f64,
+    iterations: usize,
+    bound: f64,
+    effort: f64,
+}
+
+impl Settings {
+    /// The library's settings (the command line's `settings`).
+    fn control(&self) -> Result<ControlSettings, Failure> {
+        if self.bound.is_finite() && !FORCE_RANGE.contains(self.bound) {
+            return Err(Failure::argument(
+                "bound",
+                format!(
+                    "{:e}: outside the supported force range [{:e}, {:e}] N",
+                    self.bound, FORCE_RANGE.min, FORCE_RANGE.max
+                ),
+            ));
+        }
+        Ok(ControlSettings {
+            interval: self.interval,
+            mpc: MpcOptions {
+                horizon: Horizon::Seconds(self.horizon),
+                iterations: self.iterations,
+                effort: self.effort,
+                ocp: OcpOptions::default().with_bound(self.bound),
+                ..MpcOptions::default()
+            },
+            ..ControlSettings::default()
+        })
+    }
+}
+
+/// The `[fatigue]` table of the scene (the command line's refusal without one).
+fn spec(scene: &chainbeam::Scene) -> Result<FatigueSpec, Failure> {
+    scene.fatigue.ok_or_else(|| Failure::SceneKey {
+        key: "fatigue".into(),
+        message: "key `fatigue`: fatigue needs a [fatigue] table with outer_diameter and \
+                  wall_thickness (docs/scene-format.md)"
+            .into(),
+    })
+}
+
+/// The controllers of a study: `None` → the scene's own control (a plain scatter run), else the
+/// names with `none` put first when missing (the reference of `life_extension`).
+fn kinds(controllers: Option<&[String]>) -> Result<Vec<ControllerKind>, Failure> {
+    let Some(list) = controllers else {
+        return Ok(vec![ControllerKind::Scene]);
+    };
+    let mut kinds = ControllerKind::parse_list(&list.join(",")).map_err(|e| study_error(e, 0))?;
+    if !kinds.contains(&ControllerKind::None) {
+        kinds.insert(0, ControllerKind::None);
+    }
+    Ok(kinds)
+}
+
+fn cells(cells: &[CellTuple]) -> Vec<ScatterCell> {
+    cells
+        .iter()
+        .map(|&(hs, tp, probability, direction)| ScatterCell {
+            sea: SeaState { hs, tp, direction },
+            probability,
+        })
+        .collect()
+}
+
+/// A study's error as the exception of the argument at fault (the command line's flags are the
+/// Python arguments of the same names); `offset` is added to cell indices (a one-cell run of an
+/// executor).
+fn study_error(e: StudyError, offset: usize) -> Failure {
+    let e = match e {
+        StudyError::Run {
+            controller,
+            cell,
+            source,
+        } => StudyError::Run {
+            controller,
+            cell: cell + offset,
+            source,
+        },
+        StudyError::SeaState { cell, reason } => StudyError::SeaState {
+            cell: cell + offset,
+            reason,
+        },
+        other => other,
+    };
+    match e {
+        StudyError::Run {
+            controller,
+            cell,
+            source,
+        } => {
+            let named = match source.as_ref() {
+                chainbeam::Error::Mpc(m) => Some(m.argument()),
+                chainbeam::Error::Ocp(o) => Some(o.argument()),
+                chainbeam::Error::InvalidArgument { name, .. } => Some(*name),
+                _ => None,
+            };
+            let argument = match named {
+                Some(n @ ("interval" | "horizon" | "iterations" | "effort" | "bound")) => Some(n),
+                Some("bounds") => Some("bound"),
+                _ => None,
+            };
+            match argument {
+                Some(a) => {
+                    let e = StudyError::Run {
+                        controller,
+                        cell,
+                        source,
+                    };
+                    Failure::argument(a, e.to_string())
+                }
+                None => Failure::Lib(*source),
+            }
+        }
+        e @ (StudyError::UnknownController { .. }
+        | StudyError::DuplicateController { .. }
+        | StudyError::NoControllers
+        | StudyError::ControlCannotAct { .. }) => Failure::argument("controllers", e.to_string()),
+        e => Failure::argument("scatter", e.to_string()),
+    }
+}
+
+/// The command line's refusal of a non-finite number in the report (`key` names it).
+fn finite(key: &str, values: &[f64]) -> Result<(), Failure> {
+    match values.iter().find(|v| !v.is_finite()) {
+        None => Ok(()),
+        Some(v) => Err(Failure::Internal(format!(
+            "the fatigue report's `{key}` is not finite ({v}); nothing was returned"
+        ))),
+    }
+}
+
+fn cell_dict<'py>(py: Python<'py>, c: &CellOutcome) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("hs", c.sea.map(|s| s.hs))?;
+    d.set_item("tp", c.sea.map(|s| s.tp))?;
+    if let Some(dir) = c.sea.and_then(|s| s.direction) {
+        d.set_item("direction", dir)?;
+    }
+    d.set_item("probability", c.probability)?;
+    d.set_item("damage_per_year", c.damage_per_year)?;
+    d.set_item("damage", c.damage)?;
+    d.set_item("duration_s", c.duration_s)?;
+    if let Some(f) = c.force {
+        d.set_item("force", f)?;
+    }
+    if let Some(g) = c.gains {
+        d.set_item("gains", g.to_vec())?;
+    }
+    Ok(d)
+}
+
+fn controller_dict<'py>(py: Python<'py>, c: &ControllerOutcome) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("damage_per_year", c.damage_per_year)?;
+    d.set_item("life_years", Some(c.life_years).filter(|l| l.is_finite()))?;
+    let cells = PyList::empty(py);
+    for cell in &c.cells {
+        cells.append(cell_dict(py, cell)?)?;
+    }
+    d.set_item("cells", cells)?;
+    Ok(d)
+}
+
+/// The command line's checks of a study's numbers.
+fn check_study(study: &Study) -> Result<(), Failure> {
+    for c in &study.controllers {
+        let key = format!("controllers.{}", c.kind.name());
+        finite(&key, &[c.damage_per_year])?;
+        for cell in &c.cells {
+            finite(&key, &[cell.damage, cell.damage_per_year])?;
+            finite(&key, cell.gains.as_ref().map_or(&[][..], |g| g))?;
+        }
+    }
+    Ok(())
+}
+
+/// A study as the command line's JSON: with controllers `{controllers, life_extension,
+/// settings}`, else `{damage_per_year, life_years, cells}`.
+fn study_dict<'py>(
+    py: Python<'py>,
+    study: &Study,
+    with_controllers: bool,
+    s: &Settings,
+    bound: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    if !with_controllers {
+        let c = controller_dict(py, &study.controllers[0])?;
+        for key in ["damage_per_year", "life_years", "cells"] {
+            d.set_item(key, c.get_item(key)?)?;
+        }
+        return Ok(d);
+    }
+    let (controllers, extension) = (PyDict::new(py), PyDict::new(py));
+    // Report order: none, constant, pd, mpc (the command line's object keys).
+    for kind in [
+        ControllerKind::None,
+        ControllerKind::Constant,
+        ControllerKind::Pd,
+        ControllerKind::Mpc,
+    ] {
+        if let Some(c) = study.get(kind) {
+            controllers.set_item(kind.name(), controller_dict(py, c)?)?;
+            extension.set_item(kind.name(), study.life_extension(kind))?;
+        }
+    }
+    d.set_item("controllers", controllers)?;
+    d.set_item("life_extension", extension)?;
+    let settings = PyDict::new(py);
+    settings.set_item("interval", s.interval)?;
+    settings.set_item("horizon", s.horizon)?;
+    settings.set_item("iterations", s.iterations)?;
+    settings.set_item("bound", bound)?;
+    settings.set_item("effort", s.effort)?;
+    d.set_item("settings", settings)?;
+    Ok(d)
+}
+
+/// The plain assessment (no scatter, no controllers): simulate, count, Miner.
+fn plain<'py>(py: Python<'py>, scene: &chainbeam::Scene) -> PyResult<Bound<'py, PyDict>> {
+    let s = scene.clone();
+    let a = check(
+        py,
+        interruptible(py, move || -> Result<_, Failure> {
+            let spec = spec(&s)?;
+            let traj = chainbeam::simulate(&s)?;
+            let moment_x = traj.is_spatial().then(|| traj.moment_x());
+            let history = MomentHistory {
+                duration_s: traj.steps() as f64 * traj.h(),
+                moment: traj.moment(),
+                moment_x,
+            };
+            let a = assess(&spec, history).map_err(|e| match e {
+                FatigueError::InvalidSpec { key, .. } => Failure::SceneKey {
+                    key: format!("fatigue.{key}"),
+                    message: e.to_string(),
+                },
+                e => Failure::Internal(e.to_string()),
+            })?;
+            let cycles: Vec<[f64; 3]> = a
+                .cycles
+                .iter()
+                .map(|c| [c.range, c.mean, c.count])
+                .collect();
+            finite("cycles", cycles.as_flattened())?;
+            finite("damage", &[a.damage, a.duration_s, a.damage_per_year])?;
+            Ok((cycles, a))
+        })?,
+    )?;
+    let (cycles, a) = a;
+    let d = PyDict::new(py);
+    d.set_item(
+        "cycles",
+        cycles.iter().map(|c| c.to_vec()).collect::<Vec<_>>(),
+    )?;
+    d.set_item("damage", a.damage)?;
+    d.set_item("duration_s", a.duration_s)?;
+    d.set_item("damage_per_year", a.damage_per_year)?;
+    d.set_item("life_years", Some(a.life_years).filter(|l| l.is_finite()))?;
+    Ok(d)
+}
+
+/// `chainbeam fatigue` in one process; see `chainbeam.fatigue`.
+#[pyfunction]
+#[pyo3(signature = (scene, scatter, controllers, settings))]
+pub fn _fatigue<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    scatter: Option<Vec<CellTuple>>,
+    controllers: Option<Vec<String>>,
+    settings: Settings,
+) -> PyResult<Bound<'py, PyDict>> {
+    if scatter.is_none() && controllers.is_none() {
+        return plain(py, &scene.inner);
+    }
+    let with_controllers = controllers.is_some();
+    let s = scene.inner.clone();
+    let (study, bound) = check(
+        py,
+        interruptible(py, move || -> Result<_, Failure> {
+            let spec = spec(&s)?;
+            let kinds = kinds(controllers.as_deref())?;
+            let control = settings.control()?;
+            let cells = scatter.as_deref().map(cells);
+            let input = StudyInput {
+                scene: &s,
+                spec: &spec,
+                cells: cells.as_deref(),
+                controllers: &kinds,
+                settings: &control,
+            };
+            let study = with_pool(|| run_study(&input, &|| {}))
+                .map_err(Failure::Internal)?
+                .map_err(|e| study_error(e, 0))?;
+            check_study(&study)?;
+            Ok((study, control.bound()))
+        })?,
+    )?;
+    study_dict(py, &study, with_controllers, &settings, bound)
+}
+
+/// Every controller on one scatter cell (a one-cell `run_study`): one (probability, damage,
+/// duration_s, force, gains) per controller, in the study's order. `index` is the cell's place in
+/// the diagram (for error messages).
+#[pyfunction]
+pub fn _fatigue_cell(
+    py: Python<'_>,
+    scene: &Scene,
+    cell: CellTuple,
+    index: usize,
+    controllers: Option<Vec<String>>,
+    settings: Settings,
+) -> PyResult<Vec<RunTuple>> {
+    let s = scene.inner.clone();
+    check(
+        py,
+        interruptible(py, move || -> Result<_, Failure> {
+            let spec = spec(&s)?;
+            let kinds = kinds(controllers.as_deref())?;
+            let control = settings.control()?;
+            let one = cells(&[cell]);
+            let input = StudyInput {
+                scene: &s,
+                spec: &spec,
+                cells: Some(&one),
+                controllers: &kinds,
+                settings: &control,
+            };
+            let study = with_pool(|| run_study(&input, &|| {}))
+                .map_err(Failure::Internal)?
+                .map_err(|e| study_error(e, index))?;
+            Ok(study
+                .controllers
+                .iter()
+                .map(|c| {
+                    let r = &c.cells[0];
+                    (r.probability, r.damage, r.duration_s, r.force, r.gains)
+                })
+                .collect())
+        })?,
+    )
+}
+
+/// The cells' runs ([`_fatigue_cell`], one list per cell) combined as `run_study` combines them,
+/// as the command line's JSON.
+#[pyfunction]
+pub fn _fatigue_combine<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    scatter: Vec<CellTuple>,
+    controllers: Option<Vec<String>>,
+    settings: Settings,
+    runs: Vec<Vec<RunTuple>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let with_controllers = controllers.is_some();
+    let combined = (|| -> Result<_, Failure> {
+        let spec = spec(&scene.inner)?;
+        let kinds = kinds(controllers.as_deref())?;
+        let control = settings.control()?;
+        let cells = cells(&scatter);
+        if runs.len() != cells.len() || runs.iter().any(|r| r.len() != kinds.len()) {
+            return Err(Failure::argument(
+                "runs",
+                "one run per controller for every cell is needed",
+            ));
+        }
+        let mut outcomes = Vec::with_capacity(kinds.len());
+        for (j, &kind) in kinds.iter().enumerate() {
+            let damages: Vec<CellDamage> = runs
+                .iter()
+                .map(|r| CellDamage {
+                    probability: r[j].0,
+                    damage: r[j].1,
+                    duration_s: r[j].2,
+                })
+                .collect();
+            let total =
+                combine_scatter(&damages).map_err(|e| study_error(StudyError::Fatigue(e), 0))?;
+            let cells = runs
+                .iter()
+                .zip(&cells)
+                .zip(&total.cells)
+                .map(|((r, c), &per_year)| CellOutcome {
+                    sea: Some(c.sea),
+                    probability: r[j].0,
+                    damage: r[j].1,
+                    duration_s: r[j].2,
+                    damage_per_year: per_year,
+                    force: r[j].3,
+                    gains: r[j].4,
+                })
+                .collect();
+            outcomes.push(ControllerOutcome {
+                kind,
+                damage_per_year: total.damage_per_year,
+                life_years: life_years(total.damage_per_year, spec.dff)
+                    .map_err(|e| study_error(StudyError::Fatigue(e), 0))?,
+                cells,
+            });
+        }
+        let study = Study {
+            controllers: outcomes,
+        };
+        check_study(&study)?;
+        Ok((study, control.bound()))
+    })();
+    let (study, bound) = check(py, combined)?;
+    study_dict(py, &study, with_controllers, &settings, bound)
+}

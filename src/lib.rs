@@ -156,7 +156,7 @@ pub use steppers::rattle;
 
 pub use adjoint::{
     BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, Objective,
-    Parametrisation, PerStepControl, PiecewiseControl, Start, StartKick,
+    Parametrisation, PerStepControl, PiecewiseControl, PowerObjective, Start, StartKick,
 };
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};

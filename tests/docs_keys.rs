@@ -186,7 +186,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 64, "number of documented keys");
+    assert_eq!(checked, 65, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -263,6 +263,13 @@ fn every_documented_key_is_read() {
         let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_ne!(scene, base, "loads.current.{key} changed nothing");
     }
+    // `objective.exponent` goes with kind = "power" only.
+    assert!(doc["objective"].contains_key("exponent"));
+    seen.insert("objective.exponent".to_string());
+    let power = render(Some(("objective", "kind", "\"power\"")))
+        .replace("kind = \"power\"\n", "kind = \"power\"\nexponent = 3.0\n");
+    let scene = Scene::from_toml_str(&power).unwrap_or_else(|e| panic!("{e}\n{power}"));
+    assert_ne!(scene, base, "objective.exponent changed nothing");
     // `[pipe]` replaces `beam.length`, `mass` and `stiffness` (exclusive keys).
     let pipe_base = |set: Option<(&str, &str)>| {
         let mut pipe = vec![

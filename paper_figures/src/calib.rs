@@ -36,6 +36,7 @@ pub fn entries() -> Vec<Entry> {
 
 /// Mean squared node-displacement error against a reference, J = Σ_k Σ_i (z_i(t_k) − z_i^ref(t_k))²
 /// / ((N + 1) n) \[m²\].
+#[derive(Clone)]
 struct EbMisfit {
     /// Reference z of nodes 1..n at every chain step k = 0..=N.
     reference: Vec<Vec<f64>>,

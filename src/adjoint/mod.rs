@@ -35,6 +35,7 @@
 
 mod control_map;
 mod objective;
+mod power;
 mod problem;
 mod reverse;
 mod tape;
@@ -46,8 +47,10 @@ pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };
 pub use objective::{
-    BendingObjective, FinalMomentResidual, NodeDisplacementObjective, Objective, Stage,
+    BendingObjective, FinalMomentResidual, GaussNewton, MomentStage, NodeDisplacementObjective,
+    Objective, Stage,
 };
+pub use power::PowerObjective;
 pub use problem::ControlProblem;
 pub use tape::{AdjointResult, Checkpointing, AUTO_MEMORY_BUDGET};
 

@@ -7,6 +7,8 @@ use crate::model::{zi, Chain};
 use crate::scene::ObjectiveKind;
 use num_dual::Dual;
 
+use super::power::PowerObjective;
+
 /// What a stage cost sees at t_k.
 #[derive(Clone, Copy, Debug)]
 pub struct Stage<'a, D> {
@@ -31,26 +33,60 @@ pub struct Stage<'a, D> {
 
 /// A sum of stage costs ℓ_k(M₀(t_k), u_k, z(t_k)), k = 0..=N, written once over [`Scalar`] so
 /// that its partial derivatives come from (nested) dual numbers.
-pub trait Objective: Send + Sync {
+///
+/// `Clone + 'static` so that the structured solvers of [`crate::ocp`] can keep a copy of it.
+pub trait Objective: Clone + Send + Sync + 'static {
     /// The stage cost ℓ_k.
     fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D;
     /// Whether ℓ depends on the node displacements z (then its partials cost n evaluations).
     fn uses_positions(&self) -> bool {
         false
     }
-    /// The objective as a [`BendingObjective`], if it is one (the structured Riccati solver of
-    /// [`crate::ocp`] exploits its Gauss-Newton form Σ c_k M₀² + ρh Σ u²). Default `None`.
-    fn bending(&self) -> Option<BendingObjective> {
+    /// The stage cost's Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k², if it has one: what
+    /// the structured solvers of [`crate::ocp`] (Riccati and condensed, hence [`crate::mpc`])
+    /// linearise (the residual r_k; l_xx = w_k ∇r_k∇r_kᵀ) and, in their exact phase, complete
+    /// with the residual's own curvature w_k r_k ∇²r_k. `stage` must equal this form at every
+    /// (M₀, u) of the planar model (M₀ₓ = 0, u_x = 0). Default `None`: the structured solvers
+    /// refuse the objective ([`crate::Error::InvalidArgument`] naming `objective`), every other
+    /// method takes it.
+    fn gauss_newton<D: Scalar>(&self, s: MomentStage<D>) -> Option<GaussNewton<D>> {
+        let _ = s;
         None
     }
 }
 
-/// The thesis's bending-moment objectives (§3.3) with an optional effort penalty, on the squared
+/// What the Gauss-Newton form of a stage cost sees at t_k: the planar base moment M₀(t_k).
+#[derive(Clone, Copy, Debug)]
+pub struct MomentStage<D> {
+    /// Step index k (0..=N).
+    pub k: usize,
+    /// N.
+    pub steps: usize,
+    /// Step h \[s\].
+    pub h: f64,
+    /// Base bending moment M₀(t_k) (eq. 3.1.3) \[N m\].
+    pub moment: D,
+}
+
+/// The Gauss-Newton form of a stage cost, ℓ_k = ½ w_k r_k(M₀)² + e_k u_k² (Gauss-Newton on the
+/// residual r_k, Nocedal and Wright §10.3; the effort term is exactly quadratic).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussNewton<D> {
+    /// The weight w_k ≥ 0 (independent of M₀).
+    pub weight: f64,
+    /// The residual r_k(M₀), a function of the moment alone.
+    pub residual: D,
+    /// The effort coefficient e_k ≥ 0 of u_k² (independent of M₀) \[N² m²/N²\].
+    pub effort: f64,
+}
+
+/// The bending-moment objective a scene's `[objective]` names: the thesis's (§3.3) on the squared
 /// norm |M₀|² = M₀ₓ² + M₀_z² of the base moment vector (M₀² in the planar model, where M₀ₓ = 0
-/// and the sum is bit-for-bit M₀²) and |u|² = u_x² + u_z².
+/// and the sum is bit-for-bit M₀²) or, with [`ObjectiveKind::Power`], the [`PowerObjective`]
+/// Σ|M₀|^p; with an optional effort penalty ρ h Σ |u_k|² (|u|² = u_x² + u_z²).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BendingObjective {
-    /// c = |M₀(t_N)|² (eq. 3.3.2) or c_sum = Σ_{k=0}^{N} |M₀(t_k)|² (eq. 3.3.4).
+    /// c = |M₀(t_N)|² (eq. 3.3.2), c_sum = Σ_{k=0}^{N} |M₀(t_k)|² (eq. 3.3.4) or Σ|M₀(t_k)|^p.
     pub kind: ObjectiveKind,
     /// ρ ≥ 0 of the control-effort penalty ρ h Σ_{k=0}^{N} |u_k|² \[N²m²/(N² s)\].
     pub effort: f64,
@@ -76,15 +112,36 @@ impl BendingObjective {
         self.effort = rho;
         self
     }
+    /// The [`PowerObjective`] of kind [`ObjectiveKind::Power`], with this effort.
+    fn power(&self, exponent: f64) -> PowerObjective {
+        PowerObjective {
+            exponent,
+            effort: self.effort,
+        }
+    }
 }
 
 impl Objective for BendingObjective {
-    fn bending(&self) -> Option<BendingObjective> {
-        Some(*self)
+    /// w_k = 2c_k (c_k = 1 for c_sum, [k = N] for c), r_k = M₀, e_k = ρh: ½ w r² = c_k M₀²
+    /// bit for bit. [`ObjectiveKind::Power`]: that of [`PowerObjective`].
+    fn gauss_newton<D: Scalar>(&self, s: MomentStage<D>) -> Option<GaussNewton<D>> {
+        if let ObjectiveKind::Power { exponent } = self.kind {
+            return self.power(exponent).gauss_newton(s);
+        }
+        let c = match self.kind {
+            ObjectiveKind::Final if s.k != s.steps => 0.0,
+            _ => 1.0,
+        };
+        Some(GaussNewton {
+            weight: 2.0 * c,
+            residual: s.moment,
+            effort: self.effort * s.h,
+        })
     }
     fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
         let m = match self.kind {
             ObjectiveKind::Final if s.k != s.steps => D::zero(),
+            ObjectiveKind::Power { exponent } => return self.power(exponent).stage(s),
             _ => s.moment * s.moment + s.moment_x * s.moment_x,
         };
         if self.effort > 0.0 {

@@ -37,15 +37,31 @@ pub enum OcpError {
         /// The option.
         name: &'static str,
     },
-    /// The objective is not a bending-moment objective (c or c_sum, with effort), whose
-    /// Gauss-Newton form the structured solvers exploit.
+    /// The objective has no Gauss-Newton form ½ w_k r_k(M₀)² + e_k u_k²
+    /// ([`Objective::gauss_newton`](crate::Objective::gauss_newton)), which the structured
+    /// solvers exploit.
     #[error(
-        "{solver} needs a bending-moment objective (c or c_sum, with effort): it exploits their \
-         Gauss-Newton form"
+        "{solver} needs an objective in Gauss-Newton form ½ w_k r_k(M₀)² + e_k u_k² (c, c_sum or \
+         power, with effort); use lbfgs or trust-region"
     )]
-    NeedsBendingObjective {
+    NoGaussNewtonForm {
         /// The solver, e.g. `the Riccati solver`.
         solver: &'static str,
+    },
+    /// The objective's Gauss-Newton form has a negative or non-finite weight w_k or effort e_k.
+    #[error(
+        "{solver}: the objective's Gauss-Newton form has weight {weight} and effort {effort} at \
+         stage {stage} (both must be finite and ≥ 0)"
+    )]
+    InvalidGaussNewtonForm {
+        /// The solver.
+        solver: &'static str,
+        /// The stage k.
+        stage: usize,
+        /// w_k.
+        weight: f64,
+        /// e_k.
+        effort: f64,
     },
     /// The controls are not per-step or piecewise constant in time on consecutive pieces.
     #[error(
@@ -156,7 +172,9 @@ impl OcpError {
         match self {
             OcpError::EmptyBox { .. } => "bounds",
             OcpError::OutOfRange { name, .. } | OcpError::Zero { name } => name,
-            OcpError::NeedsBendingObjective { .. } => "objective",
+            OcpError::NoGaussNewtonForm { .. } | OcpError::InvalidGaussNewtonForm { .. } => {
+                "objective"
+            }
             OcpError::NotPiecewise => "control map",
             OcpError::UnsupportedTip { .. } => "tip",
             OcpError::NoControlNode => "control node",

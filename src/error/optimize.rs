@@ -111,8 +111,9 @@ pub enum OptimizeError {
     /// A structured method (riccati, condensed) on a problem that is not a control problem with
     /// per-step, piecewise or constant controls and a bending-moment objective.
     #[error(
-        "{method} needs a control problem (per-step, piecewise or constant controls) with a \
-         bending-moment objective (c or c_sum, with effort); use lbfgs or trust-region"
+        "{method} needs a control problem (per-step, piecewise or constant controls) with an \
+         objective in Gauss-Newton form (c, c_sum or power, with effort); use lbfgs or \
+         trust-region"
     )]
     NotStructured {
         /// The method's name, e.g. `riccati`.

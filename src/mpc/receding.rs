@@ -5,7 +5,7 @@ use super::{interval_steps, Controller, Observation};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
 use crate::error::{MpcError, Requirement, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
-use crate::scene::{Control, ControlKind, Scene};
+use crate::scene::{Control, ControlKind, ObjectiveKind, Scene};
 
 /// How far a plan looks ahead.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -78,6 +78,10 @@ pub struct MpcOptions {
     pub solver: MpcSolver,
     /// Effort weight ρ of ρ h Σ u_k² ([`BendingObjective::effort`]). Default 0.01.
     pub effort: f64,
+    /// The objective each plan minimises (with the effort penalty): the scene kinds of
+    /// [`BendingObjective`], any with a Gauss-Newton form. Default [`ObjectiveKind::Sum`]
+    /// (c_sum); [`ObjectiveKind::Power`] plans on Σ|M₀(t_k)|^p.
+    pub objective: ObjectiveKind,
     /// The solver's options: the bounds on u (default |u| ≤ 5 N), the rate penalty and the
     /// tolerances; `max_iters` is replaced by the budgets above.
     pub ocp: OcpOptions,
@@ -92,6 +96,7 @@ impl Default for MpcOptions {
             warm_start: true,
             solver: MpcSolver::default(),
             effort: 0.01,
+            objective: ObjectiveKind::Sum,
             ocp: OcpOptions::default().with_bound(5.0),
         }
     }
@@ -126,7 +131,8 @@ impl Mpc {
     /// [`MpcError`]: the `interval` not a multiple of the model's step, the `horizon` not a
     /// positive whole number of intervals, zero `iterations` or `first_iterations`, an `effort`
     /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
-    /// fault; the model's errors.
+    /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
+    /// exponent; the model's errors.
     pub fn new(model: &Scene, interval: f64, options: MpcOptions) -> Result<Self> {
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
@@ -161,6 +167,7 @@ impl Mpc {
             }
             .into());
         }
+        options.objective.check()?;
         let mut model = model.clone();
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);
         model.control = Some(Control {
@@ -207,7 +214,10 @@ impl Mpc {
                 steps: scene.time.steps,
                 pieces,
             };
-            let objective = BendingObjective::summed_moment().with_effort(self.options.effort);
+            let objective = BendingObjective {
+                kind: self.options.objective,
+                effort: self.options.effort,
+            };
             self.template = Some((pieces, ControlProblem::new(&scene, map, objective)?));
         }
         let template = &self.template.as_ref().expect("set above").1;

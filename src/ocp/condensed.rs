@@ -17,10 +17,12 @@
 //! control*, 2018).
 //!
 //! # The model
-//! With S_kj = ∂M₀(t_k)/∂θ_j at the nominal and u_k = θ_{piece(k)},
+//! With S_kj = ∂M₀(t_k)/∂θ_j at the nominal, u_k = θ_{piece(k)} and the objective's
+//! Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k² (`ocp/cost.rs`; c_sum: w_k = 2,
+//! r_k = M₀, e_k = ρh), whose residual moves by ∇r_k = r_k′ S_k,
 //! ```text
-//! J(θ + δ) ≈ Σ_k c_k (M₀_k + S_k δ)² + ρh Σ_k (u_k + δ_{piece(k)})² + (σ/h) Σ_{k≥1} (Δu_k + Δδ_k)²
-//! g = 2 Σ_k c_k M₀_k S_kᵀ + (effort and rate terms, exact),   H = 2 Σ_k c_k S_kᵀ S_k + (…)
+//! J(θ + δ) ≈ Σ_k ½ w_k (r_k + r_k′ S_k δ)² + Σ_k e_k (u_k + δ_{piece(k)})² + (σ/h) Σ_{k≥1} (Δu_k + Δδ_k)²
+//! g = Σ_k w_k r_k r_k′ S_kᵀ + (effort and rate terms, exact),   H = Σ_k w_k r_k′² S_kᵀ S_k + (…)
 //! ```
 //! the same Gauss-Newton model as the Riccati solver's (the dense Hessian of
 //! [`super::Solver::dense_gauss_newton`]), so g is the exact gradient (tested against the adjoint
@@ -30,11 +32,11 @@
 //! Jacobians, [`super::stage`]).
 //!
 //! # Curvature
-//! Gauss-Newton converges linearly when the residuals M₀_k stay large at the optimum (no effort
-//! penalty, Table 3.4): its model lacks 2 Σ_k c_k M₀_k ∇²M₀_k. The dense problem is small enough
+//! Gauss-Newton converges linearly when the residuals r_k stay large at the optimum (no effort
+//! penalty, Table 3.4): its model lacks Σ_k w_k r_k ∇²r_k (c_sum: 2 Σ_k M₀_k ∇²M₀_k). The dense problem is small enough
 //! to carry NL2SOL's structured secant approximation A of that term (Dennis, Gay, Welsch,
 //! *An adaptive nonlinear least-squares algorithm*, ACM TOMS 1981): after each step
-//! s = θ₊ − θ, with y = 2 Σ_k c_k M₀_k(θ₊) (S_k(θ₊) − S_k(θ)), A is sized by
+//! s = θ₊ − θ, with y = Σ_k w_k r_k(θ₊) (∇r_k(θ₊) − ∇r_k(θ)), A is sized by
 //! min(1, |sᵀy|/|sᵀAs|) and updated by the symmetric Powell-Broyden formula to A s = y; the
 //! next step's model adds A only when, on the step just taken, the model with A predicted the
 //! change of J better than the one without (NL2SOL's adaptive choice). The first step of a
@@ -85,7 +87,7 @@ pub struct Condensed {
     grad: Vec<f64>,
     /// The QP's step δ and its working set.
     qp: BoxQp,
-    /// The structured secant approximation A ≈ 2 Σ_k c_k M₀_k ∇²M₀_k (np × np, full) and the
+    /// The structured secant approximation A ≈ Σ_k w_k r_k ∇²r_k (np × np, full) and the
     /// sensitivities and θ of the previous linearisation (module docs, "Curvature").
     secant: Vec<f64>,
     prev_rows: Vec<f64>,
@@ -250,18 +252,21 @@ impl Condensed {
         Ok(())
     }
 
-    /// Keeps S and θ of this linearisation for the next secant update.
+    /// Keeps ∇r_k = r_k′ S_k and θ of this linearisation for the next secant update.
     fn snapshot(&mut self) {
         let np = self.np;
         for k in 0..=self.steps {
-            sens_row(&self.chunks, k, &mut self.prev_rows[k * np..(k + 1) * np]);
+            let row = &mut self.prev_rows[k * np..(k + 1) * np];
+            sens_row(&self.chunks, k, row);
+            let dr = self.horizon.nominal.dresidual_dm[k];
+            row.iter_mut().for_each(|x| *x *= dr);
         }
         self.prev_theta = self.theta();
         self.has_prev = true;
     }
 
     /// The structured secant update of A (Dennis, Gay, Welsch 1981, NL2SOL): with the step
-    /// s = θ − θ_prev and y = 2 Σ_k c_k M₀_k (S_k − S_prev,k) (the change of the Jacobian applied
+    /// s = θ − θ_prev and y = Σ_k w_k r_k (∇r_k − ∇r_prev,k) (the change of the Jacobian applied
     /// to the new residuals), A is sized by min(1, |sᵀy|/|sᵀAs|) and updated by the symmetric
     /// Powell-Broyden formula so that A s = y.
     fn update_secant(&mut self) {
@@ -279,14 +284,15 @@ impl Condensed {
         let mut y = vec![0.0; np];
         let mut row = vec![0.0; np];
         for k in 0..=self.steps {
-            let c = self.horizon.cost.weight(k);
-            if c == 0.0 {
+            let w = self.horizon.cost.weight(k);
+            if w == 0.0 {
                 continue;
             }
             sens_row(&self.chunks, k, &mut row);
-            let r = self.horizon.nominal.moment[k];
+            let nom = &self.horizon.nominal;
+            let (r, dr) = (nom.residual[k], nom.dresidual_dm[k]);
             for j in 0..np {
-                y[j] += 2.0 * c * r * (row[j] - self.prev_rows[k * np + j]);
+                y[j] += w * r * (dr * row[j] - self.prev_rows[k * np + j]);
             }
         }
         let a = &mut self.secant;
@@ -319,16 +325,19 @@ impl Condensed {
         self.grad.fill(0.0);
         let mut s = vec![0.0; np];
         for k in 0..=self.steps {
-            let c = self.horizon.cost.weight(k);
-            if c != 0.0 {
+            let w = self.horizon.cost.weight(k);
+            if w != 0.0 {
                 sens_row(&self.chunks, k, &mut s);
                 // Decisions after stage k do not act on M₀(t_k).
                 let last = self.horizon.piece[k.saturating_sub(1)].min(np - 1) + 1;
-                let r = self.horizon.nominal.moment[k];
+                let nom = &self.horizon.nominal;
+                let (r, dr) = (nom.residual[k], nom.dresidual_dm[k]);
+                // ∇r_k = r′ S_k: g += w r r′ S_k, H += w r′² S_kᵀS_k (c_sum: 2M₀ and 2).
+                let (gk, hk) = (w * r * dr, w * dr * dr);
                 for i in 0..last {
-                    self.grad[i] += 2.0 * c * r * s[i];
+                    self.grad[i] += gk * s[i];
                     let row = &mut self.hess[i * np..i * np + i + 1];
-                    let si = 2.0 * c * s[i];
+                    let si = hk * s[i];
                     for (h, sj) in row.iter_mut().zip(&s[..=i]) {
                         *h += si * sj;
                     }
@@ -343,8 +352,8 @@ impl Condensed {
         let np = self.np;
         let hz = &self.horizon;
         let (p, u) = (hz.piece[k], hz.nominal.u[k]);
-        self.grad[p] += 2.0 * hz.cost.effort * u;
-        self.hess[p * np + p] += 2.0 * hz.cost.effort;
+        self.grad[p] += 2.0 * hz.cost.effort(k) * u;
+        self.hess[p * np + p] += 2.0 * hz.cost.effort(k);
         self.rate_terms(k);
     }
 

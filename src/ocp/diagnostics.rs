@@ -158,8 +158,9 @@ impl Solver {
     }
 
     /// The Gauss-Newton Hessian and the gradient of J(θ) at the nominal, assembled densely
-    /// from the stage Jacobians: H = Σ_k 2c_k ∇r_k∇r_kᵀ + 2ρh PᵀP + rate terms, with
-    /// ∇_u r_k = ∂M₀/∂φ₁ · e₁ᵀ A_{k−1}⋯A_{j+1} B_j (r_k = M₀(t_k)) and P = ∂u/∂θ. O(N² n²):
+    /// from the stage Jacobians: H = Σ_k w_k ∇r_k∇r_kᵀ + 2 e_k PᵀP + rate terms, with
+    /// ∇_u r_k = ∂r_k/∂φ₁ · e₁ᵀ A_{k−1}⋯A_{j+1} B_j (c_sum: r_k = M₀(t_k), w_k = 2) and
+    /// P = ∂u/∂θ. O(N² n²):
     /// for checking [`Solver::gauss_newton_step`] on small horizons.
     pub fn dense_gauss_newton(&mut self) -> Result<(Mat<f64>, Vec<f64>)> {
         let (steps, nxi) = (self.horizon.steps, self.nxi);
@@ -179,19 +180,19 @@ impl Solver {
                     x[(i, k - 1)] += b[i];
                 }
             }
-            let c = hz.cost.weight(k);
-            let d = hz.nominal.dmoment(k, scale);
-            let mk = hz.nominal.moment[k];
+            let w = hz.cost.weight(k);
+            let d = hz.nominal.dresidual(k, scale);
+            let rk = hz.nominal.residual[k];
             for i in 0..m {
                 let ri = d * x[(0, i)];
-                gu[i] += 2.0 * c * mk * ri;
+                gu[i] += w * rk * ri;
                 for j in 0..m {
-                    hu[(i, j)] += 2.0 * c * ri * d * x[(0, j)];
+                    hu[(i, j)] += w * ri * d * x[(0, j)];
                 }
             }
             let u = hz.nominal.u[k];
-            gu[k] += 2.0 * hz.cost.effort * u;
-            hu[(k, k)] += 2.0 * hz.cost.effort;
+            gu[k] += 2.0 * hz.cost.effort(k) * u;
+            hu[(k, k)] += 2.0 * hz.cost.effort(k);
             if k > 0 && hz.cost.rate > 0.0 {
                 let r = hz.cost.rate;
                 let du = u - hz.nominal.u[k - 1];

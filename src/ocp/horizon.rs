@@ -9,7 +9,6 @@ use super::riccati::StageCost;
 use super::stage::StageModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective, Start};
 use crate::error::{Error, OcpError, Result};
-use crate::scene::ObjectiveKind;
 
 /// A problem over its horizon with its two trajectories (module docs).
 #[derive(Clone, Debug)]
@@ -39,8 +38,8 @@ pub(crate) struct ControlHorizon {
 }
 
 impl ControlHorizon {
-    /// Validates the options, the model (planar, free tip, a control node), the objective (a
-    /// [`BendingObjective`](crate::BendingObjective)) and the control map (per-step or piecewise
+    /// Validates the options, the model (planar, free tip, a control node), the objective (one
+    /// in Gauss-Newton form, [`Objective::gauss_newton`]) and the control map (per-step or piecewise
     /// constant), then the solver's own limits on (N, number of decisions) by `admit` before
     /// anything of the horizon's size is allocated; `solver` names the solver in the
     /// objective's error.
@@ -51,19 +50,11 @@ impl ControlHorizon {
         admit: fn(usize, usize) -> Result<()>,
     ) -> Result<Self> {
         options.validate()?;
-        let obj = problem
-            .objective()
-            .bending()
-            .ok_or(OcpError::NeedsBendingObjective { solver })?;
         let steps = problem.steps();
         let h = problem.time_step();
         let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
-        let cost = StageCost {
-            effort: obj.effort * h,
-            rate: options.rate_penalty / h,
-            final_only: obj.kind == ObjectiveKind::Final,
-            steps,
-        };
+        let rate = options.rate_penalty / h;
+        let cost = StageCost::new(problem.objective(), steps, h, rate, solver)?;
         let n_params = problem.n_params();
         let structure = control_structure(&problem.controls(&ids(n_params))?, n_params)?;
         let theta_stage = (0..=steps).filter(|&k| structure.free[k]).collect();

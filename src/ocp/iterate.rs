@@ -166,14 +166,14 @@ impl QpIterate {
                 .zip(z0.iter().zip(dz.iter()))
                 .for_each(|(t, (a, b))| *t = a + b);
             if value {
-                let m = nom.moment[k] + nom.dmoment(k, scale) * self.dz_t[k * nz];
+                let r = nom.residual[k] + nom.dresidual(k, scale) * self.dz_t[k * nz];
                 let u = nom.u[k] + self.dv_t[k];
                 let w = if k > 0 {
                     nom.u[k - 1] + self.dv_t[k - 1]
                 } else {
                     0.0
                 };
-                q += hz.cost.value(k, m, u, w);
+                q += hz.cost.value(k, r, u, w);
                 if let Some(so) = &lm.second {
                     q += so.value(k, &self.dz_t[k * nz..(k + 1) * nz], self.dv_t[k]);
                 }

@@ -29,6 +29,11 @@ pub(crate) struct Traj {
     pub lambda: Vec<f64>,
     pub u: Vec<f64>,
     pub moment: Vec<f64>,
+    /// The objective's residual r_k(M₀(t_k)) and its first two derivatives in M₀
+    /// ([`StageCost::residual`]).
+    pub residual: Vec<f64>,
+    pub dresidual_dm: Vec<f64>,
+    pub d2residual_dm2: Vec<f64>,
     pub cost: f64,
 }
 
@@ -44,6 +49,9 @@ impl Traj {
             lambda: vec![0.0; m * n],
             u: vec![0.0; m],
             moment: vec![0.0; m],
+            residual: vec![0.0; m],
+            dresidual_dm: vec![0.0; m],
+            d2residual_dm2: vec![0.0; m],
             cost: 0.0,
         }
     }
@@ -71,6 +79,11 @@ impl Traj {
     #[inline]
     pub fn dmoment(&self, k: usize, scale: f64) -> f64 {
         scale * tangent(&self.q[k * self.n])[1]
+    }
+    /// ∂r_k/∂φ₁ = r_k′(M₀) ∂M₀/∂φ₁ at t_k.
+    #[inline]
+    pub fn dresidual(&self, k: usize, scale: f64) -> f64 {
+        self.dresidual_dm[k] * self.dmoment(k, scale)
     }
 }
 
@@ -190,8 +203,10 @@ fn rollout(
         }
         out.u[k] = u;
         let m = model.chain.base_moment(&st.q);
+        let r = cost.residual(k, m);
         out.moment[k] = m;
-        total += cost.value(k, m, u, w);
+        (out.residual[k], out.dresidual_dm[k], out.d2residual_dm2[k]) = (r.r, r.dr, r.d2r);
+        total += cost.value(k, r.r, u, w);
         if k < steps {
             stepper.advance(k, u)?;
             let m = stepper.state.multipliers.as_ref();

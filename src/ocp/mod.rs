@@ -13,7 +13,8 @@
 //! # The problem
 //! J(θ) = Σ_{k=0}^{N} [c_k M₀(t_k)² + ρh u_k²] + (σ/h) Σ_{k=1}^{N} (u_k − u_{k−1})²
 //! over the RATTLE trajectory from the straight beam at rest, with c_k = 1 (c_sum, eq. 3.3.4) or
-//! c_k = [k = N] (c, eq. 3.3.2), ρ the effort weight of [`BendingObjective::effort`](crate::BendingObjective::effort), σ ≥ 0 the
+//! c_k = [k = N] (c, eq. 3.3.2) — in general Σ_k [½ w_k r_k(M₀(t_k))² + e_k u_k²], the
+//! objective's Gauss-Newton form (Supported, below) — ρ the effort weight of [`BendingObjective::effort`](crate::BendingObjective::effort), σ ≥ 0 the
 //! optional rate penalty [`OcpOptions::rate_penalty`] (σh Σ ((u_k − u_{k−1})/h)²: real thrusters
 //! cannot jump), u_k = θ_{piece(k)} (per-step: θ = u; piecewise: the pieces of
 //! [`PiecewiseControl`](crate::PiecewiseControl)), and the box lower ≤ θ ≤ upper. The costs are
@@ -26,12 +27,14 @@
 //!   update is the implicit function theorem, exact to round-off), computed in parallel
 //!   (rayon, one workspace per thread: stages are independent given the trajectory).
 //! - **Second-order model** ([`Curvature`]): Gauss-Newton first — the bending residual
-//!   r_k = M₀(q_k) linearised (l_xx = 2∇r∇rᵀ), the dynamics' second derivatives dropped (iLQR):
+//!   r_k = M₀(q_k) linearised (l_xx = 2∇r∇rᵀ; an objective's residual r_k(M₀) in general,
+//!   l_xx = w_k∇r∇rᵀ), the dynamics' second derivatives dropped (iLQR):
 //!   positive semidefinite, fast from far away. From the first step whose decrease the
 //!   Gauss-Newton model did not predict (not taken in full, or actual < ½ predicted:
 //!   [`Curvature::Auto`], the default), the exact Hessian of J: each stage adds
 //!   H_k = ∇²_{(ξ,u)}(ν_{k+1}·F̃_k), the curvature of its stage map in the tangent chart weighted
-//!   by the nominal's costates, and the moment's own curvature 2c M₀ ∂²M₀/∂φ₁² = −2c M₀².
+//!   by the nominal's costates, and the cost's own curvature 2c M₀ ∂²M₀/∂φ₁² = −2c M₀²
+//!   (in general w r (r″ (∂M₀/∂φ₁)² + r′ ∂²M₀/∂φ₁²)).
 //!   With these terms the Riccati recursion solves the Newton system of J(θ) itself (the
 //!   reduced Hessian of the multiple-shooting Lagrangian with the adjoint costates as
 //!   multipliers, Dunn and Bertsekas 1989). H_k comes from the one model as well: the discrete
@@ -204,9 +207,12 @@
 //! objectives on rows 3, 6 and 8 and lower ones on rows 1 (22.93) and 9;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
-//! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), objectives
-//! [`BendingObjective`](crate::BendingObjective) (c or c_sum, with effort), controls that are per-step or piecewise
-//! constant in time. Locked and reaction-force tips are refused with
+//! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), every objective
+//! with a Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k²
+//! ([`Objective::gauss_newton`], `ocp/cost.rs`: c and c_sum of
+//! [`BendingObjective`](crate::BendingObjective) with r_k = M₀, Σ|M₀|^p of
+//! [`PowerObjective`](crate::PowerObjective) with r_k = sgn(M₀)|M₀|^{p/2}), controls that are
+//! per-step or piecewise constant in time. Locked and reaction-force tips are refused with
 //! [`OcpError::UnsupportedTip`] (their tip constraint removes a dimension of the state manifold that
 //! the tangent coordinates do not).
 //!
@@ -235,6 +241,7 @@
 
 pub mod boxqp;
 pub mod condensed;
+mod cost;
 mod dense_qp;
 mod diagnostics;
 mod globalise;

@@ -8,9 +8,10 @@
 //! ```text
 //! free:  Ã = [A 0; 0 0],  B̃ = [B; 1]          held:  Ã = [A B; 0 1],  no B̃
 //! ```
-//! Stage cost (Gauss-Newton model of the bending term r_k = M₀(q_k), linear in ∂ξ):
-//! ℓ_k = c_k M₀² + ρh u_k² + (σ/h)(u_k − w_k)² (the rate term for k ≥ 1), so
-//! l_x = 2c_k M₀ ∇M₀ (+ w terms), l_xx = 2c_k ∇M₀∇M₀ᵀ (rank 1; ∇M₀ has one entry, at φ₁).
+//! Stage cost (Gauss-Newton model of the objective's residual r_k(M₀(q_k)), linear in ∂ξ,
+//! `ocp/cost.rs`): ℓ_k = ½ w_k r_k² + e_k u_k² + (σ/h)(u_k − w_k)² (the rate term for
+//! k ≥ 1; c_sum: w_k = 2, r_k = M₀, e_k = ρh), so l_x = w_k r_k ∇r_k (+ w terms),
+//! l_xx = w_k ∇r_k∇r_kᵀ (rank 1; ∇r_k = r_k′ ∇M₀ has one entry, at φ₁).
 //!
 //! Recursion (k = N … 0; s′ = 0, S′ = 0 after the last stage), Tassa, Erez, Todorov (IROS 2012):
 //! ```text
@@ -38,6 +39,7 @@
 //! feedback is a scaled row. Nothing allocates per stage.
 
 use super::boxqp::{solve_scalar, BoxQpStep};
+pub(crate) use super::cost::StageCost;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
@@ -132,41 +134,6 @@ fn symmetrise(dst: &mut Mat<f64>, src: &Mat<f64>) {
     }
 }
 
-/// The cost weights of the stage cost.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct StageCost {
-    /// ρh: the coefficient of u_k².
-    pub effort: f64,
-    /// σ/h: the coefficient of (u_k − u_{k−1})².
-    pub rate: f64,
-    /// Only the final bending moment counts (c = M₀(t_N)², eq. 3.3.2); else the sum (eq. 3.3.4).
-    pub final_only: bool,
-    /// N.
-    pub steps: usize,
-}
-
-impl StageCost {
-    /// The bending weight c_k.
-    #[inline]
-    pub fn weight(&self, k: usize) -> f64 {
-        if self.final_only && k != self.steps {
-            0.0
-        } else {
-            1.0
-        }
-    }
-
-    /// ℓ_k for bending moment `m`, control `u` and previous control `w`.
-    #[inline]
-    pub fn value(&self, k: usize, m: f64, u: f64, w: f64) -> f64 {
-        let mut l = self.weight(k) * m * m + self.effort * u * u;
-        if k > 0 && self.rate > 0.0 {
-            l += self.rate * (u - w) * (u - w);
-        }
-        l
-    }
-}
-
 /// A stage's Jacobians in the tangent coordinates: A_k (column-major 2n × 2n) and B_k (2n).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageJacobians<'a> {
@@ -181,10 +148,10 @@ pub(crate) struct StageJacobians<'a> {
 pub(crate) struct StageInput<'a> {
     pub k: usize,
     pub free: bool,
-    /// M₀(q_k).
-    pub moment: f64,
-    /// ∂M₀/∂φ₁ at q_k.
-    pub dmoment: f64,
+    /// The residual r_k (linearised about the nominal: r_k + ∂r_k/∂φ₁ δφ₁ at the model point).
+    pub residual: f64,
+    /// ∂r_k/∂φ₁ = r_k′(M₀) ∂M₀/∂φ₁ at the nominal q_k.
+    pub dresidual: f64,
     /// u_k and w_k = u_{k−1} (0 at k = 0).
     pub u: f64,
     pub w: f64,
@@ -201,8 +168,9 @@ pub(crate) struct StageInput<'a> {
     /// (column-major (2n + 1)², [`super::hessian`]); `None` for Gauss-Newton. Only without an
     /// augmented state.
     pub hess: Option<&'a [f64]>,
-    /// The stage cost's curvature beyond Gauss-Newton, added to l_φ₁φ₁: 2c M₀ ∂²M₀/∂φ₁² =
-    /// −2c M₀² (M₀ = s sin φ₁); 0 for Gauss-Newton.
+    /// The stage cost's curvature beyond Gauss-Newton, added to l_φ₁φ₁:
+    /// w r (r″ (∂M₀/∂φ₁)² + r′ ∂²M₀/∂φ₁²) with ∂²M₀/∂φ₁² = −M₀ (M₀ = s sin φ₁; c_sum:
+    /// −2M₀²); 0 for Gauss-Newton.
     pub curv: f64,
     /// The model point δz_k (for the gradient H δ of the second-order terms; empty when
     /// they are absent) and δv_k.
@@ -300,18 +268,18 @@ impl Riccati {
     pub fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
         let (nxi, k) = (self.nxi, inp.k);
         let wi = nxi;
-        let c = cost.weight(k);
+        let (w, e) = (cost.weight(k), cost.effort(k));
         let rate = if k > 0 { cost.rate } else { 0.0 };
         self.lx.fill(0.0);
-        self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
+        self.lx[0] = w * inp.residual * inp.dresidual;
         let mut lu = 0.0;
         if inp.free {
-            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
+            lu = 2.0 * e * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
             if self.aug == 1 {
                 self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
             }
         } else {
-            self.lx[wi] = 2.0 * cost.effort * inp.w;
+            self.lx[wi] = 2.0 * e * inp.w;
         }
         lu += self.second_order(inp, false).0;
         match inp.jac {
@@ -364,21 +332,21 @@ impl Riccati {
         bounded
     }
 
-    /// The stage cost's derivatives (Gauss-Newton: l_xx = 2c ∇M₀∇M₀ᵀ): l_x into `lx`, l_xx
+    /// The stage cost's derivatives (Gauss-Newton: l_xx = w ∇r∇rᵀ): l_x into `lx`, l_xx
     /// into `qxx`, l_ux into `qux`; returns (l_u, l_uu, l_u) as the start of (Q_u, Q_uu, g).
     fn stage_costs(&mut self, inp: &StageInput<'_>, cost: &StageCost) -> QuTerms {
         let (nxi, k) = (self.nxi, inp.k);
         let wi = nxi; // index of w when aug = 1
-        let c = cost.weight(k);
+        let (w, e) = (cost.weight(k), cost.effort(k));
         let rate = if k > 0 { cost.rate } else { 0.0 };
         self.lx.fill(0.0);
-        self.lx[0] = 2.0 * c * inp.moment * inp.dmoment;
-        let lxx00 = 2.0 * c * inp.dmoment * inp.dmoment;
+        self.lx[0] = w * inp.residual * inp.dresidual;
+        let lxx00 = w * inp.dresidual * inp.dresidual;
         let mut lxx_ww = 0.0;
         let (mut lu, mut luu, mut lux_w) = (0.0, 0.0, 0.0);
         if inp.free {
-            lu = 2.0 * cost.effort * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
-            luu = 2.0 * (cost.effort + rate);
+            lu = 2.0 * e * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
+            luu = 2.0 * (e + rate);
             if self.aug == 1 {
                 self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
                 lxx_ww = 2.0 * rate;
@@ -386,8 +354,8 @@ impl Riccati {
             }
         } else {
             // held: u = w; the rate term vanishes inside a piece.
-            self.lx[wi] = 2.0 * cost.effort * inp.w;
-            lxx_ww = 2.0 * cost.effort;
+            self.lx[wi] = 2.0 * e * inp.w;
+            lxx_ww = 2.0 * e;
         }
         self.qxx.fill(0.0);
         self.qxx[(0, 0)] = lxx00;

@@ -1,5 +1,5 @@
 //! The second-order model (module docs, "Second-order model"): the exact Hessian's stage terms
-//! H_k = ∇²(ν_{k+1}·F̃_k) ([`super::hessian`]) and the moment's own curvature −2c_k M₀(t_k)²,
+//! H_k = ∇²(ν_{k+1}·F̃_k) ([`super::hessian`]) and the stage cost's own curvature beyond Gauss-Newton (−2c_k M₀(t_k)² for c and c_sum),
 //! the costates ν_k they are weighted by, and when the iterations use them ([`Curvature`]).
 
 #[cfg(feature = "parallel")]
@@ -114,9 +114,9 @@ impl SecondOrderModel {
         let scale = hz.model.moment_scale;
         for k in (0..=steps).rev() {
             let nom = &hz.nominal;
-            let (c, u) = (hz.cost.weight(k), nom.u[k]);
-            let lx0 = 2.0 * c * nom.moment[k] * nom.dmoment(k, scale);
-            let lu = 2.0 * hz.cost.effort * u;
+            let (w, u) = (hz.cost.weight(k), nom.u[k]);
+            let lx0 = w * nom.residual[k] * nom.dresidual(k, scale);
+            let lu = 2.0 * hz.cost.effort(k) * u;
             let (done, rest) = self.nu.split_at_mut((k + 1) * nxi);
             let nu_k = &mut done[k * nxi..];
             nu_k.fill(0.0);
@@ -150,7 +150,7 @@ impl SecondOrderModel {
 
     /// H_k = ∇²(ν_{k+1}·F̃_k) and the Jacobians A_k, B_k of every stage at the nominal (into
     /// `store`), in one parallel pass of forward and reverse dual steps (`hessian`), and the
-    /// cost's curvature −2c_k M₀(t_k)²; needs the costates of
+    /// cost's curvature beyond Gauss-Newton (−2c_k M₀(t_k)² for c and c_sum); needs the costates of
     /// [`SecondOrderModel::costates`].
     pub fn compute(&mut self, hz: &ControlHorizon, store: &mut JacobianStore) -> Result<()> {
         let (steps, nxi) = (hz.steps, hz.model.nx());
@@ -214,9 +214,13 @@ impl SecondOrderModel {
             work(c, h, a, b, ws)?;
         }
         store.filled_whole(steps);
+        let scale = hz.model.moment_scale;
         for k in 0..=steps {
-            let m = hz.nominal.moment[k];
-            self.curv[k] = -2.0 * hz.cost.weight(k) * m * m;
+            let nom = &hz.nominal;
+            let (m, dm) = (nom.moment[k], nom.dmoment(k, scale));
+            let (r, dr, d2r) = (nom.residual[k], nom.dresidual_dm[k], nom.d2residual_dm2[k]);
+            // w r (r″ M₀_φ² + r′ M₀_φφ), M₀_φφ = −M₀: −2M₀² for c_sum.
+            self.curv[k] = hz.cost.weight(k) * r * (d2r * dm * dm - dr * m);
         }
         self.valid = true;
         Ok(())

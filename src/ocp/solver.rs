@@ -98,13 +98,13 @@ impl Solver {
     }
 
     /// What the backward pass needs of stage k at the model point δ (the current inner
-    /// iterate: `dv`, `dz`; δ = 0 is the nominal) without its Jacobians: the linearised moment
-    /// M₀ + ∂M₀/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
+    /// iterate: `dv`, `dz`; δ = 0 is the nominal) without its Jacobians: the linearised
+    /// residual r + ∂r/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
     /// gradient. With `with_active`, a control of the ε-active set gets its fixed step.
     fn stage_input(&self, k: usize, with_active: bool) -> StageInput<'static> {
         let (hz, qp) = (&self.horizon, &self.qp);
         let nom = &hz.nominal;
-        let d = nom.dmoment(k, hz.model.moment_scale);
+        let d = nom.dresidual(k, hz.model.moment_scale);
         let u = nom.u[k] + qp.dv[k];
         let (lo, hi) = if self.ip.on {
             (f64::NEG_INFINITY, f64::INFINITY)
@@ -121,8 +121,8 @@ impl Solver {
         StageInput {
             k,
             free: hz.free[k],
-            moment: nom.moment[k] + d * qp.dz[k * self.nz],
-            dmoment: d,
+            residual: nom.residual[k] + d * qp.dz[k * self.nz],
+            dresidual: d,
             u,
             w: if k > 0 {
                 nom.u[k - 1] + qp.dv[k - 1]

@@ -235,8 +235,8 @@ macro_rules! impl_optim_problem {
 
 impl_optim_problem! {
     2,
-    /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of a
-    /// [`BendingObjective`](crate::BendingObjective).
+    /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of an objective in
+    /// Gauss-Newton form ([`Objective::gauss_newton`]).
     fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         Some(crate::ocp::solve(self, theta0, options))
     }

@@ -1,5 +1,6 @@
 //! [`Method::Riccati`] and [`Method::Condensed`]: [`minimize`](super::minimize) hands per-step,
-//! piecewise and constant control problems with a bending-moment objective to the structured
+//! piecewise and constant control problems with an objective in Gauss-Newton form
+//! ([`Objective::gauss_newton`](crate::Objective::gauss_newton)) to the structured
 //! Gauss-Newton solvers of [`crate::ocp`] (the Riccati solver, or the condensed one) and
 //! reports their result as an [`OptimResult`].
 //!

@@ -21,6 +21,7 @@ mod current;
 mod error;
 mod fatigue;
 mod input;
+mod objective;
 mod pipe;
 mod raw;
 pub(crate) mod series;
@@ -276,14 +277,20 @@ pub struct Control {
     pub values_x: Option<Vec<f64>>,
 }
 
-/// Which bending-moment objective a scene asks for (thesis §3.3).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// Which bending-moment objective a scene asks for (thesis §3.3; `[objective]`,
+/// docs/scene-format.md).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ObjectiveKind {
     /// c = M₀(t_N)² (eq. 3.3.2).
     Final,
     /// c_sum = Σ_{k=0}^{N} M₀(t_k)² (eq. 3.3.4).
     Sum,
+    /// Σ_{k=0}^{N} |M₀(t_k)|^p, p ≥ 2 ([`crate::PowerObjective`]; p = 2 is c_sum bit for bit).
+    Power {
+        /// The exponent p (finite, ≥ 2: [`ObjectiveKind::check`]).
+        exponent: f64,
+    },
 }
 
 /// A complete simulation / optimal-control scene.

@@ -10,10 +10,11 @@ use toml::Spanned;
 
 use super::current::RawCurrent;
 use super::fatigue::RawFatigue;
+use super::objective::RawObjective;
 use super::validate::{check_size, node_index, positive_count};
 use super::values::{to_i64, NumOrArray};
 use super::{
-    Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
+    Control, ControlKind, Harmonic, LoadSeries, Loads, PointLoad, Scene, SceneError,
     SceneErrorKind, Support, TimeGrid,
 };
 
@@ -305,12 +306,6 @@ impl RawControl {
     }
 }
 
-#[derive(Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawObjective {
-    kind: ObjectiveKind,
-}
-
 impl RawScene {
     pub(super) fn from_scene(s: &Scene) -> Self {
         let b = &s.beam;
@@ -349,7 +344,7 @@ impl RawScene {
                 kind: c.kind,
                 values: RawControl::join_values(c),
             }),
-            objective: s.objective.map(|kind| RawObjective { kind }),
+            objective: s.objective.map(RawObjective::from_kind),
             fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
         }
     }
@@ -417,7 +412,7 @@ impl RawScene {
                 steps,
             },
             control,
-            objective: self.objective.map(|o| o.kind),
+            objective: self.objective.map(RawObjective::into_kind).transpose()?,
             fatigue: self.fatigue.map(RawFatigue::into_spec).transpose()?,
         })
     }

@@ -184,6 +184,9 @@ impl Scene {
             pipe.check()?;
         }
         self.water.check()?;
+        if let Some(objective) = &self.objective {
+            objective.check()?;
+        }
         check_finite("loads.tension", self.loads.tension)?;
         check_range("loads.tension", self.loads.tension, &FORCE_RANGE)?;
         check_finite("loads.axial_weight", self.loads.axial_weight)?;

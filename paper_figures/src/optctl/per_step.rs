@@ -16,6 +16,7 @@ use chainbeam::{BendingObjective, ControlProblem, Parametrisation, PerStepContro
 
 /// M₀(t_j): a linear "objective" whose adjoint gradient is row j of the sensitivity matrix
 /// ∂M₀(t_j)/∂u_k.
+#[derive(Clone)]
 struct MomentAt(usize);
 
 impl Objective for MomentAt {

@@ -35,8 +35,8 @@ parameters per value, and controls and gradient are reported as pairs too: [u_x,
 [dc/du_x, dc/du_z] per value.
 
 Output (JSON): objective, gradient [dc/dθ], controls [θ], gradient_norm, model, objective_kind, \
-effort, control_kind, pieces (piecewise only), control_node. The output is itself a valid \
---controls file.
+objective_exponent (kind \"power\" only), effort, control_kind, pieces (piecewise only), \
+control_node. The output is itself a valid --controls file.
 
 Sign convention: a load F > 0 enters H as +F·z and pushes toward −z; u = −F cancels a tip load F.";
 
@@ -65,6 +65,9 @@ struct GradientReport {
     gradient_norm: f64,
     model: &'static str,
     objective_kind: &'static str,
+    /// p of kind "power".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    objective_exponent: Option<f64>,
     effort: f64,
     #[serde(flatten)]
     kind: KindReport,
@@ -101,6 +104,7 @@ pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
         controls: sp.problem.layout(&sp.theta0),
         model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
+        objective_exponent: problem::objective_exponent(sp.objective.kind),
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,

@@ -14,7 +14,7 @@ use chainbeam::mpc::{
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
 use chainbeam::scene::MAX_STEPS;
-use chainbeam::Scene;
+use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
@@ -25,7 +25,8 @@ use crate::{OUTPUT_HELP, SCENE_HELP};
 pub const LONG_ABOUT: &str = "\
 Run the scene in closed loop under a receding-horizon (model predictive) controller: every \
 --interval seconds the controller observes the beam's state, solves the optimal-control problem \
-min Σ M₀(t_k)² + ρ·h·Σ u_k² over the next --horizon seconds of its model (the scene itself, or \
+min Σ M₀(t_k)² + ρ·h·Σ u_k² (Σ |M₀(t_k)|^p + ρ·h·Σ u_k² when the model's [objective] is \
+kind = \"power\", exponent = p) over the next --horizon seconds of its model (the scene itself, or \
 --model FILE: another drag, a forecast of the loads with errors) by a Gauss-Newton solver \
 (--solver), warm-started from its previous plan and limited to --iterations iterations (real-time \
 iteration), and applies the plan's first force, held over the interval, at control.node \
@@ -142,6 +143,15 @@ struct Baselines {
     gains: [f64; 3],
 }
 
+/// What the plans minimise: the model scene's `[objective]` when it is `"power"`
+/// (Σ|M₀(t_k)|^p), otherwise c_sum (a receding horizon has no final time of its own).
+fn plan_objective(model: &Scene) -> ObjectiveKind {
+    match model.objective {
+        Some(kind @ ObjectiveKind::Power { .. }) => kind,
+        _ => ObjectiveKind::Sum,
+    }
+}
+
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     if a.bound.is_finite() {
@@ -166,6 +176,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
             SolverArg::Riccati => MpcSolver::Riccati,
         },
         effort: a.effort,
+        objective: plan_objective(&model),
         ocp: OcpOptions {
             rate_penalty: a.rate_penalty,
             ..OcpOptions::default().with_bound(a.bound)

@@ -80,9 +80,14 @@ pub fn kind_report(p: &Parametrisation) -> KindReport {
 
 /// The name of an objective kind in the JSON.
 pub fn objective_name(kind: ObjectiveKind) -> &'static str {
+    kind.name()
+}
+
+/// The exponent p of an objective of kind "power" (JSON `objective_exponent`).
+pub fn objective_exponent(kind: ObjectiveKind) -> Option<f64> {
     match kind {
-        ObjectiveKind::Final => "final",
-        ObjectiveKind::Sum => "sum",
+        ObjectiveKind::Power { exponent } => Some(exponent),
+        _ => None,
     }
 }
 

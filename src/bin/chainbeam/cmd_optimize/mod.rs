@@ -26,7 +26,8 @@ use crate::{OUTPUT_HELP, SCENE_HELP};
 /// `optimize --help`.
 pub const OPTIMIZE_LONG_ABOUT: &str = "\
 Minimise the scene's [objective] (default \"final\": c = M₀(t_N)², eq. 3.3.2; \"sum\": \
-c_sum = Σ M₀(t_k)², eq. 3.3.4; plus ρ·h·Σ u_k² with --effort ρ) over the scene's [control] \
+c_sum = Σ M₀(t_k)², eq. 3.3.4; \"power\" with exponent p ≥ 2: Σ |M₀(t_k)|^p; plus ρ·h·Σ u_k² \
+with --effort ρ) over the scene's [control] \
 parameters θ (constant or per-step force [N] at control.node, default the tip; P pieces with \
 --pieces P) by single shooting with exact adjoint gradients, starting from control.values. With \
 --starts K > 1 it runs K starts (the scene's values and K − 1 others drawn with --seed) in \

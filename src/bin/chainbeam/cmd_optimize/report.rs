@@ -82,6 +82,9 @@ struct OptimizeReport {
     hvp_evals: usize,
     model: &'static str,
     objective_kind: &'static str,
+    /// p of kind "power".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    objective_exponent: Option<f64>,
     effort: f64,
     #[serde(flatten)]
     kind: KindReport,
@@ -146,6 +149,7 @@ fn report(a: &OptimizeArgs, setup: &Setup, solved: &Solved) -> OptimizeReport {
         hvp_evals: best.hvp_evals,
         model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
+        objective_exponent: crate::problem::objective_exponent(sp.objective.kind),
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,

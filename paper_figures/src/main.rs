@@ -16,6 +16,7 @@ mod calib;
 mod ch2;
 mod ch3;
 mod extra;
+mod fatigue;
 mod mpc;
 mod ocean;
 mod optctl;
@@ -86,6 +87,7 @@ fn entries() -> Vec<Entry> {
     v.extend(calib::entries());
     v.extend(ocean::entries());
     v.extend(mpc::entries());
+    v.extend(fatigue::entries());
     // chapter 3 in figure order: the optimiser's figures (3.7, 3.8, 3.10, 3.13) between the others
     let mut c3 = ch3::entries();
     c3.extend(optctl::entries());

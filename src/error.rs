@@ -291,6 +291,12 @@ pub enum Error {
         quantity: &'static str,
     },
     /// An argument passed to the API is inconsistent with the scene.
+    ///
+    /// No function of the library returns it any longer: every argument error is a variant of
+    /// [`Error::Mpc`], [`Error::Ocp`], [`Error::Optimize`] (or the other per-area enums) a caller
+    /// can match. It is kept only while the command line's fatigue study
+    /// (`src/bin/chainbeam/cmd_fatigue/study.rs`) still matches it; use
+    /// [`Error::argument_fault`] instead, then remove it.
     #[error("invalid argument `{name}`: {reason}")]
     InvalidArgument {
         /// The argument's name.
@@ -312,6 +318,19 @@ impl Error {
             Error::Optimize(e) => Some(e.argument()),
             Error::WrongLength { name, .. } | Error::NotFinite { name, .. } => Some(name),
             Error::InvalidArgument { name, .. } => Some(name),
+            _ => None,
+        }
+    }
+
+    /// For an argument error that names its argument ([`Error::Mpc`], [`Error::Ocp`],
+    /// [`Error::Optimize`]): the argument and what is wrong with it, without the "invalid
+    /// argument" prefix, so a front end can name its own flag instead (`--interval: …`).
+    pub fn argument_fault(&self) -> Option<(&'static str, String)> {
+        match self {
+            Error::Mpc(e) => Some((e.argument(), e.to_string())),
+            Error::Ocp(e) => Some((e.argument(), e.to_string())),
+            Error::Optimize(e) => Some((e.argument(), e.to_string())),
+            Error::InvalidArgument { name, reason } => Some((name, reason.clone())),
             _ => None,
         }
     }

@@ -396,16 +396,27 @@ pub fn table_3_4() -> Result<Vec<Row>> {
         .collect()
 }
 
+/// Why a table could not be computed.
+#[derive(Debug, thiserror::Error)]
+pub enum TableError {
+    /// A name that is not one of [`NAMES`].
+    #[error("unknown table {name}: expected one of 3.1, 3.2, 3.3, 3.4")]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+    /// The library's error while computing a row.
+    #[error(transparent)]
+    Lib(#[from] chainbeam::Error),
+}
+
 /// The rows of table `name` (one of [`NAMES`]).
-pub fn table(name: &str) -> Result<Vec<Row>> {
+pub fn table(name: &str) -> std::result::Result<Vec<Row>, TableError> {
     match name {
-        "3.1" => table_3_1(),
-        "3.2" => table_3_2(),
-        "3.3" => table_3_3(),
-        "3.4" => table_3_4(),
-        _ => Err(chainbeam::Error::InvalidArgument {
-            name: "table",
-            reason: format!("unknown table {name}: expected one of 3.1, 3.2, 3.3, 3.4"),
-        }),
+        "3.1" => Ok(table_3_1()?),
+        "3.2" => Ok(table_3_2()?),
+        "3.3" => Ok(table_3_3()?),
+        "3.4" => Ok(table_3_4()?),
+        _ => Err(TableError::Unknown { name: name.into() }),
     }
 }

@@ -184,7 +184,7 @@ fn parse_args() -> std::result::Result<Option<Args>, String> {
     Ok(Some(args))
 }
 
-fn run(args: &Args) -> chainbeam::Result<()> {
+fn run(args: &Args) -> Result<(), compute::TableError> {
     let mut out = Vec::new();
     let t0 = Instant::now();
     for name in NAMES {

@@ -1,6 +1,6 @@
 //! Errors of the model-predictive controller and its closed loop ([`crate::mpc`]).
 
-use super::Requirement;
+use super::requirement::Requirement;
 use thiserror::Error;
 
 /// An argument of [`crate::mpc`] a caller can correct. `Display` says what is wrong;

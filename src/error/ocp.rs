@@ -1,6 +1,6 @@
 //! Errors of the structured optimal-control solvers (Riccati and condensed, [`crate::ocp`]).
 
-use super::Requirement;
+use super::requirement::Requirement;
 use crate::base::TipCondition;
 use thiserror::Error;
 

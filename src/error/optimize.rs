@@ -1,7 +1,7 @@
 //! Errors of the general-purpose optimiser's options, starts and problems
 //! ([`crate::optimize`]).
 
-use super::Requirement;
+use super::requirement::Requirement;
 use thiserror::Error;
 
 /// The refusal of a structured solver (riccati, condensed) on a spatial problem.

@@ -261,12 +261,9 @@ fn flag_of(name: &str) -> Option<&'static str> {
 /// for a quantity the flags set, the flags.
 fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
     // The flag that set the argument at fault, and what is wrong with it.
-    let flagged = match &e {
-        chainbeam::Error::Mpc(m) => flag_of(m.argument()).map(|f| (f, m.to_string())),
-        chainbeam::Error::Ocp(o) => flag_of(o.argument()).map(|f| (f, o.to_string())),
-        chainbeam::Error::Optimize(o) => flag_of(o.argument()).map(|f| (f, o.to_string())),
-        _ => None,
-    };
+    let flagged = e
+        .argument_fault()
+        .and_then(|(name, reason)| flag_of(name).map(|f| (f, reason)));
     if let Some((flag, reason)) = flagged {
         return CliError::msg(format!("{}: {flag}: {reason}", file.display()));
     }

@@ -290,10 +290,11 @@ fn progress_prints_iterations_on_stderr() {
     // stderr is a pipe here, so --progress prints plain lines (no terminal codes): the start,
     // then one line per iteration numbered 1, 2, …, whose count and last cost and ‖∇c‖ are the
     // JSON's `iterations`, `objective` and `gradient_norm` (the same run's result). Also under
-    // --quiet, which only silences spinners.
+    // --quiet, which only silences spinners. L-BFGS, asked for: these lines are the argmin
+    // solvers' (the default `auto` prints its choice first, tests/cli_hostile.rs).
     let sc = scene("riser_5.toml");
     for quiet in [false, true] {
-        let mut args = vec!["optimize", s(&sc), "--progress"];
+        let mut args = vec!["optimize", s(&sc), "--progress", "--method", "lbfgs"];
         if quiet {
             args.push("--quiet");
         }

@@ -514,7 +514,9 @@ fn missing_keys() {
         "loads.point[0].force",
         missing,
     );
-    expect_err(&mutate("values = [0.5]\n", ""), "control.values", missing);
+    // `control.values` left out is legal since issue 27 (zeros: docs/scene-format.md).
+    let zeros = parse(&mutate("values = [0.5]\n", "")).unwrap();
+    assert_eq!(zeros.control.unwrap().values, vec![0.0]);
     expect_err(&mutate("kind = 'constant'\n", ""), "control.kind", missing);
     expect_err(&mutate("kind = 'final'\n", ""), "objective.kind", missing);
     expect_err("[time]\nstep = 0.1\nsteps = 1\n", "beam", missing);
@@ -572,8 +574,14 @@ fn wrong_types() {
         "loads.point[0].node",
         wrong_type,
     );
+    // One number is legal since issue 27 (every value equal); a string still names the key.
     expect_err(
-        &mutate("values = [0.5]", "values = 0.5"),
+        &mutate("values = [0.5]", "values = 'half'"),
+        "control.values",
+        wrong_type,
+    );
+    expect_err(
+        &mutate("values = [0.5]", "values = {u = 0.5}"),
         "control.values",
         wrong_type,
     );

@@ -91,8 +91,9 @@ fn table_3_3_every_row() {
 /// Table 3.4: with the force bounded by the largest |u_k| the thesis used in each column, c_sum
 /// is at most the thesis's printed value for every node, every force respects the bound, the
 /// row names the start it kept (the lower of the runs from u = 0 and from the thesis's
-/// controls), and rows whose joint angle exceeds 45° are flagged FOLDED (bounded node 1:
-/// 55.6°, thesis controls 2023.5 N). The unbounded optima from u = 0 are flagged the same way
+/// controls), and rows whose joint angle exceeds 45° are flagged FOLDED (bounded node 1, at
+/// the thesis's largest force 2023.5 N: 51.2° at the default method's optimum c_sum = 22.93,
+/// 55.6° at L-BFGS's 27.25). The unbounded optima from u = 0 are flagged the same way
 /// and stay within the resolved force range π m l / h².
 #[test]
 fn table_3_4_every_row() {
@@ -139,8 +140,9 @@ fn table_3_4_every_row() {
         assert_eq!(u.note.contains("FOLDED"), ua > FOLD_FLAG_DEG);
         assert!(u.controls.iter().all(|x| x.abs() <= limit));
     }
-    // The bounded node 1 row is the one the thesis's own forces fold (55.6°).
-    assert!(rows[0].folded() && rows[0].max_joint_angle_deg.unwrap() > 55.0);
+    // The bounded node 1 row is the one whose bound (the thesis's own largest force) folds the
+    // beam: 51.2° at the default method's optimum (55.6° at L-BFGS's).
+    assert!(rows[0].folded() && rows[0].max_joint_angle_deg.unwrap() > FOLD_FLAG_DEG);
     assert!(rows[1..].iter().all(|r| !r.folded()));
 }
 

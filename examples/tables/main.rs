@@ -22,12 +22,14 @@ const USAGE: &str = "\
 Regenerates Tables 3.1-3.4 of Nøst (2023) on the thesis's riser scene and prints them beside
 the thesis's values.
 
-usage: tables [--table 3.1|3.2|3.3|3.4] [--json]
+usage: tables [--table 3.1|3.2|3.3|3.4] [--json] [--method auto|lbfgs|...]
 
 options:
   --table T   only table T (3.1, 3.2, 3.3 or 3.4)
   --json      machine-readable output on stdout:
               {\"tables\": [{\"table\": \"3.1\", \"rows\": [{\"node\": 1, \"controls\": [...], ...}]}]}
+  --method M  Table 3.4's method (default auto, the library's default, which takes the
+              condensed solver there; lbfgs is the former default)
   -h, --help  this help
 ";
 
@@ -155,18 +157,27 @@ fn json_row(r: &Row, extra: bool) -> String {
 struct Args {
     json: bool,
     only: Option<String>,
+    /// Table 3.4's method (`--method`, default auto).
+    method: chainbeam::optimize::Method,
 }
 
 fn parse_args() -> std::result::Result<Option<Args>, String> {
     let mut args = Args {
         json: false,
         only: None,
+        method: chainbeam::optimize::Method::Auto,
     };
     let mut it = std::env::args().skip(1);
     while let Some(a) = it.next() {
         match a.as_str() {
             "-h" | "--help" => return Ok(None),
             "--json" => args.json = true,
+            "--method" => {
+                let m = it
+                    .next()
+                    .ok_or("--method needs a value, e.g. auto or lbfgs")?;
+                args.method = m.parse().map_err(|e| format!("--method: {e}"))?;
+            }
             "--table" => {
                 let t = it
                     .next()
@@ -191,7 +202,7 @@ fn run(args: &Args) -> Result<(), compute::TableError> {
         if args.only.as_deref().is_some_and(|o| o != name) {
             continue;
         }
-        let rows = compute::table(name)?;
+        let rows = compute::table_with(name, args.method)?;
         if !args.json {
             print_table(name, &rows);
         }

@@ -143,7 +143,7 @@ class OptimizeResult:
 
 def optimize(
     scene: Scene,
-    method: Literal["lbfgs", "trust-region", "riccati", "condensed"] = "lbfgs",
+    method: Literal["auto", "lbfgs", "trust-region", "riccati", "condensed"] = "auto",
     bound: float | None = None,
     starts: int = 1,
     *,
@@ -159,8 +159,10 @@ def optimize(
     """Minimises the scene's objective over its controls from ``control.values`` (or
     ``controls``): ``chainbeam optimize`` with the same flags and defaults.
 
-    ``method``: ``"lbfgs"`` (default), ``"trust-region"``, ``"riccati"`` or ``"condensed"``
-    (planar scenes). ``bound``: |u| ≤ bound [N]; or a box ``lower``/``upper``. ``starts`` > 1:
+    ``method``: ``"auto"`` (default: the command line's ``--method auto``, a choice by the
+    problem's shape, the structured solvers behind an L-BFGS fallback; ``result.method`` says
+    which ran), ``"lbfgs"``, ``"trust-region"``, ``"riccati"`` or ``"condensed"`` (planar
+    scenes). ``bound``: |u| ≤ bound [N]; or a box ``lower``/``upper``. ``starts`` > 1:
     the scene's start plus ``starts`` − 1 Latin-hypercube starts in [−600, 600] N drawn with
     ``seed``; the best result (results do not depend on the number of threads).
 

@@ -50,7 +50,7 @@ def gradient(
 ) -> tuple[float, NDArray[np.float64], bool]: ...
 def optimize(
     scene: Scene,
-    method: str = "lbfgs",
+    method: str = "auto",
     bound: float | None = None,
     lower: float | None = None,
     upper: float | None = None,

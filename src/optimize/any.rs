@@ -10,7 +10,7 @@ use crate::error::{Error, OptimizeError, Result};
 use crate::ocp::{OcpOptions, OcpResult};
 use crate::scene::{Scene, SceneError, SceneErrorKind};
 
-use super::{HessianVec, OptimProblem};
+use super::{HessianVec, OptimProblem, ProblemShape};
 
 /// The spatial control problem (`DIM = 3`), with a control along z or a 2-axis control.
 pub type SpatialProblem = ControlProblem<Parametrisation, BendingObjective, 3>;
@@ -114,6 +114,9 @@ impl OptimProblem for AnyProblem {
     }
     fn check_range(&self, theta: &[f64]) -> Result<()> {
         self.optim().check_range(theta)
+    }
+    fn shape(&self) -> Option<ProblemShape> {
+        self.optim().shape()
     }
     fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         match self {

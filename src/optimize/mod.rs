@@ -152,6 +152,7 @@
 pub mod adapter;
 pub mod any;
 pub mod bounds;
+mod choice;
 pub mod observers;
 mod point;
 pub mod polish;
@@ -172,11 +173,12 @@ use argmin::core::KV;
 pub use adapter::{ArgminAdapter, EvalCounts, HessianOperator};
 pub use any::{scene_start, AnyProblem, SpatialProblem, Values, RICCATI_PLANAR};
 pub use bounds::{Bounds, ACTIVE_BOUND_TOL};
+pub use choice::{choose_method, condensed_max_params, Fallback, MethodChoice};
 pub use observers::{History, ObservedState, ProgressObserver, Record};
 pub use polish::POLISH_COST_TOL;
 pub use problem::{
     ineffective_params, resolved_control_limit, HessianVec, NoEffectCheck, OptimProblem,
-    NO_EFFECT_TOL,
+    ProblemShape, NO_EFFECT_TOL,
 };
 pub use riccati::ocp_options as riccati_options;
 pub use supervisor::{Termination, MAX_REJECTIONS};
@@ -194,9 +196,16 @@ pub(crate) fn norm(v: &[f64]) -> f64 {
 /// The local solver.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Method {
-    /// L-BFGS (memory [`OptimOptions::lbfgs_memory`]) with the More-Thuente line search: one
-    /// adjoint sweep per line-search trial, no HVPs. The default.
+    /// The default: the method is chosen from the problem's shape by [`choose_method`] —
+    /// [`Method::Condensed`] for a structured control problem with few parameters,
+    /// [`Method::Riccati`] for one with many, [`Method::Lbfgs`] for everything else — run
+    /// behind an L-BFGS fallback when the structured solver fails or does not converge
+    /// ([`Fallback`]); the result's [`OptimResult::method`] and [`OptimResult::choice`] say
+    /// which ran, why, and whether the fallback did.
     #[default]
+    Auto,
+    /// L-BFGS (memory [`OptimOptions::lbfgs_memory`]) with the More-Thuente line search: one
+    /// adjoint sweep per line-search trial, no HVPs.
     Lbfgs,
     /// Trust region (Nocedal-Wright Alg. 4.1) with Steihaug's truncated CG on exact HVPs; handles
     /// indefinite Hessians and rejects trial points where the simulation fails.
@@ -228,10 +237,11 @@ pub enum Method {
 }
 
 impl Method {
-    /// The name used on the command line: `lbfgs`, `trust-region`, `newton-cg`, `riccati` or
-    /// `condensed`.
+    /// The name used on the command line: `auto`, `lbfgs`, `trust-region`, `newton-cg`,
+    /// `riccati` or `condensed`.
     pub fn name(self) -> &'static str {
         match self {
+            Method::Auto => "auto",
             Method::Lbfgs => "lbfgs",
             Method::TrustRegion => "trust-region",
             Method::NewtonCg => "newton-cg",
@@ -251,6 +261,7 @@ impl FromStr for Method {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
         match s {
+            "auto" => Ok(Method::Auto),
             "lbfgs" | "l-bfgs" => Ok(Method::Lbfgs),
             "trust-region" | "trustregion" => Ok(Method::TrustRegion),
             "newton-cg" | "newtoncg" => Ok(Method::NewtonCg),
@@ -258,7 +269,7 @@ impl FromStr for Method {
             "condensed" => Ok(Method::Condensed),
             _ => Err(OptimizeError::UnknownMethod {
                 given: s.into(),
-                expected: "lbfgs, trust-region, newton-cg, riccati or condensed",
+                expected: "auto, lbfgs, trust-region, newton-cg, riccati or condensed",
             }
             .into()),
         }
@@ -269,8 +280,8 @@ impl FromStr for Method {
 /// `OptimOptions { method: Method::TrustRegion, ..Default::default() }`.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OptimOptions {
-    /// The solver. Default [`Method::Lbfgs`]: the cheapest per iteration (one adjoint sweep per
-    /// line-search trial, no HVPs) and robust on the thesis problems.
+    /// The solver. Default [`Method::Auto`]: chosen from the problem's shape
+    /// ([`choose_method`]).
     pub method: Method,
     /// Iterations in total over all restarts. Default 1000: the thesis problems have 1 to N + 1 =
     /// 11 parameters and converge in tens of iterations, an iteration costs about one
@@ -328,7 +339,7 @@ pub struct OptimOptions {
 impl Default for OptimOptions {
     fn default() -> Self {
         OptimOptions {
-            method: Method::Lbfgs,
+            method: Method::Auto,
             max_iters: 1000,
             grad_tol: 0.0,
             rel_grad_tol: 1e-8,
@@ -465,14 +476,18 @@ pub struct OptimResult {
     pub converged: bool,
     /// Why the run stopped.
     pub termination: Termination,
-    /// The solver used.
+    /// The solver used (never [`Method::Auto`]: the method it chose).
     pub method: Method,
+    /// With [`Method::Auto`]: what [`choose_method`] chose and why; `None` for a method given.
+    pub choice: Option<MethodChoice>,
 }
 
-/// [`minimize`] with observers: argmin's builder style.
+/// [`minimize`] with observers: argmin's builder style. The observers see the argmin solvers'
+/// iterations (L-BFGS, the trust region, Newton-CG), not the structured solvers' ([`Method::Auto`]
+/// may choose one): ask for a method to observe it.
 ///
 /// ```
-/// use chainbeam::optimize::{History, Minimizer, ObserverMode, OptimOptions};
+/// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 /// use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 ///
 /// let problem = ControlProblem::new(
@@ -481,7 +496,8 @@ pub struct OptimResult {
 ///     BendingObjective::summed_moment(),
 /// )?;
 /// let history = History::default();
-/// let r = Minimizer::new(&problem, OptimOptions::default())
+/// let lbfgs = OptimOptions { method: Method::Lbfgs, ..OptimOptions::default() };
+/// let r = Minimizer::new(&problem, lbfgs)
 ///     .add_observer(history.clone(), ObserverMode::Always)
 ///     .run(&[0.0])?;
 /// let costs: Vec<f64> = history.records().iter().map(|x| x.objective).collect();
@@ -534,11 +550,20 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
     /// [`OptimizeError::ControlOutsideBound`] if the control map turned bounded θ into forces
     /// beyond the bound.
     pub fn run(&self, theta0: &[f64]) -> Result<OptimResult> {
+        if self.opts.method != Method::Auto {
+            return self.run_with(&self.opts, theta0);
+        }
+        choice::run_auto(self, theta0)
+    }
+
+    /// [`Minimizer::run`] with `opts` (a method other than [`Method::Auto`]).
+    fn run_with(&self, opts: &OptimOptions, theta0: &[f64]) -> Result<OptimResult> {
         let clock = Instant::now();
-        let (problem, opts) = (self.problem, &self.opts);
+        let problem = self.problem;
         opts.validate()?;
         check_start(problem, theta0)?;
         if matches!(opts.method, Method::Riccati | Method::Condensed) {
+            riccati::check_start_point(problem, theta0, opts)?;
             return riccati::run(problem, theta0, opts);
         }
         if opts.method != Method::Lbfgs && problem.hessian().is_none() {
@@ -630,6 +655,7 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
             converged: termination.is_converged(),
             termination,
             method: opts.method,
+            choice: None,
         })
     }
 }
@@ -727,7 +753,7 @@ fn relay_iter<Q: OptimProblem + ?Sized>(
 }
 
 /// θ₀ has n finite entries and, for a control problem, valid controls (errors name `theta0`).
-fn check_start<Q: OptimProblem + ?Sized>(problem: &Q, theta0: &[f64]) -> Result<()> {
+pub(super) fn check_start<Q: OptimProblem + ?Sized>(problem: &Q, theta0: &[f64]) -> Result<()> {
     let n = problem.n_params();
     if theta0.len() != n {
         return Err(Error::WrongLength {

@@ -153,9 +153,10 @@ pub struct Record {
 }
 
 /// Records the start and every observed iteration: the iteration history of a run without
-/// re-running it. Clones share one record list, so keep a clone and read it after the run:
+/// re-running it (of an argmin solver: L-BFGS here). Clones share one record list, so keep a
+/// clone and read it after the run:
 /// ```
-/// use chainbeam::optimize::{History, Minimizer, ObserverMode, OptimOptions};
+/// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 /// use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 ///
 /// let problem = ControlProblem::new(
@@ -164,7 +165,8 @@ pub struct Record {
 ///     BendingObjective::final_moment(),
 /// )?;
 /// let history = History::default();
-/// let r = Minimizer::new(&problem, OptimOptions::default())
+/// let lbfgs = OptimOptions { method: Method::Lbfgs, ..OptimOptions::default() };
+/// let r = Minimizer::new(&problem, lbfgs)
 ///     .add_observer(history.clone(), ObserverMode::Always)
 ///     .run(&[0.0])?;
 /// let h = history.records();

@@ -118,6 +118,30 @@ pub trait OptimProblem {
     fn condensed(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
         None
     }
+
+    /// What the automatic choice of method ([`Method::Auto`](super::Method::Auto),
+    /// [`choose_method`](super::choose_method)) looks at; `None` (the default) for a problem
+    /// that is not a control problem.
+    fn shape(&self) -> Option<ProblemShape> {
+        None
+    }
+}
+
+/// The shape of a control problem, as the automatic choice of method sees it
+/// ([`choose_method`](super::choose_method)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ProblemShape {
+    /// The number of parameters θ.
+    pub params: usize,
+    /// The number of time steps N.
+    pub steps: usize,
+    /// The number of pendulums n.
+    pub pendulums: usize,
+    /// The model's dimension (2: planar, 3: spatial).
+    pub dim: usize,
+    /// Whether the structured solvers ([`OptimProblem::riccati`], [`OptimProblem::condensed`])
+    /// take the problem: planar, a bending-moment objective, a free tip, a control node.
+    pub structured: bool,
 }
 
 /// Hessian-vector products v ↦ ∇²J(θ) v: the capability the trust region, Newton-CG, the
@@ -227,6 +251,27 @@ macro_rules! impl_optim_problem {
                 }),
                 None => Ok(()),
             }
+        }
+        fn shape(&self) -> Option<ProblemShape> {
+            let chain = self.chain();
+            Some(ProblemShape {
+                params: ControlProblem::n_params(self),
+                steps: self.steps(),
+                pendulums: chain.n(),
+                dim: $dim,
+                structured: $dim == 2
+                    && self
+                        .objective()
+                        .gauss_newton(crate::adjoint::MomentStage {
+                            k: 0,
+                            steps: self.steps(),
+                            h: self.time_step(),
+                            moment: 0.0,
+                        })
+                        .is_some()
+                    && chain.tip_condition() == crate::TipCondition::Free
+                    && chain.control_node().is_some(),
+            })
         }
             $($riccati)*
         }

@@ -12,7 +12,9 @@
 //! that stalls short of the tolerance is finished by the trust region
 //! ([`finish_by_trust_region`]).
 
-use super::{Method, OptimOptions, OptimProblem, OptimResult, Termination};
+use super::{
+    ineffective_params, ArgminAdapter, Method, OptimOptions, OptimProblem, OptimResult, Termination,
+};
 use crate::error::{Error, OptimizeError, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 
@@ -48,8 +50,38 @@ pub(crate) fn unsupported(method: Method) -> Error {
     .into()
 }
 
+/// The start checks of the argmin methods (module docs of [`super`], "Checks at the start") for
+/// the structured solvers, which would not make them otherwise: θ₀ within the force box
+/// ([`OptimizeError::InfeasibleStart`]), within the problem's resolved range
+/// ([`OptimProblem::check_range`]), and some parameter with an effect ([`Error::NoEffect`]).
+/// One evaluation of J and ∇J at θ₀ (and Hessian-vector products for parameters with a zero
+/// gradient).
+pub(crate) fn check_start_point<Q: OptimProblem + ?Sized>(
+    problem: &Q,
+    theta0: &[f64],
+    opts: &OptimOptions,
+) -> Result<()> {
+    let adapter = ArgminAdapter::with_bounds(problem, opts.force_bounds()?);
+    let phi0 = adapter.to_phi(theta0)?;
+    let theta = adapter.to_theta(&phi0);
+    problem.check_range(&theta)?;
+    let (value, gradient) = problem.value_and_gradient(&theta)?;
+    let check = ineffective_params(problem, &theta, value, &gradient)?;
+    if check.refuses(&gradient) {
+        return Err(Error::NoEffect {
+            params: check.params,
+            objective: value,
+            relative_change: check.relative_change,
+        });
+    }
+    Ok(())
+}
+
 /// Runs the Riccati solver (or, with [`Method::Condensed`], the condensed one) on `problem`
-/// from θ₀.
+/// from θ₀. The result's objective is J(θ) evaluated by `problem` itself (one simulation), so it
+/// is the number `gradient` reports for the same controls, bit for bit (the solver's own value
+/// comes from its rollouts and may differ in the last bits); if that simulation fails (the
+/// beam folds, RATTLE fails), so does the run, with that error.
 pub(crate) fn run<Q: OptimProblem + ?Sized>(
     problem: &Q,
     theta0: &[f64],
@@ -69,7 +101,11 @@ pub(crate) fn run<Q: OptimProblem + ?Sized>(
             );
         }
     }
-    let res = result(r, opts);
+    let mut res = result(r, opts);
+    // Also the check that the result is a simulation at all: a run that ends where the beam folds
+    // or RATTLE fails (the structured solvers' line searches can end there when they do not
+    // converge) is that error, not a result.
+    res.objective = problem.value(&res.theta)?;
     if res.converged || res.termination != Termination::LineSearchStalled {
         return Ok(res);
     }
@@ -151,5 +187,6 @@ fn result(r: OcpResult, opts: &OptimOptions) -> OptimResult {
         converged: termination.is_converged(),
         termination,
         method: opts.method,
+        choice: None,
     }
 }

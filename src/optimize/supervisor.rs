@@ -511,7 +511,9 @@ pub(crate) fn run_method<Q: OptimProblem + ?Sized>(
             execute(a, solver, start, setup)
         }
         // `minimize` hands this method to crate::ocp before any argmin solver is built.
-        Method::Riccati | Method::Condensed => Err(super::riccati::unsupported(opts.method)),
+        Method::Auto | Method::Riccati | Method::Condensed => {
+            Err(super::riccati::unsupported(opts.method))
+        }
     }
 }
 

@@ -12,7 +12,7 @@ use super::current::RawCurrent;
 use super::fatigue::RawFatigue;
 use super::objective::RawObjective;
 use super::validate::{check_size, node_index, positive_count};
-use super::values::{to_i64, NumOrArray};
+use super::values::{to_i64, NumOrArray, RawValues};
 use super::{
     Control, ControlKind, Harmonic, LoadSeries, Loads, PointLoad, Scene, SceneError,
     SceneErrorKind, Support, TimeGrid,
@@ -254,8 +254,10 @@ struct RawControl {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     node: Option<i64>,
     kind: ControlKind,
-    /// u (along z) each, or [u_x, u_z] each (a 2-axis control).
-    values: Vec<NumOrArray>,
+    /// u (along z) each, or [u_x, u_z] each (a 2-axis control); or one number for every value;
+    /// or absent (zeros).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    values: Option<RawValues>,
 }
 
 impl RawControl {
@@ -342,7 +344,7 @@ impl RawScene {
             control: s.control.as_ref().map(|c| RawControl {
                 node: Some(to_i64(c.node)),
                 kind: c.kind,
-                values: RawControl::join_values(c),
+                values: Some(RawValues::Many(RawControl::join_values(c))),
             }),
             objective: s.objective.map(RawObjective::from_kind),
             fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
@@ -374,7 +376,17 @@ impl RawScene {
         let control = match self.control {
             None => None,
             Some(c) => {
-                let (values, values_x) = RawControl::split_values(c.values)?;
+                // One number: every value equal (N + 1 for per-step, 1 piece for piecewise);
+                // absent: zeros. `steps` passed the size check above.
+                let count = match c.kind {
+                    ControlKind::PerStep => steps + 1,
+                    ControlKind::Constant | ControlKind::Piecewise => 1,
+                };
+                let (values, values_x) = match c.values {
+                    Some(RawValues::Many(v)) => RawControl::split_values(v)?,
+                    Some(RawValues::One(u)) => (vec![u; count], None),
+                    None => (vec![0.0; count], None),
+                };
                 Some(Control {
                     node: match c.node {
                         Some(node) => node_index("control.node", node, n)?,

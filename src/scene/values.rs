@@ -77,6 +77,52 @@ impl NumOrArray {
     }
 }
 
+/// `control.values` as written: one number (every value equal), or the array of values.
+pub(super) enum RawValues {
+    /// One number: every value equal.
+    One(f64),
+    /// The values, each a number or a pair [u_x, u_z].
+    Many(Vec<NumOrArray>),
+}
+
+impl Serialize for RawValues {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            RawValues::One(u) => s.serialize_f64(*u),
+            RawValues::Many(v) => v.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for RawValues {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = RawValues;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number, an array of numbers or an array of pairs [u_x, u_z]")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<RawValues, E> {
+                Ok(RawValues::One(v))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<RawValues, E> {
+                Ok(RawValues::One(v as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<RawValues, E> {
+                Ok(RawValues::One(v as f64))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<RawValues, A::Error> {
+                let mut out = Vec::new();
+                while let Some(x) = seq.next_element::<NumOrArray>()? {
+                    out.push(x);
+                }
+                Ok(RawValues::Many(out))
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
 /// A count as the file's integer (saturating at `i64::MAX`).
 pub(super) fn to_i64(x: usize) -> i64 {
     i64::try_from(x).unwrap_or(i64::MAX)

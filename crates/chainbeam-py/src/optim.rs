@@ -33,6 +33,7 @@ struct OptimizeArgs {
 /// `method=` by the command line's names.
 fn method(name: &str) -> Result<Method, Failure> {
     Ok(match name {
+        "auto" => Method::Auto,
         "lbfgs" => Method::Lbfgs,
         "trust-region" => Method::TrustRegion,
         "riccati" => Method::Riccati,
@@ -41,8 +42,8 @@ fn method(name: &str) -> Result<Method, Failure> {
             return Err(Failure::argument(
                 "method",
                 format!(
-                    "unknown method {other:?}; expected \"lbfgs\", \"trust-region\", \"riccati\" \
-                     or \"condensed\""
+                    "unknown method {other:?}; expected \"auto\", \"lbfgs\", \"trust-region\", \
+                     \"riccati\" or \"condensed\""
                 ),
             ))
         }
@@ -147,7 +148,7 @@ fn run_optimize(
 
 /// Minimises the scene's objective over its controls; see `chainbeam.optimize`.
 #[pyfunction]
-#[pyo3(signature = (scene, method="lbfgs", bound=None, lower=None, upper=None, starts=1, seed=0,
+#[pyo3(signature = (scene, method="auto", bound=None, lower=None, upper=None, starts=1, seed=0,
                     max_iters=None, gtol=None, effort=0.0, controls=None, controls_x=None))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, collected at once below
 pub fn optimize<'py>(

@@ -5,6 +5,7 @@ use std::path::Path;
 use serde::Serialize;
 
 use chainbeam::multistart::{multistart, MultistartReport};
+use chainbeam::optimize::choose_method;
 
 use super::report::{why, LimitsReport};
 use super::solve::all_failed;
@@ -194,7 +195,7 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
     let n = sp.theta0.len();
     let spinner = progress.spinner(format!(
         "exploring: {starts} starts of {} on {n} parameter{}",
-        opts.method.name(),
+        choose_method(&sp.problem, &opts).method.name(),
         if n == 1 { "" } else { "s" }
     ));
     let threads = usize::from(a.parallel.threads).min(starts);
@@ -215,7 +216,7 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,
-        method: opts.method.name(),
+        method: choose_method(&sp.problem, &opts).method.name(),
         limits: LimitsReport::of(&opts),
         design: a.design.describe(),
         seed,

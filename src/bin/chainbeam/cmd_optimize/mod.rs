@@ -82,8 +82,12 @@ pub const MAX_THREADS: u16 = 1024;
 /// Options of the local solver (optimize, explore).
 #[derive(Args)]
 pub struct SolverArgs {
-    /// Optimisation method.
-    #[arg(long, value_enum, default_value_t = MethodArg::Lbfgs)]
+    /// Optimisation method; `auto` (the default) chooses from the problem: condensed for a
+    /// planar per-step, piecewise or constant control with at most 4(2n+1) parameters (n
+    /// pendulums), riccati with more, lbfgs for spatial scenes and other problems; a structured
+    /// run that fails or does not converge is followed by lbfgs from the same start, the better
+    /// result kept. The JSON's `method` says whose result it is and `method_choice` why.
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     method: MethodArg,
     /// The model of --method riccati: auto (Gauss-Newton, then the exact Hessian of the
     /// objective from the first step Gauss-Newton predicts poorly), exact (the exact Hessian
@@ -132,6 +136,9 @@ enum CurvatureArg {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum MethodArg {
+    /// Chosen from the problem (optimize::choose_method): condensed, riccati or lbfgs, with an
+    /// lbfgs fallback.
+    Auto,
     /// Limited-memory BFGS with a line search (gradients only).
     Lbfgs,
     /// Trust-region Newton-CG (Hessian-vector products by forward-over-adjoint).
@@ -209,6 +216,7 @@ impl SolverArgs {
         };
         Ok(OptimOptions {
             method: match self.method {
+                MethodArg::Auto => Method::Auto,
                 MethodArg::Lbfgs => Method::Lbfgs,
                 MethodArg::TrustRegion => Method::TrustRegion,
                 MethodArg::Riccati => Method::Riccati,

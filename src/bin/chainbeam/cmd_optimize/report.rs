@@ -65,6 +65,8 @@ struct OptimizeReport {
     #[serde(skip_serializing_if = "Option::is_none")]
     relative_gradient_norm: Option<f64>,
     method: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    method_choice: Option<ChoiceReport>,
     starts: usize,
     #[serde(skip_serializing_if = "Option::is_none")]
     seed: Option<u64>,
@@ -136,6 +138,7 @@ fn report(a: &OptimizeArgs, setup: &Setup, solved: &Solved) -> OptimizeReport {
         termination: best.termination.to_string(),
         relative_gradient_norm: relative_gradient(best),
         method: best.method.name(),
+        method_choice: best.choice.as_ref().map(ChoiceReport::of),
         starts,
         seed: multi.then_some(a.parallel.seed),
         minima_found: multi.then_some(solved.minima_found),
@@ -153,5 +156,37 @@ fn report(a: &OptimizeArgs, setup: &Setup, solved: &Solved) -> OptimizeReport {
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,
+    }
+}
+/// The JSON's `method_choice` (with `--method auto`): the method the automatic choice took, why,
+/// and the L-BFGS fallback that followed a structured run that did not converge
+/// (`chainbeam::optimize::MethodChoice`).
+#[derive(Serialize)]
+struct ChoiceReport {
+    chosen: &'static str,
+    reason: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fallback: Option<FallbackReport>,
+}
+
+/// `method_choice.fallback`: what the structured run came to, and whose result was kept.
+#[derive(Serialize)]
+struct FallbackReport {
+    method: &'static str,
+    why: String,
+    kept: &'static str,
+}
+
+impl ChoiceReport {
+    fn of(c: &chainbeam::optimize::MethodChoice) -> Self {
+        ChoiceReport {
+            chosen: c.method.name(),
+            reason: c.reason.clone(),
+            fallback: c.fallback.as_ref().map(|f| FallbackReport {
+                method: "lbfgs",
+                why: f.why.clone(),
+                kept: f.kept.name(),
+            }),
+        }
     }
 }

@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use chainbeam::multistart::{multistart, MultistartReport, StartDesign};
 use chainbeam::optimize::{
-    minimize, Minimizer, ObserverMode, OptimOptions, OptimProblem, OptimResult,
+    choose_method, minimize, Method, Minimizer, ObserverMode, OptimOptions, OptimProblem,
+    OptimResult,
 };
 
 use super::{refuse_riccati_on_spatial, OptimizeArgs};
@@ -85,19 +86,15 @@ pub struct Solved {
 pub fn solve(a: &OptimizeArgs, setup: &Setup, progress: &Progress) -> Result<Solved, CliError> {
     let n = setup.sp.theta0.len();
     let params = format!("{n} parameter{}", if n == 1 { "" } else { "s" });
+    let method = choose_method(&setup.sp.problem, &setup.opts).method.name();
     if a.starts > 1 {
-        let spinner = progress.spinner(format!(
-            "{} starts of {} on {params}",
-            a.starts,
-            setup.opts.method.name()
-        ));
+        let spinner = progress.spinner(format!("{} starts of {} on {params}", a.starts, method));
         let solved = solve_multistart(a, setup);
         spinner.finish_and_clear();
         solved
     } else {
         // The per-iteration lines of --progress replace the spinner.
-        let spinner = (!a.progress)
-            .then(|| progress.spinner(format!("{} on {params}", setup.opts.method.name())));
+        let spinner = (!a.progress).then(|| progress.spinner(format!("{method} on {params}")));
         let r = solve_single(a.progress, setup);
         if let Some(s) = spinner {
             s.finish_and_clear();
@@ -114,12 +111,21 @@ pub fn solve(a: &OptimizeArgs, setup: &Setup, progress: &Progress) -> Result<Sol
 fn solve_single(show_progress: bool, setup: &Setup) -> chainbeam::Result<OptimResult> {
     let (sp, opts) = (&setup.sp, &setup.opts);
     if show_progress {
+        // With --method auto: the choice first, and again with its fallback if there was one.
+        if opts.method == Method::Auto {
+            eprintln!("method auto: {}", choose_method(&sp.problem, opts));
+        }
         Minimizer::new(&sp.problem, opts.clone())
             .add_observer(
                 IterationProgress::on_stderr(opts.max_iters),
                 ObserverMode::Always,
             )
             .run(&sp.theta0)
+            .inspect(|r| {
+                if let Some(c) = r.choice.as_ref().filter(|c| c.fallback.is_some()) {
+                    eprintln!("method auto: {c}");
+                }
+            })
     } else {
         minimize(&sp.problem, &sp.theta0, opts)
     }

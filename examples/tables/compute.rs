@@ -23,7 +23,11 @@
 //!   reports the largest joint angle and is flagged FOLDED beyond 45°, far outside any beam
 //!   model. Against `--method lbfgs` (the former default) the bounded rows reach the same
 //!   objectives except rows 1, 9, 10 (lower: other local minima) and 3 (+0.15 %) and 6
-//!   (+1.5·10⁻⁶; other local minima, see `Method::Condensed`).
+//!   (+1.5·10⁻⁶; other local minima, see `Method::Condensed`). Measured 26 Nov 2026 (release,
+//!   `tables --table 3.4 --json`, 6 alternating pairs `--method auto`/`lbfgs`, load ~8 on 2
+//!   cores): the bounded rows' optimisation 50 ms (median; 40–75) against 440 ms (334–476),
+//!   pairwise ratio 0.12; the unbounded rows 921 ms against 150 ms (the condensed runs there do
+//!   not converge and L-BFGS runs after them), their objectives equal or lower on every row.
 
 // The test that includes this file reads only some of the fields.
 #![allow(dead_code)]

@@ -33,6 +33,7 @@
 //! a buffer of K states (memory O(n (N/K + K)), K ≈ √N by default). Recomputation repeats exactly
 //! the forward arithmetic, so the gradient is bit-for-bit the same for every K.
 
+mod bending;
 mod control_map;
 mod objective;
 mod power;
@@ -43,12 +44,12 @@ mod tape;
 pub(crate) use reverse::{Cotangents, ReverseSweep};
 pub(crate) use tape::StateView;
 
+pub use bending::BendingObjective;
 pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };
 pub use objective::{
-    BendingObjective, FinalMomentResidual, GaussNewton, MomentStage, NodeDisplacementObjective,
-    Objective, Stage,
+    FinalMomentResidual, GaussNewton, MomentStage, NodeDisplacementObjective, Objective, Stage,
 };
 pub use power::PowerObjective;
 pub use problem::ControlProblem;

@@ -21,13 +21,17 @@
 //!   thesis's. Beside it, the unbounded local optimum from u = 0 (where the condensed run does
 //!   not converge, `Method::Auto` falls back to L-BFGS and keeps the better result). Every row
 //!   reports the largest joint angle and is flagged FOLDED beyond 45°, far outside any beam
-//!   model. Against `--method lbfgs` (the former default) the bounded rows reach the same
-//!   objectives except rows 1, 9, 10 (lower: other local minima) and 3 (+0.15 %) and 6
-//!   (+1.5·10⁻⁶; other local minima, see `Method::Condensed`). Measured 26 Nov 2026 (release,
-//!   `tables --table 3.4 --json`, 6 alternating pairs `--method auto`/`lbfgs`, load ~8 on 2
-//!   cores): the bounded rows' optimisation 50 ms (median; 40–75) against 440 ms (334–476),
-//!   pairwise ratio 0.12; the unbounded rows 921 ms against 150 ms (the condensed runs there do
-//!   not converge and L-BFGS runs after them), their objectives equal or lower on every row.
+//!   model. `Method::Auto` runs the Riccati solver from the same start after a converged
+//!   condensed run and keeps the lower (condensed alone ends in other local minima on rows 3,
+//!   +0.15 %, and 6, +1.5·10⁻⁶). Against `--method lbfgs` (the former default) the bounded rows
+//!   reach the same objectives to round-off (≤ 5.9·10⁻¹³ relative) or lower (rows 1, 9, 10:
+//!   other local minima; `tests/tables.rs` `table_3_4_auto_is_never_above_lbfgs`). Measured
+//!   26 Nov 2026 (release, `tables --table 3.4 --json --method auto|lbfgs`, 3 alternating
+//!   pairs, machine idle, load ~1 on 2 cores): the bounded rows' optimisation 64–72 ms against
+//!   216–217 ms (`--method condensed` alone: 21 ms, with the two higher rows); earlier, condensed
+//!   only, at load ~8: 50 ms against 440 ms. The unbounded rows: 921 ms against 150 ms at load
+//!   ~8 (the condensed runs there do not converge and L-BFGS runs after them), their objectives
+//!   equal or lower on every row.
 
 // The test that includes this file reads only some of the fields.
 #![allow(dead_code)]

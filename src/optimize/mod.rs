@@ -200,8 +200,10 @@ pub enum Method {
     /// [`Method::Condensed`] for a structured control problem with few parameters,
     /// [`Method::Riccati`] for one with many, [`Method::Lbfgs`] for everything else — run
     /// behind an L-BFGS fallback when the structured solver fails or does not converge
-    /// ([`Fallback`]); the result's [`OptimResult::method`] and [`OptimResult::choice`] say
-    /// which ran, why, and whether the fallback did.
+    /// ([`Fallback`]); a converged condensed run is followed by the Riccati solver from the same
+    /// start and the lower converged objective is kept (module `choice`); the result's
+    /// [`OptimResult::method`] and [`OptimResult::choice`] say which ran, why, and whether the
+    /// fallback did.
     #[default]
     Auto,
     /// L-BFGS (memory [`OptimOptions::lbfgs_memory`]) with the More-Thuente line search: one

@@ -249,10 +249,11 @@ fn valid_scene() -> impl Strategy<Value = SceneFile> {
                         _ => ("piecewise", &c.values[..c.pieces]),
                     };
                     e.push(entry("kind", format!("\"{kind}\""), true, false, false));
+                    // Not required: an absent `control.values` means zeros (issue 27 item 7).
                     e.push(entry(
                         "values",
                         num_or_array(false, values),
-                        true,
+                        false,
                         false,
                         false,
                     ));

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import chainbeam as cb
+from conftest import wave_riser_toml
 
 
 def run(cli: str, *args: str, status: int = 0) -> str:
@@ -64,46 +65,12 @@ def test_simulate_equals_cli_csv(cli: str, scenes: Path, name: str) -> None:
     assert_trajectory_equal(traj, cols)
 
 
-# A 60 m riser of 6 pendulums in a JONSWAP sea with a current (tests/cli_fatigue_study.rs), 10 s.
-WAVE_SCENE = """[beam]
-pendulums = 6
-support = "riser"
-
-[pipe]
-length = 60.0
-outer_diameter = 0.5334
-wall_thickness = 0.0222
-
-[water]
-depth = 60.0
-
-[loads]
-tension = 1e6
-drag = 1e-4
-
-[loads.current]
-profile = "uniform"
-speed = 0.3
-
-[loads.waves]
-spectrum = "jonswap"
-hs = 3.0
-tp = 9.0
-seed = 7
-direction = {direction}
-
-[time]
-step = 0.05
-steps = 200
-"""
-
-
 @pytest.mark.parametrize("direction", [0.0, 30.0])
 def test_simulate_with_waves_equals_cli_csv(cli: str, tmp_path: Path, direction: float) -> None:
     """A scene with [loads.waves] (at 30° the spatial model): `eta` and every other column equal
     the command line's CSV bit for bit."""
     path = tmp_path / "waves.toml"
-    path.write_text(WAVE_SCENE.format(direction=direction))
+    path.write_text(wave_riser_toml(direction))
     cols = read_csv(run(cli, "simulate", str(path)))
     assert "eta" in cols
     traj = cb.simulate(cb.Scene.from_file(path))

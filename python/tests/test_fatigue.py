@@ -14,39 +14,11 @@ import pandas as pd
 import pytest
 
 import chainbeam as cb
+from conftest import wave_riser_toml
 
-# The 60 m riser of tests/cli_fatigue_study.rs (6 pendulums, JONSWAP sea, seed 7, current),
-# 10 s of 0.05 s, curve D in seawater with CP.
-SCENE = """[beam]
-pendulums = 6
-support = "riser"
-
-[pipe]
-length = 60.0
-outer_diameter = 0.5334
-wall_thickness = 0.0222
-
-[water]
-depth = 60.0
-
-[loads]
-tension = 1e6
-drag = 1e-4
-
-[loads.current]
-profile = "uniform"
-speed = 0.3
-
-[loads.waves]
-spectrum = "jonswap"
-hs = 3.0
-tp = 9.0
-seed = 7
-
-[time]
-step = 0.05
-steps = 200
-
+# The 60 m riser of conftest.py (waves from 0°), a control at node 3, curve D in seawater with CP.
+SCENE = wave_riser_toml(
+    tail="""
 [control]
 node = 3
 kind = "constant"
@@ -56,6 +28,7 @@ values = [0.0]
 outer_diameter = 0.5334
 wall_thickness = 0.0222
 """
+)
 
 DIAGRAM = [(1.5, 7.0, 0.5), (3.0, 9.0, 0.3), (5.0, 11.0, 0.2)]
 

@@ -1,0 +1,190 @@
+//! Building a [`Chain`] from a scene ([`Chain::from_scene`]: every term's value from the scene's
+//! keys, docs/scene-format.md) and lifting it to another scalar ([`Chain::lift`]).
+
+use super::{
+    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, Gravity, HarmonicForce, PointLoad,
+    PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
+};
+use crate::base::{Scalar, TipCondition};
+use crate::error::{Error, ModelError, Result};
+use crate::scene::{Scene, Support};
+
+impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
+    /// Builds the model of a scene (validating it first). The control node is taken from the
+    /// scene's `[control]` (default: none, so no control term is computed).
+    ///
+    /// # Errors
+    /// The scene's validation errors; [`Error::NeedsSpatialModel`] for the planar model
+    /// (`DIM = 2`) of a scene with out-of-plane loads ([`Scene::is_spatial`]).
+    pub fn from_scene(scene: &Scene) -> Result<Self> {
+        scene.validate()?;
+        if DIM == 2 {
+            if let Some(key) = scene.spatial_key() {
+                return Err(Error::NeedsSpatialModel { key });
+            }
+        }
+        let n = scene.n();
+        let b = &scene.beam;
+        let lift = |v: &[f64]| v.iter().map(|&x| D::from(x)).collect::<Vec<D>>();
+        let lengths = lift(&b.lengths);
+        let masses = lift(&b.masses);
+        let tip = match (b.support, b.reaction_force) {
+            (Support::FixedFixed | Support::PinnedPinned, false) => TipCondition::Locked,
+            (Support::FixedFixed | Support::PinnedPinned, true) => TipCondition::Reaction,
+            _ => TipCondition::Free,
+        };
+        let control_node = scene.control.as_ref().map(|c| c.node);
+        if let (TipCondition::Reaction, Some(c)) = (tip, control_node) {
+            if c != n {
+                return Err(ModelError::ReactionTipControlNode { node: c, n }.into());
+            }
+        }
+        let springs = Self::springs_of(scene);
+        let has_base = springs.present[0];
+        let loads = scene.loads.points.iter().enumerate().map(|(i, pl)| {
+            let norm = pl.direction[0].hypot(pl.direction[1]);
+            PointLoad {
+                node: pl.node,
+                force: D::from(pl.force),
+                force_x: D::from(pl.force_x),
+                start: pl.start,
+                end: pl.end.unwrap_or(f64::INFINITY),
+                ramp: pl.ramp,
+                direction: [pl.direction[0] / norm, pl.direction[1] / norm],
+                harmonics: pl
+                    .harmonics
+                    .iter()
+                    .map(|h| HarmonicForce {
+                        amplitude: D::from(h.amplitude),
+                        period: h.period,
+                        phase: D::from(h.phase),
+                    })
+                    .collect(),
+                series: pl.series.as_ref().map(|s| s.samples.as_slice().into()),
+                scene_index: i,
+            }
+        });
+        let loads: Vec<_> = loads.collect();
+        let waves = Self::wave_field(scene)?;
+        let water_drag =
+            scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0);
+        Ok(Chain {
+            n,
+            inv_lengths: lengths.iter().map(|l| l.recip()).collect(),
+            inv_masses: masses.iter().map(|m| m.recip()).collect(),
+            moment_stiffness: D::from(if has_base { b.base_stiffness } else { 0.0 }),
+            tip,
+            springs,
+            loads: (!loads.is_empty()).then(|| PointLoads::new(loads, lengths.clone())),
+            gravity: (scene.loads.gravity != 0.0).then(|| Gravity {
+                g: D::from(scene.loads.gravity),
+                lengths: lengths.clone(),
+                masses: masses.clone(),
+            }),
+            tension: (scene.loads.tension != 0.0).then(|| TopTension {
+                tension: D::from(scene.loads.tension),
+                lengths: lengths.clone(),
+            }),
+            axial_weight: (scene.loads.axial_weight != 0.0).then(|| AxialWeight {
+                weight: D::from(scene.loads.axial_weight),
+                lengths: lengths.clone(),
+            }),
+            control: control_node.map(|node| ControlForce {
+                node,
+                lengths: lengths.clone(),
+            }),
+            control_x: Vec::new(),
+            drag: (scene.loads.drag > 0.0 && !water_drag).then(|| Drag {
+                d: D::from(scene.loads.drag),
+            }),
+            current: water_drag.then(|| {
+                let c = scene.loads.current.as_ref();
+                let d = D::from(scene.loads.drag);
+                CurrentDrag::new(c, waves.clone(), d, &lengths, &masses)
+            }),
+            wave_inertia: waves.map(WaveInertia::new),
+            lengths,
+            masses,
+        })
+    }
+
+    /// The waves' field of a scene with `[loads.waves]` ([`WaveField`]; the scene is valid):
+    /// its sea realised on the scene's grid, the pipe's inertia coefficient
+    /// ρ_w (1 + C_a) A_o and the nodes' masses.
+    fn wave_field(scene: &Scene) -> Result<Option<std::sync::Arc<WaveField>>> {
+        let (Some(w), Some(pipe)) = (&scene.loads.waves, &scene.pipe) else {
+            return Ok(None);
+        };
+        let spec = w.sea_spec(scene.wave_depth())?;
+        let t = scene.time;
+        let err = |e| Error::from(crate::scene::sea_error(e, w.components));
+        let sea = crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step).map_err(err)?;
+        let inputs = WaveInputs {
+            lengths: scene.beam.lengths.clone(),
+            masses: scene.beam.masses.clone(),
+            inertia_per_length: scene.water.density
+                * (1.0 + pipe.added_mass_coefficient)
+                * pipe.outer_area(),
+            direction: w.unit_direction(),
+            rows: t.steps + 1,
+        };
+        let field = WaveField::new(std::sync::Arc::new(sea), inputs).map_err(err)?;
+        Ok(Some(std::sync::Arc::new(field)))
+    }
+
+    /// The springs a scene's support has (docs/conventions.md): interior k₂..kₙ always, k₁ except for
+    /// pinned-pinned, k_{n+1} for riser and fixed-fixed.
+    fn springs_of(scene: &Scene) -> Springs<D> {
+        let n = scene.n();
+        let b = &scene.beam;
+        let mut k = vec![D::zero(); n + 1];
+        let mut present = vec![false; n + 1];
+        for i in 1..n {
+            k[i] = D::from(b.stiffness[i - 1]);
+            present[i] = true;
+        }
+        let (base, tip) = match b.support {
+            Support::Cantilever => (true, false),
+            Support::Riser | Support::FixedFixed => (true, true),
+            Support::PinnedPinned => (false, false),
+        };
+        if base {
+            k[0] = D::from(b.base_stiffness);
+            present[0] = true;
+        }
+        if tip {
+            k[n] = D::from(b.tip_stiffness);
+            present[n] = true;
+        }
+        Springs {
+            k,
+            present,
+            fold_cos: DEFAULT_FOLD_LIMIT_DEG.to_radians().cos(),
+        }
+    }
+
+    /// The same model over another scalar type (parameters lifted with `D2::from` of their real
+    /// parts).
+    pub fn lift<D2: Scalar>(&self) -> Chain<D2, DIM> {
+        let l = |v: &[D]| v.iter().map(|x| D2::from(x.re())).collect::<Vec<D2>>();
+        Chain {
+            n: self.n,
+            lengths: l(&self.lengths),
+            masses: l(&self.masses),
+            inv_lengths: l(&self.inv_lengths),
+            inv_masses: l(&self.inv_masses),
+            moment_stiffness: D2::from(self.moment_stiffness.re()),
+            tip: self.tip,
+            springs: self.springs.lift(),
+            loads: self.loads.as_ref().map(|t| t.lift()),
+            gravity: self.gravity.as_ref().map(|t| t.lift()),
+            tension: self.tension.as_ref().map(|t| t.lift()),
+            axial_weight: self.axial_weight.as_ref().map(|t| t.lift()),
+            control: self.control.as_ref().map(|t| t.lift()),
+            control_x: self.control_x.iter().map(|x| D2::from(x.re())).collect(),
+            drag: self.drag.as_ref().map(|t| t.lift()),
+            current: self.current.as_ref().map(|t| t.lift()),
+            wave_inertia: self.wave_inertia.clone(),
+        }
+    }
+}

@@ -1,0 +1,125 @@
+//! The physical parameters θ of a [`Chain`] ([`Parameter`]): setting one (seeded with a dual
+//! number for forward-mode derivatives) and asking whether the model has it.
+
+use super::{Chain, DissipativeTerm};
+use crate::base::{Parameter, Scalar};
+use crate::error::{Error, Result};
+
+impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
+    /// Sets a physical parameter (see [`Parameter`]); seed it with a dual number to obtain
+    /// forward-mode derivatives of a whole simulation with respect to it.
+    pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
+        let n = self.n;
+        let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
+        match p {
+            Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
+            Parameter::BaseStiffness => {
+                if !self.springs.present[0] {
+                    return Err(missing(p, "the support has no base spring"));
+                }
+                self.springs.k[0] = value;
+                self.moment_stiffness = value;
+            }
+            Parameter::TipStiffness => {
+                if !self.springs.present[n] {
+                    return Err(missing(p, "the support has no tip spring"));
+                }
+                self.springs.k[n] = value;
+            }
+            Parameter::Mass => {
+                self.masses.iter_mut().for_each(|m| *m = value);
+                if let Some(g) = &mut self.gravity {
+                    g.masses.iter_mut().for_each(|m| *m = value);
+                }
+                if let Some(c) = &mut self.current {
+                    c.refresh(&self.lengths, &self.masses)
+                        .map_err(|e| crate::scene::sea_error(e, None))?;
+                }
+                self.refresh_inverses();
+            }
+            Parameter::Drag => match (&mut self.drag, &mut self.current) {
+                (Some(d), _) => d.d = value,
+                (None, Some(c)) => c.d = value,
+                (None, None) => return Err(missing(p, "the scene has no drag (D = 0)")),
+            },
+            Parameter::Tension => match &mut self.tension {
+                Some(t) => t.tension = value,
+                None => return Err(missing(p, "the scene has no tension (T = 0)")),
+            },
+            Parameter::AxialWeight => match &mut self.axial_weight {
+                Some(t) => t.weight = value,
+                None => return Err(missing(p, "the scene has no axial weight (w = 0)")),
+            },
+            Parameter::CurrentSpeed => match &mut self.current {
+                Some(c) if c.has_parameter(p) => c.speed = value,
+                Some(_) => return Err(missing(p, "a table profile has no single speed")),
+                None => return Err(missing(p, "the scene has no current")),
+            },
+            Parameter::LoadForce(i)
+            | Parameter::LoadForceX(i)
+            | Parameter::LoadAmplitude { load: i, .. }
+            | Parameter::LoadPhase { load: i, .. } => {
+                if !self.has_parameter(p) {
+                    return Err(missing(
+                        p,
+                        "no such point load or harmonic (F_x: only in the spatial model)",
+                    ));
+                }
+                let l = self.loads.as_mut().and_then(|ls| ls.by_scene_index(i));
+                if let Some(l) = l {
+                    match p {
+                        Parameter::LoadForce(_) => l.force = value,
+                        Parameter::LoadForceX(_) => l.force_x = value,
+                        Parameter::LoadAmplitude { harmonic, .. } => {
+                            l.harmonics[harmonic].amplitude = value;
+                        }
+                        Parameter::LoadPhase { harmonic, .. } => {
+                            l.harmonics[harmonic].phase = value;
+                        }
+                        _ => {}
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether `p` is a parameter of this model that gradients can be taken for (mass needs
+    /// uniform masses, drag needs D > 0, end stiffnesses need an end spring, loads need that load,
+    /// harmonic parameters that harmonic, F_x the spatial model).
+    pub fn has_parameter(&self, p: Parameter) -> bool {
+        match p {
+            Parameter::Mass => self.has_uniform_mass(),
+            Parameter::Drag => self.has_drag(),
+            Parameter::CurrentSpeed => self.current.as_ref().is_some_and(|c| c.has_parameter(p)),
+            Parameter::BaseStiffness => self.springs.present[0],
+            Parameter::TipStiffness => self.springs.present[self.n],
+            Parameter::InteriorStiffness => true,
+            Parameter::Tension => self.tension.is_some(),
+            Parameter::AxialWeight => self.axial_weight.is_some(),
+            Parameter::LoadForce(_)
+            | Parameter::LoadForceX(_)
+            | Parameter::LoadAmplitude { .. }
+            | Parameter::LoadPhase { .. } => {
+                self.loads.as_ref().is_some_and(|ls| ls.reads(p, DIM == 3))
+            }
+        }
+    }
+
+    /// Whether all masses are equal (parameter derivatives with respect to [`Parameter::Mass`]
+    /// are taken at a common mass).
+    pub fn has_uniform_mass(&self) -> bool {
+        let m0 = self.masses[0].re();
+        self.masses
+            .iter()
+            .all(|m| (m.re() - m0).abs() <= 1e-15 * m0.abs())
+    }
+
+    /// Recomputes 1/lᵢ and 1/mᵢ after the masses changed.
+    fn refresh_inverses(&mut self) {
+        for i in 0..self.n {
+            self.inv_lengths[i] = self.lengths[i].recip();
+            self.inv_masses[i] = self.masses[i].recip();
+        }
+    }
+}

@@ -167,6 +167,10 @@ pub use scene::{
 };
 pub use scene::{Current, CurrentProfile};
 pub use simulate::{
+    moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
+    StreamError, StreamSummary,
+};
+pub use simulate::{
     piecewise_constant_controls, scene_controls, scene_controls_x, simulate, simulate_chain,
     simulate_with_controls, simulate_with_controls_xz, SceneTrajectory, Trajectory,
     TrajectoryColumns,

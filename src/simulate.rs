@@ -1,5 +1,6 @@
 //! Simulation of a scene into a [`Trajectory`] (q, p, λ, μ per step, node positions, energy,
-//! base bending moment M₀(t_k) and solver statistics).
+//! base bending moment M₀(t_k) and solver statistics), or streamed to an observer state by state
+//! in O(n) memory ([`simulate_streaming`], [`moment_history`]).
 //!
 //! A trajectory stores every state, so its size ([`trajectory_bytes`]) is checked against
 //! [`MAX_TRAJECTORY_BYTES`] before anything of size N is allocated, and its buffers are reserved
@@ -14,7 +15,12 @@ use crate::scene::{ControlKind, Scene, MAX_TRAJECTORY_BYTES};
 use crate::steppers::rattle::{Rattle, State, StepStats};
 
 mod columns;
+mod stream;
 pub use columns::TrajectoryColumns;
+pub use stream::{
+    moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
+    StreamError, StreamSummary,
+};
 
 /// A simulated trajectory on the grid t_k = k h, k = 0..=N.
 #[derive(Clone, Debug)]

@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
 use chainbeam::scene::read_text_file;
-use chainbeam::{simulate, Scene};
+use chainbeam::{moment_history, Scene};
 
 mod study;
 
@@ -179,13 +179,13 @@ fn simulated(path: &Path, scene: &Scene, progress: &Progress) -> Result<History,
         scene.time.steps,
         scene.n()
     ));
-    let traj = simulate(scene);
+    let history = moment_history(scene);
     spinner.finish_and_clear();
-    let traj = traj.map_err(|e| lib_error(path, e))?;
+    let history = history.map_err(|e| lib_error(path, e))?;
     Ok(History {
-        moment: traj.moment().to_vec(),
-        moment_x: traj.is_spatial().then(|| traj.moment_x().to_vec()),
-        duration_s: traj.steps() as f64 * traj.h(),
+        duration_s: history.duration(),
+        moment: history.moment,
+        moment_x: history.moment_x,
     })
 }
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 
 use chainbeam::{
-    simulate, simulate_with_controls, simulate_with_controls_xz, ControlMap, Scene, SceneTrajectory,
+    simulate_streaming, ControlMap, Scene, StepObserver, StepView, StreamControls, StreamError,
 };
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -95,7 +95,8 @@ impl Format {
     }
 }
 
-/// Runs `simulate`.
+/// Runs `simulate`: the rows are written as RATTLE produces them (the library's
+/// [`simulate_streaming`]), so memory stays O(n) however many steps.
 pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     let format = Format::choose(a.format, a.output.as_deref());
     let out = Output::prepare(a.output.as_deref())?;
@@ -110,8 +111,6 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     let eta = scene
         .wave_elevation()
         .map_err(|e| lib_error(&a.scene, e.into()))?;
-    let names = csv_names(scene.n(), scene.is_spatial(), eta.is_some());
-    let select = select_columns(&names, a.columns.as_deref())?;
     let controls = match &a.controls {
         Some(path) => {
             let file = controls_io::read(path)?;
@@ -120,20 +119,10 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         }
         None => None,
     };
+    let spatial = scene.is_spatial() || matches!(controls, Some((_, Some(_))));
+    let names = csv_names(scene.n(), spatial, eta.is_some());
+    let select = select_columns(&names, a.columns.as_deref())?;
     refuse_overwrite(&[("--output", &out)], &inputs)?;
-    let steps = scene.time.steps;
-    let spinner = progress.spinner(format!(
-        "simulating {steps} steps of a {}-pendulum beam",
-        scene.n()
-    ));
-    let traj = match &controls {
-        Some((u, None)) => simulate_with_controls(&scene, u),
-        Some((u, Some(ux))) => simulate_with_controls_xz(&scene, ux, u),
-        None => simulate(&scene),
-    };
-    spinner.finish_and_clear();
-    let traj = traj.map_err(|e| lib_error(&a.scene, e))?;
-    check_trajectory(&a.scene, &traj)?;
     if let Some(k) = eta
         .as_ref()
         .and_then(|e| e.iter().position(|v| !v.is_finite()))
@@ -144,24 +133,40 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
             a.scene.display()
         )));
     }
-    let table = Table {
-        traj: &traj,
-        eta: eta.as_deref(),
-        names: &names,
-        select: &select,
-        every: a.every.get(),
-    };
+    let steps = scene.time.steps;
     let mut sink = out.open()?;
-    let bar = progress.bar(traj.steps() as u64 + 1, "writing rows");
-    let written = match format {
-        Format::Csv => write_csv(sink.writer(), &table, &bar),
-        Format::Npy => write_npy(sink.writer(), &table, &bar),
+    let bar = progress.bar(
+        steps as u64 + 1,
+        format!("simulating {steps} steps of a {}-pendulum beam", scene.n()),
+    );
+    let layout = (&names[..], &select[..], scene.n());
+    let mut rows = RowWriter::new(layout, format, sink.writer(), &bar);
+    rows.eta = eta.as_deref();
+    rows.every = a.every.get();
+    let stream = match &controls {
+        Some((u, None)) => StreamControls::Given(u),
+        Some((u, Some(ux))) => StreamControls::GivenXz { x: ux, z: u },
+        None => StreamControls::Scene,
     };
+    let result = rows
+        .start(steps / rows.every + 1)
+        .map_err(RowError::Io)
+        .map_err(StreamError::Observer)
+        .and_then(|()| simulate_streaming(&scene, stream, &mut rows));
     bar.finish_and_clear();
-    if let Err(e) = written {
-        return Err(sink.error(&e));
+    match result {
+        Ok(_) => sink.finish(),
+        Err(StreamError::Simulation(e)) => Err(lib_error(&a.scene, e)),
+        Err(StreamError::Observer(RowError::Io(e))) => Err(sink.error(&e)),
+        Err(StreamError::Observer(RowError::NonFinite { column, k, t })) => {
+            Err(CliError::msg(format!(
+                "{}: the simulation produced a non-finite value in column `{column}` at step {k} \
+                 (t = {t}); stopped, and the output is incomplete (an --output FILE is left as \
+                 it was)",
+                a.scene.display()
+            )))
+        }
     }
-    sink.finish()
 }
 
 /// The forces u_0..u_N of a `--controls` file on this scene and, for a 2-axis control, their x
@@ -178,43 +183,6 @@ fn controls_u(
         u
     };
     Ok((expand(&file.values), file.values_x.as_deref().map(expand)))
-}
-
-/// Never write NaN: every value is checked before the first byte goes out.
-fn check_trajectory(path: &Path, traj: &SceneTrajectory) -> Result<(), CliError> {
-    for k in 0..=traj.steps() {
-        let bad = |col: &str| {
-            CliError::msg(format!(
-                "{}: the simulation produced a non-finite value in column `{col}` at step {k} \
-                 (t = {}); nothing was written",
-                path.display(),
-                traj.time(k)
-            ))
-        };
-        for (col, v) in [
-            ("t", traj.time(k)),
-            ("energy", traj.energy()[k]),
-            ("moment", traj.moment()[k]),
-            ("control", traj.controls()[k]),
-            ("moment_x", traj.moment_x().get(k).copied().unwrap_or(0.0)),
-            (
-                "control_x",
-                traj.controls_x().get(k).copied().unwrap_or(0.0),
-            ),
-        ] {
-            if !v.is_finite() {
-                return Err(bad(col));
-            }
-        }
-        for (i, r) in traj.positions(k).iter().enumerate() {
-            for (c, v) in ["x", "y", "z"].iter().zip(r) {
-                if !v.is_finite() {
-                    return Err(bad(&format!("{c}{}", i + 1)));
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The names of the CSV's columns (see [`LONG_ABOUT`]): `t,energy,moment`, the positions,
@@ -265,94 +233,157 @@ fn select_columns(names: &[String], wanted: Option<&[String]>) -> Result<Vec<usi
     Ok(out)
 }
 
-/// What is written: the trajectory's columns (and η), the selected columns, every K-th row.
-struct Table<'a> {
-    traj: &'a SceneTrajectory,
+/// One written column: where its value comes from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Column {
+    T,
+    Energy,
+    Moment,
+    /// Node i (0-based), component c (0 = x, 1 = y, 2 = z).
+    Position(usize, usize),
+    MomentX,
+    ControlX,
+    Eta,
+    Control,
+}
+
+impl Column {
+    /// The column at index `i` of [`csv_names`]'s layout for `n` pendulums.
+    fn at(i: usize, names: &[String], n: usize) -> Column {
+        match (i, names[i].as_str()) {
+            (0, _) => Column::T,
+            (1, _) => Column::Energy,
+            (2, _) => Column::Moment,
+            (i, _) if i < 3 + 3 * n => Column::Position((i - 3) / 3, (i - 3) % 3),
+            (_, "moment_x") => Column::MomentX,
+            (_, "control_x") => Column::ControlX,
+            (_, "eta") => Column::Eta,
+            _ => Column::Control,
+        }
+    }
+}
+
+/// Why writing stopped.
+enum RowError {
+    Io(std::io::Error),
+    /// A value to be written is not finite.
+    NonFinite {
+        column: String,
+        k: usize,
+        t: f64,
+    },
+}
+
+/// The observer of a streamed run that writes the selected columns of every K-th state.
+struct RowWriter<'a> {
+    /// The selected names, in order.
+    header: Vec<&'a str>,
+    columns: Vec<Column>,
+    format: Format,
+    w: &'a mut dyn Write,
+    bar: &'a indicatif::ProgressBar,
     eta: Option<&'a [f64]>,
-    names: &'a [String],
-    select: &'a [usize],
     every: usize,
+    energy: bool,
+    positions: Vec<[f64; 3]>,
+    values: Vec<f64>,
+    line: Vec<u8>,
+    buf: zmij::Buffer,
 }
 
-impl Table<'_> {
-    /// The steps written: k = 0, K, 2K, … ≤ N.
-    fn steps(&self) -> impl Iterator<Item = usize> {
-        (0..=self.traj.steps()).step_by(self.every)
+impl<'a> RowWriter<'a> {
+    /// A writer of the columns `select` of [`csv_names`]'s `names` for `n` pendulums.
+    fn new(
+        (names, select, n): (&'a [String], &[usize], usize),
+        format: Format,
+        w: &'a mut dyn Write,
+        bar: &'a indicatif::ProgressBar,
+    ) -> Self {
+        let columns: Vec<Column> = select.iter().map(|&i| Column::at(i, names, n)).collect();
+        let positions = if columns.iter().any(|c| matches!(c, Column::Position(..))) {
+            vec![[0.0; 3]; n]
+        } else {
+            Vec::new()
+        };
+        RowWriter {
+            header: select.iter().map(|&i| names[i].as_str()).collect(),
+            energy: columns.contains(&Column::Energy),
+            format,
+            w,
+            bar,
+            eta: None,
+            every: 1,
+            positions,
+            values: Vec::with_capacity(columns.len()),
+            line: Vec::with_capacity(24 * columns.len()),
+            columns,
+            buf: zmij::Buffer::new(),
+        }
     }
 
-    fn rows(&self) -> usize {
-        self.traj.steps() / self.every + 1
-    }
-
-    /// The selected values of row k (`all`: scratch for the full row).
-    fn row(&self, k: usize, all: &mut Vec<f64>, out: &mut Vec<f64>) {
-        let traj = self.traj;
-        all.clear();
-        all.extend([traj.time(k), traj.energy()[k], traj.moment()[k]]);
-        for r in traj.positions(k) {
-            all.extend(r);
-        }
-        if traj.is_spatial() {
-            all.push(traj.moment_x()[k]);
-            all.push(traj.controls_x().get(k).copied().unwrap_or(0.0));
-        }
-        if let Some(eta) = self.eta {
-            all.push(eta[k]);
-        }
-        all.push(traj.controls()[k]);
-        out.clear();
-        out.extend(self.select.iter().map(|&i| all[i]));
-    }
-}
-
-fn write_csv(
-    w: &mut dyn Write,
-    table: &Table<'_>,
-    bar: &indicatif::ProgressBar,
-) -> std::io::Result<()> {
-    let header: Vec<&str> = table
-        .select
-        .iter()
-        .map(|&i| table.names[i].as_str())
-        .collect();
-    w.write_all(header.join(",").as_bytes())?;
-    w.write_all(b"\n")?;
-    let (mut all, mut values) = (Vec::with_capacity(table.names.len()), Vec::new());
-    let mut line = Vec::with_capacity(24 * table.select.len());
-    let mut buf = zmij::Buffer::new();
-    for k in table.steps() {
-        table.row(k, &mut all, &mut values);
-        line.clear();
-        for (j, v) in values.iter().enumerate() {
-            if j > 0 {
-                line.push(b',');
+    /// The CSV header line, or the `.npy` preamble of `rows` rows.
+    fn start(&mut self, rows: usize) -> std::io::Result<()> {
+        match self.format {
+            Format::Csv => {
+                self.w.write_all(self.header.join(",").as_bytes())?;
+                self.w.write_all(b"\n")
             }
-            push_f64(&mut line, &mut buf, *v);
-        }
-        line.push(b'\n');
-        w.write_all(&line)?;
-        if k % 1024 == 0 {
-            bar.set_position(k as u64);
+            Format::Npy => self.w.write_all(&npy::header(&[rows, self.columns.len()])),
         }
     }
-    Ok(())
 }
 
-fn write_npy(
-    w: &mut dyn Write,
-    table: &Table<'_>,
-    bar: &indicatif::ProgressBar,
-) -> std::io::Result<()> {
-    let columns = table.select.len();
-    w.write_all(&npy::header(&[table.rows(), columns]))?;
-    let (mut all, mut values) = (Vec::with_capacity(table.names.len()), Vec::new());
-    let mut bytes = Vec::with_capacity(8 * columns);
-    for k in table.steps() {
-        table.row(k, &mut all, &mut values);
-        npy::write_row(w, &mut bytes, &values)?;
+impl StepObserver for RowWriter<'_> {
+    type Error = RowError;
+
+    fn observe<const DIM: usize>(&mut self, step: &mut StepView<'_, DIM>) -> Result<(), RowError> {
+        let k = step.k();
         if k % 1024 == 0 {
-            bar.set_position(k as u64);
+            self.bar.set_position(k as u64);
         }
+        if k % self.every != 0 {
+            return Ok(());
+        }
+        let energy = if self.energy { step.energy() } else { 0.0 };
+        if !self.positions.is_empty() {
+            step.positions(&mut self.positions);
+        }
+        let [mx, mz] = step.moment_vector();
+        self.values.clear();
+        for (c, name) in self.columns.iter().zip(&self.header) {
+            let v = match *c {
+                Column::T => step.time(),
+                Column::Energy => energy,
+                Column::Moment => mz,
+                Column::Position(i, d) => self.positions[i][d],
+                Column::MomentX => mx,
+                Column::ControlX => step.control_x(),
+                Column::Eta => self.eta.map_or(0.0, |e| e[k]),
+                Column::Control => step.control(),
+            };
+            if !v.is_finite() {
+                return Err(RowError::NonFinite {
+                    column: name.to_string(),
+                    k,
+                    t: step.time(),
+                });
+            }
+            self.values.push(v);
+        }
+        let written = match self.format {
+            Format::Csv => {
+                self.line.clear();
+                for (j, v) in self.values.iter().enumerate() {
+                    if j > 0 {
+                        self.line.push(b',');
+                    }
+                    push_f64(&mut self.line, &mut self.buf, *v);
+                }
+                self.line.push(b'\n');
+                self.w.write_all(&self.line)
+            }
+            Format::Npy => npy::write_row(self.w, &mut self.line, &self.values),
+        };
+        written.map_err(RowError::Io)
     }
-    Ok(())
 }

@@ -91,6 +91,7 @@ fn fatigue_of_a_simulation_and_of_its_csv_agree() {
         duration_s: 4.0,
         moment: traj.moment(),
         moment_x: None,
+        measure: scene.moment_measure(),
     };
     let a = assess(&spec, history).unwrap();
     assert_eq!(v["damage"].as_f64().unwrap(), a.damage);

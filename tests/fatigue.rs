@@ -8,8 +8,8 @@ mod fatigue_support;
 use chainbeam::fatigue::{
     assess, combine_scatter, damage_gradient, damage_per_year, life_years, miner_sum,
     pairing_damage, power_gradient, power_objective, rainflow, rainflow_visit, CellDamage, Cycle,
-    DnvClass, Environment, FatigueError, FatigueSpec, HotSpot, MomentHistory, RainflowWorkspace,
-    SnCurve, SECONDS_PER_YEAR,
+    DnvClass, Environment, FatigueError, FatigueSpec, HotSpot, MomentHistory, MomentMeasure,
+    RainflowWorkspace, SnCurve, SECONDS_PER_YEAR,
 };
 use fatigue_support::{allocations, narrow_band, NarrowBand};
 use num_dual::Dual64;
@@ -133,6 +133,7 @@ fn non_finite_samples_are_typed_errors() {
         duration_s: 1.0,
         moment: &m,
         moment_x: None,
+        measure: MomentMeasure::Wellhead,
     };
     let err = assess(&spec, history).unwrap_err();
     assert!(
@@ -156,6 +157,7 @@ fn non_finite_samples_are_typed_errors() {
             duration_s: 1.0,
             moment: &[0.0, 1.0],
             moment_x: None,
+            measure: MomentMeasure::Wellhead,
         },
     )
     .unwrap_err();
@@ -566,6 +568,7 @@ fn hot_spot_stress_and_worst_point() {
             duration_s: 399.0,
             moment: &m,
             moment_x: None,
+            measure: MomentMeasure::Wellhead,
         },
     )
     .unwrap();
@@ -575,6 +578,7 @@ fn hot_spot_stress_and_worst_point() {
             duration_s: 399.0,
             moment: &mx,
             moment_x: Some(&mx),
+            measure: MomentMeasure::Wellhead,
         },
     )
     .unwrap();
@@ -614,7 +618,8 @@ fn fatigue_table_defaults_and_round_trip() {
 
 /// The rainflow damage of a simulated riser as a function of a constant tip control u (thesis
 /// riser, load 2 N at node 5, 400 steps of 0.01 s, a 20 mm × 2 mm tube, curve D in air):
-/// dD/du = Σ_k ∂D/∂σ_k · c · dM₀(t_k)/du, with ∂D/∂σ_k from [`damage_gradient`] and dM₀/du from
+/// dD/du = Σ_k ∂D/∂σ_k · c · dM₀(t_k)/du (c the stress per unit M₀, l₁/2 of it the wellhead
+/// moment), with ∂D/∂σ_k from [`damage_gradient`] and dM₀/du from
 /// the Dual64 simulation (the chain an adjoint objective will take), against central differences
 /// of f64 simulations (relative 1e-6, h = 1e-6 N, pairing checked unchanged) at three random
 /// controls from ChaCha8 seed 5.
@@ -623,7 +628,7 @@ fn damage_gradient_through_a_simulation_matches_central_differences() {
     use chainbeam::{catalogue, simulate_chain, Chain};
     let scene = catalogue::riser(5);
     let hot_spot = HotSpot::new(0.02, 0.002, 1.0).unwrap();
-    let c = hot_spot.stress_per_moment();
+    let c = hot_spot.stress_per_unit(scene.moment_measure());
     let curve = SnCurve::dnv(DnvClass::D, Environment::Air);
     let steps = 400;
     let stress_of = |u: f64| -> Vec<f64> {

@@ -30,6 +30,8 @@ fn damage(spec: &FatigueSpec, moment: &[f64], duration_s: f64) -> f64 {
         duration_s,
         moment,
         moment_x: None,
+        // The study counts the wellhead moment M_w = M₀ · l₁/2 of the scene's chain.
+        measure: riser().moment_measure(),
     };
     assess(spec, history).unwrap().damage
 }

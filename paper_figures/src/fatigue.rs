@@ -137,6 +137,7 @@ fn moment_with_control(ctx: &Ctx) -> Res<(Panel, String)> {
                 duration_s: duration,
                 moment: m,
                 moment_x: None,
+                measure: scene.moment_measure(),
             },
         )
         .map(|a| a.damage)

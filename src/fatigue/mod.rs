@@ -3,8 +3,9 @@
 //! diagrams, and the damage's gradient with respect to the stress history (OCEAN.md §4–5).
 //!
 //! The chain of a fatigue assessment, each link its own module:
-//! 1. [`HotSpot`] (`stress`): σ(t) = SCF · M₀(t) · (D_o/2)/I in MPa; in a spatial scene at
-//!    several points θ around the circumference, the worst one reported.
+//! 1. [`HotSpot`] (`stress`): σ(t) = SCF · M_w(t) · (D_o/2)/I in MPa, M_w = M₀ · l₁/2 the
+//!    wellhead moment of the chain's M₀ ([`MomentMeasure`]); in a spatial scene at several
+//!    points θ around the circumference, the worst one reported.
 //! 2. [`rainflow`](rainflow::rainflow) (`rainflow`): cycles of σ per ASTM E1049-85 §5.4.4,
 //!    residue as half cycles, O(N) and allocation-free with a [`RainflowWorkspace`].
 //! 3. [`SnCurve`] (`sn`): DNV-RP-C203 Tables 2-1 to 2-3, every class, with the thickness
@@ -19,12 +20,18 @@
 //! scatter diagram and reports damage per year, life and life extension per controller.
 //!
 //! ```
-//! use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
-//! // A 0.5 m × 25 mm pipe, 1 MN·m moment amplitude at 0.1 Hz for 100 s, sampled at 0.5 s.
+//! use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory, MomentMeasure};
+//! // A 0.5 m × 25 mm pipe, 1 MN·m wellhead moment amplitude at 0.1 Hz for 100 s, sampled at 0.5 s.
 //! let t: Vec<f64> = (0..=200).map(|k| 0.5 * k as f64).collect();
 //! let m: Vec<f64> = t.iter().map(|t| 1e6 * (0.2 * std::f64::consts::PI * t).sin()).collect();
 //! let spec = FatigueSpec::new(0.5, 0.025);
-//! let a = assess(&spec, MomentHistory { duration_s: 100.0, moment: &m, moment_x: None })?;
+//! let history = MomentHistory {
+//!     duration_s: 100.0,
+//!     moment: &m,
+//!     moment_x: None,
+//!     measure: MomentMeasure::Wellhead,
+//! };
+//! let a = assess(&spec, history)?;
 //! assert!(a.damage > 0.0 && a.life_years.is_finite());
 //! # Ok::<(), chainbeam::fatigue::FatigueError>(())
 //! ```
@@ -46,7 +53,7 @@ pub use miner::{
 };
 pub use rainflow::{rainflow, rainflow_into, rainflow_visit, Cycle, RainflowWorkspace};
 pub use sn::{DnvClass, Environment, Segment, SnCurve, DNV_REFERENCE_THICKNESS_M};
-pub use stress::HotSpot;
+pub use stress::{HotSpot, MomentMeasure};
 pub use study::{
     check_control_can_act, run_controller, run_study, scene_sea_state, with_sea_state, CellOutcome,
     ControlSettings, ControlledRecord, ControllerKind, ControllerOutcome, ScatterCell, SeaState,
@@ -235,10 +242,15 @@ impl FatigueSpec {
 pub struct MomentHistory<'a> {
     /// The record's duration T \[s\] (t_N − t_0).
     pub duration_s: f64,
-    /// M₀ (the z component in a spatial scene) \[N·m\].
+    /// The moment (the z component in a spatial scene), in the unit `measure` says: the chain's
+    /// M₀ of a simulation, or the wellhead moment M_w \[N·m\].
     pub moment: &'a [f64],
-    /// M₀ₓ \[N·m\] of a spatial scene (same length), or `None` for a planar one.
+    /// Its x component of a spatial scene (same length), or `None` for a planar one.
     pub moment_x: Option<&'a [f64]>,
+    /// What the values are: [`MomentMeasure::ChainM0`] with the scene's l₁
+    /// ([`crate::Scene::moment_measure`]) for a simulated M₀, whose wellhead moment is
+    /// M_w = M₀ · l₁/2; [`MomentMeasure::Wellhead`] for M_w itself.
+    pub measure: MomentMeasure,
 }
 
 /// The outcome of [`assess`].
@@ -258,18 +270,20 @@ pub struct Assessment {
     pub theta: f64,
 }
 
-/// Stress, rainflow, S-N and Miner on a moment history: the damage at the worst of
+/// Stress (σ = SCF · M_w · (D_o/2)/I, M_w from the history's [`MomentMeasure`]), rainflow, S-N
+/// and Miner on a moment history: the damage at the worst of
 /// `spec.circumference_points` points around the circumference (one point, θ = 0, for a planar
 /// history), its damage per year and life.
 ///
 /// # Errors
 /// Any [`FatigueError`] of the spec (naming its key), of the history (length mismatch,
-/// non-finite sample) or of the duration.
+/// non-finite sample, `base_length` of its measure) or of the duration.
 pub fn assess(spec: &FatigueSpec, history: MomentHistory<'_>) -> Result<Assessment, FatigueError> {
     spec.validate()?;
     let hot_spot = spec.hot_spot()?;
     let curve = spec.sn_curve()?;
     check_positive("duration", history.duration_s)?;
+    history.measure.check()?;
     check_finite("moment", history.moment)?;
     if let Some(mx) = history.moment_x {
         check_finite("moment_x", mx)?;
@@ -285,8 +299,10 @@ pub fn assess(spec: &FatigueSpec, history: MomentHistory<'_>) -> Result<Assessme
     };
     for theta in thetas {
         match history.moment_x {
-            Some(mx) => hot_spot.stress_at(mx, history.moment, theta, &mut stress)?,
-            None => hot_spot.stress(history.moment, &mut stress)?,
+            Some(mx) => {
+                hot_spot.stress_at(mx, history.moment, theta, history.measure, &mut stress)?
+            }
+            None => hot_spot.stress(history.moment, history.measure, &mut stress)?,
         }
         rainflow_into(&stress, &mut workspace, &mut cycles)?;
         let damage = miner_sum(&cycles, &curve);

@@ -495,6 +495,7 @@ fn run_cell(
             duration_s: record.duration_s,
             moment: &record.moment,
             moment_x: record.moment_x.as_deref(),
+            measure: input.scene.moment_measure(),
         },
     )?;
     let probability = input.cells.map_or(1.0, |c| c[cell].probability);

@@ -4,11 +4,22 @@
 use serde::{Deserialize, Serialize};
 
 use crate::fatigue::{
-    DnvClass, Environment, FatigueError, FatigueSpec, DEFAULT_CIRCUMFERENCE_POINTS,
+    DnvClass, Environment, FatigueError, FatigueSpec, MomentMeasure, DEFAULT_CIRCUMFERENCE_POINTS,
     DNV_REFERENCE_THICKNESS_M,
 };
 
-use super::SceneError;
+use super::{Scene, SceneError};
+
+impl Scene {
+    /// What this scene's `moment` (M₀ = 2k₁z₁/l₁², thesis eq. 3.1.3) is in terms of the wellhead
+    /// moment: [`MomentMeasure::ChainM0`] with l₁ = `beam.lengths[0]`, so that the fatigue
+    /// assessment takes M_w = k₁z₁/l₁ = M₀ · l₁/2 (docs/conventions.md "The wellhead moment M_w").
+    pub fn moment_measure(&self) -> MomentMeasure {
+        MomentMeasure::ChainM0 {
+            base_length: self.beam.lengths.first().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

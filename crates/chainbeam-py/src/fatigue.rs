@@ -266,6 +266,7 @@ fn plain<'py>(py: Python<'py>, scene: &chainbeam::Scene) -> PyResult<Bound<'py, 
                 duration_s: traj.steps() as f64 * traj.h(),
                 moment: traj.moment(),
                 moment_x,
+                measure: s.moment_measure(),
             };
             let a = assess(&spec, history).map_err(|e| match e {
                 FatigueError::InvalidSpec { key, .. } => Failure::SceneKey {

@@ -22,9 +22,11 @@ Fatigue damage and life of the wellhead from the base bending moment M₀: simul
 read a moment history with --series FILE) and count the hot-spot stress per ASTM E1049-85 \
 (rainflow), with the DNV-RP-C203 S-N curve of the scene's [fatigue] table (docs/scene-format.md).
 
-Stress: σ(t) = SCF · M₀(t) · (D_o/2)/I in MPa, I = π/64 (D_o⁴ − D_i⁴), D_i = D_o − 2t. A spatial \
+Stress: σ(t) = SCF · M_w(t) · (D_o/2)/I in MPa, I = π/64 (D_o⁴ − D_i⁴), D_i = D_o − 2t, with \
+M_w = k₁z₁/l₁ = M₀ · l₁/2 the wellhead moment (the base spring's torque) of the chain's M₀ = \
+2k₁z₁/l₁², l₁ the scene's first pendulum length (docs/conventions.md). A spatial \
 history (moment_x) is checked at 8 points θ = 0°, 22.5°, …, 157.5° around the circumference, \
-σ_θ = SCF · (M₀ₓ sin θ + M₀ cos θ) · (D_o/2)/I, and the worst point is reported (the other half of \
+σ_θ = SCF · (M_wₓ sin θ + M_w cos θ) · (D_o/2)/I, and the worst point is reported (the other half of \
 the circumference has the same ranges).
 
 S-N curve (DNV-RP-C203 April 2016, Tables 2-1 air, 2-2 seawater-cp, 2-3 free-corrosion): \
@@ -38,8 +40,9 @@ Output (JSON):
   damage_per_year  D · Y/T, Y = 365.25 · 86400 s
   life_years       1/(DFF · damage_per_year); null when the record does no damage (infinite life)
 
---series FILE: a CSV with a header line naming its columns, among them t [s] and moment [Nm] (and \
-moment_x [Nm] for a spatial history); other columns are ignored, so a `chainbeam simulate` CSV \
+--series FILE: a CSV with a header line naming its columns, among them t [s] and moment (and \
+moment_x for a spatial history), the chain's M₀ as `simulate` writes it (converted to M_w = \
+M₀ · l₁/2 with the scene's l₁); other columns are ignored, so a `chainbeam simulate` CSV \
 is a valid series. Times must increase strictly; blank lines and lines starting with # are \
 skipped.
 
@@ -135,6 +138,7 @@ pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
             duration_s: history.duration_s,
             moment: &history.moment,
             moment_x: history.moment_x.as_deref(),
+            measure: scene.moment_measure(),
         },
     )
     .map_err(|e| {

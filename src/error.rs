@@ -290,20 +290,6 @@ pub enum Error {
         /// Which quantity: "objective", "gradient" or "Hessian-vector product".
         quantity: &'static str,
     },
-    /// An argument passed to the API is inconsistent with the scene.
-    ///
-    /// No function of the library returns it any longer: every argument error is a variant of
-    /// [`Error::Mpc`], [`Error::Ocp`], [`Error::Optimize`] (or the other per-area enums) a caller
-    /// can match. It is kept only while the command line's fatigue study
-    /// (`src/bin/chainbeam/cmd_fatigue/study.rs`) still matches it; use
-    /// [`Error::argument_fault`] instead, then remove it.
-    #[error("invalid argument `{name}`: {reason}")]
-    InvalidArgument {
-        /// The argument's name.
-        name: &'static str,
-        /// What is wrong with it.
-        reason: String,
-    },
 }
 
 impl Error {
@@ -317,7 +303,6 @@ impl Error {
             Error::Ocp(e) => Some(e.argument()),
             Error::Optimize(e) => Some(e.argument()),
             Error::WrongLength { name, .. } | Error::NotFinite { name, .. } => Some(name),
-            Error::InvalidArgument { name, .. } => Some(name),
             _ => None,
         }
     }
@@ -330,7 +315,6 @@ impl Error {
             Error::Mpc(e) => Some((e.argument(), e.to_string())),
             Error::Ocp(e) => Some((e.argument(), e.to_string())),
             Error::Optimize(e) => Some((e.argument(), e.to_string())),
-            Error::InvalidArgument { name, reason } => Some((name, reason.clone())),
             _ => None,
         }
     }

@@ -45,8 +45,8 @@ pub trait Objective: Clone + Send + Sync + 'static {
     /// linearise (the residual r_k; l_xx = w_k ∇r_k∇r_kᵀ) and, in their exact phase, complete
     /// with the residual's own curvature w_k r_k ∇²r_k. `stage` must equal this form at every
     /// (M₀, u) of the planar model (M₀ₓ = 0, u_x = 0). Default `None`: the structured solvers
-    /// refuse the objective ([`crate::Error::InvalidArgument`] naming `objective`), every other
-    /// method takes it.
+    /// refuse the objective ([`crate::error::OcpError::NoGaussNewtonForm`], named `objective`),
+    /// every other method takes it.
     fn gauss_newton<D: Scalar>(&self, s: MomentStage<D>) -> Option<GaussNewton<D>> {
         let _ = s;
         None

@@ -117,7 +117,6 @@ fn class_of(e: &Error) -> (&'static str, &'static str) {
         Error::InvalidStep { .. } => ("InvalidArgumentError", "InvalidStep"),
         Error::NoEffect { .. } => ("InvalidArgumentError", "NoEffect"),
         Error::ControlOutOfRange { .. } => ("InvalidArgumentError", "ControlOutOfRange"),
-        Error::InvalidArgument { .. } => ("InvalidArgumentError", "InvalidArgument"),
         Error::Mpc(_) => ("InvalidArgumentError", "Mpc"),
         Error::Ocp(_) => ("InvalidArgumentError", "Ocp"),
         Error::Optimize(_) => ("InvalidArgumentError", "Optimize"),

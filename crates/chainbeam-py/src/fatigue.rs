@@ -125,12 +125,7 @@ fn study_error(e: StudyError, offset: usize) -> Failure {
             cell,
             source,
         } => {
-            let named = match source.as_ref() {
-                chainbeam::Error::Mpc(m) => Some(m.argument()),
-                chainbeam::Error::Ocp(o) => Some(o.argument()),
-                chainbeam::Error::InvalidArgument { name, .. } => Some(*name),
-                _ => None,
-            };
+            let named = source.argument_fault().map(|(name, _)| name);
             let argument = match named {
                 Some(n @ ("interval" | "horizon" | "iterations" | "effort" | "bound")) => Some(n),
                 Some("bounds") => Some("bound"),

@@ -170,12 +170,7 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
             cell,
             source,
         } => {
-            let named = match source.as_ref() {
-                chainbeam::Error::Mpc(m) => Some((m.argument(), m.to_string())),
-                chainbeam::Error::Ocp(o) => Some((o.argument(), o.to_string())),
-                chainbeam::Error::InvalidArgument { name, reason } => Some((*name, reason.clone())),
-                _ => None,
-            };
+            let named = source.argument_fault();
             match named.and_then(|(name, reason)| flag_of(name).map(|f| (f, reason))) {
                 Some((flag, reason)) => CliError::msg(format!(
                     "{scene}: controller `{controller}`, cell {cell}: {flag}: {reason}"

@@ -20,7 +20,7 @@ pub use multistart::MultistartError;
 pub use ocp::{HorizonShape, OcpError};
 pub use optimize::OptimizeError;
 pub(crate) use optimize::PLANAR_ONLY;
-pub use requirement::Requirement;
+pub use requirement::{Requirement, ValueError};
 pub use start::StartError;
 pub use stepper::StepperError;
 

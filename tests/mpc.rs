@@ -3,7 +3,7 @@
 //! reproduces the open-loop optimum (to the solver's tolerance), warm starts save iterations,
 //! plant and model may differ, bounds hold, the baselines and the PD gradient, bad settings.
 
-use chainbeam::error::Requirement;
+use chainbeam::error::{Requirement, ValueError};
 use chainbeam::mpc::{
     pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon,
     Mpc, MpcError, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
@@ -378,17 +378,17 @@ fn bad_settings_are_typed_errors() {
     zero.iterations = 0;
     assert_eq!(
         new(0.1, zero),
-        Error::Mpc(MpcError::Zero { name: "iterations" })
+        Error::Mpc(MpcError::Value(ValueError::Zero { name: "iterations" }))
     );
     let mut rho = o(Horizon::ToEnd);
     rho.effort = -1.0;
     assert_eq!(
         new(0.1, rho),
-        Error::Mpc(MpcError::OutOfRange {
+        Error::Mpc(MpcError::Value(ValueError::OutOfRange {
             name: "effort",
             requirement: Requirement::FiniteNonNegative,
             value: -1.0
-        })
+        }))
     );
     let mut empty = o(Horizon::ToEnd);
     empty.ocp.lower = 1.0;

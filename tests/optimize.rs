@@ -2,7 +2,7 @@
 //! thesis §3.3.1). Every reference number names its source: a thesis table, a closed form, or a
 //! second solver on the same problem.
 
-use chainbeam::error::Requirement;
+use chainbeam::error::{Requirement, ValueError};
 use chainbeam::multistart::{
     axis, certify, landscape_1d, landscape_2d, multistart, start_points, MultistartError,
     MultistartReport, StartDesign,
@@ -339,11 +339,11 @@ fn invalid_starts_and_options_are_typed_errors() {
         minimize(&p, theta0, opts).expect_err("a typed refusal")
     };
     let out_of_range = |name, requirement, value| {
-        Error::Optimize(OptimizeError::OutOfRange {
+        Error::Optimize(OptimizeError::Value(ValueError::OutOfRange {
             name,
             requirement,
             value,
-        })
+        }))
     };
     assert_eq!(
         refused(&bounded, &[11.0]),
@@ -385,11 +385,11 @@ fn invalid_starts_and_options_are_typed_errors() {
     assert!(
         matches!(
             e,
-            Error::Optimize(OptimizeError::OutOfRange {
+            Error::Optimize(OptimizeError::Value(ValueError::OutOfRange {
                 name: "rel_grad_tol",
                 requirement: Requirement::FiniteNonNegative,
                 value
-            }) if value.is_nan()
+            })) if value.is_nan()
         ),
         "{e:?}"
     );

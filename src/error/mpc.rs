@@ -1,6 +1,6 @@
 //! Errors of the model-predictive controller and its closed loop ([`crate::mpc`]).
 
-use super::requirement::Requirement;
+use super::requirement::ValueError;
 use thiserror::Error;
 
 /// An argument of [`crate::mpc`] a caller can correct. `Display` says what is wrong;
@@ -65,22 +65,10 @@ pub enum MpcError {
         /// The plant's N.
         steps: usize,
     },
-    /// A count (`iterations`, `first_iterations`) of zero.
-    #[error("must be at least 1")]
-    Zero {
-        /// The argument.
-        name: &'static str,
-    },
-    /// A number (`effort`, `bound`) outside its range.
-    #[error("must be {requirement}, got {value}")]
-    OutOfRange {
-        /// The argument.
-        name: &'static str,
-        /// What it must be.
-        requirement: Requirement,
-        /// The value given.
-        value: f64,
-    },
+    /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
+    /// outside its range.
+    #[error(transparent)]
+    Value(#[from] ValueError),
 }
 
 impl MpcError {
@@ -94,7 +82,7 @@ impl MpcError {
             MpcError::HorizonNotWhole { .. } => "horizon",
             MpcError::ModelSize { .. } => "model",
             MpcError::PastEnd { .. } => "steps",
-            MpcError::Zero { name } | MpcError::OutOfRange { name, .. } => name,
+            MpcError::Value(v) => v.argument(),
         }
     }
 }

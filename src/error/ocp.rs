@@ -1,6 +1,6 @@
 //! Errors of the structured optimal-control solvers (Riccati and condensed, [`crate::ocp`]).
 
-use super::requirement::Requirement;
+use super::requirement::ValueError;
 use crate::base::TipCondition;
 use thiserror::Error;
 
@@ -21,22 +21,10 @@ pub enum OcpError {
         upper: f64,
     },
     /// A number of [`OcpOptions`](crate::ocp::OcpOptions) (`rate_penalty`, `rel_grad_tol`,
-    /// `grad_tol`, `armijo`, `max_regularisation`) outside its range.
-    #[error("must be {requirement}, got {value}")]
-    OutOfRange {
-        /// The option.
-        name: &'static str,
-        /// What it must be.
-        requirement: Requirement,
-        /// The value given.
-        value: f64,
-    },
-    /// A count of [`OcpOptions`](crate::ocp::OcpOptions) (`backtracks`) of zero.
-    #[error("must be at least 1")]
-    Zero {
-        /// The option.
-        name: &'static str,
-    },
+    /// `grad_tol`, `armijo`, `max_regularisation`) outside its range, or a count (`backtracks`)
+    /// of zero.
+    #[error(transparent)]
+    Value(#[from] ValueError),
     /// The objective has no Gauss-Newton form ½ w_k r_k(M₀)² + e_k u_k²
     /// ([`Objective::gauss_newton`](crate::Objective::gauss_newton)), which the structured
     /// solvers exploit.
@@ -171,7 +159,7 @@ impl OcpError {
     pub fn argument(&self) -> &'static str {
         match self {
             OcpError::EmptyBox { .. } => "bounds",
-            OcpError::OutOfRange { name, .. } | OcpError::Zero { name } => name,
+            OcpError::Value(v) => v.argument(),
             OcpError::NoGaussNewtonForm { .. } | OcpError::InvalidGaussNewtonForm { .. } => {
                 "objective"
             }

@@ -1,7 +1,7 @@
 //! Errors of the general-purpose optimiser's options, starts and problems
 //! ([`crate::optimize`]).
 
-use super::requirement::Requirement;
+use super::requirement::ValueError;
 use thiserror::Error;
 
 /// The refusal of a structured solver (riccati, condensed) on a spatial problem.
@@ -25,22 +25,10 @@ pub enum OptimizeError {
         expected: &'static str,
     },
     /// A number of [`OptimOptions`](crate::optimize::OptimOptions) (`grad_tol`, `rel_grad_tol`,
-    /// `cost_rel_tol`, `first_step`, `trust_radius`, `bound`) outside its range.
-    #[error("must be {requirement}, got {value}")]
-    OutOfRange {
-        /// The option.
-        name: &'static str,
-        /// What it must be.
-        requirement: Requirement,
-        /// The value given.
-        value: f64,
-    },
-    /// A count (`lbfgs_memory`, `cg_max_iters`) of zero.
-    #[error("must be at least 1")]
-    Zero {
-        /// The option.
-        name: &'static str,
-    },
+    /// `cost_rel_tol`, `first_step`, `trust_radius`, `bound`) outside its range, or a count
+    /// (`lbfgs_memory`, `cg_max_iters`) of zero.
+    #[error(transparent)]
+    Value(#[from] ValueError),
     /// `target_cost` is NaN.
     #[error("must not be NaN")]
     TargetCostNan,
@@ -139,7 +127,7 @@ impl OptimizeError {
             | OptimizeError::NoHessian
             | OptimizeError::NotStructured { .. }
             | OptimizeError::PlanarOnly => "method",
-            OptimizeError::OutOfRange { name, .. } | OptimizeError::Zero { name } => name,
+            OptimizeError::Value(v) => v.argument(),
             OptimizeError::TargetCostNan => "target_cost",
             OptimizeError::MaxTrustRadius { .. } => "max_trust_radius",
             OptimizeError::BoundAndBox | OptimizeError::ControlOutsideBound { .. } => "bound",

@@ -138,7 +138,7 @@ impl PdTuning {
     /// (infinite: none) and effort weight ρ = `effort`.
     ///
     /// # Errors
-    /// [`MpcError::IntervalNotMultiple`]; [`MpcError::OutOfRange`] naming `bound` (not positive)
+    /// [`MpcError::IntervalNotMultiple`]; [`ValueError::OutOfRange`](crate::error::ValueError::OutOfRange) naming `bound` (not positive)
     /// or `effort` (not finite and ≥ 0).
     pub fn new(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
         let m = interval_steps(interval, scene.time.step)?;
@@ -146,14 +146,7 @@ impl PdTuning {
             ("bound", Requirement::Positive, bound),
             ("effort", Requirement::FiniteNonNegative, effort),
         ] {
-            if !requirement.holds(value) {
-                return Err(MpcError::OutOfRange {
-                    name,
-                    requirement,
-                    value,
-                }
-                .into());
-            }
+            requirement.check(name, value).map_err(MpcError::from)?;
         }
         Ok(PdTuning {
             scene: scene.clone(),

@@ -3,7 +3,7 @@
 
 use super::{interval_steps, Controller, Observation};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
-use crate::error::{MpcError, Requirement, Result};
+use crate::error::{MpcError, Requirement, Result, ValueError};
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::scene::{Control, ControlKind, ObjectiveKind, Scene};
 
@@ -154,19 +154,11 @@ impl Mpc {
             ("iterations", options.iterations),
             ("first_iterations", options.first_iterations),
         ] {
-            if v == 0 {
-                return Err(MpcError::Zero { name }.into());
-            }
+            ValueError::check_count(name, v).map_err(MpcError::from)?;
         }
-        let requirement = Requirement::FiniteNonNegative;
-        if !requirement.holds(options.effort) {
-            return Err(MpcError::OutOfRange {
-                name: "effort",
-                requirement,
-                value: options.effort,
-            }
-            .into());
-        }
+        Requirement::FiniteNonNegative
+            .check("effort", options.effort)
+            .map_err(MpcError::from)?;
         options.objective.check()?;
         let mut model = model.clone();
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);

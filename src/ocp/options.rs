@@ -1,6 +1,6 @@
 //! Options and results of the Riccati solver.
 
-use crate::error::{OcpError, Requirement, Result};
+use crate::error::{OcpError, Requirement, Result, ValueError};
 
 /// Options of [`solve`](super::solve). Build with struct update syntax or [`OcpOptions::with_bound`].
 #[derive(Clone, Debug, PartialEq)]
@@ -91,7 +91,7 @@ impl OcpOptions {
     }
 
     /// Checks every field ([`OcpError`] naming it: [`OcpError::EmptyBox`],
-    /// [`OcpError::OutOfRange`], [`OcpError::Zero`]).
+    /// [`ValueError::OutOfRange`], [`ValueError::Zero`] in [`OcpError::Value`]).
     pub fn validate(&self) -> Result<()> {
         let (lower, upper) = (self.lower, self.upper);
         if lower.is_nan() || upper.is_nan() || lower >= upper {
@@ -114,27 +114,12 @@ impl OcpOptions {
             ("grad_tol", Requirement::FiniteNonNegative, self.grad_tol),
             ("armijo", Requirement::OpenUnitInterval, self.armijo),
         ] {
-            if !requirement.holds(value) {
-                return Err(OcpError::OutOfRange {
-                    name,
-                    requirement,
-                    value,
-                }
-                .into());
-            }
+            requirement.check(name, value).map_err(OcpError::from)?;
         }
-        if self.backtracks == 0 {
-            return Err(OcpError::Zero { name: "backtracks" }.into());
-        }
-        let requirement = Requirement::PositiveFinite;
-        if !requirement.holds(self.max_regularisation) {
-            return Err(OcpError::OutOfRange {
-                name: "max_regularisation",
-                requirement,
-                value: self.max_regularisation,
-            }
-            .into());
-        }
+        ValueError::check_count("backtracks", self.backtracks).map_err(OcpError::from)?;
+        Requirement::PositiveFinite
+            .check("max_regularisation", self.max_regularisation)
+            .map_err(OcpError::from)?;
         Ok(())
     }
 }

@@ -103,7 +103,8 @@ impl<'a, Q: OptimProblem + ?Sized> ArgminAdapter<'a, Q> {
     /// The adapter for `problem` with an optional force bound |θ_i| ≤ b (b > 0, finite).
     ///
     /// # Errors
-    /// [`OptimizeError::OutOfRange`] (`bound`) for a bound that is not positive and finite.
+    /// [`ValueError::OutOfRange`](crate::error::ValueError::OutOfRange) (`bound`) for a bound
+    /// that is not positive and finite.
     pub fn new(problem: &'a Q, bound: Option<f64>) -> Result<Self> {
         let bounds = bound.map(Bounds::symmetric).transpose()?;
         Ok(Self::with_bounds(problem, bounds))

@@ -49,7 +49,7 @@ impl Bounds {
     /// The symmetric box [−b, b].
     ///
     /// # Errors
-    /// [`OptimizeError::OutOfRange`] (`bound`) unless b is positive and finite.
+    /// [`ValueError::OutOfRange`](crate::error::ValueError::OutOfRange) (`bound`) unless b is positive and finite.
     pub fn symmetric(b: f64) -> Result<Self> {
         check_bound(Some(b))?;
         Ok(Bounds {
@@ -93,13 +93,10 @@ impl Bounds {
 /// Checks a bound b: positive and finite.
 pub(crate) fn check_bound(bound: Option<f64>) -> Result<()> {
     match bound {
-        Some(b) if !Requirement::PositiveFinite.holds(b) => Err(OptimizeError::OutOfRange {
-            name: "bound",
-            requirement: Requirement::PositiveFinite,
-            value: b,
-        }
-        .into()),
-        _ => Ok(()),
+        Some(b) => Ok(Requirement::PositiveFinite
+            .check("bound", b)
+            .map_err(OptimizeError::from)?),
+        None => Ok(()),
     }
 }
 

@@ -184,7 +184,7 @@ pub use riccati::ocp_options as riccati_options;
 pub use supervisor::{Termination, MAX_REJECTIONS};
 
 pub use crate::error::OptimizeError;
-use crate::error::{Error, Requirement, Result};
+use crate::error::{Error, Requirement, Result, ValueError};
 
 type ArgminError = argmin::core::Error;
 
@@ -367,7 +367,7 @@ impl OptimOptions {
     /// [`bound`](Self::bound) = b, or `None`.
     ///
     /// # Errors
-    /// [`OptimizeError::OutOfRange`] (`bound`) for a bound that is not positive and finite,
+    /// [`ValueError::OutOfRange`] (`bound`) for a bound that is not positive and finite,
     /// [`OptimizeError::BoundAndBox`] when both `bound` and `bounds` are set.
     pub fn force_bounds(&self) -> Result<Option<Bounds>> {
         match (self.bound, self.bounds) {
@@ -392,12 +392,7 @@ impl OptimOptions {
             return Err(OptimizeError::TargetCostNan.into());
         }
         self.force_bounds()?;
-        if self.lbfgs_memory == 0 {
-            return Err(OptimizeError::Zero {
-                name: "lbfgs_memory",
-            }
-            .into());
-        }
+        ValueError::check_count("lbfgs_memory", self.lbfgs_memory).map_err(OptimizeError::from)?;
         check("first_step", positive, self.first_step)?;
         check("trust_radius", positive, self.trust_radius)?;
         if !(self.max_trust_radius.is_finite() && self.max_trust_radius >= self.trust_radius) {
@@ -407,27 +402,18 @@ impl OptimOptions {
             }
             .into());
         }
-        if self.cg_max_iters == Some(0) {
-            return Err(OptimizeError::Zero {
-                name: "cg_max_iters",
-            }
-            .into());
+        if let Some(count) = self.cg_max_iters {
+            ValueError::check_count("cg_max_iters", count).map_err(OptimizeError::from)?;
         }
         Ok(())
     }
 }
 
-/// [`OptimizeError::OutOfRange`] naming the option `name` unless `value` meets `requirement`.
+/// [`ValueError::OutOfRange`] naming the option `name` unless `value` meets `requirement`.
 fn check(name: &'static str, requirement: Requirement, value: f64) -> Result<()> {
-    if requirement.holds(value) {
-        return Ok(());
-    }
-    Err(OptimizeError::OutOfRange {
-        name,
-        requirement,
-        value,
-    }
-    .into())
+    Ok(requirement
+        .check(name, value)
+        .map_err(OptimizeError::from)?)
 }
 
 /// The outcome of [`minimize`].

@@ -9,11 +9,13 @@
 //! with n at a fixed length), and its largest |M_w|; the drag constant is
 //! re-derived for each n as D = ½ ρ_w C_d D_o / (l μ² L) (the scene files' comments).
 //!
+//! The runs keep the moment history only (`chainbeam::moment_history`, no trajectory).
+//!
 //! `cargo run --release --example riser_convergence -- SCENE.toml T0 T n1,n2,… h1,h2,…`
 
 use std::time::Instant;
 
-use chainbeam::{simulate, Scene};
+use chainbeam::{moment_history, Scene};
 
 fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
     s.split(',')
@@ -46,7 +48,7 @@ fn main() {
             s.time.step = h;
             s.time.steps = (t_end / h).round() as usize;
             let start = Instant::now();
-            let traj = match simulate(&s) {
+            let history = match moment_history(&s) {
                 Ok(t) => t,
                 Err(e) => {
                     println!("{n},{h},failed: {e}");
@@ -55,7 +57,7 @@ fn main() {
             };
             let secs = start.elapsed().as_secs_f64();
             // The base spring's moment k₁ z₁/l₁ = M₀ l₁/2 (M₀ = 2 k₁ z₁/l₁², eq. 3.1.3).
-            let m: Vec<f64> = traj.moment().iter().map(|m| m * 0.5 * l).collect();
+            let m: Vec<f64> = history.moment.iter().map(|m| m * 0.5 * l).collect();
             let first = (t0 / h).round() as usize;
             let window = &m[first..];
             let len = window.len() as f64;

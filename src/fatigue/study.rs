@@ -50,7 +50,7 @@ use super::{assess, combine_scatter, CellDamage, FatigueError, FatigueSpec, Mome
 use crate::mpc::{run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning};
 use crate::optimize::OptimOptions;
 use crate::scene::{Scene, Support};
-use crate::simulate::simulate;
+use crate::simulate::moment_history;
 
 /// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
 /// each cell is a simulation per controller).
@@ -394,11 +394,11 @@ pub fn run_controller(
             } else {
                 scene
             };
-            let traj = simulate(run)?;
+            let history = moment_history(run)?;
             Ok(ControlledRecord {
-                moment: traj.moment().to_vec(),
-                moment_x: traj.is_spatial().then(|| traj.moment_x().to_vec()),
-                duration_s: traj.steps() as f64 * traj.h(),
+                duration_s: history.duration(),
+                moment: history.moment,
+                moment_x: history.moment_x,
                 force: None,
                 gains: None,
             })

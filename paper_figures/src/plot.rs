@@ -1,11 +1,13 @@
 //! A small layer over `plotters`: figures of one or more panels of line series, written as PNG
 //! and SVG with a bundled font (DejaVu Sans, no system font needed).
 
-use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::error::Error;
 use std::path::{Path, PathBuf};
+
+mod cart;
+use cart::draw_cart;
 
 /// Result with a boxed error.
 pub type Res<T> = Result<T, Box<dyn Error>>;
@@ -606,152 +608,6 @@ where
         let c = viridis((i as f64 + 0.5) / cells as f64);
         Rectangle::new([(0.0, a), (1.0, b)], c.filled())
     }))?;
-    Ok(())
-}
-
-fn draw_cart<DB, X, Y>(area: &DrawingArea<DB, Shift>, p: &Panel, s: f64, xs: X, ys: Y) -> Res<()>
-where
-    DB: DrawingBackend,
-    DB::ErrorType: 'static,
-    X: AsRangedCoord<Value = f64>,
-    Y: AsRangedCoord<Value = f64>,
-    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
-    let px = |v: f64| ((v * s).round() as i32).max(1);
-    let mut chart = ChartBuilder::on(area)
-        .caption(&p.title, (FONT, px(22.0)))
-        .margin(px(12.0))
-        .x_label_area_size(px(55.0))
-        .y_label_area_size(px(85.0))
-        .build_cartesian_2d(xs, ys)?;
-    // linear axes: print round-off around zero as 0
-    let ((xa, xb), (ya, yb)) = panel_ranges(p);
-    let (xz, yz) = (
-        if p.logx { 0.0 } else { 1e-9 * (xb - xa).abs() },
-        if p.logy { 0.0 } else { 1e-9 * (yb - ya).abs() },
-    );
-    let exp_label = |v: f64| {
-        if (v - v.round()).abs() < 1e-9 {
-            format!("1e{}", v.round() as i64)
-        } else {
-            String::new()
-        }
-    };
-    let (ex, ey) = (p.exp_x, p.exp_y);
-    let fx = move |v: &f64| {
-        if ex {
-            exp_label(*v)
-        } else {
-            fmt_tick(if v.abs() < xz { 0.0 } else { *v })
-        }
-    };
-    let fy = move |v: &f64| {
-        if ey {
-            exp_label(*v)
-        } else {
-            fmt_tick(if v.abs() < yz { 0.0 } else { *v })
-        }
-    };
-    chart
-        .configure_mesh()
-        .x_desc(p.x.as_str())
-        .y_desc(p.y.as_str())
-        .label_style((FONT, px(15.0)))
-        .axis_desc_style((FONT, px(17.0)))
-        .x_label_formatter(&fx)
-        .y_label_formatter(&fy)
-        .x_labels(7)
-        .y_labels(7)
-        .light_line_style(RGBColor(235, 235, 235))
-        .bold_line_style(RGBColor(215, 215, 215))
-        .draw()?;
-    if let Some(h) = &p.heat {
-        let ex = Heat::edges(h.x, h.nx, p.logx);
-        let ey = Heat::edges(h.y, h.ny, p.logy);
-        let r = h.range();
-        let (ex, ey) = (&ex, &ey);
-        chart.draw_series((0..h.nx).flat_map(|i| {
-            (0..h.ny).map(move |j| {
-                let c = h.color(h.values[i * h.ny + j], r);
-                Rectangle::new([(ex[i], ey[j]), (ex[i + 1], ey[j + 1])], c.filled())
-            })
-        }))?;
-    }
-    let w = |s0: &Series| ((s0.width as f64 * s).round() as u32).max(1);
-    for ser in &p.series {
-        let style = ShapeStyle::from(ser.color).stroke_width(w(ser));
-        let pts: Vec<(f64, f64)> = ser
-            .pts
-            .iter()
-            .copied()
-            .filter(|q| q.0.is_finite() && q.1.is_finite())
-            .filter(|q| (!p.logx || q.0 > 0.0) && (!p.logy || q.1 > 0.0))
-            .collect();
-        let ann = match ser.dash {
-            Dash::Solid => chart.draw_series(LineSeries::new(pts.clone(), style))?,
-            Dash::Dashed => {
-                chart.draw_series(DashedLineSeries::new(pts.clone(), px(9.0), px(6.0), style))?
-            }
-            Dash::Dotted => {
-                let c = ser.color;
-                let r = (1.3 * s * (ser.width as f64).max(1.0)).max(1.0);
-                chart.draw_series(DottedLineSeries::new(pts.clone(), 0, px(6.0), move |xy| {
-                    Circle::new(xy, r, c.filled())
-                }))?
-            }
-            Dash::Markers => chart.draw_series(
-                pts.iter()
-                    .map(|&xy| Circle::new(xy, px(4.0), ser.color.filled())),
-            )?,
-        };
-        if let Some(name) = &ser.name {
-            let dash = ser.dash;
-            let c = ser.color;
-            let lw = w(ser);
-            let k = px(1.0);
-            ann.label(name.as_str()).legend(move |(x, y)| {
-                let st = ShapeStyle::from(c).stroke_width(lw);
-                // three segments (x0, y0, x1, y1) in units of k, so every style has one type
-                let segs: [(i32, i32, i32, i32); 3] = match dash {
-                    Dash::Solid => [(0, 0, 12, 0), (12, 0, 24, 0), (24, 0, 24, 0)],
-                    Dash::Dashed => [(0, 0, 8, 0), (14, 0, 22, 0), (22, 0, 22, 0)],
-                    Dash::Dotted => [(0, 0, 3, 0), (9, 0, 12, 0), (18, 0, 21, 0)],
-                    Dash::Markers => [(9, -3, 15, 3), (9, 3, 15, -3), (15, 3, 15, 3)],
-                };
-                let seg = |i: usize| {
-                    let (a, b, c2, d) = segs[i];
-                    PathElement::new(vec![(a * k, b * k), (c2 * k, d * k)], st)
-                };
-                EmptyElement::at((x, y)) + seg(0) + seg(1) + seg(2)
-            });
-        }
-        if ser.markers && ser.dash != Dash::Markers {
-            chart.draw_series(
-                pts.iter()
-                    .map(|&xy| Circle::new(xy, px(3.5), ser.color.filled())),
-            )?;
-        }
-    }
-    let pos = match p.legend {
-        Legend::None => None,
-        Legend::UpperRight => Some(SeriesLabelPosition::UpperRight),
-        Legend::UpperLeft => Some(SeriesLabelPosition::UpperLeft),
-        Legend::LowerRight => Some(SeriesLabelPosition::LowerRight),
-        Legend::LowerLeft => Some(SeriesLabelPosition::LowerLeft),
-        Legend::Right => Some(SeriesLabelPosition::UpperRight),
-    };
-    if let Some(pos) = pos {
-        if p.series.iter().any(|s| s.name.is_some()) {
-            chart
-                .configure_series_labels()
-                .position(pos)
-                .label_font((FONT, px(14.0)))
-                .background_style(WHITE.mix(0.85))
-                .border_style(RGBColor(180, 180, 180))
-                .draw()?;
-        }
-    }
     Ok(())
 }
 

@@ -1,6 +1,6 @@
 //! The headline of issue 31: the fatigue life of a wellhead in a North Sea wave climate without
 //! control, with the best constant force, a tuned PD law and MPC at the platform, and the CPU
-//! time each took (`chainbeam::fatigue::run_study`, the library behind
+//! time each took (`chainbeam::fatigue_study::run_study`, the library behind
 //! `chainbeam fatigue --scatter FILE --controller none,constant,pd,mpc`).
 //!
 //! ```sh
@@ -33,10 +33,8 @@
 use std::time::Instant;
 
 use chainbeam::fatigue::scatter::reduced_kvitebjorn;
-use chainbeam::fatigue::{
-    run_study, ControlSettings, ControllerKind, DnvClass, Environment, FatigueSpec, Study,
-    StudyInput,
-};
+use chainbeam::fatigue::{DnvClass, Environment, FatigueSpec};
+use chainbeam::fatigue_study::{run_study, ControlSettings, ControllerKind, Study, StudyInput};
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::Scene;

@@ -122,6 +122,9 @@
 //! - [`fatigue`]: wellhead fatigue: hot-spot stress from M₀, rainflow counting (ASTM E1049-85),
 //!   DNV-RP-C203 S-N curves, Miner's rule, annual damage and life, scatter diagrams, and the
 //!   damage's gradient with respect to the stress history.
+//! - [`fatigue_study`]: the layer above [`mpc`] and [`fatigue`]: every controller (none, the
+//!   best constant force, a PD law, MPC) on every cell of a scatter diagram, combined into
+//!   damage per year, life and life extension per controller ([`fatigue_study::run_study`]).
 //! - [`euler_bernoulli`]: the Euler-Bernoulli finite-difference beam and the static beam formulas.
 //! - [`error`]: the typed errors ([`Error`], [`Result`]).
 //!
@@ -139,6 +142,7 @@ pub mod constraints;
 pub mod error;
 pub mod euler_bernoulli;
 pub mod fatigue;
+pub mod fatigue_study;
 pub mod integrators;
 pub mod model;
 pub mod mpc;

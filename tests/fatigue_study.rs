@@ -1,11 +1,12 @@
-//! The fatigue study (src/fatigue/study.rs): each controller's damage against an independent
+//! The fatigue study (src/fatigue_study.rs): each controller's damage against an independent
 //! computation of the same record, the refusal of a control that cannot act, the controller
 //! list.
 
 use chainbeam::catalogue;
-use chainbeam::fatigue::{
-    assess, check_control_can_act, run_controller, run_study, ControlSettings, ControllerKind,
-    FatigueSpec, MomentHistory, StudyError, StudyInput,
+use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
+use chainbeam::fatigue_study::{
+    check_control_can_act, run_controller, run_study, ControlSettings, ControllerKind, StudyError,
+    StudyInput,
 };
 use chainbeam::mpc::{run_closed_loop, ConstantForce, NoControl};
 use chainbeam::scene::Support;

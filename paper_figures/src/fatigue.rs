@@ -12,10 +12,8 @@ use crate::plot::{color, Figure, Heat, Legend, Panel, Res, Series};
 use crate::{Ctx, Entry, Made};
 use chainbeam::catalogue;
 use chainbeam::fatigue::scatter::{reduced_hs_bins, reduced_kvitebjorn, reduced_tp_bins};
-use chainbeam::fatigue::{
-    assess, run_study, ControlSettings, ControllerKind, DnvClass, Environment, FatigueSpec,
-    MomentHistory, StudyInput,
-};
+use chainbeam::fatigue::{assess, DnvClass, Environment, FatigueSpec, MomentHistory};
+use chainbeam::fatigue_study::{run_study, ControlSettings, ControllerKind, StudyInput};
 use chainbeam::mpc::{run_closed_loop, Horizon, Mpc, MpcOptions, NoControl};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::Scene;

@@ -15,9 +15,11 @@
 //! 5. [`damage_gradient`] (`gradient`): ∂D/∂σ_k, non-zero at turning points only, and the smooth
 //!    proxy Σ|σ_k|^m.
 //!
-//! [`assess`] runs 1–4 on a moment history described by a [`FatigueSpec`]; [`run_study`]
-//! (`study`) runs controllers (none, the best constant force, a PD law, MPC) on every cell of a
-//! scatter diagram and reports damage per year, life and life extension per controller.
+//! [`assess`] runs 1–4 on a moment history described by a [`FatigueSpec`]; the scatter
+//! diagram's cells ([`ScatterCell`], `scatter`) are plain data here. Running controllers (none,
+//! the best constant force, a PD law, MPC) on every cell of a diagram and reporting damage per
+//! year, life and life extension per controller is the layer above the controllers,
+//! `chainbeam::fatigue_study` (`run_study`): this module knows nothing of simulation or control.
 //!
 //! ```
 //! use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory, MomentMeasure};
@@ -42,7 +44,6 @@ pub mod rainflow;
 pub mod scatter;
 pub mod sn;
 pub mod stress;
-pub mod study;
 
 use thiserror::Error;
 
@@ -52,13 +53,9 @@ pub use miner::{
     SECONDS_PER_YEAR,
 };
 pub use rainflow::{rainflow, rainflow_into, rainflow_visit, Cycle, RainflowWorkspace};
+pub use scatter::{ScatterCell, SeaState};
 pub use sn::{DnvClass, Environment, Segment, SnCurve, DNV_REFERENCE_THICKNESS_M};
 pub use stress::{HotSpot, MomentMeasure};
-pub use study::{
-    check_control_can_act, run_controller, run_study, scene_sea_state, with_sea_state, CellOutcome,
-    ControlSettings, ControlledRecord, ControllerKind, ControllerOutcome, ScatterCell, SeaState,
-    Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
-};
 
 /// Errors of the fatigue assessment; each names the quantity (and key or index) at fault.
 #[derive(Debug, Error, Clone, PartialEq)]

@@ -16,7 +16,26 @@
 //! midpoint rule in F_H over 400 slices of each H_s bin, the exact conditional lognormal
 //! probability of each T_p bin) and gives each bin the representative sea state it is given.
 
-use super::study::{ScatterCell, SeaState};
+/// A sea state: significant wave height H_s \[m\], peak period T_p \[s\] and, optionally, the
+/// mean direction \[° from +z toward +x\].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaState {
+    /// H_s \[m\].
+    pub hs: f64,
+    /// T_p \[s\].
+    pub tp: f64,
+    /// Mean direction \[°\]; `None`: the scene's.
+    pub direction: Option<f64>,
+}
+
+/// A cell of a scatter diagram: a sea state and its probability of occurrence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScatterCell {
+    /// The sea state.
+    pub sea: SeaState,
+    /// Probability of occurrence p_s ∈ \[0, 1\].
+    pub probability: f64,
+}
 
 /// The (H_s, T_p) joint model of the module docs.
 #[derive(Clone, Copy, Debug, PartialEq)]

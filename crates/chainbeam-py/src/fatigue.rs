@@ -9,9 +9,12 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use chainbeam::fatigue::{
-    assess, combine_scatter, life_years, run_study, CellDamage, CellOutcome, ControlSettings,
-    ControllerKind, ControllerOutcome, FatigueError, FatigueSpec, MomentHistory, ScatterCell,
-    SeaState, Study, StudyError, StudyInput,
+    assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
+    ScatterCell, SeaState,
+};
+use chainbeam::fatigue_study::{
+    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
+    StudyInput,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;

@@ -1,13 +1,14 @@
 //! `chainbeam fatigue --controller LIST` and `--scatter FILE`: the study of
-//! [`chainbeam::fatigue::run_study`] from the flags, its JSON, and the scatter CSV reader.
+//! [`chainbeam::fatigue_study::run_study`] from the flags, its JSON, and the scatter CSV reader.
 
 use std::path::Path;
 
 use serde::Serialize;
 
-use chainbeam::fatigue::{
-    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, FatigueSpec,
-    ScatterCell, SeaState, Study, StudyError, StudyInput, MAX_SCATTER_CELLS,
+use chainbeam::fatigue::{FatigueSpec, ScatterCell, SeaState};
+use chainbeam::fatigue_study::{
+    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
+    StudyInput, MAX_SCATTER_CELLS,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;

@@ -46,7 +46,10 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
-use super::{assess, combine_scatter, CellDamage, FatigueError, FatigueSpec, MomentHistory};
+use crate::fatigue::{
+    assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
+    ScatterCell, SeaState,
+};
 use crate::mpc::{run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning};
 use crate::optimize::OptimOptions;
 use crate::scene::{Scene, Support};
@@ -220,27 +223,6 @@ impl ControlSettings {
     pub fn bound(&self) -> f64 {
         self.mpc.ocp.upper
     }
-}
-
-/// A sea state: significant wave height H_s \[m\], peak period T_p \[s\] and, optionally, the
-/// mean direction \[° from +z toward +x\].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SeaState {
-    /// H_s \[m\].
-    pub hs: f64,
-    /// T_p \[s\].
-    pub tp: f64,
-    /// Mean direction \[°\]; `None`: the scene's.
-    pub direction: Option<f64>,
-}
-
-/// A cell of a scatter diagram: a sea state and its probability of occurrence.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScatterCell {
-    /// The sea state.
-    pub sea: SeaState,
-    /// Probability of occurrence p_s ∈ \[0, 1\].
-    pub probability: f64,
 }
 
 /// A controller's moment record on one scene.
@@ -592,7 +574,7 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
         controllers.push(ControllerOutcome {
             kind,
             damage_per_year: combined.damage_per_year,
-            life_years: super::life_years(combined.damage_per_year, input.spec.dff)?,
+            life_years: life_years(combined.damage_per_year, input.spec.dff)?,
             cells,
         });
     }

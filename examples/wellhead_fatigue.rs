@@ -39,6 +39,14 @@ use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::Scene;
 
+/// MPC's planning model: the riser's pipe as 20 pendulums at h = 0.05 s (the plant: 80 at
+/// 0.00625 s), src/mpc/planning.rs.
+const PLAN_PENDULUMS: usize = 20;
+/// The planning model's step \[s\].
+const PLAN_STEP: f64 = 0.05;
+/// The PD gains are tuned on the first 120 s of each cell's record.
+const PD_TRAINING_S: f64 = 120.0;
+
 /// Process CPU time (user + system) of every thread so far \[s\].
 fn cpu_seconds() -> f64 {
     // SAFETY: getrusage writes into the zeroed struct we own.
@@ -78,9 +86,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             horizon: Horizon::Seconds(8.0),
             effort: 1e-4,
             ocp: OcpOptions::default().with_bound(2e5),
+            plan_pendulums: Some(PLAN_PENDULUMS),
+            plan_step: Some(PLAN_STEP),
             ..MpcOptions::default()
         },
         pd_max_iters: 40,
+        pd_training: Some(PD_TRAINING_S),
+        pd_gains: None,
     };
     println!(
         "riser_300m: {} pendulums, {seconds} s per cell (h = {} s), {} cells holding {:.2} % of \

@@ -18,8 +18,10 @@
 //! - `constant`, `pd`, `mpc`: [`crate::mpc`]'s closed loop on the (planar) plant of the cell's
 //!   scene, one decision every [`ControlSettings::interval`] seconds: the best constant force
 //!   ([`ConstantForce::best`], an offline optimum of the cell's record that knows its future),
-//!   a PD law on the measured M₀ with gains tuned on the cell's record ([`PdLaw::tune`]) and the
-//!   receding-horizon controller ([`Mpc`], a perfect model). All three minimise the thesis's
+//!   a PD law on the measured M₀ with gains tuned on the cell's record ([`PdLaw::tune`]; on its
+//!   first [`ControlSettings::pd_training`] seconds, or [`ControlSettings::pd_gains`] given:
+//!   [`pd_law`]) and the receding-horizon controller ([`Mpc`], a perfect model of the loads,
+//!   on the plant's chain or a reduced planning model of it, [`MpcOptions::plan_pendulums`]). All three minimise the thesis's
 //!   Σ M₀² + ρ h Σ u² (eq. 3.3.4), the smooth stand-in of the damage; the damage reported is
 //!   the rainflow damage of the moment they leave.
 //!
@@ -46,11 +48,15 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::error::Requirement;
 use crate::fatigue::{
     assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
     ScatterCell, SeaState,
 };
-use crate::mpc::{run_closed_loop, ConstantForce, Controller, Mpc, MpcOptions, PdLaw, PdTuning};
+use crate::mpc::{
+    interval_steps, run_closed_loop, ConstantForce, Controller, Mpc, MpcError, MpcOptions, PdLaw,
+    PdTuning,
+};
 use crate::optimize::OptimOptions;
 use crate::scene::{Scene, Support};
 use crate::simulate::moment_history;
@@ -206,6 +212,15 @@ pub struct ControlSettings {
     pub mpc: MpcOptions,
     /// Iterations of the PD gains' tuning ([`PdLaw::tune`]). Default 200.
     pub pd_max_iters: usize,
+    /// The PD law's training window \[s\]: its gains are tuned on the first `pd_training`
+    /// seconds of the cell's record (rounded to whole control intervals, at least one), then
+    /// run on the whole record. `None` (default): tuned on the whole record. A window of a few
+    /// minutes holds tens of wave periods, enough to fit three gains, at a fraction of the
+    /// cost of tuning on an hour (module docs, "The controllers").
+    pub pd_training: Option<f64>,
+    /// Given PD gains (u_b \[N\], K_p \[N/(N·m)\], K_d \[N·s/(N·m)\]) used in every cell
+    /// instead of tuning them (a fixed design). Default `None`: tuned per cell.
+    pub pd_gains: Option<[f64; 3]>,
 }
 
 impl Default for ControlSettings {
@@ -214,6 +229,8 @@ impl Default for ControlSettings {
             interval: 0.1,
             mpc: MpcOptions::default(),
             pd_max_iters: 200,
+            pd_training: None,
+            pd_gains: None,
         }
     }
 }
@@ -391,13 +408,7 @@ pub fn run_controller(
             closed(&mut c, Some(force), None)
         }
         ControllerKind::Pd => {
-            let tuning = PdTuning::new(scene, interval, bound, effort)?;
-            let opts = OptimOptions {
-                max_iters: settings.pd_max_iters,
-                first_step: 0.01,
-                ..OptimOptions::default()
-            };
-            let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
+            let mut pd = pd_law(scene, settings)?;
             let gains = [pd.bias, pd.kp, pd.kd];
             closed(&mut pd, None, Some(gains))
         }
@@ -406,6 +417,40 @@ pub fn run_controller(
             closed(&mut mpc, None, None)
         }
     }
+}
+
+/// The PD law of a cell ([`ControlSettings::pd_gains`], or tuned on the first
+/// [`ControlSettings::pd_training`] seconds of `scene`'s record from zero gains).
+///
+/// # Errors
+/// The tuning's errors ([`PdTuning::new`], [`PdLaw::tune`]); [`crate::error::ValueError`] naming
+/// `pd_training` for a window that is not positive.
+pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw> {
+    let (interval, bound, effort) = (settings.interval, settings.bound(), settings.mpc.effort);
+    if let Some([bias, kp, kd]) = settings.pd_gains {
+        return Ok(PdLaw {
+            bias,
+            kp,
+            kd,
+            bound,
+        });
+    }
+    let mut training = scene.clone();
+    if let Some(seconds) = settings.pd_training {
+        Requirement::PositiveFinite
+            .check("pd_training", seconds)
+            .map_err(MpcError::from)?;
+        let m = interval_steps(interval, scene.time.step)?;
+        let intervals = ((seconds / interval).round() as usize).max(1);
+        training.time.steps = (intervals * m).min(scene.time.steps);
+    }
+    let tuning = PdTuning::new(&training, interval, bound, effort)?;
+    let opts = OptimOptions {
+        max_iters: settings.pd_max_iters,
+        first_step: 0.01,
+        ..OptimOptions::default()
+    };
+    Ok(PdLaw::tune(&tuning, [0.0; 3], &opts)?.0)
 }
 
 /// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when

@@ -117,6 +117,16 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O, 3> {
 }
 
 impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
+    /// The same problem on `chain`, a chain of the same scene whose loads are realised over a
+    /// longer record than the horizon (its wave kinematics tabulated further): a receding-horizon
+    /// controller whose horizons start at t₀ > 0 then reads the tables instead of summing every
+    /// wave component beyond a horizon-long record (src/mpc/receding.rs).
+    pub(crate) fn with_chain(mut self, chain: Chain<f64, DIM>) -> Self {
+        debug_assert_eq!(chain.n(), self.chain.n());
+        self.chain = chain;
+        self
+    }
+
     /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
     pub fn with_checkpointing(mut self, c: Checkpointing) -> Self {
         self.checkpointing = c;

@@ -65,6 +65,27 @@ pub enum MpcError {
         /// The plant's N.
         steps: usize,
     },
+    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`]) of a scene without
+    /// `[pipe]`: the coarser chain is rebuilt from the pipe's description.
+    #[error(
+        "a reduced planning model needs a scene with a [pipe] table, from which the coarser \
+         chain is built"
+    )]
+    PlanWithoutPipe,
+    /// A planning model's number of pendulums outside 1..=n.
+    #[error("must be between 1 and the plant's {n} pendulums, got {pendulums}")]
+    PlanPendulums {
+        /// The number asked for.
+        pendulums: usize,
+        /// The plant's n.
+        n: usize,
+    },
+    /// A reduced planning model of a beam whose tip is held by a constraint (fixed-fixed,
+    /// pinned-pinned, a reaction-force tip), which the state map does not keep.
+    #[error(
+        "a reduced planning model needs a free tip or a tip spring (support cantilever or riser)"
+    )]
+    PlanSupport,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -72,8 +93,9 @@ pub enum MpcError {
 }
 
 impl MpcError {
-    /// The argument at fault: `interval`, `horizon`, `model`, `steps`, or the name of a count or
-    /// a number (`iterations`, `first_iterations`, `effort`, `bound`).
+    /// The argument at fault: `interval`, `horizon`, `model`, `steps`, `plan_pendulums`, or the
+    /// name of a count or a number (`iterations`, `first_iterations`, `effort`, `bound`,
+    /// `plan_step`).
     pub fn argument(&self) -> &'static str {
         match self {
             MpcError::IntervalNotMultiple { .. }
@@ -81,6 +103,9 @@ impl MpcError {
             | MpcError::IntervalMismatch { .. } => "interval",
             MpcError::HorizonNotWhole { .. } => "horizon",
             MpcError::ModelSize { .. } => "model",
+            MpcError::PlanWithoutPipe | MpcError::PlanPendulums { .. } | MpcError::PlanSupport => {
+                "plan_pendulums"
+            }
             MpcError::PastEnd { .. } => "steps",
             MpcError::Value(v) => v.argument(),
         }

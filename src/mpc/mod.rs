@@ -154,6 +154,7 @@
 //! ```
 
 mod baselines;
+pub mod planning;
 mod plant;
 mod receding;
 

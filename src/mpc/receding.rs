@@ -1,11 +1,14 @@
 //! The receding-horizon controller: real-time iterations of a Gauss-Newton solver (condensed or
 //! Riccati) from the observed state, warm-started from the previous plan.
 
+use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::{interval_steps, Controller, Observation};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
 use crate::error::{MpcError, Requirement, Result, ValueError};
+use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::scene::{Control, ControlKind, ObjectiveKind, Scene};
+use crate::steppers::rattle::State;
 
 /// How far a plan looks ahead.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -85,6 +88,15 @@ pub struct MpcOptions {
     /// The solver's options: the bounds on u (default |u| ≤ 5 N), the rate penalty and the
     /// tolerances; `max_iters` is replaced by the budgets above.
     pub ocp: OcpOptions,
+    /// Pendulums n_p of a reduced planning model: the model scene's `[pipe]` rebuilt as a chain
+    /// of n_p pendulums ([`super::planning`]), onto which each observed state is mapped; the plant
+    /// keeps its n. `None` (default): plan on the model scene as it is.
+    pub plan_pendulums: Option<usize>,
+    /// The planning model's step h_p \[s\] (the control interval must be a multiple of it).
+    /// `None` (default): the model scene's step. With either `plan_*` option set, the effort
+    /// weight and the rate penalty are rescaled so that the plan minimises the plant's
+    /// objective in the model's units ([`super::planning`], "The objective").
+    pub plan_step: Option<f64>,
 }
 
 impl Default for MpcOptions {
@@ -98,6 +110,8 @@ impl Default for MpcOptions {
             effort: 0.01,
             objective: ObjectiveKind::Sum,
             ocp: OcpOptions::default().with_bound(5.0),
+            plan_pendulums: None,
+            plan_step: None,
         }
     }
 }
@@ -120,6 +134,11 @@ pub struct Mpc {
     warm: Vec<f64>,
     last: Option<OcpResult>,
     decisions: usize,
+    /// The map of the plant's state onto a reduced planning model, and the mapped state.
+    planning: Option<(StateMap<2>, State<f64, 2>)>,
+    /// The model's chain with its loads realised over the whole run and one horizon beyond
+    /// (built at the first decision, [`Mpc::record_chain`]).
+    record: Option<Chain<f64, 2>>,
 }
 
 impl Mpc {
@@ -133,7 +152,9 @@ impl Mpc {
     /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
     /// exponent; the model's errors.
-    pub fn new(model: &Scene, interval: f64, options: MpcOptions) -> Result<Self> {
+    pub fn new(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
+        let (plan_model, planning) = Self::planning_model(model, &mut options)?;
+        let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
         let pieces = match options.horizon {
@@ -180,7 +201,32 @@ impl Mpc {
             warm: Vec::new(),
             last: None,
             decisions: 0,
+            planning,
+            record: None,
         })
+    }
+
+    /// The reduced planning model of `options` ([`MpcOptions::plan_pendulums`],
+    /// [`MpcOptions::plan_step`]) and the map onto it, with the effort weight and the rate
+    /// penalty rescaled to its units; `(None, None)` without one.
+    #[allow(clippy::type_complexity)]
+    fn planning_model(
+        model: &Scene,
+        options: &mut MpcOptions,
+    ) -> Result<(Option<Scene>, Option<(StateMap<2>, State<f64, 2>)>)> {
+        if options.plan_pendulums.is_none() && options.plan_step.is_none() {
+            return Ok((None, None));
+        }
+        let np = options.plan_pendulums.unwrap_or(model.n());
+        let hp = options.plan_step.unwrap_or(model.time.step);
+        let plan = planning_scene(model, np, hp)?;
+        let map = StateMap::new(model, &plan)?;
+        let r = model.beam.lengths[0] / plan.beam.lengths[0];
+        let c = objective_scale(options.objective, r, model.time.step / hp);
+        options.effort *= c;
+        options.ocp.rate_penalty *= c * hp / model.time.step;
+        let start = State::straight(np);
+        Ok((Some(plan), Some((map, start))))
     }
 
     /// The solver's result of the last decision.
@@ -210,9 +256,18 @@ impl Mpc {
                 kind: self.options.objective,
                 effort: self.options.effort,
             };
-            self.template = Some((pieces, ControlProblem::new(&scene, map, objective)?));
+            let record = self.record_chain(obs, pieces)?;
+            let problem = ControlProblem::new(&scene, map, objective)?.with_chain(record);
+            self.template = Some((pieces, problem));
         }
         let template = &self.template.as_ref().expect("set above").1;
+        if let Some((map, start)) = self.planning.as_mut() {
+            return if map_observation(map, obs, start)? {
+                template.clone().starting_before_kick(start.clone(), obs.t)
+            } else {
+                template.clone().starting_from(start.clone(), obs.t)
+            };
+        }
         if template.chain().n() != obs.state.q.len() {
             return Err(MpcError::ModelSize {
                 model: template.chain().n(),
@@ -226,6 +281,27 @@ impl Mpc {
             Some(hat) => template.clone().starting_before_kick(hat.clone(), obs.t),
             None => template.clone().starting_from(obs.state.clone(), obs.t),
         }
+    }
+
+    /// The model's chain with its loads realised from t = 0 to the end of the run plus a horizon
+    /// of `pieces` intervals (built once): a scene's wave kinematics are tabulated over its
+    /// record only (`time.steps`, `WaveField`) and summed component by
+    /// component beyond it, so a chain built from the horizon's scene alone would sum thousands
+    /// of components per pendulum and step at every re-plan after the first horizon (measured on
+    /// riser_300m.toml: 97 % of a re-plan's time in that sum).
+    fn record_chain(&mut self, obs: &Observation<'_>, pieces: usize) -> Result<Chain<f64, 2>> {
+        if let Some(chain) = &self.record {
+            return Ok(chain.clone());
+        }
+        let mut scene = self.model.clone();
+        let end = obs.steps as f64 * obs.h + pieces as f64 * self.interval;
+        scene.time.steps = (end / scene.time.step).ceil() as usize + 1;
+        let mut chain = Chain::<f64, 2>::from_scene(&scene)?;
+        if chain.control_node().is_none() {
+            chain.set_control_node(Some(scene.n()))?;
+        }
+        self.record = Some(chain.clone());
+        Ok(chain)
     }
 
     /// The condensed solver for a horizon of `pieces`, moved to `problem`'s start (built on the

@@ -90,6 +90,16 @@ pub struct FatigueArgs {
     /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise.
     #[arg(long, value_name = "RHO", default_value_t = 0.01)]
     pub effort: f64,
+    /// MPC plans on a reduced model: the scene's [pipe] with N pendulums (see `mpc`).
+    #[arg(long, value_name = "N")]
+    pub plan_pendulums: Option<usize>,
+    /// The step [s] of MPC's reduced planning model (see `mpc`).
+    #[arg(long, value_name = "S")]
+    pub plan_step: Option<f64>,
+    /// Tune the PD law's gains on the first S seconds of each cell's record (default: all of
+    /// it).
+    #[arg(long, value_name = "S")]
+    pub pd_training: Option<f64>,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     pub output: Option<PathBuf>,
 }

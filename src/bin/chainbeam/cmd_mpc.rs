@@ -88,6 +88,14 @@ pub struct MpcArgs {
     /// Rate penalty σ of (σ/h)·Σ (u_k − u_{k−1})².
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
     pub rate_penalty: f64,
+    /// Plan on a reduced model: the scene's [pipe] rebuilt with N pendulums (the plant keeps
+    /// its own); the observed state is mapped onto it. Default: plan on the model as it is.
+    #[arg(long, value_name = "N")]
+    pub plan_pendulums: Option<usize>,
+    /// The planning model's step [s] (the interval must be a multiple of it). Default: the
+    /// model's time.step.
+    #[arg(long, value_name = "S")]
+    pub plan_step: Option<f64>,
     /// Also run no control, the best constant force and a tuned PD law.
     #[arg(long)]
     pub baselines: bool,
@@ -181,6 +189,8 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
             rate_penalty: a.rate_penalty,
             ..OcpOptions::default().with_bound(a.bound)
         },
+        plan_pendulums: a.plan_pendulums,
+        plan_step: a.plan_step,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
@@ -253,6 +263,8 @@ fn flag_of(name: &str) -> Option<&'static str> {
         "effort" => "--effort",
         "bound" => "--bound",
         "rate_penalty" => "--rate-penalty",
+        "plan_pendulums" => "--plan-pendulums",
+        "plan_step" => "--plan-step",
         _ => return None,
     })
 }

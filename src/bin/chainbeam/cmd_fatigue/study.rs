@@ -144,8 +144,11 @@ fn settings(a: &FatigueArgs) -> Result<ControlSettings, CliError> {
             iterations: a.iterations,
             effort: a.effort,
             ocp: OcpOptions::default().with_bound(a.bound),
+            plan_pendulums: a.plan_pendulums,
+            plan_step: a.plan_step,
             ..MpcOptions::default()
         },
+        pd_training: a.pd_training,
         ..ControlSettings::default()
     })
 }
@@ -158,6 +161,9 @@ fn flag_of(name: &str) -> Option<&'static str> {
         "iterations" => "--iterations",
         "effort" => "--effort",
         "bound" | "bounds" => "--bound",
+        "plan_pendulums" => "--plan-pendulums",
+        "plan_step" => "--plan-step",
+        "pd_training" => "--pd-training",
         _ => return None,
     })
 }

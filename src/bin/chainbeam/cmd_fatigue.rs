@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use serde::Serialize;
 
-use chainbeam::fatigue::{assess, FatigueSpec, MomentHistory};
+use chainbeam::fatigue::{assess, Assessment, FatigueSpec, MomentHistory};
 use chainbeam::scene::read_text_file;
 use chainbeam::{moment_history, Scene};
 
@@ -13,7 +13,7 @@ mod study;
 
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
-use crate::{check_finite, lib_error, load_scene, to_json, CliError};
+use crate::{check_finite, lib_error, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `fatigue --help`.
@@ -120,12 +120,12 @@ struct History {
     duration_s: f64,
 }
 
-/// Runs `fatigue`.
+/// Runs `fatigue`: inputs → solve (the assessment, or the study of `--controller`/`--scatter`)
+/// → report.
 pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
     let out = Output::prepare(a.output.as_deref())?;
-    let scene = load_scene(&a.scene)?;
     let mut inputs = Inputs::new();
-    inputs.scene(&a.scene, &scene);
+    let scene = inputs.load_scene(&a.scene)?;
     if let Some(s) = &a.series {
         inputs.file(s);
     }
@@ -135,15 +135,26 @@ pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
     refuse_overwrite(&[("--output", &out)], &inputs)?;
     let spec = fatigue_spec(&a.scene, &scene)?;
     if a.controller.is_some() || a.scatter.is_some() {
-        let json = study::run(a, &scene, &spec, &progress)?;
-        return out.write_all(&json);
+        let solved = study::solve(a, &scene, &spec, &progress)?;
+        return out.write_all(&study::report(a, &solved)?);
     }
+    let assessment = solve(a, &scene, &spec, &progress)?;
+    out.write_all(&to_json(&report(&a.scene, &assessment)?)?)
+}
+
+/// The assessment of the simulated (or `--series`) moment history.
+fn solve(
+    a: &FatigueArgs,
+    scene: &Scene,
+    spec: &FatigueSpec,
+    progress: &Progress,
+) -> Result<Assessment, CliError> {
     let history = match &a.series {
         Some(path) => read_series(path)?,
-        None => simulated(&a.scene, &scene, &progress)?,
+        None => simulated(&a.scene, scene, progress)?,
     };
-    let assessment = assess(
-        &spec,
+    assess(
+        spec,
         MomentHistory {
             duration_s: history.duration_s,
             moment: &history.moment,
@@ -154,27 +165,30 @@ pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
     .map_err(|e| {
         let file = a.series.as_deref().unwrap_or(&a.scene);
         CliError::msg(format!("{}: {e}", file.display()))
-    })?;
+    })
+}
+
+/// The JSON of an assessment; a non-finite number is refused naming the scene.
+fn report(scene_file: &Path, assessment: &Assessment) -> Result<FatigueReport, CliError> {
     let cycles: Vec<[f64; 3]> = assessment
         .cycles
         .iter()
         .map(|c| [c.range, c.mean, c.count])
         .collect();
-    check_finite(&a.scene, "cycles", cycles.as_flattened())?;
+    check_finite(scene_file, "cycles", cycles.as_flattened())?;
     let totals = [
         assessment.damage,
         assessment.duration_s,
         assessment.damage_per_year,
     ];
-    check_finite(&a.scene, "damage", &totals)?;
-    let report = FatigueReport {
+    check_finite(scene_file, "damage", &totals)?;
+    Ok(FatigueReport {
         cycles,
         damage: assessment.damage,
         duration_s: assessment.duration_s,
         damage_per_year: assessment.damage_per_year,
         life_years: Some(assessment.life_years).filter(|l| l.is_finite()),
-    };
-    out.write_all(&to_json(&report)?)
+    })
 }
 
 fn fatigue_spec(path: &Path, scene: &Scene) -> Result<FatigueSpec, CliError> {

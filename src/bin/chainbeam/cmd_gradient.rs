@@ -6,9 +6,13 @@ use clap::Args;
 use serde::Serialize;
 
 use chainbeam::optimize::OptimProblem;
+use chainbeam::Scene;
 
+use crate::controls_io::ControlsFile;
 use crate::output::{refuse_overwrite, Inputs, Output};
-use crate::problem::{self, kind_report, objective_name, KindReport, ProblemArgs, Values};
+use crate::problem::{
+    self, kind_report, objective_name, KindReport, ProblemArgs, SceneProblem, Values,
+};
 use crate::progress::Progress;
 use crate::{check_finite, controls_io, lib_error, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
@@ -74,18 +78,55 @@ struct GradientReport {
     control_node: usize,
 }
 
-/// Runs `gradient`.
+/// What `gradient` reads: the output it will write, the scene and the `--controls` file.
+struct GradientInputs {
+    out: Output,
+    scene: Scene,
+    controls: Option<ControlsFile>,
+}
+
+/// The objective and its adjoint gradient at θ₀ (what `gradient` reports).
+struct Solved {
+    sp: SceneProblem,
+    objective: f64,
+    gradient: Vec<f64>,
+}
+
+/// Runs `gradient`: inputs → solve → report.
 pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
+    let inputs = load(a)?;
+    let solved = solve(a, &inputs, &progress)?;
+    inputs.out.write_all(&to_json(&report(&solved))?)
+}
+
+/// Gathers the inputs (the flags checked, the scene and controls read) and refuses an output
+/// that is one of them.
+fn load(a: &GradientArgs) -> Result<GradientInputs, CliError> {
     let out = Output::prepare(a.output.as_deref())?;
     problem::check_effort(a.problem.effort)?;
     let mut inputs = Inputs::new();
     let scene = inputs.load_scene(&a.scene)?;
-    let file = a.controls.as_deref().map(controls_io::read).transpose()?;
+    let controls = a.controls.as_deref().map(controls_io::read).transpose()?;
     if let Some(c) = &a.controls {
         inputs.file(c);
     }
     refuse_overwrite(&[("--output", &out)], &inputs)?;
-    let sp = problem::build(&a.scene, &scene, Some(&a.problem), file.as_ref())?;
+    Ok(GradientInputs {
+        out,
+        scene,
+        controls,
+    })
+}
+
+/// The problem of the scene (and controls) and one adjoint sweep at θ₀; a non-finite objective
+/// or gradient is refused.
+fn solve(
+    a: &GradientArgs,
+    inputs: &GradientInputs,
+    progress: &Progress,
+) -> Result<Solved, CliError> {
+    let scene = &inputs.scene;
+    let sp = problem::build(&a.scene, scene, Some(&a.problem), inputs.controls.as_ref())?;
     let n = sp.theta0.len();
     let spinner = progress.spinner(format!(
         "adjoint gradient over {} steps ({n} parameter{})",
@@ -97,10 +138,20 @@ pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
     let (objective, gradient) = result.map_err(|e| lib_error(&a.scene, e))?;
     check_finite(&a.scene, "objective", &[objective])?;
     check_finite(&a.scene, "gradient", &gradient)?;
-    let report = GradientReport {
+    Ok(Solved {
+        sp,
         objective,
-        gradient_norm: problem::norm(&gradient),
-        gradient: sp.problem.layout(&gradient),
+        gradient,
+    })
+}
+
+/// The JSON of a solved gradient.
+fn report(s: &Solved) -> GradientReport {
+    let sp = &s.sp;
+    GradientReport {
+        objective: s.objective,
+        gradient_norm: problem::norm(&s.gradient),
+        gradient: sp.problem.layout(&s.gradient),
         controls: sp.problem.layout(&sp.theta0),
         model: sp.problem.model_name(),
         objective_kind: objective_name(sp.objective.kind),
@@ -108,6 +159,5 @@ pub fn run(a: &GradientArgs, progress: Progress) -> Result<(), CliError> {
         effort: sp.objective.effort,
         kind: kind_report(sp.problem.map()),
         control_node: sp.control_node,
-    };
-    out.write_all(&to_json(&report)?)
+    }
 }

@@ -198,13 +198,19 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
     }
 }
 
-/// Runs the study the flags ask for and returns the JSON.
-pub fn run(
+/// A study run from the flags: its outcome and the closed-loop settings it ran with.
+pub struct Solved {
+    study: Study,
+    settings: ControlSettings,
+}
+
+/// Runs the study the flags ask for.
+pub fn solve(
     a: &FatigueArgs,
     scene: &Scene,
     spec: &FatigueSpec,
     progress: &Progress,
-) -> Result<String, CliError> {
+) -> Result<Solved, CliError> {
     let kinds = match &a.controller {
         Some(list) => {
             let mut kinds = ControllerKind::parse_list(list).map_err(|e| study_error(a, e))?;
@@ -236,10 +242,15 @@ pub fn run(
     let study = run_study(&input, &|| bar.inc(1));
     bar.finish_and_clear();
     let study = study.map_err(|e| study_error(a, e))?;
+    Ok(Solved { study, settings })
+}
+
+/// The JSON of a study: per controller with `--controller`, else the scatter's plain run.
+pub fn report(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
     match &a.controller {
-        Some(_) => controllers_json(a, &settings, &study),
+        Some(_) => controllers_json(a, &solved.settings, &solved.study),
         None => {
-            let c = &study.controllers[0];
+            let c = &solved.study.controllers[0];
             let c = controller_json(&a.scene, c)?;
             crate::to_json(&ScatterReport {
                 damage_per_year: c.damage_per_year,

@@ -409,6 +409,25 @@ impl OptimOptions {
     }
 }
 
+/// [`Error::NoEffect`] when parameters cannot act on the objective at the start point
+/// ([`ineffective_params`]); the Hessian-vector products of the check are counted.
+fn refuse_ineffective<Q: OptimProblem + ?Sized>(
+    problem: &Q,
+    adapter: &ArgminAdapter<'_, Q>,
+    start: &point::Point,
+) -> Result<()> {
+    let check = ineffective_params(problem, &start.theta, start.value, &start.grad_theta)?;
+    adapter.shared.bump(|c| c.hvps += check.hvps);
+    if check.refuses(&start.grad_theta) {
+        return Err(Error::NoEffect {
+            params: check.params,
+            objective: start.value,
+            relative_change: check.relative_change,
+        });
+    }
+    Ok(())
+}
+
 /// [`ValueError::OutOfRange`] naming the option `name` unless `value` meets `requirement`.
 fn check(name: &'static str, requirement: Requirement, value: f64) -> Result<()> {
     Ok(requirement
@@ -562,15 +581,7 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         let phi0 = adapter.to_phi(theta0)?;
         problem.check_range(&adapter.to_theta(&phi0))?;
         let start = adapter.evaluate(&phi0)?;
-        let check = ineffective_params(problem, &start.theta, start.value, &start.grad_theta)?;
-        adapter.shared.bump(|c| c.hvps += check.hvps);
-        if check.refuses(&start.grad_theta) {
-            return Err(Error::NoEffect {
-                params: check.params,
-                objective: start.value,
-                relative_change: check.relative_change,
-            });
-        }
+        refuse_ineffective(problem, &adapter, &start)?;
         let initial_gradient_norm = norm(&start.grad_theta);
         let gnorm0 = norm(&start.grad_phi);
         // L-BFGS's first step is −s g₀; its later steps do not depend on s (the curvature

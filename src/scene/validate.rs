@@ -2,7 +2,7 @@
 //! (docs/scene-format.md, "Valid ranges" and "Size limits").
 
 use super::values::{to_i64, NumOrArray};
-use super::{ControlKind, PointLoad, Scene, SceneError, SceneErrorKind, Support};
+use super::{Control, ControlKind, PointLoad, Scene, SceneError, SceneErrorKind, Support};
 use crate::base::StepStats;
 
 /// Largest number of pendulums n a scene may have.
@@ -213,38 +213,46 @@ impl Scene {
             check_series_coverage(i, p, t_end)?;
         }
         if let Some(c) = &self.control {
-            node_index("control.node", to_i64(c.node), n)?;
-            if b.reaction_force && c.node != n {
-                return Err(SceneError::invalid(
-                    "control.node",
-                    format!(
-                        "the reaction-force variant moves the tip: the control must act at node \
-                         {n}, not {}",
-                        c.node
-                    ),
-                ));
-            }
-            check_control_count(c.kind, c.values.len(), self.time.steps)?;
-            if let Some(vx) = &c.values_x {
-                if vx.len() != c.values.len() {
-                    return Err(SceneError::count(
-                        "control.values_x",
-                        c.values.len(),
-                        vx.len(),
-                    ));
-                }
-            }
-            let vx = c.values_x.iter().flatten();
-            for (i, &u) in c.values.iter().chain(vx).enumerate() {
-                let key = format!("control.values[{}]", i % c.values.len());
-                check_finite(&key, u)?;
-                check_range(&key, u, &FORCE_RANGE)?;
-            }
+            self.check_control(c)?;
         }
         if let Some(f) = &self.fatigue {
             f.validate().map_err(super::fatigue::scene_error)?;
         }
         self.check_step_numbers()
+    }
+
+    /// The `[control]` table: the node (the tip with the reaction-force variant), the number of
+    /// values for the kind, `values_x` as long as `values`, every value finite and in range.
+    fn check_control(&self, c: &Control) -> Result<(), SceneError> {
+        let (n, b) = (self.n(), &self.beam);
+        node_index("control.node", to_i64(c.node), n)?;
+        if b.reaction_force && c.node != n {
+            return Err(SceneError::invalid(
+                "control.node",
+                format!(
+                    "the reaction-force variant moves the tip: the control must act at node \
+                     {n}, not {}",
+                    c.node
+                ),
+            ));
+        }
+        check_control_count(c.kind, c.values.len(), self.time.steps)?;
+        if let Some(vx) = &c.values_x {
+            if vx.len() != c.values.len() {
+                return Err(SceneError::count(
+                    "control.values_x",
+                    c.values.len(),
+                    vx.len(),
+                ));
+            }
+        }
+        let vx = c.values_x.iter().flatten();
+        for (i, &u) in c.values.iter().chain(vx).enumerate() {
+            let key = format!("control.values[{}]", i % c.values.len());
+            check_finite(&key, u)?;
+            check_range(&key, u, &FORCE_RANGE)?;
+        }
+        Ok(())
     }
 
     /// The step numbers of [`MAX_STEP_NUMBER`], with M̄⁻¹ᵢᵢ = (1/lᵢ²)(1/mᵢ + 1/mᵢ₋₁) the diagonal

@@ -155,7 +155,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (study, cpu, wall) in &studies {
         let c = &study.controllers[0];
         println!(
-            "| {} | {:.4e} | {:.1} | {:.2} | {cpu:.1} | {wall:.1} | {:.1} |",
+            "| {} | {:.4e} | {:.3e} | {:.2} | {cpu:.1} | {wall:.1} | {:.1} |",
             c.kind.name(),
             c.damage_per_year,
             c.life_years,

@@ -53,9 +53,11 @@ pub struct WaveField {
     inputs: WaveInputs,
     n: usize,
     h: f64,
-    /// rows × n, time-major.
-    momentum: Vec<f64>,
-    inertia: Vec<f64>,
+    /// Number of grid times of the record.
+    rows: usize,
+    /// rows × n pairs (Wᵢ(tₖ), Gᵢ(tₖ)), time-major: the two series a step reads for a
+    /// pendulum share a cache line.
+    series: Vec<f64>,
     elevation: Vec<f64>,
     /// n × N amplitudes of Wᵢ and Gᵢ.
     momentum_amp: Vec<Complex<f64>>,
@@ -109,8 +111,8 @@ impl WaveField {
         let mut field = WaveField {
             n,
             h: sea.step(),
-            momentum: alloc(rows * n)?,
-            inertia: alloc(rows * n)?,
+            rows,
+            series: alloc(rows * n * 2)?,
             elevation: alloc(rows)?,
             momentum_amp,
             inertia_amp,
@@ -118,17 +120,33 @@ impl WaveField {
             sea,
         };
         let mut plan = field.sea.synthesis();
-        for i in 0..n {
-            let (a, b) = (
-                &field.momentum_amp[i * nc..(i + 1) * nc],
-                &field.inertia_amp[i * nc..(i + 1) * nc],
-            );
-            let (mo, io) = (&mut field.momentum, &mut field.inertia);
-            field.sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
-                mo[k * n + i] = x;
-                io[k * n + i] = y;
-            });
+        // The pendulums in blocks of BLOCK: each one's series into a pendulum-major scratch,
+        // then the block into the time-major record, BLOCK pairs (one cache line) per row
+        // instead of one scattered write per pendulum and row (the same values).
+        const BLOCK: usize = 4;
+        let mut scratch = alloc(rows * 2 * BLOCK.min(n))?;
+        for i0 in (0..n).step_by(BLOCK) {
+            let width = BLOCK.min(n - i0);
+            for j in 0..width {
+                let i = i0 + j;
+                let (a, b) = (
+                    &field.momentum_amp[i * nc..(i + 1) * nc],
+                    &field.inertia_amp[i * nc..(i + 1) * nc],
+                );
+                let out = &mut scratch[j * rows * 2..(j + 1) * rows * 2];
+                field.sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
+                    out[2 * k] = x;
+                    out[2 * k + 1] = y;
+                });
+            }
+            for k in 0..rows {
+                let row = &mut field.series[(k * n + i0) * 2..(k * n + i0 + width) * 2];
+                for (j, pair) in row.chunks_exact_mut(2).enumerate() {
+                    pair.copy_from_slice(&scratch[(j * rows + k) * 2..(j * rows + k) * 2 + 2]);
+                }
+            }
         }
+        drop(scratch);
         let el = &mut field.elevation;
         field.sea.synthesize(
             (field.sea.elevation_amplitudes(), &[]),
@@ -166,24 +184,32 @@ impl WaveField {
         self.inputs.direction
     }
 
-    /// The series `table` (rows × n) of pendulum `i` at time t: the grid value at a grid time,
-    /// linear interpolation between grid times, the direct sum of `amp` beyond the record.
+    /// The series in `table` at time t (`stride` values per grid time, the series' value at
+    /// `offset`): the grid value at a grid time, linear interpolation between grid times, the
+    /// direct sum of `amp` (pendulum `i`'s amplitudes) beyond the record.
     #[inline]
-    fn sample(&self, table: &[f64], amp: &[Complex<f64>], width: usize, i: usize, t: f64) -> f64 {
-        let rows = table.len() / width.max(1);
+    fn sample(
+        &self,
+        table: &[f64],
+        (stride, offset): (usize, usize),
+        (amp, i): (&[Complex<f64>], usize),
+        t: f64,
+    ) -> f64 {
+        let rows = self.rows;
         let s = t / self.h;
         if s >= 0.0 {
             let k0 = s.floor();
             let frac = s - k0;
             let k = k0 as usize;
             if frac <= 1e-9 && k < rows {
-                return table[k * width + i];
+                return table[k * stride + offset];
             }
             if frac >= 1.0 - 1e-9 && k + 1 < rows {
-                return table[(k + 1) * width + i];
+                return table[(k + 1) * stride + offset];
             }
             if k + 1 < rows {
-                return table[k * width + i] * (1.0 - frac) + table[(k + 1) * width + i] * frac;
+                return table[k * stride + offset] * (1.0 - frac)
+                    + table[(k + 1) * stride + offset] * frac;
             }
         }
         let nc = self.sea.frequencies().len();
@@ -194,19 +220,22 @@ impl WaveField {
     /// momentum along the mean direction (module docs).
     #[inline]
     pub fn momentum(&self, i: usize, t: f64) -> f64 {
-        self.sample(&self.momentum, &self.momentum_amp, self.n, i, t)
+        let at = (2 * self.n, 2 * i);
+        self.sample(&self.series, at, (&self.momentum_amp, i), t)
     }
 
     /// Gᵢ(t) = lᵢ Σ_{k≥i} ρ_w (1 + C_a) A_o c_k u̇_k(t) \[N m\]: the inertia load's generalised
     /// force on pendulum i along the mean direction (module docs).
     #[inline]
     pub fn inertia(&self, i: usize, t: f64) -> f64 {
-        self.sample(&self.inertia, &self.inertia_amp, self.n, i, t)
+        let at = (2 * self.n, 2 * i + 1);
+        self.sample(&self.series, at, (&self.inertia_amp, i), t)
     }
 
     /// The surface elevation η(0, t) \[m\] at x = z = 0.
     pub fn elevation(&self, t: f64) -> f64 {
-        self.sample(&self.elevation, self.sea.elevation_amplitudes(), 1, 0, t)
+        let amp = self.sea.elevation_amplitudes();
+        self.sample(&self.elevation, (1, 0), (amp, 0), t)
     }
 }
 

@@ -59,6 +59,10 @@ pub enum Error {
     /// method, the bounds, an infeasible θ₀); [`OptimizeError::argument`] names it.
     #[error("invalid argument `{}`: {}", .0.argument(), .0)]
     Optimize(#[from] OptimizeError),
+    /// The fatigue assessment of an objective (`[objective] kind = "fatigue"`) failed: a
+    /// non-finite stress, histories of different lengths.
+    #[error("fatigue objective: {0}")]
+    Fatigue(#[from] crate::fatigue::FatigueError),
     /// The Newton iteration for the constraint multipliers λ of one step (RATTLE's implicit first
     /// half step, eq. 1.6.1; SHAKE's position step) did not reach its tolerance. Almost always the
     /// time step is too large for the stiffness or the loads (the thesis's cantilever fails at

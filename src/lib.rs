@@ -159,8 +159,8 @@ pub mod tridiag;
 pub use steppers::rattle;
 
 pub use adjoint::{
-    BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, Objective,
-    Parametrisation, PerStepControl, PiecewiseControl, PowerObjective, Start, StartKick,
+    BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, FatigueObjective,
+    Objective, Parametrisation, PerStepControl, PiecewiseControl, PowerObjective, Start, StartKick,
 };
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};

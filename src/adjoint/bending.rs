@@ -2,7 +2,8 @@
 //! power objective Σ|M₀|^p, dispatched by the scene's [`ObjectiveKind`]. Its own file so that the
 //! objective trait (`objective.rs`) does not import the objectives built on it (no import circle).
 
-use super::objective::{GaussNewton, MomentStage, Objective, Stage};
+use super::fatigue::FatigueObjective;
+use super::objective::{GaussNewton, History, MomentStage, Objective, Stage};
 use super::power::PowerObjective;
 use crate::base::Scalar;
 use crate::scene::ObjectiveKind;
@@ -48,12 +49,40 @@ impl BendingObjective {
     }
 }
 
+impl BendingObjective {
+    /// The [`FatigueObjective`] of kind [`ObjectiveKind::Fatigue`], with this effort.
+    fn fatigue(&self) -> Option<FatigueObjective> {
+        match self.kind {
+            ObjectiveKind::Fatigue(damage) => Some(FatigueObjective {
+                damage,
+                effort: self.effort,
+            }),
+            _ => None,
+        }
+    }
+}
+
 impl Objective for BendingObjective {
+    /// [`ObjectiveKind::Fatigue`]: the rainflow damage's history term.
+    fn has_history(&self) -> bool {
+        self.fatigue().is_some()
+    }
+    fn history<D: Scalar>(&self, h: History<'_, D>) -> crate::error::Result<D> {
+        match self.fatigue() {
+            Some(f) => f.history(h),
+            None => Ok(D::zero()),
+        }
+    }
+    fn power_proxy(&self) -> Option<f64> {
+        self.fatigue().and_then(|f| f.power_proxy())
+    }
     /// w_k = 2c_k (c_k = 1 for c_sum, [k = N] for c), r_k = M₀, e_k = ρh: ½ w r² = c_k M₀²
     /// bit for bit. [`ObjectiveKind::Power`]: that of [`PowerObjective`].
     fn gauss_newton<D: Scalar>(&self, s: MomentStage<D>) -> Option<GaussNewton<D>> {
-        if let ObjectiveKind::Power { exponent } = self.kind {
-            return self.power(exponent).gauss_newton(s);
+        match self.kind {
+            ObjectiveKind::Power { exponent } => return self.power(exponent).gauss_newton(s),
+            ObjectiveKind::Fatigue(_) => return None,
+            _ => {}
         }
         let c = match self.kind {
             ObjectiveKind::Final if s.k != s.steps => 0.0,
@@ -69,6 +98,7 @@ impl Objective for BendingObjective {
         let m = match self.kind {
             ObjectiveKind::Final if s.k != s.steps => D::zero(),
             ObjectiveKind::Power { exponent } => return self.power(exponent).stage(s),
+            ObjectiveKind::Fatigue(_) => D::zero(),
             _ => s.moment * s.moment + s.moment_x * s.moment_x,
         };
         if self.effort > 0.0 {

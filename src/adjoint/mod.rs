@@ -35,6 +35,7 @@
 
 mod bending;
 mod control_map;
+mod fatigue;
 mod objective;
 mod power;
 mod problem;
@@ -48,8 +49,10 @@ pub use bending::BendingObjective;
 pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };
+pub use fatigue::FatigueObjective;
 pub use objective::{
-    FinalMomentResidual, GaussNewton, MomentStage, NodeDisplacementObjective, Objective, Stage,
+    FinalMomentResidual, GaussNewton, History, MomentStage, NodeDisplacementObjective, Objective,
+    Stage,
 };
 pub use power::PowerObjective;
 pub use problem::ControlProblem;
@@ -62,7 +65,7 @@ use crate::model::Chain;
 use crate::simulate::check_controls;
 use crate::steppers::rattle::{Rattle, State};
 use num_dual::Dual;
-use objective::StageEval;
+use objective::{HistoryBuf, StageEval};
 
 use tape::StateStore;
 
@@ -396,6 +399,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         h,
         zbuf: vec![Dual::from_re(D::zero()); n],
         zpos: Vec::new(),
+        history: HistoryBuf::default(),
     };
     let k1_param = params.iter().position(|p| *p == Parameter::BaseStiffness);
     let Initial {
@@ -409,6 +413,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         controls: u,
     };
     let (value, checkpoints) = forward_sweep(&hz, &mut rattle, &mut stage, (kk, state0))?;
+    let value = value + stage.finish_history()?;
 
     let zero = vec![[D::zero(); DIM]; n];
     let mut cot = Cotangents {
@@ -489,11 +494,12 @@ pub fn forward_value_from<D: Scalar, O: Objective, const DIM: usize>(
         h,
         zbuf: Vec::new(),
         zpos: Vec::new(),
+        history: HistoryBuf::default(),
     };
     let mut j = stage.value(chain, 0, &st.q, u[0]);
     for k in 0..steps {
         r.step(&mut st, k, u[k], u[k + 1])?;
         j += stage.value(chain, k + 1, &st.q, u[k + 1]);
     }
-    Ok(j)
+    Ok(j + stage.finish_history()?)
 }

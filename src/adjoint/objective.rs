@@ -51,6 +51,61 @@ pub trait Objective: Clone + Send + Sync + 'static {
         let _ = s;
         None
     }
+    /// Whether J also has a term H(M₀(t_0), …, M₀(t_N)) on the whole base-moment history, which
+    /// no sum of stage costs is (the rainflow damage, [`crate::FatigueObjective`]). Default
+    /// false; then [`Objective::history`] is never called.
+    fn has_history(&self) -> bool {
+        false
+    }
+    /// That term: H of the history `h.moment` (and `h.moment_x`, M₀ₓ(t_k) in the spatial model,
+    /// empty in the planar one), with ∂H/∂M₀(t_k) written into `h.grad` (∂H/∂M₀ₓ(t_k) into
+    /// `h.grad_x`). The adjoint adds H to J after its forward sweep and ∂H/∂M₀(t_k) to the
+    /// stage cost's ∂ℓ_k/∂M₀ in its reverse sweep.
+    ///
+    /// # Errors
+    /// The term's own ([`crate::Error::Fatigue`] for a non-finite stress history).
+    fn history<D: Scalar>(&self, h: History<'_, D>) -> crate::error::Result<D> {
+        let _ = h;
+        Ok(D::zero())
+    }
+    /// The exponent p of the power objective Σ|M₀|^p that stands in for this objective in the
+    /// structured solvers when it has no Gauss-Newton form (the rainflow damage: the S-N curve's
+    /// slope m), for their refusal to suggest ([`crate::error::OcpError::NeedsPowerProxy`]).
+    fn power_proxy(&self) -> Option<f64> {
+        None
+    }
+}
+
+/// What [`Objective::history`] sees and writes.
+pub struct History<'a, D> {
+    /// M₀(t_k), k = 0..=N (the z component of the base moment vector).
+    pub moment: &'a [D],
+    /// M₀ₓ(t_k) in the spatial model; empty in the planar one.
+    pub moment_x: &'a [D],
+    /// ∂H/∂M₀(t_k) (same length as `moment`, zeroed on entry).
+    pub grad: &'a mut [D],
+    /// ∂H/∂M₀ₓ(t_k) (same length as `moment_x`, zeroed on entry).
+    pub grad_x: &'a mut [D],
+}
+
+/// The history term's buffers in the adjoint's sweeps: M₀ and M₀ₓ as the forward sweep produces
+/// them, then ∂H/∂M₀ and ∂H/∂M₀ₓ for the reverse sweep.
+pub(crate) struct HistoryBuf<D> {
+    moment: Vec<D>,
+    moment_x: Vec<D>,
+    grad: Vec<D>,
+    grad_x: Vec<D>,
+}
+
+impl<D> Default for HistoryBuf<D> {
+    fn default() -> Self {
+        HistoryBuf {
+            moment: Vec::new(),
+            moment_x: Vec::new(),
+            grad: Vec::new(),
+            grad_x: Vec::new(),
+        }
+    }
 }
 
 /// What the Gauss-Newton form of a stage cost sees at t_k: the planar base moment M₀(t_k).
@@ -124,6 +179,8 @@ pub(crate) struct StageEval<'a, O, D> {
     pub(crate) h: f64,
     pub(crate) zbuf: Vec<Dual<D>>,
     pub(crate) zpos: Vec<D>,
+    /// The history term's buffers (used only when [`Objective::has_history`]).
+    pub(crate) history: HistoryBuf<D>,
 }
 
 impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
@@ -135,6 +192,12 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         u: D,
     ) -> D {
         let [mx, m] = ch.base_moment_vector(q);
+        if self.obj.has_history() {
+            self.history.moment.push(m);
+            if DIM == 3 {
+                self.history.moment_x.push(mx);
+            }
+        }
         if self.obj.uses_positions() {
             positions_z(ch, q, &mut self.zpos);
         }
@@ -147,6 +210,25 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             control: u,
             control_x: ch.control_x(k),
             z: &self.zpos,
+        })
+    }
+
+    /// The history term H of the moments [`StageEval::value`] recorded (0 without one), with its
+    /// gradient kept for [`StageEval::accumulate`].
+    pub(crate) fn finish_history(&mut self) -> crate::error::Result<D> {
+        if !self.obj.has_history() {
+            return Ok(D::zero());
+        }
+        let b = &mut self.history;
+        b.grad.clear();
+        b.grad.resize(b.moment.len(), D::zero());
+        b.grad_x.clear();
+        b.grad_x.resize(b.moment_x.len(), D::zero());
+        self.obj.history(History {
+            moment: &b.moment,
+            moment_x: &b.moment_x,
+            grad: &mut b.grad,
+            grad_x: &mut b.grad_x,
         })
     }
 
@@ -181,6 +263,13 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
                 continue;
             }
             *di = self.stage_dual(k, point, Some(i), zslice).eps;
+        }
+        // The history term's ∂H/∂M₀(t_k) (and ∂H/∂M₀ₓ(t_k)) joins ∂ℓ_k/∂M₀.
+        if let Some(g) = self.history.grad.get(k) {
+            d[0] += *g;
+        }
+        if let Some(g) = self.history.grad_x.get(k) {
+            d[1] += *g;
         }
         cot.qbar[0][zi_] += d[0] * scale;
         cot.ubar[k] += d[2];

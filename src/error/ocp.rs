@@ -36,6 +36,21 @@ pub enum OcpError {
         /// The solver, e.g. `the Riccati solver`.
         solver: &'static str,
     },
+    /// The objective is the rainflow damage (`[objective] kind = "fatigue"`), a function of the
+    /// whole moment history with no Gauss-Newton form: the structured solvers take its smooth
+    /// stand-in Σ|M₀|^m instead ([`Objective::power_proxy`](crate::Objective::power_proxy)).
+    #[error(
+        "{solver} cannot take the rainflow damage ([objective] kind = \"fatigue\", a function of \
+         the whole moment history without a Gauss-Newton form): use its smooth stand-in \
+         [objective] kind = \"power\", exponent = {exponent} (the S-N curve's slope m) with this \
+         method, or --method lbfgs (or trust-region, or auto) for the damage itself"
+    )]
+    NeedsPowerProxy {
+        /// The solver, e.g. `the Riccati solver`.
+        solver: &'static str,
+        /// The exponent p = m of the proxy.
+        exponent: f64,
+    },
     /// The objective's Gauss-Newton form has a negative or non-finite weight w_k or effort e_k.
     #[error(
         "{solver}: the objective's Gauss-Newton form has weight {weight} and effort {effort} at \
@@ -160,9 +175,9 @@ impl OcpError {
         match self {
             OcpError::EmptyBox { .. } => "bounds",
             OcpError::Value(v) => v.argument(),
-            OcpError::NoGaussNewtonForm { .. } | OcpError::InvalidGaussNewtonForm { .. } => {
-                "objective"
-            }
+            OcpError::NoGaussNewtonForm { .. }
+            | OcpError::InvalidGaussNewtonForm { .. }
+            | OcpError::NeedsPowerProxy { .. } => "objective",
             OcpError::NotPiecewise => "control map",
             OcpError::UnsupportedTip { .. } => "tip",
             OcpError::NoControlNode => "control node",

@@ -38,6 +38,7 @@
 //! # Ok::<(), chainbeam::fatigue::FatigueError>(())
 //! ```
 
+pub mod damage;
 pub mod gradient;
 pub mod miner;
 pub mod rainflow;
@@ -47,6 +48,7 @@ pub mod stress;
 
 use thiserror::Error;
 
+pub use damage::{DamageGradient, WellheadDamage};
 pub use gradient::{damage_gradient, pairing_damage, power_gradient, power_objective};
 pub use miner::{
     combine_scatter, damage_per_year, life_years, miner_sum, CellDamage, ScatterDamage,

@@ -105,6 +105,9 @@ pub fn objective_scale(kind: ObjectiveKind, length_ratio: f64, step_ratio: f64) 
         ObjectiveKind::Final => length_ratio * length_ratio,
         ObjectiveKind::Sum => length_ratio * length_ratio * step_ratio,
         ObjectiveKind::Power { exponent } => length_ratio.powf(exponent) * step_ratio,
+        // The rainflow damage (the plans take its power proxy, never D itself: the structured
+        // solvers refuse it) counts cycles, not samples: Σ Δσ^m scales as the moment's ratio^m.
+        ObjectiveKind::Fatigue(d) => length_ratio.powf(d.exponent()),
     }
 }
 

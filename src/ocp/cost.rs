@@ -63,7 +63,8 @@ impl StageCost {
     ///
     /// # Errors
     /// [`OcpError::NoGaussNewtonForm`] when the objective has no Gauss-Newton form at some
-    /// stage, [`OcpError::InvalidGaussNewtonForm`] for a negative or non-finite weight or
+    /// stage ([`OcpError::NeedsPowerProxy`] when it is a history term with a power proxy: the
+    /// rainflow damage), [`OcpError::InvalidGaussNewtonForm`] for a negative or non-finite weight or
     /// effort; `solver` names the solver.
     pub fn new<O: Objective>(
         objective: &O,
@@ -82,9 +83,12 @@ impl StageCost {
                 h,
                 moment: 0.0,
             };
-            let g = objective
-                .gauss_newton(s)
-                .ok_or(OcpError::NoGaussNewtonForm { solver })?;
+            let g = objective.gauss_newton(s).ok_or_else(|| {
+                match objective.power_proxy().filter(|_| objective.has_history()) {
+                    Some(exponent) => OcpError::NeedsPowerProxy { solver, exponent },
+                    None => OcpError::NoGaussNewtonForm { solver },
+                }
+            })?;
             if !ok(g.weight) || !ok(g.effort) {
                 return Err(OcpError::InvalidGaussNewtonForm {
                     solver,

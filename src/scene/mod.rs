@@ -291,6 +291,11 @@ pub enum ObjectiveKind {
         /// The exponent p (finite, ≥ 2: [`ObjectiveKind::check`]).
         exponent: f64,
     },
+    /// The rainflow Miner damage D of the wellhead stress ([`crate::FatigueObjective`], issue 31
+    /// item 5): `kind = "fatigue"`, resolved when the scene is read from its `[fatigue]` table
+    /// and l₁ (a scene file writes it back as `kind = "fatigue"`; not serialised otherwise).
+    #[serde(skip)]
+    Fatigue(crate::fatigue::WellheadDamage),
 }
 
 /// A complete simulation / optimal-control scene.

@@ -1,9 +1,13 @@
-//! The `[objective]` table: `kind` (`"final"`, `"sum"` or `"power"`) and, for `"power"`, the
-//! `exponent` p ≥ 2, read into an [`ObjectiveKind`] (docs/scene-format.md).
+//! The `[objective]` table: `kind` (`"final"`, `"sum"`, `"power"` or `"fatigue"`) and, for
+//! `"power"`, the `exponent` p ≥ 2, read into an [`ObjectiveKind`] (docs/scene-format.md).
+//! `"fatigue"` takes the scene's `[fatigue]` table and l₁ ([`Scene::moment_measure`]).
 
 use serde::{Deserialize, Serialize};
 
+#[cfg(doc)]
+use super::Scene;
 use super::{ObjectiveKind, SceneError, SceneErrorKind};
+use crate::fatigue::{FatigueSpec, MomentMeasure, WellheadDamage};
 
 /// The file's names of the objective kinds.
 #[derive(Clone, Copy, Serialize, Deserialize)]
@@ -12,6 +16,7 @@ enum RawKind {
     Final,
     Sum,
     Power,
+    Fatigue,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -28,13 +33,20 @@ impl RawObjective {
             ObjectiveKind::Final => (RawKind::Final, None),
             ObjectiveKind::Sum => (RawKind::Sum, None),
             ObjectiveKind::Power { exponent } => (RawKind::Power, Some(exponent)),
+            ObjectiveKind::Fatigue(_) => (RawKind::Fatigue, None),
         };
         RawObjective { kind, exponent }
     }
 
     /// The kind; `objective.exponent` is required with `"power"` and refused otherwise (its
-    /// range is checked by [`ObjectiveKind::check`], as for a built scene).
-    pub(super) fn into_kind(self) -> Result<ObjectiveKind, SceneError> {
+    /// range is checked by [`ObjectiveKind::check`], as for a built scene). `"fatigue"` needs the
+    /// scene's `[fatigue]` table (`fatigue`, else an error naming the key `fatigue`) and the
+    /// base pendulum's length l₁ (`base_length`).
+    pub(super) fn into_kind(
+        self,
+        fatigue: Option<&FatigueSpec>,
+        base_length: f64,
+    ) -> Result<ObjectiveKind, SceneError> {
         match (self.kind, self.exponent) {
             (RawKind::Power, Some(exponent)) => Ok(ObjectiveKind::Power { exponent }),
             (RawKind::Power, None) => Err(SceneError::new(SceneErrorKind::MissingKey {
@@ -45,6 +57,22 @@ impl RawObjective {
                 EXPONENT_KEY,
                 "only kind = \"power\" takes an exponent",
             )),
+            (RawKind::Fatigue, None) => {
+                let spec = fatigue.ok_or_else(|| {
+                    SceneError::new(SceneErrorKind::MissingKey {
+                        key: "fatigue".into(),
+                        note: Some(
+                            "[objective] kind = \"fatigue\" (the rainflow damage of the wellhead \
+                             stress) needs the [fatigue] table: outer_diameter, wall_thickness \
+                             and the S-N curve"
+                                .into(),
+                        ),
+                    })
+                })?;
+                let damage = WellheadDamage::new(spec, MomentMeasure::ChainM0 { base_length })
+                    .map_err(super::fatigue::scene_error)?;
+                Ok(ObjectiveKind::Fatigue(damage))
+            }
             (RawKind::Final, None) => Ok(ObjectiveKind::Final),
             (RawKind::Sum, None) => Ok(ObjectiveKind::Sum),
         }
@@ -74,12 +102,13 @@ impl ObjectiveKind {
         }
     }
 
-    /// The name a scene file gives the kind: `final`, `sum` or `power`.
+    /// The name a scene file gives the kind: `final`, `sum`, `power` or `fatigue`.
     pub fn name(&self) -> &'static str {
         match self {
             ObjectiveKind::Final => "final",
             ObjectiveKind::Sum => "sum",
             ObjectiveKind::Power { .. } => "power",
+            ObjectiveKind::Fatigue(_) => "fatigue",
         }
     }
 }

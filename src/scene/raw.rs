@@ -403,6 +403,12 @@ impl RawScene {
             .map(RawCurrent::into_current)
             .transpose()?;
         super::pipe::reconcile_surface(&water, current.as_mut())?;
+        let fatigue = self.fatigue.map(RawFatigue::into_spec).transpose()?;
+        let base_length = beam.lengths.first().copied().unwrap_or(f64::NAN);
+        let objective = self
+            .objective
+            .map(|o| o.into_kind(fatigue.as_ref(), base_length))
+            .transpose()?;
         Ok(Scene {
             beam,
             pipe: self.pipe,
@@ -424,8 +430,8 @@ impl RawScene {
                 steps,
             },
             control,
-            objective: self.objective.map(RawObjective::into_kind).transpose()?,
-            fatigue: self.fatigue.map(RawFatigue::into_spec).transpose()?,
+            objective,
+            fatigue,
         })
     }
 }

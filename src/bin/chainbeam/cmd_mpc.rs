@@ -26,7 +26,8 @@ pub const LONG_ABOUT: &str = "\
 Run the scene in closed loop under a receding-horizon (model predictive) controller: every \
 --interval seconds the controller observes the beam's state, solves the optimal-control problem \
 min Σ M₀(t_k)² + ρ·h·Σ u_k² (Σ |M₀(t_k)|^p + ρ·h·Σ u_k² when the model's [objective] is \
-kind = \"power\", exponent = p) over the next --horizon seconds of its model (the scene itself, or \
+kind = \"power\", exponent = p; with kind = \"fatigue\" the plans take its smooth stand-in, p = the \
+S-N curve's slope m, and the summary reports the rainflow damage of the run) over the next --horizon seconds of its model (the scene itself, or \
 --model FILE: another drag, a forecast of the loads with errors) by a Gauss-Newton solver \
 (--solver), warm-started from its previous plan and limited to --iterations iterations (real-time \
 iteration), and applies the plan's first force, held over the interval, at control.node \
@@ -48,7 +49,9 @@ JSON (--summary FILE): settings, and per controller: c_sum = Σ M₀(t_k)² [N²
 max_abs_control, effort h·Σ u² [N²s], decisions, initial_decision_seconds, mean_replan_seconds, \
 worst_replan_seconds (the decisions after the first), mean_iterations, real_time_factor \
 (simulated time / controller wall time), loop_real_time_factor; real_time (worst re-plan ≤ \
-interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's.
+interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's; \
+fatigue_damage (the scene's [objective] is kind = \"fatigue\"): the rainflow Miner damage of \
+MPC's moment, as `chainbeam fatigue --series` of the CSV reports it.
 
 Exit status 0 also when re-plans stop at their iteration budget (that is the method); 1 on \
 invalid settings (naming the flag) or a failed step or solve.";
@@ -143,6 +146,9 @@ struct Report {
     c_sum_ratio_to_constant: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     c_sum_ratio_to_pd: Option<f64>,
+    /// The rainflow damage of MPC's moment when the scene's objective is kind = "fatigue".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    fatigue_damage: Option<f64>,
 }
 
 /// The runs of the baselines: none, constant, PD (with its gains).
@@ -152,10 +158,15 @@ struct Baselines {
 }
 
 /// What the plans minimise: the model scene's `[objective]` when it is `"power"`
-/// (Σ|M₀(t_k)|^p), otherwise c_sum (a receding horizon has no final time of its own).
+/// (Σ|M₀(t_k)|^p), its smooth stand-in Σ|M₀|^m when it is `"fatigue"` (m the S-N curve's
+/// slope: the structured solvers need a Gauss-Newton form, which the rainflow damage has not),
+/// otherwise c_sum (a receding horizon has no final time of its own).
 fn plan_objective(model: &Scene) -> ObjectiveKind {
     match model.objective {
         Some(kind @ ObjectiveKind::Power { .. }) => kind,
+        Some(ObjectiveKind::Fatigue(d)) => ObjectiveKind::Power {
+            exponent: d.exponent(),
+        },
         _ => ObjectiveKind::Sum,
     }
 }
@@ -217,7 +228,8 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         None
     };
     check_run(&a.scene, &closed)?;
-    let report = report(a, closed.summary.clone(), baselines.as_ref());
+    let mut report = report(a, closed.summary.clone(), baselines.as_ref());
+    report.fatigue_damage = fatigue_damage(&a.scene, &scene, &closed)?;
     let json = to_json(&report)?;
     let mut sink = out.open()?;
     if let Err(e) = write_csv(sink.writer(), &closed, baselines.as_ref()) {
@@ -333,6 +345,28 @@ fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Base
     })
 }
 
+/// The rainflow damage of the closed loop's moment (`chainbeam fatigue`'s assessment of it) when
+/// the scene's objective is kind = "fatigue".
+fn fatigue_damage(
+    path: &Path,
+    scene: &Scene,
+    r: &ClosedLoopResult,
+) -> Result<Option<f64>, CliError> {
+    let (Some(ObjectiveKind::Fatigue(_)), Some(spec)) = (scene.objective, scene.fatigue) else {
+        return Ok(None);
+    };
+    let history = chainbeam::fatigue::MomentHistory {
+        duration_s: r.summary.simulated_seconds,
+        moment: &r.moment,
+        moment_x: None,
+        measure: scene.moment_measure(),
+    };
+    let a = chainbeam::fatigue::assess(&spec, history)
+        .map_err(|e| CliError::msg(format!("{}: fatigue_damage: {e}", path.display())))?;
+    check_finite(path, "fatigue_damage", &[a.damage])?;
+    Ok(Some(a.damage))
+}
+
 fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
     let ratio = |i: usize| b.map(|b| mpc.c_sum / b.runs[i].summary.c_sum);
     Report {
@@ -351,6 +385,7 @@ fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
         c_sum_ratio_to_constant: ratio(1),
         c_sum_ratio_to_pd: ratio(2),
         pd_gains: b.map(|b| b.gains),
+        fatigue_damage: None,
         baselines: b.map_or_else(Vec::new, |b| {
             b.runs.iter().map(|r| r.summary.clone()).collect()
         }),

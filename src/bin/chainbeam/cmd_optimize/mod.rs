@@ -26,7 +26,9 @@ use crate::{OUTPUT_HELP, SCENE_HELP};
 /// `optimize --help`.
 pub const OPTIMIZE_LONG_ABOUT: &str = "\
 Minimise the scene's [objective] (default \"final\": c = M₀(t_N)², eq. 3.3.2; \"sum\": \
-c_sum = Σ M₀(t_k)², eq. 3.3.4; \"power\" with exponent p ≥ 2: Σ |M₀(t_k)|^p; plus ρ·h·Σ u_k² \
+c_sum = Σ M₀(t_k)², eq. 3.3.4; \"power\" with exponent p ≥ 2: Σ |M₀(t_k)|^p; \"fatigue\": the \
+rainflow damage of the wellhead stress with the [fatigue] table, L-BFGS or trust-region only \
+(auto chooses lbfgs; riccati and condensed refuse it); plus ρ·h·Σ u_k² \
 with --effort ρ) over the scene's [control] \
 parameters θ (constant or per-step force [N] at control.node, default the tip; P pieces with \
 --pieces P) by single shooting with exact adjoint gradients, starting from control.values. With \

@@ -3,6 +3,9 @@
 //! reproduces the open-loop optimum (to the solver's tolerance), warm starts save iterations,
 //! plant and model may differ, bounds hold, the baselines and the PD gradient, bad settings.
 
+#[path = "common/wave_riser4.rs"]
+mod wave_riser4;
+
 use chainbeam::error::{Requirement, ValueError};
 use chainbeam::mpc::{
     pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon,
@@ -11,36 +14,16 @@ use chainbeam::mpc::{
 use chainbeam::ocp::{self, OcpError, OcpOptions};
 use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::{
-    simulate_with_controls, BendingObjective, ControlMap, ControlProblem, Error, Harmonic,
-    ObjectiveKind, PiecewiseControl, PointLoad, Rattle, Scene, Support,
+    simulate_with_controls, BendingObjective, ControlMap, ControlProblem, Error, PiecewiseControl,
+    Rattle, Scene,
 };
 
 const INTERVAL: f64 = 0.1;
 const EFFORT: f64 = 0.01;
 
-/// A small riser (n = 4, k₁ = k₅ = 2000, D = 10 kg/m) under a wave of period 2 s at node 2,
-/// ramped in over 0.5 s, controlled at the tip, h = 0.01 s: short enough for the test profile.
+/// The small wave-driven riser (n = 4, wave at node 2, control at the tip, c_sum).
 fn scene(steps: usize) -> Scene {
-    let wave = Harmonic {
-        amplitude: 2.0,
-        period: 2.0,
-        phase: 0.0,
-    };
-    Scene::builder(4)
-        .length(1.0)
-        .mass(1.0)
-        .stiffness(1000.0)
-        .step(0.01)
-        .support(Support::Riser)
-        .base_stiffness(2000.0)
-        .tip_stiffness(2000.0)
-        .drag(10.0)
-        .load(PointLoad::harmonic(2, [0.0, 1.0], vec![wave]).ramped(0.5))
-        .control_constant(4, 0.0)
-        .objective(ObjectiveKind::Sum)
-        .steps(steps)
-        .build()
-        .unwrap()
+    wave_riser4::scene(steps)
 }
 
 fn options(horizon: Horizon, bound: f64, iterations: usize) -> MpcOptions {

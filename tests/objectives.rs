@@ -9,15 +9,16 @@
 #[allow(dead_code)]
 #[path = "../examples/tables/thesis.rs"]
 mod thesis;
+#[path = "common/wave_riser4.rs"]
+mod wave_riser4;
 
 use chainbeam::adjoint::forward_value;
 use chainbeam::mpc::{run_closed_loop, Horizon, Mpc, MpcOptions, MpcSolver};
 use chainbeam::ocp::{self, Condensed, OcpOptions, Solver};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
-    catalogue, BendingObjective, ControlMap, ControlProblem, Error, Harmonic, Objective,
-    ObjectiveKind, Parametrisation, PerStepControl, PiecewiseControl, PointLoad, PowerObjective,
-    Scene, SceneErrorKind, Support,
+    catalogue, BendingObjective, ControlMap, ControlProblem, Error, Objective, ObjectiveKind,
+    Parametrisation, PerStepControl, PiecewiseControl, PowerObjective, Scene, SceneErrorKind,
 };
 use num_dual::Dual64;
 
@@ -409,29 +410,10 @@ fn table_3_4_with_p_2_is_c_sum_bit_for_bit() {
     }
 }
 
-/// A small riser (n = 4, D = 10) under a ramped wave at node 2, controlled at the tip: the
+/// The small riser (n = 4, D = 10) under a ramped wave at node 2, controlled at the tip: the
 /// scene of tests/mpc.rs.
 fn wave_scene(steps: usize) -> Scene {
-    let wave = Harmonic {
-        amplitude: 2.0,
-        period: 2.0,
-        phase: 0.0,
-    };
-    Scene::builder(4)
-        .length(1.0)
-        .mass(1.0)
-        .stiffness(1000.0)
-        .step(0.01)
-        .support(Support::Riser)
-        .base_stiffness(2000.0)
-        .tip_stiffness(2000.0)
-        .drag(10.0)
-        .load(PointLoad::harmonic(2, [0.0, 1.0], vec![wave]).ramped(0.5))
-        .control_constant(4, 0.0)
-        .objective(ObjectiveKind::Sum)
-        .steps(steps)
-        .build()
-        .unwrap()
+    wave_riser4::scene(steps)
 }
 
 /// `mpc` plans on the power objective: with the horizon to the end and a perfect model its

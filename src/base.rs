@@ -65,6 +65,9 @@ pub enum Parameter {
     Tension,
     /// The axial (submerged) weight w \[N/m\] (`[loads] axial_weight`).
     AxialWeight,
+    /// All joint dampers c_j \[N·m·s/rad\] at the joints with a spring, set to one common value
+    /// (`[beam] joint_damping`; the torque −c_j θ̇_j, docs/conventions.md "Joint damping").
+    JointDamping,
 }
 
 /// Statistics of one step.

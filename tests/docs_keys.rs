@@ -13,8 +13,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use chainbeam::scene::{
-    ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, LENGTH_RANGE,
-    MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, JOINT_DAMPING_RANGE,
+    LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 use chainbeam::{Scene, SceneErrorKind};
 
@@ -186,7 +186,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 65, "number of documented keys");
+    assert_eq!(checked, 66, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -202,6 +202,7 @@ fn every_documented_key_is_read() {
         ("beam", "base_stiffness", "5.0"),
         ("beam", "tip_stiffness", "5.0"),
         ("beam", "reaction_force", "true"),
+        ("beam", "joint_damping", "1.0"),
         ("loads", "gravity", "2.0"),
         ("loads", "drag", "3.0"),
         ("water", "depth", "30.0"),
@@ -384,6 +385,7 @@ fn documented_ranges_are_the_enforced_ones() {
     for key in ["stiffness", "base_stiffness", "tip_stiffness"] {
         assert_eq!(cell("beam", key), range(&STIFFNESS_RANGE));
     }
+    assert_eq!(cell("beam", "joint_damping"), range(&JOINT_DAMPING_RANGE));
     assert_eq!(cell("loads", "gravity"), range(&GRAVITY_RANGE));
     assert_eq!(cell("loads", "drag"), range(&DRAG_RANGE));
     assert_eq!(cell("loads.current", "speed"), range(&CURRENT_SPEED_RANGE));
@@ -403,6 +405,7 @@ fn documented_ranges_are_the_enforced_ones() {
         ("length l", &LENGTH_RANGE),
         ("mass m", &MASS_RANGE),
         ("spring k (interior, base, tip)", &STIFFNESS_RANGE),
+        ("joint damper c", &JOINT_DAMPING_RANGE),
         ("force F, control u", &FORCE_RANGE),
         ("harmonic amplitude A, series forces", &FORCE_RANGE),
         ("harmonic period T", &PERIOD_RANGE),

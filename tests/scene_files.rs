@@ -49,6 +49,7 @@ fn spec_scene() -> Scene {
             tip_stiffness: 2000.0,
             support: Support::Riser,
             reaction_force: false,
+            joint_damping: Vec::new(),
         },
         pipe: None,
         water: Default::default(),

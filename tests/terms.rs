@@ -14,7 +14,8 @@
 //! function (the series for θ ≲ 11.5° and the closed form beyond) and joint angles above 90°.
 
 use chainbeam::model::{
-    BlockSym, Ctx, DissipationVisitor, DissipativeTerm, DualScratch, Embed, ForceTerm, TermVisitor,
+    BlockSym, CoupledAt, CoupledDissipativeTerm, Ctx, DissipationVisitor, DissipativeTerm,
+    DualScratch, Embed, ForceTerm, TermVisitor,
 };
 use chainbeam::{
     catalogue, Chain, Current, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene,
@@ -718,5 +719,333 @@ fn drag_slope_overrides_carry_derivatives() {
                 }
             }
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Joint damping (issue 28 item 1): the coupled dissipative term F = −Gᵀ C G q̇ (docs/conventions.md
+// "Joint damping"), checked like every term against its own definition.
+
+/// [`current_scene`] (a current and the drag relative to it, 6 pendulums, riser support) with
+/// joint dampers at every spring (joints 1..=7, a different c at each: the array form).
+fn damped_scene(spatial: bool) -> Scene {
+    let mut s = current_scene(spatial, false);
+    s.beam.joint_damping = vec![3.0, 1.5, 2.5, 0.7, 1.1, 2.0, 4.0];
+    s.validate().unwrap();
+    s
+}
+
+/// The same with one damper value at every joint and equal masses (so that
+/// [`Parameter::JointDamping`], the dampers' common value, and [`Parameter::Mass`] are defined).
+fn uniform_damped_scene(spatial: bool) -> Scene {
+    let mut s = current_scene(spatial, false);
+    s.beam.joint_damping = vec![2.0; 7];
+    s.beam.masses = vec![1.2; 6];
+    s.validate().unwrap();
+    s
+}
+
+/// For the joint damping in both dimensions and scalars (references in brackets):
+/// * F is linear in q̇ with a symmetric, negative semidefinite ∂F/∂q̇: ⟨w, F(q, v)⟩ =
+///   ⟨v, F(q, w)⟩ and v·F(q, v) = −Σ c|θ̇|² ≤ 0 [Rayleigh's dissipation function; 1e-12];
+/// * Fᵢ ⊥ qᵢ (a torque turns a pendulum, it does not stretch it) [1e-13];
+/// * the closed-form ∇_q(w·F) = the trait's dual-number default [1e-12] = central differences
+///   of w·F in q [1e-6];
+/// * w·∂F/∂c (dual seed) and w·∂F/∂m (−w·F/m at fixed p) = central differences with c, m set
+///   on the model [1e-7].
+fn check_joint_damping<D: Scalar, const DIM: usize>() {
+    let spatial = DIM == 3;
+    let chain = Chain::<D, DIM>::from_scene(&uniform_damped_scene(spatial)).unwrap();
+    assert_eq!(chain.coupled_dissipation_names(), ["joint damping"]);
+    assert_eq!(chain.dissipation_names(), ["current drag"]);
+    let n = chain.n();
+    let q: Vec<[D; DIM]> = lift(&attitudes::<DIM>(n));
+    let v: Vec<[D; DIM]> = lift(&vectors::<DIM>(n, 0.3));
+    let w: Vec<[D; DIM]> = lift(&vectors::<DIM>(n, 1.9));
+    let ctx = Ctx::new(1.0, D::zero(), 0);
+    let force = |ch: &Chain<D, DIM>, q: &[[D; DIM]], v: &[[D; DIM]]| {
+        let mut f = vec![[D::zero(); DIM]; n];
+        ch.coupled_force(q, v, &ctx, &mut f);
+        f
+    };
+    let fv = force(&chain, &q, &v);
+    let fw = force(&chain, &q, &w);
+    let (a, b) = (inner(&w, &fv).re(), inner(&v, &fw).re());
+    close("⟨w, F(v)⟩ = ⟨v, F(w)⟩", a, b, a.abs().max(1.0), 1e-12);
+    let power = inner(&v, &fv).re();
+    let jd = chain.joint_damping().unwrap();
+    let dissipated = jd.dissipated_power(&q, &v).re();
+    assert!(power < 0.0, "dissipative: {power}");
+    close("v·F = −Σ c θ̇²", -power, dissipated, dissipated, 1e-12);
+    for (fi, qi) in fv.iter().zip(&q) {
+        let along: f64 = (0..DIM).map(|d| (fi[d] * qi[d]).re()).sum();
+        assert!(along.abs() <= 1e-13 * max_abs(&fv), "F ⊥ q: {along}");
+    }
+    // ∇_q(w·F): closed form, dual default, central differences.
+    let mut closed = vec![[D::zero(); DIM]; n];
+    let mut scratch = DualScratch::new(n);
+    let at = CoupledAt {
+        q: &q,
+        v: &v,
+        w: &w,
+    };
+    chain.coupled_force_q_vjp(at, &ctx, D::one(), &mut closed, &mut scratch);
+    let mut dual = vec![[D::zero(); DIM]; n];
+    DefaultVjp(jd.clone()).force_q_vjp(&q, &v, &w, &ctx, D::one(), &mut dual, &mut scratch);
+    let scale = max_abs(&dual);
+    assert!(scale > 1e-3, "exercised");
+    for i in 0..n {
+        for d in 0..DIM {
+            let (c, g) = (closed[i][d].re(), dual[i][d].re());
+            close("∇_q(w·F) closed = dual", c, g, scale, 1e-12);
+            let hq = 1e-6;
+            let (mut qp, mut qm) = (q.clone(), q.clone());
+            qp[i][d] += D::from(hq);
+            qm[i][d] -= D::from(hq);
+            let fd = (inner(&w, &force(&chain, &qp, &v)) - inner(&w, &force(&chain, &qm, &v))).re()
+                / (2.0 * hq);
+            close("∇_q(w·F) = FD", c, fd, scale, 1e-6);
+        }
+    }
+    // Parameters: the dampers' common value and the (uniform) mass, at fixed p = M v.
+    let mut p = vec![[D::zero(); DIM]; n];
+    chain.apply_mass(&v, &mut p);
+    let wf_at = |ch: &Chain<D, DIM>| {
+        let mut vv = vec![[D::zero(); DIM]; n];
+        ch.apply_inverse_mass(&p, &mut vv);
+        inner(&w, &force(ch, &q, &vv)).re()
+    };
+    for (param, value) in [(Parameter::JointDamping, 2.0), (Parameter::Mass, 1.2)] {
+        assert!(chain.coupled_has_parameter(param) && chain.has_parameter(param));
+        let got = chain
+            .coupled_parameter_contraction(at, &ctx, param, &mut scratch)
+            .re();
+        let hstep = 1e-5 * value;
+        let (mut cp, mut cm) = (chain.clone(), chain.clone());
+        cp.set_parameter(param, D::from(value + hstep)).unwrap();
+        cm.set_parameter(param, D::from(value - hstep)).unwrap();
+        let fd = (wf_at(&cp) - wf_at(&cm)) / (2.0 * hstep);
+        assert!(fd.abs() > 1e-3, "{param:?} exercised");
+        close(&format!("w·∂F/∂{param:?}"), got, fd, fd.abs(), 1e-7);
+    }
+    assert!(!chain.coupled_has_parameter(Parameter::Drag));
+    // The array form: dampers differ, so their common value is no parameter.
+    let varied = Chain::<D, DIM>::from_scene(&damped_scene(spatial)).unwrap();
+    assert!(!varied.has_parameter(Parameter::JointDamping));
+}
+
+/// The trait's dual-number default of ∇_q(w·F), for comparison with the closed form.
+#[derive(Clone, Debug)]
+struct DefaultVjp<D>(chainbeam::model::JointDamping<D>);
+
+impl<D: Scalar, const DIM: usize> CoupledDissipativeTerm<D, DIM> for DefaultVjp<D> {
+    fn name(&self) -> &'static str {
+        "default"
+    }
+    fn force<E: Embed<D>>(
+        &self,
+        q: &[[E; DIM]],
+        v: &[[E; DIM]],
+        ctx: &Ctx<E>,
+        out: &mut [[E; DIM]],
+    ) {
+        CoupledDissipativeTerm::<D, DIM>::force(&self.0, q, v, ctx, out);
+    }
+    fn has_parameter(&self, p: Parameter) -> bool {
+        CoupledDissipativeTerm::<D, DIM>::has_parameter(&self.0, p)
+    }
+}
+
+#[test]
+fn joint_damping_term_planar_f64() {
+    check_joint_damping::<f64, 2>();
+}
+
+#[test]
+fn joint_damping_term_spatial_f64() {
+    check_joint_damping::<f64, 3>();
+}
+
+#[test]
+fn joint_damping_term_planar_dual64() {
+    check_joint_damping::<Dual64, 2>();
+}
+
+#[test]
+fn joint_damping_term_spatial_dual64() {
+    check_joint_damping::<Dual64, 3>();
+}
+
+/// Joint damping beside the drag in a current, planar and spatial (current at (0.6, 0.8)), with
+/// every conservative term of [`all_terms_scene`] and a per-step control at node 4: the adjoint's gradient of J = Σ M₀² (a) along a direction
+/// d of the controls and (b) with respect to the dampers' common value c, the drag D, the
+/// current's speed and the mass = forward-mode Dual64 of the same discrete map (1e-12 relative)
+/// = central differences (five-point, 1e-6).
+#[test]
+fn joint_damping_gradients_beside_drag_in_a_current() {
+    for spatial in [false, true] {
+        let mut s = uniform_damped_scene(spatial);
+        s.objective = Some(chainbeam::ObjectiveKind::Sum);
+        s.time.step = 0.01;
+        s.time.steps = 30;
+        s.validate().unwrap();
+        if spatial {
+            damped_gradients::<3>(&s);
+        } else {
+            damped_gradients::<2>(&s);
+        }
+    }
+}
+
+fn damped_gradients<const DIM: usize>(scene: &Scene) {
+    use chainbeam::adjoint::{adjoint_gradient, forward_value};
+    use chainbeam::{BendingObjective, Checkpointing};
+    let (h, steps) = (scene.time.step, scene.time.steps);
+    let chain = Chain::<f64, DIM>::from_scene(scene).unwrap();
+    let u: Vec<f64> = (0..=steps)
+        .map(|k| -0.4 + 0.3 * (0.37 * k as f64).sin())
+        .collect();
+    let obj = BendingObjective::summed_moment();
+    let params = [
+        (Parameter::JointDamping, 2.0),
+        (Parameter::Drag, 10.0),
+        (Parameter::CurrentSpeed, 0.8),
+        (Parameter::Mass, chain.masses()[0]),
+    ];
+    let ps: Vec<Parameter> = params.iter().map(|p| p.0).collect();
+    let adj = adjoint_gradient(&chain, h, steps, &u, &obj, &ps, Checkpointing::default()).unwrap();
+    let value = |ch: &Chain<f64, DIM>, u: &[f64]| forward_value(ch, h, steps, u, &obj).unwrap();
+    let five_point = |f: &dyn Fn(f64) -> f64, d: f64| {
+        (8.0 * (f(d) - f(-d)) - (f(2.0 * d) - f(-2.0 * d))) / (12.0 * d)
+    };
+    // (a) the controls, along d.
+    let dir: Vec<f64> = (0..=steps).map(|k| (1.3 * k as f64).cos()).collect();
+    let g_adj: f64 = adj
+        .control_gradient
+        .iter()
+        .zip(&dir)
+        .map(|(g, d)| g * d)
+        .sum();
+    let ud: Vec<Dual64> = u
+        .iter()
+        .zip(&dir)
+        .map(|(&x, &d)| Dual64::new(x, d))
+        .collect();
+    let g_fwd = forward_value(&chain.lift::<Dual64>(), h, steps, &ud, &obj)
+        .unwrap()
+        .eps;
+    let shifted = |e: f64| {
+        let v: Vec<f64> = u.iter().zip(&dir).map(|(x, d)| x + e * d).collect();
+        value(&chain, &v)
+    };
+    let g_fd = five_point(&shifted, 1e-3);
+    println!(
+        "DIM {DIM}: dJ/du·d = {g_fwd:.12e}: adjoint {:.1e}, FD {:.1e} (relative)",
+        ((g_adj - g_fwd) / g_fwd).abs(),
+        ((g_fd - g_fwd) / g_fwd).abs()
+    );
+    assert!(g_fwd.abs() > 1e-8);
+    assert!((g_adj - g_fwd).abs() <= 1e-12 * g_fwd.abs());
+    assert!((g_fd - g_fwd).abs() <= 1e-6 * g_fwd.abs());
+    // (b) the parameters.
+    let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
+    for (i, &(p, at)) in params.iter().enumerate() {
+        let mut ch = chain.lift::<Dual64>();
+        ch.set_parameter(p, Dual64::new(at, 1.0)).unwrap();
+        let fwd = forward_value(&ch, h, steps, &ud, &obj).unwrap().eps;
+        let moved = |e: f64| {
+            let mut ch = chain.clone();
+            ch.set_parameter(p, at + e).unwrap();
+            value(&ch, &u)
+        };
+        let fd = five_point(&moved, 1e-3 * at);
+        let a = adj.parameter_gradient[i];
+        println!(
+            "DIM {DIM}: dJ/d{p:?} = {fwd:.12e}: adjoint {:.1e}, FD {:.1e} (relative)",
+            ((a - fwd) / fwd).abs(),
+            ((fd - fwd) / fwd).abs()
+        );
+        assert!(fwd.abs() > 1e-10, "{p:?} is exercised");
+        assert!((a - fwd).abs() <= 1e-12 * fwd.abs(), "{p:?}: {a} vs {fwd}");
+        assert!(
+            (fd - fwd).abs() <= 1e-6 * fwd.abs(),
+            "{p:?}: FD {fd} vs {fwd}"
+        );
+    }
+}
+
+/// `joint_damping = 0` (every damper zero) builds no term, and the trajectory (RATTLE, drag in a
+/// current, every conservative term) is the one without the key, bit for bit; the statics of a
+/// damped scene are those of the undamped one bit for bit (F_J = 0 at rest).
+#[test]
+fn zero_joint_damping_changes_nothing() {
+    for spatial in [false, true] {
+        let mut without = current_scene(spatial, false);
+        without.time.step = 0.01;
+        without.time.steps = 60;
+        let mut zero = without.clone();
+        zero.beam.joint_damping = vec![0.0; 7];
+        zero.validate().unwrap();
+        assert!(Chain::<f64, 3>::from_scene(&zero)
+            .unwrap()
+            .joint_damping()
+            .is_none());
+        let (a, b) = (
+            chainbeam::simulate(&without).unwrap(),
+            chainbeam::simulate(&zero).unwrap(),
+        );
+        for k in [1, 30, 60] {
+            assert_eq!(a.positions(k), b.positions(k), "step {k}");
+        }
+        let mut damped = without.clone();
+        damped.beam.joint_damping = vec![2.0; 7];
+        let (sa, sd) = (
+            chainbeam::statics::static_equilibrium(&without).unwrap(),
+            chainbeam::statics::static_equilibrium(&damped).unwrap(),
+        );
+        assert_eq!(format!("{sa:?}"), format!("{sd:?}"), "statics at rest");
+    }
+}
+
+/// Bad `[beam] joint_damping` values are refused with a typed error naming the key: negative,
+/// NaN (as `nan` in TOML), an array of the wrong length, a damper at the free tip of a
+/// cantilever (no spring there).
+#[test]
+fn bad_joint_damping_is_refused() {
+    let text = |c: &str| {
+        format!(
+            "[beam]\npendulums = 4\nlength = 1.0\nmass = 1.0\nstiffness = 1000.0\n\
+             support = \"cantilever\"\njoint_damping = {c}\n\
+             [time]\nstep = 0.01\nsteps = 10\n"
+        )
+    };
+    let good = Scene::from_toml_str(&text("1.5")).unwrap();
+    assert_eq!(good.beam.joint_damping, [1.5, 1.5, 1.5, 1.5, 0.0]);
+    let good = Scene::from_toml_str(&text("[1.0, 2.0, 3.0, 4.0, 0.0]")).unwrap();
+    assert_eq!(good.beam.joint_damping, [1.0, 2.0, 3.0, 4.0, 0.0]);
+    let back = Scene::from_toml_str(&good.to_toml_string()).unwrap();
+    assert_eq!(
+        back.beam.joint_damping, good.beam.joint_damping,
+        "round trip"
+    );
+    for (bad, what) in [
+        ("-1.0", "negative"),
+        ("nan", "NaN"),
+        ("[1.0, 2.0, 3.0]", "wrong length"),
+        ("[1.0, 2.0, 3.0, 4.0, 5.0]", "damper at the free tip"),
+        ("[1.0, -2.0, 3.0, 4.0, 0.0]", "one negative"),
+    ] {
+        let e = Scene::from_toml_str(&text(bad)).expect_err(what);
+        let key = e.key().unwrap_or_default();
+        println!("{what}: {e}");
+        assert!(key.starts_with("beam.joint_damping"), "{what}: key {key:?}");
+        assert!(
+            matches!(
+                e.kind,
+                chainbeam::scene::SceneErrorKind::InvalidValue { .. }
+                    | chainbeam::scene::SceneErrorKind::WrongCount { .. }
+            ),
+            "{what}: {e:?}"
+        );
     }
 }

@@ -148,6 +148,7 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::CurrentSpeed => s.loads.current.as_ref().and_then(|c| c.speed()).unwrap(),
         Parameter::Tension => s.loads.tension,
         Parameter::AxialWeight => s.loads.axial_weight,
+        Parameter::JointDamping => s.beam.joint_damping[1],
     }
 }
 

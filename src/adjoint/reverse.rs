@@ -5,7 +5,8 @@
 use super::tape::StateView;
 use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::Result;
-use crate::model::{BlockSym, Chain, Ctx, DualScratch, ReactionTip};
+use crate::model::{BlockSym, Chain, CoupledAt, Ctx, DualScratch, ReactionTip};
+use crate::steppers::coupled::CoupledHalf;
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
 
@@ -39,6 +40,11 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
     scratch: DualScratch<D, DIM>,
+    /// The dense matrices of a model with coupled dissipative terms (joint damping), the
+    /// requested parameters they read (their own and the mass), and M⁻¹p_{k+½}.
+    coupled: Option<CoupledHalf<D, DIM>>,
+    coupled_params: Vec<(usize, Parameter)>,
+    vhalf: Vec<[D; DIM]>,
     /// Start time t₀ of the horizon (step k at t₀ + k h).
     pub t0: f64,
 }
@@ -60,6 +66,14 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 .filter(|(_, p)| ch.dissipation_has_parameter(**p))
                 .map(|(i, p)| (i, *p))
                 .collect(),
+            coupled: ch.has_coupled_dissipation().then(|| CoupledHalf::new(ch)),
+            coupled_params: params
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| ch.coupled_has_parameter(**p))
+                .map(|(i, p)| (i, *p))
+                .collect(),
+            vhalf: v.clone(),
             tmp: v.clone(),
             tmp2: v.clone(),
             bbar: v.clone(),
@@ -173,7 +187,59 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 cot,
             );
         }
+        if self.coupled.is_some() {
+            self.coupled_second_half(sk1, ctx1.step - 1, cot);
+        }
         self.force_terms(sk1.q, ctx1, Half::Second, cot)
+    }
+
+    /// The coupled terms' share of the second half's reverse (b = … + h/2 F_J(q′, M⁻¹p½)):
+    /// p̄½ += h/2 (∂F_J/∂p)ᵀ b̄ = h/2 M⁻¹ F_J(q′, b̄) (F_J = −B M⁻¹p, B symmetric),
+    /// q̄′ += h/2 ∇_{q′}(b̄·F_J(q′, v½)) and θ̄ += h/2 b̄·∂F_J/∂θ.
+    fn coupled_second_half(
+        &mut self,
+        sk1: &StateView<'_, D, DIM>,
+        k: usize,
+        cot: &mut Cotangents<D, DIM>,
+    ) {
+        let (ch, hh) = (self.ch, 0.5 * self.h);
+        let dctx = ch.dissipation_ctx(self.t0 + k as f64 * self.h, self.h, k);
+        self.tmp.iter_mut().for_each(|t| *t = [D::zero(); DIM]);
+        ch.coupled_force(sk1.q, &self.bbar, &dctx, &mut self.tmp);
+        ch.apply_inverse_mass(&self.tmp, &mut self.tmp2);
+        for (p, t) in self.phbar.iter_mut().zip(&self.tmp2) {
+            for d in 0..DIM {
+                p[d] += t[d] * hh;
+            }
+        }
+        self.coupled_contractions((sk1.q, sk1.phalf), Half::Second, &dctx, cot);
+    }
+
+    /// q̄ += h/2 ∇_q(w·F_J(q, M⁻¹p½)) and θ̄ += h/2 w·∂F_J/∂θ for the coupled terms, with
+    /// w = b̄ at q′ (second half) or c̄ at q_k (first half, through p½'s implicit equation).
+    fn coupled_contractions(
+        &mut self,
+        (q, phalf): (&[[D; DIM]], &[[D; DIM]]),
+        half: Half,
+        dctx: &Ctx<D>,
+        cot: &mut Cotangents<D, DIM>,
+    ) {
+        let (ch, hh) = (self.ch, 0.5 * self.h);
+        ch.apply_inverse_mass(phalf, &mut self.vhalf);
+        let w = match half {
+            Half::First => &self.cbar,
+            Half::Second => &self.bbar,
+        };
+        let s = &mut self.scratch;
+        let qvw = CoupledAt {
+            q,
+            v: &self.vhalf,
+            w,
+        };
+        ch.coupled_force_q_vjp(qvw, dctx, D::from(hh), &mut cot.qbar, s);
+        for &(ip, param) in &self.coupled_params {
+            cot.thbar[ip] += ch.coupled_parameter_contraction(qvw, dctx, param, s) * hh;
+        }
     }
 
     /// The force terms' share of a half-step's reverse: q̄ −= h/2 K(q) w, ū −= h/2 w·∂F/∂u
@@ -213,14 +279,26 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         cot: &mut Cotangents<D, DIM>,
     ) -> Result<()> {
         let (ch, ops, h, hh) = (self.ch, self.ch.constraints(), self.h, 0.5 * self.h);
-        let w = ch.has_dissipation().then_some(sk1.w);
+        let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
+        let w = (ch.has_dissipation() && self.coupled.is_none()).then_some(sk1.w);
+        if let Some(cpl) = &mut self.coupled {
+            // W = A⁻¹ and J at (q_k, p½), dense (steppers::coupled).
+            cpl.factor_at(ch, (q, sk1.phalf), h, &dctx)
+                .map_err(|zp| singular(k, zp))?;
+            cpl.factor_newton(ch, (q, sk1.q), h)
+                .map_err(|zp| singular(k, zp))?;
+        }
         self.w_times_s(&cot.qbar, w);
         ops.apply(q, &self.tmp, &mut self.rhs);
         self.rhs.iter_mut().for_each(|r| *r = -*r * hh);
-        ops.assemble_newton((q, sk1.q), w, h, &mut self.tri, &mut self.scal);
-        self.tri
-            .solve_transpose(&mut self.rhs)
-            .map_err(|zp| singular(k, zp))?;
+        if let Some(cpl) = &self.coupled {
+            cpl.newton_solve_transpose(&mut self.rhs);
+        } else {
+            ops.assemble_newton((q, sk1.q), w, h, &mut self.tri, &mut self.scal);
+            self.tri
+                .solve_transpose(&mut self.rhs)
+                .map_err(|zp| singular(k, zp))?;
+        }
         ops.add_transpose(sk1.q, &self.rhs, -D::one(), &mut cot.qbar);
         if ch.tip_condition() == TipCondition::Reaction {
             cot.tip_bar[0] += self.rhs[ch.n()];
@@ -238,15 +316,18 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.w_times_s(&cot.qbar, w);
         self.cbar.copy_from_slice(&self.tmp);
         if ch.has_dissipation() {
-            let ctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
             dissipation_contraction(
                 ch,
                 &self.drag_params,
                 (sk1.phalf, &self.cbar),
-                &ctx,
+                &dctx,
                 hh,
                 cot,
             );
+        }
+        if self.coupled.is_some() {
+            // p½ − h/2 F(q_k, p½) = c: q_k (and θ) reach p½ through F_J with the cotangent c̄.
+            self.coupled_contractions((q, sk1.phalf), Half::First, &dctx, cot);
         }
         Ok(())
     }
@@ -261,6 +342,9 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 Some(w) => w[i].apply(&s),
                 None => s,
             };
+        }
+        if let Some(cpl) = &mut self.coupled {
+            cpl.apply_w_transpose(&mut self.tmp);
         }
     }
 

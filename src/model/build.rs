@@ -2,8 +2,9 @@
 //! keys, docs/scene-format.md) and lifting it to another scalar ([`Chain::lift`]).
 
 use super::{
-    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, Gravity, HarmonicForce, PointLoad,
-    PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
+    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, Gravity, HarmonicForce, JointDamping,
+    PointLoad, PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs,
+    DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
@@ -41,6 +42,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         }
         let springs = Self::springs_of(scene);
         let has_base = springs.present[0];
+        let joint_damping = b
+            .joint_damping
+            .iter()
+            .any(|&c| c > 0.0)
+            .then(|| JointDamping {
+                c: lift(&b.joint_damping),
+                present: springs.present.clone(),
+            });
         let loads = scene.loads.points.iter().enumerate().map(|(i, pl)| {
             let norm = pl.direction[0].hypot(pl.direction[1]);
             PointLoad {
@@ -103,6 +112,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 CurrentDrag::new(c, waves.clone(), d, &lengths, &masses)
             }),
             wave_inertia: waves.map(WaveInertia::new),
+            joint_damping,
             lengths,
             masses,
         })
@@ -185,6 +195,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             drag: self.drag.as_ref().map(|t| t.lift()),
             current: self.current.as_ref().map(|t| t.lift()),
             wave_inertia: self.wave_inertia.clone(),
+            joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
         }
     }
 }

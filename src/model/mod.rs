@@ -21,10 +21,10 @@ pub mod terms;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    AxialWeight, BlockSym, ControlForce, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm,
-    Drag, DualScratch, Embed, ForceTerm, Gravity, HarmonicForce, PointLoad, PointLoads,
-    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia,
-    WaveInputs,
+    AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
+    CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity,
+    HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip, ReactionTipBar, Springs,
+    TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -60,6 +60,8 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) current: Option<CurrentDrag<D, DIM>>,
     /// The waves' inertia load (`[loads.waves]`).
     pub(crate) wave_inertia: Option<WaveInertia>,
+    /// Structural damping at the joints (`[beam] joint_damping`), a coupled dissipative term.
+    pub(crate) joint_damping: Option<JointDamping<D>>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -226,6 +228,21 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         if let Some(t) = &self.current {
             v.visit(t);
         }
+    }
+
+    /// Visits every dissipative term that couples pendulums ([`CoupledDissipativeTerm`]): **the
+    /// one place that lists them** (the joint damping), summed beside the block terms of
+    /// [`Chain::visit_dissipation`].
+    #[inline]
+    pub fn visit_coupled_dissipation<V: CoupledVisitor<D, DIM>>(&self, v: &mut V) {
+        if let Some(t) = &self.joint_damping {
+            v.visit(t);
+        }
+    }
+
+    /// The joint damping term, if the scene has `[beam] joint_damping` with a damper > 0.
+    pub fn joint_damping(&self) -> Option<&JointDamping<D>> {
+        self.joint_damping.as_ref()
     }
 
     /// Whether the model has the spring of joint i (0..=n).

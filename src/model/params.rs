@@ -50,6 +50,16 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 Some(t) => t.weight = value,
                 None => return Err(missing(p, "the scene has no axial weight (w = 0)")),
             },
+            Parameter::JointDamping => match &mut self.joint_damping {
+                Some(j) => {
+                    for (c, &on) in j.c.iter_mut().zip(&j.present) {
+                        if on {
+                            *c = value;
+                        }
+                    }
+                }
+                None => return Err(missing(p, "the scene has no joint damping")),
+            },
             Parameter::CurrentSpeed => match &mut self.current {
                 Some(c) if c.has_parameter(p) => c.speed = value,
                 Some(_) => return Err(missing(p, "a table profile has no single speed")),
@@ -96,6 +106,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,
             Parameter::Tension => self.tension.is_some(),
+            Parameter::JointDamping => self.joint_damping.as_ref().is_some_and(|j| j.is_uniform()),
             Parameter::AxialWeight => self.axial_weight.is_some(),
             Parameter::LoadForce(_)
             | Parameter::LoadForceX(_)

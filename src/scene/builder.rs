@@ -37,6 +37,7 @@ pub struct SceneBuilder {
     tip_stiffness: Option<f64>,
     support: Support,
     reaction_force: bool,
+    joint_damping: Option<NumOrArray>,
     loads: Loads,
     time: TimeGrid,
     control: Option<Control>,
@@ -55,6 +56,7 @@ impl SceneBuilder {
             tip_stiffness: None,
             support: Support::Cantilever,
             reaction_force: false,
+            joint_damping: None,
             loads: Loads::default(),
             time: TimeGrid {
                 step: 0.01,
@@ -110,6 +112,20 @@ impl SceneBuilder {
     /// The tip spring k_{n+1}.
     pub fn tip_stiffness(mut self, k: f64) -> Self {
         self.tip_stiffness = Some(k);
+        self
+    }
+
+    /// Structural damping `[beam] joint_damping = c` \[N·m·s/rad\]: a damper c at every joint
+    /// with a spring (docs/conventions.md "Joint damping").
+    pub fn joint_damping(mut self, c: f64) -> Self {
+        self.joint_damping = Some(NumOrArray::Number(c));
+        self
+    }
+
+    /// The joint dampers c₁..c_{n+1} one by one (n + 1 values, 0 where the support has no
+    /// spring), laid out like the model's springs k₁..k_{n+1}.
+    pub fn joint_dampers(mut self, c: Vec<f64>) -> Self {
+        self.joint_damping = Some(NumOrArray::Array(c));
         self
     }
 
@@ -245,7 +261,7 @@ impl SceneBuilder {
     /// The validated scene.
     pub fn build(self) -> Result<Scene, SceneError> {
         check_size(self.n, self.time.steps, self.support)?;
-        let beam = assemble_beam(
+        let mut beam = assemble_beam(
             self.n,
             self.length,
             self.mass,
@@ -254,6 +270,9 @@ impl SceneBuilder {
             self.support,
             self.reaction_force,
         )?;
+        if let Some(c) = self.joint_damping {
+            beam.joint_damping = super::validate::joint_damping_layout(c, self.n, self.support)?;
+        }
         let scene = Scene {
             beam,
             pipe: None,
@@ -317,5 +336,6 @@ pub(super) fn assemble_beam(
         tip_stiffness,
         support,
         reaction_force,
+        joint_damping: Vec::new(),
     })
 }

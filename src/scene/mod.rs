@@ -46,8 +46,8 @@ pub use pipe::{Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODUL
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
     human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
-    GRAVITY_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER,
-    MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    GRAVITY_RANGE, JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS,
+    MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, trajectory_bytes};
 pub use waves::{sea_error, WaveSpectrum, Waves, DEFAULT_GAMMA};
@@ -86,6 +86,10 @@ pub struct Beam {
     /// Reaction-force variant (thesis §3.2, eq. 3.2.1/3.2.2): the tip constraint of a fixed-fixed or
     /// pinned-pinned beam is replaced by the reaction force, so a control at the tip can move it.
     pub reaction_force: bool,
+    /// Joint dampers c₁..c_{n+1} \[N·m·s/rad\] (`[beam] joint_damping`; empty: none), laid out
+    /// like the model's springs k₁..k_{n+1}: joint 1 at the base, n + 1 at the tip, zero where the
+    /// support has no spring. The torque −c_j θ̇_j (docs/conventions.md "Joint damping").
+    pub joint_damping: Vec<f64>,
 }
 
 /// A point load at node `node` (eq. 2.2.2, extended to the transverse plane and to time-varying

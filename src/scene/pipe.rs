@@ -238,6 +238,7 @@ impl Pipe {
             tip_stiffness: clamp(end_springs.1, tip),
             support,
             reaction_force: false,
+            joint_damping: Vec::new(),
         })
     }
 }

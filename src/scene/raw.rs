@@ -68,6 +68,8 @@ struct RawBeam {
     tip_stiffness: Option<f64>,
     #[serde(default, skip_serializing_if = "is_false")]
     reaction_force: bool,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    joint_damping: Option<NumOrArray>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -321,6 +323,8 @@ impl RawScene {
                 base_stiffness: Some(b.base_stiffness),
                 tip_stiffness: Some(b.tip_stiffness),
                 reaction_force: b.reaction_force,
+                joint_damping: (!b.joint_damping.is_empty())
+                    .then(|| NumOrArray::compact(&b.joint_damping)),
             },
             pipe: s.pipe,
             water: (!s.water.is_default()).then_some(s.water),
@@ -358,7 +362,11 @@ impl RawScene {
         check_size(n, steps, self.beam.support)?;
         let b = self.beam;
         let water = self.water.unwrap_or_default();
-        let beam = super::pipe::BeamKeys {
+        let joint_damping = match b.joint_damping {
+            None => Vec::new(),
+            Some(c) => super::validate::joint_damping_layout(c, n, b.support)?,
+        };
+        let mut beam = super::pipe::BeamKeys {
             n,
             length: b.length,
             mass: b.mass,
@@ -368,6 +376,7 @@ impl RawScene {
             reaction_force: b.reaction_force,
         }
         .into_beam(self.pipe.as_ref(), &water)?;
+        beam.joint_damping = joint_damping;
         let raw_loads = self.loads.unwrap_or_default();
         let mut points = Vec::with_capacity(raw_loads.point.len());
         for (i, p) in raw_loads.point.into_iter().enumerate() {

@@ -62,6 +62,13 @@ pub const STIFFNESS_RANGE: ValueRange = ValueRange {
     unit: "N·m/rad",
     why: "h²·k/(m·l²) is the step's spring number",
 };
+/// Joint dampers c \[N·m·s/rad\] (`[beam] joint_damping`): 0 to 10¹⁵ N·m·s/rad.
+pub const JOINT_DAMPING_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e15,
+    unit: "N·m·s/rad",
+    why: "h·c/(m·l²) is the step's damping number",
+};
 /// Point loads F and control forces u \[N\]: |F| ≤ 10¹² N.
 pub const FORCE_RANGE: ValueRange = ValueRange {
     min: -1e12,
@@ -168,6 +175,7 @@ impl Scene {
         check_all("beam.stiffness", &b.stiffness, check_spring)?;
         check_spring("beam.base_stiffness", b.base_stiffness)?;
         check_spring("beam.tip_stiffness", b.tip_stiffness)?;
+        check_joint_damping(&b.joint_damping, n, b.support)?;
         if b.reaction_force && !matches!(b.support, Support::FixedFixed | Support::PinnedPinned) {
             return Err(SceneError::invalid(
                 "beam.reaction_force",
@@ -566,6 +574,60 @@ fn check_nonnegative(key: &str, x: f64) -> Result<(), SceneError> {
             format!("must be finite and non-negative, got {x}"),
         ))
     }
+}
+
+/// The joints 0..=n (0-based) that carry a spring for this support (docs/conventions.md):
+/// the interior joints always, the base except for pinned-pinned, the tip for riser and
+/// fixed-fixed.
+fn has_spring(support: Support, n: usize, j: usize) -> bool {
+    match j {
+        0 => support != Support::PinnedPinned,
+        j if j == n => matches!(support, Support::Riser | Support::FixedFixed),
+        _ => true,
+    }
+}
+
+/// `[beam] joint_damping` as n + 1 dampers c₁..c_{n+1}: one number is the damper of every joint
+/// with a spring (0 elsewhere); an array must have n + 1 values ([`SceneErrorKind::WrongCount`]
+/// naming `beam.joint_damping`).
+pub(super) fn joint_damping_layout(
+    c: NumOrArray,
+    n: usize,
+    support: Support,
+) -> Result<Vec<f64>, SceneError> {
+    match c {
+        NumOrArray::Number(x) => Ok((0..=n)
+            .map(|j| if has_spring(support, n, j) { x } else { 0.0 })
+            .collect()),
+        NumOrArray::Array(v) => NumOrArray::Array(v).expand("beam.joint_damping", n + 1),
+    }
+}
+
+/// The joint dampers (empty: none): n + 1 values, each finite and non-negative, zero at the
+/// joints without a spring (a free tip, a pinned end).
+fn check_joint_damping(c: &[f64], n: usize, support: Support) -> Result<(), SceneError> {
+    const KEY: &str = "beam.joint_damping";
+    if c.is_empty() {
+        return Ok(());
+    }
+    if c.len() != n + 1 {
+        return Err(SceneError::count(KEY, n + 1, c.len()));
+    }
+    check_all(KEY, c, check_nonnegative)?;
+    check_all(KEY, c, |k, x| check_range(k, x, &JOINT_DAMPING_RANGE))?;
+    for (j, &x) in c.iter().enumerate() {
+        if x != 0.0 && !has_spring(support, n, j) {
+            return Err(SceneError::invalid(
+                format!("{KEY}[{j}]"),
+                format!(
+                    "joint {} has no spring with support `{}`, so it has no damper (give 0)",
+                    j + 1,
+                    support_name(support)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 pub(super) fn check_spring(key: &str, x: f64) -> Result<(), SceneError> {

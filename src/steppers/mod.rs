@@ -34,6 +34,7 @@
 //! # Ok::<(), chainbeam::Error>(())
 //! ```
 
+pub(crate) mod coupled;
 pub mod rattle;
 pub mod rk4;
 pub mod shake;
@@ -159,14 +160,17 @@ pub(crate) fn check_finite<D: Scalar, const DIM: usize>(
     }
 }
 
-/// f(q, p) = U_q(q; t, u) − F_D(p): the generalised force with the sign of U_q, the conservative
-/// terms from [`Chain::potential_gradient`] and the dissipative terms (eq. 2.4.4) from
-/// [`Chain::dissipative_force`], into `out`. The ODE is ṗ = −f − Ĝᵀλ.
+/// f(q, p) = U_q(q; t, u) − F_D(p) − F_J(q, M⁻¹p): the generalised force with the sign of U_q,
+/// the conservative terms from [`Chain::potential_gradient`], the dissipative block terms (eq.
+/// 2.4.4) from [`Chain::dissipative_force`] and the coupled ones (joint damping) from
+/// [`Chain::coupled_force`], into `out`; `scratch` (n blocks) holds the velocities M⁻¹p. The ODE
+/// is ṗ = −f − Ĝᵀλ.
 pub(crate) fn total_force<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     (q, p): (&[[D; DIM]], &[[D; DIM]]),
     ctx: &Ctx<D>,
     out: &mut [[D; DIM]],
+    scratch: &mut [[D; DIM]],
 ) -> Result<()> {
     ch.potential_gradient(q, ctx.t, ctx.u, ctx.step, out)?;
     if ch.has_dissipation() {
@@ -177,6 +181,12 @@ pub(crate) fn total_force<D: Scalar, const DIM: usize>(
                 }
             }
         }
+    }
+    if ch.has_coupled_dissipation() {
+        // out −= F_J(q, M⁻¹p): F_J is linear in the velocities, so F_J(q, −v) = −F_J(q, v).
+        ch.apply_inverse_mass(p, scratch);
+        scratch.iter_mut().flatten().for_each(|x| *x = -*x);
+        ch.coupled_force(q, scratch, ctx, out);
     }
     Ok(())
 }

@@ -13,7 +13,9 @@
 //! planar model, [`crate::model::DissipativeTerm`]), evaluated at p_{k+½} in both halves
 //! (docs/conventions.md); in the first half it is implicit, and each pendulum's block solves
 //! p − (h/2) F(p) = c ([`Chain::dissipative_half_step`]: for the drag in closed form,
-//! p = 2c / (1 + √(1 + 2hD|c|)) per planar component).
+//! p = 2c / (1 + √(1 + 2hD|c|)) per planar component). A term that couples pendulums (the joint
+//! damping) is read at (q_k, p_{k+½}) in the first half and (q_{k+1}, p_{k+½}) in the second, and
+//! makes the half step and the Newton matrix below dense (`steppers/coupled.rs`, a dense LU).
 //!
 //! **Newton solve for λ.** q_{k+1}(λ) is explicit, so Newton runs on ĝ(q_{k+1}(λ)) = 0 only. Its
 //! Jacobian −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ (W = ∂p_{k+½}/∂c, the identity without drag) is
@@ -40,6 +42,7 @@
 
 pub use crate::base::StepStats;
 
+use super::coupled::CoupledHalf;
 use super::{refuse_reaction_tip, singular, Stepper};
 use crate::base::Scalar;
 use crate::error::{Error, Result};
@@ -155,6 +158,8 @@ struct Workspace<D, const DIM: usize> {
     real: [Vec<[D; DIM]>; 2],
     /// Real parts of W, likewise.
     real_w: Vec<BlockSym<D, DIM>>,
+    /// The dense half step of a model with coupled dissipative terms (joint damping).
+    coupled: Option<CoupledHalf<D, DIM>>,
 }
 
 /// RATTLE for a [`Chain`], with its workspace. `step` does not allocate.
@@ -195,6 +200,9 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             force_ready: false,
             real: [v.clone(), v.clone()],
             real_w: vec![BlockSym::identity(); n],
+            coupled: chain
+                .has_coupled_dissipation()
+                .then(|| CoupledHalf::new(&chain)),
         };
         Ok(Rattle {
             chain,
@@ -415,7 +423,18 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
             let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
-            half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), (h, &dctx), &mut ws.half);
+            match &mut ws.coupled {
+                None => {
+                    half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), (h, &dctx), &mut ws.half)
+                }
+                Some(cpl) => {
+                    let half = &mut ws.half;
+                    half.c.copy_from_slice(&ws.a);
+                    ops.add_transpose(&state.q, &ws.lam, D::from(-0.5 * h), &mut half.c);
+                    cpl.solve(ch, (&state.q, &half.c), (h, &dctx), &mut half.phalf)
+                        .map_err(|zp| singular(k, zp))?;
+                }
+            }
             ch.apply_inverse_mass(&ws.half.phalf, &mut ws.tmp);
             for i in 0..ch.n() {
                 ws.qnew[i] = std::array::from_fn(|d| state.q[i][d] + ws.tmp[i][d] * h);
@@ -450,6 +469,17 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     tolerance: self.options.tolerance,
                     h: Some(h),
                 });
+            }
+            if let Some(cpl) = &mut ws.coupled {
+                // The dense path (steppers::coupled): J with its derivative parts.
+                cpl.factor_newton(ch, (&state.q, &ws.qnew), h)
+                    .map_err(|zp| singular(k, zp))?;
+                cpl.newton_solve(&mut ws.rhs);
+                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
+                    *l -= if extra_done > 0 { *r - r.re() } else { *r };
+                }
+                iterations += 1;
+                continue;
             }
             // The derivative-only update of first-order duals is the implicit function theorem,
             // Δλ' = R_λ⁻¹ R': R_λ's real part suffices (its derivative multiplies the converged
@@ -503,6 +533,15 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                     b += f[d] * hh;
                 }
                 ws.a[i][d] = b;
+            }
+        }
+        if let Some(cpl) = &mut ws.coupled {
+            // The coupled terms at (q_{k+1}, p_{k+½}) (steppers::coupled).
+            let f = cpl.coupled_force(ch, &state.q, &ws.half.phalf, &dctx);
+            for (a, f) in ws.a.iter_mut().zip(f) {
+                for d in 0..DIM {
+                    a[d] += f[d] * hh;
+                }
             }
         }
         let v_next = match ch.reaction_tip() {

@@ -65,7 +65,7 @@ impl<D: Scalar, const DIM: usize> Rhs<D, DIM> {
         (qdot, pdot): (&mut [[D; DIM]], &mut [[D; DIM]]),
     ) -> Result<()> {
         let ops = ch.constraints();
-        total_force(ch, (q, p), ctx, &mut self.force)?;
+        total_force(ch, (q, p), ctx, &mut self.force, &mut self.minv_f)?;
         ch.apply_inverse_mass(p, qdot);
         ch.apply_inverse_mass(&self.force, &mut self.minv_f);
         // r = −Ĝ M⁻¹ f + (‖vᵢ‖²)ᵢ (no velocity term in the tip row: l is linear)

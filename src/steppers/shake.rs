@@ -152,7 +152,8 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Shake<D, DIM> {
         };
         let ch = &self.chain;
         let ws = &mut self.ws;
-        total_force(ch, (&s.q, &s.p), &Ctx::new(0.0, u_0, 0), &mut ws.force)?;
+        let ctx = Ctx::new(0.0, u_0, 0);
+        total_force(ch, (&s.q, &s.p), &ctx, &mut ws.force, &mut ws.minv_f)?;
         // a = q_0 + h M⁻¹ p_0 − h²/2 M⁻¹ f_0
         ch.apply_inverse_mass(&s.p, &mut ws.vel);
         ch.apply_inverse_mass(&ws.force, &mut ws.minv_f);
@@ -212,7 +213,13 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Shake<D, DIM> {
             }
         }
         let ctx = Ctx::new(k1 as f64 * h, u_k1, k1);
-        total_force(ch, (&state.next, &ws.pd), &ctx, &mut ws.force)?;
+        total_force(
+            ch,
+            (&state.next, &ws.pd),
+            &ctx,
+            &mut ws.force,
+            &mut ws.minv_f,
+        )?;
         ch.apply_inverse_mass(&ws.force, &mut ws.minv_f);
         // a = 2 q_{k+1} − q_k − h² M⁻¹ f
         for i in 0..n {

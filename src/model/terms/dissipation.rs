@@ -354,10 +354,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         v.0
     }
 
-    /// Whether the model has a dissipative term (then RATTLE records p_{k+½} and W).
+    /// Whether the model has a dissipative term, a block term or a coupled one
+    /// ([`Chain::has_coupled_dissipation`]); then RATTLE records p_{k+½} and W.
     #[inline]
     pub fn has_dissipation(&self) -> bool {
-        self.dissipation_count() > 0
+        self.dissipation_count() > 0 || self.has_coupled_dissipation()
     }
 
     /// Whether some dissipative term reads the physical parameter `p`.

@@ -22,6 +22,10 @@
 //! has a current. They are an open set: [`crate::Chain::visit_dissipation`] lists them and every
 //! consumer sums them ([`crate::Chain::dissipative_force`], [`crate::Chain::dissipative_slope`],
 //! [`crate::Chain::dissipative_half_step`], [`crate::Chain::dissipative_parameter_derivative`]).
+//! A dissipative term that couples pendulums (a force linear in the velocities q̇ = M⁻¹p that
+//! depends on q, such as the [`JointDamping`]) implements [`CoupledDissipativeTerm`] instead,
+//! listed in [`crate::Chain::visit_coupled_dissipation`] and summed beside them
+//! ([`crate::Chain::coupled_force`] and its derived products).
 //!
 //! **Adding a term**: write one type implementing [`ForceTerm`] (or [`DissipativeTerm`]), add it as
 //! a field of [`crate::Chain`] (set in `from_scene` and `lift`), list it in
@@ -32,10 +36,12 @@
 
 mod axial;
 mod control;
+mod coupled;
 mod current;
 mod dissipation;
 mod drag;
 mod gravity;
+mod joint_damping;
 mod point_load;
 mod reaction_tip;
 mod spring;
@@ -44,10 +50,12 @@ mod waves;
 pub use crate::scene::current_velocity;
 pub use axial::{AxialWeight, TopTension};
 pub use control::ControlForce;
+pub use coupled::{CoupledAt, CoupledDissipativeTerm, CoupledVisitor};
 pub use current::CurrentDrag;
 pub use dissipation::{block_newton, BlockSym, DissipationVisitor, DissipativeTerm};
 pub use drag::Drag;
 pub use gravity::Gravity;
+pub use joint_damping::JointDamping;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;
@@ -145,6 +153,8 @@ impl<E: Scalar> Ctx<E> {
 pub struct DualScratch<D, const DIM: usize> {
     q: Vec<[Dual<D>; DIM]>,
     f: Vec<[Dual<D>; DIM]>,
+    /// The velocities of a coupled dissipative term ([`CoupledDissipativeTerm`]).
+    v: Vec<[Dual<D>; DIM]>,
 }
 
 impl<D: Scalar, const DIM: usize> DualScratch<D, DIM> {
@@ -154,6 +164,7 @@ impl<D: Scalar, const DIM: usize> DualScratch<D, DIM> {
         DualScratch {
             q: vec![z; n],
             f: vec![z; n],
+            v: vec![z; n],
         }
     }
 
@@ -166,6 +177,24 @@ impl<D: Scalar, const DIM: usize> DualScratch<D, DIM> {
                 f[d] = Dual::from_re(D::zero());
             }
         }
+    }
+
+    /// Loads the velocities v (ε-part zero).
+    fn load_v(&mut self, v: &[[D; DIM]]) {
+        for (s, x) in self.v.iter_mut().zip(v) {
+            *s = x.map(Dual::from_re);
+        }
+    }
+
+    /// Σ w · real part of the force buffer.
+    fn contract_re(&self, w: &[[D; DIM]]) -> D {
+        let mut s = D::zero();
+        for (f, w) in self.f.iter().zip(w) {
+            for d in 0..DIM {
+                s += f[d].re * w[d];
+            }
+        }
+        s
     }
 
     /// Σ w · ε-part of the force buffer.

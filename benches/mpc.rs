@@ -69,6 +69,9 @@ fn bench_replan(c: &mut Criterion) {
         moment_rate,
         tip: plant.tip(),
         control: 0.0,
+        moment_x: 0.0,
+        moment_rate_x: 0.0,
+        control_x: 0.0,
     };
     for (solver, name) in SOLVERS {
         for horizon in [1.0, 2.0, 3.0, 4.0] {

@@ -363,6 +363,39 @@ pub fn mpc_riser() -> Scene {
     )
 }
 
+/// The spatial closed-loop scene of issue 28 (item 4): [`mpc_riser`]'s riser, drag and current
+/// (along +z, 0.1 m/s at the surface falling linearly to 0.02 m/s at the seabed) with its sea
+/// at node 5 coming from another direction, 60° from +z toward +x (F(t) = (2 N sin(2π t/8 s) +
+/// 0.5 N sin(2π t/5.3 s + 1)) (sin 60°, cos 60°), ramped in over 8 s), h = 0.01 s, N = 3000
+/// (t ∈ [0, 30] s); a 2-axis control at node 10 (the platform; a spatial closed loop,
+/// [`crate::mpc::run_closed_loop_spatial`], decides (u_x, u_z)
+/// every interval), objective c_sum = Σ |M₀(t_k)|². Spatial: the loads have x components.
+pub fn spatial_mpc_riser() -> Scene {
+    let sea = vec![
+        Harmonic {
+            amplitude: 2.0,
+            period: WAVE_PERIOD,
+            phase: 0.0,
+        },
+        Harmonic {
+            amplitude: 0.5,
+            period: 5.3,
+            phase: 1.0,
+        },
+    ];
+    let (s, c) = 60f64.to_radians().sin_cos();
+    known_good(
+        riser_chain_without_load()
+            .drag(10.0)
+            .load(PointLoad::harmonic(5, [s, c], sea).ramped(WAVE_PERIOD))
+            .current(Current::linear(0.1, 0.02, [0.0, 1.0]))
+            .control_two_axis(10, ControlKind::Constant, &[[0.0, 0.0]])
+            .objective(ObjectiveKind::Sum)
+            .steps(3000),
+        "spatial_mpc_riser",
+    )
+}
+
 /// The controller's *wrong* model of [`mpc_riser`] (the mismatch case of `examples/mpc.rs` and
 /// the `mpc_moment` figure): the drag underestimated by 30 % (D = 7 instead of 10 kg/m), the
 /// current overestimated by 20 % (0.12 → 0.024 m/s), and a forecast of the sea that misses its
@@ -491,7 +524,8 @@ const RISER_DISSIPATIVE_NAMES: [&str; 10] = [
 /// `scaled_cantilever_n20` (n = 20, L = 10, EI = 1000, M = 10, base factor 2), `long_horizon`,
 /// the scenes of the new loads: `oblique_riser`, `oblique_control` (2-axis control),
 /// `wave_riser`, `wave_series`, `sheared_current`, `turning_current`, and the closed-loop scene
-/// `mpc_riser` with its controller's wrong model `mpc_riser_wrong_model`.
+/// `mpc_riser` with its controller's wrong model `mpc_riser_wrong_model`, and its spatial
+/// sibling `spatial_mpc_riser` (current along +z, sea from 60°).
 pub fn all() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![("thesis_cantilever", thesis_cantilever())];
     for (i, name) in RISER_NAMES.iter().enumerate() {
@@ -531,6 +565,7 @@ pub fn all() -> Vec<(&'static str, Scene)> {
         ("turning_current", turning_current()),
         ("mpc_riser", mpc_riser()),
         ("mpc_riser_wrong_model", mpc_riser_wrong_model()),
+        ("spatial_mpc_riser", spatial_mpc_riser()),
     ]);
     scenes
 }

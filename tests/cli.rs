@@ -781,6 +781,14 @@ fn describe(name: &str) -> String {
              node 5 read from the time series wave_series.csv (t, fx, fz; an oblique sea of two wave \
              components, linearly interpolated), ramped in over 8 s, t in [0, 32] s. Spatial."
             .into(),
+        "spatial_mpc_riser" => "Issue 28 item 4 (MPC in the spatial model): the riser of mpc_riser \
+             (drag D = 10 kg/m, control at node 10) in a sheared current along +z (0.1 m/s at the \
+             surface falling linearly to 0.02 m/s at the seabed) while the sea comes from 60 degrees \
+             (from +z toward +x): 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1) at node 5, \
+             ramped in over 8 s, t in [0, 30] s. Spatial: a spatial closed loop decides a 2-axis force \
+             (u_x, u_z) every interval on the vector moment, objective c_sum = sum of |M0(t_k)|^2 \
+             (docs/cli.md)."
+            .into(),
         "mpc_riser" => "Issue 14 (closed loop): the riser with drag D = 10 kg/m under an irregular \
              sea at node 5, 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1), ramped in over \
              8 s, in a sheared current (along +z, 0.1 m/s at the surface falling linearly to \

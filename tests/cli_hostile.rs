@@ -457,14 +457,19 @@ fn the_default_method_is_chosen_and_reported() {
         auto["method"]
     );
     assert!(ja <= jl, "auto {ja} > lbfgs {jl}");
-    // Spatial: L-BFGS, and the reason says why.
+    // Spatial (issue 28 item 4): the condensed solver, which runs the spatial model, and the
+    // reason says why (a spatial problem of 1 parameter, the Riccati solver planar).
     let o = run(&["optimize".as_ref(), scene("oblique_riser.toml").as_os_str()]);
     assert_success(&o);
     let v = json(&o);
-    assert_eq!(v["method"], "lbfgs");
-    assert_eq!(v["method_choice"]["chosen"], "lbfgs");
+    assert_eq!(v["model"], "spatial");
+    assert_eq!(v["method"], "condensed");
+    assert_eq!(v["method_choice"]["chosen"], "condensed");
     let why = v["method_choice"]["reason"].as_str().unwrap();
-    assert!(why.contains("spatial model"), "{why}");
+    assert!(
+        why.contains("spatial control problem") && why.contains("planar only"),
+        "{why}"
+    );
 }
 
 /// Issue 27, item 7: `control.values` as one number stands for every value equal (N + 1 for a

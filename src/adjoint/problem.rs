@@ -127,6 +127,31 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         self
     }
 
+    /// A problem in the model `DIM` chooses: [`ControlProblem::new`] (`DIM = 2`) or
+    /// [`ControlProblem::spatial`] (`DIM = 3`, `two_axis` as there), for code written once over
+    /// the dimension (the receding horizon of [`crate::mpc`]).
+    ///
+    /// # Errors
+    /// As those; [`Error::NeedsSpatialModel`] naming `control.values` for a 2-axis control in
+    /// the planar model.
+    pub fn in_model(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
+        if two_axis && DIM == 2 {
+            return Err(Error::NeedsSpatialModel {
+                key: "control.values".to_string(),
+            });
+        }
+        Ok(ControlProblem {
+            chain: control_chain(scene)?,
+            h: scene.time.step,
+            steps: scene.time.steps,
+            map,
+            objective,
+            checkpointing: Checkpointing::default(),
+            two_axis,
+            start: None,
+        })
+    }
+
     /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
     pub fn with_checkpointing(mut self, c: Checkpointing) -> Self {
         self.checkpointing = c;

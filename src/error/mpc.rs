@@ -86,6 +86,12 @@ pub enum MpcError {
         "a reduced planning model needs a free tip or a tip spring (support cantilever or riser)"
     )]
     PlanSupport,
+    /// The Riccati solver asked for in the spatial model, where only the condensed one plans.
+    #[error(
+        "the Riccati solver is planar only; a spatial scene (loads, current or control along x) \
+         plans with the condensed solver (solver condensed or auto)"
+    )]
+    RiccatiPlanar,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -108,6 +114,7 @@ impl MpcError {
             }
             MpcError::PastEnd { .. } => "steps",
             MpcError::Value(v) => v.argument(),
+            MpcError::RiccatiPlanar => "solver",
         }
     }
 }

@@ -86,6 +86,23 @@ pub enum OcpError {
     /// The problem has no control node.
     #[error("the problem has no control node")]
     NoControlNode,
+    /// A structured solver in the spatial model with an objective that is not a function of the
+    /// moment's magnitude |M₀| alone (its stage cost differs for M₀ along x and along z, or it
+    /// reads the node positions): the spatial solvers take the vector residual
+    /// r_k(|M₀|) M₀/|M₀| of the objective's Gauss-Newton form.
+    #[error(
+        "{solver} in the spatial model needs an objective of |M₀| alone (c, c_sum or power):          the stage cost at M₀ = {moment} N m along x and along z differs ({along_x} against          {along_z}); use lbfgs or trust-region"
+    )]
+    AnisotropicObjective {
+        /// The solver, e.g. `the condensed Gauss-Newton solver`.
+        solver: &'static str,
+        /// The magnitude of the moment tried.
+        moment: f64,
+        /// The stage cost with M₀ along x (NaN for an objective of the positions).
+        along_x: f64,
+        /// The stage cost with M₀ along z (NaN for an objective of the positions).
+        along_z: f64,
+    },
     /// A restart ([`Condensed::restart`](crate::ocp::Condensed::restart)) with a problem of
     /// another horizon.
     #[error("a restart needs the solver's horizon {expected}, got {got}")]
@@ -177,7 +194,8 @@ impl OcpError {
             OcpError::Value(v) => v.argument(),
             OcpError::NoGaussNewtonForm { .. }
             | OcpError::InvalidGaussNewtonForm { .. }
-            | OcpError::NeedsPowerProxy { .. } => "objective",
+            | OcpError::NeedsPowerProxy { .. }
+            | OcpError::AnisotropicObjective { .. } => "objective",
             OcpError::NotPiecewise => "control map",
             OcpError::UnsupportedTip { .. } => "tip",
             OcpError::NoControlNode => "control node",

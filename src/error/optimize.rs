@@ -5,9 +5,10 @@ use super::requirement::ValueError;
 use thiserror::Error;
 
 /// The refusal of a structured solver (riccati, condensed) on a spatial problem.
-pub(crate) const PLANAR_ONLY: &str = "the structured solvers (riccati, condensed) are planar only \
-                                      (their tangent coordinates are those of the yz-plane); use \
-                                      --method lbfgs (the default) or trust-region";
+pub(crate) const PLANAR_ONLY: &str = "the Riccati solver is planar only (its tangent coordinates \
+                                      are those of the yz-plane); use --method condensed (which \
+                                      takes the spatial model), auto (the default), lbfgs or \
+                                      trust-region";
 
 /// An option, a start or a problem [`crate::optimize`] refuses. `Display` says what is wrong;
 /// [`OptimizeError::argument`] names the option or argument, and the crate's

@@ -3,7 +3,7 @@
 
 use num_dual::DualSVec64;
 
-use super::{interval_steps, Controller, Observation, Plant};
+use super::{interval_steps, Controller, Observation, Plant, SpatialController};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
 use crate::base::Scalar;
 use crate::error::{Error, MpcError, Requirement, Result};
@@ -21,6 +21,55 @@ impl Controller for NoControl {
     }
     fn control(&mut self, _: &Observation<'_>) -> Result<f64> {
         Ok(0.0)
+    }
+}
+
+impl SpatialController for NoControl {
+    fn name(&self) -> String {
+        "none".into()
+    }
+    fn control(&mut self, _: &Observation<'_, 3>) -> Result<[f64; 2]> {
+        Ok([0.0; 2])
+    }
+}
+
+/// One 2-axis force (u_x, u_z) for the whole run, in the spatial model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpatialConstantForce {
+    /// (u_x, u_z) (N).
+    pub u: [f64; 2],
+}
+
+impl SpatialConstantForce {
+    /// The best constant 2-axis force on `scene` in the spatial model:
+    /// min_u Σ_k |M₀(t_k)|² + ρ h (N + 1) |u|² subject to |u_x|, |u_z| ≤ `bound`, by the
+    /// condensed solver on the one-piece problem (θ = (u_x, u_z); an offline optimum over the
+    /// whole run, with the plant's own model and loads).
+    ///
+    /// # Errors
+    /// The problem's and the solver's errors.
+    pub fn best(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OcpResult)> {
+        let steps = scene.time.steps;
+        let map = PiecewiseControl { steps, pieces: 1 };
+        let objective = BendingObjective::summed_moment().with_effort(effort);
+        let problem = ControlProblem::spatial(scene, map, objective, true)?;
+        let opts = OcpOptions::default().with_bound(bound);
+        let r = ocp::Condensed::new(&problem, &opts)?.solve(&[0.0; 2])?;
+        Ok((
+            SpatialConstantForce {
+                u: [r.theta[0], r.theta[1]],
+            },
+            r,
+        ))
+    }
+}
+
+impl SpatialController for SpatialConstantForce {
+    fn name(&self) -> String {
+        "constant".into()
+    }
+    fn control(&mut self, _: &Observation<'_, 3>) -> Result<[f64; 2]> {
+        Ok(self.u)
     }
 }
 
@@ -126,16 +175,79 @@ impl Controller for PdLaw {
     }
 }
 
+/// A PD law on the measured moment vector in the spatial model, one law per transverse axis
+/// with common gains (the model is the same in every transverse direction) and a bias each:
+/// u_x = clamp(u_{b,x} − K_p M₀ₓ − K_d Ṁ₀ₓ), u_z = clamp(u_{b,z} − K_p M₀_z − K_d Ṁ₀_z), each
+/// component within ±u_max (the box of [`crate::mpc::Mpc`]'s plans).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpatialPdLaw {
+    /// (u_{b,x}, u_{b,z}) (N).
+    pub bias: [f64; 2],
+    /// K_p (N per Nm).
+    pub kp: f64,
+    /// K_d (N s per Nm).
+    pub kd: f64,
+    /// u_max (N; infinite: no limit).
+    pub bound: f64,
+}
+
+impl SpatialPdLaw {
+    /// The gains (u_{b,x}, u_{b,z}, K_p, K_d) minimising the closed-loop
+    /// J = Σ |M₀|² + ρ h Σ |u_k|² of a spatial tuning problem ([`PdTuning::spatial`]) from
+    /// `start`, by [`minimize`] with `options`.
+    ///
+    /// # Errors
+    /// [`Error::WrongLength`] naming `gains` for a planar tuning problem; the closed loop's and
+    /// the optimiser's errors.
+    pub fn tune(
+        tuning: &PdTuning,
+        start: [f64; 4],
+        options: &OptimOptions,
+    ) -> Result<(SpatialPdLaw, OptimResult)> {
+        let r = minimize(tuning, &start, options)?;
+        if r.theta.len() != 4 {
+            return Err(Error::WrongLength {
+                name: "gains",
+                expected: 4,
+                got: r.theta.len(),
+            });
+        }
+        let law = SpatialPdLaw {
+            bias: [r.theta[0], r.theta[1]],
+            kp: r.theta[2],
+            kd: r.theta[3],
+            bound: tuning.bound,
+        };
+        Ok((law, r))
+    }
+}
+
+impl SpatialController for SpatialPdLaw {
+    fn name(&self) -> String {
+        "PD".into()
+    }
+    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
+        let (kp, kd, b) = (self.kp, self.kd, self.bound);
+        Ok([
+            pd(&[self.bias[0], kp, kd], obs.moment_x, obs.moment_rate_x, b),
+            pd(&[self.bias[1], kp, kd], obs.moment, obs.moment_rate, b),
+        ])
+    }
+}
+
 /// The closed-loop cost of a PD law's gains θ = (u_b, K_p, K_d) on a scene, as an
 /// [`OptimProblem`]: J(θ) = Σ_{k=0}^{N} [M₀(t_k)² + ρ h u_k²] of the loop of [`super::run_closed_loop`]
 /// with [`PdLaw`] (the same plant, sampling and hold), its gradient by forward-mode dual numbers
-/// (`DualSVec64<3>`) through the RATTLE steps of the loop.
+/// (`DualSVec64<3>`) through the RATTLE steps of the loop; or, built by [`PdTuning::spatial`],
+/// of the gains θ = (u_{b,x}, u_{b,z}, K_p, K_d) of a [`SpatialPdLaw`] in the spatial model
+/// (J = Σ |M₀|² + ρ h Σ |u|², `DualSVec64<4>`).
 #[derive(Clone, Debug)]
 pub struct PdTuning {
     scene: Scene,
     interval_steps: usize,
     bound: f64,
     effort: f64,
+    spatial: bool,
 }
 
 impl PdTuning {
@@ -158,17 +270,38 @@ impl PdTuning {
             interval_steps: m,
             bound,
             effort,
+            spatial: false,
         })
+    }
+
+    /// The tuning problem of a [`SpatialPdLaw`] on `scene` in the spatial model (four gains,
+    /// [`pd_closed_loop_cost_spatial`]).
+    ///
+    /// # Errors
+    /// As [`PdTuning::new`].
+    pub fn spatial(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
+        let mut t = PdTuning::new(scene, interval, bound, effort)?;
+        t.spatial = true;
+        Ok(t)
     }
 }
 
 impl OptimProblem for PdTuning {
     fn n_params(&self) -> usize {
-        3
+        if self.spatial {
+            4
+        } else {
+            3
+        }
     }
 
     fn value(&self, theta: &[f64]) -> Result<f64> {
-        let g = gains::<f64>(theta, |x, _| x)?;
+        if self.spatial {
+            let g = gains::<f64, 4>(theta, |x, _| x)?;
+            let (m, b, e) = (self.interval_steps, self.bound, self.effort);
+            return pd_closed_loop_cost_spatial(&self.scene, m, &g, b, e);
+        }
+        let g = gains::<f64, 3>(theta, |x, _| x)?;
         pd_closed_loop_cost(
             &self.scene,
             self.interval_steps,
@@ -179,7 +312,18 @@ impl OptimProblem for PdTuning {
     }
 
     fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let g = gains::<DualSVec64<3>>(theta, |x, i| DualSVec64::<3>::from_re(x).derivative(i))?;
+        if self.spatial {
+            let seed = |x, i| DualSVec64::<4>::from_re(x).derivative(i);
+            let g = gains::<DualSVec64<4>, 4>(theta, seed)?;
+            let (m, b, e) = (self.interval_steps, self.bound, self.effort);
+            let j = pd_closed_loop_cost_spatial(&self.scene, m, &g, b, e)?;
+            let grad = match j.eps.0 {
+                Some(v) => v.iter().copied().collect(),
+                None => vec![0.0; 4],
+            };
+            return Ok((j.re, grad));
+        }
+        let g = gains::<DualSVec64<3>, 3>(theta, |x, i| DualSVec64::<3>::from_re(x).derivative(i))?;
         let j = pd_closed_loop_cost(
             &self.scene,
             self.interval_steps,
@@ -195,12 +339,15 @@ impl OptimProblem for PdTuning {
     }
 }
 
-/// The three gains of θ in a scalar type (`seed(x, i)` lifts θᵢ).
-fn gains<D: Scalar>(theta: &[f64], seed: impl Fn(f64, usize) -> D) -> Result<[D; 3]> {
-    if theta.len() != 3 {
+/// The `N` gains of θ in a scalar type (`seed(x, i)` lifts θᵢ).
+fn gains<D: Scalar, const N: usize>(
+    theta: &[f64],
+    seed: impl Fn(f64, usize) -> D,
+) -> Result<[D; N]> {
+    if theta.len() != N {
         return Err(Error::WrongLength {
             name: "gains",
-            expected: 3,
+            expected: N,
             got: theta.len(),
         });
     }
@@ -236,6 +383,42 @@ pub fn pd_closed_loop_cost<D: Scalar>(
     while plant.step_index() < plant.steps() {
         let rate = plant.moment_rate();
         plant.set_control(pd(gains, plant.moment(), rate, bound))?;
+        for _ in 0..interval_steps.min(plant.steps() - plant.step_index()) {
+            j += stage(&plant);
+            plant.advance()?;
+        }
+    }
+    Ok(j + stage(&plant))
+}
+
+/// J = Σ_{k=0}^{N} [|M₀(t_k)|² + ρ h |u_k|²] of the spatial PD loop of [`SpatialPdLaw`] with the
+/// gains (u_{b,x}, u_{b,z}, K_p, K_d) sampled every `interval_steps` steps on `scene`'s spatial
+/// plant, in any scalar (as [`pd_closed_loop_cost`]).
+///
+/// # Errors
+/// The plant's errors.
+pub fn pd_closed_loop_cost_spatial<D: Scalar>(
+    scene: &Scene,
+    interval_steps: usize,
+    gains: &[D; 4],
+    bound: f64,
+    effort: f64,
+) -> Result<D> {
+    let mut plant = Plant::<D, 3>::new(scene)?;
+    let rho_h = effort * plant.h();
+    let stage = |p: &Plant<D, 3>| {
+        let ([mx, mz], (ux, uz)) = (p.moment_vector(), (p.control_x(), p.control()));
+        mx * mx + mz * mz + (ux * ux + uz * uz) * rho_h
+    };
+    let [bx, bz, kp, kd] = *gains;
+    let mut j = D::zero();
+    while plant.step_index() < plant.steps() {
+        let ([rx, rz], [mx, mz]) = (plant.moment_vector_rate(), plant.moment_vector());
+        let u = [
+            pd(&[bx, kp, kd], mx, rx, bound),
+            pd(&[bz, kp, kd], mz, rz, bound),
+        ];
+        plant.set_controls(u)?;
         for _ in 0..interval_steps.min(plant.steps() - plant.step_index()) {
             j += stage(&plant);
             plant.advance()?;

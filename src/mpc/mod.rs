@@ -60,6 +60,18 @@
 //! 7.9·10⁻¹⁴ in J; a start that held the observed p_k fixed left the first force short by a
 //! half-kick: 1.0 % and 1.8·10⁻³).
 //!
+//! # The spatial model
+//! The plant, the observation and the loop are written once over the dimension
+//! ([`Plant<D, DIM>`](Plant), [`Observation<DIM>`](Observation)): a scene whose loads or current
+//! have an x component runs [`run_closed_loop_spatial`] with a [`SpatialController`], which
+//! decides a 2-axis force (u_x, u_z) per interval (the plant holds both); the baselines are
+//! [`NoControl`], [`SpatialConstantForce`] (the best constant (u_x, u_z), by the condensed solver
+//! in the spatial model, [`crate::ocp`] "The spatial model") and [`SpatialPdLaw`] (a PD law per
+//! axis with common gains, tuned by [`PdTuning::spatial`]). The summary then judges by
+//! |M₀|² = M₀ₓ² + M₀_z² and |u|. A planar scene runs the planar code as before, bit for bit.
+//! The receding-horizon controller [`Mpc`] is planar (the `chainbeam mpc` command refuses a
+//! spatial scene).
+//!
 //! # Which solver re-plans ([`MpcSolver`])
 //! A 3 s horizon is 300 steps but only 30 decisions. The Riccati solver linearises every step
 //! (21 dual-number directions per step for n = 10, then several Riccati passes over 300
@@ -158,7 +170,10 @@ pub mod planning;
 mod plant;
 mod receding;
 
-pub use baselines::{pd_closed_loop_cost, ConstantForce, NoControl, PdLaw, PdTuning};
+pub use baselines::{
+    pd_closed_loop_cost, pd_closed_loop_cost_spatial, ConstantForce, NoControl, PdLaw, PdTuning,
+    SpatialConstantForce, SpatialPdLaw,
+};
 pub use plant::Plant;
 pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver};
 
@@ -171,9 +186,10 @@ use crate::error::Result;
 use crate::scene::Scene;
 use crate::steppers::rattle::State;
 
-/// What a controller sees at the start t_k of a control interval.
+/// What a controller sees at the start t_k of a control interval, in the planar (`DIM = 2`) or
+/// the spatial (`DIM = 3`) model.
 #[derive(Clone, Copy, Debug)]
-pub struct Observation<'a> {
+pub struct Observation<'a, const DIM: usize = 2> {
     /// The step index k.
     pub k: usize,
     /// t_k = k h.
@@ -186,20 +202,26 @@ pub struct Observation<'a> {
     pub interval: f64,
     /// The state (q_k, p_k), p_k with the held control u_{k−1} in the second half-kick of the
     /// step into t_k ([`Plant`]).
-    pub state: &'a State<f64, 2>,
+    pub state: &'a State<f64, DIM>,
     /// (q_k, p̂_k): the state before the control's half-kick at t_k, p̂_k the momentum of the
     /// step into t_k taken with zero control in its second half-kick, which the force decided
     /// now completes ([`Plant::state_before_kick`]); `None` at k = 0 (the beam at rest, no step
     /// into t₀) and for a reaction-force tip.
-    pub state_before_kick: Option<&'a State<f64, 2>>,
-    /// M₀(t_k) (Nm).
+    pub state_before_kick: Option<&'a State<f64, DIM>>,
+    /// M₀(t_k) (Nm; its z component M₀_z in the spatial model).
     pub moment: f64,
     /// Ṁ₀(t_k) (Nm/s).
     pub moment_rate: f64,
     /// The tip displacement z_n (m).
     pub tip: f64,
-    /// The control held so far (N).
+    /// The control held so far (N; its z component in the spatial model).
     pub control: f64,
+    /// M₀ₓ(t_k) (Nm; 0 in the planar model).
+    pub moment_x: f64,
+    /// Ṁ₀ₓ(t_k) (Nm/s; 0 in the planar model).
+    pub moment_rate_x: f64,
+    /// The x component of the control held so far (N; 0 in the planar model).
+    pub control_x: f64,
 }
 
 /// A feedback law: one force per control interval from what it observes.
@@ -219,12 +241,65 @@ pub trait Controller {
     }
 }
 
+/// A feedback law in the spatial model: one 2-axis force (u_x, u_z) per control interval from
+/// what it observes ([`run_closed_loop_spatial`]).
+pub trait SpatialController {
+    /// A short name for tables ("none", "constant", "PD", "MPC").
+    fn name(&self) -> String;
+
+    /// The force (u_x, u_z) for the interval starting at `obs.t`.
+    ///
+    /// # Errors
+    /// The controller's failure (a failed solve, settings that do not fit the plant).
+    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]>;
+
+    /// Iterations of the optimiser at the last decision (None: no optimiser).
+    fn last_iterations(&self) -> Option<usize> {
+        None
+    }
+}
+
+/// The loop's view of a controller of either model: (u_x, u_z) from an observation.
+trait Decide<const DIM: usize> {
+    fn name(&self) -> String;
+    fn decide(&mut self, obs: &Observation<'_, DIM>) -> Result<[f64; 2]>;
+    fn iterations(&self) -> Option<usize>;
+}
+
+struct Planar<'c>(&'c mut dyn Controller);
+
+impl Decide<2> for Planar<'_> {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn decide(&mut self, obs: &Observation<'_, 2>) -> Result<[f64; 2]> {
+        Ok([0.0, self.0.control(obs)?])
+    }
+    fn iterations(&self) -> Option<usize> {
+        self.0.last_iterations()
+    }
+}
+
+struct Spatial<'c>(&'c mut dyn SpatialController);
+
+impl Decide<3> for Spatial<'_> {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn decide(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
+        self.0.control(obs)
+    }
+    fn iterations(&self) -> Option<usize> {
+        self.0.last_iterations()
+    }
+}
+
 /// One decision of the loop.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Decision {
     /// Its time t_k (s).
     pub t: f64,
-    /// The force decided (N).
+    /// The force decided (N; its z component in the spatial model).
     pub control: f64,
     /// Wall-clock seconds the controller took.
     pub seconds: f64,
@@ -237,13 +312,14 @@ pub struct Decision {
 pub struct Summary {
     /// [`Controller::name`].
     pub controller: String,
-    /// c_sum = Σ_{k=0}^{N} M₀(t_k)² (N²m², eq. 3.3.4).
+    /// c_sum = Σ_{k=0}^{N} M₀(t_k)² (N²m², eq. 3.3.4; |M₀|² = M₀ₓ² + M₀_z² in the spatial
+    /// model).
     pub c_sum: f64,
     /// max_k |M₀(t_k)| (Nm).
     pub max_abs_moment: f64,
-    /// max_k |u_k| (N).
+    /// max_k |u_k| (N; |u| = √(u_x² + u_z²) in the spatial model).
     pub max_abs_control: f64,
-    /// h Σ_k u_k² (N²s).
+    /// h Σ_k |u_k|² (N²s).
     pub effort: f64,
     /// Simulated time T = N h (s).
     pub simulated_seconds: f64,
@@ -269,12 +345,16 @@ pub struct Summary {
 pub struct ClosedLoopResult {
     /// t_k (s), k = 0..N.
     pub t: Vec<f64>,
-    /// M₀(t_k) (Nm).
+    /// M₀(t_k) (Nm; M₀_z in the spatial model).
     pub moment: Vec<f64>,
-    /// u_k (N).
+    /// u_k (N; u_z in the spatial model).
     pub control: Vec<f64>,
     /// Tip displacement z_n(t_k) (m).
     pub tip: Vec<f64>,
+    /// M₀ₓ(t_k) (Nm; spatial model, empty in the planar one).
+    pub moment_x: Vec<f64>,
+    /// u_{x,k} (N; spatial model, empty in the planar one).
+    pub control_x: Vec<f64>,
     /// One record per control interval.
     pub decisions: Vec<Decision>,
     /// The summary.
@@ -307,8 +387,31 @@ pub fn run_closed_loop(
     interval: f64,
     controller: &mut dyn Controller,
 ) -> Result<ClosedLoopResult> {
+    closed_loop::<2>(scene, interval, &mut Planar(controller))
+}
+
+/// [`run_closed_loop`] in the spatial model (any scene, loads and current in any transverse
+/// direction) with a 2-axis controller: the plant holds (u_x, u_z) over each interval, and the
+/// summary judges by |M₀|² = M₀ₓ² + M₀_z² and |u|² = u_x² + u_z².
+///
+/// # Errors
+/// As [`run_closed_loop`].
+pub fn run_closed_loop_spatial(
+    scene: &Scene,
+    interval: f64,
+    controller: &mut dyn SpatialController,
+) -> Result<ClosedLoopResult> {
+    closed_loop::<3>(scene, interval, &mut Spatial(controller))
+}
+
+/// The loop of both models: observe, decide, hold, record.
+fn closed_loop<const DIM: usize>(
+    scene: &Scene,
+    interval: f64,
+    controller: &mut dyn Decide<DIM>,
+) -> Result<ClosedLoopResult> {
     let start = Instant::now();
-    let mut plant = Plant::<f64>::new(scene)?;
+    let mut plant = Plant::<f64, DIM>::new(scene)?;
     let m = interval_steps(interval, plant.h())?;
     let steps = plant.steps();
     if steps % m != 0 {
@@ -318,11 +421,13 @@ pub fn run_closed_loop(
         }
         .into());
     }
-    let mut rec = Recorder::with_capacity(steps + 1);
+    let mut rec = Recorder::with_capacity(steps + 1, DIM == 3);
     let mut decisions = Vec::with_capacity(steps / m);
     for _ in 0..steps / m {
         plant.update_state_before_kick()?;
         let moment_rate = plant.moment_rate();
+        let [moment_x, _] = plant.moment_vector();
+        let [moment_rate_x, _] = plant.moment_vector_rate();
         let obs = Observation {
             k: plant.step_index(),
             t: plant.time(),
@@ -335,17 +440,20 @@ pub fn run_closed_loop(
             moment_rate,
             tip: plant.tip(),
             control: plant.control(),
+            moment_x,
+            moment_rate_x,
+            control_x: plant.control_x(),
         };
         let clock = Instant::now();
-        let u = controller.control(&obs)?;
+        let u = controller.decide(&obs)?;
         let seconds = clock.elapsed().as_secs_f64();
         decisions.push(Decision {
             t: obs.t,
-            control: u,
+            control: u[1],
             seconds,
-            iterations: controller.last_iterations(),
+            iterations: controller.iterations(),
         });
-        plant.set_control(u)?;
+        plant.set_controls(u)?;
         for _ in 0..m {
             rec.push(&plant);
             plant.advance()?;
@@ -359,34 +467,47 @@ pub fn run_closed_loop(
         moment: rec.moment,
         control: rec.control,
         tip: rec.tip,
+        moment_x: rec.moment_x,
+        control_x: rec.control_x,
         decisions,
         summary,
     })
 }
 
-/// The per-step records of a run.
+/// The per-step records of a run (the x components in the spatial model).
 struct Recorder {
     t: Vec<f64>,
     moment: Vec<f64>,
     control: Vec<f64>,
     tip: Vec<f64>,
+    moment_x: Vec<f64>,
+    control_x: Vec<f64>,
+    spatial: bool,
 }
 
 impl Recorder {
-    fn with_capacity(n: usize) -> Self {
+    fn with_capacity(n: usize, spatial: bool) -> Self {
+        let x = if spatial { n } else { 0 };
         Recorder {
             t: Vec::with_capacity(n),
             moment: Vec::with_capacity(n),
             control: Vec::with_capacity(n),
             tip: Vec::with_capacity(n),
+            moment_x: Vec::with_capacity(x),
+            control_x: Vec::with_capacity(x),
+            spatial,
         }
     }
 
-    fn push(&mut self, plant: &Plant<f64>) {
+    fn push<const DIM: usize>(&mut self, plant: &Plant<f64, DIM>) {
         self.t.push(plant.time());
         self.moment.push(plant.moment());
         self.control.push(plant.control());
         self.tip.push(plant.tip());
+        if self.spatial {
+            self.moment_x.push(plant.moment_vector()[0]);
+            self.control_x.push(plant.control_x());
+        }
     }
 }
 
@@ -407,12 +528,31 @@ fn summarise(
     let count = later.len().max(1) as f64;
     let iterations: Option<usize> = later.iter().map(|d| d.iterations).sum();
     let rtf = |s: f64| (simulated / s).min(MAX_REAL_TIME_FACTOR);
+    let (c_sum, max_abs_moment, max_abs_control, effort) = if rec.spatial {
+        let norms = |a: &[f64], b: &[f64]| -> Vec<f64> {
+            a.iter().zip(b).map(|(x, z)| x.hypot(*z)).collect()
+        };
+        let sq = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, z)| x * x + z * z).sum::<f64>();
+        (
+            sq(&rec.moment_x, &rec.moment),
+            max_abs(&norms(&rec.moment_x, &rec.moment)),
+            max_abs(&norms(&rec.control_x, &rec.control)),
+            h * sq(&rec.control_x, &rec.control),
+        )
+    } else {
+        (
+            rec.moment.iter().map(|m| m * m).sum(),
+            max_abs(&rec.moment),
+            max_abs(&rec.control),
+            h * rec.control.iter().map(|u| u * u).sum::<f64>(),
+        )
+    };
     Summary {
         controller,
-        c_sum: rec.moment.iter().map(|m| m * m).sum(),
-        max_abs_moment: max_abs(&rec.moment),
-        max_abs_control: max_abs(&rec.control),
-        effort: h * rec.control.iter().map(|u| u * u).sum::<f64>(),
+        c_sum,
+        max_abs_moment,
+        max_abs_control,
+        effort,
         simulated_seconds: simulated,
         decisions: decisions.len(),
         initial_decision_seconds: decisions.first().map_or(0.0, |d| d.seconds),

@@ -38,36 +38,48 @@ use crate::steppers::Stepper;
 /// sides of t_k exactly as the plant then applies it. At k = 0 there is no step into t₀ (the
 /// beam is at rest, p_0 = 0 whatever u_0) and there is no such state; nor for a reaction-force
 /// tip, whose control is not a force term.
+///
+/// # The spatial plant
+/// `DIM = 3` is the spatial model of a scene whose loads or current have an x component, with a
+/// 2-axis control u = (u_x, u_z) ([`Plant::set_controls`]): the x components are the chain's x
+/// schedule (held like u between decisions), and the state before the kick takes
+/// p̂_k = p_k + (h/2) P(q_k)(u b + u_x b_x).
 #[derive(Clone, Debug)]
-pub struct Plant<D: Scalar> {
-    stepper: Rattle<D, 2>,
-    state: State<D, 2>,
+pub struct Plant<D: Scalar, const DIM: usize = 2> {
+    stepper: Rattle<D, DIM>,
+    state: State<D, DIM>,
     /// The state at t_{k−1}, from which the last step is re-taken.
-    prev: State<D, 2>,
+    prev: State<D, DIM>,
     k: usize,
     steps: usize,
-    /// u_k (the control at the current t_k) and u_{k−1}.
+    /// u_k (the control at the current t_k, its z component) and u_{k−1}.
     u: D,
     u_prev: D,
     /// M⁻¹p, for Ṁ₀.
-    velocity: Vec<[D; 2]>,
+    velocity: Vec<[D; DIM]>,
     /// (q_k, p̂_k) and the step k it was computed at ([`Plant::update_state_before_kick`]).
-    before_kick: State<D, 2>,
+    before_kick: State<D, DIM>,
     before_kick_at: Option<usize>,
 }
 
-impl<D: Scalar> Plant<D> {
-    /// The plant of a planar scene at t = 0 with u_0 = 0 (the scene's `[control]` values are
-    /// not applied: the loop's controller decides them).
+impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
+    /// The plant of a scene at t = 0 with u_0 = 0 (the scene's `[control]` values are not
+    /// applied: the loop's controller decides them), in the planar (`DIM = 2`) or the spatial
+    /// (`DIM = 3`, with a 2-axis control) model.
     ///
     /// # Errors
-    /// The scene's model errors; [`Error::NeedsSpatialModel`] for a scene with loads along x.
+    /// The scene's model errors; [`Error::NeedsSpatialModel`] for a planar plant of a scene with
+    /// loads along x.
     pub fn new(scene: &Scene) -> Result<Self> {
-        let mut chain = Chain::<f64, 2>::from_scene(scene)?;
+        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }
-        let mut stepper = Rattle::new(chain.lift::<D>(), scene.time.step)?;
+        let mut chain = chain.lift::<D>();
+        if DIM == 3 {
+            chain.set_control_x(&vec![D::zero(); scene.time.steps + 1])?;
+        }
+        let mut stepper = Rattle::new(chain, scene.time.step)?;
         let state = stepper.initial_state(D::zero())?;
         Ok(Plant {
             prev: state.clone(),
@@ -78,7 +90,7 @@ impl<D: Scalar> Plant<D> {
             steps: scene.time.steps,
             u: D::zero(),
             u_prev: D::zero(),
-            velocity: vec![[D::zero(); 2]; scene.n()],
+            velocity: vec![[D::zero(); DIM]; scene.n()],
             before_kick_at: None,
         })
     }
@@ -104,7 +116,7 @@ impl<D: Scalar> Plant<D> {
     }
 
     /// The state at t_k.
-    pub fn state(&self) -> &State<D, 2> {
+    pub fn state(&self) -> &State<D, DIM> {
         &self.state
     }
 
@@ -133,11 +145,19 @@ impl<D: Scalar> Plant<D> {
             }
             (h, m) => h.clone_from(m),
         }
+        let ux = self.control_x();
         let p = &mut self.before_kick.p;
-        self.stepper.control_kick(&self.state, self.u, p)?;
+        if DIM == 3 {
+            self.stepper
+                .control_half_kick(&self.state.q, (self.u, ux), p)?;
+        } else {
+            self.stepper.control_kick(&self.state, self.u, p)?;
+        }
         for (ph, pk) in p.iter_mut().zip(&self.state.p) {
-            // p̂ = p_k − (−(h/2) u P(q_k) b)
-            *ph = [pk[0] - ph[0], pk[1] - ph[1]];
+            // p̂ = p_k − (−(h/2) P(q_k)(u b + u_x b_x))
+            for d in 0..DIM {
+                ph[d] = pk[d] - ph[d];
+            }
         }
         self.before_kick_at = Some(self.k);
         Ok(())
@@ -147,18 +167,36 @@ impl<D: Scalar> Plant<D> {
     /// control in its second half-kick (type docs), if [`Plant::update_state_before_kick`]
     /// computed it at this step; `None` at k = 0 and for a reaction-force tip. It does not
     /// depend on the control set at t_k.
-    pub fn state_before_kick(&self) -> Option<&State<D, 2>> {
+    pub fn state_before_kick(&self) -> Option<&State<D, DIM>> {
         (self.before_kick_at == Some(self.k)).then_some(&self.before_kick)
     }
 
     /// The model.
-    pub fn chain(&self) -> &Chain<D, 2> {
+    pub fn chain(&self) -> &Chain<D, DIM> {
         Stepper::chain(&self.stepper)
     }
 
-    /// The control u_k applied at t_k.
+    /// The control u_k applied at t_k (its z component in the spatial model).
     pub fn control(&self) -> D {
         self.u
+    }
+
+    /// The x component u_{x,k} of the control applied at t_k (0 in the planar model).
+    pub fn control_x(&self) -> D {
+        self.chain().control_x(self.k)
+    }
+
+    /// The base moment vector (M₀ₓ, M₀_z)(t_k) ([`Chain::base_moment_vector`]; M₀ₓ = 0 in the
+    /// planar model).
+    pub fn moment_vector(&self) -> [D; 2] {
+        self.chain().base_moment_vector(&self.state.q)
+    }
+
+    /// Its rate (Ṁ₀ₓ, Ṁ₀_z) with q̇ = M⁻¹p (M₀ is linear in q₁).
+    pub fn moment_vector_rate(&mut self) -> [D; 2] {
+        let ch = Stepper::chain(&self.stepper);
+        ch.apply_inverse_mass(&self.state.p, &mut self.velocity);
+        ch.base_moment_vector(&self.velocity)
     }
 
     /// The base bending moment M₀(t_k) = 2 k₁ z₁ / l₁² (thesis eq. 3.1.3).
@@ -192,8 +230,41 @@ impl<D: Scalar> Plant<D> {
             });
         }
         self.u = u;
+        self.apply()
+    }
+
+    /// Sets the 2-axis control (u_x, u_z) at the current t_k (the spatial model; as
+    /// [`Plant::set_control`] otherwise).
+    ///
+    /// # Errors
+    /// [`Error::NotFinite`] for a non-finite component; [`Error::NeedsSpatialModel`] for
+    /// u_x ≠ 0 in the planar model; the step's errors.
+    pub fn set_controls(&mut self, [ux, u]: [D; 2]) -> Result<()> {
+        if !(u.re().is_finite() && ux.re().is_finite()) {
+            return Err(Error::NotFinite {
+                name: "control",
+                index: self.k,
+            });
+        }
+        if DIM == 2 {
+            if ux.re().abs() > 0.0 {
+                return Err(Error::NeedsSpatialModel {
+                    key: "control".into(),
+                });
+            }
+        } else {
+            let k = self.k;
+            self.stepper.chain_mut().control_x[k] = ux;
+        }
+        self.u = u;
+        self.apply()
+    }
+
+    /// Applies the control just set: at k = 0 the initial state's force, at k > 0 the step
+    /// k−1 → k re-taken.
+    fn apply(&mut self) -> Result<()> {
         if self.k == 0 {
-            self.state = self.stepper.initial_state(u)?;
+            self.state = self.stepper.initial_state(self.u)?;
             Ok(())
         } else {
             self.retake()
@@ -218,6 +289,11 @@ impl<D: Scalar> Plant<D> {
             return Err(MpcError::PastEnd { steps: self.steps }.into());
         }
         self.prev.clone_from(&self.state);
+        if DIM == 3 {
+            // Hold u_x as u: u_{x,k+1} = u_{x,k}.
+            let (k, ux) = (self.k, self.control_x());
+            self.stepper.chain_mut().control_x[k + 1] = ux;
+        }
         Stepper::step(&mut self.stepper, &mut self.state, self.k, self.u, self.u)?;
         self.u_prev = self.u;
         self.k += 1;

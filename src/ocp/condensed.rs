@@ -47,6 +47,15 @@
 //! 192 ms for the Riccati solver (rows 2 and 3: 21 and 56 iterations against 72 and 125 of
 //! plain Gauss-Newton); now 14–18 ms against the Riccati solver's 29–31 ms.
 //!
+//! # The spatial model
+//! `Condensed<3>` (module docs of [`crate::ocp`], "The spatial model"): the sensitivities S_{k,c}
+//! of both moment components c = z, x to θ = (θ_x; θ_z) by the same dual steps (a 2-axis
+//! decision seeds u_x through the stage map's x schedule), ∇R_{k,c} = Σ_d ∂R_c/∂M₀_d S_{k,d},
+//! g = Σ_k w_k Σ_c R_{k,c}∇R_{k,c} + (…), H = Σ_k w_k Σ_c ∇R_{k,c}∇R_{k,c}ᵀ + (…), and the secant
+//! term's y from the same gradients. Tested against the adjoint (gradient and J to 10⁻¹²) and,
+//! on a planar scene turned about the beam's axis, against the planar optimum (J to 10⁻⁹,
+//! turned controls), in tests/ocp_spatial.rs.
+//!
 //! # Globalisation and convergence
 //! As the Riccati solver: a Levenberg weight μ·mean(diag H) on the QP, an open-loop line search
 //! on rollouts of θ + αδ (α = 1 first, then the quadratic interpolation in [α/10, α/2],
@@ -61,6 +70,7 @@ use num_dual::Derivative;
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
+use super::cost::ResidualVector;
 use super::dense_qp::{BoxQp, DenseQp};
 use super::globalise::{
     backtrack, raise_mu, Accepted, LineSearch, ModelChange, Outer, Progress, Step,
@@ -68,19 +78,19 @@ use super::globalise::{
 use super::horizon::{available_threads, ControlHorizon};
 use super::line_search::Traj;
 use super::options::{OcpOptions, OcpResult, Termination};
-use super::stage::{Dv, StageModel, Stepper, CHUNK};
+use super::stage::{Dv, Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{HorizonShape, OcpError, Result};
 
 /// Gauss-Newton on the condensed problem (module docs), with its buffers.
 #[derive(Clone, Debug)]
-pub struct Condensed {
+pub struct Condensed<const DIM: usize = 2> {
     /// The problem, its structure and trajectories.
-    horizon: ControlHorizon,
+    horizon: ControlHorizon<DIM>,
     /// N and the number of decisions.
     steps: usize,
     np: usize,
-    chunks: Vec<SensChunk>,
+    chunks: Vec<SensChunk<DIM>>,
     threads: usize,
     /// H (np × np, row-major, lower triangle filled) and g at the nominal.
     hess: Vec<f64>,
@@ -88,7 +98,8 @@ pub struct Condensed {
     /// The QP's step δ and its working set.
     qp: BoxQp,
     /// The structured secant approximation A ≈ Σ_k w_k r_k ∇²r_k (np × np, full) and the
-    /// sensitivities and θ of the previous linearisation (module docs, "Curvature").
+    /// residuals' gradients ∇r_k (DIM − 1 components each) and θ of the previous linearisation
+    /// (module docs, "Curvature").
     secant: Vec<f64>,
     prev_rows: Vec<f64>,
     prev_theta: Vec<f64>,
@@ -109,15 +120,18 @@ const MU_FIRST: f64 = 1e-12;
 
 /// The sensitivities of the decisions θ_first … θ_{first+len−1} (one dual-number chunk).
 #[derive(Clone, Debug)]
-struct SensChunk {
+struct SensChunk<const DIM: usize> {
     first: usize,
     len: usize,
-    stepper: Stepper<Dv>,
-    /// Row k: ∂M₀(t_k)/∂θ_{first+s} in slot s, k = 0..=N.
+    /// The first stage any of the chunk's decisions acts on.
+    start: usize,
+    stepper: Stepper<Dv, DIM>,
+    /// Row (DIM − 1)k + c: ∂M₀_c(t_k)/∂θ_{first+s} in slot s, k = 0..=N, c = 0 (z) and, in the
+    /// spatial model, 1 (x).
     rows: Vec<[f64; CHUNK]>,
 }
 
-impl Condensed {
+impl<const DIM: usize> Condensed<DIM> {
     /// Builds the solver for `problem` (as [`super::Solver::new`]: a planar problem with a
     /// free tip, a bending-moment objective and per-step or piecewise-constant controls).
     ///
@@ -125,20 +139,26 @@ impl Condensed {
     /// [`OcpError`] naming the option, the objective, the control map or
     /// the tip; [`OcpError::CondensedTooLarge`] over the memory budget.
     pub fn new<P: ControlMap, O: Objective>(
-        problem: &ControlProblem<P, O>,
+        problem: &ControlProblem<P, O, DIM>,
         options: &OcpOptions,
     ) -> Result<Self> {
         let solver = "the condensed Gauss-Newton solver";
         let horizon = ControlHorizon::new(problem, options, solver, check_memory)?;
         let (model, steps, np) = (&horizon.model, horizon.steps, horizon.n_params);
+        let m = horizon.pieces();
         let chunks = (0..np)
             .step_by(CHUNK)
             .map(|first| {
+                let len = CHUNK.min(np - first);
                 Ok(SensChunk {
                     first,
-                    len: CHUNK.min(np - first),
+                    len,
+                    start: (first..first + len)
+                        .map(|j| horizon.theta_stage[j % m])
+                        .min()
+                        .unwrap_or(0),
                     stepper: Stepper::new(model)?,
-                    rows: vec![[0.0; CHUNK]; steps + 1],
+                    rows: vec![[0.0; CHUNK]; (steps + 1) * (DIM - 1)],
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -153,7 +173,7 @@ impl Condensed {
             grad: vec![0.0; np],
             qp: BoxQp::new(np),
             secant: vec![0.0; np * np],
-            prev_rows: vec![0.0; (steps + 1) * np],
+            prev_rows: vec![0.0; (steps + 1) * (DIM - 1) * np],
             prev_theta: vec![0.0; np],
             has_prev: false,
             use_secant: false,
@@ -174,7 +194,7 @@ impl Condensed {
     /// pendulums differ from the solver's.
     pub fn restart<P: ControlMap, O: Objective>(
         &mut self,
-        problem: &ControlProblem<P, O>,
+        problem: &ControlProblem<P, O, DIM>,
     ) -> Result<()> {
         let model = &self.horizon.model;
         let expected = HorizonShape {
@@ -224,9 +244,7 @@ impl Condensed {
     /// the Gauss-Newton Hessian and the exact gradient.
     fn linearise(&mut self) -> Result<()> {
         let hz = &self.horizon;
-        let (model, nominal) = (&hz.model, &hz.nominal);
-        let (piece, stage) = (&hz.piece[..], &hz.theta_stage[..]);
-        let work = |c: &mut SensChunk| c.sweep(model, nominal, piece, stage[c.first]);
+        let work = |c: &mut SensChunk<DIM>| c.sweep(hz);
         if self.threads > 1 {
             #[cfg(feature = "parallel")]
             self.chunks.par_iter_mut().try_for_each(work)?;
@@ -255,9 +273,24 @@ impl Condensed {
     /// Keeps ∇r_k = r_k′ S_k and θ of this linearisation for the next secant update.
     fn snapshot(&mut self) {
         let np = self.np;
+        if DIM == 3 {
+            for k in 0..=self.steps {
+                let rows = &mut self.prev_rows[2 * k * np..2 * (k + 1) * np];
+                let (g0, g1) = rows.split_at_mut(np);
+                residual_gradients(
+                    &self.chunks,
+                    &self.horizon.nominal.residual_vec[k],
+                    k,
+                    [g0, g1],
+                );
+            }
+            self.prev_theta = self.theta();
+            self.has_prev = true;
+            return;
+        }
         for k in 0..=self.steps {
             let row = &mut self.prev_rows[k * np..(k + 1) * np];
-            sens_row(&self.chunks, k, row);
+            sens_row(&self.chunks, k, 0, row);
             let dr = self.horizon.nominal.dresidual_dm[k];
             row.iter_mut().for_each(|x| *x *= dr);
         }
@@ -283,12 +316,15 @@ impl Condensed {
         }
         let mut y = vec![0.0; np];
         let mut row = vec![0.0; np];
+        if DIM == 3 {
+            self.secant_change_spatial(&mut y);
+        }
         for k in 0..=self.steps {
             let w = self.horizon.cost.weight(k);
-            if w == 0.0 {
+            if w == 0.0 || DIM == 3 {
                 continue;
             }
-            sens_row(&self.chunks, k, &mut row);
+            sens_row(&self.chunks, k, 0, &mut row);
             let nom = &self.horizon.nominal;
             let (r, dr) = (nom.residual[k], nom.dresidual_dm[k]);
             for j in 0..np {
@@ -318,8 +354,57 @@ impl Condensed {
         }
     }
 
+    /// The spatial y = Σ_k w_k Σ_c R_{k,c} (∇R_{k,c} − ∇R_{k,c}^prev) of the secant update.
+    fn secant_change_spatial(&self, y: &mut [f64]) {
+        let np = self.np;
+        let (mut g0, mut g1) = (vec![0.0; np], vec![0.0; np]);
+        for k in 0..=self.steps {
+            let w = self.horizon.cost.weight(k);
+            if w == 0.0 {
+                continue;
+            }
+            let rv = &self.horizon.nominal.residual_vec[k];
+            residual_gradients(&self.chunks, rv, k, [&mut g0, &mut g1]);
+            let prev = &self.prev_rows[2 * k * np..2 * (k + 1) * np];
+            for j in 0..np {
+                y[j] += w * (rv.r[0] * (g0[j] - prev[j]) + rv.r[1] * (g1[j] - prev[np + j]));
+            }
+        }
+    }
+
+    /// H and g of the spatial model: ∇R_{k,c} = Σ_d (∂R_c/∂M₀_d) S_{k,d} for the vector
+    /// residual R_k ([`StageCost::residual_vector`](super::cost::StageCost::residual_vector)),
+    /// g = Σ_k w_k Σ_c R_{k,c} ∇R_{k,c} + (effort, rate), H = Σ_k w_k Σ_c ∇R_{k,c}∇R_{k,c}ᵀ + (…)
+    /// (lower triangle).
+    fn assemble_spatial(&mut self) {
+        let np = self.np;
+        self.hess.fill(0.0);
+        self.grad.fill(0.0);
+        let (mut g0, mut g1) = (vec![0.0; np], vec![0.0; np]);
+        for k in 0..=self.steps {
+            let w = self.horizon.cost.weight(k);
+            if w != 0.0 {
+                let rv = self.horizon.nominal.residual_vec[k];
+                residual_gradients(&self.chunks, &rv, k, [&mut g0, &mut g1]);
+                for i in 0..np {
+                    self.grad[i] += w * (rv.r[0] * g0[i] + rv.r[1] * g1[i]);
+                    let row = &mut self.hess[i * np..i * np + i + 1];
+                    let (a, b) = (w * g0[i], w * g1[i]);
+                    for (h, (x, y)) in row.iter_mut().zip(g0.iter().zip(&g1)) {
+                        *h += a * x + b * y;
+                    }
+                }
+            }
+            self.control_terms(k);
+        }
+    }
+
     /// H and g of the module docs from the sensitivities (lower triangle of H).
     fn assemble(&mut self) {
+        if DIM == 3 {
+            self.assemble_spatial();
+            return;
+        }
         let np = self.np;
         self.hess.fill(0.0);
         self.grad.fill(0.0);
@@ -327,7 +412,7 @@ impl Condensed {
         for k in 0..=self.steps {
             let w = self.horizon.cost.weight(k);
             if w != 0.0 {
-                sens_row(&self.chunks, k, &mut s);
+                sens_row(&self.chunks, k, 0, &mut s);
                 // Decisions after stage k do not act on M₀(t_k).
                 let last = self.horizon.piece[k.saturating_sub(1)].min(np - 1) + 1;
                 let nom = &self.horizon.nominal;
@@ -347,25 +432,27 @@ impl Condensed {
         }
     }
 
-    /// The exact effort and rate terms of stage k in H and g.
+    /// The exact effort and rate terms of stage k in H and g (each axis).
     fn control_terms(&mut self, k: usize) {
-        let np = self.np;
-        let hz = &self.horizon;
-        let (p, u) = (hz.piece[k], hz.nominal.u[k]);
-        self.grad[p] += 2.0 * hz.cost.effort(k) * u;
-        self.hess[p * np + p] += 2.0 * hz.cost.effort(k);
-        self.rate_terms(k);
+        for axis in 0..self.horizon.axes {
+            let np = self.np;
+            let hz = &self.horizon;
+            let (p, u) = (hz.theta_index(k, axis), control(&hz.nominal, axis, k));
+            self.grad[p] += 2.0 * hz.cost.effort(k) * u;
+            self.hess[p * np + p] += 2.0 * hz.cost.effort(k);
+            self.rate_terms(k, axis);
+        }
     }
 
-    /// The rate penalty's terms of stage k in H and g.
-    fn rate_terms(&mut self, k: usize) {
+    /// The rate penalty's terms of stage k in H and g (one axis).
+    fn rate_terms(&mut self, k: usize, axis: usize) {
         let np = self.np;
         let hz = &self.horizon;
-        let (p, u) = (hz.piece[k], hz.nominal.u[k]);
+        let (p, u) = (hz.theta_index(k, axis), control(&hz.nominal, axis, k));
         let r = hz.cost.rate;
-        if k > 0 && r > 0.0 && hz.piece[k - 1] != p {
-            let q = hz.piece[k - 1];
-            let du = u - hz.nominal.u[k - 1];
+        if k > 0 && r > 0.0 && hz.piece[k - 1] != hz.piece[k] {
+            let q = hz.theta_index(k - 1, axis);
+            let du = u - control(&hz.nominal, axis, k - 1);
             self.grad[p] += 2.0 * r * du;
             self.grad[q] -= 2.0 * r * du;
             self.hess[p * np + p] += 2.0 * r;
@@ -379,11 +466,11 @@ impl Condensed {
     fn projected_norm(&self) -> f64 {
         let hz = &self.horizon;
         let (lo, hi) = (hz.opts.lower, hz.opts.upper);
-        hz.theta_stage
+        self.grad
             .iter()
-            .zip(&self.grad)
-            .map(|(&k, g)| {
-                let t = hz.nominal.u[k];
+            .enumerate()
+            .map(|(i, g)| {
+                let t = hz.theta_at(i);
                 let d = super::boxqp::projected_component(t, *g, lo, hi);
                 d * d
             })
@@ -478,7 +565,7 @@ impl Condensed {
     }
 }
 
-impl Outer for Condensed {
+impl<const DIM: usize> Outer for Condensed<DIM> {
     fn begin(&mut self) {
         self.horizon.rollouts = 0;
         self.linearisations = 0;
@@ -487,8 +574,12 @@ impl Outer for Condensed {
         self.use_secant = false;
     }
 
-    fn horizon(&self) -> &ControlHorizon {
-        &self.horizon
+    fn options(&self) -> &OcpOptions {
+        &self.horizon.opts
+    }
+
+    fn nominal_cost(&self) -> f64 {
+        self.horizon.nominal.cost
     }
 
     fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
@@ -534,6 +625,7 @@ impl Outer for Condensed {
             objective: hz.nominal.cost,
             initial_objective: pr.j0,
             controls: hz.nominal.u.clone(),
+            controls_x: hz.nominal.ux.clone(),
             active_bounds: (0..self.np)
                 .filter(|&i| theta[i] <= lo || theta[i] >= hi)
                 .collect(),
@@ -553,23 +645,32 @@ impl Outer for Condensed {
     }
 }
 
-impl SensChunk {
-    /// Rows S_k of this chunk's decisions: dual numbers seeded on u from the chunk's first
-    /// stage s₀, real parts held at the nominal's and each step started at its converged
-    /// multipliers (one derivative-only Newton update).
-    fn sweep(&mut self, model: &StageModel, nom: &Traj, piece: &[usize], s0: usize) -> Result<()> {
-        let n = model.n;
-        let steps = self.rows.len() - 1;
-        self.rows[..=s0].fill([0.0; CHUNK]);
+impl<const DIM: usize> SensChunk<DIM> {
+    /// Rows S_k of this chunk's decisions: dual numbers seeded on u_k (and u_{x,k}) from the
+    /// chunk's first stage, real parts held at the nominal's and each step started at its
+    /// converged multipliers (one derivative-only Newton update).
+    fn sweep(&mut self, hz: &ControlHorizon<DIM>) -> Result<()> {
+        let (model, nom, s0) = (&hz.model, &hz.nominal, self.start);
+        let (n, na) = (model.n, DIM - 1);
+        let steps = hz.steps;
+        self.rows[..(s0 + 1) * na].fill([0.0; CHUNK]);
         let st = &mut self.stepper.state;
         for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
-            *q = [Dv::from_re(0.0); 2];
-            *p = [Dv::from_re(0.0); 2];
+            *q = [Dv::from_re(0.0); DIM];
+            *p = [Dv::from_re(0.0); DIM];
         }
+        let chunk = self.first..self.first + self.len;
+        let seeded = |value: f64, j: usize| {
+            let mut seed = [0.0; CHUNK];
+            if chunk.contains(&j) {
+                seed[j - chunk.start] = 1.0;
+            }
+            Dv::new(value, Derivative::some(SVector::from(seed)))
+        };
         for k in s0..steps {
             let st = &mut self.stepper.state;
             for (i, (q, p)) in st.q.iter_mut().zip(st.p.iter_mut()).enumerate() {
-                for d in 0..2 {
+                for d in 0..DIM {
                     q[d].re = nom.q(k)[i][d];
                     p[d].re = nom.p(k)[i][d];
                 }
@@ -579,19 +680,20 @@ impl SensChunk {
                 (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
             }
             st.tip_target = [Dv::from_re(0.0); 2];
-            let mut seed = [0.0; CHUNK];
-            let j = piece[k];
-            if (self.first..self.first + self.len).contains(&j) {
-                seed[j - self.first] = 1.0;
+            if hz.axes == 2 {
+                let ux = seeded(nom.ux[k], hz.theta_index(k, 1));
+                self.stepper.set_control_x(k, ux);
             }
-            let u = Dv::new(nom.u[k], Derivative::some(SVector::from(seed)));
+            let u = seeded(nom.u[k], hz.theta_index(k, 0));
             self.stepper.advance(k, u)?;
-            let z = &self.stepper.state.q[0][1];
-            let row = &mut self.rows[k + 1];
-            *row = [0.0; CHUNK];
-            if let Some(e) = z.eps.0.as_ref() {
-                for (r, v) in row.iter_mut().zip(e.iter()) {
-                    *r = model.moment_scale * v;
+            let q1 = &self.stepper.state.q[0];
+            for (c, axis) in [DIM - 1, 0].into_iter().take(na).enumerate() {
+                let row = &mut self.rows[(k + 1) * na + c];
+                *row = [0.0; CHUNK];
+                if let Some(e) = q1[axis].eps.0.as_ref() {
+                    for (r, v) in row.iter_mut().zip(e.iter()) {
+                        *r = model.moment_scale * v;
+                    }
                 }
             }
         }
@@ -620,17 +722,48 @@ fn check_memory(steps: usize, np: usize) -> Result<()> {
     Ok(())
 }
 
-/// S_k, the sensitivities of M₀(t_k) to θ, gathered from the chunks into `out`.
-fn sens_row(chunks: &[SensChunk], k: usize, out: &mut [f64]) {
+/// S_{k,c}, the sensitivities of the moment's component c (0: z, 1: x) at t_k to θ, gathered
+/// from the chunks into `out`.
+fn sens_row<const DIM: usize>(chunks: &[SensChunk<DIM>], k: usize, c: usize, out: &mut [f64]) {
+    let r = k * (DIM - 1) + c;
     for ch in chunks {
-        out[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[k][..ch.len]);
+        out[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[r][..ch.len]);
+    }
+}
+
+/// The gradients ∇R_{k,c} = Σ_d (∂R_c/∂M₀_d) S_{k,d} of the spatial vector residual `rv` at
+/// t_k, c = 0 (z), 1 (x), into `out`.
+fn residual_gradients<const DIM: usize>(
+    chunks: &[SensChunk<DIM>],
+    rv: &ResidualVector,
+    k: usize,
+    out: [&mut [f64]; 2],
+) {
+    let [g0, g1] = out;
+    sens_row(chunks, k, 0, g0);
+    sens_row(chunks, k, 1, g1);
+    let j = rv.jac;
+    for (a, b) in g0.iter_mut().zip(g1.iter_mut()) {
+        let (sz, sx) = (*a, *b);
+        *a = j[0][0] * sz + j[0][1] * sx;
+        *b = j[1][0] * sz + j[1][1] * sx;
+    }
+}
+
+/// u_k along `axis` (0: z, 1: x).
+#[inline]
+fn control<const DIM: usize>(t: &Traj<DIM>, axis: usize, k: usize) -> f64 {
+    if axis == 0 {
+        t.u[k]
+    } else {
+        t.ux[k]
     }
 }
 
 /// The chunks ordered longest, shortest, second longest, second shortest, …: the chunk of
 /// θ_first runs from θ_first's stage to N, so the recursive halving of rayon's parallel
 /// iterator hands each thread about the same number of steps.
-fn balanced(mut chunks: Vec<SensChunk>) -> Vec<SensChunk> {
+fn balanced<const DIM: usize>(mut chunks: Vec<SensChunk<DIM>>) -> Vec<SensChunk<DIM>> {
     let mut out = Vec::with_capacity(chunks.len());
     let mut front = true;
     while !chunks.is_empty() {

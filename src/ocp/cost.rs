@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use num_dual::Dual2_64;
 
-use crate::adjoint::{GaussNewton, MomentStage, Objective};
+use crate::adjoint::{GaussNewton, MomentStage, Objective, Stage};
 use crate::error::{OcpError, Result};
 
 /// The residual r_k(M₀) of an objective, type-erased (the solvers are not generic over it).
@@ -31,6 +31,18 @@ pub(crate) struct ResidualAt {
     pub dr: f64,
     pub d2r: f64,
 }
+
+/// The spatial model's vector residual R_k = r_k(|M₀|) M₀/|M₀| (z component first) and its
+/// Jacobian `jac[c][d]` = ∂R_c/∂M₀_d (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ResidualVector {
+    pub r: [f64; 2],
+    pub jac: [[f64; 2]; 2],
+}
+
+/// The moments |M₀| at which [`StageCost::check_isotropic`] compares an objective's stage cost
+/// along x and along z (N m).
+const ISOTROPY_PROBES: [f64; 3] = [0.37, 2.9, 41.0];
 
 /// The stage costs (module docs).
 #[derive(Clone)]
@@ -145,6 +157,96 @@ impl StageCost {
                 d2r: 0.0,
             },
         }
+    }
+
+    /// The spatial model's vector residual at the moment m = (M₀_z, M₀ₓ): with the objective's
+    /// residual r_k of the magnitude |M₀| and g = r_k(|M₀|)/|M₀|, û = M₀/|M₀|,
+    /// ```text
+    /// R_k = g M₀,   ∂R_k/∂M₀ = g I + (r_k′(|M₀|) − g) û ûᵀ,
+    /// ```
+    /// so ½ w_k |R_k|² = ½ w_k r_k(|M₀|)² is the objective's stage cost of the vector moment
+    /// (c_sum: R = M₀, ½·2|M₀|² = M₀ₓ² + M₀_z²; power: R = |M₀|^{p/2−1} M₀, |R|² = |M₀|^p), the
+    /// planar residual where M₀ₓ = 0 (r_k is odd in M₀ for every objective the solvers take,
+    /// [`StageCost::check_isotropic`]). Below |M₀|² = 10⁻³⁰⁸ (the straight beam of t₀):
+    /// R = r_k′(0) M₀, ∂R/∂M₀ = r_k′(0) I, the limit.
+    pub fn residual_vector(&self, k: usize, m: [f64; 2]) -> ResidualVector {
+        let mag = m[0].hypot(m[1]);
+        let at = self.residual(k, mag);
+        if mag * mag < f64::MIN_POSITIVE {
+            return ResidualVector {
+                r: [at.dr * m[0], at.dr * m[1]],
+                jac: [[at.dr, 0.0], [0.0, at.dr]],
+            };
+        }
+        let g = at.r / mag;
+        let u = [m[0] / mag, m[1] / mag];
+        let c = at.dr - g;
+        ResidualVector {
+            r: [g * m[0], g * m[1]],
+            jac: [
+                [g + c * u[0] * u[0], c * u[0] * u[1]],
+                [c * u[1] * u[0], g + c * u[1] * u[1]],
+            ],
+        }
+    }
+
+    /// ℓ_k of the spatial model for the vector residual `r`, the control `u` = (u_z, u_x) and
+    /// the previous control `w`: ½ w_k |r|² + e_k |u|² + (σ/h)|u − w|² (k ≥ 1).
+    #[inline]
+    pub fn value_axes(&self, k: usize, r: [f64; 2], u: [f64; 2], w: [f64; 2]) -> f64 {
+        let sq = |a: [f64; 2]| a[0] * a[0] + a[1] * a[1];
+        let mut l = 0.5 * self.weights[k] * sq(r) + self.efforts[k] * sq(u);
+        if k > 0 && self.rate > 0.0 {
+            l += self.rate * sq([u[0] - w[0], u[1] - w[1]]);
+        }
+        l
+    }
+
+    /// Refuses, for the spatial model, an objective whose stage cost is not a function of |M₀|
+    /// alone: [`StageCost::residual_vector`] assumes it. The stage cost (controls 0) with the
+    /// moment along x and along z must agree to 10⁻¹² relative at the first and last stages and
+    /// three magnitudes ([`ISOTROPY_PROBES`]); an objective of the node positions is refused.
+    ///
+    /// # Errors
+    /// [`OcpError::AnisotropicObjective`] naming `solver`.
+    pub fn check_isotropic<O: Objective>(&self, objective: &O, solver: &'static str) -> Result<()> {
+        for &a in &ISOTROPY_PROBES {
+            if objective.uses_positions() {
+                return Err(OcpError::AnisotropicObjective {
+                    solver,
+                    moment: a,
+                    along_x: f64::NAN,
+                    along_z: f64::NAN,
+                }
+                .into());
+            }
+            for k in [0, self.steps] {
+                let at = |moment: f64, moment_x: f64| {
+                    objective.stage(Stage {
+                        k,
+                        steps: self.steps,
+                        h: self.h,
+                        moment,
+                        moment_x,
+                        control: 0.0,
+                        control_x: 0.0,
+                        z: &[],
+                    })
+                };
+                let (along_z, along_x) = (at(a, 0.0), at(0.0, a));
+                let scale = along_z.abs().max(along_x.abs());
+                if (along_z - along_x).abs() > 1e-12 * scale || !along_z.is_finite() {
+                    return Err(OcpError::AnisotropicObjective {
+                        solver,
+                        moment: a,
+                        along_x,
+                        along_z,
+                    }
+                    .into());
+                }
+            }
+        }
+        Ok(())
     }
 
     /// ℓ_k for the residual `r`, control `u` and previous control `w`.

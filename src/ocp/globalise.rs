@@ -8,7 +8,6 @@
 
 use std::time::Instant;
 
-use super::horizon::ControlHorizon;
 use super::options::{IterationRecord, OcpOptions, OcpResult, Termination};
 use crate::error::Result;
 
@@ -43,8 +42,10 @@ pub(crate) enum Step {
 pub(crate) trait Outer {
     /// Resets the counters (and whatever else a run starts from).
     fn begin(&mut self);
-    /// The problem and its trajectories.
-    fn horizon(&self) -> &ControlHorizon;
+    /// The solver's options.
+    fn options(&self) -> &OcpOptions;
+    /// J of the nominal.
+    fn nominal_cost(&self) -> f64;
     /// Makes θ (projected onto the box) the nominal; J.
     fn set_point(&mut self, theta: &[f64]) -> Result<f64>;
     /// The exact gradient at the nominal; returns the projected gradient norm.
@@ -80,7 +81,7 @@ pub(crate) fn run<S: Outer>(solver: &mut S, theta0: &[f64]) -> Result<OcpResult>
 /// One iteration: the exact gradient and the stopping tests, the model's step and its line
 /// search, the history and the regularisation schedule. `Some` ends the run.
 fn iterate<S: Outer>(solver: &mut S, pr: &mut Progress) -> Result<Option<Termination>> {
-    let opts = solver.horizon().opts.clone();
+    let opts = solver.options().clone();
     if pr.budget_spent(&opts) {
         return Ok(Some(Termination::Budget));
     }
@@ -101,7 +102,7 @@ fn iterate<S: Outer>(solver: &mut S, pr: &mut Progress) -> Result<Option<Termina
     solver.take_step();
     pr.iterations += 1;
     pr.history.push(IterationRecord {
-        objective: solver.horizon().nominal.cost,
+        objective: solver.nominal_cost(),
         projected_gradient_norm: pg,
         alpha: acc.alpha,
         regularisation: pr.mu,

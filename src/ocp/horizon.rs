@@ -10,41 +10,46 @@ use super::stage::StageModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective, Start};
 use crate::error::{Error, OcpError, Result};
 
-/// A problem over its horizon with its two trajectories (module docs).
+/// A problem over its horizon with its two trajectories (module docs), in the planar or the
+/// spatial model. A 2-axis control has θ = (θ_x; θ_z) as [`ControlProblem`] (`axes` = 2): the
+/// decision of piece j is θ_j for u_z along z with one axis, θ_{m+j} (u_z) and θ_j (u_x) with two.
 #[derive(Clone, Debug)]
-pub(crate) struct ControlHorizon {
+pub(crate) struct ControlHorizon<const DIM: usize = 2> {
     /// The stage maps and the start.
-    pub model: StageModel,
+    pub model: StageModel<DIM>,
     /// ℓ_k.
     pub cost: StageCost,
     pub opts: OcpOptions,
     /// N.
     pub steps: usize,
-    /// The number of decisions θ.
+    /// The number of decisions θ (every axis).
     pub n_params: usize,
-    /// θ index of stage k.
+    /// Control axes: 1 (along z) or 2 ((u_x, u_z), spatial model).
+    pub axes: usize,
+    /// θ index of stage k (of the z component; its x component's is θ index − m).
     pub piece: Vec<usize>,
     /// Whether stage k starts a piece (has a decision).
     pub free: Vec<bool>,
-    /// The first stage of θ_j.
+    /// The first stage of each piece j (θ_j, and θ_{m+j} with two axes).
     pub theta_stage: Vec<usize>,
     /// The trajectory the model is built about, and the line search's trial.
-    pub nominal: Traj,
-    pub trial: Traj,
+    pub nominal: Traj<DIM>,
+    pub trial: Traj<DIM>,
     /// The simulator of the rollouts.
-    pub sim: Simulator,
+    pub sim: Simulator<DIM>,
     /// Rollouts of the nonlinear stage maps (nominal and trials).
     pub rollouts: usize,
 }
 
-impl ControlHorizon {
-    /// Validates the options, the model (planar, free tip, a control node), the objective (one
-    /// in Gauss-Newton form, [`Objective::gauss_newton`]) and the control map (per-step or piecewise
+impl<const DIM: usize> ControlHorizon<DIM> {
+    /// Validates the options, the model (free tip, a control node), the objective (one
+    /// in Gauss-Newton form, [`Objective::gauss_newton`]; in the spatial model one of |M₀|
+    /// alone, [`StageCost::check_isotropic`]) and the control map (per-step or piecewise
     /// constant), then the solver's own limits on (N, number of decisions) by `admit` before
     /// anything of the horizon's size is allocated; `solver` names the solver in the
     /// objective's error.
     pub fn new<P: ControlMap, O: Objective>(
-        problem: &ControlProblem<P, O>,
+        problem: &ControlProblem<P, O, DIM>,
         options: &OcpOptions,
         solver: &'static str,
         admit: fn(usize, usize) -> Result<()>,
@@ -52,23 +57,34 @@ impl ControlHorizon {
         options.validate()?;
         let steps = problem.steps();
         let h = problem.time_step();
-        let model = StageModel::new(problem.chain(), h)?.with_start(problem.start());
+        let two_axis = problem.is_two_axis();
+        let model = StageModel::new(problem.chain(), h)?
+            .with_start(problem.start())
+            .with_axes(two_axis, steps);
         let rate = options.rate_penalty / h;
         let cost = StageCost::new(problem.objective(), steps, h, rate, solver)?;
+        if DIM == 3 {
+            cost.check_isotropic(problem.objective(), solver)?;
+        }
         let n_params = problem.n_params();
-        let structure = control_structure(&problem.controls(&ids(n_params))?, n_params)?;
+        let axes = if two_axis { 2 } else { 1 };
+        let m = n_params / axes;
+        // θ_j = j on every axis: the controls' z components give the pieces.
+        let ids: Vec<f64> = (0..n_params).map(|j| (j % m) as f64).collect();
+        let structure = control_structure(&problem.controls(&ids)?, m)?;
         let theta_stage = (0..=steps).filter(|&k| structure.free[k]).collect();
         admit(steps, n_params)?;
         let n = model.n;
         Ok(ControlHorizon {
             sim: Simulator::new(&model)?,
-            nominal: Traj::new(n, steps),
-            trial: Traj::new(n, steps),
+            nominal: Traj::new(n, steps, two_axis),
+            trial: Traj::new(n, steps, two_axis),
             model,
             cost,
             opts: options.clone(),
             steps,
             n_params,
+            axes,
             piece: structure.piece,
             free: structure.free,
             theta_stage,
@@ -76,10 +92,39 @@ impl ControlHorizon {
         })
     }
 
+    /// Decisions per axis m.
+    #[inline]
+    pub fn pieces(&self) -> usize {
+        self.n_params / self.axes
+    }
+
+    /// The θ index of stage k's control along `axis` (0: z, 1: x of a 2-axis control).
+    #[inline]
+    pub fn theta_index(&self, k: usize, axis: usize) -> usize {
+        let j = self.piece[k];
+        match (self.axes, axis) {
+            (2, 0) => self.pieces() + j,
+            _ => j,
+        }
+    }
+
     /// Simulates θ (projected onto the box) into the trial (`into_trial`) or the nominal and
     /// returns J.
     pub fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {
         let (lo, hi) = (self.opts.lower, self.opts.upper);
+        for k in 0..=self.steps {
+            let u = theta[self.theta_index(k, 0)].clamp(lo, hi);
+            let ux = (self.axes == 2).then(|| theta[self.theta_index(k, 1)].clamp(lo, hi));
+            let out = if into_trial {
+                &mut self.trial
+            } else {
+                &mut self.nominal
+            };
+            out.u[k] = u;
+            if let Some(ux) = ux {
+                out.ux[k] = ux;
+            }
+        }
         let shooting = Shooting {
             model: &self.model,
             cost: &self.cost,
@@ -92,9 +137,6 @@ impl ControlHorizon {
         } else {
             &mut self.nominal
         };
-        for k in 0..=self.steps {
-            out.u[k] = theta[self.piece[k]].clamp(lo, hi);
-        }
         self.rollouts += 1;
         self.sim.rollout(&shooting, None, out)?;
         Ok(out.cost)
@@ -139,16 +181,24 @@ impl ControlHorizon {
         std::mem::swap(&mut self.nominal, &mut self.trial);
     }
 
+    /// θ_i of the nominal.
+    #[inline]
+    pub fn theta_at(&self, i: usize) -> f64 {
+        let m = self.pieces();
+        if self.axes == 2 && i < m {
+            self.nominal.ux[self.theta_stage[i]]
+        } else {
+            self.nominal.u[self.theta_stage[i % m]]
+        }
+    }
+
     /// θ of the nominal.
     pub fn theta(&self) -> Vec<f64> {
-        self.theta_stage
-            .iter()
-            .map(|&k| self.nominal.u[k])
-            .collect()
+        (0..self.n_params).map(|i| self.theta_at(i)).collect()
     }
 
     /// Moves the rollouts to another start (state, t₀, pending kick).
-    pub fn set_start(&mut self, start: Option<&Start<f64, 2>>) {
+    pub fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
         self.model.start = start.cloned();
         self.sim.stepper.set_start(start);
     }
@@ -171,11 +221,6 @@ fn check_theta(theta: &[f64], n_params: usize) -> Result<()> {
         });
     }
     Ok(())
-}
-
-/// θ_j = j, to read the control structure off the control map.
-fn ids(n_params: usize) -> Vec<f64> {
-    (0..n_params).map(|j| j as f64).collect()
 }
 
 /// The control structure u_k = θ_{piece(k)}.

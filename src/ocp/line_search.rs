@@ -11,61 +11,80 @@
 //! Acceptance (Crocoddyl's rule, Mastalli et al. 2020): J̄ − J(α) ≥ c·(−ΔJ(α)) with the
 //! predicted change ΔJ(α) = α d₁ + α² d₂ of the backward pass; α ∈ {1, ½, …}.
 
+use super::cost::ResidualVector;
 use super::riccati::StageCost;
-use super::stage::{tangent, StageModel, Stepper};
+use super::stage::{dot, tangent, tangent_basis, StageModel, Stepper};
 use crate::error::Result;
 
 /// A trajectory in DDP form: x̂_k = (q_k, p̂_k) for k = 0..=N with the controls, rates, Newton
-/// predictors and bending moments (flat storage, allocated once).
+/// predictors and bending moments (flat storage, allocated once), in the planar or the spatial
+/// model.
 #[derive(Clone, Debug)]
-pub(crate) struct Traj {
+pub(crate) struct Traj<const DIM: usize = 2> {
     n: usize,
-    pub q: Vec<[f64; 2]>,
-    pub p: Vec<[f64; 2]>,
+    pub q: Vec<[f64; DIM]>,
+    pub p: Vec<[f64; DIM]>,
+    /// ω_{i,a} (DIM − 1 per pendulum, [`StageModel::rates`]).
     pub omega: Vec<f64>,
     pub mu: Vec<f64>,
     /// λ of step k (k < N): the converged position multiplier, the exact Newton start of the
     /// dual-number step of the stage Jacobians.
     pub lambda: Vec<f64>,
+    /// u_k (the z component of a 2-axis control).
     pub u: Vec<f64>,
+    /// u_{x,k} of a 2-axis control (empty for a control along z).
+    pub ux: Vec<f64>,
+    /// M₀(t_k) (M₀_z in the spatial model).
     pub moment: Vec<f64>,
+    /// M₀ₓ(t_k) (spatial model; empty in the planar one).
+    pub moment_x: Vec<f64>,
     /// The objective's residual r_k(M₀(t_k)) and its first two derivatives in M₀
-    /// ([`StageCost::residual`]).
+    /// ([`StageCost::residual`]); in the spatial model r_k is the z component of the vector
+    /// residual R_k and `dresidual_dm`, `d2residual_dm2` are unused.
     pub residual: Vec<f64>,
     pub dresidual_dm: Vec<f64>,
     pub d2residual_dm2: Vec<f64>,
+    /// The spatial model's vector residual R_k = (R_z, R_x) and its Jacobian ∂R/∂(M₀_z, M₀ₓ)
+    /// ([`StageCost::residual_vector`]; empty in the planar model).
+    pub residual_vec: Vec<ResidualVector>,
     pub cost: f64,
 }
 
-impl Traj {
-    pub fn new(n: usize, steps: usize) -> Self {
+impl<const DIM: usize> Traj<DIM> {
+    /// Storage for N = `steps` stages of n pendulums, with x components for a 2-axis control.
+    pub fn new(n: usize, steps: usize, two_axis: bool) -> Self {
         let m = steps + 1;
+        let spatial = if DIM == 3 { m } else { 0 };
         Traj {
             n,
-            q: vec![[0.0; 2]; m * n],
-            p: vec![[0.0; 2]; m * n],
-            omega: vec![0.0; m * n],
+            q: vec![[0.0; DIM]; m * n],
+            p: vec![[0.0; DIM]; m * n],
+            omega: vec![0.0; m * n * (DIM - 1)],
             mu: vec![0.0; m * n],
             lambda: vec![0.0; m * n],
             u: vec![0.0; m],
+            ux: vec![0.0; if two_axis { m } else { 0 }],
             moment: vec![0.0; m],
+            moment_x: vec![0.0; spatial],
             residual: vec![0.0; m],
             dresidual_dm: vec![0.0; m],
             d2residual_dm2: vec![0.0; m],
+            residual_vec: vec![ResidualVector::default(); spatial],
             cost: 0.0,
         }
     }
     #[inline]
-    pub fn q(&self, k: usize) -> &[[f64; 2]] {
+    pub fn q(&self, k: usize) -> &[[f64; DIM]] {
         &self.q[k * self.n..(k + 1) * self.n]
     }
     #[inline]
-    pub fn p(&self, k: usize) -> &[[f64; 2]] {
+    pub fn p(&self, k: usize) -> &[[f64; DIM]] {
         &self.p[k * self.n..(k + 1) * self.n]
     }
     #[inline]
     pub fn omega(&self, k: usize) -> &[f64] {
-        &self.omega[k * self.n..(k + 1) * self.n]
+        let w = self.n * (DIM - 1);
+        &self.omega[k * w..(k + 1) * w]
     }
     #[inline]
     pub fn mu(&self, k: usize) -> &[f64] {
@@ -75,6 +94,14 @@ impl Traj {
     pub fn lambda(&self, k: usize) -> &[f64] {
         &self.lambda[k * self.n..(k + 1) * self.n]
     }
+    /// u_{x,k} (0 for a control along z).
+    #[inline]
+    pub fn ux(&self, k: usize) -> f64 {
+        self.ux.get(k).copied().unwrap_or(0.0)
+    }
+}
+
+impl Traj {
     /// ∂M₀/∂φ₁ at t_k: M₀ = s·q₁,z, ∂q₁/∂φ₁ = t₁, so ∂M₀/∂φ₁ = s·t₁,z = s·q₁,y.
     #[inline]
     pub fn dmoment(&self, k: usize, scale: f64) -> f64 {
@@ -88,8 +115,8 @@ impl Traj {
 }
 
 /// The feedback law of a rollout: `None` replays `u` (the nominal of a fresh start).
-pub(crate) struct Feedback<'a> {
-    pub nominal: &'a Traj,
+pub(crate) struct Feedback<'a, const DIM: usize = 2> {
+    pub nominal: &'a Traj<DIM>,
     pub gain: &'a [f64],
     pub ff: &'a [f64],
     pub alpha: f64,
@@ -99,57 +126,126 @@ pub(crate) struct Feedback<'a> {
 /// What every rollout of one problem shares: the stage maps, the stage costs, which stages
 /// hold a decision and the box of the controls.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Shooting<'a> {
+pub(crate) struct Shooting<'a, const DIM: usize = 2> {
     /// The stage maps (and the start).
-    pub model: &'a StageModel,
+    pub model: &'a StageModel<DIM>,
     /// ℓ_k.
     pub cost: &'a StageCost,
     /// Whether stage k has a decision (the first stage of a piece); held stages copy u_{k−1}.
     pub free: &'a [bool],
-    /// The box lower ≤ u_k ≤ upper.
+    /// The box lower ≤ u_k ≤ upper (each component of a 2-axis control).
     pub lower: f64,
     pub upper: f64,
 }
 
 /// The simulator of the rollouts, sized once: the stage map and the scratch of the rates.
 #[derive(Clone, Debug)]
-pub(crate) struct Simulator {
+pub(crate) struct Simulator<const DIM: usize = 2> {
     /// The stage map in f64.
-    pub stepper: Stepper<f64>,
+    pub stepper: Stepper<f64, DIM>,
     /// n blocks of scratch (M⁻¹p for the rates).
-    pub scratch: Vec<[f64; 2]>,
+    pub scratch: Vec<[f64; DIM]>,
 }
 
-impl Simulator {
+impl<const DIM: usize> Simulator<DIM> {
     /// For the stages of `model`.
-    pub fn new(model: &StageModel) -> Result<Self> {
+    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
         Ok(Simulator {
             stepper: Stepper::new(model)?,
-            scratch: vec![[0.0; 2]; model.n],
+            scratch: vec![[0.0; DIM]; model.n],
         })
     }
+}
 
+impl<const DIM: usize> Simulator<DIM> {
     /// Rolls out the stage maps of `shooting` from the initial state, writing `out` and its
     /// cost: [`rollout`].
     pub fn rollout(
         &mut self,
-        shooting: &Shooting<'_>,
-        fb: Option<&Feedback<'_>>,
-        out: &mut Traj,
+        shooting: &Shooting<'_, DIM>,
+        fb: Option<&Feedback<'_, DIM>>,
+        out: &mut Traj<DIM>,
     ) -> Result<()> {
         rollout(shooting, &mut self.stepper, fb, out, &mut self.scratch)
     }
 }
 
+/// The angle coordinates δφ_{i,a} of the attitude `b` about the nominal `a` in the nominal's
+/// chart: planar the exact angle atan2(a × b, a·b); spatial the rotation vector of the shortest
+/// rotation from a to b, θ (b − (a·b) a)/|b − (a·b) a| with θ = atan2(|a × b|, a·b), in the basis
+/// e_a(a) ([`tangent_basis`]).
+#[inline]
+fn chart_angles<const DIM: usize>(a: &[f64; DIM], b: &[f64; DIM]) -> [f64; 2] {
+    if DIM == 2 {
+        return [
+            (a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]),
+            0.0,
+        ];
+    }
+    let c = dot(a, b);
+    let mut perp = [0.0; DIM];
+    for d in 0..DIM {
+        perp[d] = b[d] - c * a[d];
+    }
+    let s = dot(&perp, &perp).sqrt();
+    if s == 0.0 {
+        return [0.0; 2];
+    }
+    let theta = s.atan2(c) / s;
+    let e = tangent_basis(a);
+    [theta * dot(&e[0], &perp), theta * dot(&e[1], &perp)]
+}
+
+/// The control of a free stage k under the feedback law `f`: ū_k + α k_k + K_k δz_k (before the
+/// clamp), δz_k = (δφ, δω, δw) from the state in `stepper` (its ω written into `omega`, and
+/// `scratch` = M⁻¹p): δφ by [`chart_angles`], δω planar ωᵢ − ω̄ᵢ, spatial ē_a·vᵢ − ω̄_{i,a}
+/// (the nominal chart's map L applied to the state's velocity).
+fn feedback_control<const DIM: usize>(
+    f: &Feedback<'_, DIM>,
+    model: &StageModel<DIM>,
+    stepper: &Stepper<f64, DIM>,
+    (k, w): (usize, f64),
+    (omega, scratch): (&mut [f64], &mut [[f64; DIM]]),
+) -> f64 {
+    let n = model.n;
+    let na = DIM - 1;
+    let nw = n * na;
+    let mut v = f.nominal.u[k] + f.alpha * f.ff[k];
+    if k > 0 {
+        let g = &f.gain[k * f.nz..(k + 1) * f.nz];
+        let (qn, wn) = (f.nominal.q(k), f.nominal.omega(k));
+        let st = &stepper.state;
+        // ω of the new state into `out` first.
+        model.rates(&st.q, &st.p, scratch, omega);
+        for i in 0..n {
+            let dphi = chart_angles(&qn[i], &st.q[i]);
+            if DIM == 2 {
+                v += g[i] * dphi[0] + g[n + i] * (omega[i] - wn[i]);
+                continue;
+            }
+            let e = tangent_basis(&qn[i]);
+            for a in 0..na {
+                let j = i * na + a;
+                v += g[j] * dphi[a] + g[nw + j] * (dot(&e[a], &scratch[i]) - wn[j]);
+            }
+        }
+        if f.nz > 2 * nw {
+            v += g[2 * nw] * (w - f.nominal.u[k - 1]);
+        }
+    }
+    v
+}
+
 /// Rolls out the stage maps from the initial state, writing `out` and its cost. With `fb`
-/// the free controls follow the feedback law; without it they are `out.u` as given. Held stages
-/// copy the previous control. Controls stay in the box. `scratch` has length n.
-fn rollout(
-    shooting: &Shooting<'_>,
-    stepper: &mut Stepper<f64>,
-    fb: Option<&Feedback<'_>>,
-    out: &mut Traj,
-    scratch: &mut [[f64; 2]],
+/// (planar only) the free controls follow the feedback law; without it they are `out.u` (and
+/// `out.ux`) as given. Held stages copy the previous control. Controls stay in the box.
+/// `scratch` has length n.
+fn rollout<const DIM: usize>(
+    shooting: &Shooting<'_, DIM>,
+    stepper: &mut Stepper<f64, DIM>,
+    fb: Option<&Feedback<'_, DIM>>,
+    out: &mut Traj<DIM>,
+    scratch: &mut [[f64; DIM]],
 ) -> Result<()> {
     let Shooting {
         model,
@@ -159,34 +255,26 @@ fn rollout(
         upper: hi,
     } = *shooting;
     let n = model.n;
+    let nw = n * (DIM - 1);
     let steps = cost.steps;
+    let two_axis = !out.ux.is_empty();
     let mut total = 0.0;
     for k in 0..=steps {
         let w = if k > 0 { out.u[k - 1] } else { 0.0 };
+        let wx = if k > 0 { out.ux(k - 1) } else { 0.0 };
         // The control of stage k (needs x̂_k for k ≥ 1; x̂_0 is fixed, δz_0 = 0).
-        let u = if !free[k] {
-            w
+        let (u, ux) = if !free[k] {
+            (w, wx)
         } else if let Some(f) = fb {
-            let mut v = f.nominal.u[k] + f.alpha * f.ff[k];
-            if k > 0 {
-                let g = &f.gain[k * f.nz..(k + 1) * f.nz];
-                let (qn, wn) = (f.nominal.q(k), f.nominal.omega(k));
-                let st = &stepper.state;
-                // ω of the new state into `out` first.
-                model.rates(&st.q, &st.p, scratch, &mut out.omega[k * n..(k + 1) * n]);
-                for i in 0..n {
-                    let (a, b) = (qn[i], st.q[i]);
-                    let dphi = (a[0] * b[1] - a[1] * b[0]).atan2(a[0] * b[0] + a[1] * b[1]);
-                    v += g[i] * dphi + g[n + i] * (out.omega[k * n + i] - wn[i]);
-                }
-                if f.nz > 2 * n {
-                    v += g[2 * n] * (w - f.nominal.u[k - 1]);
-                }
-            }
-            v.clamp(lo, hi)
+            let omega = &mut out.omega[k * nw..(k + 1) * nw];
+            let v = feedback_control(f, model, stepper, (k, w), (omega, scratch));
+            (v.clamp(lo, hi), 0.0)
         } else {
-            out.u[k]
+            (out.u[k], out.ux(k))
         };
+        if two_axis {
+            stepper.set_control_x(k, ux);
+        }
         if k == 0 {
             stepper.reset(u)?;
         }
@@ -199,14 +287,25 @@ fn rollout(
         };
         out.mu[k * n..(k + 1) * n].copy_from_slice(mu);
         if fb.is_none() || k == 0 || !free[k] {
-            model.rates(&st.q, &st.p, scratch, &mut out.omega[k * n..(k + 1) * n]);
+            model.rates(&st.q, &st.p, scratch, &mut out.omega[k * nw..(k + 1) * nw]);
         }
         out.u[k] = u;
-        let m = model.chain.base_moment(&st.q);
-        let r = cost.residual(k, m);
+        let [m, mx] = model.moment(&st.q);
         out.moment[k] = m;
-        (out.residual[k], out.dresidual_dm[k], out.d2residual_dm2[k]) = (r.r, r.dr, r.d2r);
-        total += cost.value(k, r.r, u, w);
+        if DIM == 2 {
+            let r = cost.residual(k, m);
+            (out.residual[k], out.dresidual_dm[k], out.d2residual_dm2[k]) = (r.r, r.dr, r.d2r);
+            total += cost.value(k, r.r, u, w);
+        } else {
+            out.moment_x[k] = mx;
+            let r = cost.residual_vector(k, [m, mx]);
+            out.residual[k] = r.r[0];
+            out.residual_vec[k] = r;
+            if two_axis {
+                out.ux[k] = ux;
+            }
+            total += cost.value_axes(k, r.r, [u, ux], [w, wx]);
+        }
         if k < steps {
             stepper.advance(k, u)?;
             let m = stepper.state.multipliers.as_ref();

@@ -207,7 +207,8 @@
 //! objectives on rows 3, 6 and 8 and lower ones on rows 1 (22.93) and 9;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
-//! Supported: the planar model (`DIM = 2`) with a free tip (cantilever, riser), every objective
+//! Supported: the planar model (`DIM = 2`; and for [`Condensed`] also the spatial model, below)
+//! with a free tip (cantilever, riser), every objective
 //! with a Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k²
 //! ([`Objective::gauss_newton`], `ocp/cost.rs`: c and c_sum of
 //! [`BendingObjective`](crate::BendingObjective) with r_k = M₀, Σ|M₀|^p of
@@ -215,6 +216,23 @@
 //! per-step or piecewise constant in time. Locked and reaction-force tips are refused with
 //! [`OcpError::UnsupportedTip`] (their tip constraint removes a dimension of the state manifold that
 //! the tangent coordinates do not).
+//!
+//! # The spatial model
+//! [`Condensed`] is written once over the dimension (`Condensed<DIM>`; the stage map
+//! `stage::Stepper<D, DIM>`, the trajectories and rollouts with it): in the spatial model
+//! (`DIM = 3`, [`ControlProblem::spatial`]) the decisions are those of a control along z or of a
+//! 2-axis control u_k = (u_{x,k}, u_{z,k}) (θ = (θ_x; θ_z), the stage map's half-kick
+//! p_k = p̂_k − (h/2) P(q_k)(u_k b + u_{x,k} b_x)), the sensitivities are those of both moment
+//! components (M₀_z, M₀ₓ), and the objective's Gauss-Newton residual is the vector
+//! R_k = r_k(|M₀|) M₀/|M₀| with ∂R_k/∂M₀ = g I + (r_k′ − g) û ûᵀ (g = r_k/|M₀|, û = M₀/|M₀|;
+//! `cost.rs`), so ½ w_k |R_k|² is the stage cost of the vector moment: M₀ₓ² + M₀_z² for c and
+//! c_sum, |M₀|^p for the power objective. This needs an objective of |M₀| alone, checked at
+//! construction ([`OcpError::AnisotropicObjective`]). The box holds each component. A planar
+//! problem runs the planar code (`DIM = 2`) bit for bit as before (`tables --json` identical).
+//! The Riccati solver ([`Solver`], [`solve`]) is planar: its stage Jacobians, Riccati passes and
+//! interior point carry one control per stage in the planar tangent coordinates; the spatial
+//! chart they would need ([`stage`]'s `tangent_basis`, the line search's spatial
+//! `chart_angles`) is in place, the 2-control recursion is not.
 //!
 //! # Example
 //! ```

@@ -180,8 +180,10 @@ pub struct OcpResult {
     pub initial_objective: f64,
     /// The parameters θ.
     pub theta: Vec<f64>,
-    /// The forces u_0..u_N.
+    /// The forces u_0..u_N (their z components for a 2-axis control).
     pub controls: Vec<f64>,
+    /// The x components u_{x,0..N} of a 2-axis control (spatial model; empty otherwise).
+    pub controls_x: Vec<f64>,
     /// ‖∇J(θ)‖₂ at the result (not zero at active bounds); after [`Termination::Budget`], at
     /// the start of the last iteration.
     pub gradient_norm: f64,

@@ -296,8 +296,12 @@ impl Outer for Solver {
         self.second.begin(self.horizon.opts.curvature);
     }
 
-    fn horizon(&self) -> &ControlHorizon {
-        &self.horizon
+    fn options(&self) -> &OcpOptions {
+        &self.horizon.opts
+    }
+
+    fn nominal_cost(&self) -> f64 {
+        self.horizon.nominal.cost
     }
 
     fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
@@ -404,6 +408,7 @@ impl Outer for Solver {
             objective: hz.nominal.cost,
             initial_objective: pr.j0,
             controls: hz.nominal.u.clone(),
+            controls_x: Vec::new(),
             theta,
             gradient_norm: gn,
             projected_gradient_norm: pg,

@@ -64,12 +64,12 @@ use num_dual::{Derivative, DualSVec64};
 /// The point x̂_k of a stage's linearisation: attitudes q, momenta p, rates ω (the tangent
 /// coordinates' velocities) and the Newton start μ of the step (`JacobianWorkspace::jacobians`).
 #[derive(Clone, Copy, Debug)]
-pub struct StagePoint<'a> {
+pub struct StagePoint<'a, const DIM: usize = 2> {
     /// qᵢ.
-    pub q: &'a [[f64; 2]],
+    pub q: &'a [[f64; DIM]],
     /// pᵢ.
-    pub p: &'a [[f64; 2]],
-    /// ωᵢ = tᵢ·(M⁻¹p)ᵢ.
+    pub p: &'a [[f64; DIM]],
+    /// ωᵢ = tᵢ·(M⁻¹p)ᵢ (DIM − 1 per pendulum, in the tangent basis e_a(qᵢ) of the stage map).
     pub omega: &'a [f64],
     /// The Newton start (the nominal's converged λ_k).
     pub mu: &'a [f64],
@@ -133,25 +133,66 @@ fn dot2<D: Scalar>(a: &[D; 2], b: &[D; 2]) -> D {
     a[0] * b[0] + a[1] * b[1]
 }
 
-/// The f64 data of the stage map that the Riccati solver needs beside the chain.
+/// a·b in `DIM` components (the planar a₀b₀ + a₁b₁ bit for bit).
+#[inline]
+pub(crate) fn dot<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DIM]) -> D {
+    let mut s = a[0] * b[0] + a[1] * b[1];
+    for d in 2..DIM {
+        s += a[d] * b[d];
+    }
+    s
+}
+
+/// The tangent basis e_a(q), a < DIM − 1, of the unit sphere at q (the coordinates of
+/// [`StagePoint::omega`] and of the spatial chart): in the plane the tangent t = q rotated by +90°
+/// (`tangent`); in space (x, y, z) e₁ = (0, −q_z, q_y)/√(q_y² + q_z²), the rotation of q
+/// about x (the planar t when q_x = 0), and e₂ = q × e₁. Orthonormal and orthogonal to q
+/// wherever q is not along ±x (a pendulum lying along x: never for a beam hanging along y).
+#[inline]
+pub(crate) fn tangent_basis<const DIM: usize>(q: &[f64; DIM]) -> [[f64; DIM]; 2] {
+    let mut e = [[0.0; DIM]; 2];
+    if DIM == 2 {
+        e[0][0] = -q[1];
+        e[0][1] = q[0];
+        return e;
+    }
+    let r = q[1].hypot(q[2]);
+    let e1 = [0.0, -q[2] / r, q[1] / r];
+    let e2 = [
+        q[1] * e1[2] - q[2] * e1[1],
+        q[2] * e1[0] - q[0] * e1[2],
+        q[0] * e1[1] - q[1] * e1[0],
+    ];
+    e[0][..3].copy_from_slice(&e1);
+    e[1][..3].copy_from_slice(&e2);
+    e
+}
+
+/// The f64 data of the stage map that the solvers need beside the chain, in the planar
+/// (`DIM = 2`) or the spatial (`DIM = 3`) model.
 #[derive(Clone, Debug)]
-pub(crate) struct StageModel {
+pub(crate) struct StageModel<const DIM: usize = 2> {
     pub n: usize,
     pub h: f64,
-    pub chain: Chain<f64, 2>,
+    pub chain: Chain<f64, DIM>,
     /// M̄ (n × n, row-major): M̄_ij = lᵢ l_j Σ_{k ≥ max(i,j)} m_k (kinetic energy ½ Σ m_k |ṙ_k|²).
     pub mass: Vec<f64>,
     /// b = ∂U_q/∂u (block j: l_j e₃ for j below the control node).
-    pub control: Vec<[f64; 2]>,
-    /// ∂M₀/∂z-component of q₁: M₀ = scale · q₁,z (eq. 3.1.3).
+    pub control: Vec<[f64; DIM]>,
+    /// b_x = ∂U_q/∂u_x (block j: l_j e₁ below the control node) of a 2-axis control (empty for
+    /// a control along z).
+    pub control_x: Vec<[f64; DIM]>,
+    /// N: the stages of the horizon (the length of a 2-axis control's x schedule).
+    pub steps: usize,
+    /// ∂M₀/∂z-component of q₁: M₀ = scale · q₁,z (eq. 3.1.3); M₀ₓ = scale · q₁,x.
     pub moment_scale: f64,
     /// The horizon's start (S₀, t₀); None: straight at rest at t = 0.
-    pub start: Option<Start<f64, 2>>,
+    pub start: Option<Start<f64, DIM>>,
 }
 
-impl StageModel {
-    /// Checks the scene's model (planar, free tip, a control node) and precomputes M̄ and b.
-    pub fn new(chain: &Chain<f64, 2>, h: f64) -> Result<Self> {
+impl<const DIM: usize> StageModel<DIM> {
+    /// Checks the scene's model (free tip, a control node) and precomputes M̄ and b.
+    pub fn new(chain: &Chain<f64, DIM>, h: f64) -> Result<Self> {
         if chain.tip_condition() != TipCondition::Free {
             return Err(OcpError::UnsupportedTip {
                 tip: chain.tip_condition(),
@@ -174,11 +215,23 @@ impl StageModel {
                 mass[i * n + j] = l[i] * l[j] * tail[i.max(j)];
             }
         }
-        let control = (0..n)
-            .map(|j| if j < node { [0.0, l[j]] } else { [0.0, 0.0] })
-            .collect();
-        let mut unit = vec![[1.0, 0.0]; n];
-        unit[0] = [0.0, 1.0];
+        let along = |axis: usize| -> Vec<[f64; DIM]> {
+            (0..n)
+                .map(|j| {
+                    let mut b = [0.0; DIM];
+                    if j < node {
+                        b[axis] = l[j];
+                    }
+                    b
+                })
+                .collect()
+        };
+        let control = along(DIM - 1);
+        // q₁ = e₃, every other pendulum along the beam's axis e₂.
+        let mut unit = vec![[0.0; DIM]; n];
+        for (i, u) in unit.iter_mut().enumerate() {
+            u[if i == 0 { DIM - 1 } else { DIM - 2 }] = 1.0;
+        }
         let moment_scale = chain.base_moment(&unit);
         Ok(StageModel {
             n,
@@ -186,61 +239,108 @@ impl StageModel {
             chain: chain.clone(),
             mass,
             control,
+            control_x: Vec::new(),
+            steps: 0,
             moment_scale,
             start: None,
         })
     }
 
+    /// The model of a 2-axis control (`two_axis`, spatial model only) over N = `steps` stages:
+    /// b_x beside b (nothing changes for a control along z).
+    pub fn with_axes(mut self, two_axis: bool, steps: usize) -> Self {
+        self.steps = steps;
+        if two_axis && DIM == 3 {
+            self.control_x = self
+                .control
+                .iter()
+                .map(|b| {
+                    let mut bx = [0.0; DIM];
+                    bx[0] = b[DIM - 1];
+                    bx
+                })
+                .collect();
+        }
+        self
+    }
+
+    /// Whether the control is 2-axis: (u_x, u_z) per stage.
+    pub fn two_axis(&self) -> bool {
+        !self.control_x.is_empty()
+    }
+
     /// The model of a horizon starting from `start` ([`crate::ControlProblem::starting_from`]).
-    pub fn with_start(mut self, start: Option<&Start<f64, 2>>) -> Self {
+    pub fn with_start(mut self, start: Option<&Start<f64, DIM>>) -> Self {
         self.start = start.cloned();
         self
     }
 
-    /// Tangent dimension 2n.
+    /// Tangent dimension 2n(DIM − 1): 2n planar, 4n spatial.
     pub fn nx(&self) -> usize {
-        2 * self.n
+        2 * self.n * (DIM - 1)
     }
 
     /// out = M v (v = velocities, out = momenta), O(n): (M̄x)ᵢ = lᵢ Σ_{k≥i} m_k Σ_{j≤k} l_j x_j.
-    pub fn apply_mass<D: Scalar>(&self, v: &[[D; 2]], out: &mut [[D; 2]]) {
+    pub fn apply_mass<D: Scalar>(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
         let (l, m) = (self.chain.lengths(), self.chain.masses());
-        let mut c = [D::zero(); 2];
+        let mut c = [D::zero(); DIM];
         for j in 0..self.n {
-            for d in 0..2 {
+            for d in 0..DIM {
                 c[d] += v[j][d] * l[j];
                 out[j][d] = c[d] * m[j];
             }
         }
-        let mut acc = [D::zero(); 2];
+        let mut acc = [D::zero(); DIM];
         for i in (0..self.n).rev() {
-            for d in 0..2 {
+            for d in 0..DIM {
                 acc[d] += out[i][d];
                 out[i][d] = acc[d] * l[i];
             }
         }
     }
 
-    /// Angular rates ωᵢ = tᵢ·(M⁻¹p)ᵢ; `scratch` has length n.
-    pub fn rates(&self, q: &[[f64; 2]], p: &[[f64; 2]], scratch: &mut [[f64; 2]], out: &mut [f64]) {
+    /// Angular rates ω_{i,a} = e_a(qᵢ)·(M⁻¹p)ᵢ ([`tangent_basis`]; planar: ωᵢ = tᵢ·(M⁻¹p)ᵢ),
+    /// DIM − 1 per pendulum; `scratch` has length n.
+    pub fn rates(
+        &self,
+        q: &[[f64; DIM]],
+        p: &[[f64; DIM]],
+        scratch: &mut [[f64; DIM]],
+        out: &mut [f64],
+    ) {
         self.chain.apply_inverse_mass(p, scratch);
+        let na = DIM - 1;
         for i in 0..self.n {
-            out[i] = dot2(&tangent(&q[i]), &scratch[i]);
+            let e = tangent_basis(&q[i]);
+            for a in 0..na {
+                out[i * na + a] = dot(&e[a], &scratch[i]);
+            }
         }
+    }
+
+    /// The base moment (M₀_z, M₀ₓ) of q, z first: planar (M₀ [`Chain::base_moment`], 0), spatial
+    /// [`Chain::base_moment_vector`] (the adjoint's objective reads the same).
+    #[inline]
+    pub fn moment(&self, q: &[[f64; DIM]]) -> [f64; 2] {
+        if DIM == 2 {
+            return [self.chain.base_moment(q), 0.0];
+        }
+        let [mx, mz] = self.chain.base_moment_vector(q);
+        [mz, mx]
     }
 }
 
 /// P(q) b = b − Gᵀy with (G M⁻¹ Gᵀ) y = G M⁻¹ b (free tip: G M⁻¹ Gᵀ is tridiagonal,
-/// (G M⁻¹ Gᵀ)_ij = (qᵢ·q_j) M̄⁻¹_ij), O(n), for any scalar.
+/// (G M⁻¹ Gᵀ)_ij = (qᵢ·q_j) M̄⁻¹_ij, in the plane and in space), O(n), for any scalar.
 #[derive(Clone, Debug)]
-pub(crate) struct Projector<D> {
-    lifted: Vec<[D; 2]>,
-    tmp: Vec<[D; 2]>,
+pub(crate) struct Projector<D, const DIM: usize = 2> {
+    lifted: Vec<[D; DIM]>,
+    tmp: Vec<[D; DIM]>,
     tri: BorderedTridiag<D>,
     rhs: Vec<D>,
 }
 
-impl<D: Scalar> Projector<D> {
+impl<D: Scalar, const DIM: usize> Projector<D, DIM> {
     /// The multipliers y_b of the last [`Projector::apply`]: P(q) b = b − Ĝ(q)ᵀ y_b.
     pub fn y(&self) -> &[D] {
         &self.rhs
@@ -248,8 +348,8 @@ impl<D: Scalar> Projector<D> {
 
     pub fn new(n: usize) -> Self {
         Projector {
-            lifted: vec![[D::zero(); 2]; n],
-            tmp: vec![[D::zero(); 2]; n],
+            lifted: vec![[D::zero(); DIM]; n],
+            tmp: vec![[D::zero(); DIM]; n],
             tri: BorderedTridiag::new(n, false),
             rhs: vec![D::zero(); n],
         }
@@ -258,20 +358,22 @@ impl<D: Scalar> Projector<D> {
     /// out = P(q) b.
     pub fn apply(
         &mut self,
-        ch: &Chain<D, 2>,
-        q: &[[D; 2]],
-        b: &[[f64; 2]],
+        ch: &Chain<D, DIM>,
+        q: &[[D; DIM]],
+        b: &[[f64; DIM]],
         step: usize,
-        out: &mut [[D; 2]],
+        out: &mut [[D; DIM]],
     ) -> Result<()> {
         let n = ch.n();
         for (o, bi) in self.lifted.iter_mut().zip(b) {
-            *o = [D::from(bi[0]), D::from(bi[1])];
+            for d in 0..DIM {
+                o[d] = D::from(bi[d]);
+            }
         }
         ch.apply_inverse_mass(&self.lifted, &mut self.tmp);
         let (l, m) = (ch.lengths(), ch.masses());
         for i in 0..n {
-            self.rhs[i] = dot2(&q[i], &self.tmp[i]);
+            self.rhs[i] = dot(&q[i], &self.tmp[i]);
             let li = l[i].recip();
             let mi = m[i].recip();
             let dii = if i > 0 {
@@ -279,10 +381,10 @@ impl<D: Scalar> Projector<D> {
             } else {
                 li * li * mi
             };
-            self.tri.diag[i] = dot2(&q[i], &q[i]) * dii;
+            self.tri.diag[i] = dot(&q[i], &q[i]) * dii;
             if i + 1 < n {
                 let off = -(li * l[i + 1].recip() * mi);
-                let v = dot2(&q[i], &q[i + 1]) * off;
+                let v = dot(&q[i], &q[i + 1]) * off;
                 self.tri.upper[i] = v;
                 self.tri.lower[i + 1] = v;
             }
@@ -295,7 +397,7 @@ impl<D: Scalar> Projector<D> {
                 pivot: zp.pivot,
             })?;
         for i in 0..n {
-            for d in 0..2 {
+            for d in 0..DIM {
                 out[i][d] = D::from(b[i][d]) - self.rhs[i] * q[i][d];
             }
         }
@@ -303,24 +405,32 @@ impl<D: Scalar> Projector<D> {
     }
 }
 
-/// The stage map F_k on a state held in `state`, for any scalar (module docs).
+/// The stage map F_k on a state held in `state`, for any scalar (module docs), in the planar or
+/// the spatial model; a 2-axis control's x components u_{x,k} are the chain's x schedule
+/// ([`Stepper::set_control_x`]).
 #[derive(Clone, Debug)]
-pub(crate) struct Stepper<D> {
-    pub rattle: Rattle<D, 2>,
-    pub state: State<D, 2>,
-    initial: Option<State<D, 2>>,
+pub(crate) struct Stepper<D, const DIM: usize = 2> {
+    pub rattle: Rattle<D, DIM>,
+    pub state: State<D, DIM>,
+    initial: Option<State<D, DIM>>,
     /// Whether stage 0 applies the control's half-kick (a start with [`StartKick::Pending`]).
     pending: bool,
-    pub proj: Projector<D>,
-    pb: Vec<[D; 2]>,
-    b: Vec<[f64; 2]>,
+    pub proj: Projector<D, DIM>,
+    pb: Vec<[D; DIM]>,
+    b: Vec<[f64; DIM]>,
+    /// b_x of a 2-axis control (empty otherwise).
+    bx: Vec<[f64; DIM]>,
     hh: f64,
 }
 
-impl<D: Scalar> Stepper<D> {
-    pub fn new(model: &StageModel) -> Result<Self> {
+impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
+    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
         let t0 = model.start.as_ref().map_or(0.0, |s| s.t0);
-        let rattle = Rattle::new(model.chain.lift::<D>(), model.h)?.with_start_time(t0);
+        let mut chain = model.chain.lift::<D>();
+        if model.two_axis() {
+            chain.set_control_x(&vec![D::zero(); model.steps + 1])?;
+        }
+        let rattle = Rattle::new(chain, model.h)?.with_start_time(t0);
         let state = rattle.straight_state();
         Ok(Stepper {
             rattle,
@@ -331,18 +441,34 @@ impl<D: Scalar> Stepper<D> {
                 .as_ref()
                 .is_some_and(|s| s.kick == StartKick::Pending),
             proj: Projector::new(model.n),
-            pb: vec![[D::zero(); 2]; model.n],
+            pb: vec![[D::zero(); DIM]; model.n],
             b: model.control.clone(),
+            bx: model.control_x.clone(),
             hh: 0.5 * model.h,
         })
     }
 
     /// Moves the stepper to another horizon start of the same model (the receding horizon of
     /// [`crate::mpc`]): its start time, initial state and pending kick.
-    pub fn set_start(&mut self, start: Option<&Start<f64, 2>>) {
+    pub fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
         self.rattle.set_start_time(start.map_or(0.0, |s| s.t0));
         self.initial = start.map(|s| s.state.lift());
         self.pending = start.is_some_and(|s| s.kick == StartKick::Pending);
+    }
+
+    /// Sets the x component u_{x,k} of a 2-axis control for stage k (and u_{x,k+1} = 0, the
+    /// second half-kick's control of the stage map); nothing for a control along z. Call it
+    /// before [`Stepper::reset`] (k = 0) and [`Stepper::advance`].
+    #[inline]
+    pub fn set_control_x(&mut self, k: usize, ux: D) {
+        if self.bx.is_empty() {
+            return;
+        }
+        let cx = &mut self.rattle.chain_mut().control_x;
+        cx[k] = ux;
+        if let Some(next) = cx.get_mut(k + 1) {
+            *next = D::zero();
+        }
     }
 
     /// Resets `state` to the initial state (the start's S₀, or straight at rest) and computes
@@ -355,8 +481,9 @@ impl<D: Scalar> Stepper<D> {
             return self.rattle.prepare(st, 0, u0);
         }
         for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
-            *q = [D::one(), D::zero()];
-            *p = [D::zero(); 2];
+            *q = [D::zero(); DIM];
+            q[DIM - 2] = D::one();
+            *p = [D::zero(); DIM];
         }
         st.multipliers = None;
         st.tip_target = [D::zero(); 2];
@@ -372,16 +499,32 @@ impl<D: Scalar> Stepper<D> {
         Ok(())
     }
 
-    /// The stage's half-kick p_k = p̂_k − (h/2) u_k P(q_k) b where the stage has one (k ≥ 1, or
-    /// a start with a pending kick); returns whether it did ([`Projector::y`] then holds y_b).
+    /// The stage's half-kick p_k = p̂_k − (h/2) P(q_k)(u_k b + u_{x,k} b_x) where the stage has
+    /// one (k ≥ 1, or a start with a pending kick); returns whether it did ([`Projector::y`]
+    /// then holds y_b of the z component).
     pub fn kick(&mut self, k: usize, u: D) -> Result<bool> {
         if !(k > 0 || self.pending) {
             return Ok(false);
         }
+        if !self.bx.is_empty() {
+            let ux = self.rattle.chain().control_x(k);
+            self.proj.apply(
+                self.rattle.chain(),
+                &self.state.q,
+                &self.bx,
+                k,
+                &mut self.pb,
+            )?;
+            for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {
+                for d in 0..DIM {
+                    p[d] -= pb[d] * ux * self.hh;
+                }
+            }
+        }
         self.proj
             .apply(self.rattle.chain(), &self.state.q, &self.b, k, &mut self.pb)?;
         for (p, pb) in self.state.p.iter_mut().zip(&self.pb) {
-            for d in 0..2 {
+            for d in 0..DIM {
                 p[d] -= pb[d] * u * self.hh;
             }
         }
@@ -389,7 +532,7 @@ impl<D: Scalar> Stepper<D> {
     }
 
     /// b = ∂U_q/∂u (block j: l_j e₃ below the control node).
-    pub fn control_direction(&self) -> &[[f64; 2]] {
+    pub fn control_direction(&self) -> &[[f64; DIM]] {
         &self.b
     }
 }

@@ -84,9 +84,9 @@ impl AnyProblem {
     }
 }
 
-/// The optimisers' view: every method delegates to the planar or spatial problem, except the
-/// Riccati solver, which is planar only and refuses the spatial problem with a message that says
-/// so ([`RICCATI_PLANAR`]).
+/// The optimisers' view: every method delegates to the planar or spatial problem (the condensed
+/// solver takes both), except the Riccati solver, which is planar only and refuses the spatial
+/// problem with a message that says so ([`RICCATI_PLANAR`]).
 impl OptimProblem for AnyProblem {
     fn n_params(&self) -> usize {
         self.optim().n_params()
@@ -127,7 +127,7 @@ impl OptimProblem for AnyProblem {
     fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         match self {
             AnyProblem::Planar(p) => p.condensed(theta0, options),
-            AnyProblem::Spatial(_) => Some(Err(planar_only())),
+            AnyProblem::Spatial(p) => p.condensed(theta0, options),
         }
     }
 }
@@ -148,7 +148,7 @@ fn planar_only() -> Error {
     OptimizeError::PlanarOnly.into()
 }
 
-/// Why `--method riccati` (or `condensed`) cannot run a spatial problem.
+/// Why `--method riccati` cannot run a spatial problem.
 pub const RICCATI_PLANAR: &str = crate::error::PLANAR_ONLY;
 
 /// The parametrisation of a scene's own `[control]` and its θ₀: `control.values` (one constant 0

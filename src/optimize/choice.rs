@@ -73,12 +73,13 @@ const CONDENSED_AUTO_BYTES: u128 = 256 << 20;
 /// The choice [`Method::Auto`] makes for `problem` under `opts` (a method other than `Auto` in
 /// `opts` is returned as given, reason "given"):
 ///
-/// 1. a control problem the structured solvers take ([`ProblemShape::structured`](super::ProblemShape::structured): the planar
-///    model, a bending-moment objective c or c_sum with or without effort, a free tip, per-step,
-///    piecewise or constant controls): [`Method::Condensed`] when its parameters P are at most
+/// 1. a control problem the structured solvers take ([`ProblemShape::structured`](super::ProblemShape::structured): an
+///    objective in Gauss-Newton form, a free tip, per-step, piecewise or constant controls):
+///    [`Method::Condensed`] when its parameters P are at most
 ///    [`condensed_max_params`]`(n)` = 4(2n + 1) and its sensitivities 16·(N + 1)·P bytes fit 256
-///    MiB, else [`Method::Riccati`] (cost linear in N per iteration);
-/// 2. anything else (the spatial model, another objective, a locked tip, a problem that is not a
+///    MiB, else [`Method::Riccati`] (cost linear in N per iteration) in the planar model and
+///    [`Method::Lbfgs`] in the spatial one (the Riccati solver is planar);
+/// 2. anything else (another objective, a locked tip, a problem that is not a
 ///    control problem): [`Method::Lbfgs`], the cheapest per iteration (one adjoint sweep per
 ///    line-search trial).
 ///
@@ -112,11 +113,7 @@ pub fn choose_method<Q: OptimProblem + ?Sized>(problem: &Q, opts: &OptimOptions)
     };
     let p = shape.params;
     if !shape.structured {
-        let why = if shape.dim == 3 {
-            "the spatial model"
-        } else {
-            "an objective, tip or control node the structured solvers do not take"
-        };
+        let why = "an objective, tip or control node the structured solvers do not take";
         return MethodChoice {
             method: Method::Lbfgs,
             reason: format!("{why}, {p} parameters"),
@@ -125,6 +122,28 @@ pub fn choose_method<Q: OptimProblem + ?Sized>(problem: &Q, opts: &OptimOptions)
     }
     let limit = condensed_max_params(shape.pendulums);
     let bytes = 16 * (shape.steps as u128 + 1) * p as u128;
+    if shape.dim == 3 {
+        let fits = p <= limit && bytes <= CONDENSED_AUTO_BYTES;
+        return MethodChoice {
+            method: if fits {
+                Method::Condensed
+            } else {
+                Method::Lbfgs
+            },
+            reason: format!(
+                "a spatial control problem with {p} parameters over N = {} steps, {} 4(2n + 1) \
+                 = {limit} for n = {} (the Riccati solver is planar only)",
+                shape.steps,
+                if fits {
+                    "at most"
+                } else {
+                    "more than (or sensitivities over 256 MiB)"
+                },
+                shape.pendulums
+            ),
+            fallback: None,
+        };
+    }
     if p <= limit && bytes <= CONDENSED_AUTO_BYTES {
         MethodChoice {
             method: Method::Condensed,
@@ -184,7 +203,8 @@ pub(super) fn run_auto<Q: OptimProblem + ?Sized>(
     if let Ok(r) = &first {
         if r.converged {
             let mut kept = first.expect("checked Ok");
-            if choice.method == Method::Condensed {
+            let planar = m.problem.shape().is_some_and(|s| s.dim == 2);
+            if choice.method == Method::Condensed && planar {
                 kept = companion(m, theta0, kept, &mut choice);
             }
             kept.seconds = clock.elapsed().as_secs_f64();

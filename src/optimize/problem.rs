@@ -140,7 +140,8 @@ pub struct ProblemShape {
     /// The model's dimension (2: planar, 3: spatial).
     pub dim: usize,
     /// Whether the structured solvers ([`OptimProblem::riccati`], [`OptimProblem::condensed`])
-    /// take the problem: planar, a bending-moment objective, a free tip, a control node.
+    /// take the problem: an objective in Gauss-Newton form, a free tip, a control node (the
+    /// Riccati solver only in the planar model, `dim` = 2).
     pub structured: bool,
 }
 
@@ -187,8 +188,8 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
 
 /// [`OptimProblem`] for the planar (`DIM = 2`, with the Riccati solver) and the spatial
 /// (`DIM = 3`) control problems: the same methods, except that only the planar one offers
-/// [`OptimProblem::riccati`] and [`OptimProblem::condensed`] (the solvers' tangent coordinates
-/// are planar).
+/// [`OptimProblem::riccati`] (its tangent coordinates are planar); both offer
+/// [`OptimProblem::condensed`].
 macro_rules! impl_optim_problem {
     ($dim:literal, $($riccati:tt)*) => {
         impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O, $dim> {
@@ -259,8 +260,7 @@ macro_rules! impl_optim_problem {
                 steps: self.steps(),
                 pendulums: chain.n(),
                 dim: $dim,
-                structured: $dim == 2
-                    && self
+                structured: self
                         .objective()
                         .gauss_newton(crate::adjoint::MomentStage {
                             k: 0,
@@ -290,7 +290,13 @@ impl_optim_problem! {
         Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))
     }
 }
-impl_optim_problem!(3,);
+impl_optim_problem! {
+    3,
+    /// [`crate::ocp::Condensed`] in the spatial model: the 2-axis control and the vector moment.
+    fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))
+    }
+}
 
 impl<P: ControlMap, O: Objective, const DIM: usize> HessianVec for ControlProblem<P, O, DIM> {
     /// Forward-over-adjoint ([`ControlProblem::hessian_vec`]).

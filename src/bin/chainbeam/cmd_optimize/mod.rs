@@ -39,7 +39,8 @@ Spatial scenes (a load, the current or the control with an x component) are opti
 spatial model, planar ones in the planar model (JSON key model); the objectives then use \
 |M₀|² = M₀ₓ² + M₀². A 2-axis control (control.values as pairs [u_x, u_z]) has 2 parameters per \
 value and its controls are reported as pairs [u_x, u_z]; --bound, --lower and --upper limit each \
-component. --method riccati and condensed are planar only and refuse a spatial scene.
+component. --method condensed (and auto) run spatial scenes in the spatial model with the vector \
+moment; --method riccati is planar only and refuses a spatial scene.
 
 Output (JSON): objective [N²m²], controls (the optimal θ, laid out as control.values: numbers, \
 or pairs [u_x, u_z] for a 2-axis control) [N], gradient_norm, iterations, seconds, converged, \
@@ -86,7 +87,7 @@ pub const MAX_THREADS: u16 = 1024;
 pub struct SolverArgs {
     /// Optimisation method; `auto` (the default) chooses from the problem: condensed for a
     /// planar per-step, piecewise or constant control with at most 4(2n+1) parameters (n
-    /// pendulums), riccati with more, lbfgs for spatial scenes and other problems; a structured
+    /// pendulums, planar or spatial), riccati with more (planar), lbfgs for other problems; a structured
     /// run that fails or does not converge is followed by lbfgs from the same start, the better
     /// result kept. The JSON's `method` says whose result it is and `method_choice` why.
     #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
@@ -401,7 +402,8 @@ pub struct ExploreArgs {
     output: Option<PathBuf>,
 }
 
-/// `--method riccati` on a problem in the spatial model: refused before any work, naming the
+/// `--method riccati` on a problem in the spatial model: refused before any work (the condensed
+/// solver takes it), naming the
 /// flag and why the scene is spatial.
 fn refuse_riccati_on_spatial(
     path: &Path,
@@ -409,7 +411,7 @@ fn refuse_riccati_on_spatial(
     opts: &OptimOptions,
 ) -> Result<(), CliError> {
     match (&sp.spatial_reason, opts.method) {
-        (Some(why), m @ (Method::Riccati | Method::Condensed)) => Err(CliError::msg(format!(
+        (Some(why), m @ Method::Riccati) => Err(CliError::msg(format!(
             "{}: --method {m}: this scene needs the spatial model ({why}), and {}",
             path.display(),
             problem::RICCATI_PLANAR

@@ -273,6 +273,7 @@ mod options;
 mod qp;
 pub mod riccati;
 mod second_order;
+mod sensitivities;
 mod solver;
 pub mod stage;
 

@@ -401,6 +401,19 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         }
     }
 
+    /// [`Error::NewtonNotConverged`] of step k after `iterations` Newton iterations that left
+    /// the residual max|ĝ| = `residual`.
+    fn not_converged(&self, k: usize, residual: f64, iterations: usize) -> Error {
+        Error::NewtonNotConverged {
+            step: k,
+            time: self.t0 + k as f64 * self.h,
+            residual,
+            iterations,
+            tolerance: self.options.tolerance,
+            h: Some(self.h),
+        }
+    }
+
     /// Newton for λ (predictor μ_{k−1}) on ĝ(q_{k+1}(λ)) = 0; leaves q_{k+1} in `state.q`, λ in
     /// `state.lambda` and p_{k+½}, W in the workspace.
     fn solve_positions(
@@ -461,14 +474,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             // (The derivative-only updates after convergence are allowed past the limit.)
             if iterations >= self.options.max_iterations && extra_done == 0 {
-                return Err(Error::NewtonNotConverged {
-                    step: k,
-                    time: self.t0 + k as f64 * h,
-                    residual: rmax,
-                    iterations,
-                    tolerance: self.options.tolerance,
-                    h: Some(h),
-                });
+                return Err(self.not_converged(k, rmax, iterations));
             }
             if let Some(cpl) = &mut ws.coupled {
                 // The dense path (steppers::coupled): J with its derivative parts.

@@ -74,8 +74,8 @@ use super::globalise::{
 };
 use super::horizon::{available_threads, ControlHorizon};
 use super::line_search::Traj;
-use super::sensitivities::{balanced, residual_gradients, sens_row, SensChunk};
 use super::options::{OcpOptions, OcpResult, Termination};
+use super::sensitivities::{balanced, residual_gradients, sens_row, SensChunk};
 use super::stage::{Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{HorizonShape, OcpError, Result};

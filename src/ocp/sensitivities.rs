@@ -87,7 +87,12 @@ impl<const DIM: usize> SensChunk<DIM> {
 
 /// S_{k,c}, the sensitivities of the moment's component c (0: z, 1: x) at t_k to θ, gathered
 /// from the chunks into `out`.
-pub(super) fn sens_row<const DIM: usize>(chunks: &[SensChunk<DIM>], k: usize, c: usize, out: &mut [f64]) {
+pub(super) fn sens_row<const DIM: usize>(
+    chunks: &[SensChunk<DIM>],
+    k: usize,
+    c: usize,
+    out: &mut [f64],
+) {
     let r = k * (DIM - 1) + c;
     for ch in chunks {
         out[ch.first..ch.first + ch.len].copy_from_slice(&ch.rows[r][..ch.len]);

@@ -1,6 +1,6 @@
-//! The headline of issue 31: the fatigue life of a wellhead in a North Sea wave climate without
-//! control, with the best constant force, a tuned PD law and MPC at the platform, and the CPU
-//! time each took (`chainbeam::fatigue_study::run_study`, the library behind
+//! The headline of issue 31: the fatigue life of a wellhead in a North Atlantic wave climate
+//! without control, with the best constant force, a tuned PD law and MPC at the platform, and
+//! the CPU time each took (`chainbeam::fatigue_study::run_study`, the library behind
 //! `chainbeam fatigue --scatter FILE --controller none,constant,pd,mpc`).
 //!
 //! ```sh
@@ -26,12 +26,12 @@
 //! - The wellhead: the pipe's section, DNV-RP-C203 curve F1 in seawater with cathodic
 //!   protection, SCF 1.2, DFF 10 (our choices for a girth weld at a subsea wellhead; OCEAN.md §4
 //!   gives 3–10 for the DFF).
-//! - The wave climate: the Kvitebjørn (northern North Sea) joint distribution of (H_s, T_p)
-//!   (Johannessen & Nygaard 2000, as quoted by Low & Huang 2017; `chainbeam::fatigue::scatter`
-//!   cites it) binned into H_s classes 0–1.5–3–4.5–∞ m (represented by 0.75, 2.25, 3.75 and
-//!   5.25 m) and T_p classes 0–9–12–∞ s (7.5, 10.5 and 13.5 s); cells below 0.5 % are left out
-//!   and their probability is reported (the life is then that of the sea states kept)
-//!   (`scatter::reduced_kvitebjorn`).
+//! - The wave climate: the North Atlantic scatter diagram of IACS Rec. No. 34 (as printed in
+//!   KR Guidance RA-03-E (2025), Pt 3 Annex 3-2, Table 3; `chainbeam::fatigue::scatter`
+//!   cites it) reduced to 20 cells: 2 m × 2 s groups of its classes, T_z → T_p by its
+//!   Pierson-Moskowitz spectrum (riser_300m's γ = 1), groups below 0.1 % dropped (0.066 % of
+//!   the time) and the rest renormalised (`scatter::reduced_north_atlantic`, the rows of
+//!   `examples/scatter/north_atlantic_iacs34.csv`).
 //! - The controllers act at the platform (the tip node) with |u| ≤ 200 kN, a decision every
 //!   second; MPC plans 20 s ahead with one Gauss-Newton iteration per re-plan. All three minimise
 //!   Σ M₀² + ρ h Σ u² (ρ = 10⁻⁴), the thesis's smooth stand-in of the damage. Each cell keeps the
@@ -40,7 +40,7 @@
 
 use std::time::Instant;
 
-use chainbeam::fatigue::scatter::reduced_kvitebjorn;
+use chainbeam::fatigue::scatter::reduced_north_atlantic;
 use chainbeam::fatigue::{DnvClass, Environment, FatigueSpec};
 use chainbeam::fatigue_study::{
     pd_law, run_study, ControlSettings, ControllerKind, Study, StudyInput,
@@ -88,7 +88,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         dff: 10.0,
         ..FatigueSpec::new(pipe.outer_diameter, pipe.wall_thickness)
     };
-    let cells = reduced_kvitebjorn();
+    let cells = reduced_north_atlantic();
     let kept: f64 = cells.iter().map(|c| c.probability).sum();
     let mut settings = ControlSettings {
         interval: 1.0,

@@ -15,6 +15,17 @@
 //! [`JointSea::cells`] integrates the joint density over rectangular (H_s, T_p) bins (the
 //! midpoint rule in F_H over 400 slices of each H_s bin, the exact conditional lognormal
 //! probability of each T_p bin) and gives each bin the representative sea state it is given.
+//!
+//! A published tabulated diagram, the North Atlantic table of IACS Rec. No. 34, and its
+//! reduction to 20 cells are in [`north_atlantic`] ([`reduced_north_atlantic`]).
+
+pub mod north_atlantic;
+
+pub use north_atlantic::{
+    lump_north_atlantic, reduced_north_atlantic, tp_over_tz, NORTH_ATLANTIC_HS,
+    NORTH_ATLANTIC_OCCURRENCES, NORTH_ATLANTIC_TOTAL, NORTH_ATLANTIC_TZ, REDUCED_NA_HS_EDGES,
+    REDUCED_NA_MIN_PROBABILITY, REDUCED_NA_TZ_EDGES,
+};
 
 /// A sea state: significant wave height H_s \[m\], peak period T_p \[s\] and, optionally, the
 /// mean direction \[° from +z toward +x\].

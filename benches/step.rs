@@ -15,6 +15,8 @@
 //!   (one `Dual64` evaluation of the springs' force at q + εv) through a wrapper that delegates
 //!   everything else to the springs. The ratio is what the override saves the adjoint, which
 //!   calls K·v twice per reverse step.
+//! - `joint_damping`: one planar `f64` step of the cantilever with a joint damper beside every
+//!   spring (c = 0.01 s · k), n = 20, 80, 320: the coupled half step's band solve.
 //!
 //! The step benchmarks first advance the straight beam by [`PRE_STEPS`] steps so the state is
 //! bent and the Newton predictor is the multiplier of a real previous step, then keep stepping the
@@ -351,6 +353,36 @@ fn force_jvp(c: &mut Criterion) {
     group.finish();
 }
 
+/// [`cantilever`]`(n)` with a joint damper beside every spring, c_j = α k_j with α = 0.01 s
+/// (stiffness-proportional damping, ζ = α ω / 2 per mode; docs/conventions.md "Joint damping").
+fn damped_cantilever(n: usize) -> Scene {
+    let mut s = cantilever(n);
+    let (base, k) = (s.beam.base_stiffness, &s.beam.stiffness);
+    // c₁..c_{n+1}: the base spring, the interior springs, no tip spring (cantilever).
+    let mut c = vec![0.01 * base];
+    c.extend(k.iter().map(|k| 0.01 * k));
+    c.push(0.0);
+    s.beam.joint_damping = c;
+    s.validate()
+        .unwrap_or_else(|e| panic!("bench damped cantilever n = {n} is invalid: {e}"));
+    s
+}
+
+/// One planar `f64` RATTLE step of [`damped_cantilever`] for n = 20, 80, 320: the cost of the
+/// joint damping's implicit half step and Newton solve (`steppers/coupled.rs`), with
+/// `Throughput::Elements(n)`. Compare with `step_f64_planar`, the same beam without dampers.
+fn joint_damping(c: &mut Criterion) {
+    let mut group = c.benchmark_group("joint_damping");
+    group.sample_size(SAMPLES.min(10));
+    for n in [20usize, 80, 320] {
+        let scene = damped_cantilever(n);
+        group.throughput(Throughput::Elements(n as u64));
+        let prep = prepared(&scene, planar_f64(&scene));
+        group.bench_function(BenchmarkId::from_parameter(n), |b| bench_steps(b, &prep));
+    }
+    group.finish();
+}
+
 /// Short defaults so a plain `cargo bench` stays quick; `--warm-up-time` / `--measurement-time` on
 /// the command line override them (the groups set only the sample size).
 fn config() -> Criterion {
@@ -362,6 +394,7 @@ fn config() -> Criterion {
 criterion_group! {
     name = benches;
     config = config();
-    targets = step_f64_planar, step_scalar, step_dim, step_current, simulate_riser, force_jvp
+    targets = step_f64_planar, step_scalar, step_dim, step_current, simulate_riser, force_jvp,
+        joint_damping
 }
 criterion_main!(benches);

@@ -136,6 +136,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod adjoint;
+pub mod banded;
 pub mod base;
 pub mod catalogue;
 pub mod constraints;

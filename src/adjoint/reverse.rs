@@ -40,7 +40,7 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     scal: Vec<D>,
     tri: BorderedTridiag<D>,
     scratch: DualScratch<D, DIM>,
-    /// The dense matrices of a model with coupled dissipative terms (joint damping), the
+    /// The band matrices of a model with coupled dissipative terms (joint damping), the
     /// requested parameters they read (their own and the mass), and M⁻¹p_{k+½}.
     coupled: Option<CoupledHalf<D, DIM>>,
     coupled_params: Vec<(usize, Parameter)>,
@@ -282,7 +282,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
         let w = (ch.has_dissipation() && self.coupled.is_none()).then_some(sk1.w);
         if let Some(cpl) = &mut self.coupled {
-            // W = A⁻¹ and J at (q_k, p½), dense (steppers::coupled).
+            // W = A⁻¹ and J at (q_k, p½), as band LUs (steppers::coupled).
             cpl.factor_at(ch, (q, sk1.phalf), h, &dctx)
                 .map_err(|zp| singular(k, zp))?;
             cpl.factor_newton(ch, (q, sk1.q), h)
@@ -291,7 +291,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.w_times_s(&cot.qbar, w);
         ops.apply(q, &self.tmp, &mut self.rhs);
         self.rhs.iter_mut().for_each(|r| *r = -*r * hh);
-        if let Some(cpl) = &self.coupled {
+        if let Some(cpl) = &mut self.coupled {
             cpl.newton_solve_transpose(&mut self.rhs);
         } else {
             ops.assemble_newton((q, sk1.q), w, h, &mut self.tri, &mut self.scal);

@@ -1,162 +1,111 @@
 //! RATTLE's first half step with dissipative terms that couple pendulums
 //! ([`crate::model::CoupledDissipativeTerm`], the joint damping; docs/conventions.md), forward and
-//! reverse.
+//! reverse, in O(n).
 //!
 //! With such a term the first half step p − (h/2) F(q_k, p) = c (F = Σ of the block terms F_D(p)
 //! and the coupled F_J(q_k, M⁻¹p)) is no longer block by block: its Jacobian
-//! A = I − (h/2)(∂F_D/∂p + ∂F_J/∂p), ∂F_J/∂p δp = F_J(q_k, M⁻¹δp), couples every pendulum to its
-//! neighbours, and W = ∂p_{k+½}/∂c = A⁻¹ is dense, as is RATTLE's Newton matrix
-//! J = −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ. Both are assembled and factorised densely here
-//! ([`DenseLu`]): O((n·DIM)³) per Newton iteration instead of the block path's O(n), which is
-//! why only scenes with such a term take this path (every other scene keeps the block path and
-//! its numbers bit for bit). The second half step reads F_J at (q_{k+1}, p_{k+½}), so the step
-//! stays symmetric.
+//! ```text
+//! A = I − (h/2)(∂F_D/∂p + ∂F_J/∂p),    ∂F_J/∂p δp = F_J(q_k, M⁻¹δp) = −B(q_k) M⁻¹ δp,
+//! ```
+//! couples every pendulum to its neighbours. B is block tridiagonal (a coupled term's Fᵢ reads
+//! the velocities of pendulums i − 1, i, i + 1: the joint dampers at the two ends of pendulum i)
+//! and M⁻¹ = M̄⁻¹ ⊗ I is tridiagonal, so A is block **pentadiagonal**: A_ij = 0 for |i − j| > 2.
+//! It is assembled by probing, ∂F_J/∂p applied to the sum of the unit vectors e_{j,e} with
+//! j ≡ r (mod 5) for r = 0..5, e = 0..DIM (5·DIM evaluations of F_J, each O(n): a column j
+//! reaches only rows |i − j| ≤ 2, so the five columns a probe sums never meet in a row), and
+//! factorised as a band matrix ([`BandedLu`], kl = ku = 3·DIM − 1). W = ∂p_{k+½}/∂c = A⁻¹ is
+//! dense but is only ever applied, W x or Wᵀ x, by a band solve.
+//!
+//! RATTLE's Newton matrix J = −h²/2 Ĝ(q_{k+1}) M⁻¹ A⁻¹ Ĝ(q_k)ᵀ is dense too, so J x = r is solved
+//! through the sparse augmented system (y = A⁻¹ Ĝ(q_k)ᵀ x)
+//! ```text
+//! [ A           −Ĝ(q_k)ᵀ ] [y]   [ 0            ]
+//! [ Σ Ĝ(q′)M⁻¹     0     ] [x] = [ −(2/h²) Σ r  ] ,
+//! ```
+//! ordered pendulum by pendulum (y_i then x_i, DIM + 1 unknowns per pendulum): a band matrix with
+//! kl = ku = 3·DIM + 1 ([`BorderedBanded`]), bordered by the tip constraint's column (lᵢ e_z on
+//! every block; its row is sparse, Σᵢ lᵢ M̄⁻¹ᵢⱼ = δ_{j,n−1}/(m_n l_n)). Σ scales each constraint
+//! row by 1/M̄⁻¹ᵢᵢ (the tip's by m_n l_n) so that its entries are of the size of A's for the
+//! pivot choice; x does not depend on Σ. Jᵀν = b is the transposed system with ν = Σ w.
+//!
+//! Cost per Newton iteration: O(n · DIM³) (two band factorisations), against the dense LU's
+//! O((n·DIM)³) this replaced (kept as the tests' reference, `coupled/dense.rs`, which gives the
+//! same numbers to round-off: `coupled/tests.rs`). Only scenes with a coupled term take this
+//! path; every other scene keeps the block path and its numbers bit for bit. The second half step
+//! reads F_J at (q_{k+1}, p_{k+½}), so the step stays symmetric.
 //!
 //! The reverse step (the discrete adjoint) reads the same matrices at (q_k, p_{k+½}):
 //! c̄ = Wᵀ S = A⁻ᵀ S, Jᵀν = λ̄, and the attitude q_k gains (h/2) ∇_q(c̄·F_J(q_k, M⁻¹p_{k+½})).
 
+use crate::banded::{BandedLu, BorderedBanded};
 use crate::base::Scalar;
-use crate::model::{Chain, Ctx};
+use crate::model::{zi, Chain, Ctx};
 use crate::tridiag::ZeroPivot;
 
-/// A dense LU factorisation P A = L U with partial pivoting (pivots chosen on the real parts),
-/// over any scalar: `solve` and `solve_transpose` after `factor`.
-#[derive(Clone, Debug)]
-pub(crate) struct DenseLu<D> {
-    n: usize,
-    /// Row-major entries (L below the diagonal, unit diagonal implied; U on and above).
-    a: Vec<D>,
-    piv: Vec<usize>,
+#[cfg(test)]
+mod dense;
+#[cfg(test)]
+mod tests;
+
+/// The block bandwidth of A: A_ij = 0 for |i − j| > `REACH` (module docs).
+const REACH: usize = 2;
+/// Blocks per block row of A, and the probing period.
+const WIDTH: usize = 2 * REACH + 1;
+
+#[cfg(test)]
+thread_local! {
+    /// Tests only: [`CoupledHalf::new`] builds the dense reference (`coupled/dense.rs`) instead
+    /// of the band solver, so that whole trajectories can be compared.
+    pub(crate) static DENSE_REFERENCE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
-impl<D: Scalar> DenseLu<D> {
-    /// Storage for an n × n matrix.
-    pub(crate) fn new(n: usize) -> Self {
-        DenseLu {
-            n,
-            a: vec![D::zero(); n * n],
-            piv: vec![0; n],
-        }
-    }
-
-    /// Entry (r, c) for assembly.
-    #[inline]
-    fn at(&mut self, r: usize, c: usize) -> &mut D {
-        &mut self.a[r * self.n + c]
-    }
-
-    /// Factorises the assembled matrix in place.
-    fn factor(&mut self) -> Result<(), ZeroPivot> {
-        let n = self.n;
-        for k in 0..n {
-            let mut p = k;
-            for r in k + 1..n {
-                if self.a[r * n + k].re().abs() > self.a[p * n + k].re().abs() {
-                    p = r;
-                }
-            }
-            let pivot = self.a[p * n + k];
-            if pivot.re() == 0.0 || !pivot.re().is_finite() {
-                return Err(ZeroPivot {
-                    index: k,
-                    pivot: pivot.re(),
-                });
-            }
-            self.piv[k] = p;
-            if p != k {
-                for c in 0..n {
-                    self.a.swap(k * n + c, p * n + c);
-                }
-            }
-            let inv = self.a[k * n + k].recip();
-            for r in k + 1..n {
-                let l = self.a[r * n + k] * inv;
-                self.a[r * n + k] = l;
-                for c in k + 1..n {
-                    let u = self.a[k * n + c];
-                    self.a[r * n + c] -= l * u;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// Solves A x = b in place.
-    fn solve(&self, b: &mut [D]) {
-        let n = self.n;
-        for k in 0..n {
-            b.swap(k, self.piv[k]);
-        }
-        for r in 0..n {
-            let mut s = b[r];
-            for c in 0..r {
-                s -= self.a[r * n + c] * b[c];
-            }
-            b[r] = s;
-        }
-        for r in (0..n).rev() {
-            let mut s = b[r];
-            for c in r + 1..n {
-                s -= self.a[r * n + c] * b[c];
-            }
-            b[r] = s / self.a[r * n + r];
-        }
-    }
-
-    /// Solves Aᵀ x = b in place (Aᵀ = Uᵀ Lᵀ P).
-    fn solve_transpose(&self, b: &mut [D]) {
-        let n = self.n;
-        for r in 0..n {
-            let mut s = b[r];
-            for c in 0..r {
-                s -= self.a[c * n + r] * b[c];
-            }
-            b[r] = s / self.a[r * n + r];
-        }
-        for r in (0..n).rev() {
-            let mut s = b[r];
-            for c in r + 1..n {
-                s -= self.a[c * n + r] * b[c];
-            }
-            b[r] = s;
-        }
-        for k in (0..n).rev() {
-            b.swap(k, self.piv[k]);
-        }
-    }
-}
-
-/// The dense half step of a chain with coupled dissipative terms (module docs): A and J
-/// factorised, and scratch, sized once per chain (no allocation per step).
+/// The half step of a chain with coupled dissipative terms (module docs): A and the augmented
+/// Newton matrix as band LUs, and scratch, sized once per chain (no allocation per step).
 #[derive(Clone, Debug)]
 pub(crate) struct CoupledHalf<D, const DIM: usize> {
-    /// A = I − (h/2) ∂F/∂p at the last assembly.
-    a: DenseLu<D>,
-    /// RATTLE's Newton matrix J (n_c × n_c).
-    jac: DenseLu<D>,
-    /// v = M⁻¹p, and the coupled force.
+    /// A's blocks at the last assembly: `blocks[i · WIDTH + j + REACH − i]` = A_ij.
+    blocks: Vec<[[D; DIM]; DIM]>,
+    /// A = I − (h/2) ∂F/∂p (n·DIM unknowns).
+    a: BandedLu<D>,
+    /// The augmented Newton system (n·(DIM + 1) unknowns, bordered by the tip).
+    newton: BorderedBanded<D>,
+    /// Σ's row scales: 1/M̄⁻¹ᵢᵢ per pendulum, then the tip's m_n l_n.
+    sigma: Vec<D>,
+    /// −2/h² of the last [`CoupledHalf::factor_newton`].
+    rhs_scale: f64,
+    /// v = M⁻¹p, the coupled force, and a probe.
     v: Vec<[D; DIM]>,
     f: Vec<[D; DIM]>,
-    /// A block vector and its flat copy.
-    blocks: Vec<[D; DIM]>,
+    probe: Vec<[D; DIM]>,
+    /// A flat copy of a block vector, and the augmented system's right-hand side.
     flat: Vec<D>,
-    /// A constraint-sized vector.
-    y: Vec<D>,
+    aug: Vec<D>,
+    /// Tests only: the dense reference that replaces every solve ([`DENSE_REFERENCE`]).
+    #[cfg(test)]
+    dense: Option<Box<dense::DenseHalf<D, DIM>>>,
 }
 
 impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
     /// Buffers for `ch`.
     pub(crate) fn new(ch: &Chain<D, DIM>) -> Self {
-        let (n, nc) = (ch.n(), ch.n_constraints());
+        let (n, bordered) = (ch.n(), ch.has_tip_constraint());
         let v = vec![[D::zero(); DIM]; n];
+        let s = DIM + 1;
         CoupledHalf {
-            a: DenseLu::new(n * DIM),
-            jac: DenseLu::new(nc),
+            blocks: vec![[[D::zero(); DIM]; DIM]; n * WIDTH],
+            a: BandedLu::new(n * DIM, 3 * DIM - 1, 3 * DIM - 1),
+            newton: BorderedBanded::new(n * s, (3 * DIM + 1, 3 * DIM + 1), bordered),
+            sigma: vec![D::zero(); n + 1],
+            rhs_scale: 0.0,
             v: v.clone(),
             f: v.clone(),
-            blocks: v,
+            probe: v,
             flat: vec![D::zero(); n * DIM],
-            y: vec![D::zero(); nc],
+            aug: vec![D::zero(); n * s + usize::from(bordered)],
+            #[cfg(test)]
+            dense: DENSE_REFERENCE
+                .with(|d| d.get())
+                .then(|| Box::new(dense::DenseHalf::new(ch))),
         }
     }
 
@@ -174,6 +123,65 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         &self.f
     }
 
+    /// A's blocks at (q, p): the identity, the block terms' −(h/2) ∂F_D/∂p on the diagonal, and
+    /// −(h/2) ∂F_J/∂p by probing with period 5 (module docs).
+    fn assemble(
+        &mut self,
+        ch: &Chain<D, DIM>,
+        (q, p): (&[[D; DIM]], &[[D; DIM]]),
+        h: f64,
+        ctx: &Ctx<D>,
+    ) {
+        let (n, hh) = (ch.n(), 0.5 * h);
+        self.blocks
+            .iter_mut()
+            .for_each(|b| *b = [[D::zero(); DIM]; DIM]);
+        for (i, pi) in p.iter().enumerate() {
+            let a = &mut self.blocks[i * WIDTH + REACH];
+            for (d, row) in a.iter_mut().enumerate() {
+                row[d] = D::one();
+            }
+            if let Some((_, s)) = ch.dissipative_slope(i, pi, ctx) {
+                for d in 0..DIM {
+                    a[d][d] -= s.diag[d] * hh;
+                }
+                if DIM == 3 {
+                    a[0][2] -= s.xz * hh;
+                    a[2][0] -= s.xz * hh;
+                }
+            }
+        }
+        for r in 0..WIDTH.min(n) {
+            for e in 0..DIM {
+                self.probe.iter_mut().for_each(|b| *b = [D::zero(); DIM]);
+                for j in (r..n).step_by(WIDTH) {
+                    self.probe[j][e] = D::one();
+                }
+                ch.apply_inverse_mass(&self.probe, &mut self.v);
+                self.f.iter_mut().for_each(|f| *f = [D::zero(); DIM]);
+                ch.coupled_force(q, &self.v, ctx, &mut self.f);
+                for (i, f) in self.f.iter().enumerate() {
+                    // The probed column within reach of row i: j ≡ r (mod 5), |i − j| ≤ 2.
+                    let off = (r + WIDTH - i % WIDTH) % WIDTH;
+                    let j = if off <= REACH {
+                        i + off
+                    } else if i + off >= WIDTH {
+                        i + off - WIDTH
+                    } else {
+                        continue;
+                    };
+                    if j >= n {
+                        continue;
+                    }
+                    let a = &mut self.blocks[i * WIDTH + j + REACH - i];
+                    for d in 0..DIM {
+                        a[d][e] -= f[d] * hh;
+                    }
+                }
+            }
+        }
+    }
+
     /// Assembles and factorises A = I − (h/2)(∂F_D/∂p + ∂F_J/∂p) at (q, p).
     pub(crate) fn factor_at(
         &mut self,
@@ -182,33 +190,19 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         h: f64,
         ctx: &Ctx<D>,
     ) -> Result<(), ZeroPivot> {
-        let (n, nn, hh) = (ch.n(), ch.n() * DIM, 0.5 * h);
-        self.a.a.iter_mut().for_each(|x| *x = D::zero());
-        for r in 0..nn {
-            *self.a.at(r, r) = D::one();
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.factor_at(ch, (q, p), h, ctx);
         }
-        for (i, pi) in p.iter().enumerate() {
-            if let Some((_, s)) = ch.dissipative_slope(i, pi, ctx) {
-                for d in 0..DIM {
-                    *self.a.at(i * DIM + d, i * DIM + d) -= s.diag[d] * hh;
-                }
-                if DIM == 3 {
-                    *self.a.at(i * DIM, i * DIM + 2) -= s.xz * hh;
-                    *self.a.at(i * DIM + 2, i * DIM) -= s.xz * hh;
-                }
-            }
-        }
-        // Column (j, e) of ∂F_J/∂p: F_J(q, M⁻¹ e_{j,e}) (M⁻¹ is tridiagonal, F_J local).
-        for j in 0..n {
-            for e in 0..DIM {
-                self.blocks.iter_mut().for_each(|b| *b = [D::zero(); DIM]);
-                self.blocks[j][e] = D::one();
-                ch.apply_inverse_mass(&self.blocks, &mut self.v);
-                self.f.iter_mut().for_each(|f| *f = [D::zero(); DIM]);
-                ch.coupled_force(q, &self.v, ctx, &mut self.f);
-                for (i, f) in self.f.iter().enumerate() {
-                    for d in 0..DIM {
-                        *self.a.at(i * DIM + d, j * DIM + e) -= f[d] * hh;
+        self.assemble(ch, (q, p), h, ctx);
+        let n = ch.n();
+        self.a.clear();
+        for i in 0..n {
+            for j in i.saturating_sub(REACH)..(i + REACH + 1).min(n) {
+                let b = &self.blocks[i * WIDTH + j + REACH - i];
+                for (d, row) in b.iter().enumerate() {
+                    for (e, x) in row.iter().enumerate() {
+                        self.a.add(i * DIM + d, j * DIM + e, *x);
                     }
                 }
             }
@@ -227,6 +221,10 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         (h, ctx): (f64, &Ctx<D>),
         p: &mut [[D; DIM]],
     ) -> Result<(), ZeroPivot> {
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.solve(ch, (q, c), (h, ctx), p);
+        }
         p.copy_from_slice(c);
         if ch.dissipation_count() == 0 {
             self.factor_at(ch, (q, p), h, ctx)?;
@@ -271,49 +269,123 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         self.factor_at(ch, (q, p), h, ctx)
     }
 
-    /// Assembles and factorises RATTLE's Newton matrix J = −h²/2 Ĝ(q′) M⁻¹ A⁻¹ Ĝ(q)ᵀ (A as
-    /// last factorised), column by column.
+    /// Assembles and factorises the augmented system of RATTLE's Newton matrix
+    /// J = −h²/2 Ĝ(q′) M⁻¹ A⁻¹ Ĝ(q)ᵀ (module docs; A's blocks as last assembled).
     pub(crate) fn factor_newton(
         &mut self,
         ch: &Chain<D, DIM>,
         (q, qnew): (&[[D; DIM]], &[[D; DIM]]),
         h: f64,
     ) -> Result<(), ZeroPivot> {
-        let ops = ch.constraints();
-        let nc = ch.n_constraints();
-        let s = D::from(-(h * h * 0.5));
-        for j in 0..nc {
-            self.y.iter_mut().for_each(|y| *y = D::zero());
-            self.y[j] = D::one();
-            self.blocks.iter_mut().for_each(|b| *b = [D::zero(); DIM]);
-            ops.add_transpose(q, &self.y, D::one(), &mut self.blocks);
-            flatten(&self.blocks, &mut self.flat);
-            self.a.solve(&mut self.flat);
-            unflatten(&self.flat, &mut self.blocks);
-            ch.apply_inverse_mass(&self.blocks, &mut self.v);
-            ops.apply(qnew, &self.v, &mut self.y);
-            for (r, y) in self.y.iter().enumerate() {
-                *self.jac.at(r, j) = *y * s;
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.factor_newton(ch, (q, qnew), h);
+        }
+        let (n, s) = (ch.n(), DIM + 1);
+        let k = &mut self.newton;
+        k.clear();
+        for i in 0..n {
+            let (yi, xi) = (i * s, i * s + DIM);
+            for j in i.saturating_sub(REACH)..(i + REACH + 1).min(n) {
+                let b = &self.blocks[i * WIDTH + j + REACH - i];
+                for (d, row) in b.iter().enumerate() {
+                    for (e, x) in row.iter().enumerate() {
+                        k.band.add(yi + d, j * s + e, *x);
+                    }
+                }
+            }
+            // −Ĝ(q)ᵀ: the column of x_i is −qᵢ on block i.
+            for d in 0..DIM {
+                k.band.add(yi + d, xi, -q[i][d]);
+            }
+            // Σ Ĝ(q′) M⁻¹: row i is σᵢ M̄⁻¹ᵢⱼ q′ᵢᵀ on blocks j = i − 1, i, i + 1 (σᵢ M̄⁻¹ᵢᵢ = 1).
+            let (dii, off) = ch.minv_entries(i);
+            let sigma = dii.recip();
+            self.sigma[i] = sigma;
+            let below = if i > 0 {
+                ch.minv_entries(i - 1).1 * sigma
+            } else {
+                D::zero()
+            };
+            let above = off * sigma;
+            for e in 0..DIM {
+                k.band.add(xi, yi + e, qnew[i][e]);
+                if i > 0 {
+                    k.band.add(xi, yi - s + e, qnew[i][e] * below);
+                }
+                if i + 1 < n {
+                    k.band.add(xi, yi + s + e, qnew[i][e] * above);
+                }
             }
         }
-        self.jac.factor()
+        if k.bordered {
+            // The tip: column −lᵢ e_z on every block; row Σᵢ lᵢ (M⁻¹y)_{i,z} = y_{n−1,z}/(m_n l_n),
+            // scaled by σ_tip = m_n l_n.
+            let z = zi::<DIM>();
+            for i in 0..n {
+                k.col[i * s + z] = -ch.lengths[i];
+            }
+            k.row[(n - 1) * s + z] = D::one();
+            self.sigma[n] = (ch.inv_masses[n - 1] * ch.inv_lengths[n - 1]).recip();
+        }
+        self.rhs_scale = -2.0 / (h * h);
+        k.factor()
     }
 
     /// Solves J x = b in place (after [`CoupledHalf::factor_newton`]).
-    pub(crate) fn newton_solve(&self, b: &mut [D]) {
-        self.jac.solve(b);
+    pub(crate) fn newton_solve(&mut self, b: &mut [D]) {
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.newton_solve(b);
+        }
+        let n = self.sigma.len() - 1;
+        self.aug.iter_mut().for_each(|x| *x = D::zero());
+        for (i, x) in b.iter().enumerate() {
+            self.aug[slot::<DIM>(i, n)] = *x * self.sigma[i] * self.rhs_scale;
+        }
+        self.newton.solve(&mut self.aug);
+        for (i, x) in b.iter_mut().enumerate() {
+            *x = self.aug[slot::<DIM>(i, n)];
+        }
     }
 
-    /// Solves Jᵀ x = b in place.
-    pub(crate) fn newton_solve_transpose(&self, b: &mut [D]) {
-        self.jac.solve_transpose(b);
+    /// Solves Jᵀ x = b in place: Kᵀ(z; w) = (0; −(2/h²) b), x = Σ w (module docs).
+    pub(crate) fn newton_solve_transpose(&mut self, b: &mut [D]) {
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.newton_solve_transpose(b);
+        }
+        let n = self.sigma.len() - 1;
+        self.aug.iter_mut().for_each(|x| *x = D::zero());
+        for (i, x) in b.iter().enumerate() {
+            self.aug[slot::<DIM>(i, n)] = *x * self.rhs_scale;
+        }
+        self.newton.solve_transpose(&mut self.aug);
+        for (i, x) in b.iter_mut().enumerate() {
+            *x = self.aug[slot::<DIM>(i, n)] * self.sigma[i];
+        }
     }
 
     /// `s` ← Wᵀ s = A⁻ᵀ s (after [`CoupledHalf::factor_at`] or [`CoupledHalf::solve`]).
     pub(crate) fn apply_w_transpose(&mut self, s: &mut [[D; DIM]]) {
+        #[cfg(test)]
+        if let Some(dense) = &mut self.dense {
+            return dense.apply_w_transpose(s);
+        }
         flatten(s, &mut self.flat);
         self.a.solve_transpose(&mut self.flat);
         unflatten(&self.flat, s);
+    }
+}
+
+/// The augmented system's index of constraint i: x_i after y_i's DIM components, the tip (i = n)
+/// last.
+#[inline]
+fn slot<const DIM: usize>(i: usize, n: usize) -> usize {
+    if i < n {
+        i * (DIM + 1) + DIM
+    } else {
+        n * (DIM + 1)
     }
 }
 

@@ -15,7 +15,8 @@
 //! p − (h/2) F(p) = c ([`Chain::dissipative_half_step`]: for the drag in closed form,
 //! p = 2c / (1 + √(1 + 2hD|c|)) per planar component). A term that couples pendulums (the joint
 //! damping) is read at (q_k, p_{k+½}) in the first half and (q_{k+1}, p_{k+½}) in the second, and
-//! makes the half step and the Newton matrix below dense (`steppers/coupled.rs`, a dense LU).
+//! couples the half step's blocks and makes the Newton matrix below dense; both are solved in O(n)
+//! as band systems (`steppers/coupled.rs`).
 //!
 //! **Newton solve for λ.** q_{k+1}(λ) is explicit, so Newton runs on ĝ(q_{k+1}(λ)) = 0 only. Its
 //! Jacobian −h²/2 Ĝ(q_{k+1}) M⁻¹ W Ĝ(q_k)ᵀ (W = ∂p_{k+½}/∂c, the identity without drag) is
@@ -158,7 +159,7 @@ struct Workspace<D, const DIM: usize> {
     real: [Vec<[D; DIM]>; 2],
     /// Real parts of W, likewise.
     real_w: Vec<BlockSym<D, DIM>>,
-    /// The dense half step of a model with coupled dissipative terms (joint damping).
+    /// The coupled half step of a model with coupled dissipative terms (joint damping).
     coupled: Option<CoupledHalf<D, DIM>>,
 }
 
@@ -477,7 +478,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 return Err(self.not_converged(k, rmax, iterations));
             }
             if let Some(cpl) = &mut ws.coupled {
-                // The dense path (steppers::coupled): J with its derivative parts.
+                // The coupled path (steppers::coupled): J's band system with its derivative parts.
                 cpl.factor_newton(ch, (&state.q, &ws.qnew), h)
                     .map_err(|zp| singular(k, zp))?;
                 cpl.newton_solve(&mut ws.rhs);

@@ -24,6 +24,11 @@ use num_dual::Dual;
 
 /// A dissipative force F(q, q̇) = −B(q) q̇ that couples pendulums (module docs), written once
 /// over the evaluation scalar.
+///
+/// **Reach:** Fᵢ may read the attitudes and velocities of pendulums i − 1, i and i + 1 only
+/// (B block tridiagonal, as for a force acting at the joints). RATTLE's implicit half step
+/// relies on it: its Jacobian I − (h/2) ∂F/∂p = I + (h/2) B M⁻¹ is then block pentadiagonal,
+/// assembled by probing and solved as a band matrix in O(n) (`steppers/coupled.rs`).
 pub trait CoupledDissipativeTerm<D: Scalar, const DIM: usize>:
     Clone + std::fmt::Debug + Send + Sync
 {

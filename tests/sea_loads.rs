@@ -5,7 +5,7 @@
 
 use chainbeam::model::Ctx;
 use chainbeam::ocean::Sea;
-use chainbeam::scene::{WaveSpectrum, Waves};
+use chainbeam::scene::{WaveLumping, WaveSpectrum, Waves};
 use chainbeam::*;
 
 /// A 100 m pipe riser (21" drilling riser section) in 100 m of water under a JONSWAP sea, with
@@ -65,6 +65,11 @@ fn bad_values_are_refused_naming_the_key() {
             "loads.waves.gamma",
         ),
         ("step = 0.05", "step = 1e-6", "time.step"),
+        (
+            "seed = 7",
+            "seed = 7\nlumping = \"cells\"",
+            "loads.waves.lumping",
+        ),
     ];
     for (from, to, key) in cases {
         let text = base.replacen(from, to, 1);
@@ -95,6 +100,7 @@ fn keys_read_and_write_back() {
             seed: 7,
             direction: 30.0,
             components: Some(500),
+            lumping: WaveLumping::Node,
         }
     );
     assert!(scene.is_spatial());
@@ -187,4 +193,105 @@ fn the_water_momentum_adds_current_and_waves() {
         );
         assert_eq!(f[0], 0.0);
     }
+}
+
+/// `lumping = "cell"`: the exact cell mean of the Airy profile ([`chainbeam::ocean::cell_profile`])
+/// against a 20-point Gauss-Legendre quadrature of `depth_profile` over the cell (an independent
+/// evaluation), including a cell reaching above the surface (clamped to the surface's
+/// kinematics) and shallow and deep components; the model's series with it against the direct
+/// sum of the same cell means; the key reads and writes back.
+#[test]
+fn cell_lumping_averages_the_profile_over_each_cell() {
+    use chainbeam::ocean::{cell_profile, depth_profile};
+    // Gauss-Legendre nodes and weights of order 20 on [-1, 1] (the 10 positive nodes): the
+    // roots of P₂₀ by Newton's method from cos(π(i − ¼)/(20 + ½)), w = 2/((1 − x²) P₂₀′(x)²).
+    let legendre = |x: f64| {
+        let (mut p0, mut p1) = (1.0, x);
+        for k in 2..=20 {
+            let p2 = ((2 * k - 1) as f64 * x * p1 - (k - 1) as f64 * p0) / k as f64;
+            (p0, p1) = (p1, p2);
+        }
+        (p1, 20.0 * (x * p1 - p0) / (x * x - 1.0))
+    };
+    let (mut nodes, mut weights) = ([0.0; 10], [0.0; 10]);
+    for i in 0..10 {
+        let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / 20.5).cos();
+        for _ in 0..100 {
+            let (p, dp) = legendre(x);
+            x -= p / dp;
+        }
+        let (_, dp) = legendre(x);
+        nodes[i] = x;
+        weights[i] = 2.0 / ((1.0 - x * x) * dp * dp);
+    }
+    assert!((weights.iter().sum::<f64>() - 1.0).abs() < 1e-14);
+    let gauss = |f: &dyn Fn(f64) -> f64, a: f64, b: f64| {
+        let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
+        nodes
+            .iter()
+            .zip(weights)
+            .map(|(x, w)| w * (f(c - r * x) + f(c + r * x)))
+            .sum::<f64>()
+            * 0.5
+    };
+    let d = 300.0;
+    for k in [1e-3, 0.02, 0.07, 0.3, 1.0] {
+        for (y0, y1) in [
+            (0.0, 1.875),
+            (150.0, 155.0),
+            (290.0, 297.5),
+            (296.25, 300.0),
+        ] {
+            let q = gauss(&|y| depth_profile(k, y, d), y0, y1);
+            let c = cell_profile(k, (y0, y1), d);
+            assert!(
+                (c - q).abs() <= 1e-12 * q.abs().max(1e-300),
+                "k {k}, [{y0}, {y1}]: {c} vs {q}"
+            );
+        }
+        // Above the surface: the part beyond d at the surface's profile.
+        let (y0, y1) = (298.0, 302.0);
+        let q = (gauss(&|y| depth_profile(k, y, d), y0, d) * (d - y0)
+            + depth_profile(k, d, d) * (y1 - d))
+            / (y1 - y0);
+        let c = cell_profile(k, (y0, y1), d);
+        assert!((c - q).abs() <= 1e-12 * q, "k {k}: {c} vs {q}");
+    }
+
+    // The model's series with cell lumping: Wᵢ = lᵢ Σ_{k≥i} m_k ū_k with ū_k the cell mean.
+    let scene =
+        Scene::from_toml_str(&wave_scene("components = 300\nlumping = \"cell\"", 1e-6)).unwrap();
+    assert_eq!(scene.loads.waves.unwrap().lumping, WaveLumping::Cell);
+    let again = Scene::from_toml_str(&scene.to_toml_string()).unwrap();
+    assert_eq!(again, scene);
+    let chain = Chain::<f64, 2>::from_scene(&scene).unwrap();
+    let field = chain.waves().expect("waves");
+    let sea: &Sea = field.sea();
+    let (l, m) = (&scene.beam.lengths, &scene.beam.masses);
+    let n = scene.n();
+    let y: Vec<f64> = (1..=n).map(|k| l[..k].iter().sum()).collect();
+    let mean_velocity = |k: usize, t: f64| {
+        let (a, b) = (
+            y[k] - 0.5 * l[k],
+            y[k] + 0.5 * l.get(k + 1).copied().unwrap_or(0.0),
+        );
+        gauss(&|z| sea.velocity(z, t), a, b) / 1.0
+    };
+    let mut scale = 0.0f64;
+    let mut err = 0.0f64;
+    for step in (0..=scene.time.steps).step_by(23) {
+        let t = step as f64 * scene.time.step;
+        for i in [0, 4, n - 1] {
+            let w: f64 = l[i] * (i..n).map(|k| m[k] * mean_velocity(k, t)).sum::<f64>();
+            scale = scale.max(w.abs());
+            err = err.max((field.momentum(i, t) - w).abs());
+        }
+    }
+    assert!(scale > 0.0);
+    assert!(err < 1e-10 * scale, "W: {err:e} of {scale:e}");
+    // Node lumping is the default and differs (the profile is convex in y).
+    let node = Scene::from_toml_str(&wave_scene("components = 300", 1e-6)).unwrap();
+    let node_chain = Chain::<f64, 2>::from_scene(&node).unwrap();
+    let nf = node_chain.waves().unwrap();
+    assert!((nf.momentum(n - 1, 3.0) - field.momentum(n - 1, 3.0)).abs() > 1e-9 * scale);
 }

@@ -137,6 +137,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 * pipe.outer_area(),
             direction: w.unit_direction(),
             rows: t.steps + 1,
+            cell_average: w.lumping == crate::scene::WaveLumping::Cell,
         };
         let field = WaveField::new(std::sync::Arc::new(sea), inputs).map_err(err)?;
         Ok(Some(std::sync::Arc::new(field)))

@@ -78,6 +78,20 @@ pub fn depth_profile(k: f64, y: f64, depth: f64) -> f64 {
     (libm::exp(k * (y - depth)) + libm::exp(-k * (y + depth))) / -libm::expm1(-2.0 * k * depth)
 }
 
+/// The mean of [`depth_profile`] over the heights [y₀, y₁] (0 ≤ y₀ < y₁):
+/// (1/(y₁ − y₀)) ∫ cosh(k y)/sinh(k d) dy = (S(y₁') − S(y₀'))/(k (y₁ − y₀)) with
+/// S(y) = sinh(k y)/sinh(k d) = (e^{k(y−d)} − e^{−k(y+d)}) / (1 − e^{−2kd}) and y' = min(y, d),
+/// plus the surface's profile over the part above d (clamped, as [`depth_profile`]). The
+/// velocity of a node's cell averaged exactly (`[loads.waves] lumping = "cell"`).
+pub fn cell_profile(k: f64, (y0, y1): (f64, f64), depth: f64) -> f64 {
+    let s = |y: f64| {
+        let y = y.clamp(0.0, depth);
+        (libm::exp(k * (y - depth)) - libm::exp(-k * (y + depth))) / -libm::expm1(-2.0 * k * depth)
+    };
+    let above = (y1 - y0.max(depth)).max(0.0) * depth_profile(k, depth, depth);
+    ((s(y1) - s(y0)) / k + above) / (y1 - y0)
+}
+
 /// A realisation of a sea state on the time grid tₖ = k h (module docs).
 #[derive(Clone, Debug)]
 pub struct Sea {
@@ -355,6 +369,16 @@ impl Sea {
         for (j, o) in out.iter_mut().enumerate().take(self.omega.len()) {
             let w = self.omega[j];
             *o = self.phasor[j] * (w * depth_profile(self.k[j], y, self.spec.depth));
+        }
+    }
+
+    /// The complex amplitudes of the horizontal particle velocity averaged over the heights
+    /// [y₀, y₁]: ωⱼ aⱼ e^{iφⱼ} times [`cell_profile`] of kⱼ over (y₀, y₁) in depth d, the mean
+    /// of [`Sea::velocity_amplitudes`] over the interval, exactly.
+    pub fn cell_velocity_amplitudes(&self, cell: (f64, f64), out: &mut [Complex<f64>]) {
+        for (j, o) in out.iter_mut().enumerate().take(self.omega.len()) {
+            let w = self.omega[j];
+            *o = self.phasor[j] * (w * cell_profile(self.k[j], cell, self.spec.depth));
         }
     }
 

@@ -50,7 +50,7 @@ pub use validate::{
     MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, trajectory_bytes};
-pub use waves::{sea_error, WaveSpectrum, Waves, DEFAULT_GAMMA};
+pub use waves::{sea_error, WaveLumping, WaveSpectrum, Waves, DEFAULT_GAMMA};
 
 use raw::RawScene;
 

@@ -22,6 +22,21 @@ pub enum WaveSpectrum {
     PiersonMoskowitz,
 }
 
+/// How the waves' kinematics are lumped onto the nodes (`[loads.waves] lumping`,
+/// docs/conventions.md "Waves on the chain").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WaveLumping {
+    /// `"node"` (default): the Airy velocity at the node's height y_k.
+    #[default]
+    Node,
+    /// `"cell"`: the Airy velocity averaged exactly over the node's cell
+    /// [y_k − l_k/2, y_k + l_{k+1}/2] (the half cell [y_n − l_n/2, y_n] at the tip), the cell of
+    /// its lumped mass ([`crate::ocean::cell_profile`]): the distributed Morison loads
+    /// integrated over each cell instead of sampled at its node.
+    Cell,
+}
+
 /// An irregular sea state (`[loads.waves]`, OCEAN.md §2): a spectrum given by H_s and T_p, a
 /// mean direction and a seeded realisation. The water depth is `[water] depth`
 /// ([`Scene::wave_depth`]).
@@ -44,6 +59,8 @@ pub struct Waves {
     /// Number of components N (`None`: enough that the sea repeats only after
     /// max(3 h, the simulated duration)).
     pub components: Option<usize>,
+    /// How the kinematics are lumped onto the nodes (default [`WaveLumping::Node`]).
+    pub lumping: WaveLumping,
 }
 
 impl Waves {
@@ -57,6 +74,7 @@ impl Waves {
             seed: 0,
             direction: 0.0,
             components: None,
+            lumping: WaveLumping::Node,
         }
     }
 
@@ -184,6 +202,12 @@ pub(super) struct RawWaves {
     direction: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     components: Option<i64>,
+    #[serde(default, skip_serializing_if = "is_node")]
+    lumping: WaveLumping,
+}
+
+fn is_node(l: &WaveLumping) -> bool {
+    *l == WaveLumping::Node
 }
 
 fn is_positive_zero(x: &f64) -> bool {
@@ -200,6 +224,7 @@ impl RawWaves {
             seed: i64::try_from(w.seed).unwrap_or(i64::MAX),
             direction: w.direction,
             components: w.components.map(|c| i64::try_from(c).unwrap_or(i64::MAX)),
+            lumping: w.lumping,
         }
     }
 
@@ -235,6 +260,7 @@ impl RawWaves {
             seed,
             direction: self.direction,
             components,
+            lumping: self.lumping,
         })
     }
 }

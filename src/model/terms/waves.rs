@@ -43,6 +43,10 @@ pub struct WaveInputs {
     pub direction: [f64; 2],
     /// Number of grid times tₖ = k h, k = 0..rows, of the record (steps + 1).
     pub rows: usize,
+    /// The velocity of node k averaged over its cell [y_k − l_k/2, y_k + l_{k+1}/2]
+    /// ([`crate::ocean::Sea::cell_velocity_amplitudes`]) instead of taken at y_k
+    /// (`[loads.waves] lumping = "cell"`).
+    pub cell_average: bool,
 }
 
 /// The wave kinematics of a chain over a record (module docs): Wᵢ(tₖ), Gᵢ(tₖ) and the surface
@@ -85,8 +89,16 @@ impl WaveField {
         let (mut sm, mut si, mut v) = (vec![zero; nc], vec![zero; nc], vec![zero; nc]);
         let omega = sea.frequencies();
         for i in (0..n).rev() {
-            sea.velocity_amplitudes(heights[i], &mut v);
             let next = inputs.lengths.get(i + 1).copied().unwrap_or(0.0);
+            if inputs.cell_average {
+                let cell = (
+                    heights[i] - 0.5 * inputs.lengths[i],
+                    heights[i] + 0.5 * next,
+                );
+                sea.cell_velocity_amplitudes(cell, &mut v);
+            } else {
+                sea.velocity_amplitudes(heights[i], &mut v);
+            }
             let cell = 0.5 * (inputs.lengths[i] + next) * inputs.inertia_per_length;
             let l = inputs.lengths[i];
             for j in 0..nc {

@@ -16,7 +16,10 @@
 //!   everything else to the springs. The ratio is what the override saves the adjoint, which
 //!   calls K·v twice per reverse step.
 //! - `joint_damping`: one planar `f64` step of the cantilever with a joint damper beside every
-//!   spring (c = 0.01 s · k), n = 20, 80, 320: the coupled half step's band solve.
+//!   spring (c = 0.01 s · k), n = 20, 80, 320: the coupled half step's band solve. Measured
+//!   (load ≈ 15 on 2 cores, back-to-back): 22 µs, 100 µs, 129 µs; the dense LU it replaced took
+//!   104 µs, 4.1 ms, 31 ms (h shrinks like 1/n², so the rows need not take the same Newton
+//!   iterations per step).
 //!
 //! The step benchmarks first advance the straight beam by [`PRE_STEPS`] steps so the state is
 //! bent and the Newton predictor is the multiplier of a real previous step, then keep stepping the

@@ -388,8 +388,29 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             *a = std::array::from_fn(|d| p[d] - f[d] * hh);
         }
         let (zeta_next, v_half) = self.tip_half_kick(state, u_k);
-        let stats = self.solve_positions(state, k, zeta_next)?;
-        self.second_half(state, k, u_k1, v_half, zeta_next)?;
+        if self.ws.coupled.is_some() {
+            return self.coupled_halves(state, (k, u_k1), (v_half, zeta_next));
+        }
+        let stats = self.solve_positions::<false>(state, k, zeta_next)?;
+        self.second_half::<false>(state, k, u_k1, v_half, zeta_next)?;
+        Ok(stats)
+    }
+
+    /// The two halves of [`Rattle::step`] for a model with coupled dissipative terms (the joint
+    /// damping, `steppers/coupled.rs`), out of line: the block path above is the instance
+    /// `COUPLED = false` of the same code without any of the coupled path, so that it compiles
+    /// to what it was before the coupled terms existed (inlined, the coupled path's code made
+    /// `step` too large for LLVM to keep the current drag's force inlined in it: 10 % more
+    /// instructions per step on `step_current`, docs/architecture.md "Benches").
+    #[inline(never)]
+    fn coupled_halves(
+        &mut self,
+        state: &mut State<D, DIM>,
+        (k, u_k1): (usize, D),
+        (v_half, zeta_next): (D, D),
+    ) -> Result<StepStats> {
+        let stats = self.solve_positions::<true>(state, k, zeta_next)?;
+        self.second_half::<true>(state, k, u_k1, v_half, zeta_next)?;
         Ok(stats)
     }
 
@@ -416,8 +437,9 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     }
 
     /// Newton for λ (predictor μ_{k−1}) on ĝ(q_{k+1}(λ)) = 0; leaves q_{k+1} in `state.q`, λ in
-    /// `state.lambda` and p_{k+½}, W in the workspace.
-    fn solve_positions(
+    /// `state.lambda` and p_{k+½}, W in the workspace. `COUPLED`: whether the model's coupled
+    /// dissipative terms are read (the workspace has them exactly when the model does).
+    fn solve_positions<const COUPLED: bool>(
         &mut self,
         state: &mut State<D, DIM>,
         k: usize,
@@ -437,7 +459,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
             let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
-            match &mut ws.coupled {
+            match ws.coupled.as_mut().filter(|_| COUPLED) {
                 None => {
                     half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), (h, &dctx), &mut ws.half)
                 }
@@ -477,7 +499,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             if iterations >= self.options.max_iterations && extra_done == 0 {
                 return Err(self.not_converged(k, rmax, iterations));
             }
-            if let Some(cpl) = &mut ws.coupled {
+            if let Some(cpl) = ws.coupled.as_mut().filter(|_| COUPLED) {
                 // The coupled path (steppers::coupled): J's band system with its derivative parts.
                 cpl.factor_newton(ch, (&state.q, &ws.qnew), h)
                     .map_err(|zp| singular(k, zp))?;
@@ -516,8 +538,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     }
 
     /// Second half-step: force at q_{k+1} with u_{k+1} (cached for the next step), then the
-    /// projection for (p_{k+1}, μ_k).
-    fn second_half(
+    /// projection for (p_{k+1}, μ_k); `COUPLED` as in [`Rattle::solve_positions`].
+    fn second_half<const COUPLED: bool>(
         &mut self,
         state: &mut State<D, DIM>,
         k: usize,
@@ -542,7 +564,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 ws.a[i][d] = b;
             }
         }
-        if let Some(cpl) = &mut ws.coupled {
+        if let Some(cpl) = ws.coupled.as_mut().filter(|_| COUPLED) {
             // The coupled terms at (q_{k+1}, p_{k+½}) (steppers::coupled).
             let f = cpl.coupled_force(ch, &state.q, &ws.half.phalf, &dctx);
             for (a, f) in ws.a.iter_mut().zip(f) {

@@ -2,7 +2,8 @@
 //! O((n·DIM)³) dense LU this crate shipped first, which assembles A and J column by column):
 //! random damped scenes, planar and spatial, every tip condition, n up to 40, with and without
 //! a drag in a current; each solve to 1e-12 relative, and whole RATTLE trajectories (f64, and
-//! Dual64 with the dampers' value seeded) to 1e-12.
+//! Dual64 with the dampers' value seeded) to 1e-12. And the adjoint through the band solves with
+//! the tip constraints (locked, reaction force) = Dual64 to 1e-12.
 
 use super::dense::DenseHalf;
 use super::{CoupledHalf, DENSE_REFERENCE};
@@ -334,4 +335,94 @@ fn dual_equal<const DIM: usize>(case: Case) {
         "the dampers' derivative is exercised ({scale})"
     );
     assert!(e <= 1e-12, "{case:?}: derivative parts {e:.1e}");
+}
+
+/// The adjoint's reverse step through the band solves (Wᵀ = A⁻ᵀ, Jᵀ by the transposed augmented
+/// system, bordered by the tip) with the tips tests/terms.rs does not cover: a locked tip and the
+/// reaction-force tip (fixed-fixed, so that M₀ = 2k₁z₁/l₁² is not zero), planar and spatial, dampers beside a drag in a current. The gradient of
+/// J = Σ M₀² along a direction of the per-step controls and with respect to the dampers' value
+/// and the mass = forward-mode Dual64 of the same discrete map to 1e-12 relative.
+#[test]
+fn adjoint_with_tip_constraints_equals_dual_numbers() {
+    for (support, reaction) in [(Support::FixedFixed, false), (Support::FixedFixed, true)] {
+        adjoint_equals_dual::<2>(support, reaction);
+        adjoint_equals_dual::<3>(support, reaction);
+    }
+}
+
+fn adjoint_equals_dual<const DIM: usize>(support: Support, reaction: bool) {
+    use crate::adjoint::{adjoint_gradient, forward_value};
+    use crate::{BendingObjective, Checkpointing};
+    let (n, steps) = (12, 60);
+    let node = if reaction { n } else { n / 2 };
+    let dir = if DIM == 3 { [0.6, 0.8] } else { [0.0, 1.0] };
+    let sc = SceneBuilder::new(n)
+        .support(support)
+        .reaction_force(reaction)
+        .length(0.8)
+        .mass(0.7)
+        .stiffness(800.0)
+        .joint_damping(4.0)
+        .drag(3.0)
+        .current(Current::linear(0.8, 0.3, dir))
+        .point_load(n / 3, 5.0)
+        .control_per_step(node, vec![0.0; steps + 1])
+        .step(0.004)
+        .steps(steps)
+        .build()
+        .unwrap();
+    let h = sc.time.step;
+    let chain = Chain::<f64, DIM>::from_scene(&sc).unwrap();
+    assert!(chain.has_tip_constraint());
+    let u: Vec<f64> = (0..=steps)
+        .map(|k| -4.0 + 3.0 * (0.37 * k as f64).sin())
+        .collect();
+    let obj = BendingObjective::summed_moment();
+    let params = [
+        (Parameter::JointDamping, 4.0),
+        (Parameter::Mass, chain.masses()[0]),
+    ];
+    let ps: Vec<Parameter> = params.iter().map(|p| p.0).collect();
+    let adj = adjoint_gradient(&chain, h, steps, &u, &obj, &ps, Checkpointing::default()).unwrap();
+    let what = format!("DIM {DIM} {support:?} reaction {reaction}");
+    let dir: Vec<f64> = (0..=steps).map(|k| (1.3 * k as f64).cos()).collect();
+    let g_adj: f64 = adj
+        .control_gradient
+        .iter()
+        .zip(&dir)
+        .map(|(g, d)| g * d)
+        .sum();
+    let ud: Vec<Dual64> = u
+        .iter()
+        .zip(&dir)
+        .map(|(&x, &d)| Dual64::new(x, d))
+        .collect();
+    let g_fwd = forward_value(&chain.lift::<Dual64>(), h, steps, &ud, &obj)
+        .unwrap()
+        .eps;
+    println!(
+        "{what}: dJ/du·d {g_fwd:.6e}, adjoint {:.1e} relative",
+        ((g_adj - g_fwd) / g_fwd).abs()
+    );
+    assert!(g_fwd.abs() > 1e-8, "{what}: exercised");
+    assert!(
+        (g_adj - g_fwd).abs() <= 1e-12 * g_fwd.abs(),
+        "{what}: controls"
+    );
+    let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
+    for (i, &(p, at)) in params.iter().enumerate() {
+        let mut ch = chain.lift::<Dual64>();
+        ch.set_parameter(p, Dual64::new(at, 1.0)).unwrap();
+        let fwd = forward_value(&ch, h, steps, &ud, &obj).unwrap().eps;
+        let a = adj.parameter_gradient[i];
+        println!(
+            "{what}: dJ/d{p:?} {fwd:.6e}, adjoint {:.1e} relative",
+            ((a - fwd) / fwd).abs()
+        );
+        assert!(fwd.abs() > 1e-10, "{what}: {p:?} exercised");
+        assert!(
+            (a - fwd).abs() <= 1e-12 * fwd.abs(),
+            "{what}: {p:?} {a} vs {fwd}"
+        );
+    }
 }

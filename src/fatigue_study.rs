@@ -17,13 +17,35 @@
 //! - `none`: the scene with its `[control]` removed, by `simulate` (spatial scenes too).
 //! - `constant`, `pd`, `mpc`: [`crate::mpc`]'s closed loop on the (planar) plant of the cell's
 //!   scene, one decision every [`ControlSettings::interval`] seconds: the best constant force
-//!   ([`ConstantForce::best`], an offline optimum of the cell's record that knows its future),
-//!   a PD law on the measured M₀ with gains tuned on the cell's record ([`PdLaw::tune`]; on its
-//!   first [`ControlSettings::pd_training`] seconds, or [`ControlSettings::pd_gains`] given:
-//!   [`pd_law`]) and the receding-horizon controller ([`Mpc`], a perfect model of the loads,
-//!   on the plant's chain or a reduced planning model of it, [`MpcOptions::plan_pendulums`]). All three minimise the thesis's
-//!   Σ M₀² + ρ h Σ u² (eq. 3.3.4), the smooth stand-in of the damage; the damage reported is
-//!   the rainflow damage of the moment they leave.
+//!   ([`ConstantForce::best`], an offline optimum of the cell's record that knows its future:
+//!   min Σ M₀² + ρ h Σ u², which cancels the mean moment), a PD law on the measured M₀ with
+//!   gains tuned on the cell's record ([`pd_law`]; on its first
+//!   [`ControlSettings::pd_training`] seconds, or [`ControlSettings::pd_gains`] given) and the
+//!   receding-horizon controller ([`Mpc`], a perfect model of the loads, on the plant's chain or
+//!   a reduced planning model of it, [`MpcOptions::plan_pendulums`]).
+//! - The PD law is tuned in scaled, bounded parameters ([`pd`]): its bias about the force that
+//!   cancels the static moment, its gains as loop gains e^{x} in units of the static gain
+//!   k_u = ∂M₀/∂u (and 1/ω_p for K_d), x in a box, so the tuning cannot end at reversed
+//!   (destabilising) or unbounded gains; it minimises the closed loop's Σ M₀² + ρ h Σ u².
+//! - MPC plans on the fatigue proxy Σ|M₀(t_k)|^m (+ ρ h Σ u²), m the S-N curve's first slope
+//!   ([`fatigue_proxy`]; [`ControlSettings::mpc_fatigue_proxy`], else
+//!   [`MpcOptions::objective`]): "MPC plans on the proxy, reports the real damage" (issue 31
+//!   item 5; the rainflow damage itself has no Gauss-Newton form).
+//!
+//! Every damage reported is the rainflow damage of the moment the controller leaves.
+//!
+//! # The start of a record
+//! Every run starts from the straight riser at rest, with the current and the sea switched on
+//! at t = 0 (the plant of [`crate::mpc`], like `simulate`): the riser swings out to its offset
+//! in the current, a start-up whose one large half cycle a short record would count as
+//! fatigue. The first [`ControlSettings::spin_up`] seconds of every record are therefore left
+//! out of the count (its damage and its duration T_s): the record of a cell runs spin-up + T_s
+//! seconds (the controllers act, and MPC and the constant force plan, over all of it). The
+//! spin-up must outlast the start-up transient: measured on `riser_300m` (docs/cli.md,
+//! `fatigue`, "The start of a record"). Starting instead from the static equilibrium in the
+//! current ([`crate::statics`]) would remove the current's part but not the sea's (the waves
+//! start at t = 0 on a riser at rest, which then takes the riser's first periods to settle),
+//! so a window is needed either way.
 //!
 //! A control that cannot act is refused before any run ([`StudyError::ControlCannotAct`]): a
 //! force at the tip of a beam whose supports lock it (fixed-fixed, pinned-pinned without the
@@ -51,15 +73,17 @@ use thiserror::Error;
 use crate::error::Requirement;
 use crate::fatigue::{
     assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
-    ScatterCell, SeaState,
+    ScatterCell, SeaState, WellheadDamage,
 };
 use crate::mpc::{
     interval_steps, run_closed_loop, ConstantForce, Controller, Mpc, MpcError, MpcOptions, PdLaw,
     PdTuning,
 };
-use crate::optimize::OptimOptions;
-use crate::scene::{Scene, Support};
+use crate::optimize::{minimize, Bounds, OptimOptions};
+use crate::scene::{ObjectiveKind, Scene, Support};
 use crate::simulate::moment_history;
+
+pub mod pd;
 
 /// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
 /// each cell is a simulation per controller).
@@ -190,6 +214,17 @@ pub enum StudyError {
         /// Why.
         reason: String,
     },
+    /// A spin-up window that is negative, not finite, or not shorter than the record.
+    #[error(
+        "spin_up = {spin_up} s: the window not counted must be finite, ≥ 0 and shorter than the \
+         record ({duration_s} s)"
+    )]
+    SpinUp {
+        /// The window given \[s\].
+        spin_up: f64,
+        /// The record's duration N h \[s\].
+        duration_s: f64,
+    },
     /// A run failed (a RATTLE step, a solve, settings that do not fit the scene).
     #[error("controller `{controller}`, cell {cell}: {source}")]
     Run {
@@ -221,6 +256,14 @@ pub struct ControlSettings {
     /// Given PD gains (u_b \[N\], K_p \[N/(N·m)\], K_d \[N·s/(N·m)\]) used in every cell
     /// instead of tuning them (a fixed design). Default `None`: tuned per cell.
     pub pd_gains: Option<[f64; 3]>,
+    /// The spin-up window \[s\] not counted (module docs, "The start of a record"): every
+    /// record's first `spin_up` seconds (rounded up to whole steps) are left out of the rainflow
+    /// count, its damage and its duration. Default 0 (everything counted).
+    pub spin_up: f64,
+    /// MPC plans on the fatigue proxy Σ|M₀(t_k)|^m, m the S-N curve's first slope
+    /// ([`ObjectiveKind::Power`], module docs "The controllers"), instead of
+    /// [`MpcOptions::objective`]. Default `true`.
+    pub mpc_fatigue_proxy: bool,
 }
 
 impl Default for ControlSettings {
@@ -231,6 +274,8 @@ impl Default for ControlSettings {
             pd_max_iters: 200,
             pd_training: None,
             pd_gains: None,
+            spin_up: 0.0,
+            mpc_fatigue_proxy: true,
         }
     }
 }
@@ -420,11 +465,12 @@ pub fn run_controller(
 }
 
 /// The PD law of a cell ([`ControlSettings::pd_gains`], or tuned on the first
-/// [`ControlSettings::pd_training`] seconds of `scene`'s record from zero gains).
+/// [`ControlSettings::pd_training`] seconds of `scene`'s record in the scaled, bounded
+/// parameters of [`pd::ScaledPdTuning`] from [`pd::PD_START`]: positive loop gains only).
 ///
 /// # Errors
-/// The tuning's errors ([`PdTuning::new`], [`PdLaw::tune`]); [`crate::error::ValueError`] naming
-/// `pd_training` for a window that is not positive.
+/// The tuning's errors ([`PdTuning::new`], [`pd::PdScales::of`], [`minimize`]);
+/// [`crate::error::ValueError`] naming `pd_training` for a window that is not positive.
 pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw> {
     let (interval, bound, effort) = (settings.interval, settings.bound(), settings.mpc.effort);
     if let Some([bias, kp, kd]) = settings.pd_gains {
@@ -444,13 +490,24 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
         let intervals = ((seconds / interval).round() as usize).max(1);
         training.time.steps = (intervals * m).min(scene.time.steps);
     }
-    let tuning = PdTuning::new(&training, interval, bound, effort)?;
+    let scaled = pd::ScaledPdTuning {
+        tuning: PdTuning::new(&training, interval, bound, effort)?,
+        scales: pd::PdScales::of(&training, bound)?,
+    };
     let opts = OptimOptions {
         max_iters: settings.pd_max_iters,
-        first_step: 0.01,
+        first_step: 0.1,
+        bounds: Some(Bounds::symmetric(pd::PD_BOX)?),
         ..OptimOptions::default()
     };
-    Ok(PdLaw::tune(&tuning, [0.0; 3], &opts)?.0)
+    let r = minimize(&scaled, &pd::PD_START, &opts)?;
+    let [bias, kp, kd] = scaled.scales.gains(&r.theta);
+    Ok(PdLaw {
+        bias,
+        kp,
+        kd,
+        bound,
+    })
 }
 
 /// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when
@@ -508,20 +565,25 @@ fn run_cell(
         cell,
         source: Box::new(source),
     };
+    let mut settings = input.settings.clone();
+    if kind == ControllerKind::Mpc && settings.mpc_fatigue_proxy {
+        settings.mpc.objective = fatigue_proxy(input.spec, input.scene)?;
+    }
     let record = match input.cells {
         Some(cells) => {
             let scene = with_sea_state(input.scene, &cells[cell].sea, cell)?;
-            run_controller(&scene, kind, input.settings)
+            run_controller(&scene, kind, &settings)
         }
-        None => run_controller(input.scene, kind, input.settings),
+        None => run_controller(input.scene, kind, &settings),
     }
     .map_err(run_err)?;
+    let skip = spin_up_steps(input.scene, input.settings.spin_up)?;
     let a = assess(
         input.spec,
         MomentHistory {
-            duration_s: record.duration_s,
-            moment: &record.moment,
-            moment_x: record.moment_x.as_deref(),
+            duration_s: record.duration_s - skip as f64 * input.scene.time.step,
+            moment: &record.moment[skip..],
+            moment_x: record.moment_x.as_deref().map(|m| &m[skip..]),
             measure: input.scene.moment_measure(),
         },
     )?;
@@ -535,6 +597,35 @@ fn run_cell(
         force: record.force,
         gains: record.gains,
     })
+}
+
+/// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of
+/// `spec`'s S-N curve ([`WellheadDamage::exponent`]; m = 3 for the DNV curves C–W3, 4 for B1
+/// and B2).
+///
+/// # Errors
+/// The spec's [`FatigueError`].
+pub fn fatigue_proxy(spec: &FatigueSpec, scene: &Scene) -> Result<ObjectiveKind, StudyError> {
+    let exponent = WellheadDamage::new(spec, scene.moment_measure())?.exponent();
+    Ok(ObjectiveKind::Power { exponent })
+}
+
+/// The steps of the spin-up window: ⌈spin_up/h⌉ (module docs, "The start of a record").
+///
+/// # Errors
+/// [`StudyError::SpinUp`] for a window that is not finite and ≥ 0, or that leaves fewer than
+/// two samples of the record.
+pub fn spin_up_steps(scene: &Scene, spin_up: f64) -> Result<usize, StudyError> {
+    let h = scene.time.step;
+    let duration_s = h * scene.time.steps as f64;
+    let steps = (spin_up / h * (1.0 - 1e-12)).ceil();
+    if !(spin_up.is_finite() && spin_up >= 0.0) || steps >= scene.time.steps as f64 {
+        return Err(StudyError::SpinUp {
+            spin_up,
+            duration_s,
+        });
+    }
+    Ok(steps as usize)
 }
 
 /// What a study keeps of one (cell, controller) run (not the record: a diagram of 30 cells of
@@ -557,6 +648,7 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
         return Err(StudyError::NoControllers);
     }
     input.spec.validate()?;
+    spin_up_steps(input.scene, input.settings.spin_up)?;
     for &kind in input.controllers {
         check_control_can_act(input.scene, kind)?;
     }

@@ -382,3 +382,51 @@ fn scatter_refusals() {
         "{stderr}"
     );
 }
+
+/// The scene's `[mpc]` table sets the controllers' settings, a flag overrides its key, an
+/// invalid key is refused naming `mpc.KEY`; `--spin-up` leaves the record's start out of the
+/// count (its duration in every cell) and is refused when it is not shorter than the record.
+#[test]
+fn the_mpc_table_flags_and_spin_up() {
+    let dir = tempfile::tempdir().unwrap();
+    let table = "\n[mpc]\nhorizon = 0.5\nbound = 3.0\ninterval = 0.1\nobjective = \"sum\"\n";
+    fs::write(dir.path().join("s.toml"), scene("riser") + table).unwrap();
+    let args = ["fatigue", "s.toml", "--controller", "mpc"];
+    let (code, out, stderr) = run(dir.path(), &args);
+    assert_eq!(code, 0, "{stderr}");
+    let v = json(&out);
+    assert_eq!(num(&v["settings"]["horizon"]), 0.5);
+    assert_eq!(num(&v["settings"]["bound"]), 3.0);
+    assert_eq!(v["settings"]["mpc_objective"].as_str(), Some("sum"));
+    assert_eq!(num(&v["settings"]["spin_up"]), 0.0);
+    let flags = [&args[..], &["--horizon", "0.3", "--spin-up", "1.5"]].concat();
+    let (code, out, stderr) = run(dir.path(), &flags);
+    assert_eq!(code, 0, "{stderr}");
+    let w = json(&out);
+    assert_eq!(num(&w["settings"]["horizon"]), 0.3);
+    assert_eq!(num(&w["settings"]["bound"]), 3.0);
+    for name in ["none", "mpc"] {
+        // 4 s recorded, the first 1.5 s not counted.
+        let cell = &w["controllers"][name]["cells"][0];
+        assert!((num(&cell["duration_s"]) - 2.5).abs() < 1e-12, "{cell}");
+    }
+    // The same flag on the plain run: the same record, the same count.
+    let (code, plain, stderr) = run(dir.path(), &["fatigue", "s.toml", "--spin-up", "1.5"]);
+    assert_eq!(code, 0, "{stderr}");
+    let plain = json(&plain);
+    assert_eq!(
+        num(&plain["damage"]),
+        num(&w["controllers"]["none"]["cells"][0]["damage"])
+    );
+    let (code, _, stderr) = run(dir.path(), &["fatigue", "s.toml", "--spin-up", "4"]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("--spin-up"), "{stderr}");
+    fs::write(
+        dir.path().join("bad.toml"),
+        scene("riser") + "\n[mpc]\nhorizon = -1.0\n",
+    )
+    .unwrap();
+    let (code, _, stderr) = run(dir.path(), &["fatigue", "bad.toml", "--controller", "mpc"]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("mpc.horizon"), "{stderr}");
+}

@@ -95,6 +95,7 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
         "fatigue",
         &[("outer_diameter", "0.5"), ("wall_thickness", "0.025")],
     ),
+    ("mpc", &[("interval", "0.1")]),
 ];
 
 /// The scene of [`SECTIONS`] with `set` = (table, key, value): the key's value replaced, or the
@@ -186,7 +187,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 67, "number of documented keys");
+    assert_eq!(checked, 76, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -243,6 +244,15 @@ fn every_documented_key_is_read() {
         ("fatigue", "thickness_exponent", "0.1"),
         ("fatigue", "reference_thickness", "0.032"),
         ("fatigue", "dff", "3.0"),
+        ("mpc", "interval", "0.2"),
+        ("mpc", "horizon", "5.0"),
+        ("mpc", "iterations", "2"),
+        ("mpc", "bound", "10.0"),
+        ("mpc", "effort", "0.5"),
+        ("mpc", "plan_pendulums", "3"),
+        ("mpc", "plan_step", "0.02"),
+        ("mpc", "pd_training", "1.0"),
+        ("mpc", "objective", "\"sum\""),
     ];
     let doc = documented();
     let mut seen = BTreeSet::new();

@@ -282,6 +282,7 @@ impl SceneBuilder {
             control: self.control,
             objective: self.objective,
             fatigue: None,
+            mpc: None,
         };
         scene.validate()?;
         Ok(scene)

@@ -20,6 +20,7 @@ mod builder;
 mod current;
 mod error;
 mod fatigue;
+mod mpc;
 mod input;
 mod objective;
 mod pipe;
@@ -42,6 +43,7 @@ pub use error::{SceneError, SceneErrorKind};
 pub use input::{
     read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
+pub use mpc::{MpcPlanObjective, MpcTable};
 pub use pipe::{Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use validate::{
@@ -322,6 +324,9 @@ pub struct Scene {
     pub objective: Option<ObjectiveKind>,
     /// Optional `[fatigue]` table: the wellhead's section and S-N curve (`chainbeam fatigue`).
     pub fatigue: Option<crate::fatigue::FatigueSpec>,
+    /// Optional `[mpc]` table: the closed-loop controllers' settings (`chainbeam fatigue`'s
+    /// flags, which override it).
+    pub mpc: Option<MpcTable>,
 }
 
 impl Scene {

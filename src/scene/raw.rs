@@ -49,6 +49,8 @@ pub(super) struct RawScene {
     objective: Option<RawObjective>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     fatigue: Option<RawFatigue>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mpc: Option<super::mpc::RawMpc>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -352,6 +354,7 @@ impl RawScene {
             }),
             objective: s.objective.map(RawObjective::from_kind),
             fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
+            mpc: s.mpc.as_ref().map(super::mpc::RawMpc::from_table),
         }
     }
 
@@ -441,6 +444,7 @@ impl RawScene {
             control,
             objective,
             fatigue,
+            mpc: self.mpc.map(super::mpc::RawMpc::into_table).transpose()?,
         })
     }
 }

@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use chainbeam::fatigue::{assess, Assessment, FatigueSpec, MomentHistory};
 use chainbeam::scene::read_text_file;
+use chainbeam::fatigue_study::spin_up_steps;
 use chainbeam::{moment_history, Scene};
 
 mod study;
@@ -51,7 +52,12 @@ scene (or every cell) in the closed loop of `chainbeam mpc` (--interval, --horiz
 --bound, --effort as there): constant = the best constant force of the record, pd = a PD law on \
 M₀ with tuned gains, mpc = receding horizon. JSON: controllers.NAME.{damage_per_year, \
 life_years, cells} and life_extension.NAME = its life over the life without control. A control \
-at a node the supports lock is refused.
+at a node the supports lock is refused. The controllers' flags default to the scene's [mpc] \
+table (docs/scene-format.md); mpc plans on Σ|M₀|^m, m the S-N curve's first slope \
+(--mpc-objective).
+
+--spin-up S: the first S seconds of every record (the start-up from the riser at rest, with the \
+current and the sea switched on at t = 0) are not counted.
 
 --scatter FILE: a CSV with header hs,tp,probability[,direction]; every cell sets the scene's \
 [loads.waves] hs, tp (direction) and keeps its seed (the same phases in every cell). JSON: \
@@ -75,33 +81,54 @@ pub struct FatigueArgs {
     /// [loads.waves] sea state is run for every cell.
     #[arg(long, value_name = "FILE", conflicts_with = "series")]
     pub scatter: Option<PathBuf>,
-    /// Control interval [s] of the constant, pd and mpc controllers.
-    #[arg(long, value_name = "S", default_value_t = 0.1)]
-    pub interval: f64,
-    /// MPC's horizon [s], a whole number of intervals.
-    #[arg(long, value_name = "S", default_value_t = 3.0)]
-    pub horizon: f64,
-    /// MPC's Gauss-Newton iterations per re-plan.
-    #[arg(long, value_name = "K", default_value_t = 1)]
-    pub iterations: usize,
-    /// Force bound |u| ≤ U [N] of the constant, pd and mpc controllers.
-    #[arg(long, value_name = "U", default_value_t = 5.0)]
-    pub bound: f64,
-    /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise.
-    #[arg(long, value_name = "RHO", default_value_t = 0.01)]
-    pub effort: f64,
-    /// MPC plans on a reduced model: the scene's [pipe] with N pendulums (see `mpc`).
+    /// Control interval [s] of the constant, pd and mpc controllers [default: the scene's
+    /// mpc.interval, else 0.1].
+    #[arg(long, value_name = "S")]
+    pub interval: Option<f64>,
+    /// MPC's horizon [s], a whole number of intervals [default: mpc.horizon, else 3].
+    #[arg(long, value_name = "S")]
+    pub horizon: Option<f64>,
+    /// MPC's Gauss-Newton iterations per re-plan [default: mpc.iterations, else 1].
+    #[arg(long, value_name = "K")]
+    pub iterations: Option<usize>,
+    /// Force bound |u| ≤ U [N] of the constant, pd and mpc controllers [default: mpc.bound,
+    /// else 5].
+    #[arg(long, value_name = "U")]
+    pub bound: Option<f64>,
+    /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise [default: mpc.effort,
+    /// else 0.01].
+    #[arg(long, value_name = "RHO")]
+    pub effort: Option<f64>,
+    /// MPC plans on a reduced model: the scene's [pipe] with N pendulums (see `mpc`)
+    /// [default: mpc.plan_pendulums, else off].
     #[arg(long, value_name = "N")]
     pub plan_pendulums: Option<usize>,
-    /// The step [s] of MPC's reduced planning model (see `mpc`).
+    /// The step [s] of MPC's reduced planning model (see `mpc`) [default: mpc.plan_step].
     #[arg(long, value_name = "S")]
     pub plan_step: Option<f64>,
-    /// Tune the PD law's gains on the first S seconds of each cell's record (default: all of
-    /// it).
+    /// Tune the PD law's gains on the first S seconds of each cell's record [default:
+    /// mpc.pd_training, else all of it].
     #[arg(long, value_name = "S")]
     pub pd_training: Option<f64>,
+    /// Leave the first S seconds of the record (of every cell and controller) out of the count:
+    /// the start-up from the riser at rest (docs/cli.md, "The start of a record").
+    #[arg(long, value_name = "S", default_value_t = 0.0, conflicts_with = "series")]
+    pub spin_up: f64,
+    /// What MPC plans on: `power` = Σ|M₀|^m with m the S-N curve's first slope (the fatigue
+    /// proxy), or `sum` = Σ M₀² [default: mpc.objective, else power].
+    #[arg(long, value_name = "KIND")]
+    pub mpc_objective: Option<MpcObjective>,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     pub output: Option<PathBuf>,
+}
+
+/// `--mpc-objective`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum MpcObjective {
+    /// Σ|M₀|^m, m the S-N curve's first slope.
+    Power,
+    /// Σ M₀² (the thesis's c_sum).
+    Sum,
 }
 
 #[derive(Serialize)]
@@ -153,12 +180,18 @@ fn solve(
         Some(path) => read_series(path)?,
         None => simulated(&a.scene, scene, progress)?,
     };
+    let skip = match &a.series {
+        Some(_) => 0,
+        None => spin_up_steps(scene, a.spin_up).map_err(|e| {
+            CliError::msg(format!("{}: --spin-up: {e}", a.scene.display()))
+        })?,
+    };
     assess(
         spec,
         MomentHistory {
-            duration_s: history.duration_s,
-            moment: &history.moment,
-            moment_x: history.moment_x.as_deref(),
+            duration_s: history.duration_s - skip as f64 * scene.time.step,
+            moment: &history.moment[skip..],
+            moment_x: history.moment_x.as_deref().map(|m| &m[skip..]),
             measure: scene.moment_measure(),
         },
     )

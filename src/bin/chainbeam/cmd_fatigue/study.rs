@@ -13,9 +13,10 @@ use chainbeam::fatigue_study::{
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::scene::read_text_file;
+use chainbeam::scene::MpcPlanObjective;
 use chainbeam::Scene;
 
-use super::FatigueArgs;
+use super::{FatigueArgs, MpcObjective};
 use crate::progress::Progress;
 use crate::{check_finite, check_force_flag, CliError};
 
@@ -86,6 +87,8 @@ struct SettingsJson {
     iterations: usize,
     bound: f64,
     effort: f64,
+    spin_up: f64,
+    mpc_objective: &'static str,
 }
 
 /// `--controller` output.
@@ -132,23 +135,62 @@ fn controller_json(scene_file: &Path, c: &ControllerOutcome) -> Result<Controlle
     })
 }
 
-/// The closed-loop settings of the flags (the `mpc` subcommand's defaults).
-fn settings(a: &FatigueArgs) -> Result<ControlSettings, CliError> {
-    if a.bound.is_finite() {
-        check_force_flag("--bound", a.bound)?;
+/// The closed-loop settings: each flag, else the scene's `[mpc]` key, else the default (the
+/// `mpc` subcommand's).
+#[derive(Clone, Copy)]
+struct Resolved {
+    interval: f64,
+    horizon: f64,
+    iterations: usize,
+    bound: f64,
+    effort: f64,
+    plan_pendulums: Option<usize>,
+    plan_step: Option<f64>,
+    pd_training: Option<f64>,
+    objective: MpcObjective,
+}
+
+fn resolve(a: &FatigueArgs, scene: &Scene) -> Resolved {
+    let t = scene.mpc.unwrap_or_default();
+    let table_objective = t.objective.map(|o| match o {
+        MpcPlanObjective::Power => MpcObjective::Power,
+        MpcPlanObjective::Sum => MpcObjective::Sum,
+    });
+    Resolved {
+        interval: a.interval.or(t.interval).unwrap_or(0.1),
+        horizon: a.horizon.or(t.horizon).unwrap_or(3.0),
+        iterations: a.iterations.or(t.iterations).unwrap_or(1),
+        bound: a.bound.or(t.bound).unwrap_or(5.0),
+        effort: a.effort.or(t.effort).unwrap_or(0.01),
+        plan_pendulums: a.plan_pendulums.or(t.plan_pendulums),
+        plan_step: a.plan_step.or(t.plan_step),
+        pd_training: a.pd_training.or(t.pd_training),
+        objective: a
+            .mpc_objective
+            .or(table_objective)
+            .unwrap_or(MpcObjective::Power),
+    }
+}
+
+/// The closed-loop settings of the flags and the scene's `[mpc]` table.
+fn settings(a: &FatigueArgs, r: &Resolved) -> Result<ControlSettings, CliError> {
+    if r.bound.is_finite() {
+        check_force_flag("--bound", r.bound)?;
     }
     Ok(ControlSettings {
-        interval: a.interval,
+        interval: r.interval,
         mpc: MpcOptions {
-            horizon: Horizon::Seconds(a.horizon),
-            iterations: a.iterations,
-            effort: a.effort,
-            ocp: OcpOptions::default().with_bound(a.bound),
-            plan_pendulums: a.plan_pendulums,
-            plan_step: a.plan_step,
+            horizon: Horizon::Seconds(r.horizon),
+            iterations: r.iterations,
+            effort: r.effort,
+            ocp: OcpOptions::default().with_bound(r.bound),
+            plan_pendulums: r.plan_pendulums,
+            plan_step: r.plan_step,
             ..MpcOptions::default()
         },
-        pd_training: a.pd_training,
+        pd_training: r.pd_training,
+        spin_up: a.spin_up,
+        mpc_fatigue_proxy: r.objective == MpcObjective::Power,
         ..ControlSettings::default()
     })
 }
@@ -164,6 +206,7 @@ fn flag_of(name: &str) -> Option<&'static str> {
         "plan_pendulums" => "--plan-pendulums",
         "plan_step" => "--plan-step",
         "pd_training" => "--pd-training",
+        "spin_up" => "--spin-up",
         _ => return None,
     })
 }
@@ -188,6 +231,7 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
         StudyError::UnknownController { .. }
         | StudyError::DuplicateController { .. }
         | StudyError::NoControllers => CliError::msg(format!("--controller: {e}")),
+        StudyError::SpinUp { .. } => CliError::msg(format!("{scene}: --spin-up: {e}")),
         StudyError::SeaState { .. } | StudyError::NoCells | StudyError::Fatigue(_)
             if a.scatter.is_some() =>
         {
@@ -201,7 +245,7 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
 /// A study run from the flags: its outcome and the closed-loop settings it ran with.
 pub struct Solved {
     study: Study,
-    settings: ControlSettings,
+    settings: Resolved,
 }
 
 /// Runs the study the flags ask for.
@@ -226,7 +270,8 @@ pub fn solve(
         Some(path) => Some(read_scatter(path)?),
         None => None,
     };
-    let settings = settings(a)?;
+    let resolved = resolve(a, scene);
+    let settings = settings(a, &resolved)?;
     let n_cells = cells.as_ref().map_or(1, Vec::len);
     let bar = progress.bar(
         (n_cells * kinds.len()) as u64,
@@ -242,7 +287,10 @@ pub fn solve(
     let study = run_study(&input, &|| bar.inc(1));
     bar.finish_and_clear();
     let study = study.map_err(|e| study_error(a, e))?;
-    Ok(Solved { study, settings })
+    Ok(Solved {
+        study,
+        settings: resolved,
+    })
 }
 
 /// The JSON of a study: per controller with `--controller`, else the scatter's plain run.
@@ -261,11 +309,7 @@ pub fn report(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
     }
 }
 
-fn controllers_json(
-    a: &FatigueArgs,
-    settings: &ControlSettings,
-    study: &Study,
-) -> Result<String, CliError> {
+fn controllers_json(a: &FatigueArgs, settings: &Resolved, study: &Study) -> Result<String, CliError> {
     let mut controllers = ByController::new();
     let mut extension = ByController::new();
     for c in &study.controllers {
@@ -281,10 +325,15 @@ fn controllers_json(
         life_extension: extension,
         settings: SettingsJson {
             interval: settings.interval,
-            horizon: a.horizon,
-            iterations: a.iterations,
-            bound: settings.bound(),
-            effort: a.effort,
+            horizon: settings.horizon,
+            iterations: settings.iterations,
+            bound: settings.bound,
+            effort: settings.effort,
+            spin_up: a.spin_up,
+            mpc_objective: match settings.objective {
+                MpcObjective::Power => "power",
+                MpcObjective::Sum => "sum",
+            },
         },
     })
 }

@@ -92,7 +92,11 @@ fn read_scatter(path: &str) -> Result<Vec<ScatterCell>, Box<dyn std::error::Erro
         .lines()
         .map(str::trim)
         .filter(|l| !l.is_empty() && !l.starts_with('#'));
-    let header: Vec<&str> = lines.next().ok_or("empty scatter file")?.split(',').collect();
+    let header: Vec<&str> = lines
+        .next()
+        .ok_or("empty scatter file")?
+        .split(',')
+        .collect();
     let col = |name: &str| {
         header
             .iter()
@@ -106,7 +110,11 @@ fn read_scatter(path: &str) -> Result<Vec<ScatterCell>, Box<dyn std::error::Erro
             .split(',')
             .map(|x| x.trim().parse())
             .collect::<Result<_, _>>()?;
-        let get = |i: usize| f.get(i).copied().ok_or(format!("{path}: short line {line}"));
+        let get = |i: usize| {
+            f.get(i)
+                .copied()
+                .ok_or(format!("{path}: short line {line}"))
+        };
         cells.push(ScatterCell {
             sea: SeaState {
                 hs: get(h)?,
@@ -295,10 +303,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             println!(
                 "pd gains (tuned on the first {:?} s of the scene's sea): u_b = {:.4e} N, K_p = \
                  {:.4e} N/(N·m), K_d = {:.4e} N·s/(N·m)",
-                settings.pd_training,
-                pd.bias,
-                pd.kp,
-                pd.kd
+                settings.pd_training, pd.bias, pd.kp, pd.kd
             );
         }
         let input = StudyInput {
@@ -360,7 +365,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let force = c.cells[s]
                     .force
                     .map_or(String::new(), |f| format!(" (u = {f:.3e} N)"));
-                format!("{} {:.3e}{force}", c.kind.name(), c.cells[s].damage_per_year)
+                format!(
+                    "{} {:.3e}{force}",
+                    c.kind.name(),
+                    c.cells[s].damage_per_year
+                )
             })
             .collect();
         println!(

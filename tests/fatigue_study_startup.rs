@@ -81,7 +81,10 @@ fn spin_up_leaves_out_the_start_up() {
         record.moment.iter().fold(0.0f64, |a, m| a.max(m.abs()))
     );
     assert!(worst < DEVIATION * m_static.abs(), "{worst} vs {m_static}");
-    let (counted, left_out) = (damage_per_year(&scene, 0.0), damage_per_year(&scene, SPIN_UP));
+    let (counted, left_out) = (
+        damage_per_year(&scene, 0.0),
+        damage_per_year(&scene, SPIN_UP),
+    );
     println!("damage per year from t = 0: {counted:.4e}, after the spin-up: {left_out:.4e}");
     assert!(counted > 0.0);
     assert!(left_out < RATIO * counted, "{left_out} vs {counted}");
@@ -189,9 +192,15 @@ fn tuned_pd_gains_stay_positive_and_improve() {
     let law = pd_law(&scene, &settings).unwrap();
     let scales = PdScales::of(&scene, bound).unwrap();
     let (gp, gd) = (law.kp / scales.kp, law.kd / scales.kd);
-    println!("loop gains {gp:.4e}, {gd:.4e}; bias {:.4e} (static {:.4e})", law.bias, scales.static_bias);
+    println!(
+        "loop gains {gp:.4e}, {gd:.4e}; bias {:.4e} (static {:.4e})",
+        law.bias, scales.static_bias
+    );
     let limit = PD_BOX.exp() * (1.0 + 1e-12);
-    assert!(gp > 0.0 && gp <= limit && gd > 0.0 && gd <= limit, "{gp} {gd}");
+    assert!(
+        gp > 0.0 && gp <= limit && gd > 0.0 && gd <= limit,
+        "{gp} {gd}"
+    );
     assert!((law.bias - scales.static_bias).abs() <= bound * (1.0 + 1e-12));
     let tuning = PdTuning::new(&scene, 0.1, bound, settings.mpc.effort).unwrap();
     let start = scales.gains(&PD_START);

@@ -86,12 +86,9 @@ fn positive(key: &str, v: Option<f64>) -> Result<Option<f64>, SceneError> {
 /// A count ≥ 1 (`mpc.KEY`).
 fn count(key: &str, v: Option<i64>) -> Result<Option<usize>, SceneError> {
     v.map(|x| {
-        usize::try_from(x)
-            .ok()
-            .filter(|&n| n >= 1)
-            .ok_or_else(|| {
-                SceneError::invalid(format!("mpc.{key}"), format!("must be ≥ 1, got {x}"))
-            })
+        usize::try_from(x).ok().filter(|&n| n >= 1).ok_or_else(|| {
+            SceneError::invalid(format!("mpc.{key}"), format!("must be ≥ 1, got {x}"))
+        })
     })
     .transpose()
 }

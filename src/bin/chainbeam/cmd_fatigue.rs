@@ -6,8 +6,8 @@ use clap::Args;
 use serde::Serialize;
 
 use chainbeam::fatigue::{assess, Assessment, FatigueSpec, MomentHistory};
-use chainbeam::scene::read_text_file;
 use chainbeam::fatigue_study::spin_up_steps;
+use chainbeam::scene::read_text_file;
 use chainbeam::{moment_history, Scene};
 
 mod study;
@@ -112,7 +112,12 @@ pub struct FatigueArgs {
     pub pd_training: Option<f64>,
     /// Leave the first S seconds of the record (of every cell and controller) out of the count:
     /// the start-up from the riser at rest (docs/cli.md, "The start of a record").
-    #[arg(long, value_name = "S", default_value_t = 0.0, conflicts_with = "series")]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.0,
+        conflicts_with = "series"
+    )]
     pub spin_up: f64,
     /// What MPC plans on: `power` = Σ|M₀|^m with m the S-N curve's first slope (the fatigue
     /// proxy), or `sum` = Σ M₀² [default: mpc.objective, else power].
@@ -182,9 +187,8 @@ fn solve(
     };
     let skip = match &a.series {
         Some(_) => 0,
-        None => spin_up_steps(scene, a.spin_up).map_err(|e| {
-            CliError::msg(format!("{}: --spin-up: {e}", a.scene.display()))
-        })?,
+        None => spin_up_steps(scene, a.spin_up)
+            .map_err(|e| CliError::msg(format!("{}: --spin-up: {e}", a.scene.display())))?,
     };
     assess(
         spec,

@@ -309,7 +309,11 @@ pub fn report(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
     }
 }
 
-fn controllers_json(a: &FatigueArgs, settings: &Resolved, study: &Study) -> Result<String, CliError> {
+fn controllers_json(
+    a: &FatigueArgs,
+    settings: &Resolved,
+    study: &Study,
+) -> Result<String, CliError> {
     let mut controllers = ByController::new();
     let mut extension = ByController::new();
     for c in &study.controllers {

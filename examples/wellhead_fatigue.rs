@@ -9,9 +9,10 @@
 //! cargo run --release --example wellhead_fatigue -- 30 none,constant # 30 s per cell, two
 //! ```
 //!
-//! Cost: the plant is n = 80 pendulums at h = 0.00625 s (96 000 steps per 600 s cell); `none`
-//! is a simulation per cell, `constant` a one-piece optimal control per cell (the condensed
-//! solver: one sensitivity direction, a few rollouts), `pd` one tuning of its gains (a fixed
+//! Cost: the plant is riser_300m's n = 60 pendulums at h = 0.0125 s (52 800 steps per cell of
+//! 600 s and the spin-up); `none` is a simulation per cell, `constant` a one-piece optimal
+//! control per cell over the training window (`pd_training`: the condensed solver, one
+//! sensitivity direction, a few rollouts) and a simulation, `pd` one tuning of its gains (a fixed
 //! design, as an engineer would commission one PD law, not one per sea state: [`PD_ITERS`]
 //! L-BFGS iterations of a dual-number closed loop over the first `pd_training` s of the
 //! scene's own sea, in the scaled, bounded parameters of `chainbeam::fatigue_study::pd`) and a

@@ -18,7 +18,8 @@
 //! - `constant`, `pd`, `mpc`: [`crate::mpc`]'s closed loop on the (planar) plant of the cell's
 //!   scene, one decision every [`ControlSettings::interval`] seconds: the best constant force
 //!   ([`ConstantForce::best`], an offline optimum of the cell's record that knows its future:
-//!   min Σ M₀² + ρ h Σ u², which cancels the mean moment), a PD law on the measured M₀ with
+//!   min Σ M₀² + ρ h Σ u², which cancels the mean moment; on the training window
+//!   [`ControlSettings::pd_training`] when one is given, [`training_scene`]), a PD law on the measured M₀ with
 //!   gains tuned on the cell's record ([`pd_law`]; on its first
 //!   [`ControlSettings::pd_training`] seconds, or [`ControlSettings::pd_gains`] given) and the
 //!   receding-horizon controller ([`Mpc`], a perfect model of the loads, on the plant's chain or
@@ -247,9 +248,10 @@ pub struct ControlSettings {
     pub mpc: MpcOptions,
     /// Iterations of the PD gains' tuning ([`PdLaw::tune`]). Default 200.
     pub pd_max_iters: usize,
-    /// The PD law's training window \[s\]: its gains are tuned on the first `pd_training`
-    /// seconds of the cell's record (rounded to whole control intervals, at least one), then
-    /// run on the whole record. `None` (default): tuned on the whole record. A window of a few
+    /// The training window \[s\] of the PD law and the constant force: the gains are tuned,
+    /// and the best constant force found, on the first `pd_training` seconds of the cell's
+    /// record (rounded to whole control intervals, at least one, [`training_scene`]), then run
+    /// on the whole record. `None` (default): tuned on the whole record. A window of a few
     /// minutes holds tens of wave periods, enough to fit three gains, at a fraction of the
     /// cost of tuning on an hour (module docs, "The controllers").
     pub pd_training: Option<f64>,
@@ -448,7 +450,8 @@ pub fn run_controller(
             })
         }
         ControllerKind::Constant => {
-            let (mut c, _) = ConstantForce::best(scene, bound, effort)?;
+            let training = training_scene(scene, settings)?;
+            let (mut c, _) = ConstantForce::best(&training, bound, effort)?;
             let force = c.u;
             closed(&mut c, Some(force), None)
         }
@@ -481,15 +484,7 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
             bound,
         });
     }
-    let mut training = scene.clone();
-    if let Some(seconds) = settings.pd_training {
-        Requirement::PositiveFinite
-            .check("pd_training", seconds)
-            .map_err(MpcError::from)?;
-        let m = interval_steps(interval, scene.time.step)?;
-        let intervals = ((seconds / interval).round() as usize).max(1);
-        training.time.steps = (intervals * m).min(scene.time.steps);
-    }
+    let training = training_scene(scene, settings)?;
     let scaled = pd::ScaledPdTuning {
         tuning: PdTuning::new(&training, interval, bound, effort)?,
         scales: pd::PdScales::of(&training, bound)?,
@@ -508,6 +503,26 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
         kd,
         bound,
     })
+}
+
+/// The scene cut to its training window: the first [`ControlSettings::pd_training`] seconds
+/// (whole control intervals, at least one), or the whole scene without one.
+///
+/// # Errors
+/// [`crate::error::ValueError`] naming `pd_training` for a window that is not positive;
+/// [`MpcError::IntervalNotMultiple`].
+pub fn training_scene(scene: &Scene, settings: &ControlSettings) -> crate::Result<Scene> {
+    let mut training = scene.clone();
+    if let Some(seconds) = settings.pd_training {
+        Requirement::PositiveFinite
+            .check("pd_training", seconds)
+            .map_err(MpcError::from)?;
+        let interval = settings.interval;
+        let m = interval_steps(interval, scene.time.step)?;
+        let intervals = ((seconds / interval).round() as usize).max(1);
+        training.time.steps = (intervals * m).min(scene.time.steps);
+    }
+    Ok(training)
 }
 
 /// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when

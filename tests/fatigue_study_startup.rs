@@ -6,11 +6,11 @@
 use chainbeam::fatigue::{DnvClass, Environment, FatigueSpec};
 use chainbeam::fatigue_study::pd::{PdScales, ScaledPdTuning, PD_BOX, PD_START};
 use chainbeam::fatigue_study::{
-    fatigue_proxy, pd_law, run_controller, run_study, spin_up_steps, ControlSettings,
-    ControllerKind, StudyError, StudyInput,
+    fatigue_proxy, pd_law, run_controller, run_study, spin_up_steps, training_scene,
+    ControlSettings, ControllerKind, StudyError, StudyInput,
 };
 use chainbeam::mpc::planning::planning_scene;
-use chainbeam::mpc::{run_closed_loop, PdTuning};
+use chainbeam::mpc::{run_closed_loop, ConstantForce, PdTuning};
 use chainbeam::optimize::OptimProblem;
 use chainbeam::scene::ObjectiveKind;
 use chainbeam::statics::static_equilibrium;
@@ -215,4 +215,50 @@ fn tuned_pd_gains_stay_positive_and_improve() {
     let mut pd = law;
     let run = run_closed_loop(&scene, 0.1, &mut pd).unwrap();
     assert!(run.summary.c_sum <= j1 * (1.0 + 1e-12));
+}
+
+/// The training window of the PD law and the constant force: whole control intervals, at most
+/// the record; the constant controller's force is the best constant force of that window (the
+/// condensed solver on the cut scene, computed here directly).
+#[test]
+fn the_training_window_cuts_whole_intervals() {
+    let scene = small();
+    let with = |pd_training| ControlSettings {
+        interval: 0.1,
+        pd_training,
+        ..ControlSettings::default()
+    };
+    assert_eq!(
+        training_scene(&scene, &with(Some(0.3))).unwrap().time.steps,
+        30
+    );
+    assert_eq!(
+        training_scene(&scene, &with(Some(0.04)))
+            .unwrap()
+            .time
+            .steps,
+        10
+    );
+    assert_eq!(
+        training_scene(&scene, &with(Some(100.0)))
+            .unwrap()
+            .time
+            .steps,
+        400
+    );
+    assert_eq!(training_scene(&scene, &with(None)).unwrap().time.steps, 400);
+    let e = training_scene(&scene, &with(Some(-1.0))).unwrap_err();
+    assert!(e.to_string().contains("pd_training"), "{e}");
+    let settings = ControlSettings {
+        mpc: chainbeam::mpc::MpcOptions {
+            ocp: chainbeam::ocp::OcpOptions::default().with_bound(5.0),
+            ..Default::default()
+        },
+        ..with(Some(1.0))
+    };
+    let record = run_controller(&scene, ControllerKind::Constant, &settings).unwrap();
+    let cut = training_scene(&scene, &settings).unwrap();
+    let (best, _) = ConstantForce::best(&cut, 5.0, settings.mpc.effort).unwrap();
+    assert_eq!(record.force, Some(best.u));
+    assert_eq!(record.moment.len(), 401);
 }

@@ -12,11 +12,15 @@
 //!
 //! Run with `cargo bench --bench adjoint -- --warm-up-time 1 --measurement-time 3`.
 
+#[path = "common/cantilever.rs"]
+mod cantilever;
+
 use std::hint::black_box;
 
+use cantilever::scaled_cantilever;
 use chainbeam::adjoint::forward_value;
 use chainbeam::{
-    catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene, Support,
+    catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, Scene,
 };
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use num_dual::Dual64;
@@ -81,24 +85,9 @@ fn bench_riser(c: &mut Criterion) {
 /// Steps of the `adjoint_large_n` scenes.
 const LARGE_N_STEPS: usize = 100;
 
-/// The scaled cantilever of `catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 2.0)` (L = 10,
-/// EI = 1000, M = 10, base spring 2k, F = 2 N at the tip, h = 0.01·min(1, (10/n)²)) with `steps`
-/// steps. Built here because the catalogue scene keeps t ∈ [0, 10] s, which at n = 1000 is
-/// N = 10⁷ steps, (N + 1)·n over the stored-state limit, so it is refused.
+/// The scaled cantilever (benches/common/cantilever.rs) with base spring 2k and `steps` steps.
 fn cantilever(n: usize, steps: usize) -> Scene {
-    let l = 10.0 / n as f64;
-    let k = 1000.0 / l;
-    Scene::builder(n)
-        .length(l)
-        .mass(10.0 / n as f64)
-        .stiffness(k)
-        .base_stiffness(2.0 * k)
-        .support(Support::Cantilever)
-        .point_load(n, 2.0)
-        .step(0.01 * (10.0 / n as f64).powi(2).min(1.0))
-        .steps(steps)
-        .build()
-        .unwrap_or_else(|e| panic!("bench cantilever n = {n} is invalid: {e}"))
+    scaled_cantilever(n, 2.0, steps)
 }
 
 fn bench_large_n(c: &mut Criterion) {

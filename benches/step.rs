@@ -29,11 +29,15 @@
 //! Run with
 //! `cargo bench --bench step -- --warm-up-time 1 --measurement-time 3`.
 
+#[path = "common/cantilever.rs"]
+mod cantilever;
+
 use std::hint::black_box;
 use std::time::Duration;
 
+use cantilever::scaled_cantilever;
 use chainbeam::model::{Ctx, DualScratch, Embed, ForceTerm, TermVisitor};
-use chainbeam::{catalogue, Chain, Current, Parameter, Rattle, Scalar, Scene, State, Support};
+use chainbeam::{catalogue, Chain, Current, Parameter, Rattle, Scalar, Scene, State};
 use criterion::measurement::WallTime;
 use criterion::{
     criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput,
@@ -46,29 +50,10 @@ const PRE_STEPS: usize = 50;
 /// Samples per benchmark (criterion's default of 100 makes the run needlessly long).
 const SAMPLES: usize = 20;
 
-/// A cantilever of n pendulums with a point load F = 2 at the tip, scaled from the n = 10 beam
-/// (l = 1, m = 1, k = 1000, base 1000, h = 0.01) so that the continuum beam is the same:
-/// total length 10 and mass 10 (l = 10/n, m = 10/n), bending stiffness k·l = 1000 (k = 1000/l
-/// for every spring, the base spring included). The highest chain frequency grows like n², so
-/// h = 0.01·(10/n)² keeps h·ω_max (and hence the Newton convergence) the same for every n.
-///
-/// These are the parameters of `catalogue::scaled_cantilever(n, 10.0, 1000.0, 10.0, 1.0)`, built
-/// here with only the [`PRE_STEPS`] steps the bench takes: the catalogue scene keeps t ∈ [0, 10] s,
-/// which at n = 1000 is N = 10⁷ steps, (N + 1)·n over the stored-state limit, so it is refused.
+/// The scaled cantilever (benches/common/cantilever.rs) with base spring k and only the
+/// [`PRE_STEPS`] steps the bench takes.
 fn cantilever(n: usize) -> Scene {
-    let l = 10.0 / n as f64;
-    let k = 1000.0 / l;
-    Scene::builder(n)
-        .length(l)
-        .mass(10.0 / n as f64)
-        .stiffness(k)
-        .base_stiffness(k)
-        .support(Support::Cantilever)
-        .point_load(n, 2.0)
-        .step(0.01 * (10.0 / n as f64).powi(2).min(1.0))
-        .steps(PRE_STEPS)
-        .build()
-        .unwrap_or_else(|e| panic!("bench cantilever n = {n} is invalid: {e}"))
+    scaled_cantilever(n, 1.0, PRE_STEPS)
 }
 
 /// The thesis riser (n = 10, l = 1, m = 1, k = 1000, base/tip 2000, F = 2 at node 5, D = 0,

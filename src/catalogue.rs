@@ -329,17 +329,10 @@ pub fn wave_riser() -> Scene {
     )
 }
 
-/// The closed-loop scene of issue 14 ([`crate::mpc`]): [`wave_riser`]'s riser and drag
-/// (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
-/// 0.5 N · sin(2π t/5.3 s + 1), ramped in over the first 8 s, h = 0.01 s, N = 6000
-/// (t ∈ [0, 60] s), in a sheared current along +z, 0.1 m/s at the surface falling linearly to
-/// 0.02 m/s at the seabed (its steady drag bends the riser one way, a mean base moment of about
-/// 28 Nm, which a constant force of about 2.9 N cancels within the bound |u| ≤ 5 N of
-/// `chainbeam mpc`; [`sheared_current`]'s 0.3 m/s would need more than 5 N). Control at node 10 (the platform; the `[control]` value 0 is only the
-/// open-loop default, `chainbeam mpc` decides it every control interval), objective
-/// c_sum = Σ M₀(t_k)².
-pub fn mpc_riser() -> Scene {
-    let sea = vec![
+/// The irregular sea of [`mpc_riser`] and [`spatial_mpc_riser`] at node 5:
+/// 2 N · sin(2π t/8 s) + 0.5 N · sin(2π t/5.3 s + 1).
+fn mpc_sea() -> Vec<Harmonic> {
+    vec![
         Harmonic {
             amplitude: 2.0,
             period: WAVE_PERIOD,
@@ -350,7 +343,20 @@ pub fn mpc_riser() -> Scene {
             period: 5.3,
             phase: 1.0,
         },
-    ];
+    ]
+}
+
+/// The closed-loop scene of issue 14 ([`crate::mpc`]): [`wave_riser`]'s riser and drag
+/// (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
+/// 0.5 N · sin(2π t/5.3 s + 1), ramped in over the first 8 s, h = 0.01 s, N = 6000
+/// (t ∈ [0, 60] s), in a sheared current along +z, 0.1 m/s at the surface falling linearly to
+/// 0.02 m/s at the seabed (its steady drag bends the riser one way, a mean base moment of about
+/// 28 Nm, which a constant force of about 2.9 N cancels within the bound |u| ≤ 5 N of
+/// `chainbeam mpc`; [`sheared_current`]'s 0.3 m/s would need more than 5 N). Control at node 10 (the platform; the `[control]` value 0 is only the
+/// open-loop default, `chainbeam mpc` decides it every control interval), objective
+/// c_sum = Σ M₀(t_k)².
+pub fn mpc_riser() -> Scene {
+    let sea = mpc_sea();
     known_good(
         riser_chain_without_load()
             .drag(10.0)
@@ -371,18 +377,7 @@ pub fn mpc_riser() -> Scene {
 /// [`crate::mpc::run_closed_loop_spatial`], decides (u_x, u_z)
 /// every interval), objective c_sum = Σ |M₀(t_k)|². Spatial: the loads have x components.
 pub fn spatial_mpc_riser() -> Scene {
-    let sea = vec![
-        Harmonic {
-            amplitude: 2.0,
-            period: WAVE_PERIOD,
-            phase: 0.0,
-        },
-        Harmonic {
-            amplitude: 0.5,
-            period: 5.3,
-            phase: 1.0,
-        },
-    ];
+    let sea = mpc_sea();
     let (s, c) = 60f64.to_radians().sin_cos();
     known_good(
         riser_chain_without_load()

@@ -2,25 +2,19 @@
 //! from its `simulate` CSV (`--series`), a spatial scene's worst point, and typed one-line errors.
 
 use std::fs;
-use std::path::Path;
 
-use assert_cmd::cargo::cargo_bin_cmd;
+#[path = "common/fatigue_cli.rs"]
+mod fatigue_cli;
+
 use chainbeam::fatigue::{assess, MomentHistory};
 use chainbeam::{simulate, Scene};
+use fatigue_cli::{beam, json, run, FATIGUE_TABLE};
 
 /// The thesis riser (load 2 N at node 5, or at 45° between x and z) over `steps` steps of
 /// 0.01 s, with a `[fatigue]` table for a small steel tube.
 fn scene(force: &str, steps: usize) -> String {
     format!(
-        r#"[beam]
-pendulums = 10
-length = 1.0
-mass = 1.0
-stiffness = 1000.0
-support = "riser"
-base_stiffness = 2000.0
-tip_stiffness = 2000.0
-
+        r#"{beam}
 [loads]
 gravity = 0.0
 drag = 0.0
@@ -32,32 +26,10 @@ force = {force}
 step = 0.01
 steps = {steps}
 
-[fatigue]
-outer_diameter = 0.02
-wall_thickness = 0.002
-scf = 1.2
-curve = "F1"
-environment = "air"
-dff = 3.0
-"#
+{table}"#,
+        beam = beam("riser"),
+        table = FATIGUE_TABLE
     )
-}
-
-fn run(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = cargo_bin_cmd!("chainbeam")
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
 
 /// The JSON has exactly the documented fields; its damage is the library's assessment of the

@@ -2,23 +2,17 @@
 //! run, `constant` against `fatigue --series` of a `simulate` with its force, and refusals.
 
 use std::fs;
-use std::path::Path;
 
-use assert_cmd::cargo::cargo_bin_cmd;
+#[path = "common/fatigue_cli.rs"]
+mod fatigue_cli;
+
+use fatigue_cli::{beam, json, run, FATIGUE_TABLE};
 
 /// The thesis riser with drag 1 kg/m under a 2 N wave (period 2 s) at node 5 and a steady 1 N
 /// load, 4 s of 0.01 s, control at node 10 (constant 0), a [fatigue] table of a small tube.
 fn scene(support: &str) -> String {
     format!(
-        r#"[beam]
-pendulums = 10
-length = 1.0
-mass = 1.0
-stiffness = 1000.0
-support = "{support}"
-base_stiffness = 2000.0
-tip_stiffness = 2000.0
-
+        r#"{beam}
 [loads]
 gravity = 0.0
 drag = 1.0
@@ -38,32 +32,10 @@ node = 10
 kind = "constant"
 values = [0.0]
 
-[fatigue]
-outer_diameter = 0.02
-wall_thickness = 0.002
-scf = 1.2
-curve = "F1"
-environment = "air"
-dff = 3.0
-"#
+{table}"#,
+        beam = beam(support),
+        table = FATIGUE_TABLE
     )
-}
-
-fn run(dir: &Path, args: &[&str]) -> (i32, String, String) {
-    let out = cargo_bin_cmd!("chainbeam")
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn json(text: &str) -> serde_json::Value {
-    serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}: {text}"))
 }
 
 fn num(v: &serde_json::Value) -> f64 {

@@ -85,16 +85,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
     /// A problem with the given parametrisation and objective; the control acts at the scene's
     /// control node (default: the tip n).
     pub fn new(scene: &Scene, map: P, objective: O) -> Result<Self> {
-        Ok(ControlProblem {
-            chain: control_chain(scene)?,
-            h: scene.time.step,
-            steps: scene.time.steps,
-            map,
-            objective,
-            checkpointing: Checkpointing::default(),
-            two_axis: false,
-            start: None,
-        })
+        Self::in_model(scene, map, objective, false)
     }
 }
 
@@ -103,16 +94,7 @@ impl<P: ControlMap, O: Objective> ControlProblem<P, O, 3> {
     /// at the scene's control node (default: the tip n): along z (`two_axis = false`, θ as in the
     /// planar problem) or 2-axis (θ = (θ_x; θ_z), 2m parameters for a map of m).
     pub fn spatial(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
-        Ok(ControlProblem {
-            chain: control_chain(scene)?,
-            h: scene.time.step,
-            steps: scene.time.steps,
-            map,
-            objective,
-            checkpointing: Checkpointing::default(),
-            two_axis,
-            start: None,
-        })
+        Self::in_model(scene, map, objective, two_axis)
     }
 }
 

@@ -458,7 +458,7 @@ fn the_default_method_is_chosen_and_reported() {
     );
     assert!(ja <= jl, "auto {ja} > lbfgs {jl}");
     // Spatial (issue 28 item 4): the condensed solver, which runs the spatial model, and the
-    // reason says why (a spatial problem of 1 parameter, the Riccati solver planar).
+    // reason says why (a spatial problem of 1 parameter, at most 4(2n + 1)).
     let o = run(&["optimize".as_ref(), scene("oblique_riser.toml").as_os_str()]);
     assert_success(&o);
     let v = json(&o);
@@ -467,7 +467,7 @@ fn the_default_method_is_chosen_and_reported() {
     assert_eq!(v["method_choice"]["chosen"], "condensed");
     let why = v["method_choice"]["reason"].as_str().unwrap();
     assert!(
-        why.contains("spatial control problem") && why.contains("planar only"),
+        why.contains("spatial control problem") && why.contains("at most"),
         "{why}"
     );
 }

@@ -229,10 +229,10 @@ impl<const DIM: usize> StateMap<DIM> {
 ///
 /// # Errors
 /// See [`StateMap::map`].
-pub(super) fn map_observation(
-    map: &mut StateMap<2>,
-    obs: &Observation<'_>,
-    out: &mut State<f64, 2>,
+pub(super) fn map_observation<const DIM: usize>(
+    map: &mut StateMap<DIM>,
+    obs: &Observation<'_, DIM>,
+    out: &mut State<f64, DIM>,
 ) -> Result<bool> {
     match obs.state_before_kick {
         Some(hat) => map.map(hat, out).map(|()| true),

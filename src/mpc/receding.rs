@@ -2,7 +2,7 @@
 //! Riccati) from the observed state, warm-started from the previous plan.
 
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
-use super::{interval_steps, Controller, Observation};
+use super::{interval_steps, Controller, Observation, SpatialController};
 use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
 use crate::error::{MpcError, Requirement, Result, ValueError};
 use crate::model::Chain;
@@ -116,9 +116,12 @@ impl Default for MpcOptions {
     }
 }
 
-/// A receding-horizon controller on a model scene (module docs of [`crate::mpc`]).
+/// A receding-horizon controller on a model scene (module docs of [`crate::mpc`]), in the planar
+/// (`DIM = 2`, [`Mpc::new`], a [`Controller`]) or the spatial model (`DIM = 3`, [`Mpc::spatial`],
+/// a [`SpatialController`] planning a 2-axis force (u_x, u_z) per interval on the vector moment:
+/// θ = (θ_x; θ_z), min Σ |M₀|² + ρ h Σ |u|², each component within the box).
 #[derive(Clone, Debug)]
-pub struct Mpc {
+pub struct Mpc<const DIM: usize = 2> {
     model: Scene,
     options: MpcOptions,
     interval: f64,
@@ -127,24 +130,49 @@ pub struct Mpc {
     /// Pieces of a fixed horizon.
     pieces: Option<usize>,
     /// The problem of the last horizon length (cloned and started from each observation).
-    template: Option<(usize, ControlProblem<PiecewiseControl, BendingObjective>)>,
+    template: Option<(
+        usize,
+        ControlProblem<PiecewiseControl, BendingObjective, DIM>,
+    )>,
     /// The condensed solver of the last horizon length, kept between re-plans.
-    condensed: Option<(usize, ocp::Condensed)>,
+    condensed: Option<(usize, ocp::Condensed<DIM>)>,
     plan: Vec<f64>,
     warm: Vec<f64>,
     last: Option<OcpResult>,
     decisions: usize,
     /// The map of the plant's state onto a reduced planning model, and the mapped state.
-    planning: Option<(StateMap<2>, State<f64, 2>)>,
+    planning: Option<(StateMap<DIM>, State<f64, DIM>)>,
     /// The model's chain with its loads realised over the whole run and one horizon beyond
     /// (built at the first decision, [`Mpc::record_chain`]).
-    record: Option<Chain<f64, 2>>,
+    record: Option<Chain<f64, DIM>>,
 }
 
 impl Mpc {
     /// A controller that plans on `model` (its beam, loads as the forecast, step, control node;
     /// its `[time]` length and `[control]` values are not used) with decisions every `interval`
-    /// seconds.
+    /// seconds, in the planar model.
+    ///
+    /// # Errors
+    /// As [`Mpc::spatial`].
+    pub fn new(model: &Scene, interval: f64, options: MpcOptions) -> Result<Self> {
+        Self::build(model, interval, options)
+    }
+}
+
+impl Mpc<3> {
+    /// The controller of [`Mpc::new`] in the spatial model: a 2-axis force (u_x, u_z) per
+    /// interval, planned on the vector moment (the scene's loads and current may have x
+    /// components; [`crate::ocp`] "The spatial model").
+    ///
+    /// # Errors
+    /// As [`Mpc::build`].
+    pub fn spatial(model: &Scene, interval: f64, options: MpcOptions) -> Result<Self> {
+        Self::build(model, interval, options)
+    }
+}
+
+impl<const DIM: usize> Mpc<DIM> {
+    /// The controller of [`Mpc::new`] in the model `DIM`.
     ///
     /// # Errors
     /// [`MpcError`]: the `interval` not a multiple of the model's step, the `horizon` not a
@@ -152,7 +180,7 @@ impl Mpc {
     /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
     /// exponent; the model's errors.
-    pub fn new(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
+    pub fn build(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
         let (plan_model, planning) = Self::planning_model(model, &mut options)?;
         let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
@@ -213,7 +241,7 @@ impl Mpc {
     fn planning_model(
         model: &Scene,
         options: &mut MpcOptions,
-    ) -> Result<(Option<Scene>, Option<(StateMap<2>, State<f64, 2>)>)> {
+    ) -> Result<(Option<Scene>, Option<(StateMap<DIM>, State<f64, DIM>)>)> {
         if options.plan_pendulums.is_none() && options.plan_step.is_none() {
             return Ok((None, None));
         }
@@ -234,17 +262,27 @@ impl Mpc {
         self.last.as_ref()
     }
 
-    /// The current plan θ (one force per interval of the last horizon).
+    /// The current plan θ (one force per interval of the last horizon; in the spatial model
+    /// θ = (θ_x; θ_z), the x components first).
     pub fn plan(&self) -> &[f64] {
         &self.plan
+    }
+
+    /// Control axes of a plan: 1 (along z, planar) or 2 ((u_x, u_z), spatial).
+    fn axes() -> usize {
+        if DIM == 3 {
+            2
+        } else {
+            1
+        }
     }
 
     /// The problem of a horizon of `pieces` intervals from `obs`.
     fn problem(
         &mut self,
         pieces: usize,
-        obs: &Observation<'_>,
-    ) -> Result<ControlProblem<PiecewiseControl, BendingObjective>> {
+        obs: &Observation<'_, DIM>,
+    ) -> Result<ControlProblem<PiecewiseControl, BendingObjective, DIM>> {
         if self.template.as_ref().map(|t| t.0) != Some(pieces) {
             let mut scene = self.model.clone();
             scene.time.steps = pieces * self.model_steps;
@@ -257,7 +295,9 @@ impl Mpc {
                 effort: self.options.effort,
             };
             let record = self.record_chain(obs, pieces)?;
-            let problem = ControlProblem::new(&scene, map, objective)?.with_chain(record);
+            let two_axis = DIM == 3;
+            let problem =
+                ControlProblem::in_model(&scene, map, objective, two_axis)?.with_chain(record);
             self.template = Some((pieces, problem));
         }
         let template = &self.template.as_ref().expect("set above").1;
@@ -289,14 +329,18 @@ impl Mpc {
     /// component beyond it, so a chain built from the horizon's scene alone would sum thousands
     /// of components per pendulum and step at every re-plan after the first horizon (measured on
     /// riser_300m.toml: 97 % of a re-plan's time in that sum).
-    fn record_chain(&mut self, obs: &Observation<'_>, pieces: usize) -> Result<Chain<f64, 2>> {
+    fn record_chain(
+        &mut self,
+        obs: &Observation<'_, DIM>,
+        pieces: usize,
+    ) -> Result<Chain<f64, DIM>> {
         if let Some(chain) = &self.record {
             return Ok(chain.clone());
         }
         let mut scene = self.model.clone();
         let end = obs.steps as f64 * obs.h + pieces as f64 * self.interval;
         scene.time.steps = (end / scene.time.step).ceil() as usize + 1;
-        let mut chain = Chain::<f64, 2>::from_scene(&scene)?;
+        let mut chain = Chain::<f64, DIM>::from_scene(&scene)?;
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }
@@ -309,9 +353,9 @@ impl Mpc {
     fn condensed(
         &mut self,
         pieces: usize,
-        problem: &ControlProblem<PiecewiseControl, BendingObjective>,
+        problem: &ControlProblem<PiecewiseControl, BendingObjective, DIM>,
         opts: &OcpOptions,
-    ) -> Result<&mut ocp::Condensed> {
+    ) -> Result<&mut ocp::Condensed<DIM>> {
         match &mut self.condensed {
             Some((p, solver)) if *p == pieces => {
                 solver.restart(problem)?;
@@ -323,7 +367,7 @@ impl Mpc {
     }
 
     /// The pieces of the horizon at `obs`.
-    fn horizon_pieces(&self, obs: &Observation<'_>) -> Result<usize> {
+    fn horizon_pieces(&self, obs: &Observation<'_, DIM>) -> Result<usize> {
         if (obs.interval - self.interval).abs() > 1e-12 * self.interval {
             return Err(MpcError::IntervalMismatch {
                 controller: self.interval,
@@ -341,25 +385,25 @@ impl Mpc {
     }
 
     /// The start θ₀ of a plan of `pieces` intervals: the previous plan shifted by one
-    /// interval, the tail padded with its last value (zeros without a plan or warm start).
+    /// interval, the tail padded with its last value (zeros without a plan or warm start);
+    /// each axis of a 2-axis plan (θ_x; θ_z) alike.
     fn warm_start(&mut self, pieces: usize) {
         self.warm.clear();
+        let axes = Self::axes();
         if self.options.warm_start && !self.plan.is_empty() {
-            let last = self.plan.len() - 1;
-            self.warm
-                .extend((0..pieces).map(|i| self.plan[(i + 1).min(last)]));
+            let m = self.plan.len() / axes;
+            for axis in self.plan.chunks(m) {
+                let last = m - 1;
+                self.warm
+                    .extend((0..pieces).map(|i| axis[(i + 1).min(last)]));
+            }
         } else {
-            self.warm.resize(pieces, 0.0);
+            self.warm.resize(pieces * axes, 0.0);
         }
     }
-}
 
-impl Controller for Mpc {
-    fn name(&self) -> String {
-        "MPC".into()
-    }
-
-    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+    /// A re-plan from `obs` (the real-time iteration of the module docs): the new plan θ.
+    fn replan(&mut self, obs: &Observation<'_, DIM>) -> Result<()> {
         let pieces = self.horizon_pieces(obs)?;
         let problem = self.problem(pieces, obs)?;
         self.warm_start(pieces);
@@ -372,7 +416,7 @@ impl Controller for Mpc {
         // Real-time iteration: the step is all a decision needs (OcpOptions::final_gradient).
         opts.final_gradient = false;
         let n = obs.state.q.len();
-        let r = match self.options.solver.resolve(pieces, n) {
+        let r = match self.options.solver.resolve(pieces * Self::axes(), n) {
             MpcSolver::Condensed | MpcSolver::Auto => {
                 let warm = std::mem::take(&mut self.warm);
                 let r = self.condensed(pieces, &problem, &opts)?.solve(&warm);
@@ -384,7 +428,35 @@ impl Controller for Mpc {
         self.plan.clone_from(&r.theta);
         self.last = Some(r);
         self.decisions += 1;
+        Ok(())
+    }
+}
+
+impl Controller for Mpc {
+    fn name(&self) -> String {
+        "MPC".into()
+    }
+
+    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        self.replan(obs)?;
         Ok(self.plan[0])
+    }
+
+    fn last_iterations(&self) -> Option<usize> {
+        self.last.as_ref().map(|r| r.iterations)
+    }
+}
+
+impl SpatialController for Mpc<3> {
+    fn name(&self) -> String {
+        "MPC".into()
+    }
+
+    /// The first interval's (u_x, u_z) of the new plan θ = (θ_x; θ_z).
+    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
+        self.replan(obs)?;
+        let m = self.plan.len() / 2;
+        Ok([self.plan[0], self.plan[m]])
     }
 
     fn last_iterations(&self) -> Option<usize> {

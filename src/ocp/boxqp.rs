@@ -79,6 +79,91 @@ pub(crate) fn solve_scalar(a: f64, g: f64, lo: f64, hi: f64) -> Option<BoxQpStep
     })
 }
 
+/// The solution of a two-control box-QP (a 2-axis control's stage).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct BoxQpPair {
+    /// The step δ*.
+    pub step: [f64; 2],
+    /// Which components are on a bound (or fixed): their feedback gains are 0.
+    pub clamped: [bool; 2],
+}
+
+/// Solves min ½ δᵀAδ + gᵀδ on the box lo ≤ δ ≤ hi (two controls; lo ≤ 0 ≤ hi per component,
+/// lo = hi for a component the active set fixes), exactly: a fixed component is set and the
+/// other solved by [`solve_scalar`]; a diagonal A separates into two scalar problems; with A
+/// positive definite the unconstrained minimiser −A⁻¹g if it lies inside the box; otherwise
+/// the minimum lies on the box's boundary (a convex quadratic whose minimiser is outside, or a
+/// nonconvex one), the best of its (at most four) edges, each a component on a finite bound
+/// and the other by [`solve_scalar`]. `None` when the problem is unbounded below (a nonconvex
+/// A with an infinite bound, or an edge that is): the caller raises the regularisation.
+pub(crate) fn solve_pair(
+    a: [[f64; 2]; 2],
+    g: [f64; 2],
+    lo: [f64; 2],
+    hi: [f64; 2],
+) -> Option<BoxQpPair> {
+    // Component c at x (clamped), the other by its scalar QP.
+    let edge = |c: usize, x: f64| -> Option<BoxQpPair> {
+        let f = 1 - c;
+        let s = solve_scalar(a[f][f], g[f] + a[f][c] * x, lo[f], hi[f])?;
+        let (mut step, mut clamped) = ([0.0; 2], [true; 2]);
+        step[c] = x;
+        step[f] = s.step;
+        clamped[f] = s.clamped;
+        Some(BoxQpPair { step, clamped })
+    };
+    for c in 0..2 {
+        if hi[c] <= lo[c] {
+            return edge(c, lo[c]);
+        }
+    }
+    if a[0][1] == 0.0 && a[1][0] == 0.0 {
+        let s0 = solve_scalar(a[0][0], g[0], lo[0], hi[0])?;
+        let s1 = solve_scalar(a[1][1], g[1], lo[1], hi[1])?;
+        return Some(BoxQpPair {
+            step: [s0.step, s1.step],
+            clamped: [s0.clamped, s1.clamped],
+        });
+    }
+    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+    let convex = a[0][0] > 0.0 && det > 0.0;
+    if convex {
+        let x = [
+            (a[0][1] * g[1] - a[1][1] * g[0]) / det,
+            (a[1][0] * g[0] - a[0][0] * g[1]) / det,
+        ];
+        if (0..2).all(|c| lo[c] < x[c] && x[c] < hi[c]) {
+            return Some(BoxQpPair {
+                step: x,
+                clamped: [false; 2],
+            });
+        }
+    }
+    let value = |s: &BoxQpPair| {
+        let d = s.step;
+        0.5 * (d[0] * (a[0][0] * d[0] + a[0][1] * d[1]) + d[1] * (a[1][0] * d[0] + a[1][1] * d[1]))
+            + g[0] * d[0]
+            + g[1] * d[1]
+    };
+    let mut best: Option<(f64, BoxQpPair)> = None;
+    for c in 0..2 {
+        for x in [lo[c], hi[c]] {
+            if !x.is_finite() {
+                if convex {
+                    continue;
+                }
+                return None;
+            }
+            let s = edge(c, x)?;
+            let v = value(&s);
+            if best.is_none_or(|(b, _)| v < b) {
+                best = Some((v, s));
+            }
+        }
+    }
+    best.map(|(_, s)| s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -156,5 +241,53 @@ mod tests {
                 clamped: true
             }
         );
+    }
+
+    /// Reference: the minimiser of ½ δᵀAδ + gᵀδ over a grid of the box (step 10⁻³, the box's
+    /// corners and edges included), against which the exact solution may not be higher; and
+    /// the closed-form unconstrained minimiser when it lies inside.
+    #[test]
+    fn pair_matches_grid_minimum() {
+        let a = [[2.0, 0.8], [0.8, 1.0]];
+        let value = |d: [f64; 2], g: [f64; 2]| {
+            0.5 * (d[0] * (a[0][0] * d[0] + a[0][1] * d[1])
+                + d[1] * (a[1][0] * d[0] + a[1][1] * d[1]))
+                + g[0] * d[0]
+                + g[1] * d[1]
+        };
+        // Inside: −A⁻¹g = (1, −1) for g = −A (1, −1) = (−1.2, 0.2).
+        let s = solve_pair(a, [-1.2, 0.2], [-2.0, -2.0], [2.0, 2.0]).unwrap();
+        assert!((s.step[0] - 1.0).abs() < 1e-15 && (s.step[1] + 1.0).abs() < 1e-15);
+        assert_eq!(s.clamped, [false, false]);
+        for g in [[-5.0, 1.0], [3.0, 3.0], [-0.3, -4.0], [4.0, -0.5]] {
+            let (lo, hi) = ([-1.0, -0.5], [0.7, 1.2]);
+            let s = solve_pair(a, g, lo, hi).unwrap();
+            let mut best = f64::INFINITY;
+            for i in 0..=1700 {
+                for j in 0..=1700 {
+                    let d = [lo[0] + i as f64 * 1e-3, lo[1] + j as f64 * 1e-3];
+                    if d[0] <= hi[0] + 1e-12 && d[1] <= hi[1] + 1e-12 {
+                        best = best.min(value(d, g));
+                    }
+                }
+            }
+            let v = value(s.step, g);
+            assert!(v <= best + 1e-12, "g {g:?}: {v} above the grid's {best}");
+            assert!(best - v <= 1e-5, "g {g:?}: {v} far below the grid's {best}");
+            assert!(s.clamped.iter().any(|&c| c), "g {g:?}: expected a bound");
+        }
+        // A fixed component: the other by its scalar QP (min ½·1·d² + (0.2 + 0.8·0.5) d).
+        let s = solve_pair(a, [1.0, 0.2], [0.5, -3.0], [0.5, 3.0]).unwrap();
+        assert_eq!(s.step[0].to_bits(), 0.5f64.to_bits());
+        assert!((s.step[1] + 0.6).abs() < 1e-15);
+        assert_eq!(s.clamped, [true, false]);
+        // Nonconvex with an infinite bound: unbounded.
+        assert!(solve_pair(
+            [[1.0, 2.0], [2.0, 1.0]],
+            [0.0, 1.0],
+            [-1.0, f64::NEG_INFINITY],
+            [1.0, 1.0]
+        )
+        .is_none());
     }
 }

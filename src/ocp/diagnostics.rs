@@ -10,14 +10,16 @@ use super::solver::Solver;
 use super::stage::{tangent, JacobiansMut, StageAt, StagePoint};
 use crate::error::{Error, OcpError, Result};
 
-impl Solver {
+impl<const DIM: usize> Solver<DIM> {
     /// ∇J(θ) at the nominal by the costate sweep of the backward pass (exact: the discrete
-    /// adjoint in tangent coordinates).
+    /// adjoint in tangent coordinates, planar or spatial).
     pub fn gradient(&mut self) -> Result<Vec<f64>> {
         self.costate()?;
         Ok(self.theta_gradient())
     }
+}
 
+impl Solver {
     /// A_k (2n × 2n) and B_k (2n) at the nominal, in the tangent coordinates ξ = (φ, ω).
     pub fn stage_jacobians(&mut self, k: usize) -> Result<(Mat<f64>, Vec<f64>)> {
         self.check_stage(k)?;
@@ -36,6 +38,7 @@ impl Solver {
             k,
             x,
             u: nom.u[k],
+            ux: 0.0,
         };
         let out = JacobiansMut {
             a: &mut a,

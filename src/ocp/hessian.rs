@@ -128,20 +128,21 @@ impl<D: Scalar> VjpWorkspace<D> {
 }
 
 /// Per-thread workspace of the stage derivatives: the dual-number stage Jacobians
-/// ([`JacobianWorkspace`]) and the dual buffers of the second-order terms.
+/// ([`JacobianWorkspace`], planar or spatial) and the dual buffers of the second-order terms
+/// (planar: the exact model is planar only).
 #[derive(Clone, Debug)]
-pub(crate) struct HessianWorkspace {
+pub(crate) struct HessianWorkspace<const DIM: usize = 2> {
     /// The forward dual step (A_k, B_k alone: [`JacobianWorkspace::jacobians`]).
-    pub jac: JacobianWorkspace,
+    pub jac: JacobianWorkspace<DIM>,
     hb: VjpBuffers<Dv>,
 }
 
-impl HessianWorkspace {
+impl<const DIM: usize> HessianWorkspace<DIM> {
     /// For the stages of `model`.
-    pub fn new(model: &StageModel) -> Result<Self> {
+    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
         Ok(HessianWorkspace {
             jac: JacobianWorkspace::new(model)?,
-            hb: VjpBuffers::new(model.n),
+            hb: VjpBuffers::new(if DIM == 2 { model.n } else { 0 }),
         })
     }
 }
@@ -304,7 +305,7 @@ impl HessianWorkspace {
         let (model, k) = (at.model, at.k);
         let nd = ndir(model.n);
         for cols in chunks(nd) {
-            let u = self.jac.seed(&at, cols.clone());
+            let [u, _] = self.jac.seed(&at, cols.clone());
             self.seed_rates(&at, cols.clone());
             let stage = VjpStage { model, k, u, nu };
             stage_vjp(&mut self.jac.stepper, &mut self.hb, stage, rev)?;
@@ -393,7 +394,13 @@ mod tests {
             omega,
             mu: lambda,
         };
-        let at = StageAt { model, k, x, u };
+        let at = StageAt {
+            model,
+            k,
+            x,
+            u,
+            ux: 0.0,
+        };
         let out = JacobiansMut {
             a: &mut a,
             b: &mut b,
@@ -444,6 +451,7 @@ mod tests {
                 k,
                 x,
                 u: pt.u,
+                ux: 0.0,
             };
             let out = SecondOrderMut {
                 hess: &mut h,

@@ -108,6 +108,18 @@ impl<const DIM: usize> ControlHorizon<DIM> {
         }
     }
 
+    /// The stage and control axis (0: z, 1: x of a 2-axis control) of θ_i: the decision
+    /// k m + axis of the Riccati solver (m = `axes`).
+    #[inline]
+    pub fn decision(&self, i: usize) -> (usize, usize) {
+        let m = self.pieces();
+        if self.axes == 2 && i < m {
+            (self.theta_stage[i], 1)
+        } else {
+            (self.theta_stage[i % m], 0)
+        }
+    }
+
     /// Simulates θ (projected onto the box) into the trial (`into_trial`) or the nominal and
     /// returns J.
     pub fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {

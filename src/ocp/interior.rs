@@ -2,24 +2,51 @@
 //! scheme of HPIPM): the multipliers z, z′ ≥ 0 of the lower and upper bounds, their steps, and
 //! the barrier terms a Riccati pass adds (Q_uu += z/s + z′/s′, l_u += −τ/s + τ/s′).
 
-/// The controls at the QP's current point: v_k = ū_k + δv_k, which stages have a decision,
-/// and the box.
+/// The controls at the QP's current point: v_i = ū_i + δv_i for each decision i = k m + a
+/// (m controls per stage: a = 0 the z component ū_k, a = 1 the x component ū_{x,k} of a
+/// 2-axis control), which stages have a decision, and the box (on every component).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Controls<'a> {
-    /// ū_k, the nominal's controls.
+    /// ū_k, the nominal's controls (z components).
     pub nominal: &'a [f64],
-    /// δv_k.
+    /// ū_{x,k} of a 2-axis control (empty otherwise).
+    pub nominal_x: &'a [f64],
+    /// δv_i.
     pub dv: &'a [f64],
+    /// Per stage.
     pub free: &'a [bool],
     pub lower: f64,
     pub upper: f64,
 }
 
 impl Controls<'_> {
-    /// v_k.
+    /// Controls per stage m.
     #[inline]
-    fn v(&self, k: usize) -> f64 {
-        self.nominal[k] + self.dv[k]
+    fn per_stage(&self) -> usize {
+        if self.nominal_x.is_empty() {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// v_i.
+    #[inline]
+    fn v(&self, i: usize) -> f64 {
+        let m = self.per_stage();
+        let (k, a) = (i / m, i % m);
+        let u = if a == 0 {
+            self.nominal[k]
+        } else {
+            self.nominal_x[k]
+        };
+        u + self.dv[i]
+    }
+
+    /// Whether decision i's stage has a decision.
+    #[inline]
+    fn free(&self, i: usize) -> bool {
+        self.free[i / self.per_stage()]
     }
 }
 
@@ -37,7 +64,7 @@ pub(crate) struct InteriorPoint {
     zh: Vec<f64>,
     dzl: Vec<f64>,
     dzh: Vec<f64>,
-    /// The barrier curvature z/s + z′/s′ and gradient −τ/s + τ/s′ per stage.
+    /// The barrier curvature z/s + z′/s′ and gradient −τ/s + τ/s′ per decision.
     pub quu: Vec<f64>,
     pub lu: Vec<f64>,
     /// Whether the next Riccati pass adds them (and drops the box of its stage QPs).
@@ -45,15 +72,15 @@ pub(crate) struct InteriorPoint {
 }
 
 impl InteriorPoint {
-    /// For a horizon of `steps` stages.
-    pub fn new(steps: usize) -> Self {
+    /// For `decisions` controls (m per stage of the horizon).
+    pub fn new(decisions: usize) -> Self {
         InteriorPoint {
-            zl: vec![0.0; steps + 1],
-            zh: vec![0.0; steps + 1],
-            dzl: vec![0.0; steps + 1],
-            dzh: vec![0.0; steps + 1],
-            quu: vec![0.0; steps + 1],
-            lu: vec![0.0; steps + 1],
+            zl: vec![0.0; decisions],
+            zh: vec![0.0; decisions],
+            dzl: vec![0.0; decisions],
+            dzh: vec![0.0; decisions],
+            quu: vec![0.0; decisions],
+            lu: vec![0.0; decisions],
             on: false,
         }
     }
@@ -82,7 +109,7 @@ impl InteriorPoint {
         let (lo, hi) = (c.lower, c.upper);
         let mut gap = 0.0;
         for k in 0..self.zl.len() {
-            if c.free[k] {
+            if c.free(k) {
                 let u = c.v(k);
                 if lo.is_finite() {
                     gap += (u - lo) * self.zl[k];
@@ -100,7 +127,7 @@ impl InteriorPoint {
         let (lo, hi) = (c.lower, c.upper);
         for k in 0..self.zl.len() {
             let (mut qs, mut ls) = (0.0, 0.0);
-            if c.free[k] {
+            if c.free(k) {
                 let u = c.v(k);
                 if lo.is_finite() {
                     let s = u - lo;
@@ -124,7 +151,7 @@ impl InteriorPoint {
         let (lo, hi) = (c.lower, c.upper);
         let (mut ap, mut ad) = (1.0f64, 1.0f64);
         for k in 0..self.zl.len() {
-            if !c.free[k] {
+            if !c.free(k) {
                 continue;
             }
             let u = c.v(k);
@@ -162,7 +189,7 @@ impl InteriorPoint {
     pub fn step_multipliers(&mut self, c: &Controls<'_>, ad: f64) {
         let (lo, hi) = (c.lower, c.upper);
         for k in 0..self.zl.len() {
-            if c.free[k] {
+            if c.free(k) {
                 if lo.is_finite() {
                     self.zl[k] += ad * self.dzl[k];
                 }

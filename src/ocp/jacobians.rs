@@ -20,12 +20,15 @@ use crate::error::{Error, Result};
 /// ([`riccati::prefetch`]).
 pub(crate) const PREFETCH_AHEAD: usize = 4;
 
-/// The stage Jacobians at the nominal and the workspaces that compute them.
+/// The stage Jacobians at the nominal and the workspaces that compute them, in the planar or
+/// the spatial model.
 #[derive(Clone, Debug)]
-pub(crate) struct JacobianStore {
+pub(crate) struct JacobianStore<const DIM: usize = 2> {
     nxi: usize,
+    /// Controls per stage (columns of B_k).
+    ncu: usize,
     /// One workspace per thread (the second-order pass uses them too).
-    pub ws: Vec<HessianWorkspace>,
+    pub ws: Vec<HessianWorkspace<DIM>>,
     a: Vec<f64>,
     b: Vec<f64>,
     /// Stages per block of the store.
@@ -38,18 +41,18 @@ pub(crate) struct JacobianStore {
 
 /// The whole store for a pass that writes every stage's Jacobians (the second-order pass):
 /// the per-thread workspaces and A_k, B_k of stages 0..N.
-pub(crate) struct WholeStore<'a> {
-    pub ws: &'a mut [HessianWorkspace],
+pub(crate) struct WholeStore<'a, const DIM: usize = 2> {
+    pub ws: &'a mut [HessianWorkspace<DIM>],
     pub a: &'a mut [f64],
     pub b: &'a mut [f64],
 }
 
-impl JacobianStore {
-    /// The store of a horizon of `steps` stages of `model` (2n tangent coordinates `nxi`):
-    /// `options.threads` workspaces (0: the thread pool's), as many stages as
-    /// `options.jacobian_memory` holds.
-    pub fn new(model: &StageModel, options: &OcpOptions, steps: usize) -> Result<Self> {
-        let nxi = model.nx();
+impl<const DIM: usize> JacobianStore<DIM> {
+    /// The store of a horizon of `steps` stages of `model` (n_ξ tangent coordinates `nxi`,
+    /// `ncu` controls per stage): `options.threads` workspaces (0: the thread pool's), as many
+    /// stages as `options.jacobian_memory` holds.
+    pub fn new(model: &StageModel<DIM>, options: &OcpOptions, steps: usize) -> Result<Self> {
+        let (nxi, ncu) = (model.nx(), model.controls());
         let threads = if options.threads == 0 {
             available_threads()
         } else {
@@ -59,19 +62,21 @@ impl JacobianStore {
         let ws = (0..threads)
             .map(|_| HessianWorkspace::new(model))
             .collect::<Result<Vec<_>>>()?;
-        let block = (options.jacobian_memory / Self::stage_bytes(nxi)).clamp(1, steps.max(1));
+        let per = Self::stage_bytes(nxi) + 8 * (ncu - 1) * nxi;
+        let block = (options.jacobian_memory / per).clamp(1, steps.max(1));
         Ok(JacobianStore {
             nxi,
+            ncu,
             ws,
             a: vec![0.0; block * nxi * nxi],
-            b: vec![0.0; block * nxi],
+            b: vec![0.0; block * nxi * ncu],
             block,
             range: None,
             passes: 0,
         })
     }
 
-    /// Bytes of one stage's A_k and B_k.
+    /// Bytes of one stage's A_k and B_k with one control.
     pub fn stage_bytes(nxi: usize) -> usize {
         8 * (nxi * nxi + nxi)
     }
@@ -88,15 +93,20 @@ impl JacobianStore {
 
     /// The Jacobians of the stages `stages` at the nominal `nom` into the store (slot i holds
     /// stage `stages.start + i`), in parallel; nothing when they are there already.
-    pub fn fill(&mut self, model: &StageModel, nom: &Traj, stages: Range<usize>) -> Result<()> {
+    pub fn fill(
+        &mut self,
+        model: &StageModel<DIM>,
+        nom: &Traj<DIM>,
+        stages: Range<usize>,
+    ) -> Result<()> {
         if self.range.as_ref() == Some(&stages) {
             return Ok(());
         }
         let (nxi, count, lo) = (self.nxi, stages.len(), stages.start);
-        let per_a = nxi * nxi;
+        let (per_a, per_b) = (nxi * nxi, nxi * self.ncu);
         let chunk = count.div_ceil(self.ws.len()).max(1);
-        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace| {
-            for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(nxi)).enumerate() {
+        let work = |c: usize, a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace<DIM>| {
+            for (i, (ai, bi)) in a.chunks_mut(per_a).zip(b.chunks_mut(per_b)).enumerate() {
                 let k = lo + c * chunk + i;
                 let x = StagePoint {
                     q: nom.q(k),
@@ -109,17 +119,18 @@ impl JacobianStore {
                     k,
                     x,
                     u: nom.u[k],
+                    ux: nom.ux(k),
                 };
                 ws.jac.jacobians(at, JacobiansMut { a: ai, b: bi })?;
             }
             Ok::<(), Error>(())
         };
         let a = &mut self.a[..count * per_a];
-        let b = &mut self.b[..count * nxi];
+        let b = &mut self.b[..count * per_b];
         #[cfg(feature = "parallel")]
         if self.ws.len() > 1 {
             a.par_chunks_mut(chunk * per_a)
-                .zip(b.par_chunks_mut(chunk * nxi))
+                .zip(b.par_chunks_mut(chunk * per_b))
                 .zip(self.ws.par_iter_mut())
                 .enumerate()
                 .try_for_each(|(c, ((a, b), ws))| work(c, a, b, ws))?;
@@ -129,7 +140,7 @@ impl JacobianStore {
         #[cfg(not(feature = "parallel"))]
         for (c, ((a, b), ws)) in a
             .chunks_mut(chunk * per_a)
-            .zip(b.chunks_mut(chunk * nxi))
+            .zip(b.chunks_mut(chunk * per_b))
             .zip(self.ws.iter_mut())
             .enumerate()
         {
@@ -142,12 +153,12 @@ impl JacobianStore {
 
     /// The workspaces and the store of stages 0..`steps` (every stage in memory), for a pass
     /// that writes them all; [`JacobianStore::filled_whole`] marks them valid afterwards.
-    pub fn whole(&mut self, steps: usize) -> WholeStore<'_> {
+    pub fn whole(&mut self, steps: usize) -> WholeStore<'_, DIM> {
         let nxi = self.nxi;
         WholeStore {
             ws: &mut self.ws,
             a: &mut self.a[..steps * nxi * nxi],
-            b: &mut self.b[..steps * nxi],
+            b: &mut self.b[..steps * nxi * self.ncu],
         }
     }
 
@@ -161,10 +172,10 @@ impl JacobianStore {
     /// A_k and B_k in store slot `slot`.
     #[inline]
     pub fn stage(&self, slot: usize) -> StageJacobians<'_> {
-        let nxi = self.nxi;
+        let (nxi, per_b) = (self.nxi, self.nxi * self.ncu);
         StageJacobians {
             a: &self.a[slot * nxi * nxi..(slot + 1) * nxi * nxi],
-            b: &self.b[slot * nxi..(slot + 1) * nxi],
+            b: &self.b[slot * per_b..(slot + 1) * per_b],
         }
     }
 

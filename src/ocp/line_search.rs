@@ -99,6 +99,40 @@ impl<const DIM: usize> Traj<DIM> {
     pub fn ux(&self, k: usize) -> f64 {
         self.ux.get(k).copied().unwrap_or(0.0)
     }
+
+    /// Component `axis` of u_k: 0 the z component u_k, 1 the x component u_{x,k}.
+    #[inline]
+    pub fn control(&self, k: usize, axis: usize) -> f64 {
+        if axis == 0 {
+            self.u[k]
+        } else {
+            self.ux(k)
+        }
+    }
+
+    /// The Gauss-Newton residual at t_k and its derivative in the attitude of pendulum 1,
+    /// (R, ∂R_c/∂φ_{1,a}): planar (r_k, ∂r_k/∂φ₁ in [0][0], [`Traj::dresidual`]); spatial
+    /// R_k = (R_z, R_x) and ∂R/∂M₀ (`residual_vec`) times ∂(M₀_z, M₀ₓ)/∂φ_{1,a} =
+    /// s ((e_a)_z, (e_a)_x) in the basis e_a(q₁) of the stage map's chart ([`tangent_basis`]).
+    #[inline]
+    pub fn residual_model(&self, k: usize, scale: f64) -> ([f64; 2], [[f64; 2]; 2]) {
+        let q = &self.q[k * self.n];
+        if DIM == 2 {
+            let dm = scale * q[0];
+            let d = self.dresidual_dm[k] * dm;
+            return ([self.residual[k], 0.0], [[d, 0.0], [0.0, 0.0]]);
+        }
+        let e = tangent_basis(q);
+        let rv = &self.residual_vec[k];
+        let mut jac = [[0.0; 2]; 2];
+        for (a, ea) in e.iter().enumerate() {
+            let dm = [scale * ea[DIM - 1], scale * ea[0]];
+            for (c, row) in jac.iter_mut().enumerate() {
+                row[a] = rv.jac[c][0] * dm[0] + rv.jac[c][1] * dm[1];
+            }
+        }
+        (rv.r, jac)
+    }
 }
 
 impl Traj {
@@ -196,23 +230,28 @@ fn chart_angles<const DIM: usize>(a: &[f64; DIM], b: &[f64; DIM]) -> [f64; 2] {
     [theta * dot(&e[0], &perp), theta * dot(&e[1], &perp)]
 }
 
-/// The control of a free stage k under the feedback law `f`: ū_k + α k_k + K_k δz_k (before the
-/// clamp), δz_k = (δφ, δω, δw) from the state in `stepper` (its ω written into `omega`, and
-/// `scratch` = M⁻¹p): δφ by [`chart_angles`], δω planar ωᵢ − ω̄ᵢ, spatial ē_a·vᵢ − ω̄_{i,a}
-/// (the nominal chart's map L applied to the state's velocity).
+/// The controls of a free stage k under the feedback law `f`: ū_i + α k_i + K_i δz_k for each
+/// control a (decision i = k m + a; before the clamp), δz_k = (δφ, δω, δw) from the state in
+/// `stepper` (its ω written into `omega`, and `scratch` = M⁻¹p): δφ by [`chart_angles`], δω
+/// planar ωᵢ − ω̄ᵢ, spatial ē_a·vᵢ − ω̄_{i,a} (the nominal chart's map L applied to the state's
+/// velocity), δw = w − ū_{k−1} (`w`: u_{k−1} of this rollout, both components).
 fn feedback_control<const DIM: usize>(
     f: &Feedback<'_, DIM>,
     model: &StageModel<DIM>,
     stepper: &Stepper<f64, DIM>,
-    (k, w): (usize, f64),
+    (k, w): (usize, [f64; 2]),
     (omega, scratch): (&mut [f64], &mut [[f64; DIM]]),
-) -> f64 {
+) -> [f64; 2] {
     let n = model.n;
     let na = DIM - 1;
     let nw = n * na;
-    let mut v = f.nominal.u[k] + f.alpha * f.ff[k];
+    let m = if f.nominal.ux.is_empty() { 1 } else { 2 };
+    let mut v = [0.0; 2];
+    for (a, va) in v.iter_mut().enumerate().take(m) {
+        *va = f.nominal.control(k, a) + f.alpha * f.ff[k * m + a];
+    }
     if k > 0 {
-        let g = &f.gain[k * f.nz..(k + 1) * f.nz];
+        let gain = |a: usize| &f.gain[(k * m + a) * f.nz..(k * m + a + 1) * f.nz];
         let (qn, wn) = (f.nominal.q(k), f.nominal.omega(k));
         let st = &stepper.state;
         // ω of the new state into `out` first.
@@ -220,24 +259,31 @@ fn feedback_control<const DIM: usize>(
         for i in 0..n {
             let dphi = chart_angles(&qn[i], &st.q[i]);
             if DIM == 2 {
-                v += g[i] * dphi[0] + g[n + i] * (omega[i] - wn[i]);
+                let g = gain(0);
+                v[0] += g[i] * dphi[0] + g[n + i] * (omega[i] - wn[i]);
                 continue;
             }
             let e = tangent_basis(&qn[i]);
-            for a in 0..na {
-                let j = i * na + a;
-                v += g[j] * dphi[a] + g[nw + j] * (dot(&e[a], &scratch[i]) - wn[j]);
+            for (c, vc) in v.iter_mut().enumerate().take(m) {
+                let g = gain(c);
+                for a in 0..na {
+                    let j = i * na + a;
+                    *vc += g[j] * dphi[a] + g[nw + j] * (dot(&e[a], &scratch[i]) - wn[j]);
+                }
             }
         }
-        if f.nz > 2 * nw {
-            v += g[2 * nw] * (w - f.nominal.u[k - 1]);
+        for (c, vc) in v.iter_mut().enumerate().take(m) {
+            let g = gain(c);
+            for b in 0..f.nz - 2 * nw {
+                *vc += g[2 * nw + b] * (w[b] - f.nominal.control(k - 1, b));
+            }
         }
     }
     v
 }
 
 /// Rolls out the stage maps from the initial state, writing `out` and its cost. With `fb`
-/// (planar only) the free controls follow the feedback law; without it they are `out.u` (and
+/// the free controls follow the feedback law; without it they are `out.u` (and
 /// `out.ux`) as given. Held stages copy the previous control. Controls stay in the box.
 /// `scratch` has length n.
 fn rollout<const DIM: usize>(
@@ -267,8 +313,9 @@ fn rollout<const DIM: usize>(
             (w, wx)
         } else if let Some(f) = fb {
             let omega = &mut out.omega[k * nw..(k + 1) * nw];
-            let v = feedback_control(f, model, stepper, (k, w), (omega, scratch));
-            (v.clamp(lo, hi), 0.0)
+            let v = feedback_control(f, model, stepper, (k, [w, wx]), (omega, scratch));
+            let vx = if two_axis { v[1].clamp(lo, hi) } else { 0.0 };
+            (v[0].clamp(lo, hi), vx)
         } else {
             (out.u[k], out.ux(k))
         };

@@ -207,7 +207,7 @@
 //! objectives on rows 3, 6 and 8 and lower ones on rows 1 (22.93) and 9;
 //! `cargo bench --bench ocp -- ocp_table_3_4`).
 //!
-//! Supported: the planar model (`DIM = 2`; and for [`Condensed`] also the spatial model, below)
+//! Supported: the planar model (`DIM = 2`) and the spatial model (`DIM = 3`, below),
 //! with a free tip (cantilever, riser), every objective
 //! with a Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k²
 //! ([`Objective::gauss_newton`], `ocp/cost.rs`: c and c_sum of
@@ -229,10 +229,24 @@
 //! c_sum, |M₀|^p for the power objective. This needs an objective of |M₀| alone, checked at
 //! construction ([`OcpError::AnisotropicObjective`]). The box holds each component. A planar
 //! problem runs the planar code (`DIM = 2`) bit for bit as before (`tables --json` identical).
-//! The Riccati solver ([`Solver`], [`solve`]) is planar: its stage Jacobians, Riccati passes and
-//! interior point carry one control per stage in the planar tangent coordinates; the spatial
-//! chart they would need ([`stage`]'s `tangent_basis`, the line search's spatial
-//! `chart_angles`) is in place, the 2-control recursion is not.
+//! The Riccati solver ([`Solver`], [`solve`]) is written once over the dimension too
+//! (`Solver<DIM>`): its stage Jacobians A_k (4n × 4n) and B_k (4n × m, m = 1 or 2 controls
+//! per stage) come from the same dual-number stage map in the spatial chart of [`stage`]
+//! (δφ_{i,a} = e_a·δqᵢ, δω_{i,a} = e_a·(M⁻¹δp)ᵢ in the basis e_a(qᵢ) of the tangent plane, the
+//! chart the closed-loop rollouts measure their deviations in, so the costate gradient is the
+//! adjoint's: tests/ocp_spatial.rs, to 10⁻¹²); the residual's gradient and Gauss-Newton
+//! curvature act on both angles of pendulum 1 (l_x = w J_Rᵀ R, l_xx = w J_RᵀJ_R with
+//! J_R = ∂R/∂M₀ ∂M₀/∂φ₁); the recursion carries m controls per stage (Q_uu m × m, K m × n_z;
+//! with m = 1 the planar scalar code, bit for bit), the interior point one pair of bound
+//! multipliers per control, the augmented state w_k = u_{k−1} both components, and the stage
+//! box-QP with two controls is solved exactly ([`boxqp`]'s `solve_pair`). The exact model
+//! (H_k by forward-over-reverse steps, `hessian.rs`) is planar: in the spatial model the
+//! iteration is Gauss-Newton throughout ([`Curvature`] is ignored there), so where the residual
+//! stays large it converges linearly and may end at J's round-off
+//! ([`Termination::RoundOff`]) rather than at the gradient tolerance, as the planar
+//! Gauss-Newton run does on the same problem (tests/ocp_spatial.rs: per-step, ρ = 0.1, the
+//! objective within 10⁻⁹ of the planar exact model's). A planar problem runs `Solver<2>`,
+//! whose arithmetic is that of the planar solver before (`tables --json` identical).
 //!
 //! # Example
 //! ```
@@ -286,9 +300,10 @@ use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::Result;
 
 /// Minimises J of a [`ControlProblem`] with per-step or piecewise-constant controls from θ₀
-/// (projected onto the box) by the structured Gauss-Newton method of the module docs.
-pub fn solve<P: ControlMap, O: Objective>(
-    problem: &ControlProblem<P, O>,
+/// (projected onto the box) by the structured Gauss-Newton method of the module docs, in the
+/// planar or the spatial model.
+pub fn solve<P: ControlMap, O: Objective, const DIM: usize>(
+    problem: &ControlProblem<P, O, DIM>,
     theta0: &[f64],
     options: &OcpOptions,
 ) -> Result<OcpResult> {

@@ -15,9 +15,10 @@ const GAP_FLOOR: f64 = 1e-15;
 const MAX_QP_ITERS: usize = 40;
 
 /// The controls at the model point δv of the horizon's nominal.
-fn controls<'a>(hz: &'a ControlHorizon, dv: &'a [f64]) -> Controls<'a> {
+fn controls<'a, const DIM: usize>(hz: &'a ControlHorizon<DIM>, dv: &'a [f64]) -> Controls<'a> {
     Controls {
         nominal: &hz.nominal.u,
+        nominal_x: &hz.nominal.ux,
         dv,
         free: &hz.free,
         lower: hz.opts.lower,
@@ -32,7 +33,7 @@ struct InteriorStep {
     lengths: StepLengths,
 }
 
-impl Solver {
+impl<const DIM: usize> Solver<DIM> {
     /// The linearised rollout of [`super::iterate::QpIterate::linearised`] on the current
     /// nominal, stored Jacobians and Riccati pass.
     fn linearised(&mut self, alpha: f64, mode: Arc) -> f64 {
@@ -81,11 +82,12 @@ impl Solver {
         }
         self.qp.at_nominal();
         let mut any = false;
-        for k in 0..=self.horizon.steps {
-            let u = self.horizon.nominal.u[k];
-            self.qp.active[k] = self.horizon.free[k] && (u <= lo || u >= hi);
-            self.qp.fixed[k] = 0.0;
-            any |= self.qp.active[k];
+        let m = self.ncu;
+        for i in 0..(self.horizon.steps + 1) * m {
+            let u = self.horizon.nominal.control(i / m, i % m);
+            self.qp.active[i] = self.horizon.free[i / m] && (u <= lo || u >= hi);
+            self.qp.fixed[i] = 0.0;
+            any |= self.qp.active[i];
         }
         if !any || !self.sweep(true)? {
             return Ok(None);
@@ -117,6 +119,7 @@ impl Solver {
         let steps = self.horizon.steps;
         let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let nb = (0..=steps).filter(|&k| self.horizon.free[k]).count()
+            * self.ncu
             * (usize::from(lo.is_finite()) + usize::from(hi.is_finite()));
         let mut sigma = 0.1;
         let mut gap0 = 0.0;
@@ -216,14 +219,15 @@ impl Solver {
     fn advance(&mut self, alpha: f64, q0: f64) -> f64 {
         let (mut s0, mut s1) = (0.0, 0.0);
         let qp = &mut self.qp;
-        for k in 0..=self.horizon.steps {
-            if self.horizon.free[k] {
-                let (g, dv, step) = (self.riccati.grad[k], qp.dv[k], qp.dir[k]);
-                let (lb, qb) = (self.ip.lu[k], self.ip.quu[k]);
+        let m = self.ncu;
+        for i in 0..(self.horizon.steps + 1) * m {
+            if self.horizon.free[i / m] {
+                let (g, dv, step) = (self.riccati.grad[i], qp.dv[i], qp.dir[i]);
+                let (lb, qb) = (self.ip.lu[i], self.ip.quu[i]);
                 let g1 = -lb - qb * step;
                 s0 += (g - lb - self.prox * dv) * step;
                 s1 += (g1 - self.prox * (dv + step)) * step;
-                self.riccati.grad[k] = (g - lb) - alpha * (g + qb * step);
+                self.riccati.grad[i] = (g - lb) - alpha * (g + qb * step);
             }
         }
         for (x, t) in qp.dv.iter_mut().zip(&qp.dv_t) {
@@ -255,9 +259,10 @@ impl Solver {
         let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
         let kappa = 1e-2 * width;
-        for k in 0..=self.horizon.steps {
-            let u = self.horizon.nominal.u[k];
-            self.qp.dir[k] = if self.horizon.free[k] {
+        let m = self.ncu;
+        for i in 0..(self.horizon.steps + 1) * m {
+            let u = self.horizon.nominal.control(i / m, i % m);
+            self.qp.dir[i] = if self.horizon.free[i / m] {
                 let (l, h) = (lo - u, hi - u);
                 let c = if h - l > 2.0 * kappa {
                     0.0f64.clamp(l + kappa, h - kappa)
@@ -296,17 +301,17 @@ impl Solver {
     fn snap_to_bounds(&mut self) {
         let (lo, hi) = (self.horizon.opts.lower, self.horizon.opts.upper);
         let width = if (hi - lo).is_finite() { hi - lo } else { 1.0 };
-        let nz = self.nz;
-        for k in 0..=self.horizon.steps {
-            if !self.horizon.free[k] {
+        let (nz, m) = (self.nz, self.ncu);
+        for i in 0..(self.horizon.steps + 1) * m {
+            if !self.horizon.free[i / m] {
                 continue;
             }
             let snap = self
                 .ip
-                .snap(&controls(&self.horizon, &self.qp.dv), k, width);
+                .snap(&controls(&self.horizon, &self.qp.dv), i, width);
             if let Some(b) = snap {
-                self.qp.dv[k] = b - self.horizon.nominal.u[k];
-                self.riccati.gain[k * nz..(k + 1) * nz].fill(0.0);
+                self.qp.dv[i] = b - self.horizon.nominal.control(i / m, i % m);
+                self.riccati.gain[i * nz..(i + 1) * nz].fill(0.0);
             }
         }
     }

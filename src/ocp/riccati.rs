@@ -38,7 +38,7 @@
 //! scalar, so no factorisation is needed: the box-QP is a clamp ([`super::boxqp`]) and the
 //! feedback is a scaled row. Nothing allocates per stage.
 
-use super::boxqp::{solve_scalar, BoxQpStep};
+use super::boxqp::{solve_pair, solve_scalar, BoxQpPair, BoxQpStep};
 pub(crate) use super::cost::StageCost;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
@@ -134,7 +134,8 @@ fn symmetrise(dst: &mut Mat<f64>, src: &Mat<f64>) {
     }
 }
 
-/// A stage's Jacobians in the tangent coordinates: A_k (column-major 2n × 2n) and B_k (2n).
+/// A stage's Jacobians in the tangent coordinates: A_k (column-major n_ξ × n_ξ) and B_k
+/// (n_ξ per control, the z component's column first).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageJacobians<'a> {
     /// A_k = ∂ξ_{k+1}/∂ξ_k.
@@ -143,30 +144,33 @@ pub(crate) struct StageJacobians<'a> {
     pub b: &'a [f64],
 }
 
-/// What the backward pass needs of stage k.
+/// What the backward pass needs of stage k. Per control (index a < m: 0 the z component,
+/// 1 the x component of a 2-axis control) the arrays hold one entry; the residual has
+/// `nc` = DIM − 1 components and coordinates (planar: one, the rest 0).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct StageInput<'a> {
     pub k: usize,
     pub free: bool,
-    /// The residual r_k (linearised about the nominal: r_k + ∂r_k/∂φ₁ δφ₁ at the model point).
-    pub residual: f64,
-    /// ∂r_k/∂φ₁ = r_k′(M₀) ∂M₀/∂φ₁ at the nominal q_k.
-    pub dresidual: f64,
+    /// The residual R_k linearised about the nominal at the model point: planar
+    /// r_k + ∂r_k/∂φ₁ δφ₁, spatial R_k + ∂R_k/∂φ₁ δφ₁ with φ₁ = (φ_{1,0}, φ_{1,1}).
+    pub residual: [f64; 2],
+    /// ∂R_{k,c}/∂φ_{1,a} at the nominal q_k (planar: r_k′(M₀) ∂M₀/∂φ₁ in [0][0]).
+    pub dresidual: [[f64; 2]; 2],
     /// u_k and w_k = u_{k−1} (0 at k = 0).
-    pub u: f64,
-    pub w: f64,
+    pub u: [f64; 2],
+    pub w: [f64; 2],
     /// Bounds of the step δv_k (lo ≤ 0 ≤ hi).
-    pub lo: f64,
-    pub hi: f64,
+    pub lo: [f64; 2],
+    pub hi: [f64; 2],
     /// Added to l_u at a free stage (the gradient μ δv of a proximal term ½ μ δv²).
-    pub lu_shift: f64,
-    /// Added to Q_uu at a free stage (interior-point barrier curvature z/s).
-    pub quu_shift: f64,
+    pub lu_shift: [f64; 2],
+    /// Added to Q_uu's diagonal at a free stage (interior-point barrier curvature z/s).
+    pub quu_shift: [f64; 2],
     /// A_k and B_k; `None` at the last stage.
     pub jac: Option<StageJacobians<'a>>,
     /// The exact second-order term of the stage map, H_k = ∇²(ν_{k+1}·F̃_k) over (ξ, u)
     /// (column-major (2n + 1)², [`super::hessian`]); `None` for Gauss-Newton. Only without an
-    /// augmented state.
+    /// augmented state, in the planar model.
     pub hess: Option<&'a [f64]>,
     /// The stage cost's curvature beyond Gauss-Newton, added to l_φ₁φ₁:
     /// w r (r″ (∂M₀/∂φ₁)² + r′ ∂²M₀/∂φ₁²) with ∂²M₀/∂φ₁² = −M₀ (M₀ = s sin φ₁; c_sum:
@@ -178,13 +182,24 @@ pub(crate) struct StageInput<'a> {
     pub dv: f64,
 }
 
-/// (Q_u, Q_uu, g) of a stage: the scalar control terms of the recursion and the exact
-/// gradient's entry g = l_u + B̃ᵀν′.
+/// (Q_u, Q_uu, g) of a stage: the control terms of the recursion (m × 1, m × m) and the exact
+/// gradient's entries g = l_u + B̃ᵀν′.
 #[derive(Clone, Copy, Debug)]
 struct QuTerms {
-    qu: f64,
-    quu: f64,
-    g: f64,
+    qu: [f64; 2],
+    quu: [[f64; 2]; 2],
+    g: [f64; 2],
+}
+
+/// The sizes of the recursion: tangent coordinates n_ξ, the augmented state (0 or m), the
+/// controls per stage m (1, or 2 for a 2-axis control) and the residual's components n_c
+/// (1 planar, 2 spatial).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RiccatiShape {
+    pub nxi: usize,
+    pub aug: usize,
+    pub controls: usize,
+    pub residuals: usize,
 }
 
 /// The backward pass's workspace and results (sized once per problem).
@@ -193,9 +208,13 @@ pub(crate) struct Riccati {
     nxi: usize,
     aug: usize,
     nz: usize,
+    /// Controls per stage m.
+    ncu: usize,
+    /// Residual components n_c.
+    nc: usize,
     s_next: Mat<f64>,
     s_cur: Mat<f64>,
-    /// E = [Ã B̃] (n_z × (n_z + 1)), R = [S′E s′ ν′] (n_z × (n_z + 3)) and EᵀR.
+    /// E = [Ã B̃] (n_z × (n_z + m)), R = [S′E s′ ν′] (n_z × (n_z + m + 2)) and EᵀR.
     ab: Mat<f64>,
     rhs: Mat<f64>,
     out: Mat<f64>,
@@ -206,33 +225,43 @@ pub(crate) struct Riccati {
     nu: Vec<f64>,
     lx: Vec<f64>,
     qx: Vec<f64>,
+    /// Q_ux, row a (n_z entries) per control.
     qux: Vec<f64>,
-    /// Feedback gains K_k (n_z per stage).
+    /// Feedback gains K_k (n_z per decision: decision k m + a, a < m).
     pub gain: Vec<f64>,
-    /// Feedforward steps k_k.
+    /// Feedforward steps k_k (per decision).
     pub ff: Vec<f64>,
-    /// Exact gradient of J with respect to the decision of each free stage (0 when held).
+    /// Exact gradient of J with respect to each decision of a free stage (0 when held).
     pub grad: Vec<f64>,
-    /// Σ k Q_u and Σ ½ k² Q_uu (ΔJ(α) = α d1 + α² d2).
+    /// Σ k Q_u and Σ ½ kᵀ Q_uu k (ΔJ(α) = α d1 + α² d2).
     pub d1: f64,
     pub d2: f64,
-    /// Σ Q_uu over the free stages and their count (the scale of the regularisation).
+    /// Σ Q_uu's diagonal over the free decisions and their count (the scale of the
+    /// regularisation).
     pub quu_sum: f64,
     pub quu_count: usize,
 }
 
 impl Riccati {
-    pub fn new(nxi: usize, aug: usize, steps: usize) -> Self {
+    pub fn new(shape: RiccatiShape, steps: usize) -> Self {
+        let RiccatiShape {
+            nxi,
+            aug,
+            controls: m,
+            residuals,
+        } = shape;
         let nz = nxi + aug;
         Riccati {
             nxi,
             aug,
             nz,
+            ncu: m,
+            nc: residuals,
             s_next: Mat::zeros(nz, nz),
             s_cur: Mat::zeros(nz, nz),
-            ab: Mat::zeros(nz, nz + 1),
-            rhs: Mat::zeros(nz, nz + 3),
-            out: Mat::zeros(nz + 1, nz + 3),
+            ab: Mat::zeros(nz, nz + m),
+            rhs: Mat::zeros(nz, nz + m + 2),
+            out: Mat::zeros(nz + m, nz + m + 2),
             qxx: Mat::zeros(nz, nz),
             sv_next: vec![0.0; nz],
             sv: vec![0.0; nz],
@@ -240,10 +269,10 @@ impl Riccati {
             nu: vec![0.0; nz],
             lx: vec![0.0; nz],
             qx: vec![0.0; nz],
-            qux: vec![0.0; nz],
-            gain: vec![0.0; (steps + 1) * nz],
-            ff: vec![0.0; steps + 1],
-            grad: vec![0.0; steps + 1],
+            qux: vec![0.0; m * nz],
+            gain: vec![0.0; (steps + 1) * m * nz],
+            ff: vec![0.0; (steps + 1) * m],
+            grad: vec![0.0; (steps + 1) * m],
             d1: 0.0,
             d2: 0.0,
             quu_sum: 0.0,
@@ -262,26 +291,50 @@ impl Riccati {
         self.quu_count = 0;
     }
 
+    /// l_x of the residual: w J_Rᵀ R over φ₁'s coordinates (planar: w r ∂r/∂φ₁ at φ₁).
+    fn residual_gradient(&mut self, inp: &StageInput<'_>, w: f64) {
+        let (r, d) = (inp.residual, inp.dresidual);
+        if self.nc == 1 {
+            self.lx[0] = w * r[0] * d[0][0];
+            return;
+        }
+        for a in 0..self.nc {
+            self.lx[a] = w * (r[0] * d[0][a] + r[1] * d[1][a]);
+        }
+    }
+
+    /// l_x and l_u of the stage's controls (effort, rate, proximal shift) into `lx` and the
+    /// returned l_u.
+    fn control_gradient(&mut self, inp: &StageInput<'_>, cost: &StageCost) -> [f64; 2] {
+        let (wi, k) = (self.nxi, inp.k);
+        let e = cost.effort(k);
+        let rate = if k > 0 { cost.rate } else { 0.0 };
+        let mut lu = [0.0; 2];
+        for a in 0..self.ncu {
+            if inp.free {
+                lu[a] = 2.0 * e * inp.u[a] + 2.0 * rate * (inp.u[a] - inp.w[a]) + inp.lu_shift[a];
+                if self.aug > 0 {
+                    self.lx[wi + a] = -2.0 * rate * (inp.u[a] - inp.w[a]);
+                }
+            } else {
+                self.lx[wi + a] = 2.0 * e * inp.w[a];
+            }
+        }
+        lu
+    }
+
     /// The costate sweep alone for stage k (called for k = N, …, 0 after [`Riccati::begin`]):
     /// ν_k = l_x + Ãᵀν_{k+1} and the gradient g_k = l_u + B̃ᵀν_{k+1} into `grad` (O(n_z²) per
     /// stage, no Riccati matrices).
     pub fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
-        let (nxi, k) = (self.nxi, inp.k);
+        let (nxi, k, m) = (self.nxi, inp.k, self.ncu);
         let wi = nxi;
-        let (w, e) = (cost.weight(k), cost.effort(k));
-        let rate = if k > 0 { cost.rate } else { 0.0 };
+        let w = cost.weight(k);
         self.lx.fill(0.0);
-        self.lx[0] = w * inp.residual * inp.dresidual;
-        let mut lu = 0.0;
-        if inp.free {
-            lu = 2.0 * e * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
-            if self.aug == 1 {
-                self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
-            }
-        } else {
-            self.lx[wi] = 2.0 * e * inp.w;
-        }
-        lu += self.second_order(inp, false).0;
+        self.residual_gradient(inp, w);
+        let mut lu = self.control_gradient(inp, cost);
+        lu[0] += self.second_order(inp, false).0;
+        let grad = &mut self.grad[k * m..(k + 1) * m];
         match inp.jac {
             Some(StageJacobians { a, b }) => {
                 let nu1 = &self.nu_next;
@@ -290,25 +343,29 @@ impl Riccati {
                     self.nu[j] =
                         self.lx[j] + col.iter().zip(&nu1[..nxi]).map(|(x, y)| x * y).sum::<f64>();
                 }
-                let bnu = b[..nxi]
-                    .iter()
-                    .zip(&nu1[..nxi])
-                    .map(|(x, y)| x * y)
-                    .sum::<f64>();
-                let nuw = if self.aug == 1 { nu1[wi] } else { 0.0 };
-                if inp.free {
-                    self.grad[k] = lu + bnu + nuw;
-                    if self.aug == 1 {
-                        self.nu[wi] = self.lx[wi];
+                for c in 0..m {
+                    let bnu = b[c * nxi..(c + 1) * nxi]
+                        .iter()
+                        .zip(&nu1[..nxi])
+                        .map(|(x, y)| x * y)
+                        .sum::<f64>();
+                    let nuw = if self.aug > 0 { nu1[wi + c] } else { 0.0 };
+                    if inp.free {
+                        grad[c] = lu[c] + bnu + nuw;
+                        if self.aug > 0 {
+                            self.nu[wi + c] = self.lx[wi + c];
+                        }
+                    } else {
+                        grad[c] = 0.0;
+                        self.nu[wi + c] = self.lx[wi + c] + bnu + nuw;
                     }
-                } else {
-                    self.grad[k] = 0.0;
-                    self.nu[wi] = self.lx[wi] + bnu + nuw;
                 }
             }
             _ => {
                 self.nu.copy_from_slice(&self.lx);
-                self.grad[k] = if inp.free { lu } else { 0.0 };
+                for c in 0..m {
+                    grad[c] = if inp.free { lu[c] } else { 0.0 };
+                }
             }
         }
         std::mem::swap(&mut self.nu, &mut self.nu_next);
@@ -332,53 +389,56 @@ impl Riccati {
         bounded
     }
 
-    /// The stage cost's derivatives (Gauss-Newton: l_xx = w ∇r∇rᵀ): l_x into `lx`, l_xx
+    /// The stage cost's derivatives (Gauss-Newton: l_xx = w J_RᵀJ_R): l_x into `lx`, l_xx
     /// into `qxx`, l_ux into `qux`; returns (l_u, l_uu, l_u) as the start of (Q_u, Q_uu, g).
     fn stage_costs(&mut self, inp: &StageInput<'_>, cost: &StageCost) -> QuTerms {
-        let (nxi, k) = (self.nxi, inp.k);
-        let wi = nxi; // index of w when aug = 1
+        let (nxi, nz, k) = (self.nxi, self.nz, inp.k);
+        let wi = nxi; // index of w when aug > 0
         let (w, e) = (cost.weight(k), cost.effort(k));
         let rate = if k > 0 { cost.rate } else { 0.0 };
         self.lx.fill(0.0);
-        self.lx[0] = w * inp.residual * inp.dresidual;
-        let lxx00 = w * inp.dresidual * inp.dresidual;
-        let mut lxx_ww = 0.0;
-        let (mut lu, mut luu, mut lux_w) = (0.0, 0.0, 0.0);
+        self.residual_gradient(inp, w);
+        let mut lu = self.control_gradient(inp, cost);
+        let (mut luu, mut lxx_ww, mut lux_w) = (0.0, 0.0, 0.0);
         if inp.free {
-            lu = 2.0 * e * inp.u + 2.0 * rate * (inp.u - inp.w) + inp.lu_shift;
             luu = 2.0 * (e + rate);
-            if self.aug == 1 {
-                self.lx[wi] = -2.0 * rate * (inp.u - inp.w);
+            if self.aug > 0 {
                 lxx_ww = 2.0 * rate;
                 lux_w = -2.0 * rate;
             }
         } else {
             // held: u = w; the rate term vanishes inside a piece.
-            self.lx[wi] = 2.0 * e * inp.w;
             lxx_ww = 2.0 * e;
         }
         self.qxx.fill(0.0);
-        self.qxx[(0, 0)] = lxx00;
-        if self.aug == 1 {
-            self.qxx[(wi, wi)] += lxx_ww;
+        let d = inp.dresidual;
+        if self.nc == 1 {
+            self.qxx[(0, 0)] = w * d[0][0] * d[0][0];
+        } else {
+            for a in 0..self.nc {
+                for b in 0..self.nc {
+                    self.qxx[(a, b)] = w * (d[0][a] * d[0][b] + d[1][a] * d[1][b]);
+                }
+            }
         }
         self.qux.fill(0.0);
-        if self.aug == 1 {
-            self.qux[wi] = lux_w;
+        for a in 0..self.aug {
+            self.qxx[(wi + a, wi + a)] += lxx_ww;
+            self.qux[a * nz + wi + a] = lux_w;
         }
         let (dlu, dluu) = self.second_order(inp, true);
-        lu += dlu;
-        luu += dluu;
-        QuTerms {
-            qu: lu,
-            quu: luu,
-            g: lu,
+        lu[0] += dlu;
+        let mut quu = [[0.0; 2]; 2];
+        for (a, row) in quu.iter_mut().enumerate().take(self.ncu) {
+            row[a] = luu;
         }
+        quu[0][0] += dluu;
+        QuTerms { qu: lu, quu, g: lu }
     }
 
     /// The exact second-order terms of the stage at the model point δ = (δz, δv): l_x += H_xz δ
     /// (+ curv δφ₁ on φ₁), and with `matrices` l_xx += H_xx (+ curv), l_ux += H_ux; returns
-    /// (H_uz δ, H_uu) for l_u and l_uu. Nothing without them (Gauss-Newton).
+    /// (H_uz δ, H_uu) for l_u and l_uu. Nothing without them (Gauss-Newton; planar only).
     fn second_order(&mut self, inp: &StageInput<'_>, matrices: bool) -> (f64, f64) {
         let nxi = self.nxi;
         if inp.curv != 0.0 {
@@ -418,10 +478,10 @@ impl Riccati {
     ///
     /// All of it from two faer products over the stage's E = [Ã B̃] (B̃ only at a free stage):
     /// R = [S′E  s′  ν′], then Eᵀ R, whose blocks are every term above (the vector terms ride
-    /// along as three extra columns of the matrix kernel instead of 4n_z dot products).
+    /// along as two extra columns of the matrix kernel instead of 4n_z dot products).
     fn propagate(&mut self, inp: &StageInput<'_>, jac: StageJacobians<'_>, q: QuTerms) -> QuTerms {
-        let nz = self.nz;
-        let m = nz + usize::from(inp.free);
+        let (nz, mu) = (self.nz, self.ncu);
+        let m = nz + if inp.free { mu } else { 0 };
         self.fill_stage_matrix(inp, jac);
         let e = self.ab.as_ref().subcols(0, m);
         matmul(
@@ -458,18 +518,23 @@ impl Riccati {
         if !inp.free {
             return q;
         }
-        for (d, s) in self.qux.iter_mut().zip(self.out.col_as_slice(nz)) {
-            *d += s;
+        let mut r = q;
+        for a in 0..mu {
+            let row = &mut self.qux[a * nz..(a + 1) * nz];
+            for (d, s) in row.iter_mut().zip(self.out.col_as_slice(nz + a)) {
+                *d += s;
+            }
+            r.qu[a] = q.qu[a] + ox[nz + a];
+            r.g[a] = q.g[a] + on[nz + a];
+            for b in 0..mu {
+                r.quu[a][b] = q.quu[a][b] + self.out[(nz + a, nz + b)];
+            }
         }
-        QuTerms {
-            qu: q.qu + ox[nz],
-            quu: q.quu + self.out[(nz, nz)],
-            g: q.g + on[nz],
-        }
+        r
     }
 
-    /// E = [Ã B̃] of the stage into `ab` (module docs: free Ã = [A 0; 0 0], B̃ = [B; 1]; held
-    /// Ã = [A B; 0 1], no B̃).
+    /// E = [Ã B̃] of the stage into `ab` (module docs: free Ã = [A 0; 0 0], B̃ = [B; I]; held
+    /// Ã = [A B; 0 I], no B̃).
     fn fill_stage_matrix(&mut self, inp: &StageInput<'_>, jac: StageJacobians<'_>) {
         let StageJacobians { a, b } = jac;
         let (nxi, nz) = (self.nxi, self.nz);
@@ -477,24 +542,24 @@ impl Riccati {
         for j in 0..nxi {
             let col = self.ab.col_as_slice_mut(j);
             col[..nxi].copy_from_slice(&a[j * nxi..(j + 1) * nxi]);
-            if nz > nxi {
-                col[wi] = 0.0;
-            }
+            col[nxi..].fill(0.0);
         }
-        if nz > nxi {
-            let col = self.ab.col_as_slice_mut(wi);
-            if inp.free {
-                col.fill(0.0);
-            } else {
-                col[..nxi].copy_from_slice(&b[..nxi]);
-                col[wi] = 1.0;
+        for c in 0..self.aug {
+            let col = self.ab.col_as_slice_mut(wi + c);
+            col.fill(0.0);
+            if !inp.free {
+                col[..nxi].copy_from_slice(&b[c * nxi..(c + 1) * nxi]);
+                col[wi + c] = 1.0;
             }
         }
         if inp.free {
-            let col = self.ab.col_as_slice_mut(nz);
-            col[..nxi].copy_from_slice(&b[..nxi]);
-            if nz > nxi {
-                col[wi] = 1.0;
+            for c in 0..self.ncu {
+                let col = self.ab.col_as_slice_mut(nz + c);
+                col[..nxi].copy_from_slice(&b[c * nxi..(c + 1) * nxi]);
+                if nz > nxi {
+                    col[nxi..].fill(0.0);
+                    col[wi + c] = 1.0;
+                }
             }
         }
     }
@@ -503,24 +568,34 @@ impl Riccati {
     /// docs: s = Q_x + KᵀQ_uu k + KᵀQ_u + Q_uxᵀk, S = Q_xx + KᵀQ_uu K + KᵀQ_ux + Q_uxᵀK), with
     /// the proximal weight μ in K, k and S alike. `false` if the QP is unbounded below.
     fn gains_and_value(&mut self, inp: &StageInput<'_>, mu: f64, q: QuTerms) -> bool {
-        let (nz, k) = (self.nz, inp.k);
-        let QuTerms { qu, mut quu, g } = q;
-        let mut bounded = true;
-        let gain = &mut self.gain[k * nz..(k + 1) * nz];
+        let (nz, k, m) = (self.nz, inp.k, self.ncu);
         self.sv.copy_from_slice(&self.qx);
         if !inp.free {
-            gain.fill(0.0);
-            self.ff[k] = 0.0;
-            self.grad[k] = 0.0;
-            return bounded;
+            self.gain[k * m * nz..(k + 1) * m * nz].fill(0.0);
+            self.ff[k * m..(k + 1) * m].fill(0.0);
+            self.grad[k * m..(k + 1) * m].fill(0.0);
+            return true;
         }
+        if m == 1 {
+            self.scalar_gains(inp, mu, q)
+        } else {
+            self.pair_gains(inp, mu, q)
+        }
+    }
+
+    /// [`Riccati::gains_and_value`] with one control: Q_uu is a scalar and the box-QP a clamp.
+    fn scalar_gains(&mut self, inp: &StageInput<'_>, mu: f64, q: QuTerms) -> bool {
+        let (nz, k) = (self.nz, inp.k);
+        let (qu, mut quu, g) = (q.qu[0], q.quu[0][0], q.g[0]);
+        let mut bounded = true;
+        let gain = &mut self.gain[k * nz..(k + 1) * nz];
         self.quu_sum += quu.abs();
         self.quu_count += 1;
-        quu += mu + inp.quu_shift;
+        quu += mu + inp.quu_shift[0];
         let qt = quu;
         // An unbounded stage QP takes no step; the costate sweep goes on (the gradient does
         // not depend on the model) and the caller raises μ.
-        let sol = solve_scalar(qt, qu, inp.lo, inp.hi).unwrap_or_else(|| {
+        let sol = solve_scalar(qt, qu, inp.lo[0], inp.hi[0]).unwrap_or_else(|| {
             bounded = false;
             BoxQpStep {
                 step: 0.0,
@@ -551,6 +626,82 @@ impl Riccati {
         self.grad[k] = g;
         self.d1 += kk * qu;
         self.d2 += 0.5 * kk * kk * quu;
+        bounded
+    }
+
+    /// [`Riccati::gains_and_value`] with two controls (a 2-axis control): the 2 × 2 box-QP
+    /// ([`solve_pair`]), K = −Q_uu⁻¹Q_ux over the controls off their bounds (0 for a clamped
+    /// one; with one clamped, K_f = −Q_ux,f/Q_uu,ff for the other), and
+    /// s = Q_x + KᵀQ_uu k + KᵀQ_u + Q_uxᵀk, S = Q_xx + Q_uxᵀK (what KᵀQ_uuK + KᵀQ_ux + Q_uxᵀK
+    /// reduces to with these gains).
+    fn pair_gains(&mut self, inp: &StageInput<'_>, mu: f64, q: QuTerms) -> bool {
+        let (nz, k) = (self.nz, inp.k);
+        let QuTerms { qu, mut quu, g } = q;
+        for (a, row) in quu.iter_mut().enumerate() {
+            self.quu_sum += row[a].abs();
+            self.quu_count += 1;
+            row[a] += mu + inp.quu_shift[a];
+        }
+        let (sol, bounded) = match solve_pair(quu, qu, inp.lo, inp.hi) {
+            Some(s) => (s, true),
+            None => (
+                BoxQpPair {
+                    step: [0.0; 2],
+                    clamped: [true; 2],
+                },
+                false,
+            ),
+        };
+        let kk = sol.step;
+        let gain = &mut self.gain[2 * k * nz..2 * (k + 1) * nz];
+        gain.fill(0.0);
+        let (qux0, qux1) = self.qux.split_at(nz);
+        match sol.clamped {
+            [false, false] => {
+                let det = quu[0][0] * quu[1][1] - quu[0][1] * quu[1][0];
+                let inv = [
+                    [quu[1][1] / det, -quu[0][1] / det],
+                    [-quu[1][0] / det, quu[0][0] / det],
+                ];
+                let (g0, g1) = gain.split_at_mut(nz);
+                for i in 0..nz {
+                    g0[i] = -(inv[0][0] * qux0[i] + inv[0][1] * qux1[i]);
+                    g1[i] = -(inv[1][0] * qux0[i] + inv[1][1] * qux1[i]);
+                }
+            }
+            [false, true] => {
+                for (g_, q) in gain[..nz].iter_mut().zip(qux0) {
+                    *g_ = -q / quu[0][0];
+                }
+            }
+            [true, false] => {
+                for (g_, q) in gain[nz..].iter_mut().zip(qux1) {
+                    *g_ = -q / quu[1][1];
+                }
+            }
+            [true, true] => {}
+        }
+        let back = [
+            quu[0][0] * kk[0] + quu[0][1] * kk[1] + qu[0],
+            quu[1][0] * kk[0] + quu[1][1] * kk[1] + qu[1],
+        ];
+        for i in 0..nz {
+            self.sv[i] +=
+                gain[i] * back[0] + gain[nz + i] * back[1] + qux0[i] * kk[0] + qux1[i] * kk[1];
+        }
+        for j in 0..nz {
+            let (c0, c1) = (gain[j], gain[nz + j]);
+            let col = self.qxx.col_as_slice_mut(j);
+            for (i, c) in col.iter_mut().enumerate() {
+                *c += qux0[i] * c0 + qux1[i] * c1;
+            }
+        }
+        self.ff[2 * k..2 * k + 2].copy_from_slice(&kk);
+        self.grad[2 * k..2 * k + 2].copy_from_slice(&g);
+        self.d1 += kk[0] * qu[0] + kk[1] * qu[1];
+        self.d2 += 0.5
+            * (kk[0] * (quu[0][0] * kk[0] + quu[0][1] * kk[1])
+                + kk[1] * (quu[1][0] * kk[0] + quu[1][1] * kk[1]));
         bounded
     }
 

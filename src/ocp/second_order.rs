@@ -13,17 +13,18 @@ use super::jacobians::{JacobianStore, WholeStore};
 use super::options::{Curvature, OcpOptions};
 use super::riccati::{self, StageInput};
 use super::stage::{Dv, JacobiansMut, StageAt, StageModel, StagePoint};
-use crate::error::{Error, Result};
+use crate::error::{Error, OcpError, Result};
 use crate::model::Chain;
+use std::any::Any;
 
 /// The exact model's stores and switches. Its storage (H_k of every stage, the costates) is
 /// allocated at its first use.
 #[derive(Clone, Debug)]
 pub(crate) struct SecondOrderModel {
-    /// The dual chain of the reverse steps.
-    chain_dv: Chain<Dv, 2>,
-    /// The stage map and buffers of the costate sweep by reverse steps.
-    vjp: VjpWorkspace<f64>,
+    /// The planar model's dual chain of the reverse steps, and its stage map and buffers of the
+    /// costate sweep by reverse steps (`None` in the spatial model, where the exact model is
+    /// not available: Gauss-Newton throughout).
+    planar: Option<PlanarReverse>,
     /// The costates ν_k (2n per stage): the multipliers of the second-order terms.
     nu: Vec<f64>,
     /// H_k per stage ((2n + 1)², column-major).
@@ -42,19 +43,40 @@ pub(crate) struct SecondOrderModel {
     pub possible: bool,
 }
 
+/// The planar reverse steps of the exact model.
+#[derive(Clone, Debug)]
+struct PlanarReverse {
+    chain_dv: Chain<Dv, 2>,
+    vjp: VjpWorkspace<f64>,
+}
+
 impl SecondOrderModel {
     /// The (empty) model of a horizon of `steps` stages of `model`; `aug` is 1 with the
-    /// augmented state w_k = u_{k−1}.
-    pub fn new(model: &StageModel, options: &OcpOptions, steps: usize, aug: usize) -> Result<Self> {
+    /// augmented state w_k = u_{k−1}. The exact model's reverse steps are planar: in the
+    /// spatial model (`DIM = 3`, found by a checked downcast of `model`) it is not possible
+    /// and the solver runs Gauss-Newton throughout.
+    pub fn new<const DIM: usize>(
+        model: &StageModel<DIM>,
+        options: &OcpOptions,
+        steps: usize,
+        aug: usize,
+    ) -> Result<Self> {
         let nxi = model.nx();
+        let planar = match (model as &dyn Any).downcast_ref::<StageModel<2>>() {
+            Some(m) => Some(PlanarReverse {
+                chain_dv: m.chain.lift::<Dv>(),
+                vjp: VjpWorkspace::new(m)?,
+            }),
+            None => None,
+        };
         // The exact model keeps H_k beside every A_k, B_k: both within `jacobian_memory`.
-        let exact_bytes = JacobianStore::stage_bytes(nxi) + 8 * (nxi + 1) * (nxi + 1);
-        let possible = aug == 0
+        let exact_bytes = JacobianStore::<2>::stage_bytes(nxi) + 8 * (nxi + 1) * (nxi + 1);
+        let possible = planar.is_some()
+            && aug == 0
             && options.jacobian_memory / exact_bytes >= steps
             && options.curvature != Curvature::GaussNewton;
         Ok(SecondOrderModel {
-            chain_dv: model.chain.lift::<Dv>(),
-            vjp: VjpWorkspace::new(model)?,
+            planar,
             nu: Vec::new(),
             h: Vec::new(),
             curv: vec![0.0; steps + 1],
@@ -110,6 +132,10 @@ impl SecondOrderModel {
     pub fn costates(&mut self, hz: &ControlHorizon, grad: &mut [f64]) -> Result<()> {
         let (steps, nxi) = (hz.steps, hz.model.nx());
         self.storage(steps, nxi);
+        let Some(planar) = self.planar.as_mut() else {
+            return Err(OcpError::NoReverseSweep.into());
+        };
+        let vjp = &mut planar.vjp;
         let mut rev = Reverse::new(&hz.model.chain, &hz.model, steps);
         let scale = hz.model.moment_scale;
         for k in (0..=steps).rev() {
@@ -125,25 +151,25 @@ impl SecondOrderModel {
             if k == steps {
                 continue;
             }
-            let st = &mut self.vjp.stepper.state;
+            let st = &mut vjp.stepper.state;
             st.q.copy_from_slice(nom.q(k));
             st.p.copy_from_slice(nom.p(k));
             let m = st.multipliers_mut(nom.lambda(k).len());
             m.lambda.copy_from_slice(nom.lambda(k));
             m.mu.copy_from_slice(nom.lambda(k));
             st.tip_target = [0.0; 2];
-            self.vjp.bufs.omega0.copy_from_slice(nom.omega(k));
+            vjp.bufs.omega0.copy_from_slice(nom.omega(k));
             let stage = VjpStage {
                 model: &hz.model,
                 k,
                 u,
                 nu: &rest[..nxi],
             };
-            stage_vjp(&mut self.vjp.stepper, &mut self.vjp.bufs, stage, &mut rev)?;
+            stage_vjp(&mut vjp.stepper, &mut vjp.bufs, stage, &mut rev)?;
             for (r, v) in nu_k.iter_mut().enumerate() {
-                *v += gradient_entry(&self.vjp.bufs, &rev, k, r);
+                *v += gradient_entry(&vjp.bufs, &rev, k, r);
             }
-            grad[k] += gradient_entry(&self.vjp.bufs, &rev, k, nxi);
+            grad[k] += gradient_entry(&vjp.bufs, &rev, k, nxi);
         }
         Ok(())
     }
@@ -158,7 +184,10 @@ impl SecondOrderModel {
         let per = nd * nd;
         let WholeStore { ws, a, b } = store.whole(steps);
         let chunk = steps.div_ceil(ws.len()).max(1);
-        let (model, nom, chain) = (&hz.model, &hz.nominal, &self.chain_dv);
+        let Some(planar) = self.planar.as_ref() else {
+            return Err(OcpError::NoExactModel.into());
+        };
+        let (model, nom, chain) = (&hz.model, &hz.nominal, &planar.chain_dv);
         let nu = &self.nu;
         let work =
             |c: usize, hs: &mut [f64], a: &mut [f64], b: &mut [f64], ws: &mut HessianWorkspace| {
@@ -181,6 +210,7 @@ impl SecondOrderModel {
                         k,
                         x,
                         u: nom.u[k],
+                        ux: 0.0,
                     };
                     let out = SecondOrderMut {
                         hess: h,

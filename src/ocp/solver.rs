@@ -11,22 +11,24 @@ use super::interior::InteriorPoint;
 use super::iterate::QpIterate;
 use super::jacobians::{JacobianStore, PREFETCH_AHEAD};
 use super::options::{OcpOptions, OcpResult, Termination};
-use super::riccati::{Riccati, StageInput};
+use super::riccati::{Riccati, RiccatiShape, StageInput};
 use super::second_order::SecondOrderModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::Result;
+use std::any::Any;
 
 /// The solver with all its buffers, reusable for several starts (and the linearisation
-/// diagnostics the tests use).
+/// diagnostics the tests use), in the planar (`DIM = 2`) or the spatial (`DIM = 3`) model
+/// (module docs, "The spatial model").
 #[derive(Clone, Debug)]
-pub struct Solver {
-    pub(super) horizon: ControlHorizon,
-    pub(super) store: JacobianStore,
+pub struct Solver<const DIM: usize = 2> {
+    pub(super) horizon: ControlHorizon<DIM>,
+    pub(super) store: JacobianStore<DIM>,
     pub(super) second: SecondOrderModel,
     pub(super) qp: QpIterate,
     pub(super) ip: InteriorPoint,
     pub(super) riccati: Riccati,
-    /// The exact gradient at the nominal (per stage).
+    /// The exact gradient at the nominal (per decision).
     gtrue: Vec<f64>,
     /// Proximal weight μ (absolute) of the current model, and the mean Q_uu it is relative to.
     pub(super) prox: f64,
@@ -35,36 +37,60 @@ pub struct Solver {
     backward_passes: usize,
     pub(super) nxi: usize,
     pub(super) nz: usize,
+    /// Controls per stage m (1, or 2 for a 2-axis control).
+    pub(super) ncu: usize,
 }
 
-impl Solver {
-    /// Builds the solver for `problem` (validates the options, the model, the objective — a
-    /// [`BendingObjective`](crate::BendingObjective) — and the control map).
+impl<const DIM: usize> Solver<DIM> {
+    /// Builds the solver for `problem` (validates the options, the model, the objective — one
+    /// in Gauss-Newton form, in the spatial model of |M₀| alone — and the control map).
     pub fn new<P: ControlMap, O: Objective>(
-        problem: &ControlProblem<P, O>,
+        problem: &ControlProblem<P, O, DIM>,
         options: &OcpOptions,
     ) -> Result<Self> {
         let horizon = ControlHorizon::new(problem, options, "the Riccati solver", |_, _| Ok(()))?;
         let (model, steps) = (&horizon.model, horizon.steps);
-        let nxi = model.nx();
-        let aug = usize::from(options.rate_penalty > 0.0 || horizon.free.iter().any(|f| !f));
+        let (nxi, ncu) = (model.nx(), horizon.axes);
+        let held = options.rate_penalty > 0.0 || horizon.free.iter().any(|f| !f);
+        let aug = if held { ncu } else { 0 };
         let nz = nxi + aug;
         let store = JacobianStore::new(model, options, steps)?;
         let second = SecondOrderModel::new(model, options, steps, aug)?;
+        let shape = RiccatiShape {
+            nxi,
+            aug,
+            controls: ncu,
+            residuals: DIM - 1,
+        };
         Ok(Solver {
             store,
             second,
-            qp: QpIterate::new(steps, nz),
-            ip: InteriorPoint::new(steps),
-            riccati: Riccati::new(nxi, aug, steps),
-            gtrue: vec![0.0; steps + 1],
+            qp: QpIterate::new(steps, nz, ncu),
+            ip: InteriorPoint::new((steps + 1) * ncu),
+            riccati: Riccati::new(shape, steps),
+            gtrue: vec![0.0; (steps + 1) * ncu],
             prox: 0.0,
             quu_scale: 1.0,
             backward_passes: 0,
             nxi,
             nz,
+            ncu,
             horizon,
         })
+    }
+
+    /// The planar horizon, store and second-order model (the exact model's reverse steps are
+    /// planar): `None` in the spatial model, by a checked downcast.
+    fn planar_parts(
+        &mut self,
+    ) -> Option<(
+        &ControlHorizon<2>,
+        &mut JacobianStore<2>,
+        &mut SecondOrderModel,
+    )> {
+        let hz = (&self.horizon as &dyn Any).downcast_ref::<ControlHorizon<2>>()?;
+        let store = (&mut self.store as &mut dyn Any).downcast_mut::<JacobianStore<2>>()?;
+        Some((hz, store, &mut self.second))
     }
 
     /// Number of parameters θ.
@@ -99,50 +125,62 @@ impl Solver {
 
     /// What the backward pass needs of stage k at the model point δ (the current inner
     /// iterate: `dv`, `dz`; δ = 0 is the nominal) without its Jacobians: the linearised
-    /// residual r + ∂r/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
-    /// gradient. With `with_active`, a control of the ε-active set gets its fixed step.
+    /// residual R + ∂R/∂φ₁ δφ₁, the shifted controls, the box relative to them and the proximal
+    /// gradient, per control. With `with_active`, a control of the ε-active set gets its fixed
+    /// step.
     fn stage_input(&self, k: usize, with_active: bool) -> StageInput<'static> {
-        let (hz, qp) = (&self.horizon, &self.qp);
+        let (hz, qp, m) = (&self.horizon, &self.qp, self.ncu);
         let nom = &hz.nominal;
-        let d = nom.dresidual(k, hz.model.moment_scale);
-        let u = nom.u[k] + qp.dv[k];
-        let (lo, hi) = if self.ip.on {
-            (f64::NEG_INFINITY, f64::INFINITY)
-        } else if with_active && qp.active[k] {
-            (qp.fixed[k], qp.fixed[k])
-        } else {
-            (hz.opts.lower - u, hz.opts.upper - u)
-        };
-        let (qs, ls) = if self.ip.on && hz.free[k] {
-            (self.ip.quu[k], self.ip.lu[k])
-        } else {
-            (0.0, 0.0)
-        };
-        StageInput {
+        let (r, d) = nom.residual_model(k, hz.model.moment_scale);
+        let dz = &qp.dz[k * self.nz..];
+        let mut residual = [r[0] + d[0][0] * dz[0], 0.0];
+        if DIM == 3 {
+            for (c, x) in residual.iter_mut().enumerate() {
+                *x = r[c] + d[c][0] * dz[0] + d[c][1] * dz[1];
+            }
+        }
+        let mut inp = StageInput {
             k,
             free: hz.free[k],
-            residual: nom.residual[k] + d * qp.dz[k * self.nz],
+            residual,
             dresidual: d,
-            u,
-            w: if k > 0 {
-                nom.u[k - 1] + qp.dv[k - 1]
-            } else {
-                0.0
-            },
-            lo,
-            hi,
-            lu_shift: if hz.free[k] {
-                self.prox * qp.dv[k] + ls
-            } else {
-                0.0
-            },
-            quu_shift: qs,
+            u: [0.0; 2],
+            w: [0.0; 2],
+            lo: [0.0; 2],
+            hi: [0.0; 2],
+            lu_shift: [0.0; 2],
+            quu_shift: [0.0; 2],
             jac: None,
             hess: None,
             curv: 0.0,
             dz: &[],
-            dv: qp.dv[k],
+            dv: qp.dv[k * m],
+        };
+        for a in 0..m {
+            let i = k * m + a;
+            let u = nom.control(k, a) + qp.dv[i];
+            (inp.lo[a], inp.hi[a]) = if self.ip.on {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else if with_active && qp.active[i] {
+                (qp.fixed[i], qp.fixed[i])
+            } else {
+                (hz.opts.lower - u, hz.opts.upper - u)
+            };
+            let (qs, ls) = if self.ip.on && hz.free[k] {
+                (self.ip.quu[i], self.ip.lu[i])
+            } else {
+                (0.0, 0.0)
+            };
+            inp.u[a] = u;
+            if k > 0 {
+                inp.w[a] = nom.control(k - 1, a) + qp.dv[i - m];
+            }
+            if hz.free[k] {
+                inp.lu_shift[a] = self.prox * qp.dv[i] + ls;
+            }
+            inp.quu_shift[a] = qs;
         }
+        inp
     }
 
     /// One sweep k = N … 0 over the stages, with the Jacobians computed block by block ahead
@@ -200,26 +238,38 @@ impl Solver {
     }
 
     /// The exact gradient and the costates ν_k at the nominal by one reverse step per stage
-    /// ([`SecondOrderModel::costates`]), for the exact model.
+    /// ([`SecondOrderModel::costates`]), for the exact model (planar only: the spatial model
+    /// never turns it on, and would get the costate sweep).
     pub(super) fn costate_by_reverse_steps(&mut self) -> Result<()> {
         self.qp.at_nominal();
         self.qp.active.fill(false);
-        self.second.costates(&self.horizon, &mut self.riccati.grad)
+        match (&self.horizon as &dyn Any).downcast_ref::<ControlHorizon<2>>() {
+            Some(hz) => self.second.costates(hz, &mut self.riccati.grad),
+            None => self.costate(),
+        }
     }
 
     /// H_k and the Jacobians of every stage at the nominal, and the cost's curvature
     /// ([`SecondOrderModel::compute`]); needs the costates of
-    /// [`Solver::costate_by_reverse_steps`].
+    /// [`Solver::costate_by_reverse_steps`]. Planar only ([`OcpError::NoExactModel`]
+    /// otherwise; the spatial model never turns the exact model on).
+    ///
+    /// [`OcpError::NoExactModel`]: crate::error::OcpError::NoExactModel
     pub(super) fn hessians(&mut self) -> Result<()> {
-        self.second.compute(&self.horizon, &mut self.store)
+        match self.planar_parts() {
+            Some((hz, store, second)) => second.compute(hz, store),
+            None => Err(crate::error::OcpError::NoExactModel.into()),
+        }
     }
 
-    /// ∂J/∂θ from the per-stage gradient of the last costate sweep.
+    /// ∂J/∂θ from the per-decision gradient of the last costate sweep.
     pub(super) fn theta_gradient(&self) -> Vec<f64> {
-        self.horizon
-            .theta_stage
-            .iter()
-            .map(|&k| self.riccati.grad[k])
+        let hz = &self.horizon;
+        (0..hz.n_params)
+            .map(|i| {
+                let (k, a) = hz.decision(i);
+                self.riccati.grad[k * self.ncu + a]
+            })
             .collect()
     }
 
@@ -227,10 +277,14 @@ impl Solver {
     pub(super) fn projected_norm(&self) -> f64 {
         let hz = &self.horizon;
         let (lo, hi) = (hz.opts.lower, hz.opts.upper);
-        hz.theta_stage
-            .iter()
-            .map(|&k| {
-                let (t, g) = (hz.nominal.u[k] + self.qp.dv[k], self.riccati.grad[k]);
+        (0..hz.n_params)
+            .map(|i| {
+                let (k, a) = hz.decision(i);
+                let j = k * self.ncu + a;
+                let (t, g) = (
+                    hz.nominal.control(k, a) + self.qp.dv[j],
+                    self.riccati.grad[j],
+                );
                 let d = boxqp::projected_component(t, g, lo, hi);
                 d * d
             })
@@ -260,9 +314,10 @@ impl Solver {
                     None => self.solve_qp(tol)?,
                 };
                 if let Some(q) = q {
-                    let a: f64 = (0..=steps)
-                        .filter(|&k| self.horizon.free[k])
-                        .map(|k| self.gtrue[k] * self.qp.dv[k])
+                    let m = self.ncu;
+                    let a: f64 = (0..(steps + 1) * m)
+                        .filter(|&i| self.horizon.free[i / m])
+                        .map(|i| self.gtrue[i] * self.qp.dv[i])
                         .sum();
                     return Ok(Some(ModelChange {
                         d1: a,
@@ -288,7 +343,7 @@ impl Solver {
     }
 }
 
-impl Outer for Solver {
+impl<const DIM: usize> Outer for Solver<DIM> {
     fn begin(&mut self) {
         self.horizon.rollouts = 0;
         self.store.passes = 0;
@@ -408,7 +463,7 @@ impl Outer for Solver {
             objective: hz.nominal.cost,
             initial_objective: pr.j0,
             controls: hz.nominal.u.clone(),
-            controls_x: Vec::new(),
+            controls_x: hz.nominal.ux.clone(),
             theta,
             gradient_norm: gn,
             projected_gradient_norm: pg,

@@ -75,21 +75,25 @@ pub struct StagePoint<'a, const DIM: usize = 2> {
     pub mu: &'a [f64],
 }
 
-/// Stage k of a model linearised at the point x̂_k = `x` with the control u_k = `u`: what
-/// [`JacobianWorkspace::jacobians`] and the second-order pass of `hessian.rs` differentiate.
+/// Stage k of a model linearised at the point x̂_k = `x` with the control u_k = `u` (and
+/// u_{x,k} = `ux` of a 2-axis control): what [`JacobianWorkspace::jacobians`] and the
+/// second-order pass of `hessian.rs` differentiate.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct StageAt<'a> {
+pub(crate) struct StageAt<'a, const DIM: usize = 2> {
     /// The stage maps.
-    pub model: &'a StageModel,
+    pub model: &'a StageModel<DIM>,
     /// The stage index k.
     pub k: usize,
     /// x̂_k with its rates and Newton start.
-    pub x: StagePoint<'a>,
-    /// u_k.
+    pub x: StagePoint<'a, DIM>,
+    /// u_k (the z component of a 2-axis control).
     pub u: f64,
+    /// u_{x,k} of a 2-axis control (unused otherwise).
+    pub ux: f64,
 }
 
-/// Where a stage's Jacobians go: A_k (column-major 2n × 2n) and B_k (2n).
+/// Where a stage's Jacobians go: A_k (column-major n_ξ × n_ξ) and B_k (n_ξ per control axis,
+/// the z component's column first).
 #[derive(Debug)]
 pub(crate) struct JacobiansMut<'a> {
     /// A_k = ∂ξ_{k+1}/∂ξ_k.
@@ -104,7 +108,8 @@ pub(crate) struct JacobiansMut<'a> {
 pub const CHUNK: usize = 8;
 pub(crate) type Dv = DualSVec64<CHUNK>;
 
-/// Directions of a stage: the 2n tangent coordinates and the control.
+/// Directions of a planar stage: the 2n tangent coordinates and the control
+/// ([`StageModel::ndir`] in general).
 pub(crate) fn ndir(n: usize) -> usize {
     2 * n + 1
 }
@@ -126,11 +131,6 @@ pub(crate) fn eps(x: &Dv, slot: usize) -> f64 {
 #[inline]
 pub(crate) fn tangent<D: Scalar>(q: &[D; 2]) -> [D; 2] {
     [-q[1], q[0]]
-}
-
-#[inline]
-fn dot2<D: Scalar>(a: &[D; 2], b: &[D; 2]) -> D {
-    a[0] * b[0] + a[1] * b[1]
 }
 
 /// a·b in `DIM` components (the planar a₀b₀ + a₁b₁ bit for bit).
@@ -278,6 +278,21 @@ impl<const DIM: usize> StageModel<DIM> {
     /// Tangent dimension 2n(DIM − 1): 2n planar, 4n spatial.
     pub fn nx(&self) -> usize {
         2 * self.n * (DIM - 1)
+    }
+
+    /// Controls per stage: 1 (along z) or 2 ((u_z, u_x), a 2-axis control).
+    pub fn controls(&self) -> usize {
+        if self.two_axis() {
+            2
+        } else {
+            1
+        }
+    }
+
+    /// Directions of a stage's Jacobians: the tangent coordinates and the controls
+    /// (2n + 1 planar, [`ndir`]).
+    pub fn ndir(&self) -> usize {
+        self.nx() + self.controls()
     }
 
     /// out = M v (v = velocities, out = momenta), O(n): (M̄x)ᵢ = lᵢ Σ_{k≥i} m_k Σ_{j≤k} l_j x_j.
@@ -537,72 +552,84 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
     }
 }
 
-/// Per-thread scratch of the dual-number stage Jacobians.
+/// Per-thread scratch of the dual-number stage Jacobians, in the planar or the spatial model.
 #[derive(Clone, Debug)]
-pub(crate) struct JacobianWorkspace {
-    pub(super) stepper: Stepper<Dv>,
-    seed_q: Vec<[[f64; CHUNK]; 2]>,
-    seed_p: Vec<[[f64; CHUNK]; 2]>,
-    dv: Vec<[f64; 2]>,
-    dp: Vec<[f64; 2]>,
-    minv: Vec<[f64; 2]>,
-    tang: Vec<[f64; 2]>,
+pub(crate) struct JacobianWorkspace<const DIM: usize = 2> {
+    pub(super) stepper: Stepper<Dv, DIM>,
+    seed_q: Vec<[[f64; CHUNK]; DIM]>,
+    seed_p: Vec<[[f64; CHUNK]; DIM]>,
+    dv: Vec<[f64; DIM]>,
+    dp: Vec<[f64; DIM]>,
+    minv: Vec<[f64; DIM]>,
+    basis: Vec<[[f64; DIM]; 2]>,
 }
 
-impl JacobianWorkspace {
-    pub fn new(model: &StageModel) -> Result<Self> {
+impl<const DIM: usize> JacobianWorkspace<DIM> {
+    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
         let n = model.n;
         Ok(JacobianWorkspace {
             stepper: Stepper::new(model)?,
-            seed_q: vec![[[0.0; CHUNK]; 2]; n],
-            seed_p: vec![[[0.0; CHUNK]; 2]; n],
-            dv: vec![[0.0; 2]; n],
-            dp: vec![[0.0; 2]; n],
-            minv: vec![[0.0; 2]; n],
-            tang: vec![[0.0; 2]; n],
+            seed_q: vec![[[0.0; CHUNK]; DIM]; n],
+            seed_p: vec![[[0.0; CHUNK]; DIM]; n],
+            dv: vec![[0.0; DIM]; n],
+            dp: vec![[0.0; DIM]; n],
+            minv: vec![[0.0; DIM]; n],
+            basis: vec![[[0.0; DIM]; 2]; n],
         })
     }
 
     /// Loads x̂_k = (q, p) into the dual stepper with the tangent directions start..end
-    /// (ξ_j for j < 2n, u for j = 2n) seeded into the slots 0..end − start (E e_j on x̂_k:
-    /// δqᵢ = tᵢ δφᵢ, δp = M δv with δvᵢ = tᵢ δωᵢ − qᵢ ωᵢ δφᵢ), the Newton start μ, and returns
-    /// the dual control.
-    pub(super) fn seed(&mut self, at: &StageAt<'_>, cols: Range<usize>) -> Dv {
+    /// (ξ_j for j < n_ξ, the controls u_z, u_x for j = n_ξ, n_ξ + 1) seeded into the slots
+    /// 0..end − start (E e_j on x̂_k, in the basis e_a(qᵢ) of [`tangent_basis`]:
+    /// δqᵢ = e_a δφ_{i,a}, δp = M δv with δvᵢ = e_a δω_{i,a} − qᵢ ω_{i,a} δφ_{i,a}; planar
+    /// e = tᵢ, δvᵢ = tᵢ δωᵢ − qᵢ ωᵢ δφᵢ), the Newton start μ, and returns the dual controls
+    /// (u_z, u_x).
+    ///
+    /// Why this chart: the closed-loop rollouts measure δω_{i,a} = ē_a·vᵢ − ω̄_{i,a} in the
+    /// nominal's basis (`line_search`), so L is δφ_{i,a} = e_a·δqᵢ, δω_{i,a} = e_a·(M⁻¹δp)ᵢ, and
+    /// E above is its inverse on the manifold (|qᵢ| = 1, qᵢ·vᵢ = 0: the −qᵢ ω δφ term keeps the
+    /// linearised qᵢ·δvᵢ + δqᵢ·vᵢ = 0), so E L is the identity on tangent vectors and the
+    /// Jacobians compose exactly (the costate gradient equals the adjoint's).
+    pub(super) fn seed(&mut self, at: &StageAt<'_, DIM>, cols: Range<usize>) -> [Dv; 2] {
         let StagePoint { q, p, omega, mu } = at.x;
-        let (model, u) = (at.model, at.u);
+        let model = at.model;
         let (start, end) = (cols.start, cols.end);
         let n = model.n;
-        let nx = 2 * n;
+        let na = DIM - 1;
+        let nw = n * na;
+        let nx = 2 * nw;
         // Seeds: direction j in slot j − start.
         for s in self.seed_q.iter_mut().chain(self.seed_p.iter_mut()) {
-            *s = [[0.0; CHUNK]; 2];
+            *s = [[0.0; CHUNK]; DIM];
         }
-        let mut u_seed = [0.0; CHUNK];
+        let mut u_seed = [[0.0; CHUNK]; 2];
         for j in start..end {
             let slot = j - start;
-            if j == nx {
-                u_seed[slot] = 1.0;
+            if j >= nx {
+                u_seed[j - nx][slot] = 1.0;
                 continue;
             }
-            let i = j % n;
-            let t = tangent(&q[i]);
-            // δv_i (only pendulum i moves): φ: −qᵢ ωᵢ, ω: tᵢ; δp = M δv = column i of M̄ ⊗ δvᵢ.
-            let dvi = if j < n {
-                self.seed_q[i][0][slot] = t[0];
-                self.seed_q[i][1][slot] = t[1];
-                [-q[i][0] * omega[i], -q[i][1] * omega[i]]
-            } else {
-                t
-            };
+            let (i, a) = ((j % nw) / na, (j % nw) % na);
+            let e = tangent_basis(&q[i])[a];
+            // δv_i (only pendulum i moves): φ: −qᵢ ω_{i,a}, ω: e_a; δp = M δv = column i of
+            // M̄ ⊗ δvᵢ.
+            let mut dvi = e;
+            if j < nw {
+                for d in 0..DIM {
+                    self.seed_q[i][d][slot] = e[d];
+                    dvi[d] = -q[i][d] * omega[i * na + a];
+                }
+            }
             for r in 0..n {
                 let mri = model.mass[r * n + i];
-                self.seed_p[r][0][slot] = mri * dvi[0];
-                self.seed_p[r][1][slot] = mri * dvi[1];
+                for d in 0..DIM {
+                    self.seed_p[r][d][slot] = mri * dvi[d];
+                }
             }
         }
         let st = &mut self.stepper.state;
         for i in 0..n {
-            for d in 0..2 {
+            for d in 0..DIM {
                 st.q[i][d] = Dv::new(q[i][d], Derivative::some(SVector::from(self.seed_q[i][d])));
                 st.p[i][d] = Dv::new(p[i][d], Derivative::some(SVector::from(self.seed_p[i][d])));
             }
@@ -612,56 +639,70 @@ impl JacobianWorkspace {
             (*ml, *mm) = (Dv::from_re(v), Dv::from_re(v));
         }
         st.tip_target = [Dv::from_re(0.0); 2];
-        if end == ndir(n) {
-            Dv::new(u, Derivative::some(SVector::from(u_seed)))
-        } else {
-            Dv::from_re(u)
-        }
+        let control = |axis: usize, value: f64| {
+            if cols.contains(&(nx + axis)) {
+                Dv::new(value, Derivative::some(SVector::from(u_seed[axis])))
+            } else {
+                Dv::from_re(value)
+            }
+        };
+        [control(0, at.u), control(1, at.ux)]
     }
 
     /// The columns start..end of A_k, B_k from the derivative parts of the dual step's result,
-    /// mapped by L_{k+1}: δφᵢ = tᵢ·δqᵢ, δωᵢ = tᵢ·(M⁻¹δp)ᵢ.
+    /// mapped by L_{k+1}: δφ_{i,a} = e_a·δqᵢ, δω_{i,a} = e_a·(M⁻¹δp)ᵢ (planar: tᵢ).
     pub(super) fn read_columns(
         &mut self,
-        model: &StageModel,
+        model: &StageModel<DIM>,
         cols: Range<usize>,
         out: &mut JacobiansMut<'_>,
     ) {
         let start = cols.start;
         let n = model.n;
-        let nx = 2 * n;
+        let na = DIM - 1;
+        let nw = n * na;
+        let nx = 2 * nw;
         let st = &self.stepper.state;
         for i in 0..n {
-            self.tang[i] = tangent(&[st.q[i][0].re, st.q[i][1].re]);
+            let mut q = [0.0; DIM];
+            for d in 0..DIM {
+                q[d] = st.q[i][d].re;
+            }
+            self.basis[i] = tangent_basis(&q);
         }
         for j in cols {
             let slot = j - start;
             for i in 0..n {
-                self.dv[i] = [eps(&st.q[i][0], slot), eps(&st.q[i][1], slot)];
-                self.dp[i] = [eps(&st.p[i][0], slot), eps(&st.p[i][1], slot)];
+                for d in 0..DIM {
+                    self.dv[i][d] = eps(&st.q[i][d], slot);
+                    self.dp[i][d] = eps(&st.p[i][d], slot);
+                }
             }
             model.chain.apply_inverse_mass(&self.dp, &mut self.minv);
             let col: &mut [f64] = if j < nx {
                 &mut out.a[j * nx..(j + 1) * nx]
             } else {
-                &mut out.b[..nx]
+                &mut out.b[(j - nx) * nx..(j - nx + 1) * nx]
             };
             for i in 0..n {
-                col[i] = dot2(&self.tang[i], &self.dv[i]);
-                col[n + i] = dot2(&self.tang[i], &self.minv[i]);
+                for a in 0..na {
+                    col[i * na + a] = dot(&self.basis[i][a], &self.dv[i]);
+                    col[nw + i * na + a] = dot(&self.basis[i][a], &self.minv[i]);
+                }
             }
         }
     }
 
-    /// A_k (column-major 2n × 2n, into `a`) and B_k (into `b`) at x̂_k = (q, p) with rates
-    /// `omega`, Newton start `mu` and control u. With `mu` the converged λ of the nominal step
-    /// the real parts are converged at once (bit for bit the nominal's) and the Newton loop does
-    /// only its derivative-only update: the implicit function theorem, one bordered-tridiagonal
-    /// solve with 8 right-hand sides per chunk.
-    pub fn jacobians(&mut self, at: StageAt<'_>, mut out: JacobiansMut<'_>) -> Result<()> {
-        for cols in chunks(ndir(at.model.n)) {
-            let ud = self.seed(&at, cols.clone());
-            self.stepper.advance(at.k, ud)?;
+    /// A_k (column-major n_ξ × n_ξ, into `a`) and B_k (n_ξ per control axis, into `b`) at
+    /// x̂_k = (q, p) with rates `omega`, Newton start `mu` and controls (u, u_x). With `mu` the
+    /// converged λ of the nominal step the real parts are converged at once (bit for bit the
+    /// nominal's) and the Newton loop does only its derivative-only update: the implicit
+    /// function theorem, one bordered-tridiagonal solve with 8 right-hand sides per chunk.
+    pub fn jacobians(&mut self, at: StageAt<'_, DIM>, mut out: JacobiansMut<'_>) -> Result<()> {
+        for cols in chunks(at.model.ndir()) {
+            let [u, ux] = self.seed(&at, cols.clone());
+            self.stepper.set_control_x(at.k, ux);
+            self.stepper.advance(at.k, u)?;
             self.read_columns(at.model, cols, &mut out);
         }
         Ok(())
@@ -715,60 +756,4 @@ pub(crate) mod fixture {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::catalogue;
-
-    /// The implicit function theorem (the dual step started at the nominal's converged λ: one
-    /// derivative-only Newton update, ∂λ/∂θ = −R_λ⁻¹ R_θ) against dual numbers carried through
-    /// the whole Newton iteration from the predictor μ (derivative parts iterated to
-    /// convergence): the same A_k and B_k to round-off, on the long-horizon scene (drag) at a
-    /// moving state.
-    #[test]
-    fn ift_jacobians_equal_iterated_dual_newton() {
-        let scene = catalogue::long_horizon();
-        let chain = Chain::<f64, 2>::from_scene(&scene).unwrap();
-        let model = StageModel::new(&chain, scene.time.step).unwrap();
-        let k = 20;
-        let fixture::Point {
-            q,
-            p,
-            omega,
-            mu,
-            lambda,
-            u,
-        } = fixture::point(&model, k);
-        // The predictor μ is not the converged λ: the second run iterates.
-        assert!(lambda
-            .iter()
-            .zip(&mu)
-            .any(|(l, m)| (l - m).abs() > 1e-9 * l.abs()));
-        let nx = model.nx();
-        let mut ws = JacobianWorkspace::new(&model).unwrap();
-        let (mut a1, mut b1) = (vec![0.0; nx * nx], vec![0.0; nx]);
-        let (mut a2, mut b2) = (a1.clone(), b1.clone());
-        let at = |mu| StageAt {
-            model: &model,
-            k,
-            x: StagePoint {
-                q: &q,
-                p: &p,
-                omega: &omega,
-                mu,
-            },
-            u,
-        };
-        let out = |a, b| JacobiansMut { a, b };
-        ws.jacobians(at(&lambda), out(&mut a1, &mut b1)).unwrap();
-        ws.jacobians(at(&mu), out(&mut a2, &mut b2)).unwrap();
-        let rel = |x: &[f64], y: &[f64]| {
-            let scale = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            x.iter()
-                .zip(y)
-                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-                / scale
-        };
-        assert!(rel(&a1, &a2) <= 1e-12, "A: {:e}", rel(&a1, &a2));
-        assert!(rel(&b1, &b2) <= 1e-12, "B: {:e}", rel(&b1, &b2));
-    }
-}
+mod tests;

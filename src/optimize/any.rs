@@ -6,7 +6,7 @@
 use serde::Serialize;
 
 use crate::adjoint::{BendingObjective, ControlMap, ControlProblem, Parametrisation};
-use crate::error::{Error, OptimizeError, Result};
+use crate::error::Result;
 use crate::ocp::{OcpOptions, OcpResult};
 use crate::scene::{Scene, SceneError, SceneErrorKind};
 
@@ -84,9 +84,8 @@ impl AnyProblem {
     }
 }
 
-/// The optimisers' view: every method delegates to the planar or spatial problem (the condensed
-/// solver takes both), except the Riccati solver, which is planar only and refuses the spatial
-/// problem with a message that says so ([`RICCATI_PLANAR`]).
+/// The optimisers' view: every method delegates to the planar or spatial problem (the Riccati
+/// and the condensed solver take both).
 impl OptimProblem for AnyProblem {
     fn n_params(&self) -> usize {
         self.optim().n_params()
@@ -121,7 +120,7 @@ impl OptimProblem for AnyProblem {
     fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         match self {
             AnyProblem::Planar(p) => p.riccati(theta0, options),
-            AnyProblem::Spatial(_) => Some(Err(planar_only())),
+            AnyProblem::Spatial(p) => p.riccati(theta0, options),
         }
     }
     fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
@@ -143,19 +142,15 @@ pub enum Values {
     Pairs(Vec<[f64; 2]>),
 }
 
-/// The refusal of a structured solver on a spatial problem.
-fn planar_only() -> Error {
-    OptimizeError::PlanarOnly.into()
-}
-
-/// Why `--method riccati` cannot run a spatial problem.
+/// Why `--method riccati` could not run a spatial problem before the Riccati solver took the
+/// spatial model (kept for callers that named it; nothing refuses with it now).
 pub const RICCATI_PLANAR: &str = crate::error::PLANAR_ONLY;
 
 /// The parametrisation of a scene's own `[control]` and its θ₀: `control.values` (one constant 0
 /// without a `[control]`); for a 2-axis control θ₀ = (θ_x; θ_z), the x components first.
 ///
 /// # Errors
-/// [`Error::Scene`] (`control.values`, a [`SceneError`] naming the key) when the number of
+/// [`Error::Scene`](crate::Error::Scene) (`control.values`, a [`SceneError`] naming the key) when the number of
 /// values does not fit the kind (a validated scene always fits); the errors of
 /// [`ControlProblem::from_scene`].
 pub fn scene_start(scene: &Scene) -> Result<(Parametrisation, Vec<f64>)> {

@@ -77,8 +77,8 @@ const CONDENSED_AUTO_BYTES: u128 = 256 << 20;
 ///    objective in Gauss-Newton form, a free tip, per-step, piecewise or constant controls):
 ///    [`Method::Condensed`] when its parameters P are at most
 ///    [`condensed_max_params`]`(n)` = 4(2n + 1) and its sensitivities 16·(N + 1)·P bytes fit 256
-///    MiB, else [`Method::Riccati`] (cost linear in N per iteration) in the planar model and
-///    [`Method::Lbfgs`] in the spatial one (the Riccati solver is planar);
+///    MiB, else [`Method::Riccati`] (cost linear in N per iteration), in the planar and the
+///    spatial model alike;
 /// 2. anything else (another objective, a locked tip, a problem that is not a
 ///    control problem): [`Method::Lbfgs`], the cheapest per iteration (one adjoint sweep per
 ///    line-search trial).
@@ -122,33 +122,12 @@ pub fn choose_method<Q: OptimProblem + ?Sized>(problem: &Q, opts: &OptimOptions)
     }
     let limit = condensed_max_params(shape.pendulums);
     let bytes = 16 * (shape.steps as u128 + 1) * p as u128;
-    if shape.dim == 3 {
-        let fits = p <= limit && bytes <= CONDENSED_AUTO_BYTES;
-        return MethodChoice {
-            method: if fits {
-                Method::Condensed
-            } else {
-                Method::Lbfgs
-            },
-            reason: format!(
-                "a spatial control problem with {p} parameters over N = {} steps, {} 4(2n + 1) \
-                 = {limit} for n = {} (the Riccati solver is planar only)",
-                shape.steps,
-                if fits {
-                    "at most"
-                } else {
-                    "more than (or sensitivities over 256 MiB)"
-                },
-                shape.pendulums
-            ),
-            fallback: None,
-        };
-    }
+    let model = if shape.dim == 3 { "spatial" } else { "planar" };
     if p <= limit && bytes <= CONDENSED_AUTO_BYTES {
         MethodChoice {
             method: Method::Condensed,
             reason: format!(
-                "a planar control problem with {p} parameters over N = {} steps, at most \
+                "a {model} control problem with {p} parameters over N = {} steps, at most \
                  4(2n + 1) = {limit} for n = {}",
                 shape.steps, shape.pendulums
             ),
@@ -158,7 +137,7 @@ pub fn choose_method<Q: OptimProblem + ?Sized>(problem: &Q, opts: &OptimOptions)
         MethodChoice {
             method: Method::Riccati,
             reason: format!(
-                "a planar control problem with {p} parameters over N = {} steps, more than \
+                "a {model} control problem with {p} parameters over N = {} steps, more than \
                  4(2n + 1) = {limit} for n = {} (or sensitivities over 256 MiB)",
                 shape.steps, shape.pendulums
             ),

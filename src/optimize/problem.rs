@@ -140,8 +140,7 @@ pub struct ProblemShape {
     /// The model's dimension (2: planar, 3: spatial).
     pub dim: usize,
     /// Whether the structured solvers ([`OptimProblem::riccati`], [`OptimProblem::condensed`])
-    /// take the problem: an objective in Gauss-Newton form, a free tip, a control node (the
-    /// Riccati solver only in the planar model, `dim` = 2).
+    /// take the problem: an objective in Gauss-Newton form, a free tip, a control node.
     pub structured: bool,
 }
 
@@ -186,10 +185,8 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
     std::f64::consts::PI * m * l / (h * h)
 }
 
-/// [`OptimProblem`] for the planar (`DIM = 2`, with the Riccati solver) and the spatial
-/// (`DIM = 3`) control problems: the same methods, except that only the planar one offers
-/// [`OptimProblem::riccati`] (its tangent coordinates are planar); both offer
-/// [`OptimProblem::condensed`].
+/// [`OptimProblem`] for the planar (`DIM = 2`) and the spatial (`DIM = 3`) control problems:
+/// the same methods, both with [`OptimProblem::riccati`] and [`OptimProblem::condensed`].
 macro_rules! impl_optim_problem {
     ($dim:literal, $($riccati:tt)*) => {
         impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O, $dim> {
@@ -292,6 +289,11 @@ impl_optim_problem! {
 }
 impl_optim_problem! {
     3,
+    /// [`crate::ocp::solve`] in the spatial model: the 2-axis control (two controls per stage)
+    /// and the vector moment.
+    fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::solve(self, theta0, options))
+    }
     /// [`crate::ocp::Condensed`] in the spatial model: the 2-axis control and the vector moment.
     fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
         Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))

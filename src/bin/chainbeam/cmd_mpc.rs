@@ -8,8 +8,9 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon, Mpc, MpcOptions,
-    MpcSolver, NoControl, Observation, PdLaw, PdTuning, Summary,
+    run_closed_loop, run_closed_loop_spatial, ClosedLoopResult, ConstantForce, Controller, Horizon,
+    Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, SpatialConstantForce,
+    SpatialController, SpatialPdLaw, Summary,
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
@@ -38,18 +39,29 @@ With --baselines the same loop also runs without control, with the best constant
 (optimised over the whole scene) and with a PD law u = clamp(u_b − K_p·M₀ − K_d·dM₀/dt) on the \
 measured base moment whose gains are tuned over the scene's closed-loop c_sum.
 
+A spatial scene (a load or the current with an x component; or a --model that is spatial) runs \
+in the spatial model: the controller plans a 2-axis force (u_x, u_z) per interval on the vector \
+moment, min Σ |M₀(t_k)|² + ρ·h·Σ |u_k|² (|M₀|² = M₀ₓ² + M₀_z², each force component within \
+--bound), with the solver of --solver as in the planar model (two controls per stage); the baselines \
+are 2-axis: the best constant (u_x, u_z), and a PD law per axis u_x = clamp(u_b,x − K_p·M₀ₓ − \
+K_d·dM₀ₓ/dt), u_z likewise, with common gains.
+
 CSV (--output; default standard output): one row per t_k, k = 0..N:
   t        time t_k [s]
   moment   base bending moment M₀(t_k) [Nm] under MPC
   control  the force u_k [N] applied by MPC
   tip      tip displacement z_n(t_k) [m] under MPC
   with --baselines also moment_none, moment_constant, control_constant, moment_pd, control_pd.
+  A spatial run adds moment_x (M₀ₓ) and control_x (u_x) after tip, and with --baselines \
+moment_x_none, moment_x_constant, control_x_constant, moment_x_pd, control_x_pd at the end.
 
 JSON (--summary FILE): settings, and per controller: c_sum = Σ M₀(t_k)² [N²m²], max_abs_moment, \
 max_abs_control, effort h·Σ u² [N²s], decisions, initial_decision_seconds, mean_replan_seconds, \
 worst_replan_seconds (the decisions after the first), mean_iterations, real_time_factor \
 (simulated time / controller wall time), loop_real_time_factor; real_time (worst re-plan ≤ \
-interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's; \
+interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's, \
+and pd_gains [u_b, K_p, K_d] (spatial: [u_b,x, u_b,z, K_p, K_d]); a spatial run has model = \
+\"spatial\" (c_sum = Σ |M₀|², max_abs_control and effort of |u|); \
 fatigue_damage (the scene's [objective] is kind = \"fatigue\"): the rainflow Miner damage of \
 MPC's moment, as `chainbeam fatigue --series` of the CSV reports it.
 
@@ -136,12 +148,15 @@ struct Settings {
 
 #[derive(Serialize)]
 struct Report {
+    /// "spatial" for a spatial run (absent for a planar one, whose JSON is as before).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    model: Option<&'static str>,
     settings: Settings,
     mpc: Summary,
     real_time: bool,
     baselines: Vec<Summary>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pd_gains: Option<[f64; 3]>,
+    pd_gains: Option<Vec<f64>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     c_sum_ratio_to_constant: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -154,7 +169,7 @@ struct Report {
 /// The runs of the baselines: none, constant, PD (with its gains).
 struct Baselines {
     runs: [ClosedLoopResult; 3],
-    gains: [f64; 3],
+    gains: Vec<f64>,
 }
 
 /// What the plans minimise: the model scene's `[objective]` when it is `"power"`
@@ -206,30 +221,28 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
     check_plan_length(a, model_file, &model)?;
-    let mut mpc = Mpc::new(&model, a.interval, options).map_err(|e| mpc_error(a, model_file, e))?;
-    let spinner = progress.spinner(format!(
-        "closed loop: {} s, a plan every {} s over {} s",
-        scene.time.steps as f64 * scene.time.step,
-        a.interval,
-        a.horizon
-    ));
-    let mut blamed = Blamed {
-        inner: &mut mpc,
-        failed: false,
+    let spatial = scene.spatial_key().is_some() || model.spatial_key().is_some();
+    let loop_of = Loop {
+        a,
+        scene: &scene,
+        model_file,
     };
-    let closed = run_closed_loop(&scene, a.interval, &mut blamed);
-    spinner.finish_and_clear();
-    // The controller's failures are the model's (its scene, its step); the others the plant's.
-    let failed_file = if blamed.failed { model_file } else { &a.scene };
-    let closed = closed.map_err(|e| mpc_error(a, failed_file, e))?;
-    let baselines = if a.baselines {
-        Some(run_baselines(a, &scene, &progress)?)
+    let closed = if spatial {
+        let mpc = Mpc::spatial(&model, a.interval, options);
+        loop_of.run(mpc, &progress, |s, i, c| run_closed_loop_spatial(s, i, c))?
     } else {
-        None
+        let mpc = Mpc::new(&model, a.interval, options);
+        loop_of.run(mpc, &progress, |s, i, c| run_closed_loop(s, i, c))?
+    };
+    let baselines = match (a.baselines, spatial) {
+        (false, _) => None,
+        (true, false) => Some(run_baselines(a, &scene, &progress)?),
+        (true, true) => Some(run_spatial_baselines(a, &scene, &progress)?),
     };
     check_run(&a.scene, &closed)?;
     let mut report = report(a, closed.summary.clone(), baselines.as_ref());
     report.fatigue_damage = fatigue_damage(&a.scene, &scene, &closed)?;
+    report.model = spatial.then_some("spatial");
     let json = to_json(&report)?;
     let mut sink = out.open()?;
     if let Err(e) = write_csv(sink.writer(), &closed, baselines.as_ref()) {
@@ -242,14 +255,75 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     Ok(())
 }
 
+/// The closed loop of a run: the plant's scene and the controller's model.
+struct Loop<'a> {
+    a: &'a MpcArgs,
+    scene: &'a Scene,
+    model_file: &'a Path,
+}
+
+impl Loop<'_> {
+    /// Runs the controller `mpc` (as built, or its error: the model's) in closed loop by `run`
+    /// (the planar or the spatial loop), blaming a failure on the model's file when the
+    /// controller failed and on the plant's otherwise.
+    fn run<C, F>(
+        &self,
+        mpc: chainbeam::Result<C>,
+        progress: &Progress,
+        run: F,
+    ) -> Result<ClosedLoopResult, CliError>
+    where
+        F: FnOnce(&Scene, f64, &mut Blamed<'_, C>) -> chainbeam::Result<ClosedLoopResult>,
+    {
+        let a = self.a;
+        let mut mpc = mpc.map_err(|e| mpc_error(a, self.model_file, e))?;
+        let spinner = progress.spinner(format!(
+            "closed loop: {} s, a plan every {} s over {} s",
+            self.scene.time.steps as f64 * self.scene.time.step,
+            a.interval,
+            a.horizon
+        ));
+        let mut blamed = Blamed {
+            inner: &mut mpc,
+            failed: false,
+        };
+        let closed = run(self.scene, a.interval, &mut blamed);
+        spinner.finish_and_clear();
+        // The controller's failures are the model's (its scene, its step); the others the
+        // plant's.
+        let failed_file = if blamed.failed {
+            self.model_file
+        } else {
+            &a.scene
+        };
+        closed.map_err(|e| mpc_error(a, failed_file, e))
+    }
+}
+
 /// The controller, remembering whether it failed: its errors come from the `--model` scene, the
 /// loop's other errors from the plant's.
-struct Blamed<'a> {
-    inner: &'a mut Mpc,
+struct Blamed<'a, C> {
+    inner: &'a mut C,
     failed: bool,
 }
 
-impl Controller for Blamed<'_> {
+impl SpatialController for Blamed<'_, Mpc<3>> {
+    fn name(&self) -> String {
+        SpatialController::name(self.inner)
+    }
+
+    fn control(&mut self, obs: &Observation<'_, 3>) -> chainbeam::Result<[f64; 2]> {
+        let u = SpatialController::control(self.inner, obs);
+        self.failed = u.is_err();
+        u
+    }
+
+    fn last_iterations(&self) -> Option<usize> {
+        SpatialController::last_iterations(self.inner)
+    }
+}
+
+impl Controller for Blamed<'_, Mpc> {
     fn name(&self) -> String {
         self.inner.name()
     }
@@ -277,6 +351,7 @@ fn flag_of(name: &str) -> Option<&'static str> {
         "rate_penalty" => "--rate-penalty",
         "plan_pendulums" => "--plan-pendulums",
         "plan_step" => "--plan-step",
+        "solver" => "--solver",
         _ => return None,
     })
 }
@@ -333,7 +408,7 @@ fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Base
         ..OptimOptions::default()
     };
     let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
-    let gains = [pd.bias, pd.kp, pd.kd];
+    let gains = vec![pd.bias, pd.kp, pd.kd];
     let pd = run_closed_loop(scene, a.interval, &mut pd).map_err(err)?;
     spinner.finish_and_clear();
     for r in [&none, &constant, &pd] {
@@ -358,7 +433,7 @@ fn fatigue_damage(
     let history = chainbeam::fatigue::MomentHistory {
         duration_s: r.summary.simulated_seconds,
         moment: &r.moment,
-        moment_x: None,
+        moment_x: (!r.moment_x.is_empty()).then_some(&r.moment_x[..]),
         measure: scene.moment_measure(),
     };
     let a = chainbeam::fatigue::assess(&spec, history)
@@ -367,9 +442,41 @@ fn fatigue_damage(
     Ok(Some(a.damage))
 }
 
+/// [`run_baselines`] in the spatial model: no control, the best constant 2-axis force and a PD
+/// law per axis with common gains ([`SpatialPdLaw`], tuned over the closed-loop Σ |M₀|²).
+fn run_spatial_baselines(
+    a: &MpcArgs,
+    scene: &Scene,
+    progress: &Progress,
+) -> Result<Baselines, CliError> {
+    let err = |e| mpc_error(a, &a.scene, e);
+    let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
+    let none = run_closed_loop_spatial(scene, a.interval, &mut NoControl).map_err(err)?;
+    let (mut constant, _) = SpatialConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
+    let constant = run_closed_loop_spatial(scene, a.interval, &mut constant).map_err(err)?;
+    let tuning = PdTuning::spatial(scene, a.interval, a.bound, a.effort).map_err(err)?;
+    let opts = OptimOptions {
+        max_iters: 200,
+        first_step: 0.01,
+        ..OptimOptions::default()
+    };
+    let (mut pd, _) = SpatialPdLaw::tune(&tuning, [0.0; 4], &opts).map_err(err)?;
+    let gains = vec![pd.bias[0], pd.bias[1], pd.kp, pd.kd];
+    let pd = run_closed_loop_spatial(scene, a.interval, &mut pd).map_err(err)?;
+    spinner.finish_and_clear();
+    for r in [&none, &constant, &pd] {
+        check_run(&a.scene, r)?;
+    }
+    Ok(Baselines {
+        runs: [none, constant, pd],
+        gains,
+    })
+}
+
 fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
     let ratio = |i: usize| b.map(|b| mpc.c_sum / b.runs[i].summary.c_sum);
     Report {
+        model: None,
         settings: Settings {
             horizon: a.horizon,
             solver: a.solver,
@@ -384,7 +491,7 @@ fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
         real_time: mpc.worst_replan_seconds <= a.interval,
         c_sum_ratio_to_constant: ratio(1),
         c_sum_ratio_to_pd: ratio(2),
-        pd_gains: b.map(|b| b.gains),
+        pd_gains: b.map(|b| b.gains.clone()),
         fatigue_damage: None,
         baselines: b.map_or_else(Vec::new, |b| {
             b.runs.iter().map(|r| r.summary.clone()).collect()
@@ -398,6 +505,8 @@ fn check_run(path: &Path, r: &ClosedLoopResult) -> Result<(), CliError> {
     check_finite(path, "moment", &r.moment)?;
     check_finite(path, "control", &r.control)?;
     check_finite(path, "tip", &r.tip)?;
+    check_finite(path, "moment_x", &r.moment_x)?;
+    check_finite(path, "control_x", &r.control_x)?;
     let s = &r.summary;
     check_finite(
         path,
@@ -411,9 +520,18 @@ fn write_csv(
     r: &ClosedLoopResult,
     b: Option<&Baselines>,
 ) -> std::io::Result<()> {
+    let spatial = !r.moment_x.is_empty();
     let mut header = String::from("t,moment,control,tip");
+    if spatial {
+        header.push_str(",moment_x,control_x");
+    }
     if b.is_some() {
         header.push_str(",moment_none,moment_constant,control_constant,moment_pd,control_pd");
+        if spatial {
+            header.push_str(
+                ",moment_x_none,moment_x_constant,control_x_constant,moment_x_pd,control_x_pd",
+            );
+        }
     }
     header.push('\n');
     w.write_all(header.as_bytes())?;
@@ -422,6 +540,9 @@ fn write_csv(
     for k in 0..r.t.len() {
         line.clear();
         let mut values = vec![r.t[k], r.moment[k], r.control[k], r.tip[k]];
+        if spatial {
+            values.extend([r.moment_x[k], r.control_x[k]]);
+        }
         if let Some(b) = b {
             let [none, constant, pd] = &b.runs;
             values.extend([
@@ -431,6 +552,15 @@ fn write_csv(
                 pd.moment[k],
                 pd.control[k],
             ]);
+            if spatial {
+                values.extend([
+                    none.moment_x[k],
+                    constant.moment_x[k],
+                    constant.control_x[k],
+                    pd.moment_x[k],
+                    pd.control_x[k],
+                ]);
+            }
         }
         for (j, v) in values.iter().enumerate() {
             if j > 0 {

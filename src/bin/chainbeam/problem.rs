@@ -28,9 +28,9 @@ pub struct ProblemArgs {
     pub effort: Option<f64>,
 }
 
-/// The problem in the model the scene needs, its Riccati refusal and the JSON layout of θ live in
-/// the library (shared with the Python bindings).
-pub use chainbeam::optimize::{AnyProblem, Values, RICCATI_PLANAR};
+/// The problem in the model the scene needs and the JSON layout of θ live in the library (shared
+/// with the Python bindings).
+pub use chainbeam::optimize::{AnyProblem, Values};
 
 /// The control problem of a scene and the parameters θ₀ to evaluate it at (or start from).
 pub struct SceneProblem {
@@ -44,9 +44,6 @@ pub struct SceneProblem {
     pub control_node: usize,
     /// The objective (kind and effort).
     pub objective: BendingObjective,
-    /// Why the spatial model was chosen (for messages), e.g. "`loads.point[0].force` has an x
-    /// component"; `None` for the planar model.
-    pub spatial_reason: Option<String>,
 }
 
 /// How the parametrisation is reported in the JSON: `control_kind` and, for piecewise controls,
@@ -148,21 +145,6 @@ fn pieces_theta(
     Ok((Parametrisation::Piecewise(pc), out))
 }
 
-/// Why `scene` (with the controls of `file`, if any) needs the spatial model, if it does.
-fn spatial_reason(scene: &Scene, file: Option<&ControlsFile>) -> Option<String> {
-    match (scene.spatial_key(), file) {
-        (Some(key), _) if scene.has_two_axis_control() => {
-            Some(format!("`{key}` are pairs [u_x, u_z], a 2-axis control"))
-        }
-        (Some(key), _) => Some(format!("`{key}` has an x component")),
-        (None, Some(f)) if f.is_two_axis() => Some(format!(
-            "the controls file {} holds a 2-axis control",
-            f.path.display()
-        )),
-        (None, _) => None,
-    }
-}
-
 /// Builds the problem: the scene's control and objective, `args`' changes, and (if given) the
 /// parametrisation and values of a `--controls` file, in the model they need.
 pub fn build(
@@ -192,7 +174,6 @@ pub fn build(
         AnyProblem::new(scene, map, objective, two_axis).map_err(|e| lib_error(path, e))?;
     let control_node = scene.control.as_ref().map_or(scene.n(), |c| c.node);
     Ok(SceneProblem {
-        spatial_reason: spatial_reason(scene, controls),
         problem,
         theta0,
         control_node,

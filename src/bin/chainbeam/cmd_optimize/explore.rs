@@ -9,7 +9,7 @@ use chainbeam::optimize::choose_method;
 
 use super::report::{why, LimitsReport};
 use super::solve::all_failed;
-use super::{refuse_riccati_on_spatial, DesignReport, ExploreArgs};
+use super::{DesignReport, ExploreArgs};
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::problem::{self, kind_report, objective_name, AnyProblem, KindReport, Values};
 use crate::progress::Progress;
@@ -188,7 +188,6 @@ pub fn run_explore(a: &ExploreArgs, progress: Progress) -> Result<(), CliError> 
     let scene = inputs.load_scene(&a.scene)?;
     refuse_overwrite(&[("--output", &out)], &inputs)?;
     let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
-    refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
     let design = a.design.design(&sp.theta0)?;
     let starts = a.starts as usize;
     let seed = a.parallel.seed;

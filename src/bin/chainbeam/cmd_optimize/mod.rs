@@ -8,7 +8,7 @@ mod solve;
 
 pub use explore::run_explore;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use serde::Serialize;
@@ -18,7 +18,7 @@ use chainbeam::ocp::Curvature;
 use chainbeam::optimize::{Bounds, Method, OptimOptions};
 
 use crate::output::Output;
-use crate::problem::{self, ProblemArgs, SceneProblem};
+use crate::problem::ProblemArgs;
 use crate::progress::Progress;
 use crate::{check_force_flag, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
@@ -400,24 +400,6 @@ pub struct ExploreArgs {
     design: DesignArgs,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     output: Option<PathBuf>,
-}
-
-/// `--method riccati` on a problem in the spatial model: refused before any work (the condensed
-/// solver takes it), naming the
-/// flag and why the scene is spatial.
-fn refuse_riccati_on_spatial(
-    path: &Path,
-    sp: &SceneProblem,
-    opts: &OptimOptions,
-) -> Result<(), CliError> {
-    match (&sp.spatial_reason, opts.method) {
-        (Some(why), m @ Method::Riccati) => Err(CliError::msg(format!(
-            "{}: --method {m}: this scene needs the spatial model ({why}), and {}",
-            path.display(),
-            problem::RICCATI_PLANAR
-        ))),
-        _ => Ok(()),
-    }
 }
 
 /// Runs `optimize`: the inputs checked and the minimisation ([`solve`]), then the JSON and the

@@ -10,7 +10,7 @@ use chainbeam::optimize::{
     OptimResult,
 };
 
-use super::{refuse_riccati_on_spatial, OptimizeArgs};
+use super::OptimizeArgs;
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::problem::{self, SceneProblem};
 use crate::progress::{IterationProgress, Progress};
@@ -48,7 +48,6 @@ impl Setup {
         let scene = inputs.load_scene(&a.scene)?;
         refuse_overwrite(&[("--output", out)], &inputs)?;
         let sp = problem::build(&a.scene, &scene, Some(&a.problem), None)?;
-        refuse_riccati_on_spatial(&a.scene, &sp, &opts)?;
         let design = a.design.design(&sp.theta0)?;
         check_start_in_bound(&a.scene, &sp, a.problem.pieces.is_some(), &opts)?;
         // Before the start's objective is evaluated: a start beyond the resolved force range

@@ -3,7 +3,10 @@
 
 ``fatigue(scene, scatter=None, controllers=None, executor=None, *, interval=0.1, horizon=3.0,
 iterations=1, bound=5.0, effort=0.01)`` returns the command line's JSON as a dict with the same
-fields (``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit):
+fields (``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit, for a scene
+without an ``[mpc]`` table and the command line without ``--spin-up``/``--mpc-objective``: the
+package runs the library's defaults for those, no spin-up and MPC on the fatigue proxy, and
+reports them as ``settings["spin_up"]`` and ``settings["mpc_objective"]``):
 
 - neither ``scatter`` nor ``controllers``: ``cycles`` ([[stress_range_MPa, mean_MPa, count], …]),
   ``damage``, ``duration_s``, ``damage_per_year``, ``life_years`` (None: no damage);

@@ -247,6 +247,16 @@ fn study_dict<'py>(
     settings.set_item("iterations", s.iterations)?;
     settings.set_item("bound", bound)?;
     settings.set_item("effort", s.effort)?;
+    // The library's defaults for what the package does not pass (`Settings::control` leaves
+    // them at `ControlSettings::default()`): the command line reports them too.
+    let lib = ControlSettings::default();
+    settings.set_item("spin_up", lib.spin_up)?;
+    let objective = if lib.mpc_fatigue_proxy {
+        "power"
+    } else {
+        "sum"
+    };
+    settings.set_item("mpc_objective", objective)?;
     d.set_item("settings", settings)?;
     Ok(d)
 }

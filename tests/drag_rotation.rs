@@ -11,6 +11,9 @@
 
 use chainbeam::*;
 
+#[path = "common/turned_riser.rs"]
+mod turned_riser;
+
 const STEPS: usize = 400;
 
 fn control(k: usize) -> f64 {
@@ -24,15 +27,7 @@ fn control(k: usize) -> f64 {
 /// model.
 fn scene(psi_deg: f64, planar: bool) -> Scene {
     let (s, c) = psi_deg.to_radians().sin_cos();
-    let b = SceneBuilder::new(10)
-        .support(Support::Riser)
-        .base_stiffness(2000.0)
-        .tip_stiffness(2000.0)
-        .drag(3.0)
-        .current(Current::linear(0.3, 0.05, [s, c]))
-        .point_load_vector(5, [2.0 * s, 2.0 * c])
-        .step(0.01)
-        .steps(STEPS);
+    let b = turned_riser::builder(psi_deg, STEPS);
     let b = if planar {
         b.control_per_step(10, (0..=STEPS).map(control).collect())
     } else {

@@ -23,6 +23,9 @@ use chainbeam::ocp::{self, Condensed, OcpOptions, Solver};
 use chainbeam::optimize::{choose_method, Method, OptimOptions};
 use chainbeam::*;
 
+#[path = "common/turned_riser.rs"]
+mod turned_riser;
+
 const STEPS: usize = 120;
 const PIECES: usize = 12;
 
@@ -32,16 +35,7 @@ const PIECES: usize = 12;
 /// piecewise control at the tip (12 pieces): along z for the planar scene (ψ = 0), 2-axis
 /// otherwise.
 fn scene(psi_deg: f64, two_axis: bool) -> Scene {
-    let (s, c) = psi_deg.to_radians().sin_cos();
-    let b = SceneBuilder::new(10)
-        .support(Support::Riser)
-        .base_stiffness(2000.0)
-        .tip_stiffness(2000.0)
-        .drag(3.0)
-        .current(Current::linear(0.3, 0.05, [s, c]))
-        .point_load_vector(5, [2.0 * s, 2.0 * c])
-        .step(0.01)
-        .steps(STEPS);
+    let b = turned_riser::builder(psi_deg, STEPS);
     if two_axis {
         b.control_two_axis(10, ControlKind::Piecewise, &[[0.0, 0.0]; PIECES])
     } else {

@@ -395,6 +395,27 @@ fn check_plan_length(a: &MpcArgs, model_file: &Path, model: &Scene) -> Result<()
     )))
 }
 
+/// The L-BFGS options of the PD baseline's tuning (planar and spatial).
+fn pd_tuning_options() -> OptimOptions {
+    OptimOptions {
+        max_iters: 200,
+        first_step: 0.01,
+        ..OptimOptions::default()
+    }
+}
+
+/// The baselines (no control, constant, PD) once each run is checked finite.
+fn checked_baselines(
+    a: &MpcArgs,
+    runs: [ClosedLoopResult; 3],
+    gains: Vec<f64>,
+) -> Result<Baselines, CliError> {
+    for r in &runs {
+        check_run(&a.scene, r)?;
+    }
+    Ok(Baselines { runs, gains })
+}
+
 fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Baselines, CliError> {
     let err = |e| mpc_error(a, &a.scene, e);
     let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
@@ -402,22 +423,12 @@ fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Base
     let (mut constant, _) = ConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
     let constant = run_closed_loop(scene, a.interval, &mut constant).map_err(err)?;
     let tuning = PdTuning::new(scene, a.interval, a.bound, a.effort).map_err(err)?;
-    let opts = OptimOptions {
-        max_iters: 200,
-        first_step: 0.01,
-        ..OptimOptions::default()
-    };
+    let opts = pd_tuning_options();
     let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
     let gains = vec![pd.bias, pd.kp, pd.kd];
     let pd = run_closed_loop(scene, a.interval, &mut pd).map_err(err)?;
     spinner.finish_and_clear();
-    for r in [&none, &constant, &pd] {
-        check_run(&a.scene, r)?;
-    }
-    Ok(Baselines {
-        runs: [none, constant, pd],
-        gains,
-    })
+    checked_baselines(a, [none, constant, pd], gains)
 }
 
 /// The rainflow damage of the closed loop's moment (`chainbeam fatigue`'s assessment of it) when
@@ -455,22 +466,12 @@ fn run_spatial_baselines(
     let (mut constant, _) = SpatialConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
     let constant = run_closed_loop_spatial(scene, a.interval, &mut constant).map_err(err)?;
     let tuning = PdTuning::spatial(scene, a.interval, a.bound, a.effort).map_err(err)?;
-    let opts = OptimOptions {
-        max_iters: 200,
-        first_step: 0.01,
-        ..OptimOptions::default()
-    };
+    let opts = pd_tuning_options();
     let (mut pd, _) = SpatialPdLaw::tune(&tuning, [0.0; 4], &opts).map_err(err)?;
     let gains = vec![pd.bias[0], pd.bias[1], pd.kp, pd.kd];
     let pd = run_closed_loop_spatial(scene, a.interval, &mut pd).map_err(err)?;
     spinner.finish_and_clear();
-    for r in [&none, &constant, &pd] {
-        check_run(&a.scene, r)?;
-    }
-    Ok(Baselines {
-        runs: [none, constant, pd],
-        gains,
-    })
+    checked_baselines(a, [none, constant, pd], gains)
 }
 
 fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {

@@ -50,7 +50,10 @@
 
 use std::time::Instant;
 
-use chainbeam::fatigue::scatter::reduced_north_atlantic;
+use chainbeam::fatigue::scatter::{
+    lump_north_atlantic, reduced_north_atlantic, REDUCED_NA_HS_EDGES, REDUCED_NA_MIN_PROBABILITY,
+    REDUCED_NA_TZ_EDGES,
+};
 use chainbeam::fatigue::{DnvClass, Environment, FatigueSpec, ScatterCell, SeaState};
 use chainbeam::fatigue_study::{
     pd_law, run_study, ControlSettings, ControllerKind, Study, StudyInput,
@@ -126,6 +129,27 @@ fn read_scatter(path: &str) -> Result<Vec<ScatterCell>, Box<dyn std::error::Erro
         });
     }
     Ok(cells)
+}
+
+/// What the diagram's cells stand for. The built-in reduction renormalises its cells to add up
+/// to 1, so their sum says nothing: the share of the source table's observations they hold
+/// does (the groups kept, before renormalising). A file's probabilities are taken as given
+/// (the time they leave out counts no damage), so their sum is what they cover.
+fn coverage(cells: &[ScatterCell], built_in: bool) -> String {
+    if built_in {
+        let kept: f64 = lump_north_atlantic(&REDUCED_NA_HS_EDGES, &REDUCED_NA_TZ_EDGES)
+            .iter()
+            .map(|c| c.probability)
+            .filter(|&p| p >= REDUCED_NA_MIN_PROBABILITY)
+            .sum();
+        format!(
+            "the groups holding {:.3} % of the table's observations, renormalised to 1",
+            100.0 * kept
+        )
+    } else {
+        let sum: f64 = cells.iter().map(|c| c.probability).sum();
+        format!("probabilities adding up to {sum:.4} (the rest of the time counts no damage)")
+    }
 }
 
 /// The command line: `[SECONDS] [CONTROLLERS] [--json FILE] [--scatter FILE]
@@ -226,6 +250,82 @@ fn write_json(
     Ok(())
 }
 
+/// The controllers' settings: the scene's `[mpc]` table (docs/scene-format.md "[mpc]"), the
+/// spin-up window and the PD tuning's iterations of this example; `objective` overrides the
+/// table's `objective`.
+fn control_settings(
+    scene: &Scene,
+    objective: Option<MpcPlanObjective>,
+) -> Result<ControlSettings, Box<dyn std::error::Error>> {
+    let t = scene.mpc.ok_or("riser_300m.toml has an [mpc] table")?;
+    let need = |key: &str| format!("riser_300m.toml: [mpc] sets {key}");
+    Ok(ControlSettings {
+        interval: t.interval.ok_or_else(|| need("interval"))?,
+        mpc: MpcOptions {
+            horizon: Horizon::Seconds(t.horizon.ok_or_else(|| need("horizon"))?),
+            iterations: t.iterations.unwrap_or(1),
+            effort: t.effort.ok_or_else(|| need("effort"))?,
+            ocp: OcpOptions::default().with_bound(t.bound.ok_or_else(|| need("bound"))?),
+            plan_pendulums: t.plan_pendulums,
+            plan_step: t.plan_step,
+            ..MpcOptions::default()
+        },
+        pd_max_iters: PD_ITERS,
+        pd_training: t.pd_training,
+        pd_gains: None,
+        spin_up: SPIN_UP_S,
+        mpc_fatigue_proxy: objective.or(t.objective) != Some(MpcPlanObjective::Sum),
+    })
+}
+
+/// The table of the controllers (each with its CPU and wall seconds) and the damage per cell;
+/// `record_s` is the simulated length of one cell's record (spin-up included) \[s\].
+fn print_results(cells: &[ScatterCell], studies: &[(Study, f64, f64)], record_s: f64) {
+    let none_life = studies
+        .iter()
+        .find(|s| s.0.controllers[0].kind == ControllerKind::None)
+        .map_or(f64::NAN, |s| s.0.controllers[0].life_years);
+    println!(
+        "\n| controller | damage per year | life (years, DFF 10) | life extension | CPU (s) | \
+         wall (s) | simulated s per CPU s |\n|---|---|---|---|---|---|---|"
+    );
+    let simulated = record_s * cells.len() as f64;
+    for (study, cpu, wall) in studies {
+        let c = &study.controllers[0];
+        println!(
+            "| {} | {:.4e} | {:.4e} | {:.3} | {cpu:.1} | {wall:.1} | {:.1} |",
+            c.kind.name(),
+            c.damage_per_year,
+            c.life_years,
+            c.life_years / none_life,
+            simulated / cpu
+        );
+    }
+    println!("\nper cell, damage per year (probability-weighted), by controller:");
+    for (s, cell) in cells.iter().enumerate() {
+        let row: Vec<String> = studies
+            .iter()
+            .map(|(study, _, _)| {
+                let c = &study.controllers[0];
+                let force = c.cells[s]
+                    .force
+                    .map_or(String::new(), |f| format!(" (u = {f:.3e} N)"));
+                format!(
+                    "{} {:.3e}{force}",
+                    c.kind.name(),
+                    c.cells[s].damage_per_year
+                )
+            })
+            .collect();
+        println!(
+            "  H_s {:4.2} m, T_p {:5.2} s: {}",
+            cell.sea.hs,
+            cell.sea.tp,
+            row.join(", ")
+        );
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let Args {
         seconds,
@@ -255,35 +355,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "reduced_north_atlantic".to_string(),
         ),
     };
-    let kept: f64 = cells.iter().map(|c| c.probability).sum();
-    // The controllers' settings are the scene's [mpc] table (docs/scene-format.md "[mpc]").
-    let t = scene.mpc.ok_or("riser_300m.toml has an [mpc] table")?;
-    let need = |key: &str| format!("riser_300m.toml: [mpc] sets {key}");
-    let mut settings = ControlSettings {
-        interval: t.interval.ok_or_else(|| need("interval"))?,
-        mpc: MpcOptions {
-            horizon: Horizon::Seconds(t.horizon.ok_or_else(|| need("horizon"))?),
-            iterations: t.iterations.unwrap_or(1),
-            effort: t.effort.ok_or_else(|| need("effort"))?,
-            ocp: OcpOptions::default().with_bound(t.bound.ok_or_else(|| need("bound"))?),
-            plan_pendulums: t.plan_pendulums,
-            plan_step: t.plan_step,
-            ..MpcOptions::default()
-        },
-        pd_max_iters: PD_ITERS,
-        pd_training: t.pd_training,
-        pd_gains: None,
-        spin_up: SPIN_UP_S,
-        mpc_fatigue_proxy: objective.or(t.objective) != Some(MpcPlanObjective::Sum),
-    };
+    let coverage = coverage(&cells, scatter.is_none());
+    let mut settings = control_settings(&scene, objective)?;
     let load_before = load_average();
     println!(
         "riser_300m: {} pendulums, {seconds} s counted per cell after a {SPIN_UP_S} s spin-up \
-         (h = {} s), scatter {diagram}: {} cells holding {:.2} % of the time; load average {}",
+         (h = {} s), scatter {diagram}: {} cells, {coverage}; load average {}",
         scene.n(),
         scene.time.step,
         cells.len(),
-        100.0 * kept,
         load_before
     );
     for c in &cells {
@@ -337,49 +417,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             write_json(file, &info, &studies)?;
         }
     }
-    let none_life = studies
-        .iter()
-        .find(|s| s.0.controllers[0].kind == ControllerKind::None)
-        .map_or(f64::NAN, |s| s.0.controllers[0].life_years);
-    println!(
-        "\n| controller | damage per year | life (years, DFF 10) | life extension | CPU (s) | \
-         wall (s) | simulated s per CPU s |\n|---|---|---|---|---|---|---|"
-    );
-    let simulated = (SPIN_UP_S + seconds) * cells.len() as f64;
-    for (study, cpu, wall) in &studies {
-        let c = &study.controllers[0];
-        println!(
-            "| {} | {:.4e} | {:.4e} | {:.3} | {cpu:.1} | {wall:.1} | {:.1} |",
-            c.kind.name(),
-            c.damage_per_year,
-            c.life_years,
-            c.life_years / none_life,
-            simulated / cpu
-        );
-    }
-    println!("\nper cell, damage per year (probability-weighted), by controller:");
-    for (s, cell) in cells.iter().enumerate() {
-        let row: Vec<String> = studies
-            .iter()
-            .map(|(study, _, _)| {
-                let c = &study.controllers[0];
-                let force = c.cells[s]
-                    .force
-                    .map_or(String::new(), |f| format!(" (u = {f:.3e} N)"));
-                format!(
-                    "{} {:.3e}{force}",
-                    c.kind.name(),
-                    c.cells[s].damage_per_year
-                )
-            })
-            .collect();
-        println!(
-            "  H_s {:4.2} m, T_p {:5.2} s: {}",
-            cell.sea.hs,
-            cell.sea.tp,
-            row.join(", ")
-        );
-    }
+    print_results(&cells, &studies, SPIN_UP_S + seconds);
     println!("load average after: {}", load_average());
     Ok(())
 }

@@ -121,7 +121,7 @@ fn mpc_bad_settings_are_one_error_and_leave_outputs_alone() {
         (vec!["--interval", "0.015"], "interval"),
         (vec!["--horizon", "0.05"], "horizon"),
         (vec!["--iterations", "0"], "iterations"),
-        (vec!["--bound=-1"], "bounds"),
+        (vec!["--bound=-1"], "--bound"),
         (vec!["--effort=-1"], "effort"),
     ] {
         let mut a = args.clone();
@@ -189,4 +189,165 @@ fn mpc_solver_flag_selects_the_solver() {
     let o = run(dir.path(), &["--solver", "newton"]);
     assert_eq!(o.status.code(), Some(2), "clap's usage error");
     assert!(String::from_utf8_lossy(&o.stderr).contains("--solver"));
+}
+
+/// The summary without the wall-clock measurements (re-plan times, real-time factors), which
+/// differ between two runs of the same loop.
+fn without_timings(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(map) => {
+            map.retain(|k, _| !(k.ends_with("_seconds") || k.contains("real_time")));
+            map.values_mut().for_each(without_timings);
+        }
+        serde_json::Value::Array(items) => items.iter_mut().for_each(without_timings),
+        _ => {}
+    }
+}
+
+/// `mpc SCENE --baselines` with `args`: (the CSV, the summary without its timings).
+fn csv_and_summary(dir: &Path, scene: &str, args: &[&str]) -> (String, serde_json::Value) {
+    let o = cargo_bin_cmd!("chainbeam")
+        .current_dir(dir)
+        .args([
+            "mpc",
+            scene,
+            "--baselines",
+            "-o",
+            "out.csv",
+            "--summary",
+            "out.json",
+        ])
+        .args(args)
+        .output()
+        .expect("run chainbeam");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = fs::read_to_string(dir.join("out.csv")).unwrap();
+    let mut v: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(dir.join("out.json")).unwrap()).unwrap();
+    without_timings(&mut v);
+    (csv, v)
+}
+
+/// The scene's `[mpc]` table sets `mpc`'s flags (the precedence of `chainbeam fatigue`,
+/// `MpcTable::resolve`): a scene with the table gives the CSV and the JSON summary (but its
+/// wall-clock timings) of the same values on the command line, byte for byte; a flag overrides
+/// its key; a value of the table that does not fit the run is refused naming `mpc.KEY`, the same
+/// value as a flag naming the flag.
+#[test]
+fn the_mpc_table_sets_the_flags() {
+    let dir = setup();
+    let table = "\n[mpc]\ninterval = 0.2\nhorizon = 0.4\niterations = 2\nbound = 1.5\n\
+                 effort = 0.02\n";
+    fs::write(dir.path().join("table.toml"), format!("{SCENE}{table}")).unwrap();
+    let flags = [
+        "--interval",
+        "0.2",
+        "--horizon",
+        "0.4",
+        "--iterations",
+        "2",
+        "--bound",
+        "1.5",
+        "--effort",
+        "0.02",
+    ];
+    let (csv, v) = csv_and_summary(dir.path(), "table.toml", &[]);
+    let (csv_flags, v_flags) = csv_and_summary(dir.path(), "scene.toml", &flags);
+    assert_eq!(csv, csv_flags);
+    assert_eq!(v, v_flags);
+    assert_eq!(v["settings"]["interval"].as_f64(), Some(0.2));
+    assert_eq!(v["settings"]["iterations"].as_u64(), Some(2));
+    assert_eq!(v["mpc"]["decisions"].as_u64(), Some(5), "1 s at 0.2 s");
+    // The MPC force is within the table's bound, not the default 5 N.
+    let max = v["mpc"]["max_abs_control"].as_f64().unwrap();
+    assert!(max <= 1.5 && max > 0.0, "{max}");
+    // A flag overrides its key; the other keys still come from the table.
+    let (csv, v) = csv_and_summary(dir.path(), "table.toml", &["--horizon", "0.6"]);
+    let mut over = flags;
+    over[3] = "0.6";
+    let (csv_flags, v_flags) = csv_and_summary(dir.path(), "scene.toml", &over);
+    assert_eq!(csv, csv_flags);
+    assert_eq!(v, v_flags);
+    assert_eq!(v["settings"]["horizon"].as_f64(), Some(0.6));
+    // An interval that is not a multiple of time.step = 0.01 s: the table's key, or the flag.
+    let bad = "\n[mpc]\ninterval = 0.015\n";
+    fs::write(dir.path().join("bad.toml"), format!("{SCENE}{bad}")).unwrap();
+    for (scene, args, needle) in [
+        ("bad.toml", vec![], "mpc.interval"),
+        ("scene.toml", vec!["--interval", "0.015"], "--interval"),
+    ] {
+        let o = cargo_bin_cmd!("chainbeam")
+            .current_dir(dir.path())
+            .args(["mpc", scene, "-o", "x.csv"])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{scene} {args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(err.contains(needle) && err.contains(scene), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+    }
+    // A value the table itself refuses, before anything runs (src/scene/mpc.rs).
+    fs::write(
+        dir.path().join("neg.toml"),
+        format!("{SCENE}\n[mpc]\nbound = 1e13\n"),
+    )
+    .unwrap();
+    let o = cargo_bin_cmd!("chainbeam")
+        .current_dir(dir.path())
+        .args(["mpc", "neg.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("mpc.bound"));
+}
+
+/// `mpc.objective` sets what the plans minimise: `"power"` is Σ|M₀|^m + ρ·h·Σ u² with m the
+/// first slope of the scene's `[fatigue]` S-N curve, so a scene with curve D (m = 3,
+/// DNV-RP-C203 Table 2-2) and `mpc.objective = "power"` runs the closed loop of the same scene
+/// with `[objective] kind = "power"`, `exponent = 3` (its CSV byte for byte); `"sum"` overrides
+/// the model's `[objective]`; `"power"` without a `[fatigue]` table is refused naming
+/// `mpc.objective`.
+#[test]
+fn the_mpc_objective_key_sets_what_the_plans_minimise() {
+    let dir = setup();
+    let fatigue = "\n[fatigue]\nouter_diameter = 0.02\nwall_thickness = 0.002\ncurve = \"D\"\n";
+    let write = |name: &str, tail: &str| {
+        fs::write(dir.path().join(name), format!("{SCENE}{fatigue}{tail}")).unwrap();
+    };
+    write(
+        "proxy.toml",
+        "\n[mpc]\nobjective = \"power\"\nhorizon = 0.5\n",
+    );
+    write(
+        "cubic.toml",
+        "\n[objective]\nkind = \"power\"\nexponent = 3.0\n",
+    );
+    write(
+        "sum.toml",
+        "\n[objective]\nkind = \"power\"\nexponent = 3.0\n\n[mpc]\nobjective = \"sum\"\n",
+    );
+    let (proxy, _) = csv_and_summary(dir.path(), "proxy.toml", &[]);
+    let (cubic, _) = csv_and_summary(dir.path(), "cubic.toml", &["--horizon", "0.5"]);
+    assert_eq!(proxy, cubic);
+    let (sum, _) = csv_and_summary(dir.path(), "sum.toml", &[]);
+    let (plain, _) = csv_and_summary(dir.path(), "scene.toml", &[]);
+    assert_eq!(sum, plain);
+    assert_ne!(sum, cubic, "the two objectives plan differently");
+    fs::write(
+        dir.path().join("nofatigue.toml"),
+        format!("{SCENE}\n[mpc]\nobjective = \"power\"\n"),
+    )
+    .unwrap();
+    let o = cargo_bin_cmd!("chainbeam")
+        .current_dir(dir.path())
+        .args(["mpc", "nofatigue.toml"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("mpc.objective") && err.contains("[fatigue]"),
+        "{err}"
+    );
 }

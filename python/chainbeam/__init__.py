@@ -23,7 +23,9 @@ forked after such a call (``multiprocessing`` with the ``fork`` start method, a
 The wellhead fatigue assessment (:func:`fatigue`: ``chainbeam fatigue``'s JSON as a dict) runs
 plain, over a scatter diagram and with controllers, its cells optionally spread over an executor
 (``fatigue(scene, scatter=..., controllers=..., executor=client)``), bit for bit the command
-line's numbers.
+line's numbers; :func:`reduced_north_atlantic` is the published scatter diagram (IACS Rec. 34)
+of the headline as a DataFrame to pass as ``scatter``. The controllers' settings default to the
+scene's ``[mpc]`` table, as on the command line.
 """
 
 from __future__ import annotations
@@ -38,7 +40,7 @@ from ._api import (
     simulate,
 )
 from ._chainbeam import Scene, __version__
-from ._fatigue import fatigue
+from ._fatigue import fatigue, reduced_north_atlantic
 from ._errors import (
     ChainbeamError,
     ConvergenceError,
@@ -56,6 +58,7 @@ __all__ = [
     "optimize",
     "mpc",
     "fatigue",
+    "reduced_north_atlantic",
     "sweep",
     "to_parquet",
     "Trajectory",

@@ -1,12 +1,16 @@
 """The wellhead fatigue assessment (``chainbeam fatigue``): plain, over a scatter diagram
 (``--scatter``) and with controllers (``--controller``), optionally spread over an executor.
 
-``fatigue(scene, scatter=None, controllers=None, executor=None, *, interval=0.1, horizon=3.0,
-iterations=1, bound=5.0, effort=0.01)`` returns the command line's JSON as a dict with the same
-fields (``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit, for a scene
-without an ``[mpc]`` table and the command line without ``--spin-up``/``--mpc-objective``: the
-package runs the library's defaults for those, no spin-up and MPC on the fatigue proxy, and
-reports them as ``settings["spin_up"]`` and ``settings["mpc_objective"]``):
+``fatigue(scene, scatter=None, controllers=None, executor=None, *, interval=None, horizon=None,
+iterations=None, bound=None, effort=None, plan_pendulums=None, plan_step=None, pd_training=None,
+mpc_objective=None, spin_up=0.0)`` returns the command line's JSON as a dict with the same fields
+(``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit, the keyword arguments
+being the flags of the same names). The controllers' settings take the command line's
+precedence: an argument given (not ``None``) overrides the scene's ``[mpc]`` table
+(docs/scene-format.md), and a key given in neither takes the default (``interval`` 0.1 s,
+``horizon`` 3 s, ``iterations`` 1, ``bound`` 5 N, ``effort`` 0.01, ``mpc_objective`` "power",
+the others off); a bad value from the table raises ``SceneError`` with ``.key`` ``mpc.KEY``, a
+bad argument ``InvalidArgumentError`` with ``.key`` the argument:
 
 - neither ``scatter`` nor ``controllers``: ``cycles`` ([[stress_range_MPa, mean_MPa, count], …]),
   ``damage``, ``duration_s``, ``damage_per_year``, ``life_years`` (None: no damage);
@@ -15,7 +19,11 @@ reports them as ``settings["spin_up"]`` and ``settings["mpc_objective"]``):
   ``damage``, ``duration_s``);
 - ``controllers``: ``controllers`` (keyed by name: ``damage_per_year``, ``life_years``,
   ``cells``), ``life_extension`` (keyed by name: its life over the life without control) and
-  ``settings``.
+  ``settings`` (``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``spin_up``,
+  ``mpc_objective``: the values the run used, from the arguments or the scene's ``[mpc]``).
+
+``reduced_north_atlantic()``: the published scatter diagram of the headline as a DataFrame
+(``hs``, ``tp``, ``probability``), ready for ``scatter=``.
 
 ``scatter``: a path to the command line's CSV (header ``hs,tp,probability[,direction]``), a
 pandas DataFrame with those columns, or a sequence of mappings with those keys. Every cell sets
@@ -38,6 +46,8 @@ import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Optional
+
+import pandas as pd
 
 from . import _chainbeam
 from ._chainbeam import Scene
@@ -133,28 +143,68 @@ def _cell_task(
     return _chainbeam._fatigue_cell(scene, cell, index, names, settings)
 
 
+def _optional(value: Any, kind: Any) -> Any:
+    return None if value is None else kind(value)
+
+
+def reduced_north_atlantic() -> pd.DataFrame:
+    """The North Atlantic wave scatter diagram of IACS Recommendation No. 34 ("Standard Wave
+    Data", as printed in Korean Register, Guidance RA-03-E (2025), Pt 3, Annex 3-2, Table 3;
+    derived from BMT's Global Wave Statistics), reduced to 20 cells: 5 x 5 groups of adjacent
+    classes, H_s the group's RMS, T_p = (5*pi/4)^(1/4) times its mean T_z (the table's
+    Pierson-Moskowitz sea: run it with ``gamma = 1``), the groups below 0.1 % of the time dropped
+    and the rest renormalised to 1 (``chainbeam::fatigue::scatter::reduced_north_atlantic``,
+    src/fatigue/scatter/north_atlantic.rs; examples/scatter/README.md).
+
+    Returns:
+        A DataFrame with the columns ``hs`` [m], ``tp`` [s] and ``probability``, one row per
+        cell, H_s slowest: the rows of examples/scatter/north_atlantic_iacs34.csv, the same
+        doubles. Pass it as ``fatigue(scene, scatter=...)``.
+    """
+    return pd.DataFrame(_chainbeam._reduced_north_atlantic(), columns=["hs", "tp", "probability"])
+
+
 def fatigue(
     scene: Scene,
     scatter: Any = None,
     controllers: str | Sequence[str] | None = None,
     executor: ExecutorLike | None = None,
     *,
-    interval: float = 0.1,
-    horizon: float = 3.0,
-    iterations: int = 1,
-    bound: float = 5.0,
-    effort: float = 0.01,
+    interval: float | None = None,
+    horizon: float | None = None,
+    iterations: int | None = None,
+    bound: float | None = None,
+    effort: float | None = None,
+    plan_pendulums: int | None = None,
+    plan_step: float | None = None,
+    pd_training: float | None = None,
+    mpc_objective: str | None = None,
+    spin_up: float = 0.0,
 ) -> dict[str, Any]:
     """The wellhead's fatigue damage and life (``chainbeam fatigue``'s JSON as a dict; module
-    docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``: the closed-loop
-    settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the same names).
+    docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
+    ``plan_step``, ``pd_training``, ``mpc_objective`` (``"power"`` or ``"sum"``): the
+    closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
+    start of every record left out of the count (``--spin-up``).
 
     Raises:
-        SceneError (no ``[fatigue]`` table, key ``fatigue``), InvalidArgumentError (``scatter``,
+        SceneError (no ``[fatigue]`` table, key ``fatigue``; a setting of the ``[mpc]`` table
+        that does not fit the run, key ``mpc.KEY``), InvalidArgumentError (``scatter``,
         ``controllers`` or a setting, named in ``.key``), SimulationError, ConvergenceError.
     """
-    settings = {"interval": float(interval), "horizon": float(horizon),
-                "iterations": int(iterations), "bound": float(bound), "effort": float(effort)}
+    settings = {
+        "interval": _optional(interval, float),
+        "horizon": _optional(horizon, float),
+        "iterations": _optional(iterations, int),
+        "bound": _optional(bound, float),
+        "effort": _optional(effort, float),
+        "plan_pendulums": _optional(plan_pendulums, int),
+        "plan_step": _optional(plan_step, float),
+        "pd_training": _optional(pd_training, float),
+        "mpc_objective": _optional(mpc_objective, str),
+        "spin_up": float(spin_up),
+    }
     cells = None if scatter is None else _cells(scatter)
     names = _controllers(controllers)
     if executor is None:
@@ -168,4 +218,4 @@ def fatigue(
     return _chainbeam._fatigue_combine(scene, cells, names, settings, runs)
 
 
-__all__ = ["fatigue"]
+__all__ = ["fatigue", "reduced_north_atlantic"]

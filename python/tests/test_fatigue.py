@@ -4,6 +4,7 @@ over a scatter diagram, with controllers, and with the cells spread over executo
 
 from __future__ import annotations
 
+import csv
 import json
 import subprocess
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
@@ -14,7 +15,7 @@ import pandas as pd
 import pytest
 
 import chainbeam as cb
-from conftest import wave_riser_toml
+from conftest import ROOT, wave_riser_toml
 
 # The 60 m riser of conftest.py (waves from 0°), a control at node 3, curve D in seawater with CP.
 SCENE = wave_riser_toml(
@@ -31,6 +32,21 @@ wall_thickness = 0.0222
 )
 
 DIAGRAM = [(1.5, 7.0, 0.5), (3.0, 9.0, 0.3), (5.0, 11.0, 0.2)]
+
+# The published diagram (IACS Rec. 34, North Atlantic) as committed for `--scatter`.
+NORTH_ATLANTIC_CSV = ROOT / "examples" / "scatter" / "north_atlantic_iacs34.csv"
+
+# Closed-loop settings in the scene (docs/scene-format.md "[mpc]"): every value differs from the
+# default, and the interval divides the 10 s record.
+MPC_TABLE = """
+[mpc]
+interval = 0.5
+horizon = 1.0
+iterations = 2
+bound = 2e4
+effort = 1e-3
+objective = "sum"
+"""
 
 
 def same(a: Any, b: Any) -> bool:
@@ -68,6 +84,10 @@ def test_plain_equals_cli(cli: str, files: tuple[Path, Path]) -> None:
     assert list(got) == ["cycles", "damage", "duration_s", "damage_per_year", "life_years"]
     assert got["damage"] > 0 and len(got["cycles"]) > 0
     assert same(got, ref)
+    # --spin-up 1.5: the first 1.5 s of the record not counted.
+    late = cb.fatigue(cb.Scene.from_file(scene), spin_up=1.5)
+    assert abs(late["duration_s"] - (got["duration_s"] - 1.5)) < 1e-12
+    assert same(late, cli_json(cli, str(scene), "--spin-up", "1.5"))
 
 
 def test_scatter_equals_cli(cli: str, files: tuple[Path, Path]) -> None:
@@ -96,6 +116,82 @@ def test_controllers_on_executors_equal_cli(cli: str, files: tuple[Path, Path]) 
         assert same(cb.fatigue(s, scatter=scatter, controllers=["constant"], executor=ex), ref)
     with ProcessPoolExecutor(2) as ex:
         assert same(cb.fatigue(s, scatter=scatter, controllers="none,constant", executor=ex), ref)
+
+
+def test_reduced_north_atlantic_is_the_committed_csv() -> None:
+    """`reduced_north_atlantic()` against examples/scatter/north_atlantic_iacs34.csv read here
+    with the csv module (its rows are printed shortest round-trip, so `float` recovers every
+    bit): the same 20 cells in the same order, bit for bit, their probabilities adding up to 1."""
+    df = cb.reduced_north_atlantic()
+    assert list(df.columns) == ["hs", "tp", "probability"]
+    assert all(str(t) == "float64" for t in df.dtypes)
+    lines = [ln for ln in NORTH_ATLANTIC_CSV.read_text().splitlines()
+             if ln.strip() and not ln.startswith("#")]
+    rows = list(csv.reader(lines))
+    assert rows[0] == ["hs", "tp", "probability"]
+    cells = [[float(x) for x in r] for r in rows[1:]]
+    assert len(cells) == 20
+    assert same(df.values.tolist(), cells)
+    assert abs(df["probability"].sum() - 1.0) < 1e-12
+    # A fresh DataFrame each call: changing one does not change the next.
+    df.loc[0, "hs"] = 99.0
+    assert cb.reduced_north_atlantic()["hs"][0] == cells[0][0]
+
+
+def test_reduced_north_atlantic_equals_cli_scatter(cli: str, files: tuple[Path, Path]) -> None:
+    """The DataFrame as `scatter` = `chainbeam fatigue --scatter` of the committed CSV, bit for
+    bit: the 20 cells, their damages and the total."""
+    scene, _ = files
+    ref = cli_json(cli, str(scene), "--scatter", str(NORTH_ATLANTIC_CSV))
+    got = cb.fatigue(cb.Scene.from_file(scene), scatter=cb.reduced_north_atlantic())
+    assert len(got["cells"]) == 20 and got["damage_per_year"] > 0
+    assert same(got, ref)
+
+
+def test_mpc_table_settings_equal_cli(cli: str, tmp_path: Path) -> None:
+    """A scene with an `[mpc]` table: `fatigue`'s settings (and every number) equal the command
+    line's JSON, which reads the same table; an argument overrides its key as the flag does."""
+    path = tmp_path / "m.toml"
+    path.write_text(SCENE + MPC_TABLE)
+    s = cb.Scene.from_file(path)
+    ref = cli_json(cli, str(path), "--controller", "constant,mpc", "--spin-up", "1.0")
+    got = cb.fatigue(s, controllers="constant,mpc", spin_up=1.0)
+    assert got["settings"] == {"interval": 0.5, "horizon": 1.0, "iterations": 2,
+                               "bound": 2e4, "effort": 1e-3, "spin_up": 1.0,
+                               "mpc_objective": "sum"}
+    assert same(got, ref)
+    ref = cli_json(cli, str(path), "--controller", "mpc", "--horizon", "1.5",
+                   "--mpc-objective", "power")
+    got = cb.fatigue(s, controllers="mpc", horizon=1.5, mpc_objective="power")
+    assert got["settings"]["horizon"] == 1.5 and got["settings"]["bound"] == 2e4
+    assert got["settings"]["mpc_objective"] == "power"
+    assert same(got, ref)
+    # Without the table, the defaults (the command line's).
+    plain = cb.Scene.from_toml(SCENE)
+    assert cb.fatigue(plain, controllers="none")["settings"] == {
+        "interval": 0.1, "horizon": 3.0, "iterations": 1, "bound": 5.0, "effort": 0.01,
+        "spin_up": 0.0, "mpc_objective": "power"}
+
+
+def test_mpc_table_refusals() -> None:
+    """A table value that does not fit the run names `mpc.KEY` (SceneError); the same value as
+    an argument names the argument; the table's own checks refuse on reading the scene."""
+    bad = cb.Scene.from_toml(SCENE + "\n[mpc]\ninterval = 0.07\n")
+    with pytest.raises(cb.SceneError) as e:
+        cb.fatigue(bad, controllers="mpc")
+    assert e.value.key == "mpc.interval"
+    with pytest.raises(cb.InvalidArgumentError) as a:
+        cb.fatigue(cb.Scene.from_toml(SCENE), controllers="mpc", interval=0.07)
+    assert a.value.key == "interval"
+    with pytest.raises(cb.SceneError) as e:
+        cb.Scene.from_toml(SCENE + "\n[mpc]\nhorizon = -1.0\n")
+    assert e.value.key == "mpc.horizon"
+    with pytest.raises(cb.InvalidArgumentError) as a:
+        cb.fatigue(cb.Scene.from_toml(SCENE), controllers="mpc", mpc_objective="cubic")
+    assert a.value.key == "mpc_objective"
+    with pytest.raises(cb.InvalidArgumentError) as a:
+        cb.fatigue(cb.Scene.from_toml(SCENE), spin_up=60.0)
+    assert a.value.key == "spin_up"
 
 
 def test_refusals(files: tuple[Path, Path]) -> None:

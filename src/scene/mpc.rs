@@ -1,10 +1,12 @@
-//! The `[mpc]` table: the settings of the closed-loop controllers (`constant`, `pd`, `mpc`) that
-//! were only flags of `chainbeam fatigue`, with the flags' names in snake case
-//! (docs/scene-format.md "[mpc]"). Every key is optional; a flag given on the command line
-//! overrides the table, and a key given in neither takes the flag's default.
+//! The `[mpc]` table: the settings of the closed-loop controllers (`constant`, `pd`, `mpc`) of
+//! `chainbeam fatigue` and `chainbeam mpc`, with the flags' names in snake case
+//! (docs/scene-format.md "[mpc]"). Every key is optional; a value given by the caller (a flag on
+//! the command line, an argument in Python) overrides the table, and a key given in neither
+//! takes the default ([`MpcTable::resolve`], the one precedence every caller uses).
 
 use serde::{Deserialize, Serialize};
 
+use super::validate::FORCE_RANGE;
 use super::SceneError;
 
 /// What MPC plans on (`mpc.objective`, the flag `--mpc-objective`).
@@ -47,6 +49,114 @@ pub struct MpcTable {
     pub pd_training: Option<f64>,
     /// `objective`: what MPC plans on (`"power"` or `"sum"`).
     pub objective: Option<MpcPlanObjective>,
+}
+
+/// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
+pub const MPC_KEYS: [&str; 9] = [
+    "interval",
+    "horizon",
+    "iterations",
+    "bound",
+    "effort",
+    "plan_pendulums",
+    "plan_step",
+    "pd_training",
+    "objective",
+];
+
+/// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
+/// with a default hold a value; the others stay optional (`None`: off, or the command's own
+/// choice: `chainbeam fatigue` plans MPC on the fatigue proxy, `chainbeam mpc` on the model's
+/// `[objective]`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MpcSettings {
+    /// The control interval \[s\] (default [`MpcSettings::DEFAULT_INTERVAL`]).
+    pub interval: f64,
+    /// MPC's horizon \[s\] (default [`MpcSettings::DEFAULT_HORIZON`]).
+    pub horizon: f64,
+    /// Gauss-Newton iterations per re-plan (default [`MpcSettings::DEFAULT_ITERATIONS`]).
+    pub iterations: usize,
+    /// The force bound |u| ≤ U \[N\] (default [`MpcSettings::DEFAULT_BOUND`]).
+    pub bound: f64,
+    /// The effort weight ρ of ρ·h·Σ u² (default [`MpcSettings::DEFAULT_EFFORT`]).
+    pub effort: f64,
+    /// Pendulums of MPC's reduced planning model (default off).
+    pub plan_pendulums: Option<usize>,
+    /// The planning model's step \[s\] (default: the model's `time.step`).
+    pub plan_step: Option<f64>,
+    /// The PD law's training window \[s\] (default: the whole record).
+    pub pd_training: Option<f64>,
+    /// What MPC plans on (default: the command's own, see the type's docs).
+    pub objective: Option<MpcPlanObjective>,
+}
+
+impl MpcSettings {
+    /// `interval`'s default \[s\] (the flag `--interval`'s).
+    pub const DEFAULT_INTERVAL: f64 = 0.1;
+    /// `horizon`'s default \[s\].
+    pub const DEFAULT_HORIZON: f64 = 3.0;
+    /// `iterations`' default.
+    pub const DEFAULT_ITERATIONS: usize = 1;
+    /// `bound`'s default \[N\].
+    pub const DEFAULT_BOUND: f64 = 5.0;
+    /// `effort`'s default.
+    pub const DEFAULT_EFFORT: f64 = 0.01;
+}
+
+impl MpcTable {
+    /// The settings of a run: each value of `self` (the caller's: the command line's flags,
+    /// the Python arguments), else the scene's `table` (`[mpc]`), else the default
+    /// ([`MpcSettings`]'s constants). The one precedence of `chainbeam fatigue`, `chainbeam mpc`
+    /// and the Python package.
+    pub fn resolve(&self, table: Option<&MpcTable>) -> MpcSettings {
+        let t = table.copied().unwrap_or_default();
+        MpcSettings {
+            interval: self
+                .interval
+                .or(t.interval)
+                .unwrap_or(MpcSettings::DEFAULT_INTERVAL),
+            horizon: self
+                .horizon
+                .or(t.horizon)
+                .unwrap_or(MpcSettings::DEFAULT_HORIZON),
+            iterations: self
+                .iterations
+                .or(t.iterations)
+                .unwrap_or(MpcSettings::DEFAULT_ITERATIONS),
+            bound: self.bound.or(t.bound).unwrap_or(MpcSettings::DEFAULT_BOUND),
+            effort: self
+                .effort
+                .or(t.effort)
+                .unwrap_or(MpcSettings::DEFAULT_EFFORT),
+            plan_pendulums: self.plan_pendulums.or(t.plan_pendulums),
+            plan_step: self.plan_step.or(t.plan_step),
+            pd_training: self.pd_training.or(t.pd_training),
+            objective: self.objective.or(t.objective),
+        }
+    }
+
+    /// Whether the key `key` (one of [`MPC_KEYS`]) is given.
+    pub fn has(&self, key: &str) -> bool {
+        match key {
+            "interval" => self.interval.is_some(),
+            "horizon" => self.horizon.is_some(),
+            "iterations" => self.iterations.is_some(),
+            "bound" => self.bound.is_some(),
+            "effort" => self.effort.is_some(),
+            "plan_pendulums" => self.plan_pendulums.is_some(),
+            "plan_step" => self.plan_step.is_some(),
+            "pd_training" => self.pd_training.is_some(),
+            "objective" => self.objective.is_some(),
+            _ => false,
+        }
+    }
+
+    /// Whether [`MpcTable::resolve`] takes `key` from the scene's `table`: `self` (the caller's
+    /// values) does not give it and the table does. Errors about the value then name the
+    /// table's key (`mpc.horizon`) rather than the caller's flag.
+    pub fn defers_to(&self, table: Option<&MpcTable>, key: &str) -> bool {
+        !self.has(key) && table.is_some_and(|t| t.has(key))
+    }
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -111,10 +221,19 @@ impl RawMpc {
 
     /// The validated table; an invalid value names its key (`mpc.horizon`).
     pub(super) fn into_table(self) -> Result<MpcTable, SceneError> {
+        // A positive number of newtons; infinite (unbounded) or within the forces a scene may
+        // have (the flag `--bound`'s check).
         let bound = match self.bound {
             Some(b) if b.is_nan() || b <= 0.0 => Err(SceneError::invalid(
                 "mpc.bound",
                 format!("must be a positive number of newtons, got {b}"),
+            )),
+            Some(b) if b.is_finite() && !FORCE_RANGE.contains(b) => Err(SceneError::invalid(
+                "mpc.bound",
+                format!(
+                    "{b:e} N: outside the supported force range [{:e}, {:e}] N",
+                    FORCE_RANGE.min, FORCE_RANGE.max
+                ),
             )),
             b => Ok(b),
         }?;

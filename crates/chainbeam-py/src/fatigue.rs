@@ -8,17 +8,18 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use chainbeam::fatigue::scatter::reduced_north_atlantic;
 use chainbeam::fatigue::{
     assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
     ScatterCell, SeaState,
 };
 use chainbeam::fatigue_study::{
-    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
-    StudyInput,
+    run_study, spin_up_steps, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome,
+    Study, StudyError, StudyInput,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
-use chainbeam::scene::FORCE_RANGE;
+use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, FORCE_RANGE, MPC_KEYS};
 
 use crate::errors::{check, Failure};
 use crate::run::{interruptible, with_pool};
@@ -31,41 +32,123 @@ type CellTuple = (f64, f64, f64, Option<f64>);
 /// duration_s, force, gains).
 type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>);
 
-/// The closed-loop settings (the command line's `--interval --horizon --iterations --bound
-/// --effort`; the package passes a dict with these keys and the command line's defaults).
-#[derive(Clone, Copy, FromPyObject)]
+/// The closed-loop settings as the package passes them: the command line's flags `--interval
+/// --horizon --iterations --bound --effort --plan-pendulums --plan-step --pd-training
+/// --mpc-objective` (`None`: not given, the scene's `[mpc]` key or the default then) and
+/// `--spin-up`.
+#[derive(Clone, FromPyObject)]
 #[pyo3(from_item_all)]
 pub struct Settings {
-    interval: f64,
-    horizon: f64,
-    iterations: usize,
-    bound: f64,
-    effort: f64,
+    interval: Option<f64>,
+    horizon: Option<f64>,
+    iterations: Option<usize>,
+    bound: Option<f64>,
+    effort: Option<f64>,
+    plan_pendulums: Option<usize>,
+    plan_step: Option<f64>,
+    pd_training: Option<f64>,
+    mpc_objective: Option<String>,
+    spin_up: f64,
+}
+
+/// The settings a study ran with (the command line's `settings` in the JSON) and the scene's
+/// table they were resolved with (for naming a setting in an error).
+struct Resolved {
+    given: MpcTable,
+    table: Option<MpcTable>,
+    settings: MpcSettings,
+    spin_up: f64,
+}
+
+impl Resolved {
+    /// The objective MPC plans on: the argument, else `mpc.objective`, else the fatigue proxy.
+    fn objective(&self) -> MpcPlanObjective {
+        self.settings.objective.unwrap_or(MpcPlanObjective::Power)
+    }
+
+    /// How an error names the setting `key` (an `[mpc]` key): the scene's `mpc.KEY` when the
+    /// value came from its table, else the Python argument.
+    fn fault(&self, key: &str, message: String) -> Failure {
+        if self.given.defers_to(self.table.as_ref(), key) {
+            Failure::SceneKey {
+                key: format!("mpc.{key}"),
+                message: format!("mpc.{key}: {message}"),
+            }
+        } else {
+            let name = if key == "objective" {
+                "mpc_objective"
+            } else {
+                key
+            };
+            Failure::argument(name, message)
+        }
+    }
 }
 
 impl Settings {
-    /// The library's settings (the command line's `settings`).
-    fn control(&self) -> Result<ControlSettings, Failure> {
-        if self.bound.is_finite() && !FORCE_RANGE.contains(self.bound) {
-            return Err(Failure::argument(
+    /// The arguments over the scene's `[mpc]` table ([`MpcTable::resolve`], the command line's
+    /// precedence).
+    fn resolve(&self, scene: &chainbeam::Scene) -> Result<Resolved, Failure> {
+        let objective = match self.mpc_objective.as_deref() {
+            None => None,
+            Some("power") => Some(MpcPlanObjective::Power),
+            Some("sum") => Some(MpcPlanObjective::Sum),
+            Some(other) => {
+                return Err(Failure::argument(
+                    "mpc_objective",
+                    format!("unknown objective {other:?}; expected \"power\" or \"sum\""),
+                ))
+            }
+        };
+        let given = MpcTable {
+            interval: self.interval,
+            horizon: self.horizon,
+            iterations: self.iterations,
+            bound: self.bound,
+            effort: self.effort,
+            plan_pendulums: self.plan_pendulums,
+            plan_step: self.plan_step,
+            pd_training: self.pd_training,
+            objective,
+        };
+        Ok(Resolved {
+            given,
+            table: scene.mpc,
+            settings: given.resolve(scene.mpc.as_ref()),
+            spin_up: self.spin_up,
+        })
+    }
+
+    /// The library's settings (the command line's `settings`) and what they were resolved from.
+    fn control(&self, scene: &chainbeam::Scene) -> Result<(ControlSettings, Resolved), Failure> {
+        let r = self.resolve(scene)?;
+        let s = &r.settings;
+        if s.bound.is_finite() && !FORCE_RANGE.contains(s.bound) {
+            return Err(r.fault(
                 "bound",
                 format!(
                     "{:e}: outside the supported force range [{:e}, {:e}] N",
-                    self.bound, FORCE_RANGE.min, FORCE_RANGE.max
+                    s.bound, FORCE_RANGE.min, FORCE_RANGE.max
                 ),
             ));
         }
-        Ok(ControlSettings {
-            interval: self.interval,
+        let control = ControlSettings {
+            interval: s.interval,
             mpc: MpcOptions {
-                horizon: Horizon::Seconds(self.horizon),
-                iterations: self.iterations,
-                effort: self.effort,
-                ocp: OcpOptions::default().with_bound(self.bound),
+                horizon: Horizon::Seconds(s.horizon),
+                iterations: s.iterations,
+                effort: s.effort,
+                ocp: OcpOptions::default().with_bound(s.bound),
+                plan_pendulums: s.plan_pendulums,
+                plan_step: s.plan_step,
                 ..MpcOptions::default()
             },
+            pd_training: s.pd_training,
+            spin_up: self.spin_up,
+            mpc_fatigue_proxy: r.objective() == MpcPlanObjective::Power,
             ..ControlSettings::default()
-        })
+        };
+        Ok((control, r))
     }
 }
 
@@ -85,7 +168,8 @@ fn kinds(controllers: Option<&[String]>) -> Result<Vec<ControllerKind>, Failure>
     let Some(list) = controllers else {
         return Ok(vec![ControllerKind::Scene]);
     };
-    let mut kinds = ControllerKind::parse_list(&list.join(",")).map_err(|e| study_error(e, 0))?;
+    let mut kinds =
+        ControllerKind::parse_list(&list.join(",")).map_err(|e| study_error(e, 0, None))?;
     if !kinds.contains(&ControllerKind::None) {
         kinds.insert(0, ControllerKind::None);
     }
@@ -103,9 +187,9 @@ fn cells(cells: &[CellTuple]) -> Vec<ScatterCell> {
 }
 
 /// A study's error as the exception of the argument at fault (the command line's flags are the
-/// Python arguments of the same names); `offset` is added to cell indices (a one-cell run of an
-/// executor).
-fn study_error(e: StudyError, offset: usize) -> Failure {
+/// Python arguments of the same names), or of the scene's `mpc.KEY` when the setting came from
+/// its table (`r`); `offset` is added to cell indices (a one-cell run of an executor).
+fn study_error(e: StudyError, offset: usize, r: Option<&Resolved>) -> Failure {
     let e = match e {
         StudyError::Run {
             controller,
@@ -129,23 +213,27 @@ fn study_error(e: StudyError, offset: usize) -> Failure {
             source,
         } => {
             let named = source.argument_fault().map(|(name, _)| name);
-            let argument = match named {
-                Some(n @ ("interval" | "horizon" | "iterations" | "effort" | "bound")) => Some(n),
+            let key = match named {
                 Some("bounds") => Some("bound"),
+                Some(n) if MPC_KEYS.contains(&n) || n == "spin_up" => Some(n),
                 _ => None,
             };
-            match argument {
-                Some(a) => {
+            match key {
+                Some(key) => {
                     let e = StudyError::Run {
                         controller,
                         cell,
                         source,
                     };
-                    Failure::argument(a, e.to_string())
+                    match r {
+                        Some(r) => r.fault(key, e.to_string()),
+                        None => Failure::argument(key, e.to_string()),
+                    }
                 }
                 None => Failure::Lib(*source),
             }
         }
+        e @ StudyError::SpinUp { .. } => Failure::argument("spin_up", e.to_string()),
         e @ (StudyError::UnknownController { .. }
         | StudyError::DuplicateController { .. }
         | StudyError::NoControllers
@@ -215,8 +303,7 @@ fn study_dict<'py>(
     py: Python<'py>,
     study: &Study,
     with_controllers: bool,
-    s: &Settings,
-    bound: f64,
+    r: &Resolved,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     if !with_controllers {
@@ -241,38 +328,36 @@ fn study_dict<'py>(
     }
     d.set_item("controllers", controllers)?;
     d.set_item("life_extension", extension)?;
-    let settings = PyDict::new(py);
+    let (settings, s) = (PyDict::new(py), &r.settings);
     settings.set_item("interval", s.interval)?;
     settings.set_item("horizon", s.horizon)?;
     settings.set_item("iterations", s.iterations)?;
-    settings.set_item("bound", bound)?;
+    settings.set_item("bound", s.bound)?;
     settings.set_item("effort", s.effort)?;
-    // The library's defaults for what the package does not pass (`Settings::control` leaves
-    // them at `ControlSettings::default()`): the command line reports them too.
-    let lib = ControlSettings::default();
-    settings.set_item("spin_up", lib.spin_up)?;
-    let objective = if lib.mpc_fatigue_proxy {
-        "power"
-    } else {
-        "sum"
-    };
-    settings.set_item("mpc_objective", objective)?;
+    settings.set_item("spin_up", r.spin_up)?;
+    settings.set_item("mpc_objective", r.objective().name())?;
     d.set_item("settings", settings)?;
     Ok(d)
 }
 
-/// The plain assessment (no scatter, no controllers): simulate, count, Miner.
-fn plain<'py>(py: Python<'py>, scene: &chainbeam::Scene) -> PyResult<Bound<'py, PyDict>> {
+/// The plain assessment (no scatter, no controllers): simulate, count (after the first
+/// `spin_up` seconds, the command line's `--spin-up`), Miner.
+fn plain<'py>(
+    py: Python<'py>,
+    scene: &chainbeam::Scene,
+    spin_up: f64,
+) -> PyResult<Bound<'py, PyDict>> {
     let s = scene.clone();
     let a = check(
         py,
         interruptible(py, move || -> Result<_, Failure> {
             let spec = spec(&s)?;
+            let skip = spin_up_steps(&s, spin_up).map_err(|e| study_error(e, 0, None))?;
             let traj = chainbeam::simulate(&s)?;
-            let moment_x = traj.is_spatial().then(|| traj.moment_x());
+            let moment_x = traj.is_spatial().then(|| &traj.moment_x()[skip..]);
             let history = MomentHistory {
-                duration_s: traj.steps() as f64 * traj.h(),
-                moment: traj.moment(),
+                duration_s: traj.steps() as f64 * traj.h() - skip as f64 * s.time.step,
+                moment: &traj.moment()[skip..],
                 moment_x,
                 measure: s.moment_measure(),
             };
@@ -317,16 +402,18 @@ pub fn _fatigue<'py>(
     settings: Settings,
 ) -> PyResult<Bound<'py, PyDict>> {
     if scatter.is_none() && controllers.is_none() {
-        return plain(py, &scene.inner);
+        // The controllers' settings are not used; their names are checked all the same.
+        check(py, settings.resolve(&scene.inner))?;
+        return plain(py, &scene.inner, settings.spin_up);
     }
     let with_controllers = controllers.is_some();
     let s = scene.inner.clone();
-    let (study, bound) = check(
+    let (study, resolved) = check(
         py,
         interruptible(py, move || -> Result<_, Failure> {
             let spec = spec(&s)?;
             let kinds = kinds(controllers.as_deref())?;
-            let control = settings.control()?;
+            let (control, resolved) = settings.control(&s)?;
             let cells = scatter.as_deref().map(cells);
             let input = StudyInput {
                 scene: &s,
@@ -337,12 +424,12 @@ pub fn _fatigue<'py>(
             };
             let study = with_pool(|| run_study(&input, &|| {}))
                 .map_err(Failure::Internal)?
-                .map_err(|e| study_error(e, 0))?;
+                .map_err(|e| study_error(e, 0, Some(&resolved)))?;
             check_study(&study)?;
-            Ok((study, control.bound()))
+            Ok((study, resolved))
         })?,
     )?;
-    study_dict(py, &study, with_controllers, &settings, bound)
+    study_dict(py, &study, with_controllers, &resolved)
 }
 
 /// Every controller on one scatter cell (a one-cell `run_study`): one (probability, damage,
@@ -363,7 +450,7 @@ pub fn _fatigue_cell(
         interruptible(py, move || -> Result<_, Failure> {
             let spec = spec(&s)?;
             let kinds = kinds(controllers.as_deref())?;
-            let control = settings.control()?;
+            let (control, resolved) = settings.control(&s)?;
             let one = cells(&[cell]);
             let input = StudyInput {
                 scene: &s,
@@ -374,7 +461,7 @@ pub fn _fatigue_cell(
             };
             let study = with_pool(|| run_study(&input, &|| {}))
                 .map_err(Failure::Internal)?
-                .map_err(|e| study_error(e, index))?;
+                .map_err(|e| study_error(e, index, Some(&resolved)))?;
             Ok(study
                 .controllers
                 .iter()
@@ -402,7 +489,7 @@ pub fn _fatigue_combine<'py>(
     let combined = (|| -> Result<_, Failure> {
         let spec = spec(&scene.inner)?;
         let kinds = kinds(controllers.as_deref())?;
-        let control = settings.control()?;
+        let (_, resolved) = settings.control(&scene.inner)?;
         let cells = cells(&scatter);
         if runs.len() != cells.len() || runs.iter().any(|r| r.len() != kinds.len()) {
             return Err(Failure::argument(
@@ -420,8 +507,8 @@ pub fn _fatigue_combine<'py>(
                     duration_s: r[j].2,
                 })
                 .collect();
-            let total =
-                combine_scatter(&damages).map_err(|e| study_error(StudyError::Fatigue(e), 0))?;
+            let total = combine_scatter(&damages)
+                .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?;
             let cells = runs
                 .iter()
                 .zip(&cells)
@@ -440,7 +527,7 @@ pub fn _fatigue_combine<'py>(
                 kind,
                 damage_per_year: total.damage_per_year,
                 life_years: life_years(total.damage_per_year, spec.dff)
-                    .map_err(|e| study_error(StudyError::Fatigue(e), 0))?,
+                    .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?,
                 cells,
             });
         }
@@ -448,8 +535,20 @@ pub fn _fatigue_combine<'py>(
             controllers: outcomes,
         };
         check_study(&study)?;
-        Ok((study, control.bound()))
+        Ok((study, resolved))
     })();
-    let (study, bound) = check(py, combined)?;
-    study_dict(py, &study, with_controllers, &settings, bound)
+    let (study, resolved) = check(py, combined)?;
+    study_dict(py, &study, with_controllers, &resolved)
+}
+
+/// The IACS Rec. No. 34 North Atlantic scatter diagram reduced to 20 cells
+/// (`chainbeam::fatigue::scatter::reduced_north_atlantic`, the rows of
+/// examples/scatter/north_atlantic_iacs34.csv): one (hs \[m\], tp \[s\], probability) per cell,
+/// H_s slowest; `chainbeam.reduced_north_atlantic()` makes it a DataFrame.
+#[pyfunction]
+pub fn _reduced_north_atlantic() -> Vec<(f64, f64, f64)> {
+    reduced_north_atlantic()
+        .iter()
+        .map(|c| (c.sea.hs, c.sea.tp, c.probability))
+        .collect()
 }

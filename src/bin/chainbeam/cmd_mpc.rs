@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
+use chainbeam::fatigue_study::fatigue_proxy;
 use chainbeam::mpc::{
     run_closed_loop, run_closed_loop_spatial, ClosedLoopResult, ConstantForce, Controller, Horizon,
     Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, SpatialConstantForce,
@@ -14,7 +15,7 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
-use chainbeam::scene::MAX_STEPS;
+use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
 use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -34,6 +35,14 @@ S-N curve's slope m, and the summary reports the rainflow damage of the run) ove
 iteration), and applies the plan's first force, held over the interval, at control.node \
 (default: the tip). The plant is the scene: RATTLE from the straight beam at rest, t in [0, N·h]. \
 The first plan (at t = 0, cold) gets --first-iterations.
+
+The settings --interval, --horizon, --iterations, --bound, --effort, --plan-pendulums and \
+--plan-step default to the scene's [mpc] table (docs/scene-format.md; the keys in snake case, \
+as `chainbeam fatigue` reads them): a flag given overrides its key, a key given in neither takes \
+the default. The table's objective = \"power\" makes the plans minimise Σ|M₀(t_k)|^m + ρ·h·Σ u_k², \
+m the first slope of the S-N curve of the scene's [fatigue] table (the fatigue proxy of \
+`chainbeam fatigue`), and \"sum\" Σ M₀(t_k)² + ρ·h·Σ u_k², whatever the model's [objective]; \
+its pd_training is `chainbeam fatigue`'s alone (the baselines here are tuned over the whole run).
 
 With --baselines the same loop also runs without control, with the best constant force \
 (optimised over the whole scene) and with a PD law u = clamp(u_b − K_p·M₀ − K_d·dM₀/dt) on the \
@@ -77,15 +86,17 @@ pub struct MpcArgs {
     /// scene itself (a perfect model). Its [time] length and [control] values are not used.
     #[arg(long, value_name = "MODEL.toml")]
     pub model: Option<PathBuf>,
-    /// Horizon of each plan [s], a whole number of intervals.
-    #[arg(long, value_name = "S", default_value_t = 3.0)]
-    pub horizon: f64,
-    /// Control interval [s], a multiple of time.step that divides the run.
-    #[arg(long, value_name = "S", default_value_t = 0.1)]
-    pub interval: f64,
-    /// Gauss-Newton iterations per re-plan.
-    #[arg(long, value_name = "K", default_value_t = 1)]
-    pub iterations: usize,
+    /// Horizon of each plan [s], a whole number of intervals [default: the scene's
+    /// mpc.horizon, else 3].
+    #[arg(long, value_name = "S")]
+    pub horizon: Option<f64>,
+    /// Control interval [s], a multiple of time.step that divides the run [default:
+    /// mpc.interval, else 0.1].
+    #[arg(long, value_name = "S")]
+    pub interval: Option<f64>,
+    /// Gauss-Newton iterations per re-plan [default: mpc.iterations, else 1].
+    #[arg(long, value_name = "K")]
+    pub iterations: Option<usize>,
     /// The solver of each plan: `condensed` (sensitivities to the plan's forces, a dense QP;
     /// the faster for horizons of a few seconds), `riccati` (stage Jacobians and Riccati
     /// passes; linear in the horizon) or `auto` (condensed up to 4(2n+1) forces per plan).
@@ -94,21 +105,22 @@ pub struct MpcArgs {
     /// Iterations of the first (cold) plan at t = 0.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub first_iterations: usize,
-    /// Force bound |u| ≤ U [N] (also for the baselines).
-    #[arg(long, value_name = "U", default_value_t = 5.0)]
-    pub bound: f64,
-    /// Effort weight ρ of ρ·h·Σ u_k².
-    #[arg(long, value_name = "RHO", default_value_t = 0.01)]
-    pub effort: f64,
+    /// Force bound |u| ≤ U [N] (also for the baselines) [default: mpc.bound, else 5].
+    #[arg(long, value_name = "U")]
+    pub bound: Option<f64>,
+    /// Effort weight ρ of ρ·h·Σ u_k² [default: mpc.effort, else 0.01].
+    #[arg(long, value_name = "RHO")]
+    pub effort: Option<f64>,
     /// Rate penalty σ of (σ/h)·Σ (u_k − u_{k−1})².
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
     pub rate_penalty: f64,
     /// Plan on a reduced model: the scene's [pipe] rebuilt with N pendulums (the plant keeps
-    /// its own); the observed state is mapped onto it. Default: plan on the model as it is.
+    /// its own); the observed state is mapped onto it [default: mpc.plan_pendulums, else plan
+    /// on the model as it is].
     #[arg(long, value_name = "N")]
     pub plan_pendulums: Option<usize>,
-    /// The planning model's step [s] (the interval must be a multiple of it). Default: the
-    /// model's time.step.
+    /// The planning model's step [s] (the interval must be a multiple of it) [default:
+    /// mpc.plan_step, else the model's time.step].
     #[arg(long, value_name = "S")]
     pub plan_step: Option<f64>,
     /// Also run no control, the best constant force and a tuned PD law.
@@ -172,24 +184,92 @@ struct Baselines {
     gains: Vec<f64>,
 }
 
-/// What the plans minimise: the model scene's `[objective]` when it is `"power"`
-/// (Σ|M₀(t_k)|^p), its smooth stand-in Σ|M₀|^m when it is `"fatigue"` (m the S-N curve's
-/// slope: the structured solvers need a Gauss-Newton form, which the rainflow damage has not),
-/// otherwise c_sum (a receding horizon has no final time of its own).
-fn plan_objective(model: &Scene) -> ObjectiveKind {
-    match model.objective {
+/// A run's flags and the closed-loop settings they resolve to with the scene's `[mpc]` table.
+struct Setup<'a> {
+    a: &'a MpcArgs,
+    /// The flags of the `[mpc]` keys (`None`: not given).
+    flags: MpcTable,
+    /// The scene's `[mpc]` table.
+    table: Option<MpcTable>,
+    /// Each flag, else the table's key, else the default ([`MpcTable::resolve`]).
+    settings: MpcSettings,
+}
+
+impl<'a> Setup<'a> {
+    fn new(a: &'a MpcArgs, scene: &Scene) -> Self {
+        let flags = MpcTable {
+            interval: a.interval,
+            horizon: a.horizon,
+            iterations: a.iterations,
+            bound: a.bound,
+            effort: a.effort,
+            plan_pendulums: a.plan_pendulums,
+            plan_step: a.plan_step,
+            ..MpcTable::default()
+        };
+        Setup {
+            a,
+            flags,
+            table: scene.mpc,
+            settings: flags.resolve(scene.mpc.as_ref()),
+        }
+    }
+
+    /// How an error names the setting `key` (an `[mpc]` key): its flag, or `mpc.KEY` when the
+    /// value is the scene's.
+    fn name(&self, key: &str) -> String {
+        setting_name(&self.flags, self.table.as_ref(), key)
+    }
+}
+
+/// How an error names the closed-loop setting `key` (one of [`MPC_KEYS`]): `mpc.KEY` when the
+/// run took it from the scene's `[mpc]` table ([`MpcTable::defers_to`]), else its flag
+/// (`--plan-pendulums`). `chainbeam mpc` and `chainbeam fatigue` both.
+pub fn setting_name(flags: &MpcTable, table: Option<&MpcTable>, key: &str) -> String {
+    if flags.defers_to(table, key) {
+        format!("mpc.{key}")
+    } else if key == "objective" {
+        "--mpc-objective".into()
+    } else {
+        format!("--{}", key.replace('_', "-"))
+    }
+}
+
+/// What the plans minimise: the scene's `mpc.objective` when it is given (`"power"`: the fatigue
+/// proxy Σ|M₀|^m of `chainbeam fatigue`, m the first slope of the scene's `[fatigue]` S-N curve;
+/// `"sum"`: c_sum); else the model scene's `[objective]` when it is `"power"` (Σ|M₀(t_k)|^p),
+/// its smooth stand-in Σ|M₀|^m when it is `"fatigue"` (m the S-N curve's slope: the structured
+/// solvers need a Gauss-Newton form, which the rainflow damage has not), otherwise c_sum (a
+/// receding horizon has no final time of its own).
+fn plan_objective(s: &Setup<'_>, scene: &Scene, model: &Scene) -> Result<ObjectiveKind, CliError> {
+    match s.settings.objective {
+        Some(MpcPlanObjective::Sum) => return Ok(ObjectiveKind::Sum),
+        Some(MpcPlanObjective::Power) => {
+            let file = s.a.scene.display();
+            let spec = scene.fatigue.ok_or_else(|| {
+                CliError::msg(format!(
+                    "{file}: mpc.objective = \"power\" plans on Σ|M₀|^m with m the S-N curve's \
+                     first slope: it needs a [fatigue] table (docs/scene-format.md)"
+                ))
+            })?;
+            return fatigue_proxy(&spec, scene)
+                .map_err(|e| CliError::msg(format!("{file}: mpc.objective: {e}")));
+        }
+        None => {}
+    }
+    Ok(match model.objective {
         Some(kind @ ObjectiveKind::Power { .. }) => kind,
         Some(ObjectiveKind::Fatigue(d)) => ObjectiveKind::Power {
             exponent: d.exponent(),
         },
         _ => ObjectiveKind::Sum,
-    }
+    })
 }
 
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
-    if a.bound.is_finite() {
-        check_force_flag("--bound", a.bound)?;
+    if let Some(bound) = a.bound.filter(|b| b.is_finite()) {
+        check_force_flag("--bound", bound)?;
     }
     let out = Output::prepare(a.output.as_deref())?;
     let summary_out = Output::prepare(a.summary.as_deref())?;
@@ -200,47 +280,48 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         None => scene.clone(),
     };
     refuse_overwrite(&[("--output", &out), ("--summary", &summary_out)], &inputs)?;
+    let setup = Setup::new(a, &scene);
+    let s = &setup.settings;
     let options = MpcOptions {
-        horizon: Horizon::Seconds(a.horizon),
-        iterations: a.iterations,
+        horizon: Horizon::Seconds(s.horizon),
+        iterations: s.iterations,
         first_iterations: a.first_iterations,
         solver: match a.solver {
             SolverArg::Auto => MpcSolver::Auto,
             SolverArg::Condensed => MpcSolver::Condensed,
             SolverArg::Riccati => MpcSolver::Riccati,
         },
-        effort: a.effort,
-        objective: plan_objective(&model),
+        effort: s.effort,
+        objective: plan_objective(&setup, &scene, &model)?,
         ocp: OcpOptions {
             rate_penalty: a.rate_penalty,
-            ..OcpOptions::default().with_bound(a.bound)
+            ..OcpOptions::default().with_bound(s.bound)
         },
-        plan_pendulums: a.plan_pendulums,
-        plan_step: a.plan_step,
+        plan_pendulums: s.plan_pendulums,
+        plan_step: s.plan_step,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
-    check_plan_length(a, model_file, &model)?;
+    check_plan_length(&setup, model_file, &model)?;
     let spatial = scene.spatial_key().is_some() || model.spatial_key().is_some();
     let loop_of = Loop {
-        a,
+        setup: &setup,
         scene: &scene,
         model_file,
     };
     let closed = if spatial {
-        let mpc = Mpc::spatial(&model, a.interval, options);
+        let mpc = Mpc::spatial(&model, s.interval, options);
         loop_of.run(mpc, &progress, |s, i, c| run_closed_loop_spatial(s, i, c))?
     } else {
-        let mpc = Mpc::new(&model, a.interval, options);
+        let mpc = Mpc::new(&model, s.interval, options);
         loop_of.run(mpc, &progress, |s, i, c| run_closed_loop(s, i, c))?
     };
-    let baselines = match (a.baselines, spatial) {
-        (false, _) => None,
-        (true, false) => Some(run_baselines(a, &scene, &progress)?),
-        (true, true) => Some(run_spatial_baselines(a, &scene, &progress)?),
+    let baselines = match a.baselines {
+        false => None,
+        true => Some(run_baselines(&setup, &scene, spatial, &progress)?),
     };
     check_run(&a.scene, &closed)?;
-    let mut report = report(a, closed.summary.clone(), baselines.as_ref());
+    let mut report = report(&setup, closed.summary.clone(), baselines.as_ref());
     report.fatigue_damage = fatigue_damage(&a.scene, &scene, &closed)?;
     report.model = spatial.then_some("spatial");
     let json = to_json(&report)?;
@@ -257,7 +338,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
 
 /// The closed loop of a run: the plant's scene and the controller's model.
 struct Loop<'a> {
-    a: &'a MpcArgs,
+    setup: &'a Setup<'a>,
     scene: &'a Scene,
     model_file: &'a Path,
 }
@@ -275,19 +356,19 @@ impl Loop<'_> {
     where
         F: FnOnce(&Scene, f64, &mut Blamed<'_, C>) -> chainbeam::Result<ClosedLoopResult>,
     {
-        let a = self.a;
-        let mut mpc = mpc.map_err(|e| mpc_error(a, self.model_file, e))?;
+        let (a, s) = (self.setup.a, &self.setup.settings);
+        let mut mpc = mpc.map_err(|e| mpc_error(self.setup, self.model_file, e))?;
         let spinner = progress.spinner(format!(
             "closed loop: {} s, a plan every {} s over {} s",
             self.scene.time.steps as f64 * self.scene.time.step,
-            a.interval,
-            a.horizon
+            s.interval,
+            s.horizon
         ));
         let mut blamed = Blamed {
             inner: &mut mpc,
             failed: false,
         };
-        let closed = run(self.scene, a.interval, &mut blamed);
+        let closed = run(self.scene, s.interval, &mut blamed);
         spinner.finish_and_clear();
         // The controller's failures are the model's (its scene, its step); the others the
         // plant's.
@@ -296,7 +377,7 @@ impl Loop<'_> {
         } else {
             &a.scene
         };
-        closed.map_err(|e| mpc_error(a, failed_file, e))
+        closed.map_err(|e| mpc_error(self.setup, failed_file, e))
     }
 }
 
@@ -339,40 +420,37 @@ impl Controller for Blamed<'_, Mpc> {
     }
 }
 
-/// The flag of an option of [`MpcOptions`] or of the loop (the library's argument name).
-fn flag_of(name: &str) -> Option<&'static str> {
+/// The flag (or the scene's `mpc.KEY` it came from) of an option of [`MpcOptions`] or of the
+/// loop (the library's argument name).
+fn flag_of(s: &Setup<'_>, name: &str) -> Option<String> {
     Some(match name {
-        "interval" => "--interval",
-        "horizon" => "--horizon",
-        "iterations" => "--iterations",
-        "first_iterations" => "--first-iterations",
-        "effort" => "--effort",
-        "bound" => "--bound",
-        "rate_penalty" => "--rate-penalty",
-        "plan_pendulums" => "--plan-pendulums",
-        "plan_step" => "--plan-step",
-        "solver" => "--solver",
+        "first_iterations" => "--first-iterations".into(),
+        "rate_penalty" => "--rate-penalty".into(),
+        "solver" => "--solver".into(),
+        "bounds" => s.name("bound"),
+        key if MPC_KEYS.contains(&key) => s.name(key),
         _ => return None,
     })
 }
 
 /// A library error of the run, naming `file` (the plant's scene or the controller's model) or,
-/// for a quantity the flags set, the flags.
-fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
+/// for a quantity the flags (or the scene's `[mpc]` table) set, the flag (or `mpc.KEY`).
+fn mpc_error(s: &Setup<'_>, file: &Path, e: chainbeam::Error) -> CliError {
     // The flag that set the argument at fault, and what is wrong with it.
     let flagged = e
         .argument_fault()
-        .and_then(|(name, reason)| flag_of(name).map(|f| (f, reason)));
+        .and_then(|(name, reason)| flag_of(s, name).map(|f| (f, reason)));
     if let Some((flag, reason)) = flagged {
         return CliError::msg(format!("{}: {flag}: {reason}", file.display()));
     }
     match &e {
         // The plan's scene has the model's beam and a length set by the flags.
         chainbeam::Error::Scene(se) if se.key() == Some("time.steps") => CliError::msg(format!(
-            "{}: --horizon {} s (plans of --horizon/--interval intervals of {} s): the plan {}",
+            "{}: {} {} s (plans of horizon/interval intervals of {} s): the plan {}",
             file.display(),
-            a.horizon,
-            a.interval,
+            s.name("horizon"),
+            s.settings.horizon,
+            s.settings.interval,
             se.kind
         )),
         _ => lib_error(file, e),
@@ -381,16 +459,17 @@ fn mpc_error(a: &MpcArgs, file: &Path, e: chainbeam::Error) -> CliError {
 
 /// Refuses a horizon whose plans would have more steps than a scene may (`--horizon`/
 /// `--interval` intervals of the model's `time.step`), before any plan is built.
-fn check_plan_length(a: &MpcArgs, model_file: &Path, model: &Scene) -> Result<(), CliError> {
-    let steps = (a.horizon / model.time.step).round();
+fn check_plan_length(s: &Setup<'_>, model_file: &Path, model: &Scene) -> Result<(), CliError> {
+    let horizon = s.settings.horizon;
+    let steps = (horizon / model.time.step).round();
     if steps.is_finite() && steps <= MAX_STEPS as f64 {
         return Ok(());
     }
+    let name = s.name("horizon");
     Err(CliError::msg(format!(
-        "{}: --horizon {} s: a plan of {steps:e} steps of the model's time.step = {} s, over the \
-         {MAX_STEPS} steps a plan may have; give a shorter --horizon",
+        "{}: {name} {horizon} s: a plan of {steps:e} steps of the model's time.step = {} s, over \
+         the {MAX_STEPS} steps a plan may have; give a shorter horizon",
         model_file.display(),
-        a.horizon,
         model.time.step
     )))
 }
@@ -404,31 +483,53 @@ fn pd_tuning_options() -> OptimOptions {
     }
 }
 
-/// The baselines (no control, constant, PD) once each run is checked finite.
-fn checked_baselines(
-    a: &MpcArgs,
-    runs: [ClosedLoopResult; 3],
-    gains: Vec<f64>,
+/// The baselines (no control, the best constant force, a PD law tuned over the closed-loop
+/// c_sum), each run checked finite; with `spatial` in the spatial model: the best constant 2-axis
+/// force and a PD law per axis with common gains ([`SpatialPdLaw`], tuned over the closed-loop
+/// Σ |M₀|²).
+fn run_baselines(
+    s: &Setup<'_>,
+    scene: &Scene,
+    spatial: bool,
+    progress: &Progress,
 ) -> Result<Baselines, CliError> {
+    let err = |e| mpc_error(s, &s.a.scene, e);
+    let MpcSettings {
+        interval,
+        bound,
+        effort,
+        ..
+    } = s.settings;
+    let planar = |c: &mut dyn Controller| run_closed_loop(scene, interval, c).map_err(err);
+    let spatial_loop =
+        |c: &mut dyn SpatialController| run_closed_loop_spatial(scene, interval, c).map_err(err);
+    let opts = pd_tuning_options();
+    let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
+    let (runs, gains) = if spatial {
+        let (mut constant, _) = SpatialConstantForce::best(scene, bound, effort).map_err(err)?;
+        let tuning = PdTuning::spatial(scene, interval, bound, effort).map_err(err)?;
+        let (mut pd, _) = SpatialPdLaw::tune(&tuning, [0.0; 4], &opts).map_err(err)?;
+        let gains = vec![pd.bias[0], pd.bias[1], pd.kp, pd.kd];
+        let none = spatial_loop(&mut NoControl)?;
+        let runs = [none, spatial_loop(&mut constant)?, spatial_loop(&mut pd)?];
+        (runs, gains)
+    } else {
+        let (mut constant, _) = ConstantForce::best(scene, bound, effort).map_err(err)?;
+        let tuning = PdTuning::new(scene, interval, bound, effort).map_err(err)?;
+        let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
+        let gains = vec![pd.bias, pd.kp, pd.kd];
+        let runs = [
+            planar(&mut NoControl)?,
+            planar(&mut constant)?,
+            planar(&mut pd)?,
+        ];
+        (runs, gains)
+    };
+    spinner.finish_and_clear();
     for r in &runs {
-        check_run(&a.scene, r)?;
+        check_run(&s.a.scene, r)?;
     }
     Ok(Baselines { runs, gains })
-}
-
-fn run_baselines(a: &MpcArgs, scene: &Scene, progress: &Progress) -> Result<Baselines, CliError> {
-    let err = |e| mpc_error(a, &a.scene, e);
-    let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
-    let none = run_closed_loop(scene, a.interval, &mut NoControl).map_err(err)?;
-    let (mut constant, _) = ConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
-    let constant = run_closed_loop(scene, a.interval, &mut constant).map_err(err)?;
-    let tuning = PdTuning::new(scene, a.interval, a.bound, a.effort).map_err(err)?;
-    let opts = pd_tuning_options();
-    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
-    let gains = vec![pd.bias, pd.kp, pd.kd];
-    let pd = run_closed_loop(scene, a.interval, &mut pd).map_err(err)?;
-    spinner.finish_and_clear();
-    checked_baselines(a, [none, constant, pd], gains)
 }
 
 /// The rainflow damage of the closed loop's moment (`chainbeam fatigue`'s assessment of it) when
@@ -453,43 +554,23 @@ fn fatigue_damage(
     Ok(Some(a.damage))
 }
 
-/// [`run_baselines`] in the spatial model: no control, the best constant 2-axis force and a PD
-/// law per axis with common gains ([`SpatialPdLaw`], tuned over the closed-loop Σ |M₀|²).
-fn run_spatial_baselines(
-    a: &MpcArgs,
-    scene: &Scene,
-    progress: &Progress,
-) -> Result<Baselines, CliError> {
-    let err = |e| mpc_error(a, &a.scene, e);
-    let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
-    let none = run_closed_loop_spatial(scene, a.interval, &mut NoControl).map_err(err)?;
-    let (mut constant, _) = SpatialConstantForce::best(scene, a.bound, a.effort).map_err(err)?;
-    let constant = run_closed_loop_spatial(scene, a.interval, &mut constant).map_err(err)?;
-    let tuning = PdTuning::spatial(scene, a.interval, a.bound, a.effort).map_err(err)?;
-    let opts = pd_tuning_options();
-    let (mut pd, _) = SpatialPdLaw::tune(&tuning, [0.0; 4], &opts).map_err(err)?;
-    let gains = vec![pd.bias[0], pd.bias[1], pd.kp, pd.kd];
-    let pd = run_closed_loop_spatial(scene, a.interval, &mut pd).map_err(err)?;
-    spinner.finish_and_clear();
-    checked_baselines(a, [none, constant, pd], gains)
-}
-
-fn report(a: &MpcArgs, mpc: Summary, b: Option<&Baselines>) -> Report {
+fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
+    let (a, s) = (setup.a, &setup.settings);
     let ratio = |i: usize| b.map(|b| mpc.c_sum / b.runs[i].summary.c_sum);
     Report {
         model: None,
         settings: Settings {
-            horizon: a.horizon,
+            horizon: s.horizon,
             solver: a.solver,
-            interval: a.interval,
-            iterations: a.iterations,
+            interval: s.interval,
+            iterations: s.iterations,
             first_iterations: a.first_iterations,
-            bound: a.bound,
-            effort: a.effort,
+            bound: s.bound,
+            effort: s.effort,
             rate_penalty: a.rate_penalty,
             model: a.model.as_ref().map(|p| p.display().to_string()),
         },
-        real_time: mpc.worst_replan_seconds <= a.interval,
+        real_time: mpc.worst_replan_seconds <= s.interval,
         c_sum_ratio_to_constant: ratio(1),
         c_sum_ratio_to_pd: ratio(2),
         pd_gains: b.map(|b| b.gains.clone()),

@@ -13,10 +13,11 @@ use chainbeam::fatigue_study::{
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::scene::read_text_file;
-use chainbeam::scene::MpcPlanObjective;
+use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 use chainbeam::Scene;
 
 use super::{FatigueArgs, MpcObjective};
+use crate::cmd_mpc::setting_name;
 use crate::progress::Progress;
 use crate::{check_finite, check_force_flag, CliError};
 
@@ -135,45 +136,32 @@ fn controller_json(scene_file: &Path, c: &ControllerOutcome) -> Result<Controlle
     })
 }
 
-/// The closed-loop settings: each flag, else the scene's `[mpc]` key, else the default (the
-/// `mpc` subcommand's).
-#[derive(Clone, Copy)]
-struct Resolved {
-    interval: f64,
-    horizon: f64,
-    iterations: usize,
-    bound: f64,
-    effort: f64,
-    plan_pendulums: Option<usize>,
-    plan_step: Option<f64>,
-    pd_training: Option<f64>,
-    objective: MpcObjective,
-}
-
-fn resolve(a: &FatigueArgs, scene: &Scene) -> Resolved {
-    let t = scene.mpc.unwrap_or_default();
-    let table_objective = t.objective.map(|o| match o {
-        MpcPlanObjective::Power => MpcObjective::Power,
-        MpcPlanObjective::Sum => MpcObjective::Sum,
-    });
-    Resolved {
-        interval: a.interval.or(t.interval).unwrap_or(0.1),
-        horizon: a.horizon.or(t.horizon).unwrap_or(3.0),
-        iterations: a.iterations.or(t.iterations).unwrap_or(1),
-        bound: a.bound.or(t.bound).unwrap_or(5.0),
-        effort: a.effort.or(t.effort).unwrap_or(0.01),
-        plan_pendulums: a.plan_pendulums.or(t.plan_pendulums),
-        plan_step: a.plan_step.or(t.plan_step),
-        pd_training: a.pd_training.or(t.pd_training),
-        objective: a
-            .mpc_objective
-            .or(table_objective)
-            .unwrap_or(MpcObjective::Power),
+/// The flags of the closed-loop settings as an `[mpc]` table (`None`: not given), the values
+/// that override the scene's table ([`MpcTable::resolve`]).
+fn flags(a: &FatigueArgs) -> MpcTable {
+    MpcTable {
+        interval: a.interval,
+        horizon: a.horizon,
+        iterations: a.iterations,
+        bound: a.bound,
+        effort: a.effort,
+        plan_pendulums: a.plan_pendulums,
+        plan_step: a.plan_step,
+        pd_training: a.pd_training,
+        objective: a.mpc_objective.map(|o| match o {
+            MpcObjective::Power => MpcPlanObjective::Power,
+            MpcObjective::Sum => MpcPlanObjective::Sum,
+        }),
     }
 }
 
+/// What MPC plans on: the flag, else `mpc.objective`, else the fatigue proxy.
+fn plan_objective(r: &MpcSettings) -> MpcPlanObjective {
+    r.objective.unwrap_or(MpcPlanObjective::Power)
+}
+
 /// The closed-loop settings of the flags and the scene's `[mpc]` table.
-fn settings(a: &FatigueArgs, r: &Resolved) -> Result<ControlSettings, CliError> {
+fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliError> {
     if r.bound.is_finite() {
         check_force_flag("--bound", r.bound)?;
     }
@@ -190,29 +178,25 @@ fn settings(a: &FatigueArgs, r: &Resolved) -> Result<ControlSettings, CliError> 
         },
         pd_training: r.pd_training,
         spin_up: a.spin_up,
-        mpc_fatigue_proxy: r.objective == MpcObjective::Power,
+        mpc_fatigue_proxy: plan_objective(r) == MpcPlanObjective::Power,
         ..ControlSettings::default()
     })
 }
 
-/// The flag of a library argument name.
-fn flag_of(name: &str) -> Option<&'static str> {
-    Some(match name {
-        "interval" => "--interval",
-        "horizon" => "--horizon",
-        "iterations" => "--iterations",
-        "effort" => "--effort",
-        "bound" | "bounds" => "--bound",
-        "plan_pendulums" => "--plan-pendulums",
-        "plan_step" => "--plan-step",
-        "pd_training" => "--pd-training",
-        "spin_up" => "--spin-up",
-        _ => return None,
-    })
+/// The flag (or the scene's `mpc.KEY` it came from) of a library argument name.
+fn flag_of(name: &str, flags: &MpcTable, table: Option<&MpcTable>) -> Option<String> {
+    let key = match name {
+        "bounds" => "bound",
+        "spin_up" => return Some("--spin-up".into()),
+        other => other,
+    };
+    MPC_KEYS
+        .contains(&key)
+        .then(|| setting_name(flags, table, key))
 }
 
 /// A study's error as one line naming the scene (or the scatter file) and the flag.
-fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
+fn study_error(a: &FatigueArgs, table: Option<&MpcTable>, e: StudyError) -> CliError {
     let scene = a.scene.display();
     match &e {
         StudyError::Run {
@@ -221,7 +205,10 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
             source,
         } => {
             let named = source.argument_fault();
-            match named.and_then(|(name, reason)| flag_of(name).map(|f| (f, reason))) {
+            let flags = flags(a);
+            let flagged =
+                named.and_then(|(name, reason)| flag_of(name, &flags, table).map(|f| (f, reason)));
+            match flagged {
                 Some((flag, reason)) => CliError::msg(format!(
                     "{scene}: controller `{controller}`, cell {cell}: {flag}: {reason}"
                 )),
@@ -245,7 +232,7 @@ fn study_error(a: &FatigueArgs, e: StudyError) -> CliError {
 /// A study run from the flags: its outcome and the closed-loop settings it ran with.
 pub struct Solved {
     study: Study,
-    settings: Resolved,
+    settings: MpcSettings,
 }
 
 /// Runs the study the flags ask for.
@@ -257,7 +244,8 @@ pub fn solve(
 ) -> Result<Solved, CliError> {
     let kinds = match &a.controller {
         Some(list) => {
-            let mut kinds = ControllerKind::parse_list(list).map_err(|e| study_error(a, e))?;
+            let mut kinds =
+                ControllerKind::parse_list(list).map_err(|e| study_error(a, None, e))?;
             if !kinds.contains(&ControllerKind::None) {
                 // The reference of `life_extension`.
                 kinds.insert(0, ControllerKind::None);
@@ -270,7 +258,7 @@ pub fn solve(
         Some(path) => Some(read_scatter(path)?),
         None => None,
     };
-    let resolved = resolve(a, scene);
+    let resolved = flags(a).resolve(scene.mpc.as_ref());
     let settings = settings(a, &resolved)?;
     let n_cells = cells.as_ref().map_or(1, Vec::len);
     let bar = progress.bar(
@@ -286,7 +274,7 @@ pub fn solve(
     };
     let study = run_study(&input, &|| bar.inc(1));
     bar.finish_and_clear();
-    let study = study.map_err(|e| study_error(a, e))?;
+    let study = study.map_err(|e| study_error(a, scene.mpc.as_ref(), e))?;
     Ok(Solved {
         study,
         settings: resolved,
@@ -311,7 +299,7 @@ pub fn report(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
 
 fn controllers_json(
     a: &FatigueArgs,
-    settings: &Resolved,
+    settings: &MpcSettings,
     study: &Study,
 ) -> Result<String, CliError> {
     let mut controllers = ByController::new();
@@ -334,10 +322,7 @@ fn controllers_json(
             bound: settings.bound,
             effort: settings.effort,
             spin_up: a.spin_up,
-            mpc_objective: match settings.objective {
-                MpcObjective::Power => "power",
-                MpcObjective::Sum => "sum",
-            },
+            mpc_objective: plan_objective(settings).name(),
         },
     })
 }

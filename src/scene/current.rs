@@ -429,14 +429,24 @@ fn table_rows(table: Option<Vec<Vec<f64>>>) -> Result<Vec<[f64; 3]>, SceneError>
         .collect()
 }
 
+/// How far above the surface, relative to its height y_s, a node still counts as at the surface
+/// (depth 0): the nodes' heights are sums of the lengths, y_k = l₁ + … + l_k, and equal lengths
+/// L/n do not always add up to L exactly (1000/300 three hundred times is 1000 + 4.4e-12), which
+/// left the top node of a riser whose water depth is its length without current. 1e-9 y_s is
+/// far above such rounding and far below any height a scene means.
+const SURFACE_TOLERANCE: f64 = 1e-9;
+
 /// The current's velocity at height y above the base, split as U(y) = s·a(y) + b(y) with s the
 /// speed parameter ([`crate::base::Parameter::CurrentSpeed`]): returns (a, b), each as (U_x, U_z). `surface`
-/// is the height y_s of the free surface; above it (y > y_s) there is no current.
+/// is the height y_s of the free surface; above it (y > y_s (1 + 10⁻⁹)) there is no current, and a
+/// node less than 10⁻⁹ y_s above it is at the surface (depth 0: the node heights are sums of the
+/// lengths, and L/n added n times can exceed L by rounding).
 pub fn current_velocity(current: &Current, y: f64, surface: f64) -> ([f64; 2], [f64; 2]) {
     let depth = surface - y;
-    if depth < 0.0 {
+    if depth < -SURFACE_TOLERANCE * surface {
         return ([0.0; 2], [0.0; 2]);
     }
+    let depth = depth.max(0.0);
     let [dx, dz] = current.direction;
     let norm = dx.hypot(dz);
     let dir = [dx / norm, dz / norm];
@@ -448,7 +458,7 @@ pub fn current_velocity(current: &Current, y: f64, surface: f64) -> ([f64; 2], [
             (scaled(1.0 - xi), scaled(bottom_speed * xi))
         }
         CurrentProfile::PowerLaw { exponent, .. } => {
-            (scaled((y / surface).powf(*exponent)), [0.0; 2])
+            (scaled((y.min(surface) / surface).powf(*exponent)), [0.0; 2])
         }
         CurrentProfile::Table { rows } => ([0.0; 2], table_velocity(rows, depth)),
     }

@@ -229,20 +229,26 @@ def mpc(
     scene: Scene,
     *,
     model: Scene | None = None,
-    horizon: float = 3.0,
-    interval: float = 0.1,
-    iterations: int = 1,
+    horizon: float | None = None,
+    interval: float | None = None,
+    iterations: int | None = None,
     solver: Literal["auto", "condensed", "riccati"] = "auto",
     first_iterations: int = 50,
-    bound: float = 5.0,
-    effort: float = 0.01,
+    bound: float | None = None,
+    effort: float | None = None,
     rate_penalty: float = 0.0,
     baselines: bool = False,
+    plan_pendulums: int | None = None,
+    plan_step: float | None = None,
 ) -> MpcResult:
     """Receding-horizon control of ``scene`` in closed loop: ``chainbeam mpc`` with the same
     flags and defaults (a plan over ``horizon`` s every ``interval`` s on ``model``, default the
-    scene itself; the plan's first force applied at ``control.node``). ``baselines=True`` also
-    runs no control, the best constant force and a tuned PD law."""
+    scene itself; the plan's first force applied at ``control.node``), planar scenes.
+    ``baselines=True`` also runs no control, the best constant force and a tuned PD law.
+    ``horizon``, ``interval``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
+    ``plan_step``: ``None`` takes the scene's ``[mpc]`` key, else the command line's default
+    (3 s, 0.1 s, 1, 5 N, 0.01, off, off); the table's ``objective`` and the model's
+    ``[objective]`` set what the plans minimise, as on the command line."""
     d = _chainbeam.mpc(
         scene,
         model,
@@ -255,5 +261,7 @@ def mpc(
         effort,
         rate_penalty,
         baselines,
+        plan_pendulums,
+        plan_step,
     )
     return MpcResult(**d)

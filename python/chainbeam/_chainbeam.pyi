@@ -65,15 +65,17 @@ def optimize(
 def mpc(
     scene: Scene,
     model: Scene | None = None,
-    horizon: float = 3.0,
-    interval: float = 0.1,
-    iterations: int = 1,
+    horizon: float | None = None,
+    interval: float | None = None,
+    iterations: int | None = None,
     solver: str = "auto",
     first_iterations: int = 50,
-    bound: float = 5.0,
-    effort: float = 0.01,
+    bound: float | None = None,
+    effort: float | None = None,
     rate_penalty: float = 0.0,
     baselines: bool = False,
+    plan_pendulums: int | None = None,
+    plan_step: float | None = None,
 ) -> dict[str, Any]: ...
 
 _Cell = tuple[float, float, float, float | None]

@@ -131,6 +131,24 @@ def test_optimize_multistart_equals_cli_json(cli: str, scenes: Path) -> None:
     assert r.minima_found == ref["minima_found"]
 
 
+def test_mpc_reads_the_mpc_table_like_cli(cli: str, scenes: Path, tmp_path: Path) -> None:
+    """A scene with an `[mpc]` table: `mpc` takes its keys where no argument is given, as
+    `chainbeam mpc` takes them where no flag is given (the same closed loop, bit for bit), and an
+    argument overrides its key as the flag does."""
+    short = cb.Scene.from_file(scenes / "mpc_riser.toml").replace({"time.steps": 200})
+    path = tmp_path / "table.toml"
+    path.write_text(short.to_toml()
+                    + "\n[mpc]\ninterval = 0.2\nhorizon = 0.6\nbound = 3.0\neffort = 0.02\n")
+    scene = cb.Scene.from_file(path)
+    for flags, kwargs in [((), {}), (("--horizon", "0.4"), {"horizon": 0.4})]:
+        cols = read_csv(run(cli, "mpc", str(path), *flags))
+        r = cb.mpc(scene, **kwargs)
+        for name in ("t", "moment", "control", "tip"):
+            assert np.array_equal(bits(getattr(r, name)), bits(cols[name])), (flags, name)
+        assert r.summary["decisions"] == 10  # 2 s at the table's 0.2 s
+        assert r.summary["max_abs_control"] <= 3.0
+
+
 def test_mpc_equals_cli_csv(cli: str, scenes: Path, tmp_path: Path) -> None:
     # A short closed loop of the MPC scene (its first 2 s), so the test stays quick.
     scene = cb.Scene.from_file(scenes / "mpc_riser.toml").replace({"time.steps": 200})

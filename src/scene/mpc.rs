@@ -7,7 +7,8 @@
 use serde::{Deserialize, Serialize};
 
 use super::validate::FORCE_RANGE;
-use super::SceneError;
+use super::{ObjectiveKind, Scene, SceneError};
+use crate::fatigue::WellheadDamage;
 
 /// What MPC plans on (`mpc.objective`, the flag `--mpc-objective`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -101,6 +102,52 @@ impl MpcSettings {
     pub const DEFAULT_BOUND: f64 = 5.0;
     /// `effort`'s default.
     pub const DEFAULT_EFFORT: f64 = 0.01;
+}
+
+impl MpcSettings {
+    /// What MPC plans on (with the effort penalty ρ·h·Σ u²): `objective` when given —
+    /// `"power"`, the fatigue proxy Σ|M₀(t_k)|^m with m the first slope of the S-N curve of
+    /// `scene`'s `[fatigue]` table ([`WellheadDamage::exponent`]); `"sum"`, c_sum (thesis eq.
+    /// 3.3.4) — else the `model` scene's `[objective]` when it is `"power"` (Σ|M₀(t_k)|^p), its
+    /// smooth stand-in Σ|M₀|^m when it is `"fatigue"` (the structured solvers need a
+    /// Gauss-Newton form, which the rainflow damage has not), otherwise c_sum (a receding
+    /// horizon has no final time of its own). `chainbeam mpc`'s and the Python package's `mpc`.
+    ///
+    /// # Errors
+    /// [`SceneError`] naming `mpc.objective` for `"power"` without a `[fatigue]` table (or with
+    /// one whose S-N curve is invalid).
+    pub fn plan_objective(
+        &self,
+        scene: &Scene,
+        model: &Scene,
+    ) -> Result<ObjectiveKind, SceneError> {
+        match self.objective {
+            Some(MpcPlanObjective::Sum) => return Ok(ObjectiveKind::Sum),
+            Some(MpcPlanObjective::Power) => {
+                let spec = scene.fatigue.ok_or_else(|| {
+                    SceneError::invalid(
+                        "mpc.objective",
+                        "\"power\" plans on Σ|M₀|^m with m the S-N curve's first slope: it needs \
+                         a [fatigue] table (docs/scene-format.md)",
+                    )
+                })?;
+                let d = WellheadDamage::new(&spec, scene.moment_measure()).map_err(|e| {
+                    SceneError::invalid("mpc.objective", format!("\"power\": [fatigue]: {e}"))
+                })?;
+                return Ok(ObjectiveKind::Power {
+                    exponent: d.exponent(),
+                });
+            }
+            None => {}
+        }
+        Ok(match model.objective {
+            Some(kind @ ObjectiveKind::Power { .. }) => kind,
+            Some(ObjectiveKind::Fatigue(d)) => ObjectiveKind::Power {
+                exponent: d.exponent(),
+            },
+            _ => ObjectiveKind::Sum,
+        })
+    }
 }
 
 impl MpcTable {

@@ -12,6 +12,7 @@ use chainbeam::mpc::{
 use chainbeam::multistart::{multistart, StartDesign};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::{minimize, Bounds, Method, OptimOptions, OptimProblem, OptimResult};
+use chainbeam::scene::MpcTable;
 
 use crate::calls::{build_problem, Controls};
 use crate::errors::{check, Failure};
@@ -224,15 +225,13 @@ fn method_of(name: &str) -> Result<Method, Failure> {
     method(name)
 }
 
-/// The settings of `mpc` (the command line's flags of the same names and defaults).
+/// The settings of `mpc` (the command line's flags of the same names and defaults): `given`
+/// the arguments of the scene's `[mpc]` keys (`None`: the table's key, else the default;
+/// [`MpcTable::resolve`], the command line's precedence).
 struct MpcArgs {
-    horizon: f64,
-    interval: f64,
-    iterations: usize,
+    given: MpcTable,
     solver: MpcSolver,
     first_iterations: usize,
-    bound: f64,
-    effort: f64,
     rate_penalty: f64,
     baselines: bool,
 }
@@ -246,27 +245,33 @@ fn run_mpc(
     model: &chainbeam::Scene,
     a: &MpcArgs,
 ) -> Result<Loops, Failure> {
+    let s = a.given.resolve(scene.mpc.as_ref());
     let options = MpcOptions {
-        horizon: Horizon::Seconds(a.horizon),
-        iterations: a.iterations,
+        horizon: Horizon::Seconds(s.horizon),
+        iterations: s.iterations,
         first_iterations: a.first_iterations,
         solver: a.solver,
-        effort: a.effort,
+        effort: s.effort,
+        objective: s
+            .plan_objective(scene, model)
+            .map_err(chainbeam::Error::from)?,
         ocp: OcpOptions {
             rate_penalty: a.rate_penalty,
-            ..OcpOptions::default().with_bound(a.bound)
+            ..OcpOptions::default().with_bound(s.bound)
         },
+        plan_pendulums: s.plan_pendulums,
+        plan_step: s.plan_step,
         ..MpcOptions::default()
     };
-    let mut mpc = Mpc::new(model, a.interval, options)?;
-    let closed = run_closed_loop(scene, a.interval, &mut mpc)?;
+    let mut mpc = Mpc::new(model, s.interval, options)?;
+    let closed = run_closed_loop(scene, s.interval, &mut mpc)?;
     if !a.baselines {
         return Ok((closed, None));
     }
-    let none = run_closed_loop(scene, a.interval, &mut NoControl)?;
-    let (mut constant, _) = ConstantForce::best(scene, a.bound, a.effort)?;
-    let constant = run_closed_loop(scene, a.interval, &mut constant)?;
-    let tuning = PdTuning::new(scene, a.interval, a.bound, a.effort)?;
+    let none = run_closed_loop(scene, s.interval, &mut NoControl)?;
+    let (mut constant, _) = ConstantForce::best(scene, s.bound, s.effort)?;
+    let constant = run_closed_loop(scene, s.interval, &mut constant)?;
+    let tuning = PdTuning::new(scene, s.interval, s.bound, s.effort)?;
     let opts = OptimOptions {
         max_iters: 200,
         first_step: 0.01,
@@ -274,7 +279,7 @@ fn run_mpc(
     };
     let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
     let gains = [pd.bias, pd.kp, pd.kd];
-    let pd = run_closed_loop(scene, a.interval, &mut pd)?;
+    let pd = run_closed_loop(scene, s.interval, &mut pd)?;
     Ok((closed, Some(([none, constant, pd], gains))))
 }
 
@@ -299,22 +304,25 @@ fn summary<'py>(py: Python<'py>, s: &Summary) -> PyResult<Bound<'py, PyDict>> {
 
 /// Receding-horizon control in closed loop; see `chainbeam.mpc`.
 #[pyfunction]
-#[pyo3(signature = (scene, model=None, horizon=3.0, interval=0.1, iterations=1, solver="auto",
-                    first_iterations=50, bound=5.0, effort=0.01, rate_penalty=0.0, baselines=false))]
+#[pyo3(signature = (scene, model=None, horizon=None, interval=None, iterations=None,
+                    solver="auto", first_iterations=50, bound=None, effort=None, rate_penalty=0.0,
+                    baselines=false, plan_pendulums=None, plan_step=None))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, collected at once below
 pub fn mpc<'py>(
     py: Python<'py>,
     scene: &Scene,
     model: Option<&Scene>,
-    horizon: f64,
-    interval: f64,
-    iterations: usize,
+    horizon: Option<f64>,
+    interval: Option<f64>,
+    iterations: Option<usize>,
     solver: &str,
     first_iterations: usize,
-    bound: f64,
-    effort: f64,
+    bound: Option<f64>,
+    effort: Option<f64>,
     rate_penalty: f64,
     baselines: bool,
+    plan_pendulums: Option<usize>,
+    plan_step: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let solver = match solver {
         "auto" => MpcSolver::Auto,
@@ -331,13 +339,18 @@ pub fn mpc<'py>(
         }
     };
     let a = MpcArgs {
-        horizon,
-        interval,
-        iterations,
+        given: MpcTable {
+            interval,
+            horizon,
+            iterations,
+            bound,
+            effort,
+            plan_pendulums,
+            plan_step,
+            ..MpcTable::default()
+        },
         solver,
         first_iterations,
-        bound,
-        effort,
         rate_penalty,
         baselines,
     };

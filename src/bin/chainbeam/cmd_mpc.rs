@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use chainbeam::fatigue_study::fatigue_proxy;
 use chainbeam::mpc::{
     run_closed_loop, run_closed_loop_spatial, ClosedLoopResult, ConstantForce, Controller, Horizon,
     Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, SpatialConstantForce,
@@ -15,7 +14,7 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
-use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
+use chainbeam::scene::{MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
 use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -235,37 +234,6 @@ pub fn setting_name(flags: &MpcTable, table: Option<&MpcTable>, key: &str) -> St
     }
 }
 
-/// What the plans minimise: the scene's `mpc.objective` when it is given (`"power"`: the fatigue
-/// proxy Σ|M₀|^m of `chainbeam fatigue`, m the first slope of the scene's `[fatigue]` S-N curve;
-/// `"sum"`: c_sum); else the model scene's `[objective]` when it is `"power"` (Σ|M₀(t_k)|^p),
-/// its smooth stand-in Σ|M₀|^m when it is `"fatigue"` (m the S-N curve's slope: the structured
-/// solvers need a Gauss-Newton form, which the rainflow damage has not), otherwise c_sum (a
-/// receding horizon has no final time of its own).
-fn plan_objective(s: &Setup<'_>, scene: &Scene, model: &Scene) -> Result<ObjectiveKind, CliError> {
-    match s.settings.objective {
-        Some(MpcPlanObjective::Sum) => return Ok(ObjectiveKind::Sum),
-        Some(MpcPlanObjective::Power) => {
-            let file = s.a.scene.display();
-            let spec = scene.fatigue.ok_or_else(|| {
-                CliError::msg(format!(
-                    "{file}: mpc.objective = \"power\" plans on Σ|M₀|^m with m the S-N curve's \
-                     first slope: it needs a [fatigue] table (docs/scene-format.md)"
-                ))
-            })?;
-            return fatigue_proxy(&spec, scene)
-                .map_err(|e| CliError::msg(format!("{file}: mpc.objective: {e}")));
-        }
-        None => {}
-    }
-    Ok(match model.objective {
-        Some(kind @ ObjectiveKind::Power { .. }) => kind,
-        Some(ObjectiveKind::Fatigue(d)) => ObjectiveKind::Power {
-            exponent: d.exponent(),
-        },
-        _ => ObjectiveKind::Sum,
-    })
-}
-
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     if let Some(bound) = a.bound.filter(|b| b.is_finite()) {
@@ -292,7 +260,9 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
             SolverArg::Riccati => MpcSolver::Riccati,
         },
         effort: s.effort,
-        objective: plan_objective(&setup, &scene, &model)?,
+        objective: s
+            .plan_objective(&scene, &model)
+            .map_err(|e| lib_error(&a.scene, e.into()))?,
         ocp: OcpOptions {
             rate_penalty: a.rate_penalty,
             ..OcpOptions::default().with_bound(s.bound)

@@ -7,36 +7,9 @@ use std::process::Output;
 
 use assert_cmd::cargo::cargo_bin_cmd;
 
-/// A small riser (n = 4, D = 10 kg/m) with a wave of period 2 s at node 2, 1 s of closed loop.
-const SCENE: &str = r#"[beam]
-pendulums = 4
-length = 1.0
-mass = 1.0
-stiffness = 1000.0
-support = "riser"
-base_stiffness = 2000.0
-tip_stiffness = 2000.0
-
-[loads]
-drag = 10.0
-
-[[loads.point]]
-node = 2
-ramp = 0.5
-
-[[loads.point.harmonic]]
-amplitude = 2.0
-period = 2.0
-
-[time]
-step = 0.01
-steps = 100
-
-[control]
-node = 4
-kind = "constant"
-values = [0.0]
-"#;
+#[path = "common/wave_riser4_toml.rs"]
+mod wave_riser4_toml;
+use wave_riser4_toml::PLANAR as SCENE;
 
 fn run(dir: &Path, args: &[&str]) -> Output {
     cargo_bin_cmd!("chainbeam")

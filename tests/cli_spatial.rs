@@ -13,6 +13,8 @@
 //! symmetry of the drag-free riser about its axis y for the direction of the optimal control.
 
 mod common;
+#[path = "common/wave_riser4_toml.rs"]
+mod wave_riser4_toml;
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -521,44 +523,8 @@ fn json_keys_of_spatial_runs_are_documented() {
 /// round-trip); the baselines are the 2-axis ones (pd_gains [u_b,x, u_b,z, K_p, K_d]).
 #[test]
 fn mpc_runs_a_spatial_scene() {
-    const SCENE: &str = r#"[beam]
-pendulums = 4
-length = 1.0
-mass = 1.0
-stiffness = 1000.0
-support = "riser"
-base_stiffness = 2000.0
-tip_stiffness = 2000.0
-
-[loads]
-drag = 10.0
-
-[[loads.point]]
-node = 2
-ramp = 0.5
-direction = [0.8660254037844386, 0.5000000000000001]
-
-[[loads.point.harmonic]]
-amplitude = 2.0
-period = 2.0
-
-[loads.current]
-profile = "linear"
-speed = 0.1
-bottom_speed = 0.02
-direction = [0.0, 1.0]
-
-[time]
-step = 0.01
-steps = 100
-
-[control]
-node = 4
-kind = "constant"
-values = [0.0]
-"#;
     let dir = tempfile::tempdir().unwrap();
-    fs::write(dir.path().join("scene.toml"), SCENE).unwrap();
+    fs::write(dir.path().join("scene.toml"), wave_riser4_toml::spatial()).unwrap();
     for solver in ["condensed", "riccati"] {
         let o = assert_cmd::cargo::cargo_bin_cmd!("chainbeam")
             .current_dir(dir.path())

@@ -63,6 +63,36 @@ fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
 
+/// The spatial optimum `r` of the scene turned by ψ = `psi` degrees against the planar optimum
+/// `r0` (rotational symmetry, module docs): the control acts (its largest force |u|_max > 0.1
+/// N), equal objectives to 1e-9 relative, the turned controls (u_x, u_z) = (sin ψ·u, cos ψ·u)
+/// to 1e-6 |u|_max, and u_x for every step; `case` names the case in the messages.
+fn assert_turned(r0: &ocp::OcpResult, r: &ocp::OcpResult, psi: f64, case: &str) {
+    let umax = r0.theta.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    assert!(umax > 0.1, "the control acts ({umax} N)");
+    let (s, c) = psi.to_radians().sin_cos();
+    assert!(
+        rel(r.objective, r0.objective) <= 1e-9,
+        "ψ = {psi} {case}: J {} against the planar {}",
+        r.objective,
+        r0.objective
+    );
+    let np = r0.theta.len();
+    let (tx, tz) = r.theta.split_at(np);
+    for j in 0..np {
+        let u = r0.theta[j];
+        assert!(
+            (tx[j] - s * u).abs() <= 1e-6 * umax && (tz[j] - c * u).abs() <= 1e-6 * umax,
+            "ψ = {psi} {case}, θ {j}: ({}, {}) against ({}, {})",
+            tx[j],
+            tz[j],
+            s * u,
+            c * u
+        );
+    }
+    assert_eq!(r.controls_x.len(), STEPS + 1);
+}
+
 /// The planar optimum and the spatial optimum of the scene turned by ψ = 45° (and 120°), by
 /// the condensed solver: equal objectives to 1e-9 relative, turned controls to 1e-6 of the
 /// largest force, for c_sum with effort and for Σ|M₀|⁴.
@@ -82,35 +112,14 @@ fn turned_scene_has_the_planar_optimum_turned() {
             .solve(&[0.0; PIECES])
             .unwrap();
         assert!(r0.converged, "planar: {:?}", r0.termination);
-        let umax = r0.theta.iter().fold(0.0f64, |m, u| m.max(u.abs()));
-        assert!(umax > 0.1, "the control acts ({umax} N)");
         for psi in [45.0f64, 120.0] {
-            let (s, c) = psi.to_radians().sin_cos();
             let p = ControlProblem::spatial(&scene(psi, true), map(), obj, true).unwrap();
             let r = Condensed::new(&p, &options())
                 .unwrap()
                 .solve(&[0.0; 2 * PIECES])
                 .unwrap();
             assert!(r.converged, "ψ = {psi}: {:?}", r.termination);
-            assert!(
-                rel(r.objective, r0.objective) <= 1e-9,
-                "ψ = {psi}: J {} against the planar {}",
-                r.objective,
-                r0.objective
-            );
-            let (tx, tz) = r.theta.split_at(PIECES);
-            for j in 0..PIECES {
-                let u = r0.theta[j];
-                assert!(
-                    (tx[j] - s * u).abs() <= 1e-6 * umax && (tz[j] - c * u).abs() <= 1e-6 * umax,
-                    "ψ = {psi}, piece {j}: ({}, {}) against ({}, {})",
-                    tx[j],
-                    tz[j],
-                    s * u,
-                    c * u
-                );
-            }
-            assert_eq!(r.controls_x.len(), STEPS + 1);
+            assert_turned(&r0, &r, psi, "");
         }
     }
 }
@@ -215,32 +224,11 @@ fn riccati_turned_scene_has_the_planar_riccati_optimum_turned() {
         let planar = ControlProblem::new(&scene(0.0, false), m, obj).unwrap();
         let r0 = ocp::solve(&planar, &vec![0.0; np], &options()).unwrap();
         assert!(r0.converged, "planar {m:?}: {:?}", r0.termination);
-        let umax = r0.theta.iter().fold(0.0f64, |a, u| a.max(u.abs()));
-        assert!(umax > 0.1, "the control acts ({umax} N)");
         for psi in [45.0f64, 120.0] {
-            let (s, c) = psi.to_radians().sin_cos();
             let p = ControlProblem::spatial(&scene(psi, true), m, obj, true).unwrap();
             let r = ocp::solve(&p, &vec![0.0; 2 * np], &options()).unwrap();
             assert!(done(&r), "ψ = {psi} {m:?}: {:?}", r.termination);
-            assert!(
-                rel(r.objective, r0.objective) <= 1e-9,
-                "ψ = {psi} {m:?}: J {} against the planar {}",
-                r.objective,
-                r0.objective
-            );
-            let (tx, tz) = r.theta.split_at(np);
-            for j in 0..np {
-                let u = r0.theta[j];
-                assert!(
-                    (tx[j] - s * u).abs() <= 1e-6 * umax && (tz[j] - c * u).abs() <= 1e-6 * umax,
-                    "ψ = {psi} {m:?}, θ {j}: ({}, {}) against ({}, {})",
-                    tx[j],
-                    tz[j],
-                    s * u,
-                    c * u
-                );
-            }
-            assert_eq!(r.controls_x.len(), STEPS + 1);
+            assert_turned(&r0, &r, psi, &format!("{m:?}"));
         }
     }
 }

@@ -791,7 +791,7 @@ fn check_joint_damping<D: Scalar, const DIM: usize>() {
     };
     chain.coupled_force_q_vjp(at, &ctx, D::one(), &mut closed, &mut scratch);
     let mut dual = vec![[D::zero(); DIM]; n];
-    DefaultVjp(jd.clone()).force_q_vjp(&q, &v, &w, &ctx, D::one(), &mut dual, &mut scratch);
+    DefaultVjp(jd.clone()).force_q_vjp(at, &ctx, D::one(), &mut dual, &mut scratch);
     let scale = max_abs(&dual);
     assert!(scale > 1e-3, "exercised");
     for i in 0..n {

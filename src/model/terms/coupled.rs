@@ -49,19 +49,17 @@ pub trait CoupledDissipativeTerm<D: Scalar, const DIM: usize>:
     /// coupled term reads through q̇ = M⁻¹p).
     fn has_parameter(&self, p: Parameter) -> bool;
 
-    /// Accumulates `scale` · ∇_q (w·F(q, v)) into `out`. Default: one `Dual<D>` evaluation of
-    /// [`CoupledDissipativeTerm::force`] per component of q (O(n²)).
-    #[allow(clippy::too_many_arguments)]
+    /// Accumulates `scale` · ∇_q (w·F(q, v)) into `out`, (q, v, w) = `at`. Default: one
+    /// `Dual<D>` evaluation of [`CoupledDissipativeTerm::force`] per component of q (O(n²)).
     fn force_q_vjp(
         &self,
-        q: &[[D; DIM]],
-        v: &[[D; DIM]],
-        w: &[[D; DIM]],
+        at: CoupledAt<'_, D, DIM>,
         ctx: &Ctx<D>,
         scale: D,
         out: &mut [[D; DIM]],
         scratch: &mut DualScratch<D, DIM>,
     ) {
+        let CoupledAt { q, v, w } = at;
         let c = unseeded(ctx, None);
         scratch.load_v(v);
         for i in 0..q.len() {
@@ -157,9 +155,7 @@ impl<D: Scalar, const DIM: usize> CoupledVisitor<D, DIM> for ForceSum<'_, D, DIM
 
 /// The products that take a dual scratch: `scale`·∇_q(w·F) (`out` given) or w·∂F/∂θ.
 struct Products<'a, D, const DIM: usize> {
-    q: &'a [[D; DIM]],
-    v: &'a [[D; DIM]],
-    w: &'a [[D; DIM]],
+    at: CoupledAt<'a, D, DIM>,
     ctx: &'a Ctx<D>,
     scale: D,
     out: Option<&'a mut [[D; DIM]]>,
@@ -172,18 +168,17 @@ struct Products<'a, D, const DIM: usize> {
 impl<D: Scalar, const DIM: usize> CoupledVisitor<D, DIM> for Products<'_, D, DIM> {
     fn visit<T: CoupledDissipativeTerm<D, DIM>>(&mut self, term: &T) {
         if let Some(out) = self.out.as_deref_mut() {
-            let (q, v, w, s) = (self.q, self.v, self.w, &mut *self.scratch);
-            term.force_q_vjp(q, v, w, self.ctx, self.scale, out, s);
+            term.force_q_vjp(self.at, self.ctx, self.scale, out, self.scratch);
             return;
         }
         let Some(p) = self.param else { return };
         let seed = term.has_parameter(p).then_some(p);
         let s = &mut *self.scratch;
-        s.load(self.q, None);
-        s.load_v(self.v);
+        s.load(self.at.q, None);
+        s.load_v(self.at.v);
         term.force(&s.q, &s.v, &unseeded(self.ctx, seed), &mut s.f);
-        self.sums.0 += s.contract(self.w);
-        self.sums.1 += s.contract_re(self.w);
+        self.sums.0 += s.contract(self.at.w);
+        self.sums.1 += s.contract_re(self.at.w);
     }
 }
 
@@ -234,11 +229,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         out: &mut [[D; DIM]],
         scratch: &mut DualScratch<D, DIM>,
     ) {
-        let CoupledAt { q, v, w } = at;
         self.visit_coupled_dissipation(&mut Products {
-            q,
-            v,
-            w,
+            at,
             ctx,
             scale,
             out: Some(out),
@@ -257,11 +249,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         p: Parameter,
         scratch: &mut DualScratch<D, DIM>,
     ) -> D {
-        let CoupledAt { q, v, w } = at;
         let mut pr = Products {
-            q,
-            v,
-            w,
+            at,
             ctx,
             scale: D::one(),
             out: None,

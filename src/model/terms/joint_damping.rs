@@ -18,7 +18,7 @@
 //! θ_j, so dampers with c_j/k_j = α at every spring are stiffness-proportional (Rayleigh) damping
 //! C = α K, under which mode j decays with ζ_j = α ω_j / 2 (tests/joint_damping.rs).
 
-use super::coupled::CoupledDissipativeTerm;
+use super::coupled::{CoupledAt, CoupledDissipativeTerm};
 use super::{Ctx, Embed};
 use crate::base::{Parameter, Scalar};
 
@@ -143,14 +143,13 @@ impl<D: Scalar, const DIM: usize> CoupledDissipativeTerm<D, DIM> for JointDampin
     /// tested equal to the trait's dual-number default (tests/terms.rs).
     fn force_q_vjp(
         &self,
-        q: &[[D; DIM]],
-        v: &[[D; DIM]],
-        w: &[[D; DIM]],
+        at: CoupledAt<'_, D, DIM>,
         ctx: &Ctx<D>,
         scale: D,
         out: &mut [[D; DIM]],
         _scratch: &mut super::DualScratch<D, DIM>,
     ) {
+        let CoupledAt { q, v, w } = at;
         self.torques(q, v, ctx, |i, tau| {
             let g: [D; DIM] = from3(cross(&to3(&w[i]), &tau));
             for d in 0..DIM {

@@ -6,9 +6,10 @@
 //! The energy and its derivatives come from the model's force terms ([`crate::model::terms`]):
 //! f = ∂U/∂q ([`Chain::potential_gradient`]) and K = ∂²U/∂q² ([`Chain::force_jacobian_product`],
 //! symmetric and block-tridiagonal, so a few products seeded on every third pendulum give all of
-//! it). A current's drag enters as its steady force at rest, F(0) = D P⊙|P|
-//! ([`crate::model::CurrentDrag`]): independent of q, it adds −F(0) to f and nothing to K (the
-//! still-water drag has F(0) = 0). A locked tip (fixed-fixed, pinned-pinned, and the
+//! it). A current's drag enters as its steady force at rest, Fᵢ(0) = Dᵢ Pᵢ|Pᵢ|
+//! ([`crate::model::CurrentDrag`], read from the model, so with the per-pendulum Dᵢ = D wᵢ of a
+//! `[pipe]` scene, [`Scene::drag_weights`]): independent of q, it adds −F(0) to f and nothing to
+//! K (the still-water drag has F(0) = 0). A locked tip (fixed-fixed, pinned-pinned, and the
 //! reaction-force variant at its rest target 0) adds ν l(q) to the energy, with
 //! l(q) = Σ lⱼ e₃ᵀqⱼ the tip's z: the constraint the model imposes (in the spatial model too,
 //! where the tip's x stays free, as in the dynamics); ν is the tip multiplier.
@@ -144,7 +145,7 @@ pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
 /// needs (a 2-axis control's x component is 0 here: see [`static_equilibrium_spatial`]).
 ///
 /// A current's drag enters as its steady force at rest: ṗ = 0 and p = 0 leave
-/// F(0) = D P⊙|P| ([`crate::model::CurrentDrag`]), a force independent of q, so it adds −F(0) to
+/// Fᵢ(0) = Dᵢ Pᵢ|Pᵢ| ([`crate::model::CurrentDrag`]), a force independent of q, so it adds −F(0) to
 /// ∂U/∂q and nothing to K (the still-water drag has F(0) = 0).
 ///
 /// # Errors

@@ -2,8 +2,8 @@
 //! keys, docs/scene-format.md) and lifting it to another scalar ([`Chain::lift`]).
 
 use super::{
-    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, Gravity, HarmonicForce, JointDamping,
-    PointLoad, PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs,
+    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, DragWeights, Gravity, HarmonicForce,
+    JointDamping, PointLoad, PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs,
     DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
@@ -105,11 +105,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             control_x: Vec::new(),
             drag: (scene.loads.drag > 0.0 && !water_drag).then(|| Drag {
                 d: D::from(scene.loads.drag),
+                weights: DragWeights::new(scene.drag_weights()),
             }),
             current: water_drag.then(|| {
                 let c = scene.loads.current.as_ref();
                 let d = D::from(scene.loads.drag);
-                CurrentDrag::new(c, waves.clone(), d, &lengths, &masses)
+                let w = DragWeights::new(scene.drag_weights());
+                CurrentDrag::new(c, waves.clone(), d, w, &lengths, &masses)
             }),
             wave_inertia: waves.map(WaveInertia::new),
             joint_damping,

@@ -22,9 +22,9 @@ pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, y
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
     AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
-    CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DualScratch, Embed, ForceTerm, Gravity,
-    HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip, ReactionTipBar, Springs,
-    TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
+    CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
+    ForceTerm, Gravity, HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip,
+    ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -215,6 +215,17 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The drag relative to the current, if the scene has a current.
     pub fn current_drag(&self) -> Option<&CurrentDrag<D, DIM>> {
         self.current.as_ref()
+    }
+
+    /// The per-pendulum factors wᵢ of the drag constant, Dᵢ = D wᵢ ([`DragWeights`]; a chain
+    /// built from `[pipe]`), `None` when every pendulum takes D (or the model has no drag).
+    pub fn drag_weights(&self) -> Option<&[f64]> {
+        let w = match (&self.drag, &self.current) {
+            (Some(t), _) => &t.weights,
+            (None, Some(t)) => &t.weights,
+            (None, None) => return None,
+        };
+        w.as_slice()
     }
 
     /// Visits every dissipative term the model has: **the one place that lists them** (the

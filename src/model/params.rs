@@ -34,6 +34,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 if let Some(c) = &mut self.current {
                     c.refresh(&self.lengths, &self.masses)
                         .map_err(|e| crate::scene::sea_error(e, None))?;
+                    c.weights.refresh(&self.lengths, &self.masses);
+                }
+                if let Some(d) = &mut self.drag {
+                    d.weights.refresh(&self.lengths, &self.masses);
                 }
                 self.refresh_inverses();
             }

@@ -17,7 +17,11 @@
 //! step h_p; every load per unit length or by depth (tension, axial weight, current, waves,
 //! gravity) as the scene gives it; the momentum drag constant D scaled by n_p/n, because the
 //! scene's D matches the Morison load of a uniform flow on the base pendulum,
-//! D = ½ ρ_w C_d D_o/(l μ² L) ∝ 1/l (docs/conventions.md "Drag in a current"); the control node
+//! D = ½ ρ_w C_d D_o/(l μ² L) ∝ 1/l (docs/conventions.md "Drag in a current"), and each of the
+//! planning chain's pendulums weighted by the factors wᵢ = l₁S₁/(lᵢSᵢ) of *its* lengths and masses
+//! ([`Scene::drag_weights`], which the planning scene, still a `[pipe]` scene, gives its model:
+//! docs/conventions.md "Equivalent drag constant"), so that plant and plan give every pendulum the
+//! same share of Morison's load; the control node
 //! and point loads at node j moved to the node at the same height, round(j n_p/n) (at least 1).
 //!
 //! # The objective
@@ -86,6 +90,7 @@ pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scen
         end_springs,
     )?;
     out.time.step = step;
+    // D ∝ 1/l; the per-pendulum weights follow from the rebuilt beam (`Scene::drag_weights`).
     out.loads.drag *= pendulums as f64 / n as f64;
     let node = |j: usize| ((j * pendulums) as f64 / n as f64).round().max(1.0) as usize;
     for load in &mut out.loads.points {

@@ -189,9 +189,16 @@ impl Current {
 }
 
 impl Current {
-    /// The steady force D·|Pᵢ|² of the current on each pendulum at rest (Pᵢ = lᵢ Σ_{k≥i} m_k U_k,
-    /// [`crate::model::CurrentDrag`]), for the load number of the step check.
-    pub(super) fn steady_forces(&self, drag: f64, lengths: &[f64], masses: &[f64]) -> Vec<f64> {
+    /// The steady force Dᵢ·|Pᵢ|² of the current on each pendulum at rest (Pᵢ = lᵢ Σ_{k≥i} m_k U_k,
+    /// [`crate::model::CurrentDrag`]; Dᵢ = D wᵢ with the `weights` of a pipe's chain,
+    /// [`crate::scene::drag_weights`], else D), for the load number of the step check.
+    pub(super) fn steady_forces(
+        &self,
+        drag: f64,
+        weights: Option<&[f64]>,
+        lengths: &[f64],
+        masses: &[f64],
+    ) -> Vec<f64> {
         let surface = self.surface.unwrap_or_else(|| lengths.iter().sum());
         let s = self.speed().unwrap_or(0.0);
         let mut y = 0.0;
@@ -209,7 +216,8 @@ impl Current {
             acc[0] += masses[i] * velocities[i][0];
             acc[1] += masses[i] * velocities[i][1];
             let p = lengths[i] * acc[0].hypot(acc[1]);
-            out[i] = drag * p * p;
+            let d = weights.map_or(drag, |w| drag * w[i]);
+            out[i] = d * p * p;
         }
         out
     }
@@ -482,4 +490,42 @@ fn table_velocity(rows: &[[f64; 3]], depth: f64) -> [f64; 2] {
     let w = (depth - a[0]) / (b[0] - a[0]);
     let (va, vb) = (vel(a), vel(b));
     [va[0] + w * (vb[0] - va[0]), va[1] + w * (vb[1] - va[1])]
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::{Chain, Ctx};
+    use crate::scene::Scene;
+
+    /// The load number's steady current force (`steady_forces`, the scene check) is the model's
+    /// drag at rest |Fᵢ(0)| = Dᵢ|Pᵢ|² ([`crate::model::CurrentDrag`], an independent code path),
+    /// to 1e-12, on a `[pipe]` scene (Dᵢ = D wᵢ) and on the same chain given by its masses (one D).
+    #[test]
+    fn the_load_numbers_current_force_is_the_models() {
+        let text = "[beam]\npendulums = 8\nsupport = \"riser\"\n\n\
+                    [pipe]\nlength = 80.0\nouter_diameter = 0.5\nwall_thickness = 0.02\n\n\
+                    [loads]\ndrag = 1e-5\n\n\
+                    [loads.current]\nprofile = \"linear\"\nspeed = 0.8\nbottom_speed = 0.2\n\n\
+                    [time]\nstep = 0.01\nsteps = 10\n";
+        let piped: Scene = text.parse().unwrap();
+        let mut plain = piped.clone();
+        plain.pipe = None;
+        for (scene, weighted) in [(&piped, true), (&plain, false)] {
+            let chain = Chain::<f64, 2>::from_scene(scene).unwrap();
+            assert_eq!(chain.drag_weights().is_some(), weighted);
+            let b = &scene.beam;
+            let c = scene.loads.current.as_ref().unwrap();
+            let w = scene.drag_weights();
+            let steady = c.steady_forces(scene.loads.drag, w.as_deref(), &b.lengths, &b.masses);
+            let ctx = Ctx::new(0.0, 0.0, 0);
+            for (i, s) in steady.iter().enumerate() {
+                let f = chain.dissipative_force(i, &[0.0; 2], &ctx).unwrap();
+                let model = f[0].hypot(f[1]);
+                assert!(
+                    (s - model).abs() <= 1e-12 * model,
+                    "pendulum {i}: {s} vs {model}"
+                );
+            }
+        }
+    }
 }

@@ -243,6 +243,37 @@ impl Pipe {
     }
 }
 
+/// The per-pendulum factors of the momentum drag constant of a pipe's chain (docs/conventions.md
+/// "Equivalent drag constant"): wᵢ = l₁S₁/(lᵢSᵢ) with Sᵢ = Σ_{k≥i} m_k the mass beyond joint i,
+/// so that Dᵢ = D wᵢ. Under a uniform relative flow U, Morison's load on pendulum i (the
+/// generalised force lᵢ Σ_{k≥i} ½ ρ_w C_d D_o c_k U² of the node loads on their cells
+/// c_k = m_k/μ) is lᵢ ½ ρ_w C_d D_o (Sᵢ/μ) U², and the momentum drag Dᵢ (lᵢ Sᵢ U)² is
+/// D l₁S₁ · lᵢSᵢ U²: the same share of it, D l₁S₁ μ/(½ ρ_w C_d D_o), on every pendulum. w₁ = 1
+/// exactly. The weights depend on the discretisation only (lᵢ, mᵢ), not on D, which stays the one
+/// parameter (∂Dᵢ/∂D = wᵢ).
+pub fn drag_weights(lengths: &[f64], masses: &[f64]) -> Vec<f64> {
+    let mut beyond = vec![0.0; masses.len()];
+    let mut s = 0.0;
+    for i in (0..masses.len()).rev() {
+        s += masses[i];
+        beyond[i] = lengths[i] * s;
+    }
+    let base = beyond.first().copied().unwrap_or(1.0);
+    beyond.iter().map(|b| base / b).collect()
+}
+
+impl super::Scene {
+    /// The per-pendulum factors wᵢ of the drag constant ([`drag_weights`]) for a scene built
+    /// from `[pipe]`, `None` for a scene whose beam is given by its lengths and masses (one D on
+    /// every pendulum, the thesis's eq. 2.4.4). Every reader of D (the model's drag terms, the
+    /// statics through them, the scene check's load number, MPC's planning chain) takes them
+    /// from here.
+    pub fn drag_weights(&self) -> Option<Vec<f64>> {
+        self.pipe
+            .map(|_| drag_weights(&self.beam.lengths, &self.beam.masses))
+    }
+}
+
 /// The beam of a scene file: from `[pipe]`, or from `beam.length`, `beam.mass` and
 /// `beam.stiffness` — one or the other, never both ([`SceneErrorKind::ExclusiveKeys`]).
 pub(super) struct BeamKeys {

@@ -266,8 +266,9 @@ impl Scene {
     /// The step numbers of [`MAX_STEP_NUMBER`], with M̄⁻¹ᵢᵢ = (1/lᵢ²)(1/mᵢ + 1/mᵢ₋₁) the diagonal
     /// of the inverse mass matrix (docs/conventions.md): the spring number
     /// h²·(kᵢ + kᵢ₊₁)·M̄⁻¹ᵢᵢ ≈ (ω h)², ω the fastest local angular frequency, and the load number
-    /// h²·(C·lᵢ + D·|Pᵢ|²)·M̄⁻¹ᵢᵢ with C = Σ|F| + |g|·Σm + max|u| the largest load and D·|Pᵢ|² the
-    /// current's steady drag on pendulum i (if any), an upper bound
+    /// h²·(C·lᵢ + Dᵢ·|Pᵢ|²)·M̄⁻¹ᵢᵢ with C = Σ|F| + |g|·Σm + max|u| the largest load and Dᵢ·|Pᵢ|²
+    /// the current's steady drag on pendulum i (if any; Dᵢ = D wᵢ on a pipe's chain,
+    /// [`Scene::drag_weights`]), an upper bound
     /// of the angle one step from rest turns pendulum i through. Every factor is inside its
     /// range, so both are finite.
     fn check_step_numbers(&self) -> Result<(), SceneError> {
@@ -308,9 +309,10 @@ impl Scene {
             .sum::<f64>()
             + loads.gravity.abs() * total_mass
             + max_u;
+        let weights = self.drag_weights();
         let current = loads.current.as_ref().map_or_else(
             || vec![0.0; n],
-            |c| c.steady_forces(loads.drag, &b.lengths, &b.masses),
+            |c| c.steady_forces(loads.drag, weights.as_deref(), &b.lengths, &b.masses),
         );
         let (mut worst_spring, mut at_spring) = (0.0f64, 0);
         let (mut worst_load, mut at_load) = (0.0f64, 0);

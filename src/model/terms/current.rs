@@ -20,6 +20,9 @@
 //! and p − 0 = p exactly, so the simulation is equal in IEEE arithmetic, tests/current.rs), and
 //! at rest (p = 0) it is the steady force D |P_⊥| P_⊥ along the current (transversally).
 //!
+//! On a chain built from `[pipe]` D is the per-pendulum Dᵢ = D wᵢ ([`super::DragWeights`],
+//! docs/conventions.md "Equivalent drag constant, per pendulum").
+//!
 //! The depth of node k is taken on the undeformed beam, y_k = l₁ + … + l_k (small deflections:
 //! the node's height changes only to second order in the angles), so P is a constant of the
 //! model, F stays a function of each pendulum's own momentum, and RATTLE's implicit half step
@@ -27,7 +30,7 @@
 
 use std::sync::Arc;
 
-use super::drag::{morison, root_of, slope_of};
+use super::drag::{morison, root_of, slope_of, DragWeights};
 use super::waves::WaveField;
 use super::{BlockSym, Ctx, DissipativeTerm, Embed};
 use crate::base::{Parameter, Scalar};
@@ -43,9 +46,13 @@ use crate::scene::{current_velocity, Current};
 /// With waves (`[loads.waves]`) the water velocity is the current's plus the waves' particle
 /// velocity, U_k(t) = U(y_k) + u_k(t) e, and P gains the time-dependent share Wᵢ(t) e
 /// ([`WaveField::momentum`], read at the context's time): one term, the same drag.
+///
+/// On a chain built from `[pipe]` pendulum i takes Dᵢ = D wᵢ ([`DragWeights`]).
 #[derive(Clone, Debug)]
 pub struct CurrentDrag<D, const DIM: usize> {
     pub(crate) d: D,
+    /// The per-pendulum factors of D.
+    pub(crate) weights: DragWeights,
     /// The speed parameter s (0 for a table, which has none).
     pub(crate) speed: D,
     reads_speed: bool,
@@ -67,11 +74,12 @@ pub struct CurrentDrag<D, const DIM: usize> {
 
 impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
     /// The term for `current` (none: still water) and `waves` (none: no waves) with drag
-    /// constant `drag` on a chain with these lengths and masses.
+    /// constant `drag` (times `weights` per pendulum) on a chain with these lengths and masses.
     pub(crate) fn new(
         current: Option<&Current>,
         waves: Option<Arc<WaveField>>,
         drag: D,
+        weights: DragWeights,
         lengths: &[D],
         masses: &[D],
     ) -> Self {
@@ -100,6 +108,7 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
         let wave_unit = waves.as_ref().map_or([0.0; DIM], |w| embed(w.direction()));
         let mut term = CurrentDrag {
             d: drag,
+            weights,
             speed: D::from(current.speed().unwrap_or(0.0)),
             reads_speed,
             unit,
@@ -164,6 +173,7 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
         };
         CurrentDrag {
             d: D2::from(self.d.re()),
+            weights: self.weights.clone(),
             speed: D2::from(self.speed.re()),
             reads_speed: self.reads_speed,
             unit: self.unit.clone(),
@@ -212,7 +222,10 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
     #[inline]
     fn force<E: Embed<D>>(&self, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
         let r: [E; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, ctx));
-        morison(ctx.param(Parameter::Drag, self.d), &r)
+        morison(
+            self.weights.apply(i, ctx.param(Parameter::Drag, self.d)),
+            &r,
+        )
     }
 
     fn has_parameter(&self, p: Parameter) -> bool {
@@ -234,7 +247,7 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         let plain = Ctx { seed: None, ..*ctx };
         let r: [D; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, &plain));
-        slope_of(self.d, &r)
+        slope_of(self.weights.apply(i, self.d), &r)
     }
 
     /// Closed form: r = p − P solves r + (hD/2) r|r| = c − P, the still-water root
@@ -250,7 +263,7 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         let big: [D; DIM] = std::array::from_fn(|d| self.momentum(i, d, ctx));
         let shifted: [D; DIM] = std::array::from_fn(|d| c[d] - big[d]);
-        let (r, w) = root_of(self.d, &shifted, h);
+        let (r, w) = root_of(self.weights.apply(i, self.d), &shifted, h);
         (std::array::from_fn(|d| r[d] + big[d]), w)
     }
 }

@@ -6,9 +6,12 @@ use crate::base::{Parameter, Scalar};
 /// Still-water drag added to ṗ, Morison's form on the momenta (`morison` in `drag.rs`): transversally
 /// F_⊥ = −D |p_⊥| p_⊥ (rotation-invariant about the beam's axis), axially −D p_y|p_y|; in the
 /// planar model exactly the thesis's F_D(p) = −D p ⊙ |p| (eq. 2.4.4).
+///
+/// On a chain built from `[pipe]` pendulum i takes Dᵢ = D wᵢ ([`DragWeights`]).
 #[derive(Clone, Debug)]
 pub struct Drag<D> {
     pub(crate) d: D,
+    pub(crate) weights: DragWeights,
 }
 
 impl<D: Scalar> Drag<D> {
@@ -16,7 +19,46 @@ impl<D: Scalar> Drag<D> {
     pub(crate) fn lift<D2: Scalar>(&self) -> Drag<D2> {
         Drag {
             d: D2::from(self.d.re()),
+            weights: self.weights.clone(),
         }
+    }
+}
+
+/// The per-pendulum factors wᵢ of the drag constant, Dᵢ = D wᵢ (docs/conventions.md "Equivalent
+/// drag constant"; [`crate::scene::drag_weights`]: wᵢ = l₁S₁/(lᵢSᵢ) for a chain built from
+/// `[pipe]`), stored once when the model is built; none (every wᵢ = 1, and D is used as it is,
+/// bit for bit the thesis's eq. 2.4.4) for a chain given by its lengths and masses. The weights
+/// are constants: ∂Dᵢ/∂D = wᵢ, so D stays the one [`Parameter::Drag`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DragWeights(Vec<f64>);
+
+impl DragWeights {
+    /// The weights `w` (one per pendulum), or none.
+    pub(crate) fn new(w: Option<Vec<f64>>) -> Self {
+        DragWeights(w.unwrap_or_default())
+    }
+
+    /// Dᵢ = D wᵢ for pendulum `i` (0-based): D itself without weights.
+    #[inline]
+    pub(crate) fn apply<S: Scalar>(&self, i: usize, d: S) -> S {
+        match self.0.get(i) {
+            Some(&w) => d * w,
+            None => d,
+        }
+    }
+
+    /// Recomputes the weights of a chain built from `[pipe]` for new lengths and masses (their
+    /// real parts: the weights are constants); nothing without weights.
+    pub(crate) fn refresh<D: Scalar>(&mut self, lengths: &[D], masses: &[D]) {
+        if !self.0.is_empty() {
+            let re = |v: &[D]| v.iter().map(|x| x.re()).collect::<Vec<f64>>();
+            self.0 = crate::scene::drag_weights(&re(lengths), &re(masses));
+        }
+    }
+
+    /// The weights, `None` when every pendulum takes D.
+    pub fn as_slice(&self) -> Option<&[f64]> {
+        (!self.0.is_empty()).then_some(self.0.as_slice())
     }
 }
 
@@ -35,8 +77,8 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
     }
 
     #[inline]
-    fn force<E: Embed<D>>(&self, _i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
-        morison(ctx.param(Parameter::Drag, self.d), p)
+    fn force<E: Embed<D>>(&self, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
+        morison(self.weights.apply(i, ctx.param(Parameter::Drag, self.d)), p)
     }
 
     fn has_parameter(&self, p: Parameter) -> bool {
@@ -49,11 +91,11 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
     #[inline]
     fn force_and_slope(
         &self,
-        _i: usize,
+        i: usize,
         p: &[D; DIM],
         _ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
-        slope_of(self.d, p)
+        slope_of(self.weights.apply(i, self.d), p)
     }
 
     /// Closed-form root (`root_of`; planar: p + (hD/2) p|p| = c per component,
@@ -62,12 +104,12 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
     #[inline]
     fn implicit_half_step(
         &self,
-        _i: usize,
+        i: usize,
         c: &[D; DIM],
         h: f64,
         _ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
-        root_of(self.d, c, h)
+        root_of(self.weights.apply(i, self.d), c, h)
     }
 }
 

@@ -53,7 +53,7 @@ pub use control::ControlForce;
 pub use coupled::{CoupledAt, CoupledDissipativeTerm, CoupledVisitor};
 pub use current::CurrentDrag;
 pub use dissipation::{block_newton, BlockSym, DissipationVisitor, DissipativeTerm};
-pub use drag::Drag;
+pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};

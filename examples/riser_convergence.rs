@@ -7,7 +7,8 @@
 //! M_w = k₁ z₁/l₁ = M₀ l₁/2 \[N m\] (the base spring's moment; the thesis's M₀ = 2k₁z₁/l₁² of
 //! the `moment` column is that times 2/l₁, which is M_w·2 at the thesis's l₁ = 1 m but grows
 //! with n at a fixed length), and its largest |M_w|; the drag constant is
-//! re-derived for each n as D = ½ ρ_w C_d D_o / (l μ² L) (the scene files' comments).
+//! re-derived for each n as D = ½ ρ_w C_d D_o / (l μ² L) (the scene files' comments), and the
+//! model weights it per pendulum for the rebuilt chain (Dᵢ = D l₁S₁/(lᵢSᵢ), `Scene::drag_weights`).
 //!
 //! The runs keep the moment history only (`chainbeam::moment_history`, no trajectory).
 //!

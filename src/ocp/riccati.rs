@@ -134,6 +134,20 @@ fn symmetrise(dst: &mut Mat<f64>, src: &Mat<f64>) {
     }
 }
 
+/// dst += the block (0..n, 0..n) of `src`, column by column (Q_xx += the block of EᵀR in
+/// [`Riccati::propagate`]). Out of line so that LLVM vectorises it as it would alone: inlined
+/// into `propagate` since cc205e1 it compiled to twice the instructions per stage
+/// (docs/architecture.md "Benches"); one rounding per entry either way.
+#[inline(never)]
+fn add_block(dst: &mut Mat<f64>, src: &Mat<f64>, n: usize) {
+    for j in 0..n {
+        let s = &src.col_as_slice(j)[..n];
+        for (d, s) in dst.col_as_slice_mut(j)[..n].iter_mut().zip(s) {
+            *d += s;
+        }
+    }
+}
+
 /// A stage's Jacobians in the tangent coordinates: A_k (column-major n_ξ × n_ξ) and B_k
 /// (n_ξ per control, the z component's column first).
 #[derive(Clone, Copy, Debug)]
@@ -504,12 +518,7 @@ impl Riccati {
             1.0,
             Par::Seq,
         );
-        for j in 0..nz {
-            let src = &self.out.col_as_slice(j)[..nz];
-            for (d, s) in self.qxx.col_as_slice_mut(j).iter_mut().zip(src) {
-                *d += s;
-            }
-        }
+        add_block(&mut self.qxx, &self.out, nz);
         let (ox, on) = (self.out.col_as_slice(m), self.out.col_as_slice(m + 1));
         for i in 0..nz {
             self.qx[i] = self.lx[i] + ox[i];

@@ -267,6 +267,16 @@ pub(crate) struct SecondOrder<'a> {
     dz: &'a [f64],
 }
 
+/// (H_k δ)_j = H_k[.., j]·δz + H_k[n_z, j] δv of a stage's H_k = `h` (n_z + 1 columns of
+/// n_z + 1, symmetric) at δ = (δz, δv) = (`dz`, `dv`). Always inlined: as a closure of
+/// [`SecondOrder::value`] it was a call per entry since cc205e1 (1.9 M instructions per
+/// `ocp_newton` pass, docs/architecture.md "Benches").
+#[inline(always)]
+fn h_row(h: &[f64], (nz, j): (usize, usize), dz: &[f64], dv: f64) -> f64 {
+    let c = &h[j * (nz + 1)..(j + 1) * (nz + 1)];
+    riccati::dot(&c[..nz], dz) + c[nz] * dv
+}
+
 impl<'a> SecondOrder<'a> {
     /// H_k of every stage ((2n + 1)² each).
     pub fn h(&self) -> &'a [f64] {
@@ -275,15 +285,13 @@ impl<'a> SecondOrder<'a> {
 
     /// ½ δᵀH_kδ + ½ curv_k δφ₁² at the model point δ = (δz_k, δv_k): stage k's second-order
     /// terms in the model's value.
+    #[inline]
     pub fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
         let (nz, nd) = (self.nz, self.nz + 1);
         let mut v = 0.5 * self.curv[k] * dz[0] * dz[0];
         if k < self.steps {
             let h = &self.h[k * nd * nd..(k + 1) * nd * nd];
-            let hx = |j: usize| {
-                let c = &h[j * nd..(j + 1) * nd];
-                riccati::dot(&c[..nz], dz) + c[nz] * dv
-            };
+            let hx = |j: usize| h_row(h, (nz, j), dz, dv);
             v += 0.5 * ((0..nz).map(|j| dz[j] * hx(j)).sum::<f64>() + dv * hx(nz));
         }
         v

@@ -133,8 +133,10 @@ pub(crate) fn tangent<D: Scalar>(q: &[D; 2]) -> [D; 2] {
     [-q[1], q[0]]
 }
 
-/// a·b in `DIM` components (the planar a₀b₀ + a₁b₁ bit for bit).
-#[inline]
+/// a·b in `DIM` components (the planar a₀b₀ + a₁b₁ bit for bit). Always inlined: in dual
+/// numbers LLVM otherwise calls it out of line from the projector of the second-order pass
+/// (5.2 M instructions per `ocp_newton` pass in its calls, docs/architecture.md "Benches").
+#[inline(always)]
 pub(crate) fn dot<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DIM]) -> D {
     let mut s = a[0] * b[0] + a[1] * b[1];
     for d in 2..DIM {

@@ -50,30 +50,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 c: lift(&b.joint_damping),
                 present: springs.present.clone(),
             });
-        let loads = scene.loads.points.iter().enumerate().map(|(i, pl)| {
-            let norm = pl.direction[0].hypot(pl.direction[1]);
-            PointLoad {
-                node: pl.node,
-                force: D::from(pl.force),
-                force_x: D::from(pl.force_x),
-                start: pl.start,
-                end: pl.end.unwrap_or(f64::INFINITY),
-                ramp: pl.ramp,
-                direction: [pl.direction[0] / norm, pl.direction[1] / norm],
-                harmonics: pl
-                    .harmonics
-                    .iter()
-                    .map(|h| HarmonicForce {
-                        amplitude: D::from(h.amplitude),
-                        period: h.period,
-                        phase: D::from(h.phase),
-                    })
-                    .collect(),
-                series: pl.series.as_ref().map(|s| s.samples.as_slice().into()),
-                scene_index: i,
-            }
-        });
-        let loads: Vec<_> = loads.collect();
+        let loads = Self::point_loads(scene);
         let waves = Self::wave_field(scene)?;
         let water_drag =
             scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0);
@@ -118,6 +95,39 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             lengths,
             masses,
         })
+    }
+
+    /// The scene's point loads `[[loads.point]]` as model terms (their directions normalised).
+    fn point_loads(scene: &Scene) -> Vec<PointLoad<D>> {
+        scene
+            .loads
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, pl)| {
+                let norm = pl.direction[0].hypot(pl.direction[1]);
+                PointLoad {
+                    node: pl.node,
+                    force: D::from(pl.force),
+                    force_x: D::from(pl.force_x),
+                    start: pl.start,
+                    end: pl.end.unwrap_or(f64::INFINITY),
+                    ramp: pl.ramp,
+                    direction: [pl.direction[0] / norm, pl.direction[1] / norm],
+                    harmonics: pl
+                        .harmonics
+                        .iter()
+                        .map(|h| HarmonicForce {
+                            amplitude: D::from(h.amplitude),
+                            period: h.period,
+                            phase: D::from(h.phase),
+                        })
+                        .collect(),
+                    series: pl.series.as_ref().map(|s| s.samples.as_slice().into()),
+                    scene_index: i,
+                }
+            })
+            .collect()
     }
 
     /// The waves' field of a scene with `[loads.waves]` ([`WaveField`]; the scene is valid):

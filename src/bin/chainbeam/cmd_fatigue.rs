@@ -12,6 +12,7 @@ use chainbeam::{moment_history, Scene};
 
 mod study;
 
+use crate::cmd_mpc::MpcFlags;
 use crate::output::{refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
 use crate::{check_finite, lib_error, to_json, CliError};
@@ -81,31 +82,8 @@ pub struct FatigueArgs {
     /// [loads.waves] sea state is run for every cell.
     #[arg(long, value_name = "FILE", conflicts_with = "series")]
     pub scatter: Option<PathBuf>,
-    /// Control interval [s] of the constant, pd and mpc controllers [default: the scene's
-    /// mpc.interval, else 0.1].
-    #[arg(long, value_name = "S")]
-    pub interval: Option<f64>,
-    /// MPC's horizon [s], a whole number of intervals [default: mpc.horizon, else 3].
-    #[arg(long, value_name = "S")]
-    pub horizon: Option<f64>,
-    /// MPC's Gauss-Newton iterations per re-plan [default: mpc.iterations, else 1].
-    #[arg(long, value_name = "K")]
-    pub iterations: Option<usize>,
-    /// Force bound |u| ≤ U [N] of the constant, pd and mpc controllers [default: mpc.bound,
-    /// else 5].
-    #[arg(long, value_name = "U")]
-    pub bound: Option<f64>,
-    /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise [default: mpc.effort,
-    /// else 0.01].
-    #[arg(long, value_name = "RHO")]
-    pub effort: Option<f64>,
-    /// MPC plans on a reduced model: the scene's [pipe] with N pendulums (see `mpc`)
-    /// [default: mpc.plan_pendulums, else off].
-    #[arg(long, value_name = "N")]
-    pub plan_pendulums: Option<usize>,
-    /// The step [s] of MPC's reduced planning model (see `mpc`) [default: mpc.plan_step].
-    #[arg(long, value_name = "S")]
-    pub plan_step: Option<f64>,
+    #[command(flatten)]
+    pub mpc: MpcFlags,
     /// Tune the PD law's gains on the first S seconds of each cell's record [default:
     /// mpc.pd_training, else all of it].
     #[arg(long, value_name = "S")]

@@ -10,9 +10,7 @@ use chainbeam::Scene;
 
 use crate::controls_io::ControlsFile;
 use crate::output::{refuse_overwrite, Inputs, Output};
-use crate::problem::{
-    self, kind_report, objective_name, KindReport, ProblemArgs, SceneProblem, Values,
-};
+use crate::problem::{self, ProblemArgs, ProblemReport, SceneProblem, Values};
 use crate::progress::Progress;
 use crate::{check_finite, controls_io, lib_error, to_json, CliError};
 use crate::{OUTPUT_HELP, SCENE_HELP};
@@ -67,15 +65,8 @@ struct GradientReport {
     gradient: Values,
     controls: Values,
     gradient_norm: f64,
-    model: &'static str,
-    objective_kind: &'static str,
-    /// p of kind "power".
-    #[serde(skip_serializing_if = "Option::is_none")]
-    objective_exponent: Option<f64>,
-    effort: f64,
     #[serde(flatten)]
-    kind: KindReport,
-    control_node: usize,
+    problem: ProblemReport,
 }
 
 /// What `gradient` reads: the output it will write, the scene and the `--controls` file.
@@ -153,11 +144,6 @@ fn report(s: &Solved) -> GradientReport {
         gradient_norm: problem::norm(&s.gradient),
         gradient: sp.problem.layout(&s.gradient),
         controls: sp.problem.layout(&sp.theta0),
-        model: sp.problem.model_name(),
-        objective_kind: objective_name(sp.objective.kind),
-        objective_exponent: problem::objective_exponent(sp.objective.kind),
-        effort: sp.objective.effort,
-        kind: kind_report(sp.problem.map()),
-        control_node: sp.control_node,
+        problem: ProblemReport::of(sp),
     }
 }

@@ -85,17 +85,8 @@ pub struct MpcArgs {
     /// scene itself (a perfect model). Its [time] length and [control] values are not used.
     #[arg(long, value_name = "MODEL.toml")]
     pub model: Option<PathBuf>,
-    /// Horizon of each plan [s], a whole number of intervals [default: the scene's
-    /// mpc.horizon, else 3].
-    #[arg(long, value_name = "S")]
-    pub horizon: Option<f64>,
-    /// Control interval [s], a multiple of time.step that divides the run [default:
-    /// mpc.interval, else 0.1].
-    #[arg(long, value_name = "S")]
-    pub interval: Option<f64>,
-    /// Gauss-Newton iterations per re-plan [default: mpc.iterations, else 1].
-    #[arg(long, value_name = "K")]
-    pub iterations: Option<usize>,
+    #[command(flatten)]
+    pub mpc: MpcFlags,
     /// The solver of each plan: `condensed` (sensitivities to the plan's forces, a dense QP;
     /// the faster for horizons of a few seconds), `riccati` (stage Jacobians and Riccati
     /// passes; linear in the horizon) or `auto` (condensed up to 4(2n+1) forces per plan).
@@ -104,24 +95,9 @@ pub struct MpcArgs {
     /// Iterations of the first (cold) plan at t = 0.
     #[arg(long, value_name = "K", default_value_t = 50)]
     pub first_iterations: usize,
-    /// Force bound |u| ≤ U [N] (also for the baselines) [default: mpc.bound, else 5].
-    #[arg(long, value_name = "U")]
-    pub bound: Option<f64>,
-    /// Effort weight ρ of ρ·h·Σ u_k² [default: mpc.effort, else 0.01].
-    #[arg(long, value_name = "RHO")]
-    pub effort: Option<f64>,
     /// Rate penalty σ of (σ/h)·Σ (u_k − u_{k−1})².
     #[arg(long, value_name = "SIGMA", default_value_t = 0.0)]
     pub rate_penalty: f64,
-    /// Plan on a reduced model: the scene's [pipe] rebuilt with N pendulums (the plant keeps
-    /// its own); the observed state is mapped onto it [default: mpc.plan_pendulums, else plan
-    /// on the model as it is].
-    #[arg(long, value_name = "N")]
-    pub plan_pendulums: Option<usize>,
-    /// The planning model's step [s] (the interval must be a multiple of it) [default:
-    /// mpc.plan_step, else the model's time.step].
-    #[arg(long, value_name = "S")]
-    pub plan_step: Option<f64>,
     /// Also run no control, the best constant force and a tuned PD law.
     #[arg(long)]
     pub baselines: bool,
@@ -130,6 +106,59 @@ pub struct MpcArgs {
     pub summary: Option<PathBuf>,
     #[arg(long, short, value_name = "FILE", help = OUTPUT_HELP)]
     pub output: Option<PathBuf>,
+}
+
+/// The closed-loop flags `chainbeam mpc` and `chainbeam fatigue` share: one per key of the
+/// scene's `[mpc]` table but `pd_training` and `objective` (`fatigue`'s alone), each overriding
+/// its key when given ([`MpcTable::resolve`]).
+#[derive(Args)]
+pub struct MpcFlags {
+    /// Control interval [s] of every controller (MPC, the constant force, the PD law), a
+    /// multiple of time.step that divides the run [default: the scene's mpc.interval, else
+    /// 0.1].
+    #[arg(long, value_name = "S")]
+    pub interval: Option<f64>,
+    /// Horizon of each MPC plan [s], a whole number of intervals [default: mpc.horizon, else
+    /// 3].
+    #[arg(long, value_name = "S")]
+    pub horizon: Option<f64>,
+    /// MPC's Gauss-Newton iterations per re-plan [default: mpc.iterations, else 1].
+    #[arg(long, value_name = "K")]
+    pub iterations: Option<usize>,
+    /// Force bound |u| ≤ U [N] of every controller (MPC, the constant force, the PD law)
+    /// [default: mpc.bound, else 5].
+    #[arg(long, value_name = "U")]
+    pub bound: Option<f64>,
+    /// Effort weight ρ of ρ·h·Σ u_k² in what the controllers minimise [default: mpc.effort,
+    /// else 0.01].
+    #[arg(long, value_name = "RHO")]
+    pub effort: Option<f64>,
+    /// MPC plans on a reduced model: the model's [pipe] rebuilt with N pendulums (the plant
+    /// keeps its own); the observed state is mapped onto it [default: mpc.plan_pendulums, else
+    /// plan on the model as it is].
+    #[arg(long, value_name = "N")]
+    pub plan_pendulums: Option<usize>,
+    /// The step [s] of MPC's planning model (the interval must be a multiple of it) [default:
+    /// mpc.plan_step, else the model's time.step].
+    #[arg(long, value_name = "S")]
+    pub plan_step: Option<f64>,
+}
+
+impl MpcFlags {
+    /// The flags as an `[mpc]` table (`None`: not given), the values that override the scene's
+    /// table ([`MpcTable::resolve`]); `pd_training` and `objective` not given.
+    pub fn table(&self) -> MpcTable {
+        MpcTable {
+            interval: self.interval,
+            horizon: self.horizon,
+            iterations: self.iterations,
+            bound: self.bound,
+            effort: self.effort,
+            plan_pendulums: self.plan_pendulums,
+            plan_step: self.plan_step,
+            ..MpcTable::default()
+        }
+    }
 }
 
 /// `--solver`.
@@ -196,16 +225,7 @@ struct Setup<'a> {
 
 impl<'a> Setup<'a> {
     fn new(a: &'a MpcArgs, scene: &Scene) -> Self {
-        let flags = MpcTable {
-            interval: a.interval,
-            horizon: a.horizon,
-            iterations: a.iterations,
-            bound: a.bound,
-            effort: a.effort,
-            plan_pendulums: a.plan_pendulums,
-            plan_step: a.plan_step,
-            ..MpcTable::default()
-        };
+        let flags = a.mpc.table();
         Setup {
             a,
             flags,
@@ -236,7 +256,7 @@ pub fn setting_name(flags: &MpcTable, table: Option<&MpcTable>, key: &str) -> St
 
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
-    if let Some(bound) = a.bound.filter(|b| b.is_finite()) {
+    if let Some(bound) = a.mpc.bound.filter(|b| b.is_finite()) {
         check_force_flag("--bound", bound)?;
     }
     let out = Output::prepare(a.output.as_deref())?;

@@ -75,6 +75,36 @@ pub fn kind_report(p: &Parametrisation) -> KindReport {
     }
 }
 
+/// The problem as the JSON of `gradient` and `optimize` ends: model, objective_kind,
+/// objective_exponent (kind "power" only), effort, control_kind, pieces (piecewise only),
+/// control_node.
+#[derive(Serialize)]
+pub struct ProblemReport {
+    model: &'static str,
+    objective_kind: &'static str,
+    /// p of kind "power".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    objective_exponent: Option<f64>,
+    effort: f64,
+    #[serde(flatten)]
+    kind: KindReport,
+    control_node: usize,
+}
+
+impl ProblemReport {
+    /// The report of `sp`.
+    pub fn of(sp: &SceneProblem) -> Self {
+        ProblemReport {
+            model: sp.problem.model_name(),
+            objective_kind: objective_name(sp.objective.kind),
+            objective_exponent: objective_exponent(sp.objective.kind),
+            effort: sp.objective.effort,
+            kind: kind_report(sp.problem.map()),
+            control_node: sp.control_node,
+        }
+    }
+}
+
 /// The name of an objective kind in the JSON.
 pub fn objective_name(kind: ObjectiveKind) -> &'static str {
     kind.name()

@@ -140,18 +140,12 @@ fn controller_json(scene_file: &Path, c: &ControllerOutcome) -> Result<Controlle
 /// that override the scene's table ([`MpcTable::resolve`]).
 fn flags(a: &FatigueArgs) -> MpcTable {
     MpcTable {
-        interval: a.interval,
-        horizon: a.horizon,
-        iterations: a.iterations,
-        bound: a.bound,
-        effort: a.effort,
-        plan_pendulums: a.plan_pendulums,
-        plan_step: a.plan_step,
         pd_training: a.pd_training,
         objective: a.mpc_objective.map(|o| match o {
             MpcObjective::Power => MpcPlanObjective::Power,
             MpcObjective::Sum => MpcPlanObjective::Sum,
         }),
+        ..a.mpc.table()
     }
 }
 

@@ -8,7 +8,7 @@ use chainbeam::optimize::{OptimOptions, OptimResult};
 use super::solve::{Setup, Solved};
 use super::OptimizeArgs;
 use crate::output::Output;
-use crate::problem::{kind_report, objective_name, KindReport, Values};
+use crate::problem::{ProblemReport, Values};
 use crate::{check_finite, to_json, CliError};
 
 /// The force limits of a run as reported in the JSON: `bound` for --bound, `lower` and `upper`
@@ -82,15 +82,8 @@ struct OptimizeReport {
     limits: LimitsReport,
     gradient_evals: usize,
     hvp_evals: usize,
-    model: &'static str,
-    objective_kind: &'static str,
-    /// p of kind "power".
-    #[serde(skip_serializing_if = "Option::is_none")]
-    objective_exponent: Option<f64>,
-    effort: f64,
     #[serde(flatten)]
-    kind: KindReport,
-    control_node: usize,
+    problem: ProblemReport,
 }
 
 /// Checks the result finite, writes the JSON report to `out` and ends with
@@ -150,14 +143,10 @@ fn report(a: &OptimizeArgs, setup: &Setup, solved: &Solved) -> OptimizeReport {
         limits: LimitsReport::of(&setup.opts),
         gradient_evals: best.gradient_evals,
         hvp_evals: best.hvp_evals,
-        model: sp.problem.model_name(),
-        objective_kind: objective_name(sp.objective.kind),
-        objective_exponent: crate::problem::objective_exponent(sp.objective.kind),
-        effort: sp.objective.effort,
-        kind: kind_report(sp.problem.map()),
-        control_node: sp.control_node,
+        problem: ProblemReport::of(sp),
     }
 }
+
 /// The JSON's `method_choice` (with `--method auto`): the method the automatic choice took, why,
 /// and the L-BFGS fallback that followed a structured run that did not converge
 /// (`chainbeam::optimize::MethodChoice`).

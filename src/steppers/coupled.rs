@@ -225,48 +225,7 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         if let Some(dense) = &mut self.dense {
             return dense.solve(ch, (q, c), (h, ctx), p);
         }
-        p.copy_from_slice(c);
-        if ch.dissipation_count() == 0 {
-            self.factor_at(ch, (q, p), h, ctx)?;
-            flatten(c, &mut self.flat);
-            self.a.solve(&mut self.flat);
-            unflatten(&self.flat, p);
-            return Ok(());
-        }
-        let hh = 0.5 * h;
-        let mut extra = false;
-        for _ in 0..50 {
-            // r = p − (h/2) F(p) − c
-            self.coupled_force(ch, q, p, ctx);
-            let mut rmax: f64 = 0.0;
-            let mut pmax: f64 = 0.0;
-            for i in 0..p.len() {
-                let fd = ch.dissipative_force(i, &p[i], ctx);
-                for d in 0..DIM {
-                    let mut fi = self.f[i][d];
-                    if let Some(fd) = &fd {
-                        fi += fd[d];
-                    }
-                    let r = p[i][d] - fi * hh - c[i][d];
-                    self.flat[i * DIM + d] = r;
-                    rmax = rmax.max(r.re().abs());
-                    pmax = pmax.max(p[i][d].re().abs());
-                }
-            }
-            let small = rmax <= 1e-15 * (1.0 + pmax);
-            if small && extra {
-                break;
-            }
-            extra |= small;
-            self.factor_at(ch, (q, p), h, ctx)?;
-            self.a.solve(&mut self.flat);
-            for (i, pi) in p.iter_mut().enumerate() {
-                for d in 0..DIM {
-                    pi[d] -= self.flat[i * DIM + d];
-                }
-            }
-        }
-        self.factor_at(ch, (q, p), h, ctx)
+        solve_half_step(self, ch, (q, c), (h, ctx), p)
     }
 
     /// Assembles and factorises the augmented system of RATTLE's Newton matrix
@@ -376,6 +335,111 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
         self.a.solve_transpose(&mut self.flat);
         unflatten(&self.flat, s);
     }
+}
+
+/// What the half step's Newton iteration ([`solve_half_step`]) needs of a solver of A: the band
+/// solver here and the tests' dense reference (`coupled/dense.rs`), which share the iteration and
+/// differ only in how A is assembled and solved.
+trait HalfSystem<D: Scalar, const DIM: usize> {
+    /// Σ_T F_T(q, M⁻¹p) of the coupled terms into the workspace (`CoupledHalf::coupled_force`).
+    fn force(&mut self, ch: &Chain<D, DIM>, q: &[[D; DIM]], p: &[[D; DIM]], ctx: &Ctx<D>);
+    /// The force of the last [`HalfSystem::force`], and the flat right-hand side of A x = b.
+    fn parts(&mut self) -> (&[[D; DIM]], &mut [D]);
+    /// Assembles and factorises A at (q, p) (`CoupledHalf::factor_at`).
+    fn factor(
+        &mut self,
+        ch: &Chain<D, DIM>,
+        at: (&[[D; DIM]], &[[D; DIM]]),
+        h: f64,
+        ctx: &Ctx<D>,
+    ) -> Result<(), ZeroPivot>;
+    /// Solves A x = b in place on the flat right-hand side (after [`HalfSystem::factor`]).
+    fn solve_flat(&mut self);
+}
+
+impl<D: Scalar, const DIM: usize> HalfSystem<D, DIM> for CoupledHalf<D, DIM> {
+    #[inline]
+    fn force(&mut self, ch: &Chain<D, DIM>, q: &[[D; DIM]], p: &[[D; DIM]], ctx: &Ctx<D>) {
+        self.coupled_force(ch, q, p, ctx);
+    }
+
+    #[inline]
+    fn parts(&mut self) -> (&[[D; DIM]], &mut [D]) {
+        (&self.f, &mut self.flat)
+    }
+
+    #[inline]
+    fn factor(
+        &mut self,
+        ch: &Chain<D, DIM>,
+        (q, p): (&[[D; DIM]], &[[D; DIM]]),
+        h: f64,
+        ctx: &Ctx<D>,
+    ) -> Result<(), ZeroPivot> {
+        self.factor_at(ch, (q, p), h, ctx)
+    }
+
+    #[inline]
+    fn solve_flat(&mut self) {
+        self.a.solve(&mut self.flat);
+    }
+}
+
+/// Solves p − (h/2) F(q, p) = c (every dissipative term, block and coupled) into `p`, and
+/// leaves A factorised at the solution (W = A⁻¹): one solve when the model has no block term;
+/// Newton from p = c otherwise, with one update past the real parts' convergence so that the
+/// derivative parts of dual numbers converge too ([`CoupledHalf::solve`]).
+fn solve_half_step<D: Scalar, const DIM: usize, S: HalfSystem<D, DIM>>(
+    s: &mut S,
+    ch: &Chain<D, DIM>,
+    (q, c): (&[[D; DIM]], &[[D; DIM]]),
+    (h, ctx): (f64, &Ctx<D>),
+    p: &mut [[D; DIM]],
+) -> Result<(), ZeroPivot> {
+    p.copy_from_slice(c);
+    if ch.dissipation_count() == 0 {
+        s.factor(ch, (q, p), h, ctx)?;
+        flatten(c, s.parts().1);
+        s.solve_flat();
+        unflatten(s.parts().1, p);
+        return Ok(());
+    }
+    let hh = 0.5 * h;
+    let mut extra = false;
+    for _ in 0..50 {
+        // r = p − (h/2) F(p) − c
+        s.force(ch, q, p, ctx);
+        let (f, flat) = s.parts();
+        let mut rmax: f64 = 0.0;
+        let mut pmax: f64 = 0.0;
+        for i in 0..p.len() {
+            let fd = ch.dissipative_force(i, &p[i], ctx);
+            for d in 0..DIM {
+                let mut fi = f[i][d];
+                if let Some(fd) = &fd {
+                    fi += fd[d];
+                }
+                let r = p[i][d] - fi * hh - c[i][d];
+                flat[i * DIM + d] = r;
+                rmax = rmax.max(r.re().abs());
+                pmax = pmax.max(p[i][d].re().abs());
+            }
+        }
+        let small = rmax <= 1e-15 * (1.0 + pmax);
+        if small && extra {
+            break;
+        }
+        extra |= small;
+        s.factor(ch, (q, p), h, ctx)?;
+        s.solve_flat();
+        let flat = s.parts().1;
+        for (i, pi) in p.iter_mut().enumerate() {
+            for d in 0..DIM {
+                pi[d] -= flat[i * DIM + d];
+            }
+        }
+    }
+    s.factor(ch, (q, p), h, ctx)
 }
 
 /// The augmented system's index of constraint i: x_i after y_i's DIM components, the tip (i = n)

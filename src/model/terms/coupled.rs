@@ -60,7 +60,7 @@ pub trait CoupledDissipativeTerm<D: Scalar, const DIM: usize>:
         scratch: &mut DualScratch<D, DIM>,
     ) {
         let CoupledAt { q, v, w } = at;
-        let c = unseeded(ctx, None);
+        let c = ctx.dual(None);
         scratch.load_v(v);
         for i in 0..q.len() {
             for d in 0..DIM {
@@ -88,17 +88,6 @@ fn load_seeded<D: Scalar, const DIM: usize>(
             sq[c] = Dual::new(q[j][c], eps);
             f[c] = Dual::from_re(D::zero());
         }
-    }
-}
-
-/// The context over `Dual<D>` with the seed `seed` (u, u_x constants).
-fn unseeded<D: Scalar>(ctx: &Ctx<D>, seed: Option<Parameter>) -> Ctx<Dual<D>> {
-    Ctx {
-        t: ctx.t,
-        u: Dual::from_re(ctx.u),
-        ux: Dual::from_re(ctx.ux),
-        step: ctx.step,
-        seed,
     }
 }
 
@@ -176,7 +165,7 @@ impl<D: Scalar, const DIM: usize> CoupledVisitor<D, DIM> for Products<'_, D, DIM
         let s = &mut *self.scratch;
         s.load(self.at.q, None);
         s.load_v(self.at.v);
-        term.force(&s.q, &s.v, &unseeded(self.ctx, seed), &mut s.f);
+        term.force(&s.q, &s.v, &self.ctx.dual(seed), &mut s.f);
         self.sums.0 += s.contract(self.at.w);
         self.sums.1 += s.contract_re(self.at.w);
     }

@@ -120,15 +120,7 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             wave_unit,
             wave_scale: D::one(),
         };
-        let (mut sa, mut sb) = ([D::zero(); DIM], [D::zero(); DIM]);
-        for i in (0..n).rev() {
-            for d in 0..DIM {
-                sa[d] += masses[i] * term.unit[i][d];
-                sb[d] += masses[i] * term.fixed[i][d];
-                term.per_speed[i][d] = lengths[i] * sa[d];
-                term.offset[i][d] = lengths[i] * sb[d];
-            }
-        }
+        term.suffix_sums(lengths, masses);
         term
     }
 
@@ -151,6 +143,14 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             // through P ∝ m (uniform masses, the only ones the mass parameter sets).
             self.wave_scale = masses[0] / D::from(masses[0].re());
         }
+        self.suffix_sums(lengths, masses);
+        self.mass = masses[0];
+        Ok(())
+    }
+
+    /// Aᵢ = lᵢ Σ_{k≥i} m_k a_k and Bᵢ = lᵢ Σ_{k≥i} m_k b_k (module docs: P = s·A + B), by suffix
+    /// sums in O(n).
+    fn suffix_sums(&mut self, lengths: &[D], masses: &[D]) {
         let (mut sa, mut sb) = ([D::zero(); DIM], [D::zero(); DIM]);
         for i in (0..lengths.len()).rev() {
             for d in 0..DIM {
@@ -160,8 +160,6 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
                 self.offset[i][d] = lengths[i] * sb[d];
             }
         }
-        self.mass = masses[0];
-        Ok(())
     }
 
     /// The same term over another scalar (real parts).

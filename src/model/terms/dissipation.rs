@@ -134,7 +134,7 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
         p: &[D; DIM],
         ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
-        let c = unseeded(ctx);
+        let c = ctx.dual(None);
         let mut j = BlockSym::zero();
         let mut f = [D::zero(); DIM];
         for s in 0..DIM {
@@ -161,10 +161,7 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
         if !self.has_parameter(param) {
             return [D::zero(); DIM];
         }
-        let c = Ctx {
-            seed: Some(param),
-            ..unseeded(ctx)
-        };
+        let c = ctx.dual(Some(param));
         self.force(i, &p.map(Dual::from_re), &c).map(|v| v.eps)
     }
 
@@ -178,17 +175,6 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
         ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         block_newton(c, h, |p| self.force_and_slope(i, p, ctx))
-    }
-}
-
-/// The context over `Dual<D>` with no seed (u, u_x constants).
-fn unseeded<D: Scalar>(ctx: &Ctx<D>) -> Ctx<Dual<D>> {
-    Ctx {
-        t: ctx.t,
-        u: Dual::from_re(ctx.u),
-        ux: Dual::from_re(ctx.ux),
-        step: ctx.step,
-        seed: None,
     }
 }
 

@@ -131,6 +131,19 @@ impl<E: Scalar> Ctx<E> {
         self
     }
 
+    /// The context over `Dual<E>` with `seed` the seeded parameter and u, u_x constants: where
+    /// the derived products evaluate a term once more in dual numbers.
+    #[inline]
+    pub(crate) fn dual(&self, seed: Option<Parameter>) -> Ctx<Dual<E>> {
+        Ctx {
+            t: self.t,
+            u: Dual::from_re(self.u),
+            ux: Dual::from_re(self.ux),
+            step: self.step,
+            seed,
+        }
+    }
+
     /// Reads a physical parameter `p` of value `v` into the evaluation scalar, seeded with
     /// derivative 1 when `p` is the context's seed. Terms read every parameter through this, so
     /// that parameter derivatives come from the same code.
@@ -254,13 +267,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
             return Ok(());
         }
         scratch.load(q, Some(v));
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::from_re(ctx.u),
-            ux: Dual::from_re(ctx.ux),
-            step: ctx.step,
-            seed: None,
-        };
+        let c = ctx.dual(None);
         self.force(&scratch.q, &c, &mut scratch.f)?;
         for (o, f) in out.iter_mut().zip(&scratch.f) {
             for d in 0..DIM {
@@ -297,13 +304,7 @@ pub trait ForceTerm<D: Scalar, const DIM: usize>: Clone + std::fmt::Debug + Send
             return Ok(D::zero());
         }
         scratch.load(q, None);
-        let c = Ctx {
-            t: ctx.t,
-            u: Dual::from_re(ctx.u),
-            ux: Dual::from_re(ctx.ux),
-            step: ctx.step,
-            seed: Some(p),
-        };
+        let c = ctx.dual(Some(p));
         self.force(&scratch.q, &c, &mut scratch.f)?;
         Ok(scratch.contract(w))
     }

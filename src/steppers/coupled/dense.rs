@@ -6,6 +6,8 @@ use crate::base::Scalar;
 use crate::model::{Chain, Ctx};
 use crate::tridiag::ZeroPivot;
 
+use super::{flatten, solve_half_step, unflatten, HalfSystem};
+
 /// A dense LU factorisation P A = L U with partial pivoting (pivots chosen on the real parts),
 /// over any scalar: `solve` and `solve_transpose` after `factor`.
 #[derive(Clone, Debug)]
@@ -203,10 +205,8 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
         self.a.factor()
     }
 
-    /// Solves p − (h/2) F(q, p) = c (every dissipative term, block and coupled) into `p`, and
-    /// leaves A factorised at the solution (W = A⁻¹). Linear when the model has no block term
-    /// (one solve); Newton from p = c otherwise, with one update past the real parts'
-    /// convergence so that the derivative parts of dual numbers converge too.
+    /// Solves p − (h/2) F(q, p) = c into `p` by the band solver's Newton iteration
+    /// ([`super::CoupledHalf::solve`]) on the dense A, and leaves A factorised at the solution.
     pub(crate) fn solve(
         &mut self,
         ch: &Chain<D, DIM>,
@@ -214,48 +214,7 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
         (h, ctx): (f64, &Ctx<D>),
         p: &mut [[D; DIM]],
     ) -> Result<(), ZeroPivot> {
-        p.copy_from_slice(c);
-        if ch.dissipation_count() == 0 {
-            self.factor_at(ch, (q, p), h, ctx)?;
-            flatten(c, &mut self.flat);
-            self.a.solve(&mut self.flat);
-            unflatten(&self.flat, p);
-            return Ok(());
-        }
-        let hh = 0.5 * h;
-        let mut extra = false;
-        for _ in 0..50 {
-            // r = p − (h/2) F(p) − c
-            self.coupled_force(ch, q, p, ctx);
-            let mut rmax: f64 = 0.0;
-            let mut pmax: f64 = 0.0;
-            for i in 0..p.len() {
-                let fd = ch.dissipative_force(i, &p[i], ctx);
-                for d in 0..DIM {
-                    let mut fi = self.f[i][d];
-                    if let Some(fd) = &fd {
-                        fi += fd[d];
-                    }
-                    let r = p[i][d] - fi * hh - c[i][d];
-                    self.flat[i * DIM + d] = r;
-                    rmax = rmax.max(r.re().abs());
-                    pmax = pmax.max(p[i][d].re().abs());
-                }
-            }
-            let small = rmax <= 1e-15 * (1.0 + pmax);
-            if small && extra {
-                break;
-            }
-            extra |= small;
-            self.factor_at(ch, (q, p), h, ctx)?;
-            self.a.solve(&mut self.flat);
-            for (i, pi) in p.iter_mut().enumerate() {
-                for d in 0..DIM {
-                    pi[d] -= self.flat[i * DIM + d];
-                }
-            }
-        }
-        self.factor_at(ch, (q, p), h, ctx)
+        solve_half_step(self, ch, (q, c), (h, ctx), p)
     }
 
     /// Assembles and factorises RATTLE's Newton matrix J = −h²/2 Ĝ(q′) M⁻¹ A⁻¹ Ĝ(q)ᵀ (A as
@@ -304,14 +263,26 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
     }
 }
 
-fn flatten<D: Scalar, const DIM: usize>(v: &[[D; DIM]], out: &mut [D]) {
-    for (i, b) in v.iter().enumerate() {
-        out[i * DIM..(i + 1) * DIM].copy_from_slice(b);
+impl<D: Scalar, const DIM: usize> HalfSystem<D, DIM> for DenseHalf<D, DIM> {
+    fn force(&mut self, ch: &Chain<D, DIM>, q: &[[D; DIM]], p: &[[D; DIM]], ctx: &Ctx<D>) {
+        self.coupled_force(ch, q, p, ctx);
     }
-}
 
-fn unflatten<D: Scalar, const DIM: usize>(v: &[D], out: &mut [[D; DIM]]) {
-    for (i, b) in out.iter_mut().enumerate() {
-        b.copy_from_slice(&v[i * DIM..(i + 1) * DIM]);
+    fn parts(&mut self) -> (&[[D; DIM]], &mut [D]) {
+        (&self.f, &mut self.flat)
+    }
+
+    fn factor(
+        &mut self,
+        ch: &Chain<D, DIM>,
+        (q, p): (&[[D; DIM]], &[[D; DIM]]),
+        h: f64,
+        ctx: &Ctx<D>,
+    ) -> Result<(), ZeroPivot> {
+        self.factor_at(ch, (q, p), h, ctx)
+    }
+
+    fn solve_flat(&mut self) {
+        self.a.solve(&mut self.flat);
     }
 }

@@ -10,6 +10,9 @@ use chainbeam::statics::static_equilibrium;
 use chainbeam::*;
 use num_dual::Dual64;
 
+#[path = "common/settle.rs"]
+mod settle;
+
 /// Least-squares slope of log(y) against log(x).
 fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
     let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
@@ -238,36 +241,9 @@ fn table_3_1_roots() {
     assert!((u + 2.0).abs() < 1e-12);
 }
 
-/// Runs a dissipative scene with RATTLE (without storing the trajectory) until the largest
-/// attitude rate |q̇ᵢ| = |(M⁻¹p)ᵢ| over a window of 1000 steps (10 s, several periods of the
-/// slowest mode) falls below `v_tol`, or `t_max` is reached; returns the node positions (y, z) and
-/// the time.
+/// [`settle::settle`] without control.
 fn settle(scene: &Scene, v_tol: f64, t_max: f64) -> (Vec<[f64; 2]>, f64) {
-    let chain = Chain::<f64, 2>::from_scene(scene).unwrap();
-    let n = chain.n();
-    let mut r = Rattle::new(chain.clone(), scene.time.step).unwrap();
-    let mut st = r.straight_state();
-    let max_steps = (t_max / scene.time.step) as usize;
-    let mut k = 0;
-    let mut v = vec![[0.0; 2]; n];
-    let mut window_max: f64 = 0.0;
-    while k < max_steps {
-        r.step(&mut st, k, 0.0, 0.0).unwrap();
-        k += 1;
-        chain.apply_inverse_mass(&st.p, &mut v);
-        window_max = v
-            .iter()
-            .fold(window_max, |m, v| m.max(v[0].abs()).max(v[1].abs()));
-        if k % 1000 == 0 {
-            if window_max < v_tol {
-                break;
-            }
-            window_max = 0.0;
-        }
-    }
-    let mut pos = vec![[0.0; 2]; n];
-    chain.node_positions(&st.q, &mut pos);
-    (pos, k as f64 * scene.time.step)
+    settle::settle(scene, 0.0, v_tol, t_max)
 }
 
 /// Thesis §2.4.4 (Fig. 2.14-2.15): with drag D = 100 the cantilever (base spring 2000),

@@ -12,10 +12,13 @@
 //! static solver (an independent method, in angle coordinates) for the state a long simulation
 //! settles to, as the thesis checks eq. 2.4.4 in §2.4.4.
 
-use chainbeam::adjoint::{adjoint_gradient, forward_value};
 use chainbeam::statics::{static_equilibrium, static_equilibrium_at};
 use chainbeam::*;
-use num_dual::Dual64;
+
+#[path = "common/gradient_check.rs"]
+mod gradient_check;
+#[path = "common/settle.rs"]
+mod settle;
 
 const H: f64 = 0.01;
 
@@ -194,74 +197,19 @@ fn gradients_with_a_current() {
     check_gradients::<3>(&build(table), &params[1..]);
 }
 
+/// dJ/dθ of `params` on `scene` in the model of dimension DIM over 40 steps
+/// ([`gradient_check::check_parameters`]; five-point central difference, δ = 1e-3·|θ|:
+/// truncation O(δ⁴)).
 fn check_gradients<const DIM: usize>(scene: &Scene, params: &[(Parameter, f64)]) {
     let chain = Chain::<f64, DIM>::from_scene(scene).unwrap();
     let u = scene_controls(scene);
-    let obj = BendingObjective::summed_moment();
-    let ps: Vec<Parameter> = params.iter().map(|p| p.0).collect();
-    let adjoint = adjoint_gradient(&chain, H, 40, &u, &obj, &ps, Checkpointing::default())
-        .unwrap()
-        .parameter_gradient;
-    let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
-    for (i, &(p, value)) in params.iter().enumerate() {
-        let mut ch = chain.lift::<Dual64>();
-        ch.set_parameter(p, Dual64::new(value, 1.0)).unwrap();
-        let fwd = forward_value(&ch, H, 40, &ud, &obj).unwrap().eps;
-        let at = |v: f64| {
-            let mut ch = chain.clone();
-            ch.set_parameter(p, v).unwrap();
-            forward_value(&ch, H, 40, &u, &obj).unwrap()
-        };
-        // five-point central difference, δ = 1e-3·|θ|: truncation O(δ⁴)
-        let d = 1e-3 * value;
-        let fd = (8.0 * (at(value + d) - at(value - d))
-            - (at(value + 2.0 * d) - at(value - 2.0 * d)))
-            / (12.0 * d);
-        println!(
-            "DIM {DIM}: dJ/d{p:?} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e}",
-            (adjoint[i] - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 1e-8, "{p:?} is exercised");
-        assert!(
-            (adjoint[i] - fwd).abs() <= 1e-12 * fwd.abs(),
-            "{p:?}: {} vs {fwd}",
-            adjoint[i]
-        );
-        assert!(
-            (fd - fwd).abs() <= 1e-6 * fwd.abs(),
-            "{p:?}: FD {fd} vs {fwd}"
-        );
-    }
+    gradient_check::check_parameters(&chain, &u, params, (H, 40), |value| 1e-3 * value);
 }
 
-/// Runs RATTLE from the straight beam until the largest node velocity stays below `v_tol` for
-/// 1000 steps (or `t_max`); returns the node positions (y, z) and the time.
+/// [`settle::settle`] under the scene's last control value.
 fn settle(scene: &Scene, v_tol: f64, t_max: f64) -> (Vec<[f64; 2]>, f64) {
-    let chain = Chain::<f64, 2>::from_scene(scene).unwrap();
-    let n = chain.n();
-    let mut r = Rattle::new(chain.clone(), scene.time.step).unwrap();
     let u = *scene_controls(scene).last().unwrap_or(&0.0);
-    let mut st = r.straight_state();
-    let max_steps = (t_max / scene.time.step) as usize;
-    let (mut k, mut v, mut window_max) = (0, vec![[0.0; 2]; n], 0.0f64);
-    while k < max_steps {
-        r.step(&mut st, k, u, u).unwrap();
-        k += 1;
-        chain.apply_inverse_mass(&st.p, &mut v);
-        window_max = v
-            .iter()
-            .fold(window_max, |m, v| m.max(v[0].abs()).max(v[1].abs()));
-        if k % 1000 == 0 {
-            if window_max < v_tol {
-                break;
-            }
-            window_max = 0.0;
-        }
-    }
-    let mut pos = vec![[0.0; 2]; n];
-    chain.node_positions(&st.q, &mut pos);
-    (pos, k as f64 * scene.time.step)
+    settle::settle(scene, u, v_tol, t_max)
 }
 
 /// The current's steady drag gives a static offset: the static solver (angle coordinates, the

@@ -11,6 +11,8 @@
 
 use chainbeam::*;
 
+#[path = "common/rotation.rs"]
+mod rotation;
 #[path = "common/turned_riser.rs"]
 mod turned_riser;
 
@@ -47,18 +49,7 @@ fn rotated_difference(psi_deg: f64) -> (f64, f64) {
     assert!(matches!(planar, SceneTrajectory::Planar(_)));
     let turned = simulate(&scene(psi_deg, false)).unwrap();
     assert!(matches!(turned, SceneTrajectory::Spatial(_)));
-    let (mut worst, mut reach): (f64, f64) = (0.0, 0.0);
-    for k in 0..=STEPS {
-        for (a, b) in planar.positions(k).into_iter().zip(turned.positions(k)) {
-            assert_eq!(a[0], 0.0);
-            let want = [a[2] * s, a[1], a[2] * c];
-            for d in 0..3 {
-                worst = worst.max((want[d] - b[d]).abs());
-            }
-            reach = reach.max(a[2].abs());
-        }
-    }
-    (worst, reach)
+    rotation::rotated_gap(&planar, &turned, [s, c], STEPS)
 }
 
 #[test]

@@ -17,9 +17,12 @@
 use std::f64::consts::{FRAC_PI_4, TAU};
 use std::path::Path;
 
-use chainbeam::adjoint::{adjoint_gradient, forward_value};
+use chainbeam::adjoint::forward_value;
 use chainbeam::*;
 use num_dual::Dual64;
+
+#[path = "common/gradient_check.rs"]
+mod gradient_check;
 
 const H: f64 = 0.01;
 
@@ -297,9 +300,13 @@ fn gradient_scene(direction: [f64; 2], force: [f64; 2]) -> Scene {
 /// The five-point central difference (8(J(v+δ) − J(v−δ)) − (J(v+2δ) − J(v−2δ)))/(12δ) with
 /// δ = 1e-3·max(|v|, 1): truncation error O(δ⁴), rounding error ~1e-16·|J|/δ, so it resolves
 /// derivatives far smaller than J (∂J/∂F_x is 1e-5 of J here, since M₀ measures z only).
-fn central_difference(j: impl Fn(f64) -> f64, v: f64) -> f64 {
-    let d = 1e-3 * v.abs().max(1.0);
-    (8.0 * (j(v + d) - j(v - d)) - (j(v + 2.0 * d) - j(v - 2.0 * d))) / (12.0 * d)
+fn central_difference(j: &dyn Fn(f64) -> f64, v: f64) -> f64 {
+    gradient_check::five_point(j, v, central_difference_step(v))
+}
+
+/// The step of [`central_difference`] at v: 10⁻³ of |v|, at least 10⁻³.
+fn central_difference_step(v: f64) -> f64 {
+    1e-3 * v.abs().max(1.0)
 }
 
 fn load_parameters() -> Vec<(Parameter, f64)> {
@@ -352,27 +359,14 @@ fn load_parameter_gradients_planar() {
             let u: Vec<f64> = u.iter().map(|x| x.re).collect();
             forward_value(&ch, H, 40, &u, &obj).unwrap()
         };
-        let fd = central_difference(at, value);
-        println!(
-            "dJ/d{p:?} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} (relative)",
-            (adjoint[i] - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 1e-8, "{p:?} is exercised");
-        assert!(
-            (adjoint[i] - fwd).abs() <= 1e-12 * fwd.abs(),
-            "{p:?}: {} vs {fwd}",
-            adjoint[i]
-        );
-        assert!(
-            (fd - fwd).abs() <= 1e-6 * fwd.abs(),
-            "{p:?}: FD {fd} vs {fwd}"
-        );
+        let fd = central_difference(&at, value);
+        gradient_check::assert_derivative(&format!("{p:?}"), adjoint[i], fwd, fd);
     }
 }
 
 /// The same in the spatial model (harmonics along (0.6, 0.8), a constant load with an x
-/// component, and ∂J/∂F_x), by `adjoint_gradient` on `Chain<_, 3>`.
+/// component, and ∂J/∂F_x), by `adjoint_gradient` on `Chain<_, 3>`
+/// ([`gradient_check::check_parameters`]).
 #[test]
 fn load_parameter_gradients_spatial() {
     let scene = gradient_scene([0.6, 0.8], [0.7, 1.1]);
@@ -384,40 +378,9 @@ fn load_parameter_gradients_spatial() {
     let mut params = load_parameters();
     params.push((Parameter::LoadForce(1), 1.1));
     params.push((Parameter::LoadForceX(1), 0.7));
-    let ps: Vec<Parameter> = params.iter().map(|p| p.0).collect();
     let chain = Chain::<f64, 3>::from_scene(&scene).unwrap();
     let u = scene_controls(&scene);
-    let obj = BendingObjective::summed_moment();
-    let adjoint = adjoint_gradient(&chain, H, 40, &u, &obj, &ps, Checkpointing::default())
-        .unwrap()
-        .parameter_gradient;
-    let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
-    for (i, &(p, value)) in params.iter().enumerate() {
-        let mut ch = chain.lift::<Dual64>();
-        ch.set_parameter(p, Dual64::new(value, 1.0)).unwrap();
-        let fwd = forward_value(&ch, H, 40, &ud, &obj).unwrap().eps;
-        let at = |v: f64| {
-            let mut ch = chain.clone();
-            ch.set_parameter(p, v).unwrap();
-            forward_value(&ch, H, 40, &u, &obj).unwrap()
-        };
-        let fd = central_difference(at, value);
-        println!(
-            "dJ/d{p:?} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} (relative)",
-            (adjoint[i] - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 1e-8, "{p:?} is exercised");
-        assert!(
-            (adjoint[i] - fwd).abs() <= 1e-12 * fwd.abs(),
-            "{p:?}: {} vs {fwd}",
-            adjoint[i]
-        );
-        assert!(
-            (fd - fwd).abs() <= 1e-6 * fwd.abs(),
-            "{p:?}: FD {fd} vs {fwd}"
-        );
-    }
+    gradient_check::check_parameters(&chain, &u, &params, (H, 40), central_difference_step);
     // F_x is not a parameter of the planar model of a planar scene
     let planar = Chain::<f64, 2>::from_scene(&gradient_scene([0.0, 1.0], [0.0, 1.1])).unwrap();
     assert!(!planar.has_parameter(Parameter::LoadForceX(1)));

@@ -18,6 +18,11 @@ use chainbeam::adjoint::{adjoint_gradient, forward_value};
 use chainbeam::*;
 use num_dual::Dual64;
 
+#[path = "common/gradient_check.rs"]
+mod gradient_check;
+#[path = "common/rotation.rs"]
+mod rotation;
+
 const H: f64 = 0.05;
 
 /// A 100 m, 21" riser (D_o = 0.5334 m, t = 22.2 mm) of 10 pendulums in 100 m of water under
@@ -49,18 +54,7 @@ fn rotated_difference(psi: f64) -> (f64, f64) {
     assert!(matches!(planar, SceneTrajectory::Planar(_)));
     let turned = simulate(&scene(psi, steps, "")).unwrap();
     let [s, c] = chainbeam::scene::direction_of_angle(psi);
-    let (mut worst, mut reach): (f64, f64) = (0.0, 0.0);
-    for k in 0..=steps {
-        for (a, b) in planar.positions(k).into_iter().zip(turned.positions(k)) {
-            assert_eq!(a[0], 0.0);
-            let want = [a[2] * s, a[1], a[2] * c];
-            for d in 0..3 {
-                worst = worst.max((want[d] - b[d]).abs());
-            }
-            reach = reach.max(a[2].abs());
-        }
-    }
-    (worst, reach)
+    rotation::rotated_gap(&planar, &turned, [s, c], steps)
 }
 
 #[test]
@@ -116,24 +110,9 @@ fn check_gradients<const DIM: usize>(scene: &Scene, params: &[(Parameter, f64)])
     let ps: Vec<Parameter> = params.iter().map(|p| p.0).collect();
     let adj = adjoint_gradient(&chain, H, steps, &u, &obj, &ps, Checkpointing::default()).unwrap();
     let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
-    let five_point = |f: &dyn Fn(f64) -> f64, x: f64, d: f64| {
-        (8.0 * (f(x + d) - f(x - d)) - (f(x + 2.0 * d) - f(x - 2.0 * d))) / (12.0 * d)
-    };
     let check = |label: String, adjoint: f64, fwd: f64, fd: f64| {
-        println!(
-            "DIM {DIM}: dJ/d{label} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e}",
-            (adjoint - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 1e-8, "{label} is exercised");
-        assert!(
-            (adjoint - fwd).abs() <= 1e-12 * fwd.abs(),
-            "{label}: {adjoint} vs {fwd}"
-        );
-        assert!(
-            (fd - fwd).abs() <= 1e-6 * fwd.abs(),
-            "{label}: FD {fd} vs {fwd}"
-        );
+        println!("DIM {DIM}:");
+        gradient_check::assert_derivative(&label, adjoint, fwd, fd);
     };
     for (i, &(p, value)) in params.iter().enumerate() {
         let mut ch = chain.lift::<Dual64>();
@@ -147,7 +126,7 @@ fn check_gradients<const DIM: usize>(scene: &Scene, params: &[(Parameter, f64)])
         // The drag r|r| is C¹ only: where a relative momentum passes 0 the five-point rule's
         // error is O(d²), not O(d⁴) (measured for the current speed with the per-pendulum drag:
         // 2.4e-6 at d = 1e-3 of the value, 1.1e-7 at 1e-4; round-off stays below 1e-10).
-        let fd = five_point(&at, value, 1e-4 * value);
+        let fd = gradient_check::five_point(&at, value, 1e-4 * value);
         check(format!("{p:?}"), adj.parameter_gradient[i], fwd, fd);
     }
     for k in [0, steps / 3, steps - 1] {
@@ -161,7 +140,7 @@ fn check_gradients<const DIM: usize>(scene: &Scene, params: &[(Parameter, f64)])
             w[k] = v;
             forward_value(&chain, H, steps, &w, &obj).unwrap()
         };
-        let fd = five_point(&at, u[k], 10.0);
+        let fd = gradient_check::five_point(&at, u[k], 10.0);
         check(format!("u[{k}]"), adj.control_gradient[k], fwd, fd);
     }
 }

@@ -223,7 +223,7 @@ impl<D: Scalar, const DIM: usize> CoupledHalf<D, DIM> {
     ) -> Result<(), ZeroPivot> {
         #[cfg(test)]
         if let Some(dense) = &mut self.dense {
-            return dense.solve(ch, (q, c), (h, ctx), p);
+            return solve_half_step(&mut **dense, ch, (q, c), (h, ctx), p);
         }
         solve_half_step(self, ch, (q, c), (h, ctx), p)
     }

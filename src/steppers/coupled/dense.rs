@@ -6,7 +6,7 @@ use crate::base::Scalar;
 use crate::model::{Chain, Ctx};
 use crate::tridiag::ZeroPivot;
 
-use super::{flatten, solve_half_step, unflatten, HalfSystem};
+use super::{flatten, unflatten, HalfSystem};
 
 /// A dense LU factorisation P A = L U with partial pivoting (pivots chosen on the real parts),
 /// over any scalar: `solve` and `solve_transpose` after `factor`.
@@ -205,18 +205,6 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
         self.a.factor()
     }
 
-    /// Solves p − (h/2) F(q, p) = c into `p` by the band solver's Newton iteration
-    /// ([`super::CoupledHalf::solve`]) on the dense A, and leaves A factorised at the solution.
-    pub(crate) fn solve(
-        &mut self,
-        ch: &Chain<D, DIM>,
-        (q, c): (&[[D; DIM]], &[[D; DIM]]),
-        (h, ctx): (f64, &Ctx<D>),
-        p: &mut [[D; DIM]],
-    ) -> Result<(), ZeroPivot> {
-        solve_half_step(self, ch, (q, c), (h, ctx), p)
-    }
-
     /// Assembles and factorises RATTLE's Newton matrix J = −h²/2 Ĝ(q′) M⁻¹ A⁻¹ Ĝ(q)ᵀ (A as
     /// last factorised), column by column.
     pub(crate) fn factor_newton(
@@ -255,7 +243,7 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
         self.jac.solve_transpose(b);
     }
 
-    /// `s` ← Wᵀ s = A⁻ᵀ s (after [`DenseHalf::factor_at`] or [`DenseHalf::solve`]).
+    /// `s` ← Wᵀ s = A⁻ᵀ s (after [`DenseHalf::factor_at`] or the half step's solve).
     pub(crate) fn apply_w_transpose(&mut self, s: &mut [[D; DIM]]) {
         flatten(s, &mut self.flat);
         self.a.solve_transpose(&mut self.flat);
@@ -263,6 +251,8 @@ impl<D: Scalar, const DIM: usize> DenseHalf<D, DIM> {
     }
 }
 
+/// The dense A in the band solver's Newton iteration of the half step
+/// ([`super::CoupledHalf::solve`] runs it on this when the tests ask for the dense reference).
 impl<D: Scalar, const DIM: usize> HalfSystem<D, DIM> for DenseHalf<D, DIM> {
     fn force(&mut self, ch: &Chain<D, DIM>, q: &[[D; DIM]], p: &[[D; DIM]], ctx: &Ctx<D>) {
         self.coupled_force(ch, q, p, ctx);

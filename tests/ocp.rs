@@ -10,7 +10,7 @@ mod thesis;
 mod table_3_4;
 
 use chainbeam::ocp::{solve, OcpError, OcpOptions, Solver, Termination};
-use chainbeam::optimize::{minimize, Method, OptimOptions};
+use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Error, Parametrisation, PerStepControl,
     PiecewiseControl, Scene,
@@ -18,6 +18,31 @@ use chainbeam::{
 
 fn per_step(steps: usize) -> Parametrisation {
     Parametrisation::PerStep(PerStepControl { steps })
+}
+
+/// The per-step control problem of `scene` over `steps` steps: c_sum + ρ·h·Σ u_k², ρ = 0.01.
+fn per_step_problem(scene: &Scene, steps: usize) -> ControlProblem {
+    ControlProblem::new(
+        scene,
+        per_step(steps),
+        BendingObjective::summed_moment().with_effort(0.01),
+    )
+    .unwrap()
+}
+
+/// The trust region's minimum of `p` from `theta0` within |u| ≤ `bound` (the reference of the
+/// Riccati solver's optimum).
+fn trust_region(p: &ControlProblem, theta0: &[f64], bound: f64) -> OptimResult {
+    minimize(
+        p,
+        theta0,
+        &OptimOptions {
+            method: Method::TrustRegion,
+            bound: Some(bound),
+            ..OptimOptions::default()
+        },
+    )
+    .unwrap()
 }
 
 /// The long-horizon scene (riser, D = 10, F = 2 N at node 5, h = 0.01) cut to `steps` steps.
@@ -112,12 +137,7 @@ fn costate_gradient_equals_discrete_adjoint() {
 #[test]
 fn memory_bounded_fallback_converges() {
     let steps = 60;
-    let p = ControlProblem::new(
-        &long_horizon(steps),
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&long_horizon(steps), steps);
     let theta0 = vec![0.0; steps + 1];
     let full = solve(&p, &theta0, &OcpOptions::default().with_bound(5.0)).unwrap();
     let opts = OcpOptions {
@@ -141,12 +161,7 @@ fn memory_bounded_fallback_converges() {
 #[test]
 fn stage_jacobians_match_finite_differences() {
     let scene = long_horizon(40);
-    let p = ControlProblem::new(
-        &scene,
-        per_step(40),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&scene, 40);
     let mut s = Solver::new(&p, &OcpOptions::default()).unwrap();
     s.set_point(&wiggle(41, 2.0)).unwrap();
     for k in [0, 1, 17, 39] {
@@ -326,16 +341,7 @@ fn table_3_4_rows_agree_with_trust_region() {
         if node == 9 {
             continue;
         }
-        let tr = minimize(
-            &p,
-            &[0.0; 11],
-            &OptimOptions {
-                method: Method::TrustRegion,
-                bound: Some(bound),
-                ..OptimOptions::default()
-            },
-        )
-        .unwrap();
+        let tr = trust_region(&p, &[0.0; 11], bound);
         assert!(
             r.objective <= tr.objective * (1.0 + 1e-8) + 1e-12,
             "node {node}: riccati {} vs trust region {}",
@@ -353,23 +359,9 @@ fn table_3_4_rows_agree_with_trust_region() {
 fn long_horizon_short_agrees_with_trust_region() {
     let steps = 150;
     let scene = long_horizon(steps);
-    let p = ControlProblem::new(
-        &scene,
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&scene, steps);
     let theta0 = vec![0.0; steps + 1];
-    let tr = minimize(
-        &p,
-        &theta0,
-        &OptimOptions {
-            method: Method::TrustRegion,
-            bound: Some(5.0),
-            ..OptimOptions::default()
-        },
-    )
-    .unwrap();
+    let tr = trust_region(&p, &theta0, 5.0);
     let r = solve(&p, &theta0, &OcpOptions::default().with_bound(5.0)).unwrap();
     assert!(r.converged, "{}", r.termination);
     assert!(
@@ -391,12 +383,7 @@ fn long_horizon_short_agrees_with_trust_region() {
 fn bounds_never_violated() {
     let steps = 80;
     let scene = long_horizon(steps);
-    let p = ControlProblem::new(
-        &scene,
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&scene, steps);
     for rate in [0.0, 0.02] {
         let opts = OcpOptions {
             lower: -1.0,
@@ -417,12 +404,7 @@ fn bounds_never_violated() {
 fn non_convergence_and_bad_input_are_reported() {
     let steps = 60;
     let scene = long_horizon(steps);
-    let p = ControlProblem::new(
-        &scene,
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&scene, steps);
     let r = solve(
         &p,
         &vec![0.0; steps + 1],
@@ -494,12 +476,7 @@ fn forty_pendulums() {
     let mut scene = catalogue::scaled_cantilever_steps(40, 10.0, 1000.0, 10.0, 2.0, steps);
     scene.loads.drag = 1.0;
     scene.loads.points.push(chainbeam::PointLoad::new(25, 2.0));
-    let p = ControlProblem::new(
-        &scene,
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = per_step_problem(&scene, steps);
     let theta = wiggle(steps + 1, 1.0);
     let opts = OcpOptions::default().with_bound(5.0);
     let mut s = Solver::new(&p, &opts).unwrap();

@@ -355,6 +355,14 @@ fn expect_err(text: &str, key: &str, check: fn(&SceneErrorKind) -> bool) {
     assert!(!msg.contains('\n'), "multi-line message: {msg}");
 }
 
+/// [`expect_err`] for each (from, to, key) of `cases`: the valid scene with `from` replaced by
+/// `to` ([`mutate`]) is refused naming `key`, with a kind that satisfies `check`.
+fn expect_mutation_errs(cases: &[(&str, &str, &str)], check: fn(&SceneErrorKind) -> bool) {
+    for (from, to, key) in cases {
+        expect_err(&mutate(from, to), key, check);
+    }
+}
+
 fn unknown(k: &SceneErrorKind) -> bool {
     matches!(k, SceneErrorKind::UnknownKey { .. })
 }
@@ -546,61 +554,22 @@ fn missing_keys() {
 
 #[test]
 fn wrong_types() {
-    expect_err(
-        &mutate("length = 1.0", "length = 'long'"),
-        "beam.length",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("length = 1.0", "length = [1.0, 'x', 2]"),
-        "beam.length[1]",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("mass = 1.0", "mass = true"),
-        "beam.mass",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("pendulums = 3", "pendulums = 3.0"),
-        "beam.pendulums",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("steps = 4", "steps = '4'"),
-        "time.steps",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("node = 2", "node = 2.5"),
-        "loads.point[0].node",
-        wrong_type,
-    );
-    // One number is legal since issue 27 (every value equal); a string still names the key.
-    expect_err(
-        &mutate("values = [0.5]", "values = 'half'"),
-        "control.values",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("values = [0.5]", "values = {u = 0.5}"),
-        "control.values",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("values = [0.5]", "values = [0.5, {}]"),
-        "control.values[1]",
-        wrong_type,
-    );
-    expect_err(
-        &mutate("support = 'cantilever'", "support = 1"),
-        "beam.support",
-        wrong_type,
-    );
-    expect_err(&mutate("[beam]", "beam = 1\n[other]"), "beam", wrong_type);
-    expect_err(
-        &mutate("[[loads.point]]", "[loads.point]"),
-        "loads.point",
+    expect_mutation_errs(
+        &[
+            ("length = 1.0", "length = 'long'", "beam.length"),
+            ("length = 1.0", "length = [1.0, 'x', 2]", "beam.length[1]"),
+            ("mass = 1.0", "mass = true", "beam.mass"),
+            ("pendulums = 3", "pendulums = 3.0", "beam.pendulums"),
+            ("steps = 4", "steps = '4'", "time.steps"),
+            ("node = 2", "node = 2.5", "loads.point[0].node"),
+            // One number is legal since issue 27 (every value equal); a string still names the key.
+            ("values = [0.5]", "values = 'half'", "control.values"),
+            ("values = [0.5]", "values = {u = 0.5}", "control.values"),
+            ("values = [0.5]", "values = [0.5, {}]", "control.values[1]"),
+            ("support = 'cantilever'", "support = 1", "beam.support"),
+            ("[beam]", "beam = 1\n[other]", "beam"),
+            ("[[loads.point]]", "[loads.point]", "loads.point"),
+        ],
         wrong_type,
     );
     expect_err(
@@ -616,25 +585,14 @@ fn wrong_types() {
 
 #[test]
 fn invalid_values() {
-    expect_err(
-        &mutate("pendulums = 3", "pendulums = 0"),
-        "beam.pendulums",
-        invalid,
-    );
-    expect_err(
-        &mutate("pendulums = 3", "pendulums = -2"),
-        "beam.pendulums",
-        invalid,
-    );
-    expect_err(
-        &mutate("pendulums = 3", "pendulums = 99999999999"),
-        "beam.pendulums",
-        invalid,
-    );
-    expect_err(&mutate("steps = 4", "steps = 0"), "time.steps", invalid);
-    expect_err(
-        &mutate("steps = 4", "steps = 100000000"),
-        "time.steps",
+    expect_mutation_errs(
+        &[
+            ("pendulums = 3", "pendulums = 0", "beam.pendulums"),
+            ("pendulums = 3", "pendulums = -2", "beam.pendulums"),
+            ("pendulums = 3", "pendulums = 99999999999", "beam.pendulums"),
+            ("steps = 4", "steps = 0", "time.steps"),
+            ("steps = 4", "steps = 100000000", "time.steps"),
+        ],
         invalid,
     );
     for bad in ["0", "-1", "nan", "inf", "-inf", "+nan"] {
@@ -654,19 +612,12 @@ fn invalid_values() {
             invalid,
         );
     }
-    expect_err(
-        &mutate("length = 1.0", "length = [1, 0, 1]"),
-        "beam.length[1]",
-        invalid,
-    );
-    expect_err(
-        &mutate("length = 1.0", "length = [1, 1, nan]"),
-        "beam.length[2]",
-        invalid,
-    );
-    expect_err(
-        &mutate("mass = 1.0", "mass = [-inf, 1, 1]"),
-        "beam.mass[0]",
+    expect_mutation_errs(
+        &[
+            ("length = 1.0", "length = [1, 0, 1]", "beam.length[1]"),
+            ("length = 1.0", "length = [1, 1, nan]", "beam.length[2]"),
+            ("mass = 1.0", "mass = [-inf, 1, 1]", "beam.mass[0]"),
+        ],
         invalid,
     );
     for bad in ["-1", "nan", "inf"] {
@@ -691,62 +642,40 @@ fn invalid_values() {
             invalid,
         );
     }
-    expect_err(
-        &mutate(
-            "stiffness = 100.0",
-            "stiffness = [1, -1]\nbase_stiffness = 1",
-        ),
-        "beam.stiffness[1]",
-        invalid,
-    );
-    expect_err(
-        &mutate("gravity = 0.0", "gravity = nan"),
-        "loads.gravity",
-        invalid,
-    );
-    expect_err(
-        &mutate("force = 2.0", "force = inf"),
-        "loads.point[0].force",
-        invalid,
-    );
-    expect_err(
-        &mutate("values = [0.5]", "values = [nan]"),
-        "control.values[0]",
-        invalid,
-    );
-    expect_err(
-        &mutate("force = 2.0", "force = 2.0\nstart = 1.0\nend = 0.5"),
-        "loads.point[0].end",
-        invalid,
-    );
-    expect_err(
-        &mutate("force = 2.0", "force = 2.0\nend = 0.0"),
-        "loads.point[0].end",
-        invalid,
-    );
-    expect_err(
-        &mutate("force = 2.0", "force = 2.0\nstart = nan"),
-        "loads.point[0].start",
-        invalid,
-    );
-    expect_err(
-        &mutate("force = 2.0", "force = 2.0\nend = inf"),
-        "loads.point[0].end",
-        invalid,
-    );
-    expect_err(
-        &mutate("support = 'cantilever'", "support = 'free'"),
-        "beam.support",
-        invalid,
-    );
-    expect_err(
-        &mutate("kind = 'constant'", "kind = 'linear'"),
-        "control.kind",
-        invalid,
-    );
-    expect_err(
-        &mutate("kind = 'final'", "kind = 'max'"),
-        "objective.kind",
+    expect_mutation_errs(
+        &[
+            (
+                "stiffness = 100.0",
+                "stiffness = [1, -1]\nbase_stiffness = 1",
+                "beam.stiffness[1]",
+            ),
+            ("gravity = 0.0", "gravity = nan", "loads.gravity"),
+            ("force = 2.0", "force = inf", "loads.point[0].force"),
+            ("values = [0.5]", "values = [nan]", "control.values[0]"),
+            (
+                "force = 2.0",
+                "force = 2.0\nstart = 1.0\nend = 0.5",
+                "loads.point[0].end",
+            ),
+            (
+                "force = 2.0",
+                "force = 2.0\nend = 0.0",
+                "loads.point[0].end",
+            ),
+            (
+                "force = 2.0",
+                "force = 2.0\nstart = nan",
+                "loads.point[0].start",
+            ),
+            (
+                "force = 2.0",
+                "force = 2.0\nend = inf",
+                "loads.point[0].end",
+            ),
+            ("support = 'cantilever'", "support = 'free'", "beam.support"),
+            ("kind = 'constant'", "kind = 'linear'", "control.kind"),
+            ("kind = 'final'", "kind = 'max'", "objective.kind"),
+        ],
         invalid,
     );
     expect_err(
@@ -806,35 +735,20 @@ fn nodes_out_of_range() {
 
 #[test]
 fn wrong_counts() {
-    expect_err(
-        &mutate("length = 1.0", "length = [1, 1]"),
-        "beam.length",
-        count,
-    );
-    expect_err(
-        &mutate("mass = 1.0", "mass = [1, 1, 1, 1]"),
-        "beam.mass",
-        count,
-    );
-    expect_err(&mutate("mass = 1.0", "mass = []"), "beam.mass", count);
-    expect_err(
-        &mutate("stiffness = 100.0", "stiffness = [1, 1, 1]"),
-        "beam.stiffness",
-        count,
-    );
-    expect_err(
-        &mutate("values = [0.5]", "values = [0.5, 1]"),
-        "control.values",
-        count,
-    );
-    expect_err(
-        &mutate("values = [0.5]", "values = []"),
-        "control.values",
-        count,
-    );
-    expect_err(
-        &mutate("kind = 'constant'", "kind = 'per-step'"),
-        "control.values",
+    expect_mutation_errs(
+        &[
+            ("length = 1.0", "length = [1, 1]", "beam.length"),
+            ("mass = 1.0", "mass = [1, 1, 1, 1]", "beam.mass"),
+            ("mass = 1.0", "mass = []", "beam.mass"),
+            (
+                "stiffness = 100.0",
+                "stiffness = [1, 1, 1]",
+                "beam.stiffness",
+            ),
+            ("values = [0.5]", "values = [0.5, 1]", "control.values"),
+            ("values = [0.5]", "values = []", "control.values"),
+            ("kind = 'constant'", "kind = 'per-step'", "control.values"),
+        ],
         count,
     );
     let ok = mutate(

@@ -12,7 +12,11 @@
 //!
 //! The runs keep the moment history only (`chainbeam::moment_history`, no trajectory).
 //!
-//! `cargo run --release --example riser_convergence -- SCENE.toml T0 T n1,n2,… h1,h2,…`
+//! The wave record's step (`[loads.waves] record_step`) is the scene's, rounded down to a whole
+//! number of each h; an optional last list r1,r2,… of record steps \[s\] runs each (0: a
+//! record at every step), for the record step's own convergence study.
+//!
+//! `cargo run --release --example riser_convergence -- SCENE.toml T0 T n1,n2,… h1,h2,… [r1,r2,…]`
 
 use std::time::Instant;
 
@@ -26,21 +30,40 @@ fn list<T: std::str::FromStr>(s: &str) -> Vec<T> {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    if args.len() != 6 {
-        eprintln!("usage: riser_convergence SCENE.toml T0 T n1,n2,... h1,h2,...");
+    if args.len() != 6 && args.len() != 7 {
+        eprintln!("usage: riser_convergence SCENE.toml T0 T n1,n2,... h1,h2,... [r1,r2,...]");
         std::process::exit(2);
     }
     let base = Scene::from_file(&args[1]).expect("scene");
     let (t0, t_end): (f64, f64) = (args[2].parse().unwrap(), args[3].parse().unwrap());
     let ns: Vec<usize> = list(&args[4]);
     let hs: Vec<f64> = list(&args[5]);
+    let record_steps: Vec<Option<f64>> = match args.get(6) {
+        Some(r) => list::<f64>(r)
+            .into_iter()
+            .map(|x| (x > 0.0).then_some(x))
+            .collect(),
+        None => vec![base.loads.waves.and_then(|w| w.record_step)],
+    };
     let pipe = base.pipe.expect("a [pipe] scene");
     let rho = base.water.density;
     let mu = pipe.mass_per_length(rho);
-    println!("n,h,D,mean_Mw,std_Mw,max_abs_Mw,seconds");
+    println!("n,h,record_step,D,mean_Mw,std_Mw,max_abs_Mw,seconds");
     for &n in &ns {
-        for &h in &hs {
+        for (&h, &rs) in hs
+            .iter()
+            .flat_map(|h| record_steps.iter().map(move |r| (h, r)))
+        {
             let mut s = base.clone();
+            if let Some(w) = s.loads.waves.as_mut() {
+                w.record_step = rs;
+                w.fit_record_step(h);
+            }
+            let record = s
+                .loads
+                .waves
+                .and_then(|w| w.record_step)
+                .map_or("h".to_string(), |r| format!("{r}"));
             s.beam = pipe
                 .beam(n, s.beam.support, rho, (None, None))
                 .expect("beam");
@@ -52,7 +75,7 @@ fn main() {
             let history = match moment_history(&s) {
                 Ok(t) => t,
                 Err(e) => {
-                    println!("{n},{h},failed: {e}");
+                    println!("{n},{h},{record},failed: {e}");
                     continue;
                 }
             };
@@ -67,7 +90,7 @@ fn main() {
             let max = window.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             let d = s.loads.drag;
             println!(
-                "{n},{h},{d:.6e},{mean:.6e},{:.6e},{max:.6e},{secs:.2}",
+                "{n},{h},{record},{d:.6e},{mean:.6e},{:.6e},{max:.6e},{secs:.2}",
                 var.sqrt()
             );
         }

@@ -179,15 +179,16 @@ pub fn dissipative_pinned_pinned(drag: f64) -> Scene {
 /// formula 2.4.5), m = M/n, F = 2 N at the tip (node n), no drag, t ∈ [0, 10] s with
 /// h = 0.01 s · min(1, (10/n)²): the fastest mode's frequency grows like n² and RATTLE's Newton
 /// solve needs h·ω_max bounded (thesis: it fails at h = 0.02 for n = 10). The time grid is thus
-/// N = 1000 for n ≤ 10 and grows like n² beyond; the trajectory then exceeds
-/// [`crate::scene::MAX_TRAJECTORY_BYTES`] from n ≈ 260 on: use [`scaled_cantilever_steps`] for a
+/// N = 1000 for n ≤ 10 and grows like n² beyond; a stored trajectory then exceeds
+/// [`crate::scene::MAX_TRAJECTORY_BYTES`] from n ≈ 260 on (a streamed run,
+/// [`crate::simulate_streaming`], does not store it): use [`scaled_cantilever_steps`] for a
 /// shorter horizon. `scaled_cantilever(10, 10.0, 1000.0, 10.0, 2.0)` is [`dissipative_cantilever`]
 /// without drag.
 ///
 /// # Panics
 /// If `n` is 0 or above [`crate::scene::MAX_PENDULUMS`], or `total_length`, `ei`, `total_mass`
 /// are not positive and finite, or `base_factor` is negative or not finite, or the scene is
-/// invalid (over the memory budget, or outside the valid ranges of docs/scene-format.md).
+/// invalid (outside the valid ranges of docs/scene-format.md).
 pub fn scaled_cantilever(
     n: usize,
     total_length: f64,

@@ -4,8 +4,11 @@
 //!
 //! A trajectory stores every state, so its size ([`trajectory_bytes`]) is checked against
 //! [`MAX_TRAJECTORY_BYTES`] before anything of size N is allocated, and its buffers are reserved
-//! fallibly: a trajectory that does not fit is [`Error::TrajectoryTooLarge`], naming the bytes and
-//! the scene keys to change, never an allocation abort.
+//! fallibly: a scene's trajectory that does not fit is refused by
+//! [`Scene::check_stored_trajectory`] (an [`Error::Scene`] naming `time.steps`, the bytes and the
+//! limit), a chain's by [`simulate_chain`] ([`Error::TrajectoryTooLarge`], naming the same), never
+//! an allocation abort. The check belongs to the run that stores: a scene over the budget is
+//! valid and streams ([`simulate_streaming`], [`moment_history`], `chainbeam simulate`).
 
 use crate::base::Scalar;
 use crate::error::{Error, Result};
@@ -323,14 +326,23 @@ impl SceneTrajectory {
 /// all loads lie in the yz-plane and the control (if any) acts along z (every thesis scene), the
 /// spatial one otherwise ([`Scene::is_spatial`]; docs/scene-format.md "model no more than a
 /// scene needs").
+///
+/// # Errors
+/// [`Scene::check_stored_trajectory`]'s (the trajectory over [`MAX_TRAJECTORY_BYTES`], naming
+/// `time.steps`) before anything of size N is allocated; then as [`simulate_chain`].
 pub fn simulate(scene: &Scene) -> Result<SceneTrajectory> {
+    scene.check_stored_trajectory()?;
     let ux = scene_controls_x(scene);
     simulate_with_controls_at(scene, (&scene_controls(scene), &ux), false)
 }
 
 /// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1) at the
 /// scene's control node (default: the tip), in the model it needs (see [`simulate()`]).
+///
+/// # Errors
+/// As [`simulate()`].
 pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<SceneTrajectory> {
+    scene.check_stored_trajectory()?;
     simulate_with_controls_at(scene, (controls, &[]), true)
 }
 
@@ -339,12 +351,13 @@ pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<SceneTr
 /// tip), in the spatial model.
 ///
 /// # Errors
-/// As [`simulate_chain`]; [`Error::WrongLength`] if `controls_x` is not N + 1 long.
+/// As [`simulate()`]; [`Error::WrongLength`] if `controls_x` is not N + 1 long.
 pub fn simulate_with_controls_xz(
     scene: &Scene,
     controls_x: &[f64],
     controls: &[f64],
 ) -> Result<SceneTrajectory> {
+    scene.check_stored_trajectory()?;
     check_controls(controls_x, scene.time.steps)?;
     let mut chain = Chain::<f64, 3>::from_scene(scene)?;
     if chain.control_node().is_none() {

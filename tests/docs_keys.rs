@@ -187,7 +187,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 76, "number of documented keys");
+    assert_eq!(checked, 77, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -359,6 +359,7 @@ fn every_documented_key_is_read() {
         ("direction", "180.0"),
         ("components", "65"),
         ("lumping", "\"cell\""),
+        ("record_step", "0.03"),
     ] {
         assert!(doc["loads.waves"].contains_key(key), "loads.waves.{key}");
         seen.insert(format!("loads.waves.{key}"));

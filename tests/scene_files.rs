@@ -252,8 +252,13 @@ fn builder_defaults_and_errors() {
     assert_eq!(e.key(), Some("beam.pendulums"));
     let e = err(SceneBuilder::new(3).steps(MAX_STEPS + 1));
     assert_eq!(e.key(), Some("time.steps"));
-    // over the stored-state limit, rejected before anything is allocated
-    let e = err(SceneBuilder::new(MAX_PENDULUMS).steps(1000));
+    // over the stored-trajectory budget: a valid scene (it streams), refused by a run that
+    // stores its trajectory before anything of size N is allocated
+    let big = SceneBuilder::new(MAX_PENDULUMS)
+        .steps(1000)
+        .build()
+        .unwrap();
+    let e = big.check_stored_trajectory().unwrap_err();
     assert_eq!(e.key(), Some("time.steps"));
     let e = err(SceneBuilder::new(3).step(1e302).steps(MAX_STEPS));
     assert_eq!(e.key(), Some("time.step"));
@@ -1013,9 +1018,11 @@ fn trajectory_budget_is_exact() {
             .support(Support::Riser)
             .steps(steps)
             .build()
+            .unwrap()
     };
-    assert!(riser(max).is_ok());
-    let e = riser(max + 1).unwrap_err();
+    // The budget is a run's that stores the trajectory, not the scene's: both scenes are valid.
+    assert!(riser(max).check_stored_trajectory().is_ok());
+    let e = riser(max + 1).check_stored_trajectory().unwrap_err();
     assert_eq!(e.key(), Some("time.steps"));
     assert!(
         e.to_string()

@@ -101,6 +101,7 @@ fn keys_read_and_write_back() {
             direction: 30.0,
             components: Some(500),
             lumping: WaveLumping::Node,
+            record_step: None,
         }
     );
     assert!(scene.is_spatial());

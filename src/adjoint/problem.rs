@@ -115,8 +115,11 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     ///
     /// # Errors
     /// As those; [`Error::NeedsSpatialModel`] naming `control.values` for a 2-axis control in
-    /// the planar model.
+    /// the planar model; [`Scene::check_stored_trajectory`]'s (naming `time.steps`) for a scene
+    /// whose trajectory is over the stored-trajectory budget (the optimisers keep per-step
+    /// quantities of that order).
     pub fn in_model(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
+        scene.check_stored_trajectory()?;
         if two_axis && DIM == 2 {
             return Err(Error::NeedsSpatialModel {
                 key: "control.values".to_string(),

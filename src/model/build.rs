@@ -141,6 +141,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let t = scene.time;
         let err = |e| Error::from(crate::scene::sea_error(e, w.components));
         let sea = crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step).map_err(err)?;
+        // The record every r steps (`record_step` = r h): ⌈N/r⌉ + 1 times cover t_N.
+        let every = w.record_stride(t.step)?;
         let inputs = WaveInputs {
             lengths: scene.beam.lengths.clone(),
             masses: scene.beam.masses.clone(),
@@ -148,7 +150,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 * (1.0 + pipe.added_mass_coefficient)
                 * pipe.outer_area(),
             direction: w.unit_direction(),
-            rows: t.steps + 1,
+            rows: t.steps.div_ceil(every) + 1,
+            every,
             cell_average: w.lumping == crate::scene::WaveLumping::Cell,
         };
         let field = WaveField::new(std::sync::Arc::new(sea), inputs).map_err(err)?;

@@ -90,6 +90,10 @@ pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scen
         end_springs,
     )?;
     out.time.step = step;
+    // A wave record every r steps of the plant: as close on the model's grid, not longer.
+    if let Some(w) = out.loads.waves.as_mut() {
+        w.fit_record_step(step);
+    }
     // D ∝ 1/l; the per-pendulum weights follow from the rebuilt beam (`Scene::drag_weights`).
     out.loads.drag *= pendulums as f64 / n as f64;
     let node = |j: usize| ((j * pendulums) as f64 / n as f64).round().max(1.0) as usize;

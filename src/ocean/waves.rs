@@ -400,20 +400,36 @@ impl Sea {
 
     /// A reusable inverse FFT of length M for [`Sea::synthesize`].
     pub fn synthesis(&self) -> Synthesis {
-        let m = self.fft_len;
+        self.synthesis_every(1)
+    }
+
+    /// A reusable inverse FFT for [`Sea::synthesize`] on the coarser grid t = k r h (`r` =
+    /// `every` ≥ 1; 1 is [`Sea::synthesis`]): of length M/r when r divides M — on that grid
+    /// e^{iωⱼ k r h} = e^{2πi (j+1) k/(M/r)}, so the series is the inverse DFT of length M/r with
+    /// the components folded modulo M/r, exactly — and otherwise of length M, read every r-th
+    /// value.
+    pub fn synthesis_every(&self, every: usize) -> Synthesis {
+        let every = every.max(1);
+        let (m, stride) = if self.fft_len.is_multiple_of(every) {
+            (self.fft_len / every, 1)
+        } else {
+            (self.fft_len, every)
+        };
         let fft = FftPlanner::<f64>::new().plan_fft_inverse(m);
         let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
         Synthesis {
             fft,
             buf: vec![Complex::new(0.0, 0.0); m],
             scratch,
+            stride,
         }
     }
 
     /// Two real series at once on the grid tₖ = k h, k = 0..`rows`, by one inverse FFT of length
     /// M: `out(k, xₖ, yₖ)` with xₖ = Re Σⱼ Xⱼ e^{iωⱼ tₖ} and yₖ = Re Σⱼ Yⱼ e^{iωⱼ tₖ} (one
     /// amplitude per component; k is taken modulo M beyond the repeat period). O(M log M)
-    /// instead of the direct sum's O(N) per time.
+    /// instead of the direct sum's O(N) per time. With a plan of [`Sea::synthesis_every`]`(r)`
+    /// the grid is tₖ = k r h.
     pub fn synthesize(
         &self,
         (x, y): (&[Complex<f64>], &[Complex<f64>]),
@@ -430,9 +446,9 @@ impl Sea {
         });
         plan.fft
             .process_with_scratch(&mut plan.buf, &mut plan.scratch);
-        let m = plan.buf.len();
+        let (m, stride) = (plan.buf.len(), plan.stride);
         for k in 0..rows {
-            let z = plan.buf[k % m];
+            let z = plan.buf[(k * stride) % m];
             out(k, z.re, z.im);
         }
     }
@@ -455,17 +471,21 @@ impl Sea {
     }
 }
 
-/// A planned inverse FFT with its buffers ([`Sea::synthesis`], [`Sea::synthesize`]).
+/// A planned inverse FFT with its buffers ([`Sea::synthesis`], [`Sea::synthesis_every`],
+/// [`Sea::synthesize`]).
 pub struct Synthesis {
     fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
     buf: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
+    /// The output read every `stride`-th value (1 unless a coarser grid's r does not divide M).
+    stride: usize,
 }
 
 impl std::fmt::Debug for Synthesis {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Synthesis")
             .field("len", &self.buf.len())
+            .field("stride", &self.stride)
             .finish()
     }
 }

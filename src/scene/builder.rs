@@ -260,7 +260,7 @@ impl SceneBuilder {
 
     /// The validated scene.
     pub fn build(self) -> Result<Scene, SceneError> {
-        check_size(self.n, self.time.steps, self.support)?;
+        check_size(self.n, self.time.steps)?;
         let mut beam = assemble_beam(
             self.n,
             self.length,

@@ -7,8 +7,8 @@
 //! [`crate::catalogue`]. The valid ranges are the constants [`LENGTH_RANGE`], [`MASS_RANGE`],
 //! [`STIFFNESS_RANGE`], [`FORCE_RANGE`], [`GRAVITY_RANGE`], [`DRAG_RANGE`], [`STEP_RANGE`],
 //! [`PERIOD_RANGE`] and
-//! [`MAX_STEP_NUMBER`]; the size limits are [`MAX_PENDULUMS`], [`MAX_STEPS`] and
-//! [`MAX_TRAJECTORY_BYTES`].
+//! [`MAX_STEP_NUMBER`]; the size limits are [`MAX_PENDULUMS`] and [`MAX_STEPS`], and a run that
+//! stores the trajectory checks [`MAX_TRAJECTORY_BYTES`] ([`Scene::check_stored_trajectory`]).
 //!
 //! The rest of this page is the repository's `docs/scene-format.md`; the conventions it refers to
 //! (coordinates, signs, M₀, time grid) are in `docs/conventions.md`, which is also part of the

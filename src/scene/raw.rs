@@ -362,7 +362,7 @@ impl RawScene {
     pub(super) fn into_scene(self, dir: Option<&Path>) -> Result<Scene, SceneError> {
         let n = positive_count("beam.pendulums", self.beam.pendulums)?;
         let steps = positive_count("time.steps", self.time.steps)?;
-        check_size(n, steps, self.beam.support)?;
+        check_size(n, steps)?;
         let b = self.beam;
         let water = self.water.unwrap_or_default();
         let joint_damping = match b.joint_damping {

@@ -10,10 +10,13 @@ pub const MAX_PENDULUMS: usize = 1_000_000;
 /// Largest number of time steps N a scene may have.
 pub const MAX_STEPS: usize = 10_000_000;
 /// Memory budget of a stored trajectory: 8 GiB, a third of a 24 GiB machine (the rest is left
-/// for the operating system, the optimiser's vectors and the output). A scene whose planar `f64`
-/// trajectory ([`trajectory_bytes`]) needs more is rejected by
-/// [`Scene::validate`] naming `time.steps`; [`crate::simulate::simulate_chain`] checks every
-/// scalar type and dimension against the same budget and allocates fallibly.
+/// for the operating system, the optimiser's vectors and the output). It is checked where a
+/// trajectory is stored, not when a scene is read (a streamed run, [`crate::simulate_streaming`],
+/// stores none): a scene whose planar `f64` trajectory ([`trajectory_bytes`]) needs more is
+/// refused by [`Scene::check_stored_trajectory`] naming `time.steps`, which
+/// [`crate::simulate()`] and [`crate::ControlProblem`] call, and
+/// [`crate::simulate::simulate_chain`] checks every scalar type and dimension against the same
+/// budget and allocates fallibly.
 pub const MAX_TRAJECTORY_BYTES: u64 = 8 << 30;
 /// Largest step number h²·k/(m·l²) (springs) and h²·F·l/(m·l²) (loads) a scene may have: the
 /// dimensionless angle one step turns a pendulum through. RATTLE resolves the motion only when
@@ -148,11 +151,12 @@ fn n_constraints(n: usize, support: Support) -> usize {
 impl Scene {
     /// Checks the rules of docs/scene-format.md: counts and nodes, the value ranges
     /// ([`LENGTH_RANGE`], [`MASS_RANGE`], ...), the step numbers ([`MAX_STEP_NUMBER`]) and the size
-    /// limits ([`MAX_PENDULUMS`], [`MAX_STEPS`], [`MAX_TRAJECTORY_BYTES`]). The error names the
-    /// first offending key.
+    /// limits ([`MAX_PENDULUMS`], [`MAX_STEPS`], the wave record's). The error names the first
+    /// offending key. The stored trajectory's budget ([`MAX_TRAJECTORY_BYTES`]) is not a rule of
+    /// the scene but of a run that stores one: [`Scene::check_stored_trajectory`].
     pub fn validate(&self) -> Result<(), SceneError> {
         let n = self.n();
-        check_size(n, self.time.steps, self.beam.support)?;
+        check_size(n, self.time.steps)?;
         let b = &self.beam;
         if b.masses.len() != n {
             return Err(SceneError::count("beam.mass", n, b.masses.len()));
@@ -493,9 +497,10 @@ pub(super) fn node_index(key: &str, node: i64, n: usize) -> Result<usize, SceneE
     }
 }
 
-/// The size limits ([`MAX_PENDULUMS`], [`MAX_STEPS`], [`MAX_TRAJECTORY_BYTES`]), checked before
-/// anything of size n or N is allocated.
-pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(), SceneError> {
+/// The size limits ([`MAX_PENDULUMS`], [`MAX_STEPS`]), checked before anything of size n or N is
+/// allocated. The stored trajectory's budget is [`check_trajectory_budget`]'s, for runs that store
+/// one.
+pub(super) fn check_size(n: usize, steps: usize) -> Result<(), SceneError> {
     if n == 0 {
         return Err(SceneError::invalid(
             "beam.pendulums",
@@ -520,6 +525,17 @@ pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(),
             format!("at most {MAX_STEPS} steps are supported, got {steps}"),
         ));
     }
+    Ok(())
+}
+
+/// The stored trajectory's budget: the planar `f64` trajectory of N = `steps` steps of n
+/// pendulums ([`trajectory_bytes`]) must fit [`MAX_TRAJECTORY_BYTES`], else an error naming
+/// `time.steps`, the bytes, the limit and the largest N that fits.
+pub(super) fn check_trajectory_budget(
+    n: usize,
+    steps: usize,
+    support: Support,
+) -> Result<(), SceneError> {
     let nc = n_constraints(n, support);
     let bytes = trajectory_bytes::<f64, 2>(n, nc, steps);
     if bytes > MAX_TRAJECTORY_BYTES {
@@ -536,6 +552,22 @@ pub(super) fn check_size(n: usize, steps: usize, support: Support) -> Result<(),
         ));
     }
     Ok(())
+}
+
+impl Scene {
+    /// Whether a run that stores this scene's trajectory may: its planar `f64` trajectory
+    /// ([`trajectory_bytes`]: q, p, λ, μ per node and time, (N + 1)(6n + 4)·8 bytes and more)
+    /// fits [`MAX_TRAJECTORY_BYTES`]. [`crate::simulate()`] and its variants and
+    /// [`crate::ControlProblem`] (the adjoint and the optimisers) check it before anything of
+    /// size N is allocated; a streamed run ([`crate::simulate_streaming`],
+    /// [`crate::moment_history`], `chainbeam simulate`) stores no trajectory and does not.
+    ///
+    /// # Errors
+    /// [`SceneErrorKind::InvalidValue`] naming `time.steps`, with the bytes needed, the limit and
+    /// the largest N that fits this beam.
+    pub fn check_stored_trajectory(&self) -> Result<(), SceneError> {
+        check_trajectory_budget(self.n(), self.time.steps, self.beam.support)
+    }
 }
 
 /// Whether the support has a base spring k₁ / a tip spring k_{n+1}.

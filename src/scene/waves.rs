@@ -61,6 +61,11 @@ pub struct Waves {
     pub components: Option<usize>,
     /// How the kinematics are lumped onto the nodes (default [`WaveLumping::Node`]).
     pub lumping: WaveLumping,
+    /// The time step \[s\] of the wave record, a whole multiple r h of `time.step` (`None`: h,
+    /// every step). With r > 1 the model keeps the kinematics and their time derivatives every
+    /// r steps and reads them by cubic Hermite interpolation ([`crate::model::WaveField`]): r/2
+    /// times less memory, an error below (r h)⁴/384 · Σⱼ |Xⱼ| ωⱼ⁴ on a series Re Σⱼ Xⱼ e^{iωⱼ t}.
+    pub record_step: Option<f64>,
 }
 
 impl Waves {
@@ -75,6 +80,42 @@ impl Waves {
             direction: 0.0,
             components: None,
             lumping: WaveLumping::Node,
+            record_step: None,
+        }
+    }
+
+    /// The record's stride r = `record_step`/h for a time step h (1 without `record_step`).
+    ///
+    /// # Errors
+    /// [`SceneErrorKind::InvalidValue`] naming `loads.waves.record_step` unless it is a whole
+    /// multiple r h of h with 1 ≤ r ≤ [`super::MAX_STEPS`] (to 1e-9 relative).
+    pub fn record_stride(&self, step: f64) -> Result<usize, SceneError> {
+        let Some(x) = self.record_step else {
+            return Ok(1);
+        };
+        let r = x / step;
+        let whole = r.round();
+        if (1.0..=super::MAX_STEPS as f64).contains(&whole) && (r - whole).abs() <= 1e-9 * whole {
+            return Ok(whole as usize);
+        }
+        Err(SceneError::invalid(
+            "loads.waves.record_step",
+            format!(
+                "must be a whole multiple r·h of time.step h = {step} s with r in 1..={} (the \
+                 record is read at every step by interpolation between its times), got {x} s \
+                 ({r} steps)",
+                super::MAX_STEPS
+            ),
+        ))
+    }
+
+    /// `record_step` for another time step h: the largest whole multiple of h not above it, at
+    /// least h (unchanged without `record_step`). For scenes derived with a new `time.step` (a
+    /// planning model, a convergence study).
+    pub fn fit_record_step(&mut self, step: f64) {
+        if let Some(x) = self.record_step {
+            let r = (x / step * (1.0 + 1e-9)).floor().max(1.0);
+            self.record_step = Some(r * step);
         }
     }
 
@@ -136,17 +177,26 @@ impl Waves {
         let t = scene.time;
         let sea = Sea::new(&spec, t.step, t.steps as f64 * t.step)
             .map_err(|e| sea_error(e, self.components))?;
-        // The record: two series per pendulum and the elevation, steps + 1 rows.
-        let rows = t.steps as u64 + 1;
-        let bytes = rows
-            .saturating_mul(2 * scene.n() as u64 + 1)
-            .saturating_mul(8);
+        let every = self.record_stride(t.step)?;
+        // The record: two series per pendulum and the elevation, steps + 1 rows; with a record
+        // step r h > h, each with its derivative, ⌈steps/r⌉ + 1 rows.
+        let (rows, width) = if every == 1 {
+            (t.steps as u64 + 1, 2 * scene.n() as u64 + 1)
+        } else {
+            (t.steps.div_ceil(every) as u64 + 1, 4 * scene.n() as u64 + 2)
+        };
+        let bytes = rows.saturating_mul(width).saturating_mul(8);
         if bytes > crate::ocean::waves::MAX_RECORD_BYTES {
+            let hint = if self.record_step.is_some() {
+                "; use fewer steps or pendulums, or a longer `loads.waves.record_step`"
+            } else {
+                "; use fewer steps or pendulums, or a `loads.waves.record_step` of several steps"
+            };
             return Err(SceneError::invalid(
                 "time.steps",
                 format!(
                     "the wave record of {rows} times × {} pendulums needs {bytes} bytes, over \
-                     the limit of {}; use fewer steps or pendulums",
+                     the limit of {}{hint}",
                     scene.n(),
                     crate::ocean::waves::MAX_RECORD_BYTES
                 ),
@@ -204,6 +254,8 @@ pub(super) struct RawWaves {
     components: Option<i64>,
     #[serde(default, skip_serializing_if = "is_node")]
     lumping: WaveLumping,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    record_step: Option<f64>,
 }
 
 fn is_node(l: &WaveLumping) -> bool {
@@ -225,6 +277,7 @@ impl RawWaves {
             direction: w.direction,
             components: w.components.map(|c| i64::try_from(c).unwrap_or(i64::MAX)),
             lumping: w.lumping,
+            record_step: w.record_step,
         }
     }
 
@@ -261,6 +314,7 @@ impl RawWaves {
             direction: self.direction,
             components,
             lumping: self.lumping,
+            record_step: self.record_step,
         })
     }
 }

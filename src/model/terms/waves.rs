@@ -21,6 +21,18 @@
 //! record instead of O(n N) cosines per step. Between grid times the series are interpolated
 //! linearly (RATTLE's drag reads them at t_k + h/2); beyond the record they are summed directly
 //! (O(N) per pendulum and time).
+//!
+//! **A coarser record** (`[loads.waves] record_step` = r h, r > 1; [`WaveInputs::every`]): the
+//! record keeps the times t_j = j r h only, with each series' time derivative (Ẇᵢ = Re Σ iωⱼ Xⱼ
+//! e^{iωⱼ t}, the same for Gᵢ and η: two transforms per pendulum, of length M/r when r divides
+//! M, [`crate::ocean::Sea::synthesis_every`]), and is read at any t by the cubic Hermite
+//! interpolant of the values and derivatives at the two record times around it,
+//! p(x) = y₀ + x d₀ + x² (3Δ − 2d₀ − d₁) + x³ (d₀ + d₁ − 2Δ) with x = (t − t_j)/(r h),
+//! Δ = y₁ − y₀, d = r h ẏ: error at most (r h)⁴/384 · max |y⁗| ≤ (r h)⁴/384 · Σⱼ |Xⱼ| ωⱼ⁴ for
+//! y = Re Σⱼ Xⱼ e^{iωⱼ t}. The memory is 4n + 2 values per record time instead of 2n + 1 per step,
+//! (r/2 less), and the reads stay allocation-free. The series are known functions of time that
+//! enter the derivatives as constants, so the adjoint and dual numbers differentiate the model as
+//! interpolated, exactly.
 
 use std::sync::Arc;
 
@@ -41,8 +53,13 @@ pub struct WaveInputs {
     pub inertia_per_length: f64,
     /// Unit direction (d_x, d_z) of the waves in the transverse plane.
     pub direction: [f64; 2],
-    /// Number of grid times tₖ = k h, k = 0..rows, of the record (steps + 1).
+    /// Number of record times t_j = j r h, j = 0..rows (steps + 1 when r = 1; ⌈steps/r⌉ + 1
+    /// covers t_N when r > 1).
     pub rows: usize,
+    /// r: the record keeps every r-th time of the sea's grid (`[loads.waves] record_step` =
+    /// r h); 1: every step, read by linear interpolation between steps (the default); r > 1:
+    /// values and time derivatives, read by cubic Hermite interpolation (module docs).
+    pub every: usize,
     /// The velocity of node k averaged over its cell [y_k − l_k/2, y_k + l_{k+1}/2]
     /// ([`crate::ocean::Sea::cell_velocity_amplitudes`]) instead of taken at y_k
     /// (`[loads.waves] lumping = "cell"`).
@@ -56,12 +73,16 @@ pub struct WaveField {
     sea: Arc<Sea>,
     inputs: WaveInputs,
     n: usize,
+    /// The record's time step r h.
     h: f64,
-    /// Number of grid times of the record.
+    /// Number of record times.
     rows: usize,
+    /// r of [`WaveInputs::every`].
+    every: usize,
     /// rows × n pairs (Wᵢ(tₖ), Gᵢ(tₖ)), time-major: the two series a step reads for a
-    /// pendulum share a cache line.
+    /// pendulum share a cache line; for r > 1, rows × n quadruples (Wᵢ, Ẇᵢ, Gᵢ, Ġᵢ).
     series: Vec<f64>,
+    /// η(0, tₖ); for r > 1, pairs (η, η̇).
     elevation: Vec<f64>,
     /// n × N amplitudes of Wᵢ and Gᵢ.
     momentum_amp: Vec<Complex<f64>>,
@@ -120,17 +141,24 @@ impl WaveField {
             x.resize(size, 0.0);
             Ok(x)
         };
+        let every = inputs.every.max(1);
+        let width = if every == 1 { 2 } else { 4 };
         let mut field = WaveField {
             n,
-            h: sea.step(),
+            h: sea.step() * every as f64,
             rows,
-            series: alloc(rows * n * 2)?,
-            elevation: alloc(rows)?,
+            every,
+            series: alloc(rows * n * width)?,
+            elevation: alloc(rows * width / 2)?,
             momentum_amp,
             inertia_amp,
             inputs,
             sea,
         };
+        if every > 1 {
+            field.fill_hermite_record();
+            return Ok(field);
+        }
         let mut plan = field.sea.synthesis();
         // The pendulums in blocks of BLOCK: each one's series into a pendulum-major scratch,
         // then the block into the time-major record, BLOCK pairs (one cache line) per row
@@ -171,6 +199,45 @@ impl WaveField {
         Ok(field)
     }
 
+    /// The record of r > 1 (module docs): (Wᵢ, Ẇᵢ, Gᵢ, Ġᵢ) and (η, η̇) at t_j = j r h, each
+    /// series with its derivative in one transform of [`Sea::synthesis_every`].
+    fn fill_hermite_record(&mut self) {
+        let (n, rows) = (self.n, self.rows);
+        let nc = self.sea.frequencies().len();
+        let sea = self.sea.clone();
+        let omega = sea.frequencies();
+        let mut plan = sea.synthesis_every(self.every);
+        let mut rate = vec![Complex::new(0.0, 0.0); nc];
+        let derivative = |a: &[Complex<f64>], out: &mut [Complex<f64>]| {
+            for ((o, x), &w) in out.iter_mut().zip(a).zip(omega) {
+                *o = Complex::new(0.0, w) * x;
+            }
+        };
+        for i in 0..n {
+            for (amp, offset) in [(&self.momentum_amp, 0), (&self.inertia_amp, 2)] {
+                let a = &amp[i * nc..(i + 1) * nc];
+                derivative(a, &mut rate);
+                let table = &mut self.series;
+                sea.synthesize((a, &rate), rows, &mut plan, |k, x, dx| {
+                    let at = (k * n + i) * 4 + offset;
+                    table[at] = x;
+                    table[at + 1] = dx;
+                });
+            }
+        }
+        derivative(sea.elevation_amplitudes(), &mut rate);
+        let el = &mut self.elevation;
+        sea.synthesize(
+            (sea.elevation_amplitudes(), &rate),
+            rows,
+            &mut plan,
+            |k, x, dx| {
+                el[2 * k] = x;
+                el[2 * k + 1] = dx;
+            },
+        );
+    }
+
     /// The same field for new node masses (the water momentum's weights): recomputed.
     ///
     /// # Errors
@@ -207,6 +274,9 @@ impl WaveField {
         (amp, i): (&[Complex<f64>], usize),
         t: f64,
     ) -> f64 {
+        if self.every > 1 {
+            return self.hermite(table, (stride, offset), (amp, i), t);
+        }
         let rows = self.rows;
         let s = t / self.h;
         if s >= 0.0 {
@@ -228,11 +298,61 @@ impl WaveField {
         self.sea.sum_at(&amp[i * nc..(i + 1) * nc], t)
     }
 
+    /// The series of a record of r > 1 at time t (the value at `offset`, its derivative at
+    /// `offset + 1`): the cubic Hermite interpolant between the record times around t (module
+    /// docs), the record's value at its last time, the direct sum beyond.
+    #[inline]
+    fn hermite(
+        &self,
+        table: &[f64],
+        (stride, offset): (usize, usize),
+        (amp, i): (&[Complex<f64>], usize),
+        t: f64,
+    ) -> f64 {
+        let s = t / self.h;
+        if s >= 0.0 {
+            let j0 = s.floor();
+            let x = s - j0;
+            let j = j0 as usize;
+            if j + 1 < self.rows {
+                let (a, b) = (j * stride + offset, (j + 1) * stride + offset);
+                let (y0, d0) = (table[a], table[a + 1] * self.h);
+                let (y1, d1) = (table[b], table[b + 1] * self.h);
+                let dy = y1 - y0;
+                let c2 = 3.0 * dy - 2.0 * d0 - d1;
+                let c3 = d0 + d1 - 2.0 * dy;
+                return y0 + x * (d0 + x * (c2 + x * c3));
+            }
+            if x <= 1e-9 && j < self.rows {
+                return table[j * stride + offset];
+            }
+        }
+        let nc = self.sea.frequencies().len();
+        self.sea.sum_at(&amp[i * nc..(i + 1) * nc], t)
+    }
+
+    /// Values per record time and pendulum: 2 (W, G), or 4 (W, Ẇ, G, Ġ) for r > 1.
+    #[inline]
+    fn width(&self) -> usize {
+        if self.every > 1 {
+            4
+        } else {
+            2
+        }
+    }
+
+    /// The record's time step r h \[s\] (`[loads.waves] record_step`; the plant's step h when
+    /// r = 1).
+    pub fn record_step(&self) -> f64 {
+        self.h
+    }
+
     /// Wᵢ(t) = lᵢ Σ_{k≥i} m_k u_k(t) \[kg m/s · m\]: the waves' share of pendulum i's water
     /// momentum along the mean direction (module docs).
     #[inline]
     pub fn momentum(&self, i: usize, t: f64) -> f64 {
-        let at = (2 * self.n, 2 * i);
+        let w = self.width();
+        let at = (w * self.n, w * i);
         self.sample(&self.series, at, (&self.momentum_amp, i), t)
     }
 
@@ -240,14 +360,28 @@ impl WaveField {
     /// force on pendulum i along the mean direction (module docs).
     #[inline]
     pub fn inertia(&self, i: usize, t: f64) -> f64 {
-        let at = (2 * self.n, 2 * i + 1);
+        let w = self.width();
+        let at = (w * self.n, w * i + w / 2);
         self.sample(&self.series, at, (&self.inertia_amp, i), t)
+    }
+
+    /// The complex amplitudes of Wᵢ (`inertia = false`) or Gᵢ (`true`), one per component:
+    /// the series is Re Σⱼ Xⱼ e^{iωⱼ t} (module docs).
+    pub fn amplitudes(&self, i: usize, inertia: bool) -> &[Complex<f64>] {
+        let nc = self.sea.frequencies().len();
+        let amp = if inertia {
+            &self.inertia_amp
+        } else {
+            &self.momentum_amp
+        };
+        &amp[i * nc..(i + 1) * nc]
     }
 
     /// The surface elevation η(0, t) \[m\] at x = z = 0.
     pub fn elevation(&self, t: f64) -> f64 {
         let amp = self.sea.elevation_amplitudes();
-        self.sample(&self.elevation, (1, 0), (amp, 0), t)
+        let w = self.width() / 2;
+        self.sample(&self.elevation, (w, 0), (amp, 0), t)
     }
 }
 

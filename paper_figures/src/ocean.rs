@@ -10,7 +10,7 @@
 
 use crate::plot::{color, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
-use chainbeam::optimize::{minimize, OptimOptions};
+use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::scene::Current;
 use chainbeam::{
     catalogue, simulate, simulate_with_controls_xz, BendingObjective, ControlProblem, Harmonic,
@@ -143,7 +143,9 @@ fn riser_current_wave_control(ctx: &Ctx) -> Res<Made> {
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces });
     let obj = BendingObjective::summed_moment().with_effort(1e-3);
     let problem = ControlProblem::spatial(&scene, map, obj, true)?;
+    // L-BFGS, as the note says (the library's default is `Method::Auto`)
     let opts = OptimOptions {
+        method: Method::Lbfgs,
         max_iters: if ctx.quick { 30 } else { 500 },
         ..OptimOptions::default()
     };

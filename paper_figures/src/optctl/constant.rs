@@ -9,7 +9,7 @@ use super::{
 use crate::plot::{color, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Made};
 use chainbeam::multistart::{axis, landscape_1d, multistart, StartDesign};
-use chainbeam::optimize::OptimOptions;
+use chainbeam::optimize::{Method, OptimOptions};
 use chainbeam::{BendingObjective, ControlProblem, Parametrisation};
 
 /// Which objective a figure shows: its symbol, axis label and thesis optimum.
@@ -83,8 +83,10 @@ struct Runs {
 impl Runs {
     fn solve(p: &ControlProblem, starts: usize) -> Res<Self> {
         // the default relative gradient tolerance (1e-8 ‖g₀‖) stops starts at |u| ~ 300, where
-        // ‖g₀‖ is large, at |u − u*| ~ 1e-6: ask for round-off instead
+        // ‖g₀‖ is large, at |u − u*| ~ 1e-6: ask for round-off instead. L-BFGS, as the figure
+        // says (the library's default is `Method::Auto`)
         let opts = OptimOptions {
+            method: Method::Lbfgs,
             rel_grad_tol: 1e-15,
             ..Default::default()
         };

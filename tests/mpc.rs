@@ -285,6 +285,63 @@ fn bounds_hold(r: &ClosedLoopResult, bound: f64) {
 }
 
 #[test]
+fn a_warm_start_whose_box_caps_the_projected_gradient_is_not_taken_as_a_plan() {
+    // The solver stops at ‖θ − Π(θ − ∇J)‖ ≤ 10⁻⁸‖∇J(θ₀)‖ (OcpOptions::rel_grad_tol); the
+    // projection caps the left side at the box's width, the right side is not capped. With
+    // |u| ≤ 10⁻⁹ N the test passes at θ = 0 before any iteration, and MPC used to apply u = 0
+    // throughout, reporting convergence (on riser_300m planned at n_p = n = 80 with 200 kN the
+    // same happened at the real bound: src/mpc/receding.rs, `capped_convergence`).
+    //
+    // Reference: within so small a box J is linear in θ to first order,
+    // J(θ) = J(0) + ∇J(0)·θ, so the plan is θᵢ = −u_max·sign(∂J/∂θᵢ(0)) on every piece whose
+    // gradient is not zero; the gradient by the adjoint of the first plan's problem (the
+    // horizon of 0.5 s from the beam at rest, one piece per interval), an independent method
+    // from the condensed solver's forward sensitivities and the Riccati solver's stage
+    // Jacobians.
+    let s = scene(100);
+    let bound = 1e-9;
+    let mut first = s.clone();
+    first.time.steps = 50;
+    let map = PiecewiseControl {
+        steps: 50,
+        pieces: 5,
+    };
+    let objective = BendingObjective::summed_moment().with_effort(EFFORT);
+    let g = ControlProblem::new(&first, map, objective)
+        .unwrap()
+        .gradient(&[0.0; 5])
+        .unwrap();
+    assert!(g[0].abs() > 0.0);
+    let opts = OcpOptions::default().with_bound(bound);
+    let direct = ocp::solve(
+        &ControlProblem::new(&first, map, objective).unwrap(),
+        &[0.0; 5],
+        &opts,
+    )
+    .unwrap();
+    println!(
+        "the solver alone: {} after {} iterations, theta {:?} (|grad J| {:.3e})",
+        direct.termination, direct.iterations, direct.theta, direct.initial_gradient_norm
+    );
+    for solver in SOLVERS {
+        let o = MpcOptions {
+            solver,
+            ..options(Horizon::Seconds(0.5), bound, 1)
+        };
+        let mut mpc = Mpc::new(&s, INTERVAL, o).unwrap();
+        let r = run_closed_loop(&s, INTERVAL, &mut mpc).unwrap();
+        let u0 = r.decisions[0].control;
+        assert!(
+            (u0 + bound * g[0].signum()).abs() <= 1e-6 * bound,
+            "{solver:?}: u_0 = {u0:e}, dJ/dtheta_0 = {:e}",
+            g[0]
+        );
+        assert!(r.decisions[0].iterations.unwrap() >= 1, "{solver:?}");
+        bounds_hold(&r, bound);
+    }
+}
+
+#[test]
 fn baselines_improve_on_no_control() {
     // u = 0 is feasible for both problems, so their optima cannot be worse than no control.
     let s = scene(100);

@@ -145,6 +145,10 @@ pub struct Mpc<const DIM: usize = 2> {
     /// The model's chain with its loads realised over the whole run and one horizon beyond
     /// (built at the first decision, [`Mpc::record_chain`]).
     record: Option<Chain<f64, DIM>>,
+    /// Whether only the iteration budget stops a re-plan (`rel_grad_tol` = 0), set once the
+    /// solver's relative test stopped a plan at a capped projected gradient
+    /// ([`capped_convergence`]).
+    budget_only: bool,
 }
 
 impl Mpc {
@@ -231,6 +235,7 @@ impl<const DIM: usize> Mpc<DIM> {
             decisions: 0,
             planning,
             record: None,
+            budget_only: false,
         })
     }
 
@@ -416,10 +421,16 @@ impl<const DIM: usize> Mpc<DIM> {
         // Real-time iteration: the step is all a decision needs (OcpOptions::final_gradient).
         opts.final_gradient = false;
         let n = obs.state.q.len();
+        if self.budget_only {
+            opts.rel_grad_tol = 0.0;
+        }
         let mut r = self.solve(pieces, &problem, &opts, n)?;
         if capped_convergence(&r, &opts) {
-            // Only the iteration budget stops the re-plan (`capped_convergence`).
+            // From now on only the iteration budget stops a re-plan (`capped_convergence`); the
+            // kept condensed solver holds its options, so it is rebuilt with these.
+            self.budget_only = true;
             opts.rel_grad_tol = 0.0;
+            self.condensed = None;
             r = self.solve(pieces, &problem, &opts, n)?;
         }
         self.plan.clone_from(&r.theta);
@@ -465,7 +476,9 @@ const CAPPED_STEP: f64 = 1e-6;
 /// convergence. Measured on examples/scenes/riser_300m.toml planned at n_p = n = 80 with
 /// |u| ≤ 200 kN: every decision "converged" after 0 iterations with ‖θ − Π(θ − ∇J)‖ =
 /// √20 · 2·10⁵ N, u = 0 for 120 s (README, "Headline"). A warm start that is a solution has
-/// that step at zero on its active bounds and at most `rel_grad_tol`·‖∇J‖ elsewhere.
+/// that step at zero on its active bounds and at most `rel_grad_tol`·‖∇J‖ elsewhere (should that
+/// exceed the share, the guard costs the budget's iterations from a solution, no more). Once it
+/// fires, the controller's re-plans stop on their budget alone (`rel_grad_tol` = 0).
 fn capped_convergence(r: &OcpResult, opts: &OcpOptions) -> bool {
     let width = opts.upper - opts.lower;
     r.iterations == 0

@@ -1,9 +1,10 @@
 //! The stored-trajectory budget (`MAX_TRAJECTORY_BYTES`, 8 GiB) is checked where a trajectory is
 //! stored, not when a scene is read: a scene whose trajectory is over the budget is valid, a
-//! streamed run of it (the library's `simulate_streaming`, `chainbeam simulate`, which always
-//! streams its rows) starts and writes its rows, and every run that stores one (`simulate`,
+//! streamed run of it (the library's `simulate_streaming`, `chainbeam simulate --columns`)
+//! starts and writes its rows, and every run that stores one or writes it whole (`simulate`,
 //! `simulate_with_controls`, the adjoint and the optimisers through `ControlProblem`,
-//! `chainbeam gradient`) is refused at once with the message the scene check gave before:
+//! `chainbeam gradient`, `chainbeam simulate` without `--columns`) is refused at once with the
+//! message the scene check gave before:
 //! typed (`Error::Scene` with the key `time.steps`), the bytes needed, the limit and the largest N
 //! that fits.
 //!
@@ -114,46 +115,43 @@ fn a_scene_over_the_trajectory_budget_streams_and_is_refused_where_it_is_stored(
     );
 }
 
-/// The command line: `simulate` streams its rows (with `--columns` and without), so the scene is
-/// accepted and its rows come out; `gradient` (the adjoint, which keeps per-step quantities) is
-/// refused with the budget's message naming the file and `time.steps`.
+/// The command line: `simulate --columns` streams its rows, so the scene is accepted and its rows
+/// come out; `simulate` without `--columns` writes the whole trajectory and `gradient` (the
+/// adjoint) keeps per-step quantities: both are refused with the budget's message naming the
+/// file and `time.steps`.
 #[test]
-fn the_command_line_streams_it_and_refuses_the_adjoint() {
+fn the_command_line_streams_chosen_columns_and_refuses_the_whole_trajectory() {
     let dir = Dir::new();
     let path = dir.write("long.toml", &scene_text());
-    for columns in [Some("t,moment"), None] {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_chainbeam"));
-        cmd.arg("simulate").arg(&path);
-        if let Some(c) = columns {
-            cmd.args(["--columns", c]);
-        }
-        let mut child = cmd
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
-        let header = lines.next().expect("a header").unwrap();
-        let rows: Vec<String> = lines.by_ref().take(50).map(|l| l.unwrap()).collect();
-        // Closing the pipe stops the run (`| head`: exit status 0, nothing on stderr).
-        drop(lines);
-        let out = child.wait_with_output().unwrap();
-        let err = String::from_utf8(out.stderr).unwrap();
-        assert!(out.status.success(), "{columns:?}: {:?} {err}", out.status);
-        assert!(!err.contains("time.steps"), "{columns:?}: {err}");
-        match columns {
-            Some(c) => assert_eq!(header, c),
-            None => assert!(header.starts_with("t,energy,moment,x1,y1,z1"), "{header}"),
-        }
-        assert_eq!(rows.len(), 50, "{columns:?}");
-        // Rows k = 0..49 in order: t_k = k h, written as the shortest decimal of the double.
-        for (k, row) in rows.iter().enumerate() {
-            let t: f64 = row.split(',').next().unwrap().parse().unwrap();
-            assert_eq!(t, k as f64 * 0.01, "{columns:?}: row {k}");
-        }
+    let mut child = Command::new(env!("CARGO_BIN_EXE_chainbeam"))
+        .arg("simulate")
+        .arg(&path)
+        .args(["--columns", "t,moment"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stdout.take().unwrap()).lines();
+    let header = lines.next().expect("a header").unwrap();
+    let rows: Vec<String> = lines.by_ref().take(50).map(|l| l.unwrap()).collect();
+    // Closing the pipe stops the run (`| head`: exit status 0, nothing on stderr).
+    drop(lines);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(out.status.success(), "{:?} {err}", out.status);
+    assert!(!err.contains("time.steps"), "{err}");
+    assert_eq!(header, "t,moment");
+    assert_eq!(rows.len(), 50);
+    // Rows k = 0..49 in order: t_k = k h, written as the shortest decimal of the double.
+    for (k, row) in rows.iter().enumerate() {
+        let t: f64 = row.split(',').next().unwrap().parse().unwrap();
+        assert_eq!(t, k as f64 * 0.01, "row {k}");
     }
-    let o = run(&["gradient".as_ref(), path.as_os_str()]);
     let mut needles = vec!["long.toml"];
     needles.extend(MESSAGE);
-    assert_one_line(&o, 1, &needles);
+    for sub in ["simulate", "gradient"] {
+        let o = run(&[sub.as_ref(), path.as_os_str()]);
+        assert_one_line(&o, 1, &needles);
+        assert!(o.stdout.is_empty(), "{sub}: nothing written");
+    }
 }

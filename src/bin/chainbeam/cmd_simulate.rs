@@ -37,7 +37,9 @@ A spatial scene (a load or a 2-axis control with an x component) has two more co
   control  the control force u_k [N] applied at t_k (0 without a control; its z component for a
            2-axis control); always the last column
 --columns t,eta,moment writes those columns only, in that order (any of the above names);
---every K writes the rows k = 0, K, 2K, … only (both for CSV and .npy).
+--every K writes the rows k = 0, K, 2K, … only (both for CSV and .npy). Without --columns the \
+output is the whole trajectory and a scene whose stored trajectory is over the 8 GiB budget is \
+refused (naming time.steps); with --columns the rows stream whatever N.
 Numbers are written as the shortest decimal that reads back to the same double.
 
 NumPy (--format npy, or an --output name ending in .npy): one C-ordered float64 array of shape \
@@ -108,6 +110,13 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
     }
     let mut inputs = Inputs::new();
     let scene = inputs.load_scene(&a.scene)?;
+    if a.columns.is_none() {
+        // Every column is the whole trajectory (each node at each step), as large as a stored
+        // one: held to its budget. Chosen columns stream a run of any length.
+        scene
+            .check_stored_trajectory()
+            .map_err(|e| lib_error(&a.scene, e.into()))?;
+    }
     let eta = scene
         .wave_elevation()
         .map_err(|e| lib_error(&a.scene, e.into()))?;

@@ -129,7 +129,10 @@ impl<const DIM: usize> Solver<DIM> {
     /// gradient, per control. With `with_active`, a control of the ε-active set gets its fixed
     /// step.
     fn stage_input(&self, k: usize, with_active: bool) -> StageInput<'static> {
-        let (hz, qp, m) = (&self.horizon, &self.qp, self.ncu);
+        // A planar control is along z alone (a 2-axis control is spatial, `StageModel::with_axes`):
+        // m = 1 as a constant lets the planar instance drop the loop over the axes below.
+        let m = if DIM == 2 { 1 } else { self.ncu };
+        let (hz, qp) = (&self.horizon, &self.qp);
         let nom = &hz.nominal;
         let (r, d) = nom.residual_model(k, hz.model.moment_scale);
         let dz = &qp.dz[k * self.nz..];

@@ -131,16 +131,6 @@ impl WaveField {
             }
         }
         let rows = inputs.rows;
-        let alloc = |size: usize| -> std::result::Result<Vec<f64>, SeaError> {
-            let mut x = Vec::new();
-            x.try_reserve_exact(size).map_err(|_| SeaError::TooLarge {
-                what: "bytes",
-                needed: (size as u64).saturating_mul(8),
-                limit: crate::ocean::waves::MAX_RECORD_BYTES,
-            })?;
-            x.resize(size, 0.0);
-            Ok(x)
-        };
         let every = inputs.every.max(1);
         let width = if every == 1 { 2 } else { 4 };
         let mut field = WaveField {
@@ -148,8 +138,8 @@ impl WaveField {
             h: sea.step() * every as f64,
             rows,
             every,
-            series: alloc(rows * n * width)?,
-            elevation: alloc(rows * width / 2)?,
+            series: alloc_record(rows * n * width)?,
+            elevation: alloc_record(rows * width / 2)?,
             momentum_amp,
             inertia_amp,
             inputs,
@@ -159,44 +149,51 @@ impl WaveField {
             field.fill_hermite_record();
             return Ok(field);
         }
-        let mut plan = field.sea.synthesis();
+        field.fill_step_record()?;
+        Ok(field)
+    }
+
+    /// The record of r = 1 (module docs): (Wᵢ, Gᵢ) and η at every step tₖ = k h.
+    fn fill_step_record(&mut self) -> std::result::Result<(), SeaError> {
+        let (n, rows, nc) = (self.n, self.rows, self.sea.frequencies().len());
+        let mut plan = self.sea.synthesis();
         // The pendulums in blocks of BLOCK: each one's series into a pendulum-major scratch,
         // then the block into the time-major record, BLOCK pairs (one cache line) per row
         // instead of one scattered write per pendulum and row (the same values).
         const BLOCK: usize = 4;
-        let mut scratch = alloc(rows * 2 * BLOCK.min(n))?;
+        let mut scratch = alloc_record(rows * 2 * BLOCK.min(n))?;
         for i0 in (0..n).step_by(BLOCK) {
             let width = BLOCK.min(n - i0);
             for j in 0..width {
                 let i = i0 + j;
                 let (a, b) = (
-                    &field.momentum_amp[i * nc..(i + 1) * nc],
-                    &field.inertia_amp[i * nc..(i + 1) * nc],
+                    &self.momentum_amp[i * nc..(i + 1) * nc],
+                    &self.inertia_amp[i * nc..(i + 1) * nc],
                 );
                 let out = &mut scratch[j * rows * 2..(j + 1) * rows * 2];
-                field.sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
+                self.sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
                     out[2 * k] = x;
                     out[2 * k + 1] = y;
                 });
             }
             for k in 0..rows {
-                let row = &mut field.series[(k * n + i0) * 2..(k * n + i0 + width) * 2];
+                let row = &mut self.series[(k * n + i0) * 2..(k * n + i0 + width) * 2];
                 for (j, pair) in row.chunks_exact_mut(2).enumerate() {
                     pair.copy_from_slice(&scratch[(j * rows + k) * 2..(j * rows + k) * 2 + 2]);
                 }
             }
         }
         drop(scratch);
-        let el = &mut field.elevation;
-        field.sea.synthesize(
-            (field.sea.elevation_amplitudes(), &[]),
+        let el = &mut self.elevation;
+        self.sea.synthesize(
+            (self.sea.elevation_amplitudes(), &[]),
             rows,
             &mut plan,
             |k, x, _| {
                 el[k] = x;
             },
         );
-        Ok(field)
+        Ok(())
     }
 
     /// The record of r > 1 (module docs): (Wᵢ, Ẇᵢ, Gᵢ, Ġᵢ) and (η, η̇) at t_j = j r h, each
@@ -463,4 +460,17 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
     fn has_parameter(&self, _p: Parameter) -> bool {
         false
     }
+}
+
+/// A zeroed record buffer of `size` values, refused with [`SeaError::TooLarge`] when the memory
+/// cannot be reserved.
+fn alloc_record(size: usize) -> std::result::Result<Vec<f64>, SeaError> {
+    let mut x = Vec::new();
+    x.try_reserve_exact(size).map_err(|_| SeaError::TooLarge {
+        what: "bytes",
+        needed: (size as u64).saturating_mul(8),
+        limit: crate::ocean::waves::MAX_RECORD_BYTES,
+    })?;
+    x.resize(size, 0.0);
+    Ok(x)
 }

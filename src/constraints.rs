@@ -142,14 +142,10 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
                 None => q[i],
             }
         };
-        for i in 0..n {
-            let (dii, off) = ch.minv_entries(i);
-            let wqi = wq(i);
-            tri.diag[i] = dot(&qnew[i], &wqi) * dii * s;
-            if i + 1 < n {
-                tri.upper[i] = dot(&qnew[i], &wq(i + 1)) * off * s;
-                tri.lower[i + 1] = dot(&qnew[i + 1], &wqi) * off * s;
-            }
+        // The band, its loop written once per case of W (the check out of the loop).
+        match w {
+            Some(w) => self.newton_band(qnew, |i| w[i].apply(&q[i]), s, tri),
+            None => self.newton_band(qnew, |i| q[i], s, tri),
         }
         if !self.bordered() {
             return;
@@ -169,6 +165,29 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
         let wqn = wq(n - 1);
         tri.row[n - 1] = wqn[z] * inv_mn * ch.inv_lengths[n - 1] * s;
         tri.corner = wz(n - 1) * inv_mn * s;
+    }
+
+    /// The tridiagonal band of [`ConstraintOperator::assemble_newton`]: J_{ij} = s M̄⁻¹_{ij}
+    /// q′ᵢ·(W_j q_j) for |i − j| ≤ 1, with (W q)_j = `wq`(j).
+    #[inline]
+    fn newton_band(
+        &self,
+        qnew: &[[D; DIM]],
+        wq: impl Fn(usize) -> [D; DIM],
+        s: f64,
+        tri: &mut BorderedTridiag<D>,
+    ) {
+        let ch = self.ch;
+        let n = ch.n();
+        for i in 0..n {
+            let (dii, off) = ch.minv_entries(i);
+            let wqi = wq(i);
+            tri.diag[i] = dot(&qnew[i], &wqi) * dii * s;
+            if i + 1 < n {
+                tri.upper[i] = dot(&qnew[i], &wq(i + 1)) * off * s;
+                tri.lower[i + 1] = dot(&qnew[i + 1], &wqi) * off * s;
+            }
+        }
     }
 
     /// col_i = s q′_{i,c} (M̄⁻¹(l ⊙ ω))ᵢ with ω_j = `weight`(j) (component c of q′).

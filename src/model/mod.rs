@@ -23,7 +23,7 @@ pub(crate) use geometry::{dot, e2};
 pub use terms::{
     AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
     CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
-    ForceTerm, Gravity, HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip,
+    ForceTerm, Gravity, HalfKick, HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip,
     ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
 };
 

@@ -48,7 +48,7 @@ use super::{refuse_reaction_tip, singular, Stepper};
 use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{e2, BlockSym, Chain, Ctx};
+use crate::model::{e2, BlockSym, Chain, Ctx, HalfKick};
 use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
@@ -553,17 +553,13 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let t1 = self.t0 + (k + 1) as f64 * h;
         ch.potential_gradient(&state.q, t1, u_k1, k + 1, &mut ws.force)?;
         let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
-        for i in 0..ch.n() {
-            let ph = &ws.half.phalf[i];
-            let f = ch.dissipative_force(i, ph, &dctx);
-            for d in 0..DIM {
-                let mut b = ph[d] - ws.force[i][d] * hh;
-                if let Some(f) = &f {
-                    b += f[d] * hh;
-                }
-                ws.a[i][d] = b;
-            }
-        }
+        // b = p_{k+½} − h/2 U_q(q_{k+1}; u_{k+1}) + h/2 Σ_T F_T(p_{k+½})
+        let kick = HalfKick {
+            p: &ws.half.phalf,
+            g: &ws.force,
+            s: hh,
+        };
+        ch.dissipative_half_kick(kick, &dctx, &mut ws.a);
         if let Some(cpl) = ws.coupled.as_mut().filter(|_| COUPLED) {
             // The coupled terms at (q_{k+1}, p_{k+½}) (steppers::coupled).
             let f = cpl.coupled_force(ch, &state.q, &ws.half.phalf, &dctx);
@@ -670,12 +666,7 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
     match ch.dissipation_count() {
         0 => out.phalf.copy_from_slice(&out.c),
-        terms => {
-            let pw = out.phalf.iter_mut().zip(&mut out.w);
-            for (i, (c, (p, w))) in out.c.iter().zip(pw).enumerate() {
-                (*p, *w) = ch.dissipative_half_step(terms, i, c, h, ctx);
-            }
-        }
+        _ => ch.dissipative_half_steps(&out.c, h, ctx, &mut out.phalf, &mut out.w),
     }
 }
 

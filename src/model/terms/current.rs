@@ -32,7 +32,7 @@ use std::sync::Arc;
 
 use super::drag::{morison, root_of, slope_of, DragWeights};
 use super::waves::WaveField;
-use super::{BlockSym, Ctx, DissipativeTerm, Embed};
+use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
 use crate::scene::{current_velocity, Current};
@@ -219,11 +219,8 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
 
     #[inline]
     fn force<E: Embed<D>>(&self, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
-        let r: [E; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, ctx));
-        morison(
-            self.weights.apply(i, ctx.param(Parameter::Drag, self.d)),
-            &r,
-        )
+        let drag = self.weights.apply(i, ctx.param(Parameter::Drag, self.d));
+        self.force_with(drag, i, p, ctx)
     }
 
     fn has_parameter(&self, p: Parameter) -> bool {
@@ -260,8 +257,94 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
         ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         let big: [D; DIM] = std::array::from_fn(|d| self.momentum(i, d, ctx));
-        let shifted: [D; DIM] = std::array::from_fn(|d| c[d] - big[d]);
-        let (r, w) = root_of(self.weights.apply(i, self.d), &shifted, h);
-        (std::array::from_fn(|d| r[d] + big[d]), w)
+        shifted_root(self.weights.apply(i, self.d), c, &big, h)
+    }
+
+    /// [`CurrentDrag::implicit_half_step`] on every block, Dᵢ by `DragWeights::each` and Pᵢ by
+    /// `CurrentDrag::block_momentum` (the same arithmetic per block).
+    #[inline]
+    fn implicit_half_steps(
+        &self,
+        c: &[[D; DIM]],
+        h: f64,
+        ctx: &Ctx<D>,
+        p: &mut [[D; DIM]],
+        w: &mut [BlockSym<D, DIM>],
+    ) {
+        let n = c.len();
+        let (p, w) = (&mut p[..n], &mut w[..n]);
+        let plain = self.is_plain(ctx);
+        self.weights.each(
+            n,
+            self.d,
+            #[inline(always)]
+            |i, d| {
+                let big = self.block_momentum(i, ctx, plain);
+                (p[i], w[i]) = shifted_root(d, &c[i], &big, h);
+            },
+        );
+    }
+
+    /// [`DissipativeTerm::half_kick`] on every block ([`CurrentDrag::force`]), Dᵢ by
+    /// `DragWeights::each` and Pᵢ by `CurrentDrag::block_momentum`.
+    #[inline]
+    fn half_kick(&self, kick: HalfKick<'_, D, DIM>, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        let HalfKick { p, g, s } = kick;
+        let n = p.len();
+        let (g, out) = (&g[..n], &mut out[..n]);
+        let drag = ctx.param(Parameter::Drag, self.d);
+        let plain = self.is_plain(ctx);
+        self.weights.each(
+            n,
+            drag,
+            #[inline(always)]
+            |i, d| {
+                let big = self.block_momentum(i, ctx, plain);
+                let r: [D; DIM] = std::array::from_fn(|k| p[i][k] - big[k]);
+                let f = morison(d, &r);
+                out[i] = std::array::from_fn(|k| p[i][k] - g[i][k] * s + f[k] * s);
+            },
+        );
+    }
+}
+
+/// The root p of p − (h/2) F_D(p − P) = c: r = p − P solves the still-water root for c − P
+/// ([`root_of`]), p = r + P, W = ∂p/∂c that of r.
+#[inline(always)]
+fn shifted_root<D: Scalar, const DIM: usize>(
+    drag: D,
+    c: &[D; DIM],
+    big: &[D; DIM],
+    h: f64,
+) -> ([D; DIM], BlockSym<D, DIM>) {
+    let shifted: [D; DIM] = std::array::from_fn(|d| c[d] - big[d]);
+    let (r, w) = root_of(drag, &shifted, h);
+    (std::array::from_fn(|d| r[d] + big[d]), w)
+}
+
+impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
+    /// Fᵢ(p) = F_D(p − Pᵢ) with the block's drag constant `drag` = Dᵢ.
+    #[inline]
+    fn force_with<E: Embed<D>>(&self, drag: E, i: usize, p: &[E; DIM], ctx: &Ctx<E>) -> [E; DIM] {
+        let r: [E; DIM] = std::array::from_fn(|d| p[d] - self.momentum(i, d, ctx));
+        morison(drag, &r)
+    }
+
+    /// Whether [`CurrentDrag::momentum`] reduces to P = s·A + B in this context: no seeded
+    /// parameter and no waves (then the batched loops skip its per-block checks).
+    #[inline]
+    fn is_plain<E>(&self, ctx: &Ctx<E>) -> bool {
+        ctx.seed.is_none() && self.waves.is_none()
+    }
+
+    /// Pᵢ = [`CurrentDrag::momentum`] of block i, computed as s·Aᵢ + Bᵢ directly when `plain`
+    /// ([`CurrentDrag::is_plain`]: the same operations without the checks).
+    #[inline(always)]
+    fn block_momentum(&self, i: usize, ctx: &Ctx<D>, plain: bool) -> [D; DIM] {
+        if plain {
+            std::array::from_fn(|d| self.speed * self.per_speed[i][d] + self.offset[i][d])
+        } else {
+            std::array::from_fn(|d| self.momentum(i, d, ctx))
+        }
     }
 }

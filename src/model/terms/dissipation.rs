@@ -176,6 +176,37 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         block_newton(c, h, |p| self.force_and_slope(i, p, ctx))
     }
+
+    /// [`DissipativeTerm::implicit_half_step`] on every block: (pᵢ, Wᵢ) into `p[i]`, `w[i]` from
+    /// cᵢ = `c[i]`. Default: block by block; a term overrides it to hoist what is the same for
+    /// every block out of the loop (the drags' hD and 2hD), with the same arithmetic per block.
+    #[inline]
+    fn implicit_half_steps(
+        &self,
+        c: &[[D; DIM]],
+        h: f64,
+        ctx: &Ctx<D>,
+        p: &mut [[D; DIM]],
+        w: &mut [BlockSym<D, DIM>],
+    ) {
+        for (i, (c, (p, w))) in c.iter().zip(p.iter_mut().zip(w)).enumerate() {
+            (*p, *w) = self.implicit_half_step(i, c, h, ctx);
+        }
+    }
+
+    /// The half kick of every block with this term's force at the block's own momentum,
+    /// bᵢ = pᵢ − s gᵢ + s Fᵢ(pᵢ) (RATTLE's second half step: p = p_{k+½}, g = U_q(q_{k+1}),
+    /// s = h/2), into `out[i]`, evaluated in that order ((pᵢ − s gᵢ) first). Default:
+    /// [`DissipativeTerm::force`] block by block; overridden like
+    /// [`DissipativeTerm::implicit_half_steps`].
+    #[inline]
+    fn half_kick(&self, kick: HalfKick<'_, D, DIM>, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        let HalfKick { p, g, s } = kick;
+        for (i, (o, (p, g))) in out.iter_mut().zip(p.iter().zip(g)).enumerate() {
+            let f = self.force(i, p, ctx);
+            *o = std::array::from_fn(|d| p[d] - g[d] * s + f[d] * s);
+        }
+    }
 }
 
 /// Newton for p − (h/2) F(p) = c on one block from p = c, to round-off, with (F, ∂F/∂p) from
@@ -291,6 +322,47 @@ impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for SolveOne<'_, D,
     }
 }
 
+/// The implicit half step of the only term on every block.
+struct SolveAll<'a, D, const DIM: usize> {
+    c: &'a [[D; DIM]],
+    h: f64,
+    ctx: &'a Ctx<D>,
+    p: &'a mut [[D; DIM]],
+    w: &'a mut [BlockSym<D, DIM>],
+}
+
+impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for SolveAll<'_, D, DIM> {
+    #[inline]
+    fn visit<T: DissipativeTerm<D, DIM>>(&mut self, term: &T) {
+        term.implicit_half_steps(self.c, self.h, self.ctx, self.p, self.w);
+    }
+}
+
+/// The inputs of a half kick bᵢ = pᵢ − s gᵢ + s Fᵢ(pᵢ) ([`DissipativeTerm::half_kick`]).
+#[derive(Clone, Copy, Debug)]
+pub struct HalfKick<'a, D, const DIM: usize> {
+    /// The momenta pᵢ (RATTLE: p_{k+½}), at which F is evaluated.
+    pub p: &'a [[D; DIM]],
+    /// The potential's gradient gᵢ (RATTLE: U_q(q_{k+1}; u_{k+1})).
+    pub g: &'a [[D; DIM]],
+    /// The scale s (RATTLE: h/2).
+    pub s: f64,
+}
+
+/// The only term's half kick on every block.
+struct KickAll<'a, D, const DIM: usize> {
+    kick: HalfKick<'a, D, DIM>,
+    ctx: &'a Ctx<D>,
+    out: &'a mut [[D; DIM]],
+}
+
+impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for KickAll<'_, D, DIM> {
+    #[inline]
+    fn visit<T: DissipativeTerm<D, DIM>>(&mut self, term: &T) {
+        term.half_kick(self.kick, self.ctx, self.out);
+    }
+}
+
 /// Counts the terms, and whether any reads a parameter (no allocation: called per step).
 struct Census {
     count: usize,
@@ -364,6 +436,36 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         };
         self.visit_dissipation(&mut v);
         v.sum
+    }
+
+    /// bᵢ = pᵢ − s gᵢ + s Σ_T F_T(pᵢ) on every pendulum ([`HalfKick`]; RATTLE's second half
+    /// step), evaluated in that order: pᵢ − s gᵢ without dissipative terms; the only term's
+    /// [`DissipativeTerm::half_kick`] (one dispatch per step); with several, the sum
+    /// [`Chain::dissipative_force`] per block.
+    #[inline]
+    pub fn dissipative_half_kick(
+        &self,
+        kick: HalfKick<'_, D, DIM>,
+        ctx: &Ctx<D>,
+        out: &mut [[D; DIM]],
+    ) {
+        let HalfKick { p, g, s } = kick;
+        match self.dissipation_count() {
+            0 => {
+                for (o, (p, g)) in out.iter_mut().zip(p.iter().zip(g)) {
+                    *o = std::array::from_fn(|d| p[d] - g[d] * s);
+                }
+            }
+            1 => self.visit_dissipation(&mut KickAll { kick, ctx, out }),
+            _ => {
+                for (i, (o, (p, g))) in out.iter_mut().zip(p.iter().zip(g)).enumerate() {
+                    let f = self
+                        .dissipative_force(i, p, ctx)
+                        .unwrap_or([D::zero(); DIM]);
+                    *o = std::array::from_fn(|d| p[d] - g[d] * s + f[d] * s);
+                }
+            }
+        }
     }
 
     /// Σ_T (F_T, ∂F_T/∂pᵢ) on pendulum `i`, `None` without dissipative terms.
@@ -441,6 +543,32 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 self.dissipative_slope(i, p, ctx)
                     .unwrap_or(([D::zero(); DIM], BlockSym::zero()))
             }),
+        }
+    }
+
+    /// [`Chain::dissipative_half_step`] on every block: pᵢ, Wᵢ into `p[i]`, `w[i]` from cᵢ =
+    /// `c[i]`; the only term's [`DissipativeTerm::implicit_half_steps`] (one dispatch per step,
+    /// its per-step constants hoisted), (c, I) without terms, the summed Newton with several.
+    #[inline]
+    pub fn dissipative_half_steps(
+        &self,
+        c: &[[D; DIM]],
+        h: f64,
+        ctx: &Ctx<D>,
+        p: &mut [[D; DIM]],
+        w: &mut [BlockSym<D, DIM>],
+    ) {
+        match self.dissipation_count() {
+            0 => {
+                p.copy_from_slice(c);
+                w.fill(BlockSym::identity());
+            }
+            1 => self.visit_dissipation(&mut SolveAll { c, h, ctx, p, w }),
+            terms => {
+                for (i, (c, (p, w))) in c.iter().zip(p.iter_mut().zip(w)).enumerate() {
+                    (*p, *w) = self.dissipative_half_step(terms, i, c, h, ctx);
+                }
+            }
         }
     }
 }

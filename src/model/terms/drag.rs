@@ -1,6 +1,6 @@
 //! Still-water drag on the conjugate momenta (thesis eq. 2.4.4, docs/conventions.md).
 
-use super::{BlockSym, Ctx, DissipativeTerm, Embed};
+use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick};
 use crate::base::{Parameter, Scalar};
 
 /// Still-water drag added to ṗ, Morison's form on the momenta (`morison` in `drag.rs`): transversally
@@ -44,6 +44,18 @@ impl DragWeights {
         match self.0.get(i) {
             Some(&w) => d * w,
             None => d,
+        }
+    }
+
+    /// Calls `f(i, Dᵢ)` for pendulums i = 0..n, Dᵢ = D wᵢ (D without weights, as
+    /// [`DragWeights::apply`]). The loop is written once per case so that without weights D
+    /// stays the same in every iteration and what depends on it alone (hD, 2hD) is computed once
+    /// per call, not per pendulum (docs/architecture.md "Benches").
+    #[inline]
+    pub(crate) fn each<S: Scalar>(&self, n: usize, d: S, mut f: impl FnMut(usize, S)) {
+        match self.as_slice() {
+            None => (0..n).for_each(|i| f(i, d)),
+            Some(w) => w.iter().take(n).enumerate().for_each(|(i, &w)| f(i, d * w)),
         }
     }
 
@@ -110,6 +122,47 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
         _ctx: &Ctx<D>,
     ) -> ([D; DIM], BlockSym<D, DIM>) {
         root_of(self.weights.apply(i, self.d), c, h)
+    }
+
+    /// [`Drag::implicit_half_step`] on every block, Dᵢ by `DragWeights::each`.
+    #[inline]
+    fn implicit_half_steps(
+        &self,
+        c: &[[D; DIM]],
+        h: f64,
+        _ctx: &Ctx<D>,
+        p: &mut [[D; DIM]],
+        w: &mut [BlockSym<D, DIM>],
+    ) {
+        let n = c.len();
+        let (p, w) = (&mut p[..n], &mut w[..n]);
+        self.weights.each(
+            n,
+            self.d,
+            #[inline(always)]
+            |i, d| {
+                (p[i], w[i]) = root_of(d, &c[i], h);
+            },
+        );
+    }
+
+    /// [`DissipativeTerm::half_kick`] on every block ([`Drag::force`]), Dᵢ by
+    /// `DragWeights::each`.
+    #[inline]
+    fn half_kick(&self, kick: HalfKick<'_, D, DIM>, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        let HalfKick { p, g, s } = kick;
+        let n = p.len();
+        let (g, out) = (&g[..n], &mut out[..n]);
+        let drag = ctx.param(Parameter::Drag, self.d);
+        self.weights.each(
+            n,
+            drag,
+            #[inline(always)]
+            |i, d| {
+                let f = morison(d, &p[i]);
+                out[i] = std::array::from_fn(|k| p[i][k] - g[i][k] * s + f[k] * s);
+            },
+        );
     }
 }
 

@@ -13,7 +13,9 @@
 //! planar model, [`crate::model::DissipativeTerm`]), evaluated at p_{k+½} in both halves
 //! (docs/conventions.md); in the first half it is implicit, and each pendulum's block solves
 //! p − (h/2) F(p) = c ([`Chain::dissipative_half_step`]: for the drag in closed form,
-//! p = 2c / (1 + √(1 + 2hD|c|)) per planar component). A term that couples pendulums (the joint
+//! p = 2c / (1 + √(1 + 2hD|c|)) per planar component). The step calls the dissipative terms once
+//! per half step for every block together ([`Chain::dissipative_half_steps`],
+//! [`Chain::dissipative_half_kick`]), so that a term hoists what its blocks share out of the loop. A term that couples pendulums (the joint
 //! damping) is read at (q_k, p_{k+½}) in the first half and (q_{k+1}, p_{k+½}) in the second, and
 //! couples the half step's blocks and makes the Newton matrix below dense; both are solved in O(n)
 //! as band systems (`steppers/coupled.rs`).

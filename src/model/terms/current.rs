@@ -302,7 +302,9 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
                 let big = self.block_momentum(i, ctx, plain);
                 let r: [D; DIM] = std::array::from_fn(|k| p[i][k] - big[k]);
                 let f = morison(d, &r);
-                out[i] = std::array::from_fn(|k| p[i][k] - g[i][k] * s + f[k] * s);
+                for k in 0..DIM {
+                    out[i][k] = p[i][k] - g[i][k] * s + f[k] * s;
+                }
             },
         );
     }

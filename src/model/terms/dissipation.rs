@@ -46,7 +46,10 @@ impl<D: Scalar, const DIM: usize> BlockSym<D, DIM> {
     /// B v.
     #[inline]
     pub fn apply(&self, v: &[D; DIM]) -> [D; DIM] {
-        let mut out: [D; DIM] = std::array::from_fn(|d| v[d] * self.diag[d]);
+        let mut out = *v;
+        for (o, (x, w)) in out.iter_mut().zip(v.iter().zip(&self.diag)) {
+            *o = *x * *w;
+        }
         if DIM == 3 {
             out[0] += self.xz * v[2];
             out[2] += self.xz * v[0];
@@ -204,7 +207,9 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
         let HalfKick { p, g, s } = kick;
         for (i, (o, (p, g))) in out.iter_mut().zip(p.iter().zip(g)).enumerate() {
             let f = self.force(i, p, ctx);
-            *o = std::array::from_fn(|d| p[d] - g[d] * s + f[d] * s);
+            for d in 0..DIM {
+                o[d] = p[d] - g[d] * s + f[d] * s;
+            }
         }
     }
 }
@@ -453,7 +458,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         match self.dissipation_count() {
             0 => {
                 for (o, (p, g)) in out.iter_mut().zip(p.iter().zip(g)) {
-                    *o = std::array::from_fn(|d| p[d] - g[d] * s);
+                    for d in 0..DIM {
+                        o[d] = p[d] - g[d] * s;
+                    }
                 }
             }
             1 => self.visit_dissipation(&mut KickAll { kick, ctx, out }),
@@ -462,7 +469,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     let f = self
                         .dissipative_force(i, p, ctx)
                         .unwrap_or([D::zero(); DIM]);
-                    *o = std::array::from_fn(|d| p[d] - g[d] * s + f[d] * s);
+                    for d in 0..DIM {
+                        o[d] = p[d] - g[d] * s + f[d] * s;
+                    }
                 }
             }
         }

@@ -160,7 +160,9 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
             #[inline(always)]
             |i, d| {
                 let f = morison(d, &p[i]);
-                out[i] = std::array::from_fn(|k| p[i][k] - g[i][k] * s + f[k] * s);
+                for k in 0..DIM {
+                    out[i][k] = p[i][k] - g[i][k] * s + f[k] * s;
+                }
             },
         );
     }
@@ -183,17 +185,19 @@ pub(super) fn transverse_norm<S: Scalar, const DIM: usize>(r: &[S; DIM]) -> S {
 /// transverse part −D |r_⊥| r_⊥ with the Euclidean norm (invariant under rotations about the
 /// beam's axis y), the axial part −D r_y|r_y| (eq. 2.4.4). In the planar model (r_⊥ = r_z) and
 /// whenever r_x = 0 this is the thesis's elementwise −D r⊙|r|, bit for bit.
-#[inline]
+#[inline(always)]
 pub(super) fn morison<S: Scalar, const DIM: usize>(drag: S, r: &[S; DIM]) -> [S; DIM] {
     let nt = transverse_norm(r);
     let y = DIM - 2;
-    std::array::from_fn(|d| {
-        if d == y {
+    let mut f = *r;
+    for (d, f) in f.iter_mut().enumerate() {
+        *f = if d == y {
             -(drag * r[d] * r[d].abs())
         } else {
             -(drag * r[d] * nt)
-        }
-    })
+        };
+    }
+    f
 }
 
 /// The transverse 2×2 block a (I − r̂r̂ᵀ) + b r̂r̂ᵀ of a spatial block, written with

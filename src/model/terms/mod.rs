@@ -21,7 +21,10 @@
 //! [`dissipation`](DissipativeTerm)): the still-water [`Drag`], or [`CurrentDrag`] when the scene
 //! has a current. They are an open set: [`crate::Chain::visit_dissipation`] lists them and every
 //! consumer sums them ([`crate::Chain::dissipative_force`], [`crate::Chain::dissipative_slope`],
-//! [`crate::Chain::dissipative_half_step`], [`crate::Chain::dissipative_parameter_derivative`]).
+//! [`crate::Chain::dissipative_half_step`], [`crate::Chain::dissipative_parameter_derivative`],
+//! and RATTLE's per-step forms over every block, [`crate::Chain::dissipative_half_steps`] and
+//! [`crate::Chain::dissipative_half_kick`], which a term may speed up by overriding
+//! [`DissipativeTerm::implicit_half_steps`] and [`DissipativeTerm::half_kick`]).
 //! A dissipative term that couples pendulums (a force linear in the velocities q̇ = M⁻¹p that
 //! depends on q, such as the [`JointDamping`]) implements [`CoupledDissipativeTerm`] instead,
 //! listed in [`crate::Chain::visit_coupled_dissipation`] and summed beside them

@@ -248,11 +248,12 @@ pub trait DissipationVisitor<D: Scalar, const DIM: usize> {
 
 /// Σ_T of a per-term value: the first term's value as is, the others added (so one term gives
 /// its own value bit for bit, the sign of a zero included).
+#[inline(always)]
 fn accumulate<X, const DIM: usize>(acc: &mut Option<X>, x: X, add: impl Fn(&X, &X) -> X) {
-    *acc = Some(match acc.take() {
-        Some(a) => add(&a, &x),
-        None => x,
-    });
+    match acc {
+        Some(a) => *a = add(a, &x),
+        None => *acc = Some(x),
+    }
 }
 
 fn add_arrays<D: Scalar, const DIM: usize>(a: &[D; DIM], b: &[D; DIM]) -> [D; DIM] {

@@ -76,7 +76,7 @@ impl DragWeights {
 
 /// The root of r + (hD/2) r|r| = c: r = 2c / (1 + √(1 + 2hD|c|)), with W = ∂r/∂c =
 /// 1/(1 + hD|r|) (shared by [`Drag`] and [`super::CurrentDrag`], which solves it for r = p − P).
-#[inline]
+#[inline(always)]
 pub(super) fn quadratic_root<D: Scalar>(drag: D, c: D, h: f64) -> (D, D) {
     let root = (drag * (2.0 * h) * c.abs() + 1.0).sqrt() + 1.0;
     let r = c * 2.0 * root.recip();
@@ -225,7 +225,7 @@ fn transverse_block<D: Scalar, const DIM: usize>(
 /// (F, ∂F/∂r) of [`morison`] in closed form: axial −2D|r_y|; transverse
 /// −D(|r_⊥| I + r_⊥ r_⊥ᵀ/|r_⊥|) = −D|r_⊥| (I − r̂r̂ᵀ) − 2D|r_⊥| r̂r̂ᵀ (−2D|r_z| in the planar model)
 /// (shared with [`super::CurrentDrag`]).
-#[inline]
+#[inline(always)]
 pub(super) fn slope_of<D: Scalar, const DIM: usize>(
     drag: D,
     r: &[D; DIM],
@@ -248,7 +248,7 @@ pub(super) fn slope_of<D: Scalar, const DIM: usize>(
 /// r_⊥ = c_⊥ · 2/(1 + √(1 + 2hD|c_⊥|)) (r_⊥ is parallel to c_⊥, and |r_⊥| solves the scalar
 /// quadratic), with W_⊥ = (I − r̂r̂ᵀ)/(1 + hD|r_⊥|/2) + r̂r̂ᵀ/(1 + hD|r_⊥|). In the planar model
 /// (and for c_x = 0) these are the thesis's per-component roots, bit for bit.
-#[inline]
+#[inline(always)]
 pub(super) fn root_of<D: Scalar, const DIM: usize>(
     drag: D,
     c: &[D; DIM],

@@ -216,6 +216,8 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for PointLoads<D> {
         ctx: &Ctx<E>,
         out: &mut [[E; DIM]],
     ) -> Result<()> {
+        // One length check here instead of a bounds check per node.
+        let out = &mut out[..self.lengths.len()];
         self.for_each(ctx, |j, [cx, cz]| {
             out[j][zi::<DIM>()] += cz;
             if DIM == 3 {

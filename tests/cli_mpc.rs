@@ -76,6 +76,11 @@ fn mpc_writes_the_closed_loop_csv_and_summary() {
     let ratio = v["c_sum_ratio_to_pd"].as_f64().unwrap();
     let pd = v["baselines"][2]["c_sum"].as_f64().unwrap();
     assert!((ratio - reported / pd).abs() <= 1e-12 * ratio);
+    // MPC's c_sum over the uncontrolled run's; below 1 here, so no warning on stderr.
+    let to_none = v["c_sum_ratio_to_none"].as_f64().unwrap();
+    assert!((to_none - reported / none_reported).abs() <= 1e-12 * to_none);
+    assert!(to_none < 1.0, "MPC worse than no control: {to_none}");
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
     for key in [
         "real_time_factor",
         "mean_replan_seconds",

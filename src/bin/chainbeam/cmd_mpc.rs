@@ -197,6 +197,10 @@ struct Report {
     baselines: Vec<Summary>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pd_gains: Option<Vec<f64>>,
+    /// MPC's c_sum over the uncontrolled run's: above 1, the controller made the moment worse
+    /// ([`worse_than_none`] says so on stderr).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    c_sum_ratio_to_none: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     c_sum_ratio_to_constant: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -315,6 +319,12 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     report.fatigue_damage = fatigue_damage(&a.scene, &scene, &closed)?;
     report.model = spatial.then_some("spatial");
     let json = to_json(&report)?;
+    if let Some(b) = &baselines {
+        let none = b.runs[0].summary.c_sum;
+        if let Some(w) = worse_than_none(&a.scene, report.mpc.c_sum, none) {
+            eprintln!("{w}");
+        }
+    }
     let mut sink = out.open()?;
     if let Err(e) = write_csv(sink.writer(), &closed, baselines.as_ref()) {
         return Err(sink.error(&e));
@@ -561,6 +571,7 @@ fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
             model: a.model.as_ref().map(|p| p.display().to_string()),
         },
         real_time: mpc.worst_replan_seconds <= s.interval,
+        c_sum_ratio_to_none: ratio(0),
         c_sum_ratio_to_constant: ratio(1),
         c_sum_ratio_to_pd: ratio(2),
         pd_gains: b.map(|b| b.gains.clone()),
@@ -570,6 +581,22 @@ fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
         }),
         mpc,
     }
+}
+
+/// The warning for a closed loop whose c_sum = Σ M₀² is above the uncontrolled run's (the
+/// baseline "none"): the controller made the bending moment worse. A run still exits 0 (its
+/// outputs are what was computed, and `c_sum_ratio_to_none` says the same), but it is never
+/// reported as a success in silence.
+fn worse_than_none(scene: &Path, mpc: f64, none: f64) -> Option<String> {
+    (mpc > none).then(|| {
+        format!(
+            "{}: warning: MPC's closed loop has c_sum = {mpc:.6e} N²m², above the uncontrolled \
+             run's {none:.6e} (ratio {:.4}): the controller made the bending moment worse \
+             (try a longer --horizon, more --iterations, or the full model)",
+            scene.display(),
+            mpc / none
+        )
+    })
 }
 
 /// Never write NaN: the run's columns and summary are checked before anything is written.
@@ -644,4 +671,22 @@ fn write_csv(
         w.write_all(&line)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::worse_than_none;
+    use std::path::Path;
+
+    /// The warning names the scene, both sums and their ratio when MPC's c_sum is above the
+    /// uncontrolled run's, and there is none when it is at or below it.
+    #[test]
+    fn worse_than_none_warns_only_above_the_uncontrolled_run() {
+        let w = worse_than_none(Path::new("s.toml"), 3.0e4, 2.0e4).unwrap();
+        assert!(w.starts_with("s.toml: warning:"), "{w}");
+        assert!(w.contains("3.000000e4") && w.contains("2.000000e4"), "{w}");
+        assert!(w.contains("ratio 1.5000"), "{w}");
+        assert_eq!(worse_than_none(Path::new("s.toml"), 2.0e4, 2.0e4), None);
+        assert_eq!(worse_than_none(Path::new("s.toml"), 1.0e4, 2.0e4), None);
+    }
 }

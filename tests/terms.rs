@@ -15,7 +15,7 @@
 
 use chainbeam::model::{
     BlockSym, CoupledAt, CoupledDissipativeTerm, Ctx, DissipationVisitor, DissipativeTerm,
-    DualScratch, Embed, ForceTerm, HalfKick, TermVisitor,
+    DualScratch, Embed, ForceTerm, HalfKick, HalfSteps, TermVisitor,
 };
 use chainbeam::{
     catalogue, Chain, Current, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene,
@@ -643,7 +643,7 @@ fn check_batched<D: Scalar, const DIM: usize>(scene: &Scene) {
             })
             .collect();
         let (mut p, mut w) = (c.clone(), vec![BlockSym::zero(); n]);
-        chain.dissipative_half_steps(&c, h, &ctx, &mut p, &mut w);
+        chain.dissipative_half_steps(HalfSteps::new(&c, &mut p, &mut w), h, &ctx);
         let g: Vec<[D; DIM]> = c.iter().map(|v| v.map(|x| x * 0.5 + 0.25)).collect();
         let mut a = vec![[D::zero(); DIM]; n];
         let kick = HalfKick { p: &c, g: &g, s };

@@ -23,8 +23,9 @@ pub(crate) use geometry::{dot, e2};
 pub use terms::{
     AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
     CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
-    ForceTerm, Gravity, HalfKick, HarmonicForce, JointDamping, PointLoad, PointLoads, ReactionTip,
-    ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
+    ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, PointLoad, PointLoads,
+    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia,
+    WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};

@@ -50,7 +50,7 @@ use super::{refuse_reaction_tip, singular, Stepper};
 use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
-use crate::model::{e2, BlockSym, Chain, Ctx, HalfKick};
+use crate::model::{e2, BlockSym, Chain, Ctx, HalfKick, HalfSteps};
 use crate::tridiag::BorderedTridiag;
 
 /// Newton settings of the RATTLE step.
@@ -668,7 +668,10 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
     match ch.dissipation_count() {
         0 => out.phalf.copy_from_slice(&out.c),
-        _ => ch.dissipative_half_steps(&out.c, h, ctx, &mut out.phalf, &mut out.w),
+        _ => {
+            let blocks = HalfSteps::new(&out.c, &mut out.phalf, &mut out.w);
+            ch.dissipative_half_steps(blocks, h, ctx);
+        }
     }
 }
 

@@ -32,7 +32,7 @@ use std::sync::Arc;
 
 use super::drag::{morison, root_of, slope_of, DragWeights};
 use super::waves::WaveField;
-use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick};
+use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick, HalfSteps};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
 use crate::scene::{current_velocity, Current};
@@ -263,16 +263,9 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for CurrentDrag<D, DIM
     /// [`CurrentDrag::implicit_half_step`] on every block, Dᵢ by `DragWeights::each` and Pᵢ by
     /// `CurrentDrag::block_momentum` (the same arithmetic per block).
     #[inline]
-    fn implicit_half_steps(
-        &self,
-        c: &[[D; DIM]],
-        h: f64,
-        ctx: &Ctx<D>,
-        p: &mut [[D; DIM]],
-        w: &mut [BlockSym<D, DIM>],
-    ) {
+    fn implicit_half_steps(&self, blocks: HalfSteps<'_, D, DIM>, h: f64, ctx: &Ctx<D>) {
+        let HalfSteps { c, p, w } = blocks;
         let n = c.len();
-        let (p, w) = (&mut p[..n], &mut w[..n]);
         let plain = self.is_plain(ctx);
         self.weights.each(
             n,

@@ -180,18 +180,12 @@ pub trait DissipativeTerm<D: Scalar, const DIM: usize>:
         block_newton(c, h, |p| self.force_and_slope(i, p, ctx))
     }
 
-    /// [`DissipativeTerm::implicit_half_step`] on every block: (pᵢ, Wᵢ) into `p[i]`, `w[i]` from
-    /// cᵢ = `c[i]`. Default: block by block; a term overrides it to hoist what is the same for
-    /// every block out of the loop (the drags' hD and 2hD), with the same arithmetic per block.
+    /// [`DissipativeTerm::implicit_half_step`] on every block ([`HalfSteps`]: cᵢ in, (pᵢ, Wᵢ)
+    /// out). Default: block by block; a term overrides it to hoist what is the same for every
+    /// block out of the loop (the drags' hD and 2hD), with the same arithmetic per block.
     #[inline]
-    fn implicit_half_steps(
-        &self,
-        c: &[[D; DIM]],
-        h: f64,
-        ctx: &Ctx<D>,
-        p: &mut [[D; DIM]],
-        w: &mut [BlockSym<D, DIM>],
-    ) {
+    fn implicit_half_steps(&self, blocks: HalfSteps<'_, D, DIM>, h: f64, ctx: &Ctx<D>) {
+        let HalfSteps { c, p, w } = blocks;
         for (i, (c, (p, w))) in c.iter().zip(p.iter_mut().zip(w)).enumerate() {
             (*p, *w) = self.implicit_half_step(i, c, h, ctx);
         }
@@ -328,19 +322,56 @@ impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for SolveOne<'_, D,
     }
 }
 
+/// The blocks of an implicit half step p − (h/2) F(p) = c ([`DissipativeTerm::implicit_half_steps`]):
+/// cᵢ in, pᵢ and Wᵢ = ∂pᵢ/∂cᵢ out, block i at index i of each.
+#[derive(Debug)]
+pub struct HalfSteps<'a, D, const DIM: usize> {
+    /// The right-hand sides cᵢ (RATTLE: a − h/2 Ĝ(q_k)ᵀλ).
+    pub c: &'a [[D; DIM]],
+    /// The roots pᵢ (RATTLE: p_{k+½}).
+    pub p: &'a mut [[D; DIM]],
+    /// Wᵢ = (I − (h/2) ∂Fᵢ/∂pᵢ)⁻¹.
+    pub w: &'a mut [BlockSym<D, DIM>],
+}
+
+impl<'a, D, const DIM: usize> HalfSteps<'a, D, DIM> {
+    /// The blocks of `c`, with `p` and `w` cut to its length (one length check here, none per
+    /// block in the loops).
+    ///
+    /// # Panics
+    /// If `p` or `w` is shorter than `c` (a caller's bug: the steppers size them once).
+    #[inline]
+    pub fn new(c: &'a [[D; DIM]], p: &'a mut [[D; DIM]], w: &'a mut [BlockSym<D, DIM>]) -> Self {
+        let n = c.len();
+        HalfSteps {
+            c,
+            p: &mut p[..n],
+            w: &mut w[..n],
+        }
+    }
+
+    /// The same blocks, borrowed again (to pass them on and keep them).
+    #[inline]
+    pub fn reborrow(&mut self) -> HalfSteps<'_, D, DIM> {
+        HalfSteps {
+            c: self.c,
+            p: &mut *self.p,
+            w: &mut *self.w,
+        }
+    }
+}
+
 /// The implicit half step of the only term on every block.
 struct SolveAll<'a, D, const DIM: usize> {
-    c: &'a [[D; DIM]],
+    blocks: HalfSteps<'a, D, DIM>,
     h: f64,
     ctx: &'a Ctx<D>,
-    p: &'a mut [[D; DIM]],
-    w: &'a mut [BlockSym<D, DIM>],
 }
 
 impl<D: Scalar, const DIM: usize> DissipationVisitor<D, DIM> for SolveAll<'_, D, DIM> {
     #[inline]
     fn visit<T: DissipativeTerm<D, DIM>>(&mut self, term: &T) {
-        term.implicit_half_steps(self.c, self.h, self.ctx, self.p, self.w);
+        term.implicit_half_steps(self.blocks.reborrow(), self.h, self.ctx);
     }
 }
 
@@ -556,25 +587,19 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         }
     }
 
-    /// [`Chain::dissipative_half_step`] on every block: pᵢ, Wᵢ into `p[i]`, `w[i]` from cᵢ =
-    /// `c[i]`; the only term's [`DissipativeTerm::implicit_half_steps`] (one dispatch per step,
-    /// its per-step constants hoisted), (c, I) without terms, the summed Newton with several.
+    /// [`Chain::dissipative_half_step`] on every block ([`HalfSteps`]: cᵢ in, (pᵢ, Wᵢ) out); the
+    /// only term's [`DissipativeTerm::implicit_half_steps`] (one dispatch per step, its per-step
+    /// constants hoisted), (c, I) without terms, the summed Newton with several.
     #[inline]
-    pub fn dissipative_half_steps(
-        &self,
-        c: &[[D; DIM]],
-        h: f64,
-        ctx: &Ctx<D>,
-        p: &mut [[D; DIM]],
-        w: &mut [BlockSym<D, DIM>],
-    ) {
+    pub fn dissipative_half_steps(&self, blocks: HalfSteps<'_, D, DIM>, h: f64, ctx: &Ctx<D>) {
         match self.dissipation_count() {
             0 => {
-                p.copy_from_slice(c);
-                w.fill(BlockSym::identity());
+                blocks.p.copy_from_slice(blocks.c);
+                blocks.w.fill(BlockSym::identity());
             }
-            1 => self.visit_dissipation(&mut SolveAll { c, h, ctx, p, w }),
+            1 => self.visit_dissipation(&mut SolveAll { blocks, h, ctx }),
             terms => {
+                let HalfSteps { c, p, w } = blocks;
                 for (i, (c, (p, w))) in c.iter().zip(p.iter_mut().zip(w)).enumerate() {
                     (*p, *w) = self.dissipative_half_step(terms, i, c, h, ctx);
                 }

@@ -1,6 +1,6 @@
 //! Still-water drag on the conjugate momenta (thesis eq. 2.4.4, docs/conventions.md).
 
-use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick};
+use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick, HalfSteps};
 use crate::base::{Parameter, Scalar};
 
 /// Still-water drag added to ṗ, Morison's form on the momenta (`morison` in `drag.rs`): transversally
@@ -126,16 +126,9 @@ impl<D: Scalar, const DIM: usize> DissipativeTerm<D, DIM> for Drag<D> {
 
     /// [`Drag::implicit_half_step`] on every block, Dᵢ by `DragWeights::each`.
     #[inline]
-    fn implicit_half_steps(
-        &self,
-        c: &[[D; DIM]],
-        h: f64,
-        _ctx: &Ctx<D>,
-        p: &mut [[D; DIM]],
-        w: &mut [BlockSym<D, DIM>],
-    ) {
+    fn implicit_half_steps(&self, blocks: HalfSteps<'_, D, DIM>, h: f64, _ctx: &Ctx<D>) {
+        let HalfSteps { c, p, w } = blocks;
         let n = c.len();
-        let (p, w) = (&mut p[..n], &mut w[..n]);
         self.weights.each(
             n,
             self.d,

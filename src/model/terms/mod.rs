@@ -55,7 +55,9 @@ pub use axial::{AxialWeight, TopTension};
 pub use control::ControlForce;
 pub use coupled::{CoupledAt, CoupledDissipativeTerm, CoupledVisitor};
 pub use current::CurrentDrag;
-pub use dissipation::{block_newton, BlockSym, DissipationVisitor, DissipativeTerm, HalfKick};
+pub use dissipation::{
+    block_newton, BlockSym, DissipationVisitor, DissipativeTerm, HalfKick, HalfSteps,
+};
 pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;

@@ -19,6 +19,9 @@ pub enum TipCondition {
     Free,
     /// The tip's z is locked by l(q) = Σ lᵢ e₃ᵀqᵢ = 0 (fixed-fixed, pinned-pinned; eq. 2.4.1).
     Locked,
+    /// The tip's z is held where the vessel puts it: l(q) = Z(t), a known function of time
+    /// (`support = "vessel"`, [`crate::model::VesselMotion`]).
+    Prescribed,
     /// Reaction-force variant (eq. 3.2.1/3.2.2): the reaction λ_l cancels every force on the tip's
     /// z except the control, so m_n z̈_n = −u. Discretised as a rheonomic tip constraint
     /// l(q_k) = ζ_k whose target ζ follows the control by Störmer–Verlet (see [`crate::steppers::rattle`]).

@@ -337,13 +337,7 @@ fn newton_advice(h: Option<f64>) -> String {
 
 /// The scene-file name of a support (`support = "pinned-pinned"`).
 fn support_name(support: crate::scene::Support) -> &'static str {
-    use crate::scene::Support;
-    match support {
-        Support::Cantilever => "cantilever",
-        Support::Riser => "riser",
-        Support::FixedFixed => "fixed-fixed",
-        Support::PinnedPinned => "pinned-pinned",
-    }
+    support.name()
 }
 
 /// Result alias for chainbeam.

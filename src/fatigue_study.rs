@@ -376,12 +376,7 @@ pub struct StudyInput<'a> {
 
 /// The scene's support as the scene file writes it.
 fn support_name(s: Support) -> &'static str {
-    match s {
-        Support::Cantilever => "cantilever",
-        Support::Riser => "riser",
-        Support::FixedFixed => "fixed-fixed",
-        Support::PinnedPinned => "pinned-pinned",
-    }
+    s.name()
 }
 
 /// Refuses a feedback controller whose force acts at a node the supports lock (the tip of a
@@ -395,10 +390,7 @@ pub fn check_control_can_act(scene: &Scene, kind: ControllerKind) -> Result<(), 
     }
     let n = scene.n();
     let node = scene.control.as_ref().map_or(n, |c| c.node);
-    let locked = matches!(
-        scene.beam.support,
-        Support::FixedFixed | Support::PinnedPinned
-    ) && !scene.beam.reaction_force;
+    let locked = scene.beam.support.holds_tip() && !scene.beam.reaction_force;
     if locked && node == n {
         return Err(StudyError::ControlCannotAct {
             controller: kind.name(),

@@ -239,8 +239,9 @@ impl Integrator {
     /// # Errors
     /// [`StepperError::StepNotPositive`] if `h` is not positive and finite,
     /// [`StepperError::NonConstantControl`] if the scene has a per-step control,
-    /// [`StepperError::ReactionTipUnsupported`] if `method` is not RATTLE and the scene uses the
-    /// reaction-force tip; the
+    /// [`StepperError::ReactionTipUnsupported`] / [`StepperError::PrescribedTipUnsupported`] if
+    /// `method` is not RATTLE and the scene uses the reaction-force tip / a tip held by the
+    /// vessel; the
     /// scene's own validation errors; and any error of the first step's set-up (SHAKE's starter).
     pub fn new(scene: &Scene, method: Method, h: f64) -> Result<Self> {
         let mut chain = Chain::<f64, 2>::from_scene(scene)?;

@@ -170,7 +170,7 @@ pub use scene::{
     Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
     SceneBuilder, SceneError, SceneErrorKind, Support, TimeGrid,
 };
-pub use scene::{Current, CurrentProfile};
+pub use scene::{Current, CurrentProfile, Rao, Vessel};
 pub use simulate::{
     moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
     StreamError, StreamSummary,

@@ -47,7 +47,8 @@ pub struct Trajectory<D, const DIM: usize> {
     pub moment_x: Vec<D>,
     /// The x components u_{x,k} of a 2-axis control, k = 0..=N; empty for a 1-axis control.
     pub controls_x: Vec<D>,
-    /// Reaction-force variant: tip target ζ_k (zero otherwise).
+    /// The tip's target: ζ_k of the reaction-force variant, the vessel's Z(t_k) of a tip the
+    /// vessel holds, zero otherwise.
     pub tip_target: Vec<D>,
     /// Per-step Newton statistics, k = 0..N−1.
     pub stats: Vec<StepStats>,
@@ -282,7 +283,8 @@ impl SceneTrajectory {
     pub fn controls_x(&self) -> &[f64] {
         either!(self, t => &t.controls_x)
     }
-    /// Reaction-force variant: tip target ζ_k (zero otherwise).
+    /// The tip's target: ζ_k of the reaction-force variant, the vessel's Z(t_k) of a tip the
+    /// vessel holds, zero otherwise.
     pub fn tip_target(&self) -> &[f64] {
         either!(self, t => &t.tip_target)
     }

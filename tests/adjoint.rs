@@ -9,10 +9,18 @@ use chainbeam::catalogue;
 use chainbeam::*;
 use num_dual::Dual64;
 
-/// A thesis riser scene (docs/conventions.md) with another support, drag and horizon.
+/// A thesis riser scene (docs/conventions.md) with another support, drag and horizon. The vessel
+/// support moves its top: a 2 cm offset ramped in over 0.08 s of the 0.12 s horizon.
 fn scene(support: Support, load_node: usize, drag: f64, steps: usize) -> Scene {
     let mut s = catalogue::riser(load_node);
     s.beam.support = support;
+    if support == Support::Vessel {
+        s.vessel = Some(Vessel {
+            offset: 0.02,
+            ramp: 0.08,
+            rao: None,
+        });
+    }
     s.loads.drag = drag;
     s.time.steps = steps;
     s
@@ -54,7 +62,7 @@ fn check<O: Objective + Clone>(
     if s.beam.support != Support::PinnedPinned {
         params.push(Parameter::BaseStiffness);
     }
-    if matches!(s.beam.support, Support::Riser | Support::FixedFixed) {
+    if s.beam.support.end_springs().1 {
         params.push(Parameter::TipStiffness);
     }
     if s.loads.drag > 0.0 {
@@ -131,8 +139,8 @@ fn check<O: Objective + Clone>(
 
 /// Every support x objective (final, sum, with and without effort) x parametrisation x drag
 /// (0, 10) x load node. Pinned-pinned beams have no base spring, so M₀ ≡ 0 there: they are checked
-/// with the displacement of node 3 instead. Locked tips absorb a tip control, so fixed-fixed and
-/// pinned-pinned are controlled at node 7.
+/// with the displacement of node 3 instead. Held tips absorb a tip control, so fixed-fixed,
+/// pinned-pinned and vessel are controlled at node 7.
 #[test]
 fn adjoint_matches_forward_mode_and_finite_differences() {
     let steps = 12;
@@ -146,12 +154,9 @@ fn adjoint_matches_forward_mode_and_finite_differences() {
         Support::Riser,
         Support::FixedFixed,
         Support::PinnedPinned,
+        Support::Vessel,
     ] {
-        let control_node = if matches!(support, Support::FixedFixed | Support::PinnedPinned) {
-            7
-        } else {
-            10
-        };
+        let control_node = if support.holds_tip() { 7 } else { 10 };
         for drag in [0.0, 10.0] {
             for load_node in [3, 5, 9] {
                 let s = scene(support, load_node, drag, steps);

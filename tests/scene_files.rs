@@ -73,6 +73,7 @@ fn spec_scene() -> Scene {
         objective: Some(ObjectiveKind::Final),
         fatigue: None,
         mpc: None,
+        vessel: None,
     }
 }
 

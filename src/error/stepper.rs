@@ -16,6 +16,16 @@ pub enum StepperError {
         /// The method, e.g. `SHAKE`.
         method: &'static str,
     },
+    /// The method does not implement the vessel's prescribed tip (`support = "vessel"`): only
+    /// RATTLE does.
+    #[error(
+        "invalid argument `tip condition`: {method} does not support a tip held by the vessel \
+         (support = \"vessel\"); use RATTLE"
+    )]
+    PrescribedTipUnsupported {
+        /// The method, e.g. `SHAKE`.
+        method: &'static str,
+    },
     /// The time step h is not positive and finite.
     #[error("invalid argument `h`: the step must be positive and finite, got {h}")]
     StepNotPositive {

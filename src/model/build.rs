@@ -3,8 +3,8 @@
 
 use super::{
     AxialWeight, Chain, ControlForce, CurrentDrag, Drag, DragWeights, Gravity, HarmonicForce,
-    JointDamping, PointLoad, PointLoads, Springs, TopTension, WaveField, WaveInertia, WaveInputs,
-    DEFAULT_FOLD_LIMIT_DEG,
+    JointDamping, PointLoad, PointLoads, Springs, TopTension, VesselMotion, WaveField, WaveInertia,
+    WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
@@ -32,6 +32,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let tip = match (b.support, b.reaction_force) {
             (Support::FixedFixed | Support::PinnedPinned, false) => TipCondition::Locked,
             (Support::FixedFixed | Support::PinnedPinned, true) => TipCondition::Reaction,
+            (Support::Vessel, _) => TipCondition::Prescribed,
             _ => TipCondition::Free,
         };
         let control_node = scene.control.as_ref().map(|c| c.node);
@@ -52,6 +53,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             });
         let loads = Self::point_loads(scene);
         let waves = Self::wave_field(scene)?;
+        let vessel = Self::vessel_motion(scene)?;
         let water_drag =
             scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0);
         Ok(Chain {
@@ -92,9 +94,34 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }),
             wave_inertia: waves.map(WaveInertia::new),
             joint_damping,
+            vessel,
             lengths,
             masses,
         })
+    }
+
+    /// The vessel's motion of the top for `support = "vessel"` ([`VesselMotion`]; the scene is
+    /// valid): the `[vessel]` table (a vessel at rest when absent) with its RAO applied to the
+    /// scene's sea, realised on the scene's grid for the run.
+    fn vessel_motion(scene: &Scene) -> Result<Option<std::sync::Arc<VesselMotion>>> {
+        if scene.beam.support != Support::Vessel {
+            return Ok(None);
+        }
+        let vessel = scene.vessel.clone().unwrap_or_default();
+        let t = scene.time;
+        let sea = match (&scene.loads.waves, &vessel.rao) {
+            (Some(w), Some(_)) => {
+                let spec = w.sea_spec(scene.wave_depth())?;
+                let err = |e| Error::from(crate::scene::sea_error(e, w.components));
+                let sea =
+                    crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step).map_err(err)?;
+                Some((std::sync::Arc::new(sea), w.unit_direction()[1]))
+            }
+            _ => None,
+        };
+        let motion = VesselMotion::new(&vessel, sea, t.steps + 1)
+            .map_err(|e| Error::from(crate::scene::sea_error(e, None)))?;
+        Ok(Some(std::sync::Arc::new(motion)))
     }
 
     /// The scene's point loads `[[loads.point]]` as model terms (their directions normalised).
@@ -169,11 +196,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             k[i] = D::from(b.stiffness[i - 1]);
             present[i] = true;
         }
-        let (base, tip) = match b.support {
-            Support::Cantilever => (true, false),
-            Support::Riser | Support::FixedFixed => (true, true),
-            Support::PinnedPinned => (false, false),
-        };
+        let (base, tip) = b.support.end_springs();
         if base {
             k[0] = D::from(b.base_stiffness);
             present[0] = true;
@@ -212,6 +235,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             current: self.current.as_ref().map(|t| t.lift()),
             wave_inertia: self.wave_inertia.clone(),
             joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
+            vessel: self.vessel.clone(),
         }
     }
 }

@@ -17,6 +17,7 @@ pub mod geometry;
 mod mass;
 mod params;
 pub mod terms;
+mod vessel;
 
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
@@ -31,6 +32,7 @@ pub use terms::{
 pub use crate::base::{Parameter, Scalar, TipCondition};
 pub use crate::error::ModelError;
 use crate::error::{Error, Result};
+pub use vessel::VesselMotion;
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
 /// term of docs/conventions.md ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,
@@ -63,6 +65,8 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) wave_inertia: Option<WaveInertia>,
     /// Structural damping at the joints (`[beam] joint_damping`), a coupled dissipative term.
     pub(crate) joint_damping: Option<JointDamping<D>>,
+    /// The vessel's motion of the tip ([`TipCondition::Prescribed`]).
+    pub(crate) vessel: Option<std::sync::Arc<VesselMotion>>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -182,7 +186,25 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         })
     }
 
-    /// Whether the model has the tip constraint row (locked or reaction-force tip).
+    /// The prescribed tip's (Z(t), Ż(t)) at time t ([`TipCondition::Prescribed`]), `None` for
+    /// other tips.
+    #[inline]
+    pub fn prescribed_tip(&self, t: f64) -> Option<[D; 2]> {
+        self.vessel.as_ref().map(|v| v.at(t).map(D::from))
+    }
+
+    /// Where a static equilibrium holds the tip's z: the vessel's mean offset Z₀ for a
+    /// prescribed tip, 0 for a locked one.
+    pub fn static_tip_target(&self) -> f64 {
+        self.vessel.as_ref().map_or(0.0, |v| v.mean())
+    }
+
+    /// The vessel's motion of the tip, if the vessel holds it.
+    pub fn vessel(&self) -> Option<&VesselMotion> {
+        self.vessel.as_deref()
+    }
+
+    /// Whether the model has the tip constraint row (locked, prescribed or reaction-force tip).
     pub fn has_tip_constraint(&self) -> bool {
         self.tip != TipCondition::Free
     }

@@ -48,7 +48,7 @@
 use super::Observation;
 use crate::error::{MpcError, Requirement, Result};
 use crate::model::Chain;
-use crate::scene::{ObjectiveKind, Scene, Support};
+use crate::scene::{ObjectiveKind, Scene};
 use crate::steppers::rattle::State;
 
 /// The planning model of `scene` with `pendulums` pendulums at step `step` (module docs).
@@ -64,10 +64,7 @@ pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scen
     if pendulums == 0 || pendulums > n {
         return Err(MpcError::PlanPendulums { pendulums, n }.into());
     }
-    let locked = matches!(
-        scene.beam.support,
-        Support::FixedFixed | Support::PinnedPinned
-    );
+    let locked = scene.beam.support.holds_tip();
     if locked || scene.beam.reaction_force {
         return Err(MpcError::PlanSupport.into());
     }

@@ -22,7 +22,9 @@ pub use dispersion::wavenumber;
 /// The complex numbers of the amplitudes (`rustfft`'s `num_complex`).
 pub use rustfft::num_complex::Complex;
 pub use spectrum::{Spectrum, SpectrumKind};
-pub use waves::{cell_profile, depth_profile, Sea, SeaSpec, Synthesis, WaveRecord};
+pub use waves::{
+    cell_profile, depth_profile, Sea, SeaSpec, Synthesis, WaveRecord, MAX_RECORD_BYTES,
+};
 
 use thiserror::Error;
 

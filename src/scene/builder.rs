@@ -283,6 +283,7 @@ impl SceneBuilder {
             objective: self.objective,
             fatigue: None,
             mpc: None,
+            vessel: (self.support == Support::Vessel).then(super::Vessel::default),
         };
         scene.validate()?;
         Ok(scene)

@@ -28,6 +28,7 @@ mod raw;
 pub(crate) mod series;
 mod validate;
 mod values;
+mod vessel;
 mod waves;
 
 use std::path::Path;
@@ -52,6 +53,7 @@ pub use validate::{
     MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, trajectory_bytes};
+pub use vessel::{Rao, Vessel, DEFAULT_VESSEL_RAMP, MAX_RAO_ROWS};
 pub use waves::{sea_error, WaveLumping, WaveSpectrum, Waves, DEFAULT_GAMMA};
 
 use raw::RawScene;
@@ -68,6 +70,41 @@ pub enum Support {
     FixedFixed,
     /// No end springs, tip z locked by l(q) = 0 (eq. 2.4.3).
     PinnedPinned,
+    /// Base and tip springs (the lower and upper flex joints), the tip's z held by the vessel:
+    /// l(q) = Z(t), the vessel's position ([`Vessel`], `[vessel]`); planar scenes only.
+    Vessel,
+}
+
+impl Support {
+    /// Whether the support has a base spring k₁ and a tip spring k_{n+1} (docs/conventions.md):
+    /// the base except for pinned-pinned, the tip for riser, fixed-fixed and vessel.
+    pub fn end_springs(self) -> (bool, bool) {
+        match self {
+            Support::Cantilever => (true, false),
+            Support::Riser | Support::FixedFixed | Support::Vessel => (true, true),
+            Support::PinnedPinned => (false, false),
+        }
+    }
+
+    /// Whether the tip's z is held by a constraint (fixed-fixed, pinned-pinned: at 0; vessel: at
+    /// the vessel's position).
+    pub fn holds_tip(self) -> bool {
+        matches!(
+            self,
+            Support::FixedFixed | Support::PinnedPinned | Support::Vessel
+        )
+    }
+
+    /// The name the scene file writes (`support = "pinned-pinned"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Support::Cantilever => "cantilever",
+            Support::Riser => "riser",
+            Support::FixedFixed => "fixed-fixed",
+            Support::PinnedPinned => "pinned-pinned",
+            Support::Vessel => "vessel",
+        }
+    }
 }
 
 /// The chain of pendulums: geometry, masses and spring constants (thesis §2.2.2).
@@ -327,6 +364,9 @@ pub struct Scene {
     /// Optional `[mpc]` table: the closed-loop controllers' settings (`chainbeam fatigue`'s
     /// flags, which override it).
     pub mpc: Option<MpcTable>,
+    /// The vessel that holds the top (`[vessel]`), with `support = "vessel"` only (which
+    /// defaults it: a vessel that holds the top still over the wellhead).
+    pub vessel: Option<Vessel>,
 }
 
 impl Scene {

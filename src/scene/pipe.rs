@@ -225,11 +225,7 @@ impl Pipe {
         let clamp = |given: Option<f64>, clamped: bool| {
             given.unwrap_or(if clamped { 2.0 * k } else { 0.0 })
         };
-        let (base, tip) = match support {
-            Support::Cantilever => (true, false),
-            Support::Riser | Support::FixedFixed => (true, true),
-            Support::PinnedPinned => (false, false),
-        };
+        let (base, tip) = support.end_springs();
         Ok(Beam {
             lengths: vec![l; n],
             masses,

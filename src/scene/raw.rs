@@ -51,6 +51,8 @@ pub(super) struct RawScene {
     fatigue: Option<RawFatigue>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     mpc: Option<super::mpc::RawMpc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    vessel: Option<super::Vessel>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -355,6 +357,7 @@ impl RawScene {
             objective: s.objective.map(RawObjective::from_kind),
             fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
             mpc: s.mpc.as_ref().map(super::mpc::RawMpc::from_table),
+            vessel: s.vessel.clone(),
         }
     }
 
@@ -421,6 +424,11 @@ impl RawScene {
             .objective
             .map(|o| o.into_kind(fatigue.as_ref(), base_length))
             .transpose()?;
+        // `support = "vessel"` without `[vessel]`: a vessel that holds the top still.
+        let vessel = match (self.vessel, beam.support) {
+            (None, Support::Vessel) => Some(super::Vessel::default()),
+            (v, _) => v,
+        };
         Ok(Scene {
             beam,
             pipe: self.pipe,
@@ -445,6 +453,7 @@ impl RawScene {
             objective,
             fatigue,
             mpc: self.mpc.map(super::mpc::RawMpc::into_table).transpose()?,
+            vessel,
         })
     }
 }

@@ -142,10 +142,7 @@ pub fn human_bytes(bytes: u64) -> String {
 /// plus the tip constraint of fixed-fixed and pinned-pinned beams (also in the reaction-force
 /// variant, where it is the moving target).
 fn n_constraints(n: usize, support: Support) -> usize {
-    match support {
-        Support::FixedFixed | Support::PinnedPinned => n + 1,
-        Support::Cantilever | Support::Riser => n,
-    }
+    n + usize::from(support.holds_tip())
 }
 
 impl Scene {
@@ -190,6 +187,7 @@ impl Scene {
                 ),
             ));
         }
+        self.check_vessel()?;
         check_finite("loads.gravity", self.loads.gravity)?;
         check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
         if let Some(pipe) = &self.pipe {
@@ -570,22 +568,44 @@ impl Scene {
     }
 }
 
-/// Whether the support has a base spring k₁ / a tip spring k_{n+1}.
-pub(super) fn end_springs(support: Support) -> (bool, bool) {
-    match support {
-        Support::Cantilever => (true, false),
-        Support::Riser | Support::FixedFixed => (true, true),
-        Support::PinnedPinned => (false, false),
+impl Scene {
+    /// `[vessel]` belongs to `support = "vessel"` and its values are valid; the vessel holds the
+    /// tip's z only, so its scenes are planar.
+    fn check_vessel(&self) -> Result<(), SceneError> {
+        let vessel_support = self.beam.support == Support::Vessel;
+        match &self.vessel {
+            Some(_) if !vessel_support => Err(SceneError::invalid(
+                "vessel",
+                format!(
+                    "a `[vessel]` table needs `beam.support = \"vessel\"`, not `{}`",
+                    self.beam.support.name()
+                ),
+            )),
+            Some(v) => {
+                v.check()?;
+                match self.spatial_key() {
+                    Some(key) => Err(SceneError::invalid(
+                        "beam.support",
+                        format!(
+                            "`vessel` holds the top along z only, and `{key}` makes the scene \
+                             spatial (a load, current, wave or control along x)"
+                        ),
+                    )),
+                    None => Ok(()),
+                }
+            }
+            None => Ok(()),
+        }
     }
 }
 
+/// Whether the support has a base spring k₁ / a tip spring k_{n+1}.
+pub(super) fn end_springs(support: Support) -> (bool, bool) {
+    support.end_springs()
+}
+
 pub(super) fn support_name(support: Support) -> &'static str {
-    match support {
-        Support::Cantilever => "cantilever",
-        Support::Riser => "riser",
-        Support::FixedFixed => "fixed-fixed",
-        Support::PinnedPinned => "pinned-pinned",
-    }
+    support.name()
 }
 
 pub(super) fn check_positive(key: &str, x: f64) -> Result<(), SceneError> {
@@ -616,7 +636,7 @@ fn check_nonnegative(key: &str, x: f64) -> Result<(), SceneError> {
 fn has_spring(support: Support, n: usize, j: usize) -> bool {
     match j {
         0 => support != Support::PinnedPinned,
-        j if j == n => matches!(support, Support::Riser | Support::FixedFixed),
+        j if j == n => support.end_springs().1,
         _ => true,
     }
 }

@@ -88,7 +88,7 @@ impl Chart<2> for Angles {
             }
         }
         if bordered {
-            rhs[n] = (0..n).map(|j| l[j] * phi[j].sin()).sum();
+            rhs[n] = (0..n).map(|j| l[j] * phi[j].sin()).sum::<f64>() - chain.static_tip_target();
         }
         for color in 0..3 {
             for j in 0..n {

@@ -173,7 +173,7 @@ impl Chart<3> for Spheres {
             }
         }
         if chain.has_tip_constraint() {
-            rhs[2 * n] = chain.tip_z(&self.q);
+            rhs[2 * n] = chain.tip_z(&self.q) - chain.static_tip_target();
         }
         self.add_stiffness(chain, &ctx, &mut a)?;
         Ok(a)

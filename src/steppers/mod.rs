@@ -124,6 +124,19 @@ pub(crate) fn refuse_reaction_tip<D: Scalar, const DIM: usize>(
     Ok(())
 }
 
+/// Refuses the tips whose constraint moves (the reaction-force tip and the vessel's prescribed
+/// tip) for a method that implements neither.
+pub(crate) fn refuse_moving_tip<D: Scalar, const DIM: usize>(
+    chain: &Chain<D, DIM>,
+    method: &'static str,
+) -> Result<()> {
+    refuse_reaction_tip(chain, method)?;
+    if chain.tip_condition() == TipCondition::Prescribed {
+        return Err(StepperError::PrescribedTipUnsupported { method }.into());
+    }
+    Ok(())
+}
+
 /// Checks that the step h is positive and finite.
 pub(crate) fn check_step(h: f64) -> Result<()> {
     if !(h > 0.0 && h.is_finite()) {

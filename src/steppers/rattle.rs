@@ -42,6 +42,14 @@
 //! and imposed as the rheonomic constraints l(q_{k+1}) = ζ_{k+1}, L M⁻¹ p_{k+1} = v_{k+1}. With
 //! u = 0 this is exactly the locked beam. The control then needs no potential term: its force lies
 //! along Lᵀ and would be absorbed by the tip multiplier.
+//!
+//! **Prescribed tip** ([`crate::model::TipCondition::Prescribed`], `support = "vessel"`): the
+//! vessel's Z(t) and Ż(t) ([`crate::model::VesselMotion`]) take the place of ζ and v:
+//! l(q_{k+1}) = Z(t_{k+1}) and L M⁻¹ p_{k+1} = Ż(t_{k+1}), both at the end of the step, where the
+//! locked tip has 0. Each half of the step then stays the adjoint of the other under
+//! k ↔ k + 1, h ↔ −h (the constraint of a position is read at that position's time), so the step
+//! is symmetric and of order 2 (tests/vessel.rs measures it); with Z ≡ 0 it is the fixed-fixed
+//! step bit for bit.
 
 pub use crate::base::StepStats;
 
@@ -283,11 +291,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
 
     /// Solves Ĝ M⁻¹ Ĝᵀ μ₀ = −Ĝ M⁻¹ U_q into the workspace (U_q must be prepared).
     fn solve_consistent_multiplier(&mut self, state: &State<D, DIM>, k: usize) -> Result<()> {
+        let t = self.time(k);
         let ws = &mut self.ws;
         for (o, f) in ws.a.iter_mut().zip(ws.force.iter()) {
             *o = f.map(|x| -x);
         }
-        let target = D::zero();
+        // The tip's rate: the vessel's Ż(t_k) for a prescribed tip, else 0 (at rest).
+        let target = match self.chain.prescribed_tip(t) {
+            Some([_, v]) => v,
+            None => D::zero(),
+        };
         let q = &state.q;
         projection_solve(
             &self.chain,
@@ -389,7 +402,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         for (a, (p, f)) in self.ws.a.iter_mut().zip(state.p.iter().zip(&self.ws.force)) {
             *a = std::array::from_fn(|d| p[d] - f[d] * hh);
         }
-        let (zeta_next, v_half) = self.tip_half_kick(state, u_k);
+        let (zeta_next, v_half) = self.tip_half_kick(state, k, u_k);
         if self.ws.coupled.is_some() {
             return self.coupled_halves(state, (k, u_k1), (v_half, zeta_next));
         }
@@ -417,11 +430,14 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     }
 
     /// Tip target of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u): (ζ_{k+1},
-    /// v_{k+½}), zeros for other tips.
-    fn tip_half_kick(&self, state: &State<D, DIM>, u_k: D) -> (D, D) {
+    /// v_{k+½}); of a prescribed tip: (Z(t_{k+1}), 0); zeros for other tips.
+    fn tip_half_kick(&self, state: &State<D, DIM>, k: usize, u_k: D) -> (D, D) {
         match self.chain.reaction_tip() {
             Some(tip) => tip.first_half(state.tip_target, u_k, self.h),
-            None => (D::zero(), D::zero()),
+            None => match self.chain.prescribed_tip(self.time(k + 1)) {
+                Some([z, _]) => (z, D::zero()),
+                None => (D::zero(), D::zero()),
+            },
         }
     }
 
@@ -571,13 +587,18 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 }
             }
         }
-        let v_next = match ch.reaction_tip() {
-            Some(tip) => {
+        let v_next = match (ch.reaction_tip(), ch.prescribed_tip(t1)) {
+            (Some(tip), _) => {
                 let v = tip.second_half(v_half, u_k1, h);
                 state.tip_target = [zeta_next, v];
                 v
             }
-            None => D::zero(),
+            // The vessel's Ż(t_{k+1}): Ĝ(q_{k+1}) M⁻¹ p_{k+1} = Ż on the tip row.
+            (None, Some([z, v])) => {
+                state.tip_target = [z, v];
+                v
+            }
+            (None, None) => D::zero(),
         };
         projection_solve(
             ch,

@@ -68,6 +68,9 @@ pub enum Parameter {
     Tension,
     /// The axial (submerged) weight w \[N/m\] (`[loads] axial_weight`).
     AxialWeight,
+    /// The drag coefficient C_d of the node-by-node Morison drag (`[pipe] drag_coefficient` with
+    /// `drag_model = "morison"`).
+    DragCoefficient,
     /// All joint dampers c_j \[N·m·s/rad\] at the joints with a spring, set to one common value
     /// (`[beam] joint_damping`; the torque −c_j θ̇_j, docs/conventions.md "Joint damping").
     JointDamping,

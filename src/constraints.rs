@@ -167,6 +167,55 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
         tri.corner = wz(n - 1) * inv_mn * s;
     }
 
+    /// Assembles the Newton matrix J = −h²/2 Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ of a half step whose W is
+    /// A⁻¹ Ω A (the node-by-node Morison drag, [`crate::model::NodeDrag`]): M⁻¹W = Aᵀ diag(Ωₖ/mₖ) A
+    /// with (A x)ₖ = xₖ/lₖ − xₖ₊₁/lₖ₊₁, so with aⱼ = qⱼ/lⱼ, a′ⱼ = q′ⱼ/lⱼ and Ω̃ₖ = Ωₖ/mₖ
+    /// J_{jj} = s (a′ⱼ·Ω̃ⱼaⱼ + a′ⱼ·Ω̃ⱼ₋₁aⱼ), J_{j,j+1} = −s a′ⱼ·Ω̃ⱼaⱼ₊₁,
+    /// J_{j+1,j} = −s a′ⱼ₊₁·Ω̃ⱼaⱼ (s = −h²/2); the tip row Σ lⱼ e₃ᵀ maps to e₃ at the last node
+    /// only: col_{n−1} = s a′ₙ₋₁·Ω̃ₙ₋₁e₃, row_{n−1} = s e₃·Ω̃ₙ₋₁aₙ₋₁, corner s e₃·Ω̃ₙ₋₁e₃.
+    /// With Ω = I this is [`ConstraintOperator::assemble_newton`] without W.
+    pub fn assemble_newton_nodes(
+        &self,
+        (q, qnew): (&[[D; DIM]], &[[D; DIM]]),
+        omega: &[BlockSym<D, DIM>],
+        h: f64,
+        tri: &mut BorderedTridiag<D>,
+    ) {
+        let ch = self.ch;
+        let n = ch.n();
+        let s = -(h * h * 0.5);
+        let scaled = |x: &[D; DIM], j: usize| x.map(|c| c * ch.inv_lengths[j]);
+        // Ω̃ₖ v = Ωₖ v / mₖ.
+        let om = |k: usize, v: &[D; DIM]| omega[k].apply(v).map(|c| c * ch.inv_masses[k]);
+        for j in 0..n {
+            let (a, an) = (scaled(&q[j], j), scaled(&qnew[j], j));
+            let mut d = dot(&an, &om(j, &a));
+            if j > 0 {
+                d += dot(&an, &om(j - 1, &a));
+            }
+            tri.diag[j] = d * s;
+            if j + 1 < n {
+                let (b, bn) = (scaled(&q[j + 1], j + 1), scaled(&qnew[j + 1], j + 1));
+                tri.upper[j] = -(dot(&an, &om(j, &b)) * s);
+                tri.lower[j + 1] = -(dot(&bn, &om(j, &a)) * s);
+            }
+        }
+        if !self.bordered() {
+            return;
+        }
+        let z = zi::<DIM>();
+        let mut ez = [D::zero(); DIM];
+        ez[z] = D::one();
+        tri.col.iter_mut().for_each(|c| *c = D::zero());
+        tri.row.iter_mut().for_each(|c| *c = D::zero());
+        let last = n - 1;
+        let (a, an) = (scaled(&q[last], last), scaled(&qnew[last], last));
+        let oz = om(last, &ez);
+        tri.col[last] = dot(&an, &oz) * s;
+        tri.row[last] = dot(&ez, &om(last, &a)) * s;
+        tri.corner = oz[z] * s;
+    }
+
     /// The tridiagonal band of [`ConstraintOperator::assemble_newton`]: J_{ij} = s M̄⁻¹_{ij}
     /// q′ᵢ·(W_j q_j) for |i − j| ≤ 1, with (W q)_j = `wq`(j).
     #[inline]

@@ -149,6 +149,7 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::Tension => s.loads.tension,
         Parameter::AxialWeight => s.loads.axial_weight,
         Parameter::JointDamping => s.beam.joint_damping[1],
+        Parameter::DragCoefficient => s.pipe.unwrap().drag_coefficient,
     }
 }
 

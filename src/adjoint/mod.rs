@@ -389,6 +389,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     start: Option<&Start<D, DIM>>,
 ) -> Result<AdjointResult<D>> {
     check_controls(u, steps)?;
+    chain.check_adjoint()?;
     check_parameters(chain, params)?;
     let (n, nc) = (chain.n(), chain.n_constraints());
     let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.has_dissipation());

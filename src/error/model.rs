@@ -30,6 +30,17 @@ pub enum ModelError {
     /// for a chain without a control node.
     #[error("invalid argument `control_x`: the model has no control node")]
     NoControlNode,
+    /// The model has a term whose reverse step (discrete adjoint) is not written yet: the
+    /// node-by-node Morison drag. Forward-mode (dual-number) derivatives of a simulation are
+    /// exact for it; the adjoint, the structured optimal-control solvers and MPC refuse it.
+    #[error(
+        "invalid argument `model`: the {term} has no discrete adjoint yet; use forward-mode \
+         derivatives (dual numbers) or `drag_model = \"momentum\"`"
+    )]
+    NoAdjoint {
+        /// The term, e.g. `node-by-node Morison drag`.
+        term: &'static str,
+    },
     /// A fold limit outside (0°, 180°) ([`Chain::set_fold_limit_deg`](crate::model::Chain::set_fold_limit_deg)).
     #[error("invalid argument `fold limit`: must be in (0, 180) degrees, got {deg}")]
     FoldLimitOutOfRange {

@@ -3,8 +3,8 @@
 
 use super::{
     AxialWeight, Chain, ControlForce, CurrentDrag, Drag, DragWeights, Gravity, HarmonicForce,
-    JointDamping, PointLoad, PointLoads, Springs, TopTension, VesselMotion, WaveField, WaveInertia,
-    WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
+    JointDamping, NodeDrag, PointLoad, PointLoads, Springs, TopTension, VesselMotion, WaveField,
+    WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
@@ -54,8 +54,28 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let loads = Self::point_loads(scene);
         let waves = Self::wave_field(scene)?;
         let vessel = Self::vessel_motion(scene)?;
-        let water_drag =
-            scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0);
+        let node_morison = scene
+            .pipe
+            .filter(|p| p.drag_model == crate::scene::DragModel::Morison);
+        let water_drag = node_morison.is_none()
+            && (scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0));
+        let node_drag = node_morison.map(|pipe| {
+            let water = CurrentDrag::new(
+                scene.loads.current.as_ref(),
+                waves.clone(),
+                D::zero(),
+                DragWeights::new(None),
+                &lengths,
+                &masses,
+            );
+            NodeDrag::new(
+                pipe.drag_coefficient,
+                0.5 * scene.water.density * pipe.outer_diameter,
+                &b.lengths,
+                &b.masses,
+                water,
+            )
+        });
         Ok(Chain {
             n,
             inv_lengths: lengths.iter().map(|l| l.recip()).collect(),
@@ -82,7 +102,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 lengths: lengths.clone(),
             }),
             control_x: Vec::new(),
-            drag: (scene.loads.drag > 0.0 && !water_drag).then(|| Drag {
+            drag: (scene.loads.drag > 0.0 && !water_drag && node_drag.is_none()).then(|| Drag {
                 d: D::from(scene.loads.drag),
                 weights: DragWeights::new(scene.drag_weights()),
             }),
@@ -94,6 +114,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }),
             wave_inertia: waves.map(WaveInertia::new),
             joint_damping,
+            node_drag,
             vessel,
             lengths,
             masses,
@@ -235,6 +256,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             current: self.current.as_ref().map(|t| t.lift()),
             wave_inertia: self.wave_inertia.clone(),
             joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
+            node_drag: self.node_drag.as_ref().map(|t| t.lift()),
             vessel: self.vessel.clone(),
         }
     }

@@ -24,9 +24,9 @@ pub(crate) use geometry::{dot, e2};
 pub use terms::{
     AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
     CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
-    ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, PointLoad, PointLoads,
-    ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField, WaveInertia,
-    WaveInputs,
+    ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, NodeDrag, PointLoad,
+    PointLoads, ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField,
+    WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
@@ -65,6 +65,9 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) wave_inertia: Option<WaveInertia>,
     /// Structural damping at the joints (`[beam] joint_damping`), a coupled dissipative term.
     pub(crate) joint_damping: Option<JointDamping<D>>,
+    /// Morison's drag node by node (`[pipe] drag_model = "morison"`), in place of `drag` and
+    /// `current`.
+    pub(crate) node_drag: Option<NodeDrag<D, DIM>>,
     /// The vessel's motion of the tip ([`TipCondition::Prescribed`]).
     pub(crate) vessel: Option<std::sync::Arc<VesselMotion>>,
 }
@@ -197,6 +200,44 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// prescribed tip, 0 for a locked one.
     pub fn static_tip_target(&self) -> f64 {
         self.vessel.as_ref().map_or(0.0, |v| v.mean())
+    }
+
+    /// Refuses a model with a term the discrete adjoint does not differentiate yet (the
+    /// node-by-node Morison drag): the adjoint and the structured solvers call it first.
+    ///
+    /// # Errors
+    /// [`ModelError::NoAdjoint`].
+    pub fn check_adjoint(&self) -> Result<()> {
+        if self.node_drag.is_some() {
+            return Err(ModelError::NoAdjoint {
+                term: "node-by-node Morison drag",
+            }
+            .into());
+        }
+        Ok(())
+    }
+
+    /// The node-by-node Morison drag's generalised force Q(p) ([`NodeDrag::generalised_force`])
+    /// added to `out` with the factor `scale`, if the model has that term (allocates: for
+    /// the statics, not a step).
+    pub fn add_node_drag(&self, p: &[[D; DIM]], ctx: &Ctx<D>, scale: D, out: &mut [[D; DIM]]) {
+        if let Some(nd) = &self.node_drag {
+            let (mut y, mut f) = (
+                vec![[D::zero(); DIM]; self.n],
+                vec![[D::zero(); DIM]; self.n],
+            );
+            nd.generalised_force(p, (&self.lengths, &self.inv_lengths), ctx, &mut y, &mut f);
+            for (o, f) in out.iter_mut().zip(&f) {
+                for d in 0..DIM {
+                    o[d] += f[d] * scale;
+                }
+            }
+        }
+    }
+
+    /// Morison's drag node by node, if the model has it.
+    pub fn node_drag(&self) -> Option<&NodeDrag<D, DIM>> {
+        self.node_drag.as_ref()
     }
 
     /// The vessel's motion of the tip, if the vessel holds it.
@@ -566,6 +607,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// Lengths lᵢ.
     pub fn lengths(&self) -> &[D] {
         &self.lengths
+    }
+
+    /// The inverse lengths 1/lᵢ.
+    pub fn inverse_lengths(&self) -> &[D] {
+        &self.inv_lengths
     }
 
     /// Masses mᵢ.

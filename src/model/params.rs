@@ -26,6 +26,21 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 }
                 self.springs.k[n] = value;
             }
+            Parameter::Mass if self.node_drag.is_some() => {
+                return Err(missing(
+                    p,
+                    "the node-by-node Morison drag's constants depend on the masses node by node",
+                ));
+            }
+            Parameter::DragCoefficient => match &mut self.node_drag {
+                Some(d) => d.cd = value,
+                None => {
+                    return Err(missing(
+                        p,
+                        "the scene has no node-by-node Morison drag (`[pipe] drag_model`)",
+                    ))
+                }
+            },
             Parameter::Mass => {
                 self.masses.iter_mut().for_each(|m| *m = value);
                 if let Some(g) = &mut self.gravity {
@@ -64,6 +79,12 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 }
                 None => return Err(missing(p, "the scene has no joint damping")),
             },
+            Parameter::CurrentSpeed if self.node_drag.is_some() => {
+                match self.node_drag.as_mut().map(|d| &mut d.water) {
+                    Some(c) if c.has_parameter(p) => c.speed = value,
+                    _ => return Err(missing(p, "the scene has no current with a speed")),
+                }
+            }
             Parameter::CurrentSpeed => match &mut self.current {
                 Some(c) if c.has_parameter(p) => c.speed = value,
                 Some(_) => return Err(missing(p, "a table profile has no single speed")),
@@ -103,9 +124,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// harmonic parameters that harmonic, F_x the spatial model).
     pub fn has_parameter(&self, p: Parameter) -> bool {
         match p {
-            Parameter::Mass => self.has_uniform_mass(),
+            Parameter::Mass => self.has_uniform_mass() && self.node_drag.is_none(),
             Parameter::Drag => self.has_drag(),
-            Parameter::CurrentSpeed => self.current.as_ref().is_some_and(|c| c.has_parameter(p)),
+            Parameter::DragCoefficient => self.node_drag.is_some(),
+            Parameter::CurrentSpeed => match &self.node_drag {
+                Some(d) => d.has_parameter(p),
+                None => self.current.as_ref().is_some_and(|c| c.has_parameter(p)),
+            },
             Parameter::BaseStiffness => self.springs.present[0],
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,

@@ -195,6 +195,7 @@ pub(crate) struct StageModel<const DIM: usize = 2> {
 impl<const DIM: usize> StageModel<DIM> {
     /// Checks the scene's model (free tip, a control node) and precomputes M̄ and b.
     pub fn new(chain: &Chain<f64, DIM>, h: f64) -> Result<Self> {
+        chain.check_adjoint()?;
         if chain.tip_condition() != TipCondition::Free {
             return Err(OcpError::UnsupportedTip {
                 tip: chain.tip_condition(),

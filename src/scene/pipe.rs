@@ -42,6 +42,29 @@ pub struct Pipe {
     /// Added-mass coefficient C_a (default 1.0): C_a ρ_w A_o joins the mass per unit length.
     #[serde(default = "default_one")]
     pub added_mass_coefficient: f64,
+    /// How the water's drag acts on the chain (default [`DragModel::Momentum`]).
+    #[serde(default, skip_serializing_if = "DragModel::is_momentum")]
+    pub drag_model: DragModel,
+}
+
+/// How the water's drag acts on a pipe's chain (`[pipe] drag_model`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DragModel {
+    /// The thesis's momentum drag −Dᵢ|pᵢ − Pᵢ|(pᵢ − Pᵢ) per pendulum, with `[loads] drag` = D and
+    /// the per-pendulum weights (docs/conventions.md "Drag in a current").
+    #[default]
+    Momentum,
+    /// Morison's drag node by node, −½ ρ_w C_d D_o cₖ |v_r⊥| v_r⊥ on each node's velocity relative
+    /// to the water over its cell (docs/conventions.md "Morison's drag node by node"); `[loads]
+    /// drag` is not used (and must be 0).
+    Morison,
+}
+
+impl DragModel {
+    fn is_momentum(&self) -> bool {
+        *self == DragModel::Momentum
+    }
 }
 
 fn default_e() -> f64 {
@@ -109,6 +132,7 @@ impl Pipe {
             contents_density: 0.0,
             drag_coefficient: 1.0,
             added_mass_coefficient: 1.0,
+            drag_model: DragModel::Momentum,
         }
     }
 

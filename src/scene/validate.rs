@@ -192,6 +192,25 @@ impl Scene {
         check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
         if let Some(pipe) = &self.pipe {
             pipe.check()?;
+            if pipe.drag_model == super::DragModel::Morison && !self.beam.joint_damping.is_empty() {
+                return Err(SceneError::invalid(
+                    "beam.joint_damping",
+                    "the joint damping and `pipe.drag_model = \"morison\"` are not combined yet \
+                     (each couples the pendulums' half step in its own way)"
+                        .to_string(),
+                ));
+            }
+            if pipe.drag_model == super::DragModel::Morison && self.loads.drag != 0.0 {
+                return Err(SceneError::invalid(
+                    "loads.drag",
+                    format!(
+                        "is the momentum drag's constant D, which `pipe.drag_model = \"morison\"` \
+                         does not use (its drag is ½ ρ_w C_d D_o per length from `[pipe]`): \
+                         leave it out, got {}",
+                        self.loads.drag
+                    ),
+                ));
+            }
         }
         self.water.check()?;
         if let Some(objective) = &self.objective {
@@ -211,7 +230,11 @@ impl Scene {
             check_point_load(i, p, n)?;
         }
         if let Some(c) = &self.loads.current {
-            c.check(self.loads.drag)?;
+            // Morison's node drag acts through the pipe's C_d, not D (which must then be 0).
+            let node_drag = self
+                .pipe
+                .is_some_and(|p| p.drag_model == super::DragModel::Morison);
+            c.check(if node_drag { 1.0 } else { self.loads.drag })?;
         }
         check_positive("time.step", self.time.step)?;
         check_range("time.step", self.time.step, &STEP_RANGE)?;

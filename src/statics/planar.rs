@@ -76,6 +76,7 @@ impl Chart<2> for Angles {
                 f.iter_mut().zip(fd).for_each(|(f, fd)| *f -= fd);
             }
         }
+        chain.add_node_drag(&vec![[0.0; 2]; n], &ctx, -1.0, &mut self.f);
         let mut a = DMatrix::<f64>::zeros(rhs.len(), rhs.len());
         for j in 0..n {
             let (s, c) = phi[j].sin_cos();

@@ -104,6 +104,8 @@ impl Spheres {
                 f.iter_mut().zip(fd).for_each(|(f, fd)| *f -= fd);
             }
         }
+        let n = self.f.len();
+        chain.add_node_drag(&vec![[0.0; 3]; n], ctx, -1.0, &mut self.f);
         if chain.has_tip_constraint() {
             for (f, l) in self.f.iter_mut().zip(chain.lengths()) {
                 f[2] += nu * l;

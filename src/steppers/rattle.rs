@@ -543,8 +543,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             } else {
                 (&state.q, &ws.qnew, &ws.half.w)
             };
-            let w = ch.has_dissipation().then_some(w);
-            ops.assemble_newton((q, qn), w, h, &mut ws.tri, &mut ws.scal);
+            if ch.node_drag().is_some() {
+                ops.assemble_newton_nodes((q, qn), w, h, &mut ws.tri);
+            } else {
+                let w = ch.has_dissipation().then_some(w);
+                ops.assemble_newton((q, qn), w, h, &mut ws.tri, &mut ws.scal);
+            }
             ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
             for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
                 // After convergence, Δ − re(Δ): a real part of exactly 0 keeps the real parts
@@ -578,6 +582,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             s: hh,
         };
         ch.dissipative_half_kick(kick, &dctx, &mut ws.a);
+        if let Some(nd) = ch.node_drag() {
+            // + h/2 Q(p½), Q = A⁻¹ F(A(p½ − P)) (model::NodeDrag); tmp and qnew are scratch here.
+            let ls = (ch.lengths(), ch.inverse_lengths());
+            nd.generalised_force(&ws.half.phalf, ls, &dctx, &mut ws.tmp, &mut ws.qnew);
+            for (a, f) in ws.a.iter_mut().zip(&ws.qnew) {
+                for d in 0..DIM {
+                    a[d] += f[d] * hh;
+                }
+            }
+        }
         if let Some(cpl) = ws.coupled.as_mut().filter(|_| COUPLED) {
             // The coupled terms at (q_{k+1}, p_{k+½}) (steppers::coupled).
             let f = cpl.coupled_force(ch, &state.q, &ws.half.phalf, &dctx);
@@ -687,6 +701,11 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
     out.c.copy_from_slice(a);
     ch.constraints()
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
+    if let Some(nd) = ch.node_drag() {
+        let ls = (ch.lengths(), ch.inverse_lengths());
+        nd.implicit_half_step(&out.c, ls, (h, ctx), &mut out.phalf, &mut out.w);
+        return;
+    }
     match ch.dissipation_count() {
         0 => out.phalf.copy_from_slice(&out.c),
         _ => {

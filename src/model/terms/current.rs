@@ -185,6 +185,11 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
         }
     }
 
+    /// Whether the water's momentum reads the current's speed parameter.
+    pub(crate) fn reads_speed(&self) -> bool {
+        self.reads_speed
+    }
+
     /// The waves' field, if the scene has waves.
     pub fn waves(&self) -> Option<&WaveField> {
         self.waves.as_deref()

@@ -45,6 +45,7 @@ mod dissipation;
 mod drag;
 mod gravity;
 mod joint_damping;
+mod node_drag;
 mod point_load;
 mod reaction_tip;
 mod spring;
@@ -61,6 +62,7 @@ pub use dissipation::{
 pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
+pub use node_drag::NodeDrag;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;

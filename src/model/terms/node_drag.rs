@@ -1,0 +1,181 @@
+//! Morison's drag node by node (`[pipe] drag_model = "morison"`; docs/conventions.md "Morison's
+//! drag node by node").
+//!
+//! Node k (1-based, at rₖ = Σ_{j≤k} lⱼqⱼ) moves at vₖ = Σ_{j≤k} lⱼq̇ⱼ through water moving at Uₖ
+//! (current and waves, [`super::CurrentDrag::momentum`]); over its cell cₖ (half of each
+//! neighbouring pendulum, half a pendulum at the tip) it feels Morison's drag
+//!
+//! ```text
+//! Fₖ = −κₖ |v_r⊥| v_r⊥,   v_r = vₖ − Uₖ,   κₖ = ½ ρ_w C_d D_o cₖ,
+//! ```
+//!
+//! transverse to the beam's axis y (the Euclidean norm over (x, z); no drag along the axis).
+//! Its generalised force is Qⱼ = lⱼ Σ_{k≥j} Fₖ. With q̇ = M⁻¹p and M̄⁻¹ = Aᵀ diag(1/m) A, where
+//! (A x)ₖ = xₖ/lₖ − xₖ₊₁/lₖ₊₁ is upper bidiagonal, the node momenta are mₖvₖ = (A p)ₖ, and
+//! A⁻¹ = diag(l) Tᵀ (suffix sums), so
+//!
+//! ```text
+//! Q(p) = A⁻¹ F(y),   y = A (p − P),   Fₖ(y) = −Dₖ |yₖ⊥| yₖ⊥,   Dₖ = κₖ/mₖ²,
+//! ```
+//!
+//! P the water's momentum (Pⱼ = lⱼ Σ_{k≥j} mₖUₖ, so that A P = m ⊙ U). RATTLE's implicit half
+//! step p − (h/2) Q(p) = c becomes, multiplied by A, y − (h/2) F(y) = A(c − P) =: b: **one
+//! closed-form root per node** (the thesis drag's, `root_of`), then p = A⁻¹ y + P by suffix
+//! sums, O(n). Its Jacobian W = ∂p/∂c = A⁻¹ Ω A with Ω = diag(Ωₖ) the nodes' root slopes, so
+//! M⁻¹W = Aᵀ diag(Ωₖ/mₖ) A is tridiagonal like M⁻¹ itself: the Newton matrix
+//! Ĝ(q′) M⁻¹ W Ĝ(q)ᵀ keeps its bordered tridiagonal form
+//! ([`crate::constraints::ConstraintOperator::assemble_newton_nodes`]).
+
+use super::current::CurrentDrag;
+use super::drag::root_of;
+use super::{BlockSym, Ctx, Embed};
+use crate::base::{Parameter, Scalar};
+
+/// Morison's drag node by node (module docs), over the water of a [`CurrentDrag`] (whose own drag
+/// constant is not used).
+#[derive(Clone, Debug)]
+pub struct NodeDrag<D, const DIM: usize> {
+    /// C_d (the parameter [`Parameter::DragCoefficient`]).
+    pub(crate) cd: D,
+    /// Dₖ/C_d = ½ ρ_w D_o cₖ / mₖ² per node.
+    pub(crate) per_cd: Vec<f64>,
+    /// The water's momentum P (current and waves).
+    pub(crate) water: CurrentDrag<D, DIM>,
+}
+
+impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
+    /// The term for drag coefficient `cd`, drag per unit length and coefficient ½ ρ_w D_o
+    /// (`half_rho_d`), on a chain with these lengths and masses, in the water of `water`.
+    pub(crate) fn new(
+        cd: f64,
+        half_rho_d: f64,
+        lengths: &[f64],
+        masses: &[f64],
+        water: CurrentDrag<D, DIM>,
+    ) -> Self {
+        let n = lengths.len();
+        let per_cd = (0..n)
+            .map(|k| {
+                let next = lengths.get(k + 1).copied().unwrap_or(0.0);
+                let cell = 0.5 * (lengths[k] + next);
+                half_rho_d * cell / (masses[k] * masses[k])
+            })
+            .collect();
+        NodeDrag {
+            cd: D::from(cd),
+            per_cd,
+            water,
+        }
+    }
+
+    /// The same term over another scalar (real parts).
+    pub(crate) fn lift<D2: Scalar>(&self) -> NodeDrag<D2, DIM> {
+        NodeDrag {
+            cd: D2::from(self.cd.re()),
+            per_cd: self.per_cd.clone(),
+            water: self.water.lift(),
+        }
+    }
+
+    /// Whether the term reads parameter `p`: C_d, and the current's speed.
+    pub fn has_parameter(&self, p: Parameter) -> bool {
+        p == Parameter::DragCoefficient
+            || (p == Parameter::CurrentSpeed && self.water.reads_speed())
+    }
+
+    /// Dₖ = C_d ⋅ ½ ρ_w D_o cₖ / mₖ².
+    #[inline]
+    fn node_constant<E: Embed<D>>(&self, k: usize, ctx: &Ctx<E>) -> E {
+        ctx.param(Parameter::DragCoefficient, self.cd) * self.per_cd[k]
+    }
+
+    /// y = A (p − P) (module docs) into `y`.
+    pub fn node_momenta<E: Embed<D>>(
+        &self,
+        p: &[[E; DIM]],
+        inv_lengths: &[D],
+        ctx: &Ctx<E>,
+        y: &mut [[E; DIM]],
+    ) {
+        let n = p.len();
+        let mut next = [E::zero(); DIM];
+        for k in (0..n).rev() {
+            let il = E::embed(inv_lengths[k]);
+            let cur: [E; DIM] =
+                std::array::from_fn(|d| (p[k][d] - self.water.momentum(k, d, ctx)) * il);
+            y[k] = std::array::from_fn(|d| cur[d] - next[d]);
+            next = cur;
+        }
+    }
+
+    /// The node forces F(y) (transverse Morison, no axial part) into `f`.
+    pub fn node_forces<E: Embed<D>>(&self, y: &[[E; DIM]], ctx: &Ctx<E>, f: &mut [[E; DIM]]) {
+        for (k, (f, y)) in f.iter_mut().zip(y).enumerate() {
+            *f = transverse_morison(self.node_constant(k, ctx), y);
+        }
+    }
+
+    /// Q(p) = A⁻¹ F(A(p − P)) (module docs) into `out`, `y` scratch of length n.
+    pub fn generalised_force<E: Embed<D>>(
+        &self,
+        p: &[[E; DIM]],
+        (lengths, inv_lengths): (&[D], &[D]),
+        ctx: &Ctx<E>,
+        y: &mut [[E; DIM]],
+        out: &mut [[E; DIM]],
+    ) {
+        self.node_momenta(p, inv_lengths, ctx, y);
+        self.node_forces(y, ctx, out);
+        suffix_scale(out, lengths);
+    }
+
+    /// The implicit half step p − (h/2) Q(p) = c: b = A(c − P), yₖ the drag's root of
+    /// y − (h/2) F(y) = b at each node, p = A⁻¹ y + P; `omega` gets Ωₖ = ∂yₖ/∂bₖ (axial 1).
+    pub fn implicit_half_step(
+        &self,
+        c: &[[D; DIM]],
+        (lengths, inv_lengths): (&[D], &[D]),
+        (h, ctx): (f64, &Ctx<D>),
+        p: &mut [[D; DIM]],
+        omega: &mut [BlockSym<D, DIM>],
+    ) {
+        self.node_momenta(c, inv_lengths, ctx, p);
+        let ax = DIM - 2;
+        for (k, (y, w)) in p.iter_mut().zip(omega.iter_mut()).enumerate() {
+            let b = *y;
+            let (r, mut om) = root_of(self.node_constant(k, ctx), &b, h);
+            *y = r;
+            y[ax] = b[ax];
+            om.diag[ax] = D::one();
+            *w = om;
+        }
+        suffix_scale(p, lengths);
+        for (k, pk) in p.iter_mut().enumerate() {
+            for d in 0..DIM {
+                pk[d] += self.water.momentum(k, d, ctx);
+            }
+        }
+    }
+}
+
+/// Fₖ = −D |y⊥| y⊥ with no axial part ([`super::drag::morison`] without its y component).
+#[inline]
+fn transverse_morison<S: Scalar, const DIM: usize>(drag: S, y: &[S; DIM]) -> [S; DIM] {
+    let mut f = super::drag::morison(drag, y);
+    f[DIM - 2] = S::zero();
+    f
+}
+
+/// x ← A⁻¹ x = diag(l) Tᵀ x: xⱼ ← lⱼ Σ_{k≥j} xₖ (suffix sums).
+pub(crate) fn suffix_scale<E: Embed<D>, D: Scalar, const DIM: usize>(
+    x: &mut [[E; DIM]],
+    lengths: &[D],
+) {
+    let mut s = [E::zero(); DIM];
+    for j in (0..x.len()).rev() {
+        for d in 0..DIM {
+            s[d] += x[j][d];
+            x[j][d] = s[d] * E::embed(lengths[j]);
+        }
+    }
+}

@@ -15,6 +15,8 @@
 //!   (one `Dual64` evaluation of the springs' force at q + εv) through a wrapper that delegates
 //!   everything else to the springs. The ratio is what the override saves the adjoint, which
 //!   calls K·v twice per reverse step.
+//! - `step_pipe_drag`: riser_300m's pipe in its current, the momentum drag against Morison's
+//!   drag node by node, n = 100 and 1000 (time per pendulum-step: both O(n));
 //! - `joint_damping`: one planar `f64` step of the cantilever with a joint damper beside every
 //!   spring (c = 0.01 s · k), n = 20, 80, 320: the coupled half step's band solve. Measured
 //!   (load ≈ 15 on 2 cores, back-to-back): 22 µs, 100 µs, 129 µs; the dense LU it replaced took
@@ -147,6 +149,57 @@ fn step_dim(c: &mut Criterion) {
         );
         group.bench_function(BenchmarkId::new("planar", n), |b| bench_steps(b, &planar));
         group.bench_function(BenchmarkId::new("spatial", n), |b| bench_steps(b, &spatial));
+    }
+    group.finish();
+}
+
+/// riser_300m.toml's pipe in its 0.5 m/s current (no waves) as `n` pendulums at a step stable
+/// for that n (h = 0.0125 (80/n)² s: the fastest bending mode scales like n²), with the
+/// momentum drag (`"momentum"`, its D for that n) or Morison's drag node by node (`"morison"`).
+fn pipe_riser(n: usize, model: &str) -> Scene {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/scenes/riser_300m.toml"
+    ))
+    .expect("riser_300m.toml");
+    let text = text.split("\n[mpc]\n").next().expect("scene");
+    let (a, b) = (
+        text.find("\n[loads.waves]\n").expect("waves"),
+        text.find("\n[time]\n").expect("time"),
+    );
+    let h = 0.0125 * (80.0 / n as f64).powi(2);
+    let mut text = format!("{}{}", &text[..a], &text[b..])
+        .replace("pendulums = 80", &format!("pendulums = {n}"))
+        .replace("step = 0.0125", &format!("step = {h}"))
+        .replace("steps = 48000 ", &format!("steps = {PRE_STEPS} "));
+    if model == "morison" {
+        text = text
+            .replace(
+                "added_mass_coefficient = 1.0\n",
+                "added_mass_coefficient = 1.0\ndrag_model = \"morison\"\n",
+            )
+            .replace("drag = 4.0020e-7 ", "# drag ");
+    } else {
+        let d = 4.0020e-7 * 80.0 / n as f64;
+        text = text.replace("drag = 4.0020e-7 ", &format!("drag = {d:e} "));
+    }
+    Scene::from_toml_str(&text).expect("valid scene")
+}
+
+/// The cost of Morison's drag node by node against the momentum drag it replaces, one planar
+/// `f64` step of riser_300m's pipe in its current, n = 100 and 1000: both O(n) (the node drag's
+/// half step is a root per node and two bidiagonal passes, its Newton matrix tridiagonal), so
+/// the time per pendulum-step is flat in n for both.
+fn step_pipe_drag(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step_pipe_drag");
+    group.sample_size(SAMPLES);
+    for n in [100, 1000] {
+        group.throughput(Throughput::Elements(n as u64));
+        for model in ["momentum", "morison"] {
+            let scene = pipe_riser(n, model);
+            let prep = prepared(&scene, planar_f64(&scene));
+            group.bench_function(BenchmarkId::new(model, n), |b| bench_steps(b, &prep));
+        }
     }
     group.finish();
 }
@@ -383,6 +436,6 @@ criterion_group! {
     name = benches;
     config = config();
     targets = step_f64_planar, step_scalar, step_dim, step_current, simulate_riser, force_jvp,
-        joint_damping
+        joint_damping, step_pipe_drag
 }
 criterion_main!(benches);

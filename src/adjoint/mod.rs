@@ -323,7 +323,7 @@ fn forward_sweep<D: Scalar, O: Objective, const DIM: usize>(
     (kk, mut state): (usize, State<D, DIM>),
 ) -> Result<(D, StateStore<D, DIM>)> {
     let (chain, u, steps) = (hz.chain, hz.controls, hz.steps);
-    let half = chain.has_dissipation();
+    let half = chain.records_half_step();
     rattle.prepare(&mut state, 0, u[0])?;
     let mut value = stage.value(chain, 0, &state.q, u[0]);
     let (n, nc) = (chain.n(), chain.n_constraints());
@@ -389,10 +389,9 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     start: Option<&Start<D, DIM>>,
 ) -> Result<AdjointResult<D>> {
     check_controls(u, steps)?;
-    chain.check_adjoint()?;
     check_parameters(chain, params)?;
     let (n, nc) = (chain.n(), chain.n_constraints());
-    let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.has_dissipation());
+    let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.records_half_step());
     let kk = checkpointing.interval(steps, state_size);
     let mut stage = StageEval {
         obj: objective,
@@ -430,7 +429,7 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     stage.accumulate(chain, (steps, last, u[steps]), &mut cot, k1_param);
     let mut sweep = ReverseSweep::new(chain, h, params);
     sweep.t0 = start.map_or(0.0, |s| s.t0);
-    let half = chain.has_dissipation();
+    let half = chain.records_half_step();
     let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
     for seg in (0..n_segments).rev() {
         let (a, b) = (seg * kk, (seg * kk + kk).min(steps));

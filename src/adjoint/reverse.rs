@@ -5,7 +5,8 @@
 use super::tape::StateView;
 use crate::base::{Parameter, Scalar, TipCondition};
 use crate::error::Result;
-use crate::model::{BlockSym, Chain, CoupledAt, Ctx, DualScratch, ReactionTip};
+use crate::model::terms::NodeReverseScratch;
+use crate::model::{BlockSym, Chain, CoupledAt, Ctx, DualScratch, NodeDrag, ReactionTip};
 use crate::steppers::coupled::CoupledHalf;
 use crate::steppers::singular;
 use crate::tridiag::BorderedTridiag;
@@ -45,6 +46,10 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     coupled: Option<CoupledHalf<D, DIM>>,
     coupled_params: Vec<(usize, Parameter)>,
     vhalf: Vec<[D; DIM]>,
+    /// Morison's drag node by node: the reverse products' scratch and the requested parameters
+    /// it reads (C_d, the current's speed).
+    node: Option<NodeReverseScratch<D, DIM>>,
+    node_params: Vec<(usize, Parameter)>,
     /// Start time t₀ of the horizon (step k at t₀ + k h).
     pub t0: f64,
 }
@@ -71,6 +76,13 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 .iter()
                 .enumerate()
                 .filter(|(_, p)| ch.coupled_has_parameter(**p))
+                .map(|(i, p)| (i, *p))
+                .collect(),
+            node: ch.node_drag().map(|_| NodeReverseScratch::new(n)),
+            node_params: params
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| ch.node_drag().is_some_and(|d| d.has_parameter(**p)))
                 .map(|(i, p)| (i, *p))
                 .collect(),
             vhalf: v.clone(),
@@ -190,7 +202,37 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         if self.coupled.is_some() {
             self.coupled_second_half(sk1, ctx1.step - 1, cot);
         }
+        if ch.node_drag().is_some() {
+            self.node_second_half(sk1, ctx1.step - 1, cot);
+        }
         self.force_terms(sk1.q, ctx1, Half::Second, cot)
+    }
+
+    /// The node-by-node Morison drag's share of the second half's reverse (b = … + h/2 Q(p½)):
+    /// p̄½ += h/2 (∂Q/∂p)ᵀ b̄ and θ̄ += h/2 b̄·∂Q/∂θ ([`crate::model::NodeDrag`]).
+    fn node_second_half(
+        &mut self,
+        sk1: &StateView<'_, D, DIM>,
+        k: usize,
+        cot: &mut Cotangents<D, DIM>,
+    ) {
+        let (ch, hh) = (self.ch, 0.5 * self.h);
+        let (Some(nd), Some(scratch)) = (ch.node_drag(), self.node.as_mut()) else {
+            return;
+        };
+        let dctx = ch.dissipation_ctx(self.t0 + k as f64 * self.h, self.h, k);
+        let ls = (ch.lengths(), ch.inverse_lengths());
+        self.tmp.copy_from_slice(&self.bbar);
+        nd.slope_transpose_apply(sk1.phalf, ls, &dctx, &mut self.tmp, scratch);
+        for (p, t) in self.phbar.iter_mut().zip(&self.tmp) {
+            for d in 0..DIM {
+                p[d] += t[d] * hh;
+            }
+        }
+        for &(ip, param) in &self.node_params {
+            let g = nd.parameter_contraction(sk1.phalf, ls, (&dctx, param), &self.bbar, scratch);
+            cot.thbar[ip] += g * hh;
+        }
     }
 
     /// The coupled terms' share of the second half's reverse (b = … + h/2 F_J(q′, M⁻¹p½)):
@@ -288,11 +330,16 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             cpl.factor_newton(ch, (q, sk1.q), h)
                 .map_err(|zp| singular(k, zp))?;
         }
-        self.w_times_s(&cot.qbar, w);
+        self.s_through_w(&cot.qbar, w, sk1.w);
         ops.apply(q, &self.tmp, &mut self.rhs);
         self.rhs.iter_mut().for_each(|r| *r = -*r * hh);
         if let Some(cpl) = &mut self.coupled {
             cpl.newton_solve_transpose(&mut self.rhs);
+        } else if ch.node_drag().is_some() {
+            ops.assemble_newton_nodes((q, sk1.q), sk1.w, h, &mut self.tri);
+            self.tri
+                .solve_transpose(&mut self.rhs)
+                .map_err(|zp| singular(k, zp))?;
         } else {
             ops.assemble_newton((q, sk1.q), w, h, &mut self.tri, &mut self.scal);
             self.tri
@@ -313,7 +360,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             }
             cot.thbar[ip] -= s * ch.inv_masses[0];
         }
-        self.w_times_s(&cot.qbar, w);
+        self.s_through_w(&cot.qbar, w, sk1.w);
         self.cbar.copy_from_slice(&self.tmp);
         if ch.has_dissipation() {
             dissipation_contraction(
@@ -329,10 +376,20 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             // p½ − h/2 F(q_k, p½) = c: q_k (and θ) reach p½ through F_J with the cotangent c̄.
             self.coupled_contractions((q, sk1.phalf), Half::First, &dctx, cot);
         }
+        if let (Some(nd), Some(scratch)) = (ch.node_drag(), self.node.as_mut()) {
+            // p½ − h/2 Q(p½; θ) = c: θ reaches p½ through Q with the cotangent c̄.
+            let ls = (ch.lengths(), ch.inverse_lengths());
+            for &(ip, param) in &self.node_params {
+                let g =
+                    nd.parameter_contraction(sk1.phalf, ls, (&dctx, param), &self.cbar, scratch);
+                cot.thbar[ip] += g * hh;
+            }
+        }
         Ok(())
     }
 
-    /// tmp = Wᵀ (p̄½ + h M⁻¹ q̄′) (W = I when `w` is None; each block of W is symmetric).
+    /// tmp = Wᵀ (p̄½ + h M⁻¹ q̄′) (W = I when `w` is None; each block of W is symmetric; with the
+    /// node-by-node Morison drag `w` holds its node slopes Ω and Wᵀ = Aᵀ Ω A⁻ᵀ).
     fn w_times_s(&mut self, qbar: &[[D; DIM]], w: Option<&[BlockSym<D, DIM>]>) {
         let h = self.h;
         self.ch.apply_inverse_mass(qbar, &mut self.tmp);
@@ -346,6 +403,32 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         if let Some(cpl) = &mut self.coupled {
             cpl.apply_w_transpose(&mut self.tmp);
         }
+    }
+
+    /// tmp = Wᵀ (p̄½ + h M⁻¹ q̄′) for the model's W: the node drag's ([`Self::node_w_times_s`],
+    /// `recorded` its Ω) or the blocks' ([`Self::w_times_s`]).
+    fn s_through_w(
+        &mut self,
+        qbar: &[[D; DIM]],
+        w: Option<&[BlockSym<D, DIM>]>,
+        recorded: &[BlockSym<D, DIM>],
+    ) {
+        if self.ch.node_drag().is_some() {
+            self.node_w_times_s(qbar, recorded);
+        } else {
+            self.w_times_s(qbar, w);
+        }
+    }
+
+    /// tmp = Wᵀ (p̄½ + h M⁻¹ q̄′) with the node drag's W = A⁻¹ Ω A (Ω = `omega`).
+    fn node_w_times_s(&mut self, qbar: &[[D; DIM]], omega: &[BlockSym<D, DIM>]) {
+        let h = self.h;
+        let ch = self.ch;
+        ch.apply_inverse_mass(qbar, &mut self.tmp);
+        for (t, p) in self.tmp.iter_mut().zip(&self.phbar) {
+            *t = std::array::from_fn(|d| p[d] + t[d] * h);
+        }
+        NodeDrag::w_transpose_apply(omega, (ch.lengths(), ch.inverse_lengths()), &mut self.tmp);
     }
 
     /// First half-step c = p_k − h/2 U_q(q_k; u_k) − h/2 Ĝ(q_k)ᵀλ: p̄_k = c̄,

@@ -30,12 +30,12 @@ pub enum ModelError {
     /// for a chain without a control node.
     #[error("invalid argument `control_x`: the model has no control node")]
     NoControlNode,
-    /// The model has a term whose reverse step (discrete adjoint) is not written yet: the
-    /// node-by-node Morison drag. Forward-mode (dual-number) derivatives of a simulation are
-    /// exact for it; the adjoint, the structured optimal-control solvers and MPC refuse it.
+    /// The model has a term the structured optimal-control solvers (Riccati, condensed) and so
+    /// MPC do not take yet: the node-by-node Morison drag (simulations, statics, forward-mode
+    /// derivatives and the discrete adjoint take it).
     #[error(
-        "invalid argument `model`: the {term} has no discrete adjoint yet; use forward-mode \
-         derivatives (dual numbers) or `drag_model = \"momentum\"`"
+        "invalid argument `model`: the structured solvers (Riccati, condensed) and MPC do not take \
+         the {term} yet; use L-BFGS on the adjoint gradient, or `drag_model = \"momentum\"`"
     )]
     NoAdjoint {
         /// The term, e.g. `node-by-node Morison drag`.

@@ -26,6 +26,16 @@ pub enum StepperError {
         /// The method, e.g. `SHAKE`.
         method: &'static str,
     },
+    /// The method does not implement Morison's drag node by node (`[pipe] drag_model =
+    /// "morison"`): only RATTLE does.
+    #[error(
+        "invalid argument `drag model`: {method} does not implement Morison's drag node by node \
+         (drag_model = \"morison\"); use RATTLE"
+    )]
+    NodeDragUnsupported {
+        /// The method, e.g. `SHAKE`.
+        method: &'static str,
+    },
     /// The time step h is not positive and finite.
     #[error("invalid argument `h`: the step must be positive and finite, got {h}")]
     StepNotPositive {

@@ -202,8 +202,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.vessel.as_ref().map_or(0.0, |v| v.mean())
     }
 
-    /// Refuses a model with a term the discrete adjoint does not differentiate yet (the
-    /// node-by-node Morison drag): the adjoint and the structured solvers call it first.
+    /// Whether a RATTLE step's half-step record (p_{k+½} and W, or the node drag's Ω) is
+    /// needed by the adjoint: a dissipative term or the node-by-node Morison drag.
+    pub fn records_half_step(&self) -> bool {
+        self.has_dissipation() || self.node_drag.is_some()
+    }
+
+    /// Refuses a model with a term the structured optimal-control solvers (Riccati, condensed;
+    /// so MPC) do not take yet (the node-by-node Morison drag): their stage models call it first.
     ///
     /// # Errors
     /// [`ModelError::NoAdjoint`].

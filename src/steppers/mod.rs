@@ -124,15 +124,18 @@ pub(crate) fn refuse_reaction_tip<D: Scalar, const DIM: usize>(
     Ok(())
 }
 
-/// Refuses the tips whose constraint moves (the reaction-force tip and the vessel's prescribed
-/// tip) for a method that implements neither.
-pub(crate) fn refuse_moving_tip<D: Scalar, const DIM: usize>(
+/// Refuses what only RATTLE implements: the tips whose constraint moves (the reaction-force tip
+/// and the vessel's prescribed tip) and Morison's drag node by node.
+pub(crate) fn refuse_rattle_only<D: Scalar, const DIM: usize>(
     chain: &Chain<D, DIM>,
     method: &'static str,
 ) -> Result<()> {
     refuse_reaction_tip(chain, method)?;
     if chain.tip_condition() == TipCondition::Prescribed {
         return Err(StepperError::PrescribedTipUnsupported { method }.into());
+    }
+    if chain.node_drag().is_some() {
+        return Err(StepperError::NodeDragUnsupported { method }.into());
     }
     Ok(())
 }

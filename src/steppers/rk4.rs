@@ -17,7 +17,7 @@
 
 use super::rattle::projection_solve;
 use super::{
-    check_finite, check_len, check_step, refuse_moving_tip, singular, total_force, PositionSolve,
+    check_finite, check_len, check_step, refuse_rattle_only, singular, total_force, PositionSolve,
     PositionStage, Stepper,
 };
 use crate::base::Scalar;
@@ -142,7 +142,7 @@ impl<D: Scalar, const DIM: usize> ProjectedRk4<D, DIM> {
     /// (only RATTLE supports it).
     pub fn new(chain: Chain<D, DIM>, h: f64) -> Result<Self> {
         check_step(h)?;
-        refuse_moving_tip(&chain, "projected RK4")?;
+        refuse_rattle_only(&chain, "projected RK4")?;
         let n = chain.n();
         let v = vec![[D::zero(); DIM]; n];
         let ws = Workspace {

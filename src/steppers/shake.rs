@@ -20,7 +20,7 @@
 //! λ of the previous step. The reaction-force tip is refused at construction.
 
 use super::{
-    check_finite, check_len, check_step, refuse_moving_tip, total_force, PositionSolve,
+    check_finite, check_len, check_step, refuse_rattle_only, total_force, PositionSolve,
     PositionStage, Stepper,
 };
 use crate::base::Scalar;
@@ -93,7 +93,7 @@ impl<D: Scalar, const DIM: usize> Shake<D, DIM> {
     /// (only RATTLE supports it).
     pub fn new(chain: Chain<D, DIM>, h: f64) -> Result<Self> {
         check_step(h)?;
-        refuse_moving_tip(&chain, "SHAKE")?;
+        refuse_rattle_only(&chain, "SHAKE")?;
         let v = vec![[D::zero(); DIM]; chain.n()];
         let ws = Workspace {
             force: v.clone(),

@@ -62,7 +62,7 @@ pub use dissipation::{
 pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
-pub use node_drag::NodeDrag;
+pub use node_drag::{NodeDrag, NodeReverseScratch};
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use spring::Springs;

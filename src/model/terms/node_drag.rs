@@ -27,9 +27,10 @@
 //! ([`crate::constraints::ConstraintOperator::assemble_newton_nodes`]).
 
 use super::current::CurrentDrag;
-use super::drag::root_of;
+use super::drag::{root_of, slope_of};
 use super::{BlockSym, Ctx, Embed};
 use crate::base::{Parameter, Scalar};
+use num_dual::Dual;
 
 /// Morison's drag node by node (module docs), over the water of a [`CurrentDrag`] (whose own drag
 /// constant is not used).
@@ -155,6 +156,116 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
                 pk[d] += self.water.momentum(k, d, ctx);
             }
         }
+    }
+}
+
+/// Scratch of the reverse products of a [`NodeDrag`] (allocated once per sweep).
+#[derive(Clone, Debug)]
+pub struct NodeReverseScratch<D, const DIM: usize> {
+    y: Vec<[D; DIM]>,
+    dp: Vec<[Dual<D>; DIM]>,
+    dy: Vec<[Dual<D>; DIM]>,
+    dq: Vec<[Dual<D>; DIM]>,
+}
+
+impl<D: Scalar, const DIM: usize> NodeReverseScratch<D, DIM> {
+    /// For a chain of `n` pendulums.
+    pub fn new(n: usize) -> Self {
+        NodeReverseScratch {
+            y: vec![[D::zero(); DIM]; n],
+            dp: vec![[Dual::from_re(D::zero()); DIM]; n],
+            dy: vec![[Dual::from_re(D::zero()); DIM]; n],
+            dq: vec![[Dual::from_re(D::zero()); DIM]; n],
+        }
+    }
+}
+
+impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
+    /// x ← (∂Q/∂p)ᵀ x = Aᵀ F′(y) A⁻ᵀ x at p (y = A(p − P); F′ symmetric per node, no axial
+    /// part): the second half step's reverse, p̄½ = b̄ + (h/2)(∂Q/∂p)ᵀ b̄.
+    pub(crate) fn slope_transpose_apply(
+        &self,
+        p: &[[D; DIM]],
+        (lengths, inv_lengths): (&[D], &[D]),
+        ctx: &Ctx<D>,
+        x: &mut [[D; DIM]],
+        scratch: &mut NodeReverseScratch<D, DIM>,
+    ) {
+        self.node_momenta(p, inv_lengths, ctx, &mut scratch.y);
+        prefix_scale(x, lengths);
+        let ax = DIM - 2;
+        for (k, (x, y)) in x.iter_mut().zip(&scratch.y).enumerate() {
+            let (_, mut j) = slope_of(self.node_constant(k, ctx), y);
+            j.diag[ax] = D::zero();
+            *x = j.apply(x);
+        }
+        difference_scale(x, inv_lengths);
+    }
+
+    /// x ← Wᵀ x = Aᵀ Ω A⁻ᵀ x (W = A⁻¹ Ω A of the half step, Ω recorded by it, each block
+    /// symmetric).
+    pub(crate) fn w_transpose_apply(
+        omega: &[BlockSym<D, DIM>],
+        (lengths, inv_lengths): (&[D], &[D]),
+        x: &mut [[D; DIM]],
+    ) {
+        prefix_scale(x, lengths);
+        for (x, w) in x.iter_mut().zip(omega) {
+            *x = w.apply(x);
+        }
+        difference_scale(x, inv_lengths);
+    }
+
+    /// w·∂Q/∂θ at p for the parameter θ (C_d, or the current's speed through P), by one
+    /// `Dual<D>` evaluation of Q with θ seeded.
+    pub(crate) fn parameter_contraction(
+        &self,
+        p: &[[D; DIM]],
+        ls: (&[D], &[D]),
+        (ctx, param): (&Ctx<D>, Parameter),
+        w: &[[D; DIM]],
+        scratch: &mut NodeReverseScratch<D, DIM>,
+    ) -> D {
+        if !self.has_parameter(param) {
+            return D::zero();
+        }
+        let c = ctx.dual(Some(param));
+        for (o, p) in scratch.dp.iter_mut().zip(p) {
+            *o = p.map(Dual::from_re);
+        }
+        let NodeReverseScratch { dp, dy, dq, .. } = scratch;
+        self.generalised_force(dp, ls, &c, dy, dq);
+        let out = &*dq;
+        let mut s = D::zero();
+        for (o, w) in out.iter().zip(w) {
+            for d in 0..DIM {
+                s += o[d].eps * w[d];
+            }
+        }
+        s
+    }
+}
+
+/// x ← A⁻ᵀ x = T diag(l) x: xₖ ← Σ_{j≤k} lⱼ xⱼ (prefix sums).
+fn prefix_scale<D: Scalar, const DIM: usize>(x: &mut [[D; DIM]], lengths: &[D]) {
+    let mut s = [D::zero(); DIM];
+    for (x, l) in x.iter_mut().zip(lengths) {
+        for (s, x) in s.iter_mut().zip(x.iter()) {
+            *s += *x * *l;
+        }
+        *x = s;
+    }
+}
+
+/// x ← Aᵀ x: xⱼ ← (xⱼ − xⱼ₋₁)/lⱼ (x₋₁ = 0).
+fn difference_scale<D: Scalar, const DIM: usize>(x: &mut [[D; DIM]], inv_lengths: &[D]) {
+    let mut prev = [D::zero(); DIM];
+    for (x, il) in x.iter_mut().zip(inv_lengths) {
+        let cur = *x;
+        for d in 0..DIM {
+            x[d] = (cur[d] - prev[d]) * *il;
+        }
+        prev = cur;
     }
 }
 

@@ -210,7 +210,7 @@ impl Sea {
                 // asks for 6.5·10¹⁰ components over 3 h): held to the limit of a given
                 // `components`, checked in f64 before any conversion or allocation.
                 let derived = (wc / dw).floor();
-                if !(derived <= MAX_COMPONENTS as f64) {
+                if derived.is_nan() || derived > MAX_COMPONENTS as f64 {
                     return Err(SeaError::TooManyComponents {
                         needed: derived,
                         repeat_period: fft_len as f64 * h,

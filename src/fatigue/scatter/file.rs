@@ -262,8 +262,8 @@ mod tests {
         assert!(e.to_string().contains("columns 2 and 4"), "{e}");
         let cells = parse_scatter("tp, hs ,probability\n# c\n8,1.5,0.25\n").unwrap();
         assert_eq!(cells.len(), 1);
-        assert_eq!((cells[0].sea.hs, cells[0].sea.tp), (1.5, 8.0));
-        assert_eq!(cells[0].probability, 0.25);
+        let bits = |c: &ScatterCell| [c.sea.hs, c.sea.tp, c.probability].map(f64::to_bits);
+        assert_eq!(bits(&cells[0]), [1.5f64, 8.0, 0.25].map(f64::to_bits));
     }
 
     /// Probabilities that add up to 0 describe no time: refused, not an infinite life.

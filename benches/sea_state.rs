@@ -19,6 +19,8 @@
 //! record) to the sampling noise, a check on the split (docs/scene-format.md "Real-scale
 //! risers").
 //!
+//! Group `wave_setup_10s` times the set-up of a 10 s run of the same sea (`wave_setup`).
+//!
 //! Run with `cargo bench --bench sea_state` (ten samples each; the report's time per iteration
 //! is the time of one whole run; target for 3 hours ≤ 10 s, ≥ 1000× real time). One group:
 //! `cargo bench --bench sea_state -- riser_300m_converged`.
@@ -103,5 +105,55 @@ fn sea_state(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sea_state);
+/// The set-up of a short wave run: `examples/scenes/riser_300m.toml` for 10 s (800 steps of
+/// 0.0125 s), its sea the same 3-hour realisation (M = 864 000 grid points per repeat period).
+/// `chain_from_scene`: the model as built now (the sea, the amplitudes and, per pendulum, the
+/// cheaper of the full inverse FFT and the zoom transform of the run's 801 times;
+/// `Sea::synthesis_rows`); `full_fft_record`: the per-pendulum transforms as they were built
+/// before, the repeat period's full inverse FFT of length M for each of the n + 1 series
+/// (`Sea::synthesis_every(1)`), the cost that made every wave scene take ~2.4 s before its
+/// first step whatever its length; `zoom_record`: the same n + 1 series by the zoom transform.
+/// `cargo bench --bench sea_state -- wave_setup_10s`.
+fn wave_setup(c: &mut Criterion) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/riser_300m.toml");
+    let mut scene = Scene::from_file(path).expect("the shipped scene");
+    scene.time.steps = 800;
+    assert_eq!(scene.time.steps as f64 * scene.time.step, 10.0);
+    scene.validate().unwrap();
+    let w = scene.loads.waves.expect("a sea");
+    let sea = chainbeam::ocean::Sea::new(
+        &w.sea_spec(scene.wave_depth()).unwrap(),
+        scene.time.step,
+        10.0,
+    )
+    .unwrap();
+    let amplitudes = vec![chainbeam::ocean::Complex::new(1.0, 0.5); sea.frequencies().len()];
+    let rows = scene.time.steps + 1;
+    let series = |plan: &mut chainbeam::ocean::Synthesis| {
+        let mut sum = 0.0;
+        for _ in 0..=scene.n() {
+            sea.synthesize((&amplitudes, &amplitudes), rows, plan, |_, x, y| {
+                sum += x + y
+            });
+        }
+        sum
+    };
+    let mut g = c.benchmark_group("wave_setup_10s");
+    g.sampling_mode(SamplingMode::Flat);
+    g.sample_size(10);
+    g.warm_up_time(Duration::from_millis(1));
+    g.measurement_time(Duration::from_secs(1));
+    g.bench_function("chain_from_scene", |b| {
+        b.iter(|| black_box(Chain::<f64, 2>::from_scene(black_box(&scene)).unwrap()))
+    });
+    g.bench_function("full_fft_record", |b| {
+        b.iter(|| black_box(series(&mut sea.synthesis_every(1))))
+    });
+    g.bench_function("zoom_record", |b| {
+        b.iter(|| black_box(series(&mut sea.synthesis_rows(1, rows))))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, sea_state, wave_setup);
 criterion_main!(benches);

@@ -329,6 +329,18 @@ fn scatter_refusals() {
             "line 2, column 3 (`probability`)",
         ),
         ("hs,tp,probability\n1,8,0.6\n2,9,0.6\n", "add up to 1.2"),
+        // No time at all: refused, not an infinite life (it exited 0 with life_years null).
+        ("hs,tp,probability\n1,8,0\n2,9,0.0\n", "add up to 0"),
+        // A repeated column (the first used to win, the rest ignored).
+        (
+            "hs,tp,probability,tp\n1,8,0.5,9\n",
+            "columns 2 and 4: the column `tp` is named twice",
+        ),
+        // One bad row's sea: the default components of T_p = 1 ms (used to abort).
+        (
+            "hs,tp,probability\n1,8,0.5\n1,0.001,0.5\n",
+            "loads.waves.tp",
+        ),
         ("hs,tp,probability\n", "no cells"),
         (
             "hs,tp,probability,direction\n1,8,0.5,inf\n",

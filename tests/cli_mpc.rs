@@ -329,3 +329,59 @@ fn the_mpc_objective_key_sets_what_the_plans_minimise() {
         "{err}"
     );
 }
+
+/// A planar scene whose load series covers exactly the run (t ∈ [0, t_N]) runs under `mpc`:
+/// the last plans look a horizon past t_N, where the plans see the series' last value held
+/// (docs/cli.md "mpc"). The hold changes nothing the plant sees, so the closed loop equals the
+/// same run with the series extended by hand with its last value over the last horizon (bit
+/// for bit: the same model, the same plans).
+#[test]
+fn a_series_that_covers_exactly_the_run_runs() {
+    let dir = setup();
+    // The harmonic load of the scene as a series of 101 rows, t = 0 … 1 s.
+    let rows: Vec<(f64, f64)> = (0..=100)
+        .map(|k| {
+            let t = k as f64 * 0.01;
+            (t, 2.0 * (std::f64::consts::PI * t).sin())
+        })
+        .collect();
+    let csv = |extra: bool| {
+        let mut s = String::from("t,fx,fz\n");
+        for (t, f) in &rows {
+            s.push_str(&format!("{t:?},0.0,{f:?}\n"));
+        }
+        if extra {
+            s.push_str(&format!("2.0,0.0,{:?}\n", rows[100].1));
+        }
+        s
+    };
+    fs::write(dir.path().join("exact.csv"), csv(false)).unwrap();
+    fs::write(dir.path().join("longer.csv"), csv(true)).unwrap();
+    let scene = |file: &str| {
+        SCENE.replacen(
+            "[[loads.point]]\nnode = 2\nramp = 0.5\n\n[[loads.point.harmonic]]\namplitude = 2.0\nperiod = 2.0\n",
+            &format!("[[loads.point]]\nnode = 2\nseries = \"{file}\"\n"),
+            1,
+        )
+    };
+    assert!(scene("x").contains("series"));
+    fs::write(dir.path().join("scene.toml"), scene("exact.csv")).unwrap();
+    let args = ["--horizon", "0.5", "--bound", "1.0", "-o", "exact_loop.csv"];
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    fs::write(dir.path().join("scene.toml"), scene("longer.csv")).unwrap();
+    let args = [
+        "--horizon",
+        "0.5",
+        "--bound",
+        "1.0",
+        "-o",
+        "longer_loop.csv",
+    ];
+    let o = run(dir.path(), &args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let exact = fs::read_to_string(dir.path().join("exact_loop.csv")).unwrap();
+    let longer = fs::read_to_string(dir.path().join("longer_loop.csv")).unwrap();
+    assert_eq!(exact.lines().count(), 102);
+    assert_eq!(exact, longer);
+}

@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "__version__"]
+__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "_read_scatter", "__version__"]
 
 @final
 class Scene:
@@ -102,3 +102,4 @@ def _fatigue_combine(
     runs: list[list[_Run]],
 ) -> dict[str, Any]: ...
 def _reduced_north_atlantic() -> list[tuple[float, float, float]]: ...
+def _read_scatter(path: str) -> list[tuple[float, float, float, float | None]]: ...

@@ -39,8 +39,6 @@ assessment is one task.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import os
 from collections.abc import Mapping, Sequence
@@ -94,17 +92,10 @@ def _cell(row: Mapping[str, Any], where: str) -> Cell:
 
 
 def _read_csv(path: Path) -> list[Cell]:
-    """The command line's scatter CSV: a header, # comments, fields trimmed."""
-    text = path.read_text()
-    lines = [ln for ln in text.splitlines() if not ln.lstrip().startswith("#")]
-    rows = list(csv.reader(io.StringIO("\n".join(lines))))
-    rows = [[f.strip() for f in r] for r in rows if r and any(f.strip() for f in r)]
-    if not rows:
-        raise _bad(f"scatter: {path}: no header")
-    header = rows[0]
-    cells = [_cell(dict(zip(header, r)), f"{path}, row {i}") for i, r in enumerate(rows[1:], 1)]
-    if not cells:
-        raise _bad(f"scatter: {path}: no cells (rows after the header)")
+    """The command line's scatter CSV, read by the library's reader (the bounded reader of every
+    input file: ``/dev/zero``, a huge file, a directory, a missing or non-UTF-8 file raise
+    ``InvalidArgumentError`` naming ``scatter`` and the file, never read for ever)."""
+    cells: list[Cell] = _chainbeam._read_scatter(os.fspath(path))
     return cells
 
 
@@ -143,8 +134,17 @@ def _cell_task(
     return _chainbeam._fatigue_cell(scene, cell, index, names, settings)
 
 
-def _optional(value: Any, kind: Any) -> Any:
-    return None if value is None else kind(value)
+def _optional(value: Any, kind: Any, name: str) -> Any:
+    """``value`` converted by ``kind`` (None: not given); a value that does not convert raises
+    ``InvalidArgumentError`` naming the argument ``name``."""
+    if value is None:
+        return None
+    try:
+        return kind(value)
+    except (TypeError, ValueError, OverflowError):
+        what = {int: "an integer", float: "a number"}.get(kind, "a string")
+        raise InvalidArgumentError(f"{name}: expected {what}, got {value!r}", "InvalidArgument",
+                                   name, None) from None
 
 
 def reduced_north_atlantic() -> pd.DataFrame:
@@ -194,16 +194,16 @@ def fatigue(
         ``controllers`` or a setting, named in ``.key``), SimulationError, ConvergenceError.
     """
     settings = {
-        "interval": _optional(interval, float),
-        "horizon": _optional(horizon, float),
-        "iterations": _optional(iterations, int),
-        "bound": _optional(bound, float),
-        "effort": _optional(effort, float),
-        "plan_pendulums": _optional(plan_pendulums, int),
-        "plan_step": _optional(plan_step, float),
-        "pd_training": _optional(pd_training, float),
-        "mpc_objective": _optional(mpc_objective, str),
-        "spin_up": float(spin_up),
+        "interval": _optional(interval, float, "interval"),
+        "horizon": _optional(horizon, float, "horizon"),
+        "iterations": _optional(iterations, int, "iterations"),
+        "bound": _optional(bound, float, "bound"),
+        "effort": _optional(effort, float, "effort"),
+        "plan_pendulums": _optional(plan_pendulums, int, "plan_pendulums"),
+        "plan_step": _optional(plan_step, float, "plan_step"),
+        "pd_training": _optional(pd_training, float, "pd_training"),
+        "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
+        "spin_up": _optional(spin_up, float, "spin_up"),
     }
     cells = None if scatter is None else _cells(scatter)
     names = _controllers(controllers)

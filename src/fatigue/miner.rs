@@ -89,6 +89,8 @@ const PROBABILITY_SUM_TOLERANCE: f64 = 1e-6;
 /// # Errors
 /// [`FatigueError::InvalidProbability`] naming the cell if a probability is outside \[0, 1\] or
 /// not finite, [`FatigueError::ProbabilitySum`] if they add up to more than 1 (+10⁻⁶),
+/// [`FatigueError::EmptyDiagram`] if there is no cell or they add up to 0 (no time at all: not
+/// an infinite life),
 /// [`FatigueError::InvalidSpec`] (`duration`) or [`FatigueError::NonFinite`] (`damage`, with
 /// the cell's index) for a bad record.
 pub fn combine_scatter(cells: &[CellDamage]) -> Result<ScatterDamage, FatigueError> {
@@ -107,6 +109,11 @@ pub fn combine_scatter(cells: &[CellDamage]) -> Result<ScatterDamage, FatigueErr
         return Err(FatigueError::ProbabilitySum {
             sum: probability_sum,
         });
+    }
+    // A diagram of probability 0 describes no time at all: its damage 0 would be an infinite
+    // life read from nothing.
+    if cells.is_empty() || probability_sum <= 0.0 {
+        return Err(FatigueError::EmptyDiagram { cells: cells.len() });
     }
     Ok(ScatterDamage {
         damage_per_year: out.iter().sum(),

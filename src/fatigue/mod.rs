@@ -116,6 +116,16 @@ pub enum FatigueError {
         /// The probability.
         value: f64,
     },
+    /// The scatter diagram has no cell, or its probabilities add up to 0: it describes no time,
+    /// and a damage of 0 from it would be an infinite life read from nothing.
+    #[error(
+        "the scatter diagram's {cells} cells have probabilities that add up to 0: it describes \
+         no sea states (give each cell its probability of occurrence)"
+    )]
+    EmptyDiagram {
+        /// The number of cells.
+        cells: usize,
+    },
     /// The scatter diagram's probabilities add up to more than 1.
     #[error("the scatter diagram's probabilities add up to {sum}, more than 1")]
     ProbabilitySum {

@@ -17,9 +17,16 @@
 //! probability of each T_p bin) and gives each bin the representative sea state it is given.
 //!
 //! A published tabulated diagram, the North Atlantic table of IACS Rec. No. 34, and its
-//! reduction to 20 cells are in [`north_atlantic`] ([`reduced_north_atlantic`]).
+//! reduction to 20 cells are in [`north_atlantic`] ([`reduced_north_atlantic`]). A diagram's
+//! CSV file is read by [`read_scatter_file`] ([`file`]).
 
+pub mod file;
 pub mod north_atlantic;
+
+pub use file::{
+    check_diagram, parse_scatter, read_scatter_file, ScatterFileError, ScatterFileErrorKind,
+    SCATTER_COLUMNS,
+};
 
 pub use north_atlantic::{
     lump_north_atlantic, reduced_north_atlantic, tp_over_tz, NORTH_ATLANTIC_HS,

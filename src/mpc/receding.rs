@@ -291,6 +291,7 @@ impl<const DIM: usize> Mpc<DIM> {
         if self.template.as_ref().map(|t| t.0) != Some(pieces) {
             let mut scene = self.model.clone();
             scene.time.steps = pieces * self.model_steps;
+            hold_series_past_end(&mut scene);
             let map = PiecewiseControl {
                 steps: scene.time.steps,
                 pieces,
@@ -345,6 +346,7 @@ impl<const DIM: usize> Mpc<DIM> {
         let mut scene = self.model.clone();
         let end = obs.steps as f64 * obs.h + pieces as f64 * self.interval;
         scene.time.steps = (end / scene.time.step).ceil() as usize + 1;
+        hold_series_past_end(&mut scene);
         let mut chain = Chain::<f64, DIM>::from_scene(&scene)?;
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
@@ -516,5 +518,26 @@ impl SpatialController for Mpc<3> {
 
     fn last_iterations(&self) -> Option<usize> {
         self.last.as_ref().map(|r| r.iterations)
+    }
+}
+
+/// What a plan sees of a load's time series past the run's end: its last value, held. The
+/// plans of the last decisions look up to a horizon beyond t_N, where the plant never runs and
+/// the series (which need only cover the run) has no rows; a [`crate::scene::LoadSeries`] holds
+/// its last row outside its rows already, so a row (t_end, last F) appended at the planning
+/// scene's end t_end = N h changes nothing inside the series and makes the hold explicit for
+/// the scene's coverage rule (the planning scene is then valid, as the plant's is). The
+/// alternative, a horizon cut at t_N, would change every plan of every scene near the end,
+/// series or not; holding the last value changes no scene that ran before.
+fn hold_series_past_end(scene: &mut Scene) {
+    let t_end = scene.time.steps as f64 * scene.time.step;
+    for load in &mut scene.loads.points {
+        if let Some(series) = load.series.as_mut() {
+            if let Some(&[t, fx, fz]) = series.samples.last() {
+                if t < t_end {
+                    series.samples.push([t_end, fx, fz]);
+                }
+            }
+        }
     }
 }

@@ -21,6 +21,11 @@ pub fn wavenumber(omega: f64, depth: f64, g: f64) -> f64 {
     if nu > 40.0 {
         return k_deep;
     }
+    // A depth so small that ν is subnormal or 0 (where ν/√(tanh ν) would be 0/0): the
+    // shallow-water root k = ω/√(g d), exact to round-off there (tanh x = x to ε below 10⁻⁸).
+    if nu < f64::MIN_POSITIVE {
+        return omega / (g * depth).sqrt();
+    }
     let mut x = nu / libm::tanh(nu).sqrt();
     for _ in 0..60 {
         let t = libm::tanh(x);

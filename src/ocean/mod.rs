@@ -23,7 +23,8 @@ pub use dispersion::wavenumber;
 pub use rustfft::num_complex::Complex;
 pub use spectrum::{Spectrum, SpectrumKind};
 pub use waves::{
-    cell_profile, depth_profile, Sea, SeaSpec, Synthesis, WaveRecord, MAX_RECORD_BYTES,
+    above_surface, cell_profile, depth_profile, Sea, SeaSpec, Synthesis, WaveRecord,
+    MAX_RECORD_BYTES, SURFACE_TOLERANCE,
 };
 
 use thiserror::Error;
@@ -46,6 +47,22 @@ pub enum SeaError {
         value: f64,
         /// The valid range, in words.
         expected: &'static str,
+    },
+    /// The default number of components N = ⌊ω_c T_r/2π⌋ = ⌊6 T_r/T_p⌋ (the spectrum's cutoff
+    /// ω_c = 6 ω_p over the frequency step 2π/T_r) is over the limit of a given `components`
+    /// (a very short peak period, or a very long run).
+    #[error(
+        "the sea needs {needed:e} components (⌊6 T_r/T_p⌋ with the repeat period T_r = \
+         {repeat_period} s), over the limit of {limit}; use a longer peak period tp (or a \
+         shorter run), or give the number of components"
+    )]
+    TooManyComponents {
+        /// N = ⌊ω_c T_r/2π⌋ (may be +∞).
+        needed: f64,
+        /// The repeat period T_r \[s\].
+        repeat_period: f64,
+        /// The limit, [`waves::MAX_COMPONENTS`].
+        limit: usize,
     },
     /// The record (or its FFT) would need more memory than the limit.
     #[error(

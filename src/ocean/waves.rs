@@ -68,28 +68,51 @@ impl SeaSpec {
     }
 }
 
+/// How far above the mean surface, relative to the depth d, a height still counts as at the
+/// surface: node heights are sums of the lengths, y_k = l₁ + … + l_k, and equal lengths L/n do
+/// not always add up to L exactly (1000/300 three hundred times is 1000 + 4.4e-12), so the top
+/// node of a riser whose length is the water depth may lie a few ulps above it. 10⁻⁹ d is far
+/// above such rounding and far below any height a scene means (the current's tolerance,
+/// `scene::current_velocity`).
+pub const SURFACE_TOLERANCE: f64 = 1e-9;
+
+/// Whether height y lies above the mean surface y = d (by more than [`SURFACE_TOLERANCE`] d):
+/// there is no water there, and the waves' kinematics are zero.
+#[inline]
+pub fn above_surface(y: f64, depth: f64) -> bool {
+    y > depth + SURFACE_TOLERANCE * depth
+}
+
 /// The depth profile of the horizontal particle velocity of a component of wavenumber k at
 /// height y above the seabed in depth d: cosh(k y)/sinh(k d) (DNV-RP-C205 Table 3-1), evaluated
 /// as (e^{k(y−d)} + e^{−k(y+d)}) / (1 − e^{−2kd}) so that it neither overflows in deep water
-/// nor loses digits in shallow water. y is clamped to [0, d]: above the mean surface the
-/// surface's kinematics are used (no stretching).
+/// nor loses digits in shallow water. Above the mean surface (y > d, [`above_surface`]) there is
+/// no water and the profile is 0 (as the current stops there); a height within
+/// [`SURFACE_TOLERANCE`] d above it is at the surface (y = d), one below the seabed at y = 0.
 pub fn depth_profile(k: f64, y: f64, depth: f64) -> f64 {
+    if above_surface(y, depth) {
+        return 0.0;
+    }
     let y = y.clamp(0.0, depth);
     (libm::exp(k * (y - depth)) + libm::exp(-k * (y + depth))) / -libm::expm1(-2.0 * k * depth)
 }
 
 /// The mean of [`depth_profile`] over the heights [y₀, y₁] (0 ≤ y₀ < y₁):
 /// (1/(y₁ − y₀)) ∫ cosh(k y)/sinh(k d) dy = (S(y₁') − S(y₀'))/(k (y₁ − y₀)) with
-/// S(y) = sinh(k y)/sinh(k d) = (e^{k(y−d)} − e^{−k(y+d)}) / (1 − e^{−2kd}) and y' = min(y, d),
-/// plus the surface's profile over the part above d (clamped, as [`depth_profile`]). The
-/// velocity of a node's cell averaged exactly (`[loads.waves] lumping = "cell"`).
+/// S(y) = sinh(k y)/sinh(k d) = (e^{k(y−d)} − e^{−k(y+d)}) / (1 − e^{−2kd}) and y' = min(y, d):
+/// the part of the interval above the mean surface holds no water and adds nothing (the
+/// profile is 0 there, [`depth_profile`]), so a cell cut by the surface has the mean of its
+/// wet part times its wet fraction. The velocity of a node's cell averaged exactly
+/// (`[loads.waves] lumping = "cell"`).
 pub fn cell_profile(k: f64, (y0, y1): (f64, f64), depth: f64) -> f64 {
+    if above_surface(y0, depth) {
+        return 0.0;
+    }
     let s = |y: f64| {
         let y = y.clamp(0.0, depth);
         (libm::exp(k * (y - depth)) - libm::exp(-k * (y + depth))) / -libm::expm1(-2.0 * k * depth)
     };
-    let above = (y1 - y0.max(depth)).max(0.0) * depth_profile(k, depth, depth);
-    ((s(y1) - s(y0)) / k + above) / (y1 - y0)
+    (s(y1) - s(y0)) / k / (y1 - y0)
 }
 
 /// A realisation of a sea state on the time grid tₖ = k h (module docs).
@@ -180,11 +203,25 @@ impl Sea {
         }
         let fft_len = m as usize;
         let dw = 2.0 * PI / (fft_len as f64 * h);
-        let count = spec
-            .components
-            .unwrap_or(((wc / dw).floor() as usize).max(1));
+        let count = match spec.components {
+            Some(c) => c,
+            None => {
+                // N = ⌊ω_c/Δω⌋ = ⌊6 T_r/T_p⌋ grows without bound as T_p → 0 (a T_p of 1 ms
+                // asks for 6.5·10¹⁰ components over 3 h): held to the limit of a given
+                // `components`, checked in f64 before any conversion or allocation.
+                let derived = (wc / dw).floor();
+                if derived.is_nan() || derived > MAX_COMPONENTS as f64 {
+                    return Err(SeaError::TooManyComponents {
+                        needed: derived,
+                        repeat_period: fft_len as f64 * h,
+                        limit: MAX_COMPONENTS,
+                    });
+                }
+                (derived as usize).max(1)
+            }
+        };
         let omega: Vec<f64> = (1..=count).map(|j| j as f64 * dw).collect();
-        let k = omega
+        let k: Vec<f64> = omega
             .iter()
             .map(|&w| wavenumber(w, spec.depth, spec.gravity))
             .collect();
@@ -192,6 +229,22 @@ impl Sea {
             .iter()
             .map(|&w| (2.0 * spec.spectrum.density(w) * dw).sqrt())
             .collect();
+        // Outside the domain of the f64 sea: a height so large that S(ω) overflows, a depth so
+        // small that the wavenumbers do (each named, never a NaN in the loads later).
+        if amplitude.iter().any(|a| !a.is_finite()) {
+            return Err(invalid(
+                "hs",
+                spec.spectrum.hs,
+                "small enough that the amplitudes √(2 S(ωⱼ) Δω) are finite [m]",
+            ));
+        }
+        if k.iter().any(|k: &f64| !k.is_finite()) {
+            return Err(invalid(
+                "depth",
+                spec.depth,
+                "large enough that the wavenumbers are finite [m]",
+            ));
+        }
         let phase = phases(spec.seed, count);
         let phasor = amplitude
             .iter()
@@ -292,9 +345,11 @@ impl Sea {
     }
 
     /// The record of `steps + 1` times tₖ = k h (k = 0..=steps) at the given heights above the
-    /// seabed \[m\]: one inverse FFT of length M per height (velocity and acceleration together
-    /// as the real and imaginary parts of one transform) and one for η, O((n + 1) M log M).
-    /// Beyond T_r the record repeats (k is taken modulo M).
+    /// seabed \[m\]: one synthesis per height (velocity and acceleration together as the real and
+    /// imaginary parts of one transform) and one for η, each the cheaper of the inverse FFT of
+    /// length M and the zoom transform of the steps + 1 times alone ([`Sea::synthesis_rows`]):
+    /// O((n + 1) min(M log M, P log P)), P ≈ 2N + steps. Beyond T_r the record repeats (k is
+    /// taken modulo M).
     ///
     /// # Errors
     /// [`SeaError::Invalid`] naming `height` for a negative or non-finite height;
@@ -333,30 +388,29 @@ impl Sea {
             acceleration: alloc(len * n)?,
             elevation: alloc(len)?,
         };
-        let m = self.fft_len;
-        let fft = FftPlanner::<f64>::new().plan_fft_inverse(m);
-        let mut buf = vec![Complex::new(0.0, 0.0); m];
-        let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
-        let i = Complex::new(0.0, 1.0);
+        // The cheaper of the full and the zoom transform for these rows, as the model's record
+        // chooses ([`Sea::synthesis_rows`]): the same elevation, bit for bit.
+        let mut plan = self.synthesis_rows(1, len);
         // η = Re Σ aⱼ e^{iφⱼ} e^{iωⱼt}.
-        self.fill(&mut buf, |j| (self.phasor[j], Complex::new(0.0, 0.0)));
-        fft.process_with_scratch(&mut buf, &mut scratch);
-        for (k, e) in rec.elevation.iter_mut().enumerate() {
-            *e = buf[k % m].re;
-        }
+        let el = &mut rec.elevation;
+        self.synthesize((&self.phasor, &[]), len, &mut plan, |k, x, _| el[k] = x);
+        let i = Complex::new(0.0, 1.0);
+        let nc = self.omega.len();
+        let (mut v, mut a) = (
+            vec![Complex::new(0.0, 0.0); nc],
+            vec![Complex::new(0.0, 0.0); nc],
+        );
         for (node, &y) in heights.iter().enumerate() {
             // u = Re Σ Vⱼ e^{iωⱼt}, Vⱼ = ωⱼ Gⱼ(y) aⱼ e^{iφⱼ}, and u̇ = Re Σ i ωⱼ Vⱼ e^{iωⱼt}.
-            self.fill(&mut buf, |j| {
-                let w = self.omega[j];
-                let v = self.phasor[j] * (w * depth_profile(self.k[j], y, self.spec.depth));
-                (v, i * w * v)
-            });
-            fft.process_with_scratch(&mut buf, &mut scratch);
-            for k in 0..len {
-                let z = buf[k % m];
-                rec.velocity[k * n + node] = z.re;
-                rec.acceleration[k * n + node] = z.im;
+            self.velocity_amplitudes(y, &mut v);
+            for ((aj, vj), &w) in a.iter_mut().zip(&v).zip(&self.omega) {
+                *aj = i * w * vj;
             }
+            let (vel, acc) = (&mut rec.velocity, &mut rec.acceleration);
+            self.synthesize((&v, &a), len, &mut plan, |k, x, y| {
+                vel[k * n + node] = x;
+                acc[k * n + node] = y;
+            });
         }
         Ok(rec)
     }
@@ -409,19 +463,114 @@ impl Sea {
     /// the components folded modulo M/r, exactly — and otherwise of length M, read every r-th
     /// value.
     pub fn synthesis_every(&self, every: usize) -> Synthesis {
-        let every = every.max(1);
-        let (m, stride) = if self.fft_len.is_multiple_of(every) {
-            (self.fft_len / every, 1)
-        } else {
-            (self.fft_len, every)
-        };
+        let (m, stride) = self.grid(every);
         let fft = FftPlanner::<f64>::new().plan_fft_inverse(m);
         let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
         Synthesis {
-            fft,
-            buf: vec![Complex::new(0.0, 0.0); m],
-            scratch,
-            stride,
+            engine: Engine::Full {
+                fft,
+                buf: vec![Complex::new(0.0, 0.0); m],
+                scratch,
+                stride,
+            },
+        }
+    }
+
+    /// The transform length L and the stride s of the grid t = k r h (`every` = r ≥ 1): (M/r, 1)
+    /// when r divides M, else (M, r): on that grid ωⱼ t = 2π (j+1) s k / L.
+    fn grid(&self, every: usize) -> (usize, usize) {
+        let every = every.max(1);
+        if self.fft_len.is_multiple_of(every) {
+            (self.fft_len / every, 1)
+        } else {
+            (self.fft_len, every)
+        }
+    }
+
+    /// A reusable synthesis of the first `rows` times of the grid t = k r h (`every` = r ≥ 1)
+    /// for [`Sea::synthesize`], at the cost of the run rather than of the repeat period: the
+    /// full inverse FFT of [`Sea::synthesis_every`] (length L = M/r or M) when it is the cheaper,
+    /// else the **zoom** transform, which forms only the `rows` outputs the run reads.
+    ///
+    /// The zoom transform (Bluestein's chirp z-transform restricted to the band the components
+    /// occupy): on the grid, with signed frequency indices f ∈ [−N, N] (component j at
+    /// f = j + 1 with (Xⱼ + i Yⱼ)/2 and at f = −(j + 1) with (X̄ⱼ + i Ȳⱼ)/2, the coefficients the
+    /// full transform's bins hold, [`Sea::synthesize`]) and V = e^{iπ s/L},
+    /// z_k = Σ_f c_f V^{2 f k}. With u = f + N and 2uk = u² + k² − (k − u)²,
+    ///
+    /// ```text
+    /// z_k = V^{k² − 2Nk} Σ_{u=0}^{2N} (c_{u−N} V^{u²}) V^{−(k−u)²},   k = 0..rows,
+    /// ```
+    ///
+    /// a linear convolution of 2N + 1 values with a kernel of 2N + rows values: two FFTs of a
+    /// length P ≥ 2N + rows per series (the kernel's transform is planned once), O(P log P) in
+    /// place of O(L log L): a 10 s run of a 3-hour sea at h = 0.01 s transforms 16 384 points
+    /// instead of 1 080 000. Every power V^m is formed from m s reduced modulo 2L in integers, so
+    /// the transform is exact to round-off whatever the size of the exponents; the sum is the
+    /// same trigonometric sum as the full transform's (the same sea: the components, amplitudes
+    /// and phases are untouched), its values differ from the full FFT's by round-off
+    /// (measured 10⁻¹⁶ of the series' amplitude sum, `tests/sea_domain.rs`).
+    ///
+    /// The choice is made from the sizes alone (the zoom when 2 P log₂ P < L log₂ L / 2, the
+    /// margin keeping the full transform, and its bits, for runs of a good part of the repeat
+    /// period), so the model's record and [`Sea::record`] of the same grid and rows choose
+    /// alike and agree bit for bit.
+    pub fn synthesis_rows(&self, every: usize, rows: usize) -> Synthesis {
+        let (l, s) = self.grid(every);
+        let nc = self.omega.len();
+        let band = 2 * nc + 1;
+        let p = match band.checked_add(rows) {
+            Some(x) => x.next_power_of_two(),
+            None => return self.synthesis_every(every),
+        };
+        let cost = |n: usize| n as f64 * (n.max(2) as f64).log2();
+        if rows == 0 || 2.0 * cost(p) >= 0.5 * cost(l) {
+            return self.synthesis_every(every);
+        }
+        // V^m = e^{iπ s m / L}, m reduced modulo 2L exactly.
+        let (l2, s) = (2 * l as i128, s as i128);
+        let power = |m: i128| {
+            let e = (s * m).rem_euclid(l2) as f64;
+            let a = PI * e / l as f64;
+            Complex::new(libm::cos(a), libm::sin(a))
+        };
+        let nn = nc as i128;
+        let pre: Vec<Complex<f64>> = (0..band as i128).map(|u| power(u * u)).collect();
+        let post: Vec<Complex<f64>> = (0..rows as i128)
+            .map(|k| power(k * k - 2 * nn * k))
+            .collect();
+        // The kernel h_d = V^{−d²}, d = −2N..rows−1, stored cyclically (d < 0 at P + d), its
+        // transform divided by P (the inverse transform's normalisation).
+        let mut planner = FftPlanner::<f64>::new();
+        let forward = planner.plan_fft_forward(p);
+        let inverse = planner.plan_fft_inverse(p);
+        let mut kernel = vec![Complex::new(0.0, 0.0); p];
+        for d in -(2 * nn)..rows as i128 {
+            let at = if d < 0 { p as i128 + d } else { d } as usize;
+            kernel[at] = power(-d * d);
+        }
+        let mut scratch = vec![
+            Complex::new(0.0, 0.0);
+            forward
+                .get_inplace_scratch_len()
+                .max(inverse.get_inplace_scratch_len())
+        ];
+        forward.process_with_scratch(&mut kernel, &mut scratch);
+        let scale = 1.0 / p as f64;
+        for x in &mut kernel {
+            *x *= scale;
+        }
+        Synthesis {
+            engine: Engine::Zoom(Box::new(Zoom {
+                forward,
+                inverse,
+                kernel,
+                pre,
+                post,
+                buf: vec![Complex::new(0.0, 0.0); p],
+                scratch,
+                dt: every.max(1) as f64 * self.h,
+            })),
         }
     }
 
@@ -429,7 +578,9 @@ impl Sea {
     /// M: `out(k, xₖ, yₖ)` with xₖ = Re Σⱼ Xⱼ e^{iωⱼ tₖ} and yₖ = Re Σⱼ Yⱼ e^{iωⱼ tₖ} (one
     /// amplitude per component; k is taken modulo M beyond the repeat period). O(M log M)
     /// instead of the direct sum's O(N) per time. With a plan of [`Sea::synthesis_every`]`(r)`
-    /// the grid is tₖ = k r h.
+    /// the grid is tₖ = k r h; with one of [`Sea::synthesis_rows`]`(r, rows)` the same grid by
+    /// the cheaper of the full and the zoom transform (rows beyond the plan's are then summed
+    /// directly, O(N) each).
     pub fn synthesize(
         &self,
         (x, y): (&[Complex<f64>], &[Complex<f64>]),
@@ -438,18 +589,57 @@ impl Sea {
         mut out: impl FnMut(usize, f64, f64),
     ) {
         let zero = Complex::new(0.0, 0.0);
-        self.fill(&mut plan.buf, |j| {
+        let coef = |j: usize| {
             (
                 x.get(j).copied().unwrap_or(zero),
                 y.get(j).copied().unwrap_or(zero),
             )
-        });
-        plan.fft
-            .process_with_scratch(&mut plan.buf, &mut plan.scratch);
-        let (m, stride) = (plan.buf.len(), plan.stride);
-        for k in 0..rows {
-            let z = plan.buf[(k * stride) % m];
-            out(k, z.re, z.im);
+        };
+        match &mut plan.engine {
+            Engine::Full {
+                fft,
+                buf,
+                scratch,
+                stride,
+            } => {
+                self.fill(buf, coef);
+                fft.process_with_scratch(buf, scratch);
+                let m = buf.len();
+                for k in 0..rows {
+                    let z = buf[(k * *stride) % m];
+                    out(k, z.re, z.im);
+                }
+            }
+            Engine::Zoom(z) => {
+                let nc = self.omega.len();
+                let i = Complex::new(0.0, 1.0);
+                z.buf.fill(zero);
+                for j in 0..nc {
+                    let (a, b) = coef(j);
+                    // f = j + 1 at u = N + j + 1, f = −(j + 1) at u = N − j − 1.
+                    z.buf[nc + j + 1] = (a + i * b) * 0.5 * z.pre[nc + j + 1];
+                    z.buf[nc - j - 1] = (a.conj() + i * b.conj()) * 0.5 * z.pre[nc - j - 1];
+                }
+                z.forward.process_with_scratch(&mut z.buf, &mut z.scratch);
+                for (b, h) in z.buf.iter_mut().zip(&z.kernel) {
+                    *b *= h;
+                }
+                z.inverse.process_with_scratch(&mut z.buf, &mut z.scratch);
+                let formed = rows.min(z.post.len());
+                for k in 0..formed {
+                    let v = z.buf[k] * z.post[k];
+                    out(k, v.re, v.im);
+                }
+                if rows > formed {
+                    let h = z.dt;
+                    let xs: Vec<Complex<f64>> = (0..nc).map(|j| coef(j).0).collect();
+                    let ys: Vec<Complex<f64>> = (0..nc).map(|j| coef(j).1).collect();
+                    for k in formed..rows {
+                        let t = k as f64 * h;
+                        out(k, self.sum_at(&xs, t), self.sum_at(&ys, t));
+                    }
+                }
+            }
         }
     }
 
@@ -471,22 +661,69 @@ impl Sea {
     }
 }
 
-/// A planned inverse FFT with its buffers ([`Sea::synthesis`], [`Sea::synthesis_every`],
-/// [`Sea::synthesize`]).
+/// A planned synthesis with its buffers ([`Sea::synthesis`], [`Sea::synthesis_every`],
+/// [`Sea::synthesis_rows`], [`Sea::synthesize`]).
 pub struct Synthesis {
-    fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    engine: Engine,
+}
+
+/// How a [`Synthesis`] forms the series.
+enum Engine {
+    /// The inverse FFT of length L, read every `stride`-th value (1 unless a coarser grid's r
+    /// does not divide M).
+    Full {
+        fft: std::sync::Arc<dyn rustfft::Fft<f64>>,
+        buf: Vec<Complex<f64>>,
+        scratch: Vec<Complex<f64>>,
+        stride: usize,
+    },
+    /// The zoom transform of [`Sea::synthesis_rows`].
+    Zoom(Box<Zoom>),
+}
+
+/// The plan of the zoom transform ([`Sea::synthesis_rows`]): the chirps V^{u²} (u = 0..=2N) and
+/// V^{k² − 2Nk} (k = 0..rows), the kernel's transform over P, and the FFTs of length P.
+struct Zoom {
+    forward: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    inverse: std::sync::Arc<dyn rustfft::Fft<f64>>,
+    kernel: Vec<Complex<f64>>,
+    pre: Vec<Complex<f64>>,
+    post: Vec<Complex<f64>>,
     buf: Vec<Complex<f64>>,
     scratch: Vec<Complex<f64>>,
-    /// The output read every `stride`-th value (1 unless a coarser grid's r does not divide M).
-    stride: usize,
+    /// The grid's time step r h \[s\] (for rows beyond the plan's, summed directly).
+    dt: f64,
+}
+
+impl Synthesis {
+    /// Whether the plan forms only the rows asked for (the zoom transform of
+    /// [`Sea::synthesis_rows`]) rather than the whole repeat period.
+    pub fn is_zoom(&self) -> bool {
+        matches!(self.engine, Engine::Zoom(_))
+    }
+
+    /// The number of points of its FFTs (L for the full transform, P for the zoom).
+    pub fn len(&self) -> usize {
+        match &self.engine {
+            Engine::Full { buf, .. } => buf.len(),
+            Engine::Zoom(z) => z.buf.len(),
+        }
+    }
+
+    /// Whether it has no points (never).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 impl std::fmt::Debug for Synthesis {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Synthesis")
-            .field("len", &self.buf.len())
-            .field("stride", &self.stride)
-            .finish()
+        let mut d = f.debug_struct("Synthesis");
+        d.field("len", &self.len()).field("zoom", &self.is_zoom());
+        if let Engine::Full { stride, .. } = &self.engine {
+            d.field("stride", stride);
+        }
+        d.finish()
     }
 }
 

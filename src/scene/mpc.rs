@@ -124,11 +124,11 @@ impl MpcSettings {
         match self.objective {
             Some(MpcPlanObjective::Sum) => return Ok(ObjectiveKind::Sum),
             Some(MpcPlanObjective::Power) => {
-                let spec = scene.fatigue.ok_or_else(|| {
+                let spec = scene.fatigue_spec().ok_or_else(|| {
                     SceneError::invalid(
                         "mpc.objective",
                         "\"power\" plans on Σ|M₀|^m with m the S-N curve's first slope: it needs \
-                         a [fatigue] table (docs/scene-format.md)",
+                         a [fatigue] or a [pipe] table (docs/scene-format.md)",
                     )
                 })?;
                 let d = WellheadDamage::new(&spec, scene.moment_measure()).map_err(|e| {

@@ -418,11 +418,19 @@ impl RawScene {
             .map(RawCurrent::into_current)
             .transpose()?;
         super::pipe::reconcile_surface(&water, current.as_mut())?;
-        let fatigue = self.fatigue.map(RawFatigue::into_spec).transpose()?;
+        let fatigue = self
+            .fatigue
+            .map(|f| f.into_spec(self.pipe.as_ref()))
+            .transpose()?;
         let base_length = beam.lengths.first().copied().unwrap_or(f64::NAN);
+        // Without a [fatigue] table a [pipe]'s section serves (`Scene::fatigue_spec`).
+        let assessed = fatigue.or_else(|| {
+            self.pipe
+                .map(|p| crate::fatigue::FatigueSpec::new(p.outer_diameter, p.wall_thickness))
+        });
         let objective = self
             .objective
-            .map(|o| o.into_kind(fatigue.as_ref(), base_length))
+            .map(|o| o.into_kind(assessed.as_ref(), base_length))
             .transpose()?;
         // `support = "vessel"` without `[vessel]`: a vessel that holds the top still.
         let vessel = match (self.vessel, beam.support) {

@@ -202,6 +202,26 @@ impl Waves {
                 ),
             ));
         }
+        // The model's amplitudes: two complex values per pendulum and component.
+        let nc = sea.frequencies().len() as u64;
+        let amp_bytes = (scene.n() as u64).saturating_mul(nc).saturating_mul(32);
+        if amp_bytes > crate::ocean::waves::MAX_RECORD_BYTES {
+            let key = if self.components.is_some() {
+                "loads.waves.components"
+            } else {
+                "loads.waves.tp"
+            };
+            return Err(SceneError::invalid(
+                key,
+                format!(
+                    "the waves' amplitudes of {} pendulums × {nc} components need {amp_bytes} \
+                     bytes, over the limit of {}; use fewer pendulums or components (by default \
+                     ⌊6 T_r/T_p⌋), or a longer peak period",
+                    scene.n(),
+                    crate::ocean::waves::MAX_RECORD_BYTES
+                ),
+            ));
+        }
         drop(sea);
         Ok(())
     }
@@ -210,7 +230,8 @@ impl Waves {
 /// A [`SeaError`] as a scene error naming its key (`components`: the scene's
 /// `loads.waves.components`): `loads.waves.<quantity>` for the sea's own
 /// quantities, `water.depth`, `time.step`; a too large FFT names `loads.waves.components` when
-/// it was given, `time.step` otherwise.
+/// it was given, `time.step` otherwise; too many default components name `loads.waves.tp` (the
+/// count is ⌊6 T_r/T_p⌋).
 pub fn sea_error(e: SeaError, components: Option<usize>) -> SceneError {
     match e {
         SeaError::Invalid {
@@ -225,6 +246,9 @@ pub fn sea_error(e: SeaError, components: Option<usize>) -> SceneError {
                 q => format!("loads.waves.{q}"),
             };
             SceneError::invalid(key, format!("must be {expected}, got {value}"))
+        }
+        e @ SeaError::TooManyComponents { .. } => {
+            SceneError::invalid("loads.waves.tp", e.to_string())
         }
         e @ SeaError::TooLarge { .. } => {
             let key = if components.is_some() {

@@ -36,8 +36,11 @@ type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>);
 /// --horizon --iterations --bound --effort --plan-pendulums --plan-step --pd-training
 /// --mpc-objective` (`None`: not given, the scene's `[mpc]` key or the default then) and
 /// `--spin-up`.
-#[derive(Clone, FromPyObject)]
-#[pyo3(from_item_all)]
+///
+/// Extracted by hand, item by item: a value of the wrong type or range (a negative
+/// `iterations`, `spin_up="soon"`) raises `InvalidArgumentError` with `.key` the argument's name,
+/// not pyo3's `TypeError` naming the struct's field.
+#[derive(Clone)]
 pub struct Settings {
     interval: Option<f64>,
     horizon: Option<f64>,
@@ -49,6 +52,75 @@ pub struct Settings {
     pd_training: Option<f64>,
     mpc_objective: Option<String>,
     spin_up: f64,
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        // The item `name` (absent or None: not given), converted to T, or an
+        // InvalidArgumentError naming the argument.
+        fn item<'py, T: for<'b> FromPyObject<'b, 'py>>(
+            obj: Borrowed<'_, 'py, PyAny>,
+            name: &str,
+            expected: &str,
+        ) -> PyResult<Option<T>> {
+            let py = obj.py();
+            let value = match obj.get_item(name) {
+                Ok(v) if !v.is_none() => v,
+                _ => return Ok(None),
+            };
+            value.extract::<T>().map(Some).map_err(|_| {
+                let shown = value
+                    .repr()
+                    .map(|r| r.to_string())
+                    .unwrap_or_else(|_| "?".into());
+                Failure::argument(name, format!("{name}: expected {expected}, got {shown}"))
+                    .into_py(py)
+            })
+        }
+        const COUNT: &str = "a non-negative integer";
+        const NUMBER: &str = "a number";
+        let spin_up = item::<f64>(obj, "spin_up", "a number of seconds")?.unwrap_or(0.0);
+        Ok(Settings {
+            interval: item(obj, "interval", NUMBER)?,
+            horizon: item(obj, "horizon", NUMBER)?,
+            iterations: item(obj, "iterations", COUNT)?,
+            bound: item(obj, "bound", NUMBER)?,
+            effort: item(obj, "effort", NUMBER)?,
+            plan_pendulums: item(obj, "plan_pendulums", COUNT)?,
+            plan_step: item(obj, "plan_step", NUMBER)?,
+            pd_training: item(obj, "pd_training", NUMBER)?,
+            mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
+            spin_up,
+        })
+    }
+}
+
+/// Reads a scatter-diagram CSV by the library's reader
+/// ([`chainbeam::fatigue::scatter::read_scatter_file`]: the bounded input reader, so `/dev/zero`,
+/// a huge or sparse file, a directory or a non-UTF-8 file fail at once, naming the file), as
+/// cells (hs, tp, probability, direction or None). Errors raise `InvalidArgumentError` with
+/// `.key` `scatter` and `.file` the file.
+#[pyfunction]
+pub fn _read_scatter(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Vec<CellTuple>> {
+    let read = interruptible(py, move || {
+        chainbeam::fatigue::scatter::read_scatter_file(&path)
+    })?;
+    match read {
+        Ok(cells) => Ok(cells
+            .iter()
+            .map(|c| (c.sea.hs, c.sea.tp, c.probability, c.sea.direction))
+            .collect()),
+        Err(e) => Err(crate::errors::raise(
+            py,
+            "InvalidArgumentError",
+            &format!("scatter: {e}"),
+            "InvalidArgument",
+            Some("scatter"),
+            Some(e.file.display().to_string()),
+        )),
+    }
 }
 
 /// The settings a study ran with (the command line's `settings` in the JSON) and the scene's
@@ -152,12 +224,13 @@ impl Settings {
     }
 }
 
-/// The `[fatigue]` table of the scene (the command line's refusal without one).
+/// The scene's fatigue assessment (`Scene::fatigue_spec`: the `[fatigue]` table, else the
+/// `[pipe]`'s section; the command line's refusal with neither).
 fn spec(scene: &chainbeam::Scene) -> Result<FatigueSpec, Failure> {
-    scene.fatigue.ok_or_else(|| Failure::SceneKey {
+    scene.fatigue_spec().ok_or_else(|| Failure::SceneKey {
         key: "fatigue".into(),
         message: "key `fatigue`: fatigue needs a [fatigue] table with outer_diameter and \
-                  wall_thickness (docs/scene-format.md)"
+                  wall_thickness, or a [pipe] table whose section it takes (docs/scene-format.md)"
             .into(),
     })
 }

@@ -35,6 +35,7 @@ fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fatigue::_fatigue_cell, m)?)?;
     m.add_function(wrap_pyfunction!(fatigue::_fatigue_combine, m)?)?;
     m.add_function(wrap_pyfunction!(fatigue::_reduced_north_atlantic, m)?)?;
+    m.add_function(wrap_pyfunction!(fatigue::_read_scatter, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

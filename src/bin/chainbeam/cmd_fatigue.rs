@@ -207,10 +207,10 @@ fn report(scene_file: &Path, assessment: &Assessment) -> Result<FatigueReport, C
 }
 
 fn fatigue_spec(path: &Path, scene: &Scene) -> Result<FatigueSpec, CliError> {
-    scene.fatigue.ok_or_else(|| {
+    scene.fatigue_spec().ok_or_else(|| {
         CliError::msg(format!(
             "{}: key `fatigue`: the fatigue command needs a [fatigue] table with outer_diameter \
-             and wall_thickness (docs/scene-format.md)",
+             and wall_thickness, or a [pipe] table whose section it takes (docs/scene-format.md)",
             path.display()
         ))
     })

@@ -539,7 +539,8 @@ fn fatigue_damage(
     scene: &Scene,
     r: &ClosedLoopResult,
 ) -> Result<Option<f64>, CliError> {
-    let (Some(ObjectiveKind::Fatigue(_)), Some(spec)) = (scene.objective, scene.fatigue) else {
+    let (Some(ObjectiveKind::Fatigue(_)), Some(spec)) = (scene.objective, scene.fatigue_spec())
+    else {
         return Ok(None);
     };
     let history = chainbeam::fatigue::MomentHistory {

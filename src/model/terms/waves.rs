@@ -16,9 +16,12 @@
 //!
 //! with c_k the node's cell (l_k + l_{k+1})/2, half a cell l_n/2 at the tip (the lumping of the
 //! pipe's masses). Each is Re Σⱼ (lᵢ Σ_{k≥i} w_k V_{jk}) e^{iωⱼ t}: its complex amplitudes are
-//! suffix sums (O(n N)) and the series on the grid tₖ = k h is one inverse FFT per pendulum
-//! (both series in one transform, [`crate::ocean::Sea::synthesize`]): O(n M log M) for the
-//! record instead of O(n N) cosines per step. Between grid times the series are interpolated
+//! suffix sums (O(n N)) and the series on the grid tₖ = k h is one transform per pendulum
+//! (both series in one transform, [`crate::ocean::Sea::synthesize`]): the inverse FFT of the
+//! repeat period's M points, or, when cheaper, the zoom transform that forms only the record's
+//! rows ([`crate::ocean::Sea::synthesis_rows`], P ≈ 2N + rows points): O(n min(M log M,
+//! P log P)) for the record instead of O(n N) cosines per step, so a short run of a 3-hour sea
+//! sets up in a time that scales with the run, not with the sea's repeat period. Between grid times the series are interpolated
 //! linearly (RATTLE's drag reads them at t_k + h/2); beyond the record they are summed directly
 //! (O(N) per pendulum and time).
 //!
@@ -93,12 +96,13 @@ impl WaveField {
     /// Realises the series of the module docs for `sea` on a chain (`inputs`).
     ///
     /// # Errors
-    /// [`SeaError::TooLarge`] when the record's memory is refused.
+    /// [`SeaError::TooLarge`] when the record's or the amplitudes' memory is refused.
     pub fn new(sea: Arc<Sea>, inputs: WaveInputs) -> std::result::Result<Self, SeaError> {
         let n = inputs.lengths.len();
         let nc = sea.frequencies().len();
         let zero = Complex::new(0.0, 0.0);
-        let (mut momentum_amp, mut inertia_amp) = (vec![zero; n * nc], vec![zero; n * nc]);
+        let (mut momentum_amp, mut inertia_amp) =
+            (alloc_amplitudes(n, nc)?, alloc_amplitudes(n, nc)?);
         let heights: Vec<f64> = inputs
             .lengths
             .iter()
@@ -156,7 +160,7 @@ impl WaveField {
     /// The record of r = 1 (module docs): (Wᵢ, Gᵢ) and η at every step tₖ = k h.
     fn fill_step_record(&mut self) -> std::result::Result<(), SeaError> {
         let (n, rows, nc) = (self.n, self.rows, self.sea.frequencies().len());
-        let mut plan = self.sea.synthesis();
+        let mut plan = self.sea.synthesis_rows(1, rows);
         // The pendulums in blocks of BLOCK: each one's series into a pendulum-major scratch,
         // then the block into the time-major record, BLOCK pairs (one cache line) per row
         // instead of one scattered write per pendulum and row (the same values).
@@ -203,7 +207,7 @@ impl WaveField {
         let nc = self.sea.frequencies().len();
         let sea = self.sea.clone();
         let omega = sea.frequencies();
-        let mut plan = sea.synthesis_every(self.every);
+        let mut plan = sea.synthesis_rows(self.every, rows);
         let mut rate = vec![Complex::new(0.0, 0.0); nc];
         let derivative = |a: &[Complex<f64>], out: &mut [Complex<f64>]| {
             for ((o, x), &w) in out.iter_mut().zip(a).zip(omega) {
@@ -460,6 +464,25 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
     fn has_parameter(&self, _p: Parameter) -> bool {
         false
     }
+}
+
+/// n × N zeroed complex amplitudes, refused with [`SeaError::TooLarge`] when their memory is over
+/// [`crate::ocean::waves::MAX_RECORD_BYTES`] or cannot be reserved (never an abort).
+fn alloc_amplitudes(n: usize, nc: usize) -> std::result::Result<Vec<Complex<f64>>, SeaError> {
+    let limit = crate::ocean::waves::MAX_RECORD_BYTES;
+    let bytes = (n as u64).saturating_mul(nc as u64).saturating_mul(16);
+    let refuse = || SeaError::TooLarge {
+        what: "bytes",
+        needed: bytes,
+        limit,
+    };
+    if bytes > limit {
+        return Err(refuse());
+    }
+    let mut x = Vec::new();
+    x.try_reserve_exact(n * nc).map_err(|_| refuse())?;
+    x.resize(n * nc, Complex::new(0.0, 0.0));
+    Ok(x)
 }
 
 /// A zeroed record buffer of `size` values, refused with [`SeaError::TooLarge`] when the memory

@@ -5,14 +5,13 @@ use std::path::Path;
 
 use serde::Serialize;
 
-use chainbeam::fatigue::{FatigueSpec, ScatterCell, SeaState};
+use chainbeam::fatigue::{FatigueSpec, ScatterCell};
 use chainbeam::fatigue_study::{
     run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
-    StudyInput, MAX_SCATTER_CELLS,
+    StudyInput,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
-use chainbeam::scene::read_text_file;
 use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 use chainbeam::Scene;
 
@@ -321,94 +320,10 @@ fn controllers_json(
     })
 }
 
-fn scatter_error(path: &Path, what: impl std::fmt::Display) -> CliError {
-    CliError::msg(format!("{}: {what}", path.display()))
-}
-
-/// The columns of a scatter CSV.
-const SCATTER_COLUMNS: [&str; 4] = ["hs", "tp", "probability", "direction"];
-
-/// Reads a `--scatter` CSV: header `hs,tp,probability[,direction]` (any order, no other
-/// column), one cell per row (the library's bounded reader, then the `csv` crate). Errors name
-/// the file, the line and the column.
+/// Reads a `--scatter` CSV: the library's reader
+/// ([`chainbeam::fatigue::scatter::read_scatter_file`]: header `hs,tp,probability[,direction]`
+/// in any order, each column once, no other column; probabilities adding up to (0, 1]). Errors
+/// name the file, the line and the column.
 pub fn read_scatter(path: &Path) -> Result<Vec<ScatterCell>, CliError> {
-    let text = read_text_file(path).map_err(|e| CliError::msg(e.to_string()))?;
-    let mut reader = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(text.as_bytes());
-    let header = reader
-        .headers()
-        .map_err(|e| scatter_error(path, e))?
-        .clone();
-    if let Some((i, h)) = header
-        .iter()
-        .enumerate()
-        .find(|(_, h)| !SCATTER_COLUMNS.contains(h))
-    {
-        return Err(scatter_error(
-            path,
-            format!(
-                "line 1, column {}: unknown column `{h}` (the header is hs,tp,probability[,\
-                 direction])",
-                i + 1
-            ),
-        ));
-    }
-    let column = |name: &str| header.iter().position(|h| h == name);
-    let missing = |name: &str| {
-        scatter_error(
-            path,
-            format!("line 1: no column `{name}` (the header is hs,tp,probability[,direction])"),
-        )
-    };
-    let hs_col = column("hs").ok_or_else(|| missing("hs"))?;
-    let tp_col = column("tp").ok_or_else(|| missing("tp"))?;
-    let p_col = column("probability").ok_or_else(|| missing("probability"))?;
-    let dir_col = column("direction");
-    let mut cells = Vec::new();
-    for record in reader.records() {
-        let record = record.map_err(|e| scatter_error(path, e))?;
-        let line = record.position().map_or(0, |p| p.line());
-        let value = |col: usize, ok: fn(f64) -> bool, what: &str| -> Result<f64, CliError> {
-            let field = record.get(col).unwrap_or("");
-            match field.parse::<f64>() {
-                Ok(v) if ok(v) => Ok(v),
-                _ => Err(scatter_error(
-                    path,
-                    format!(
-                        "line {line}, column {} (`{}`): `{field}` is not {what}",
-                        col + 1,
-                        header.get(col).unwrap_or("")
-                    ),
-                )),
-            }
-        };
-        if cells.len() == MAX_SCATTER_CELLS {
-            return Err(scatter_error(
-                path,
-                format!("line {line}: more than {MAX_SCATTER_CELLS} cells"),
-            ));
-        }
-        let positive = |v: f64| v.is_finite() && v > 0.0;
-        cells.push(ScatterCell {
-            sea: SeaState {
-                hs: value(hs_col, positive, "a positive number (H_s, m)")?,
-                tp: value(tp_col, positive, "a positive number (T_p, s)")?,
-                direction: match dir_col {
-                    Some(c) => Some(value(c, f64::is_finite, "a finite angle (degrees)")?),
-                    None => None,
-                },
-            },
-            probability: value(
-                p_col,
-                |v| (0.0..=1.0).contains(&v),
-                "a probability in [0, 1]",
-            )?,
-        });
-    }
-    if cells.is_empty() {
-        return Err(scatter_error(path, "no cells (rows after the header)"));
-    }
-    Ok(cells)
+    chainbeam::fatigue::scatter::read_scatter_file(path).map_err(|e| CliError::msg(e.to_string()))
 }

@@ -4,8 +4,9 @@
 //!
 //! A [`CancelToken`] is a shared flag. [`CancelToken::install`] makes it the current thread's
 //! token for the life of the returned guard; the long loops of the library call [`check`] once
-//! per batch of [`CHECK_EVERY`] steps (the stored and streamed simulations, the closed loop of
-//! [`crate::mpc`]) and before each run of a fatigue study. A thread without a token (the
+//! per batch of [`CHECK_EVERY`] steps (the stored and streamed simulations, the plant of
+//! [`crate::mpc`] that every closed loop and PD tuning steps) and at each decision of a closed
+//! loop and before each run of a fatigue study. A thread without a token (the
 //! default: the command line, a plain library call) never stops: [`check`] is then one
 //! thread-local read. Threads that a computation starts (a rayon pool) see a token only if the
 //! front end installs it on them too (e.g. in the pool's start handler).

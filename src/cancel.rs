@@ -105,7 +105,7 @@ pub fn check() -> Result<()> {
 /// [`Error::Cancelled`].
 #[inline]
 pub fn check_at(k: usize) -> Result<()> {
-    if k % CHECK_EVERY == 0 {
+    if k.is_multiple_of(CHECK_EVERY) {
         check()
     } else {
         Ok(())

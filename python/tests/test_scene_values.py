@@ -109,3 +109,5 @@ def test_trajectory_over_the_memory_budget_is_the_documented_error() -> None:
     with pytest.raises(cb.TrajectoryTooLargeError) as e:
         cb.simulate(s)
     assert e.value.key == "time.steps" and isinstance(e.value, MemoryError)
+    with pytest.raises(cb.TrajectoryTooLargeError):
+        cb.gradient(s)

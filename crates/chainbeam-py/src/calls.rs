@@ -200,6 +200,8 @@ pub fn build_problem(
             format!("the penalty weight ρ must be finite and non-negative, got {effort}"),
         ));
     }
+    // The adjoint stores the trajectory: a run over the budget is the documented error.
+    crate::errors::check_stored(scene)?;
     let (map, theta0, two_axis) = match controls {
         None => {
             let (map, theta0) = scene_start(scene)?;

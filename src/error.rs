@@ -294,6 +294,10 @@ pub enum Error {
         /// Which quantity: "objective", "gradient" or "Hessian-vector product".
         quantity: &'static str,
     },
+    /// The computation was cancelled through the thread's [`crate::cancel::CancelToken`]
+    /// (a front end's Ctrl-C); nothing was returned.
+    #[error("the computation was cancelled")]
+    Cancelled,
 }
 
 impl Error {

@@ -572,6 +572,8 @@ fn run_cell(
         cell,
         source: Box::new(source),
     };
+    // A cancelled study starts no further run (its sea's set-up alone can take seconds).
+    crate::cancel::check().map_err(run_err)?;
     let mut settings = input.settings.clone();
     if kind == ControllerKind::Mpc && settings.mpc_fatigue_proxy {
         settings.mpc.objective = fatigue_proxy(input.spec, input.scene)?;

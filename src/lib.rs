@@ -138,6 +138,7 @@
 pub mod adjoint;
 pub mod banded;
 pub mod base;
+pub mod cancel;
 pub mod catalogue;
 pub mod constraints;
 pub mod error;

@@ -480,6 +480,7 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
     let first = (&mu0[..], &mu0[..]);
     record(&mut traj, (&state, 0), first, &mut scratch, rattle.chain());
     for k in 0..steps {
+        crate::cancel::check_at(k)?;
         let s = rattle.step(&mut state, k, controls[k], controls[k + 1])?;
         traj.stats.push(s);
         let m = state

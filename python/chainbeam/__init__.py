@@ -6,12 +6,16 @@ Quickstart::
     import chainbeam as cb
     scene = cb.Scene.from_file("examples/scenes/riser_5.toml")
     traj = cb.simulate(scene)                  # traj.t, traj.moment, traj.positions (N+1, n, 3)
+    traj.wellhead_moment                       # M_w = M₀·l₁/2 [N m]; traj.to_pandas()
     c, g = cb.gradient(scene)                  # objective and exact adjoint gradient
+    c, d = cb.gradient(scene, wrt=["loads.drag"])  # dJ/dD (every physical parameter)
     best = cb.optimize(scene)                  # best.controls, best.objective, best.converged
     drag = scene.replace({"loads.drag": 12.0}) # a changed copy (errors name the key)
 
 Every call runs the Rust library's code (the command line's, bit for bit) with the GIL released:
-two threads simulate at once. Ctrl-C raises ``KeyboardInterrupt`` promptly. Scenes and results
+two threads simulate at once. Ctrl-C raises ``KeyboardInterrupt`` promptly and stops the work
+(within a batch of steps). ``progress=True`` draws a bar on ``fatigue``, ``mpc``, ``optimize``
+and ``sweep`` (tqdm when installed), or pass a callable ``progress(done, total)``. Scenes and results
 pickle, so they travel to process pools and clusters; :func:`sweep` runs parameter studies on any
 executor (``ProcessPoolExecutor``, ``dask.distributed.Client``).
 
@@ -41,12 +45,15 @@ from ._api import (
 )
 from ._chainbeam import Scene, __version__
 from ._fatigue import fatigue, reduced_north_atlantic
+from ._fatigue_result import FatigueResult
 from ._errors import (
     ChainbeamError,
+    ChainbeamWarning,
     ConvergenceError,
     InvalidArgumentError,
     SceneError,
     SimulationError,
+    StartUpWarning,
     TrajectoryTooLargeError,
 )
 from ._sweep import sweep, to_parquet
@@ -64,11 +71,14 @@ __all__ = [
     "Trajectory",
     "OptimizeResult",
     "MpcResult",
+    "FatigueResult",
     "ChainbeamError",
     "SceneError",
     "InvalidArgumentError",
     "SimulationError",
     "ConvergenceError",
     "TrajectoryTooLargeError",
+    "ChainbeamWarning",
+    "StartUpWarning",
     "__version__",
 ]

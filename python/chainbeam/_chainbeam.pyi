@@ -1,6 +1,7 @@
 """Type stubs of the extension module ``chainbeam._chainbeam`` (crates/chainbeam-py); checked
 against the built module by ``python -m mypy.stubtest chainbeam`` (scripts/test-all)."""
 
+from collections.abc import Callable
 from os import PathLike
 from typing import Any, final
 
@@ -8,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "_read_scatter", "__version__"]
+__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "gradient_wrt", "_cancel_running", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "_read_scatter", "__version__"]
 
 @final
 class Scene:
@@ -20,8 +21,24 @@ class Scene:
     def from_toml(text: str, dir: str | PathLike[str] | None = None) -> Scene: ...
     def to_toml(self) -> str: ...
     def replace(self, changes: dict[str, Any]) -> Scene: ...
+    def __getitem__(self, key: str, /) -> Any: ...
+    def __contains__(self, key: str, /) -> bool: ...
     @property
     def n(self) -> int: ...
+    @property
+    def lengths(self) -> list[float]: ...
+    @property
+    def l1(self) -> float: ...
+    @property
+    def length(self) -> float: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def section(self) -> dict[str, float] | None: ...
+    @property
+    def has_fatigue(self) -> bool: ...
+    @property
+    def has_waves(self) -> bool: ...
     @property
     def steps(self) -> int: ...
     @property
@@ -48,6 +65,14 @@ def gradient(
     controls_x: NDArray[np.float64] | None = None,
     effort: float = 0.0,
 ) -> tuple[float, NDArray[np.float64], bool]: ...
+def _cancel_running() -> int: ...
+def gradient_wrt(
+    scene: Scene,
+    wrt: list[str],
+    controls: NDArray[np.float64] | None = None,
+    controls_x: NDArray[np.float64] | None = None,
+    effort: float = 0.0,
+) -> tuple[float, NDArray[np.float64] | None, list[float], bool]: ...
 def optimize(
     scene: Scene,
     method: str = "auto",
@@ -61,6 +86,7 @@ def optimize(
     effort: float = 0.0,
     controls: NDArray[np.float64] | None = None,
     controls_x: NDArray[np.float64] | None = None,
+    progress: Callable[[int, int], Any] | None = None,
 ) -> dict[str, Any]: ...
 def mpc(
     scene: Scene,
@@ -76,6 +102,7 @@ def mpc(
     baselines: bool = False,
     plan_pendulums: int | None = None,
     plan_step: float | None = None,
+    progress: Callable[[int, int], Any] | None = None,
 ) -> dict[str, Any]: ...
 
 _Cell = tuple[float, float, float, float | None]
@@ -86,6 +113,7 @@ def _fatigue(
     scatter: list[_Cell] | None,
     controllers: list[str] | None,
     settings: dict[str, Any],
+    progress: Callable[[int, int], Any] | None = None,
 ) -> dict[str, Any]: ...
 def _fatigue_cell(
     scene: Scene,

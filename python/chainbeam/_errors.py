@@ -64,7 +64,17 @@ class ConvergenceError(SimulationError):
 
 
 class TrajectoryTooLargeError(ChainbeamError, MemoryError):
-    """A trajectory that does not fit the library's memory budget (reduce ``time.steps``)."""
+    """A trajectory that does not fit the library's memory budget (reduce ``time.steps``;
+    ``key`` is ``"time.steps"`` when the run was refused before it started)."""
+
+
+class ChainbeamWarning(UserWarning):
+    """Base class of chainbeam's warnings: a result that a default may dominate."""
+
+
+class StartUpWarning(ChainbeamWarning):
+    """``fatigue`` counted the start of every record (``spin_up`` not given): the transient of
+    a beam starting at rest under loads that ramp in, which can dominate the damage."""
 
 
 __all__ = [
@@ -74,4 +84,6 @@ __all__ = [
     "SimulationError",
     "ConvergenceError",
     "TrajectoryTooLargeError",
+    "ChainbeamWarning",
+    "StartUpWarning",
 ]

@@ -3,7 +3,9 @@
 
 ``fatigue(scene, scatter=None, controllers=None, executor=None, *, interval=None, horizon=None,
 iterations=None, bound=None, effort=None, plan_pendulums=None, plan_step=None, pd_training=None,
-mpc_objective=None, spin_up=0.0)`` returns the command line's JSON as a dict with the same fields
+mpc_objective=None, spin_up=None, progress=False, duration=None)`` returns the command line's
+JSON as a :class:`FatigueResult` (a dict with the same fields, and tables: ``to_pandas()``,
+``cells_frame()``, ``summary_frame()``, ``cycles_frame()``)
 (``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit, the keyword arguments
 being the flags of the same names). The controllers' settings take the command line's
 precedence: an argument given (not ``None``) overrides the scene's ``[mpc]`` table
@@ -34,13 +36,23 @@ list or a sequence of ``none``, ``constant``, ``pd``, ``mpc`` (``none`` is alway
 ``dask.distributed.Client`` or its ``get_executor()``); each scatter cell (all its controllers)
 is one task, and the cells are combined as the command line combines them, so the result does
 not depend on the executor or the number of workers, bit for bit. Without ``scatter`` the whole
-assessment is one task.
+assessment is one task. A Ctrl-C (or any exception) while waiting cancels the tasks not yet
+started.
+
+``spin_up`` [s]: the start of every record left out of the count. Every run starts from the
+straight beam at rest and its loads ramp in, a transient that can dominate the damage of a
+short record; not giving ``spin_up`` counts it (``spin_up=0``, the command line's default) and
+warns (:class:`StartUpWarning`); give ``spin_up=0.0`` to count the start without the warning.
+
+``progress``: ``True`` for a bar (tqdm, else lines on standard error) or a callable
+``progress(done, total)``, over the (cell, controller) runs (with an executor: over the tasks).
 """
 
 from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Optional
@@ -48,9 +60,12 @@ from typing import Any, Optional
 import pandas as pd
 
 from . import _chainbeam
+from ._api import _with_duration
 from ._chainbeam import Scene
-from ._errors import InvalidArgumentError
-from ._sweep import ExecutorLike
+from ._errors import InvalidArgumentError, StartUpWarning
+from ._fatigue_result import FatigueResult
+from ._progress import ProgressArg, Reporter
+from ._sweep import ExecutorLike, _gather
 
 Cell = tuple[float, float, float, Optional[float]]
 
@@ -113,11 +128,12 @@ def _cells(scatter: Any) -> list[Cell]:
 
 
 def _controllers(controllers: Any) -> list[str] | None:
+    """The controllers' names, lower-case (the one spelling: ``"MPC"`` is ``"mpc"``)."""
     if controllers is None:
         return None
     if isinstance(controllers, str):
-        return [controllers]
-    return [str(c) for c in controllers]
+        return [controllers.lower()]
+    return [str(c).lower() for c in controllers]
 
 
 def _fatigue_task(
@@ -179,14 +195,18 @@ def fatigue(
     plan_step: float | None = None,
     pd_training: float | None = None,
     mpc_objective: str | None = None,
-    spin_up: float = 0.0,
-) -> dict[str, Any]:
+    spin_up: float | None = None,
+    progress: ProgressArg = False,
+    duration: float | None = None,
+) -> FatigueResult:
     """The wellhead's fatigue damage and life (``chainbeam fatigue``'s JSON as a dict; module
     docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
     ``plan_step``, ``pd_training``, ``mpc_objective`` (``"power"`` or ``"sum"``): the
     closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
-    start of every record left out of the count (``--spin-up``).
+    start of every record left out of the count (``--spin-up``; not given: 0 with a
+    :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
+    ``duration`` [s]: every record's length instead of the scene's ``time.steps``.
 
     Raises:
         SceneError (no ``[fatigue]`` table, key ``fatigue``; a setting of the ``[mpc]`` table
@@ -203,19 +223,31 @@ def fatigue(
         "plan_step": _optional(plan_step, float, "plan_step"),
         "pd_training": _optional(pd_training, float, "pd_training"),
         "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
-        "spin_up": _optional(spin_up, float, "spin_up"),
+        "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
     }
+    if spin_up is None:
+        warnings.warn(
+            "fatigue: spin_up not given, so the start of every record is counted: the beam "
+            "starts straight and at rest and its loads ramp in, a transient that can dominate "
+            "the damage of a record (the headline leaves out 60 s: spin_up=60.0). Give "
+            "spin_up=0.0 to count the start on purpose.",
+            StartUpWarning,
+            stacklevel=2,
+        )
+    scene = _with_duration(scene, duration)
     cells = None if scatter is None else _cells(scatter)
     names = _controllers(controllers)
-    if executor is None:
-        return _chainbeam._fatigue(scene, cells, names, settings)
-    if cells is None:
-        out: dict[str, Any] = executor.submit(_fatigue_task, scene, None, names, settings).result()
-        return out
-    futures = [executor.submit(_cell_task, scene, c, i, names, settings)
-               for i, c in enumerate(cells)]
-    runs = [f.result() for f in futures]
-    return _chainbeam._fatigue_combine(scene, cells, names, settings, runs)
+    with Reporter(progress, "fatigue", "run") as r:
+        if executor is None:
+            return FatigueResult(_chainbeam._fatigue(scene, cells, names, settings, r.callback))
+        if cells is None:
+            futures = [executor.submit(_fatigue_task, scene, None, names, settings)]
+            (out,) = _gather(futures, r.callback)
+            return FatigueResult(out)
+        futures = [executor.submit(_cell_task, scene, c, i, names, settings)
+                   for i, c in enumerate(cells)]
+        runs = _gather(futures, r.callback)
+    return FatigueResult(_chainbeam._fatigue_combine(scene, cells, names, settings, runs))
 
 
-__all__ = ["fatigue", "reduced_north_atlantic"]
+__all__ = ["fatigue", "reduced_north_atlantic", "FatigueResult"]

@@ -28,10 +28,12 @@ On a SLURM cluster, the same script runs through dask-jobqueue::
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 import pandas as pd
+
+from ._progress import ProgressArg, Reporter
 
 
 class _Future(Protocol):
@@ -61,24 +63,78 @@ def _run_case(fn: Callable[[Any], Mapping[str, Any]], case: Any) -> tuple[bool, 
         return False, _error_text(e)
 
 
+def _cancel_all(futures: Sequence[Any]) -> None:
+    """Cancels the futures not yet started (a running task cannot be stopped from here; a Ctrl-C
+    reaches the worker processes of a terminal's process group by itself)."""
+    for f in futures:
+        cancel = getattr(f, "cancel", None)
+        if cancel is not None:
+            try:
+                cancel()
+            except Exception:  # an executor whose cancel fails: nothing more to do
+                pass
+
+
+def _gather(
+    futures: Sequence[Any],
+    progress: Callable[[int, int], Any] | None = None,
+    errors_as_rows: bool = False,
+) -> list[Any]:
+    """The futures' results in order, ``progress(done, total)`` after each; on an exception
+    (a Ctrl-C's ``KeyboardInterrupt`` included) the futures not yet started are cancelled and it
+    is raised. ``errors_as_rows``: a future that raises (the worker died) gives
+    ``(False, "Type: message")`` instead."""
+    out: list[Any] = []
+    total = len(futures)
+    try:
+        if progress is not None:
+            progress(0, total)
+        for f in futures:
+            try:
+                out.append(f.result())
+            except Exception as e:
+                if not errors_as_rows:
+                    raise
+                out.append((False, _error_text(e)))
+            if progress is not None:
+                progress(len(out), total)
+    except BaseException as e:
+        _cancel_all(futures)
+        if isinstance(e, KeyboardInterrupt):
+            # Tasks running on this process's threads (a ThreadPoolExecutor) get no signal.
+            from . import _chainbeam
+
+            _chainbeam._cancel_running()
+        raise
+    return out
+
+
 def sweep(
     fn: Callable[[Any], Mapping[str, Any]],
     cases: Iterable[Any],
     executor: ExecutorLike | None = None,
+    *,
+    progress: ProgressArg = False,
 ) -> pd.DataFrame:
     """Applies ``fn`` to every case (serially, or on ``executor``) and returns one row per case,
-    in order: the case's inputs, ``fn``'s fields and ``error`` (module docs)."""
+    in order: the case's inputs, ``fn``'s fields and ``error`` (module docs). ``progress``:
+    ``True`` for a bar (tqdm, else lines on standard error) or a callable
+    ``progress(done, total)`` over the cases. A Ctrl-C while waiting cancels the cases not yet
+    started on the executor."""
     cases = list(cases)
-    if executor is None:
-        outcomes = [_run_case(fn, c) for c in cases]
-    else:
-        futures = [executor.submit(_run_case, fn, c) for c in cases]
-        outcomes = []
-        for f in futures:
-            try:
-                outcomes.append(f.result())
-            except Exception as e:  # the worker itself died (e.g. BrokenProcessPool)
-                outcomes.append((False, _error_text(e)))
+    with Reporter(progress, "sweep", "case") as r:
+        if executor is None:
+            outcomes = []
+            if r.callback is not None:
+                r.callback(0, len(cases))
+            for c in cases:
+                outcomes.append(_run_case(fn, c))
+                if r.callback is not None:
+                    r.callback(len(outcomes), len(cases))
+        else:
+            futures = [executor.submit(_run_case, fn, c) for c in cases]
+            # A worker that died (e.g. BrokenProcessPool) is that case's error.
+            outcomes = _gather(futures, r.callback, errors_as_rows=True)
     rows = []
     for case, (ok, value) in zip(cases, outcomes):
         row: dict[str, Any] = dict(case) if isinstance(case, Mapping) else {"case": case}

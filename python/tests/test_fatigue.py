@@ -17,6 +17,10 @@ import pytest
 import chainbeam as cb
 from conftest import ROOT, wave_riser_toml
 
+# These calls compare with the command line, whose default --spin-up is 0: leaving spin_up out
+# is that default, and its warning (cb.StartUpWarning, test_fatigue_tables.py) is not the point.
+pytestmark = pytest.mark.filterwarnings("ignore::chainbeam.StartUpWarning")
+
 # The 60 m riser of conftest.py (waves from 0°), a control at node 3, curve D in seawater with CP.
 SCENE = wave_riser_toml(
     tail="""

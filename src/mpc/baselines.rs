@@ -167,7 +167,7 @@ impl PdLaw {
 
 impl Controller for PdLaw {
     fn name(&self) -> String {
-        "PD".into()
+        "pd".into()
     }
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
         let gains = [self.bias, self.kp, self.kd];
@@ -224,7 +224,7 @@ impl SpatialPdLaw {
 
 impl SpatialController for SpatialPdLaw {
     fn name(&self) -> String {
-        "PD".into()
+        "pd".into()
     }
     fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
         let (kp, kd, b) = (self.kp, self.kd, self.bound);

@@ -231,7 +231,8 @@ pub struct Observation<'a, const DIM: usize = 2> {
 
 /// A feedback law: one force per control interval from what it observes.
 pub trait Controller {
-    /// A short name for tables ("none", "constant", "PD", "MPC").
+    /// A short name for tables, lower-case as the command line's controller names ("none",
+    /// "constant", "pd", "mpc").
     fn name(&self) -> String;
 
     /// The force for the interval starting at `obs.t`.
@@ -249,7 +250,8 @@ pub trait Controller {
 /// A feedback law in the spatial model: one 2-axis force (u_x, u_z) per control interval from
 /// what it observes ([`run_closed_loop_spatial`]).
 pub trait SpatialController {
-    /// A short name for tables ("none", "constant", "PD", "MPC").
+    /// A short name for tables, lower-case as the command line's controller names ("none",
+    /// "constant", "pd", "mpc").
     fn name(&self) -> String;
 
     /// The force (u_x, u_z) for the interval starting at `obs.t`.
@@ -429,6 +431,7 @@ fn closed_loop<const DIM: usize>(
     let mut rec = Recorder::with_capacity(steps + 1, DIM == 3);
     let mut decisions = Vec::with_capacity(steps / m);
     for _ in 0..steps / m {
+        crate::cancel::check()?;
         plant.update_state_before_kick()?;
         let moment_rate = plant.moment_rate();
         let [moment_x, _] = plant.moment_vector();

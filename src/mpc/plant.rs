@@ -288,6 +288,8 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         if self.k >= self.steps {
             return Err(MpcError::PastEnd { steps: self.steps }.into());
         }
+        // Every closed loop and PD cost steps through here: a cancelled run stops within a batch.
+        crate::cancel::check_at(self.k)?;
         self.prev.clone_from(&self.state);
         if DIM == 3 {
             // Hold u_x as u: u_{x,k+1} = u_{x,k}.

@@ -491,7 +491,7 @@ fn capped_convergence(r: &OcpResult, opts: &OcpOptions) -> bool {
 
 impl Controller for Mpc {
     fn name(&self) -> String {
-        "MPC".into()
+        "mpc".into()
     }
 
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
@@ -506,7 +506,7 @@ impl Controller for Mpc {
 
 impl SpatialController for Mpc<3> {
     fn name(&self) -> String {
-        "MPC".into()
+        "mpc".into()
     }
 
     /// The first interval's (u_x, u_z) of the new plan θ = (θ_x; θ_z).

@@ -318,6 +318,7 @@ fn stream_chain<const DIM: usize, O: StepObserver>(
     observer.observe(&mut view).map_err(StreamError::Observer)?;
     let mut newton_iterations = 0;
     for k in 0..steps {
+        crate::cancel::check_at(k).map_err(StreamError::from)?;
         let (uk, uk1) = (u.at(k), u.at(k + 1));
         let s = rattle.step(&mut state, k, uk, uk1)?;
         newton_iterations += s.iterations;

@@ -8,7 +8,8 @@ use pyo3::types::PyDict;
 use chainbeam::optimize::{scene_start, AnyProblem, OptimProblem};
 use chainbeam::{
     simulate as lib_simulate, simulate_with_controls, simulate_with_controls_xz, BendingObjective,
-    ControlMap, ObjectiveKind, Parametrisation, PerStepControl, SceneTrajectory,
+    ControlKind, ControlMap, ObjectiveKind, Parameter, Parametrisation, PerStepControl,
+    PiecewiseControl, SceneTrajectory,
 };
 
 use crate::errors::{check, Failure};
@@ -38,7 +39,9 @@ impl Controls {
     }
 
     /// The parametrisation of these values on a scene of N steps: 1 value a constant, N + 1
-    /// per-step (the command line's `--controls` without a declared kind).
+    /// per-step (the command line's `--controls` without a declared kind), and as many values
+    /// as the scene's own `[control]` has a piecewise control of that many pieces: the θ layout
+    /// that `gradient` and `optimize` return for the scene, which can be passed back as is.
     pub fn parametrisation(&self, scene: &chainbeam::Scene) -> Result<Parametrisation, Failure> {
         let steps = scene.time.steps;
         if scene.has_two_axis_control() && self.x.is_none() {
@@ -60,15 +63,31 @@ impl Controls {
                 format!("entry {bad} is not finite"),
             ));
         }
+        let pieces = scene
+            .control
+            .as_ref()
+            .filter(|c| c.kind == ControlKind::Piecewise)
+            .map(|c| c.values.len());
         match self.z.len() {
             1 => Ok(Parametrisation::Constant),
             got if got == steps + 1 => Ok(Parametrisation::PerStep(PerStepControl { steps })),
+            got if Some(got) == pieces => Ok(Parametrisation::Piecewise(PiecewiseControl {
+                steps,
+                pieces: got,
+            })),
             got => Err(Failure::argument(
                 "controls",
                 format!(
                     "expected N + 1 = {} values u_0..u_N for this scene (time.steps = {steps}), \
-                     or 1 value (a constant force), got {got}",
-                    steps + 1
+                     1 value (a constant force){}, got {got}",
+                    steps + 1,
+                    match pieces {
+                        Some(p) => format!(
+                            " or {p} values (one per piece of the scene's piecewise control: \
+                             the layout gradient and optimize return)"
+                        ),
+                        None => String::new(),
+                    }
                 ),
             )),
         }
@@ -124,6 +143,7 @@ pub fn simulate<'py>(
     let (c, eta) = check(
         py,
         interruptible(py, move || -> Result<_, Failure> {
+            crate::errors::check_stored(&s)?;
             let eta = wave_elevation(&s)?;
             Ok((run_simulation(&s, controls.as_ref())?.into_columns()?, eta))
         })?,
@@ -180,6 +200,8 @@ pub fn build_problem(
             format!("the penalty weight ρ must be finite and non-negative, got {effort}"),
         ));
     }
+    // The adjoint stores the trajectory: a run over the budget is the documented error.
+    crate::errors::check_stored(scene)?;
     let (map, theta0, two_axis) = match controls {
         None => {
             let (map, theta0) = scene_start(scene)?;
@@ -221,6 +243,125 @@ pub fn gradient<'py>(
         })?,
     )?;
     Ok((c, PyArray1::from_vec(py, g), two_axis))
+}
+
+/// A physical parameter by its scene key (`cb.gradient(scene, wrt=[...])`): every
+/// [`Parameter`] of the library. A key that sets several values of the model at once
+/// (`beam.stiffness`: k₂..kₙ, `beam.mass`: m₁..mₙ, `beam.joint_damping`: every damper) is the
+/// derivative with respect to their common value (the sum of the partial derivatives).
+pub fn parameter_of(key: &str) -> Option<Parameter> {
+    let simple = match key {
+        "beam.stiffness" => Some(Parameter::InteriorStiffness),
+        "beam.base_stiffness" => Some(Parameter::BaseStiffness),
+        "beam.tip_stiffness" => Some(Parameter::TipStiffness),
+        "beam.mass" => Some(Parameter::Mass),
+        "beam.joint_damping" => Some(Parameter::JointDamping),
+        "loads.drag" => Some(Parameter::Drag),
+        "loads.tension" => Some(Parameter::Tension),
+        "loads.axial_weight" => Some(Parameter::AxialWeight),
+        "loads.current.speed" => Some(Parameter::CurrentSpeed),
+        _ => None,
+    };
+    if simple.is_some() {
+        return simple;
+    }
+    // loads.point[i].force, .force[1] (F_z), .force[0] (F_x), .harmonic[j].amplitude|phase
+    let rest = key.strip_prefix("loads.point[")?;
+    let (i, rest) = rest.split_once(']')?;
+    let load: usize = i.parse().ok()?;
+    match rest {
+        ".force" | ".force[1]" => return Some(Parameter::LoadForce(load)),
+        ".force[0]" => return Some(Parameter::LoadForceX(load)),
+        _ => {}
+    }
+    let rest = rest.strip_prefix(".harmonic[")?;
+    let (j, field) = rest.split_once(']')?;
+    let harmonic: usize = j.parse().ok()?;
+    match field {
+        ".amplitude" => Some(Parameter::LoadAmplitude { load, harmonic }),
+        ".phase" => Some(Parameter::LoadPhase { load, harmonic }),
+        _ => None,
+    }
+}
+
+/// The keys `wrt` accepts (for the error that names an unknown one).
+const WRT_KEYS: &str = "\"controls\", \"beam.stiffness\", \"beam.base_stiffness\", \
+    \"beam.tip_stiffness\", \"beam.mass\", \"beam.joint_damping\", \"loads.drag\", \
+    \"loads.tension\", \"loads.axial_weight\", \"loads.current.speed\", \
+    \"loads.point[i].force\" (F_z; also \"force[1]\"), \"loads.point[i].force[0]\" (F_x), \
+    \"loads.point[i].harmonic[j].amplitude\", \"loads.point[i].harmonic[j].phase\"";
+
+/// ∂J/∂p for the physical parameters `params` at θ (one adjoint sweep).
+fn parameter_gradient(
+    problem: &AnyProblem,
+    theta: &[f64],
+    params: &[Parameter],
+) -> chainbeam::Result<Vec<f64>> {
+    match problem {
+        AnyProblem::Planar(p) => p.parameter_gradient(theta, params),
+        AnyProblem::Spatial(p) => p.parameter_gradient(theta, params),
+    }
+}
+
+/// J and its gradient with respect to the controls (θ) and/or physical parameters by their
+/// scene keys; see `chainbeam.gradient(..., wrt=[...])`. Returns (J, ∇_θJ flat or None,
+/// [∂J/∂p in `wrt`'s order, the parameters only], two_axis).
+#[pyfunction]
+#[pyo3(signature = (scene, wrt, controls=None, controls_x=None, effort=0.0))]
+#[allow(clippy::type_complexity)] // one tuple for Python to unpack
+pub fn gradient_wrt<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    wrt: Vec<String>,
+    controls: Option<PyReadonlyArray1<'py, f64>>,
+    controls_x: Option<PyReadonlyArray1<'py, f64>>,
+    effort: f64,
+) -> PyResult<(f64, Option<Bound<'py, PyArray1<f64>>>, Vec<f64>, bool)> {
+    let mut params = Vec::new();
+    let mut with_controls = false;
+    for key in &wrt {
+        if key == "controls" {
+            with_controls = true;
+            continue;
+        }
+        match parameter_of(key) {
+            Some(p) => params.push(p),
+            None => {
+                return Err(Failure::argument(
+                    "wrt",
+                    format!("unknown parameter {key:?}; expected one of {WRT_KEYS}"),
+                )
+                .into_py(py))
+            }
+        }
+    }
+    let controls = Controls::from_arrays(controls, controls_x)?;
+    let s = scene.inner.clone();
+    let (c, g, dp, two_axis) = check(
+        py,
+        interruptible(py, move || -> Result<_, Failure> {
+            let (problem, theta0) = build_problem(&s, controls.as_ref(), effort)?;
+            let (c, g) = if with_controls || params.is_empty() {
+                let (c, g) = problem.value_and_gradient(&theta0)?;
+                (c, Some(g))
+            } else {
+                (problem.value(&theta0)?, None)
+            };
+            let dp = if params.is_empty() {
+                Vec::new()
+            } else {
+                parameter_gradient(&problem, &theta0, &params)?
+            };
+            let bad = !c.is_finite() || g.iter().flatten().chain(&dp).any(|v| !v.is_finite());
+            if bad {
+                return Err(Failure::Lib(chainbeam::Error::NonFiniteObjective {
+                    quantity: "objective or gradient",
+                }));
+            }
+            Ok((c, g.filter(|_| with_controls), dp, problem.is_two_axis()))
+        })?,
+    )?;
+    Ok((c, g.map(|g| PyArray1::from_vec(py, g)), dp, two_axis))
 }
 
 /// A trajectory of the library handed back by [`_time_library_simulate`] so that it is freed

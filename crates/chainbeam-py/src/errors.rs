@@ -27,6 +27,14 @@ pub enum Failure {
         /// The message.
         message: String,
     },
+    /// A run whose stored trajectory is over the library's memory budget
+    /// (`TrajectoryTooLargeError`, `.key` the scene key to change, `time.steps`).
+    TooLarge {
+        /// The scene key.
+        key: String,
+        /// The message.
+        message: String,
+    },
     /// A bug or an operating-system failure.
     Internal(String),
 }
@@ -61,9 +69,29 @@ impl Failure {
             Failure::SceneKey { key, message } => {
                 raise(py, "SceneError", &message, "Scene", Some(&key), None)
             }
+            Failure::TooLarge { key, message } => raise(
+                py,
+                "TrajectoryTooLargeError",
+                &message,
+                "TrajectoryTooLarge",
+                Some(&key),
+                None,
+            ),
             Failure::Internal(m) => internal(py, &m),
         }
     }
+}
+
+/// The check a run that stores its trajectory makes first ([`chainbeam::Scene::check_stored_trajectory`]),
+/// as the documented `TrajectoryTooLargeError` rather than the scene's error it is in the
+/// library (the scene is valid; the run asked of it is too long to keep in memory).
+pub fn check_stored(scene: &chainbeam::Scene) -> Result<(), Failure> {
+    scene
+        .check_stored_trajectory()
+        .map_err(|e| Failure::TooLarge {
+            key: e.key().unwrap_or("time.steps").to_string(),
+            message: e.to_string(),
+        })
 }
 
 /// `Result<T, Failure>` → `PyResult<T>`.
@@ -109,6 +137,7 @@ fn class_of(e: &Error) -> (&'static str, &'static str) {
         Error::StaticFolded { .. } => ("SimulationError", "StaticFolded"),
         Error::StaticNotIsolated { .. } => ("SimulationError", "StaticNotIsolated"),
         Error::NonFiniteObjective { .. } => ("SimulationError", "NonFiniteObjective"),
+        Error::Cancelled => ("ChainbeamError", "Cancelled"),
         Error::TrajectoryTooLarge { .. } => ("TrajectoryTooLargeError", "TrajectoryTooLarge"),
         Error::NeedsSpatialModel { .. } => ("InvalidArgumentError", "NeedsSpatialModel"),
         Error::WrongLength { .. } => ("InvalidArgumentError", "WrongLength"),

@@ -22,7 +22,7 @@ use chainbeam::ocp::OcpOptions;
 use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, FORCE_RANGE, MPC_KEYS};
 
 use crate::errors::{check, Failure};
-use crate::run::{interruptible, with_pool};
+use crate::run::{interruptible, watched, with_pool};
 use crate::scene::Scene;
 
 /// A scatter cell as Python passes it: (hs, tp, probability, direction or None).
@@ -419,11 +419,13 @@ fn plain<'py>(
     py: Python<'py>,
     scene: &chainbeam::Scene,
     spin_up: f64,
+    progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = scene.clone();
     let a = check(
         py,
-        interruptible(py, move || -> Result<_, Failure> {
+        watched(py, progress, move |ticker| -> Result<_, Failure> {
+            ticker.set_total(1);
             let spec = spec(&s)?;
             let skip = spin_up_steps(&s, spin_up).map_err(|e| study_error(e, 0, None))?;
             let traj = chainbeam::simulate(&s)?;
@@ -448,6 +450,7 @@ fn plain<'py>(
                 .collect();
             finite("cycles", cycles.as_flattened())?;
             finite("damage", &[a.damage, a.duration_s, a.damage_per_year])?;
+            ticker.tick();
             Ok((cycles, a))
         })?,
     )?;
@@ -464,30 +467,35 @@ fn plain<'py>(
     Ok(d)
 }
 
-/// `chainbeam fatigue` in one process; see `chainbeam.fatigue`.
+/// `chainbeam fatigue` in one process; see `chainbeam.fatigue`. `progress(done, total)` (or
+/// None) is called on this thread as the (cell, controller) runs end.
 #[pyfunction]
-#[pyo3(signature = (scene, scatter, controllers, settings))]
+#[pyo3(signature = (scene, scatter, controllers, settings, progress=None))]
 pub fn _fatigue<'py>(
     py: Python<'py>,
     scene: &Scene,
     scatter: Option<Vec<CellTuple>>,
     controllers: Option<Vec<String>>,
     settings: Settings,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let progress = progress.as_ref().filter(|p| !p.is_none());
     if scatter.is_none() && controllers.is_none() {
         // The controllers' settings are not used; their names are checked all the same.
         check(py, settings.resolve(&scene.inner))?;
-        return plain(py, &scene.inner, settings.spin_up);
+        return plain(py, &scene.inner, settings.spin_up, progress);
     }
     let with_controllers = controllers.is_some();
     let s = scene.inner.clone();
     let (study, resolved) = check(
         py,
-        interruptible(py, move || -> Result<_, Failure> {
+        watched(py, progress, move |ticker| -> Result<_, Failure> {
             let spec = spec(&s)?;
             let kinds = kinds(controllers.as_deref())?;
             let (control, resolved) = settings.control(&s)?;
             let cells = scatter.as_deref().map(cells);
+            let runs = cells.as_ref().map_or(1, Vec::len) * kinds.len();
+            ticker.set_total(runs as u64);
             let input = StudyInput {
                 scene: &s,
                 spec: &spec,
@@ -495,7 +503,7 @@ pub fn _fatigue<'py>(
                 controllers: &kinds,
                 settings: &control,
             };
-            let study = with_pool(|| run_study(&input, &|| {}))
+            let study = with_pool(|| run_study(&input, &|| ticker.tick()))
                 .map_err(Failure::Internal)?
                 .map_err(|e| study_error(e, 0, Some(&resolved)))?;
             check_study(&study)?;

@@ -28,6 +28,8 @@ fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::_scene_from_state, m)?)?;
     m.add_function(wrap_pyfunction!(calls::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(calls::gradient, m)?)?;
+    m.add_function(wrap_pyfunction!(calls::gradient_wrt, m)?)?;
+    m.add_function(wrap_pyfunction!(run::_cancel_running, m)?)?;
     m.add_function(wrap_pyfunction!(calls::_time_library_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(optim::optimize, m)?)?;
     m.add_function(wrap_pyfunction!(optim::mpc, m)?)?;

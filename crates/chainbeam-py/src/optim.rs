@@ -6,8 +6,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Horizon, Mpc, MpcOptions, MpcSolver,
-    NoControl, PdLaw, PdTuning, Summary,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon, Mpc, MpcOptions,
+    MpcSolver, NoControl, Observation, PdLaw, PdTuning, Summary,
 };
 use chainbeam::multistart::{multistart, StartDesign};
 use chainbeam::ocp::OcpOptions;
@@ -16,8 +16,13 @@ use chainbeam::scene::MpcTable;
 
 use crate::calls::{build_problem, Controls};
 use crate::errors::{check, Failure};
-use crate::run::{interruptible, with_pool};
+use crate::run::{watched, with_pool, Ticker};
+
+use std::sync::Arc;
+
 use crate::scene::Scene;
+use chainbeam::optimize::argmin::core::{Error as ArgminError, KV};
+use chainbeam::optimize::{Minimizer, Observe, ObservedState, ObserverMode};
 
 /// The settings of `optimize` (the command line's flags of the same names).
 struct OptimizeArgs {
@@ -87,11 +92,28 @@ fn options(a: &OptimizeArgs) -> Result<OptimOptions, Failure> {
     })
 }
 
+/// An optimiser's observer that counts its iterations on the call's [`Ticker`] (the progress
+/// of `optimize(..., progress=...)`) and stops it when the call is cancelled (Ctrl-C): the
+/// iteration returns an error, which nobody receives.
+struct Watch(Arc<Ticker>);
+
+impl Observe<ObservedState> for Watch {
+    fn observe_iter(&mut self, _state: &ObservedState, _kv: &KV) -> Result<(), ArgminError> {
+        self.0.tick();
+        if chainbeam::cancel::is_cancelled() {
+            return Err(ArgminError::msg("the computation was cancelled"));
+        }
+        Ok(())
+    }
+}
+
 /// The best result, the minima found and the failed starts (the command line's `run_optimize`).
+/// Progress: the iterations of a single start (out of `max_iters`), else the starts done.
 fn run_optimize(
     scene: &chainbeam::Scene,
     controls: Option<&Controls>,
     a: &OptimizeArgs,
+    ticker: &Arc<Ticker>,
 ) -> Result<(OptimResult, f64, usize, usize, bool), Failure> {
     let opts = options(a)?;
     let (problem, theta0) = build_problem(scene, controls, a.effort)?;
@@ -112,16 +134,26 @@ fn run_optimize(
     let initial = problem.value(&theta0)?;
     let two_axis = problem.is_two_axis();
     if a.starts == 1 {
-        let r = minimize(&problem, &theta0, &opts)?;
+        ticker.set_total(opts.max_iters as u64);
+        // `Minimizer::run` is what `minimize` runs, with the observer added.
+        let r = Minimizer::new(&problem, opts.clone())
+            .add_observer(Watch(ticker.clone()), ObserverMode::Always)
+            .run(&theta0)?;
         return Ok((r, initial, 1, 0, two_axis));
     }
+    ticker.set_total(a.starts as u64);
     // The scene's own start, then K − 1 points of the command line's default design.
     let design = StartDesign::LatinHypercube {
         lo: -600.0,
         hi: 600.0,
     };
     let own = minimize(&problem, &theta0, &opts);
+    ticker.tick();
+    chainbeam::cancel::check()?;
     let report = multistart(&problem, &design, a.starts - 1, a.seed, 0, &opts)?;
+    for _ in 1..a.starts {
+        ticker.tick();
+    }
     let mut failed = report.failures.len();
     let mut candidates: Vec<&OptimResult> = report.results.iter().collect();
     let own = match own {
@@ -150,7 +182,8 @@ fn run_optimize(
 /// Minimises the scene's objective over its controls; see `chainbeam.optimize`.
 #[pyfunction]
 #[pyo3(signature = (scene, method="auto", bound=None, lower=None, upper=None, starts=1, seed=0,
-                    max_iters=None, gtol=None, effort=0.0, controls=None, controls_x=None))]
+                    max_iters=None, gtol=None, effort=0.0, controls=None, controls_x=None,
+                    progress=None))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, collected at once below
 pub fn optimize<'py>(
     py: Python<'py>,
@@ -166,6 +199,7 @@ pub fn optimize<'py>(
     effort: f64,
     controls: Option<PyReadonlyArray1<'py, f64>>,
     controls_x: Option<PyReadonlyArray1<'py, f64>>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let bounds = match (bound, lower, upper) {
         (Some(_), Some(_), _) | (Some(_), _, Some(_)) => Err(Failure::argument(
@@ -196,8 +230,10 @@ pub fn optimize<'py>(
     };
     let controls = Controls::from_arrays(controls, controls_x)?;
     let s = scene.inner.clone();
-    let out = interruptible(py, move || {
-        with_pool(|| run_optimize(&s, controls.as_ref(), &args)).map_err(Failure::Internal)?
+    let progress = progress.as_ref().filter(|p| !p.is_none());
+    let out = watched(py, progress, move |ticker| {
+        with_pool(|| run_optimize(&s, controls.as_ref(), &args, ticker))
+            .map_err(Failure::Internal)?
     })?;
     let (r, initial, minima, failed, two_axis) = check(py, out)?;
     let d = PyDict::new(py);
@@ -240,12 +276,56 @@ struct MpcArgs {
 /// tuned PD law (with its gains [bias, K_p, K_d]).
 type Loops = (ClosedLoopResult, Option<([ClosedLoopResult; 3], [f64; 3])>);
 
+/// A controller whose decisions are counted on the call's [`Ticker`] (the progress of
+/// `mpc(..., progress=...)`); it decides as the controller it wraps.
+struct Counted<'a, C: ?Sized> {
+    inner: &'a mut C,
+    ticker: &'a Ticker,
+}
+
+impl<C: Controller + ?Sized> Controller for Counted<'_, C> {
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+
+    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<f64> {
+        let u = self.inner.control(obs);
+        self.ticker.tick();
+        u
+    }
+
+    fn last_iterations(&self) -> Option<usize> {
+        self.inner.last_iterations()
+    }
+}
+
+/// The closed loop of `controller`, its decisions counted.
+fn counted_loop(
+    scene: &chainbeam::Scene,
+    interval: f64,
+    controller: &mut dyn Controller,
+    ticker: &Ticker,
+) -> chainbeam::Result<ClosedLoopResult> {
+    let mut c = Counted {
+        inner: controller,
+        ticker,
+    };
+    run_closed_loop(scene, interval, &mut c)
+}
+
 fn run_mpc(
     scene: &chainbeam::Scene,
     model: &chainbeam::Scene,
     a: &MpcArgs,
+    ticker: &Ticker,
 ) -> Result<Loops, Failure> {
     let s = a.given.resolve(scene.mpc.as_ref());
+    // One decision every `interval` over T = N h, for each closed loop run.
+    let decisions = (scene.time.steps as f64 * scene.time.step / s.interval).round();
+    let loops = if a.baselines { 4.0 } else { 1.0 };
+    if decisions.is_finite() && decisions >= 0.0 {
+        ticker.set_total((decisions * loops) as u64);
+    }
     let options = MpcOptions {
         horizon: Horizon::Seconds(s.horizon),
         iterations: s.iterations,
@@ -264,13 +344,13 @@ fn run_mpc(
         ..MpcOptions::default()
     };
     let mut mpc = Mpc::new(model, s.interval, options)?;
-    let closed = run_closed_loop(scene, s.interval, &mut mpc)?;
+    let closed = counted_loop(scene, s.interval, &mut mpc, ticker)?;
     if !a.baselines {
         return Ok((closed, None));
     }
-    let none = run_closed_loop(scene, s.interval, &mut NoControl)?;
+    let none = counted_loop(scene, s.interval, &mut NoControl, ticker)?;
     let (mut constant, _) = ConstantForce::best(scene, s.bound, s.effort)?;
-    let constant = run_closed_loop(scene, s.interval, &mut constant)?;
+    let constant = counted_loop(scene, s.interval, &mut constant, ticker)?;
     let tuning = PdTuning::new(scene, s.interval, s.bound, s.effort)?;
     let opts = OptimOptions {
         max_iters: 200,
@@ -279,7 +359,7 @@ fn run_mpc(
     };
     let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
     let gains = [pd.bias, pd.kp, pd.kd];
-    let pd = run_closed_loop(scene, s.interval, &mut pd)?;
+    let pd = counted_loop(scene, s.interval, &mut pd, ticker)?;
     Ok((closed, Some(([none, constant, pd], gains))))
 }
 
@@ -306,7 +386,7 @@ fn summary<'py>(py: Python<'py>, s: &Summary) -> PyResult<Bound<'py, PyDict>> {
 #[pyfunction]
 #[pyo3(signature = (scene, model=None, horizon=None, interval=None, iterations=None,
                     solver="auto", first_iterations=50, bound=None, effort=None, rate_penalty=0.0,
-                    baselines=false, plan_pendulums=None, plan_step=None))]
+                    baselines=false, plan_pendulums=None, plan_step=None, progress=None))]
 #[allow(clippy::too_many_arguments)] // Python keyword arguments, collected at once below
 pub fn mpc<'py>(
     py: Python<'py>,
@@ -323,6 +403,7 @@ pub fn mpc<'py>(
     baselines: bool,
     plan_pendulums: Option<usize>,
     plan_step: Option<f64>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let solver = match solver {
         "auto" => MpcSolver::Auto,
@@ -356,8 +437,9 @@ pub fn mpc<'py>(
     };
     let s = scene.inner.clone();
     let m = model.map_or_else(|| s.clone(), |m| m.inner.clone());
-    let out = interruptible(py, move || {
-        with_pool(|| run_mpc(&s, &m, &a)).map_err(Failure::Internal)?
+    let progress = progress.as_ref().filter(|p| !p.is_none());
+    let out = watched(py, progress, move |ticker| {
+        with_pool(|| run_mpc(&s, &m, &a, ticker)).map_err(Failure::Internal)?
     })?;
     let (closed, base) = check(py, out)?;
     let d = PyDict::new(py);

@@ -69,7 +69,11 @@ impl Scene {
 
     /// A new scene with the keys of `changes` set: dotted paths into the scene file
     /// (`"loads.drag"`, `"beam.stiffness"`, `"loads.point[0].force"`), values numbers, strings,
-    /// booleans, lists or dicts. The result is validated like a file; an error names the key.
+    /// booleans, lists or dicts. A dict given for a table is merged into it key by key
+    /// (`{"loads": {"drag": 1.0}}` changes `loads.drag` and keeps the table's other keys, as
+    /// `{"loads.drag": 1.0}` does); a dict where the scene has a value, or a value where it has
+    /// a table, is refused naming the key. A list replaces the whole list (it is the value).
+    /// The result is validated like a file; an error names the key.
     fn replace(&self, py: Python<'_>, changes: &Bound<'_, PyDict>) -> PyResult<Self> {
         let text = self.inner.to_toml_string();
         let mut doc: toml::Table = text
@@ -114,13 +118,105 @@ impl Scene {
         self.inner.is_spatial()
     }
 
+    /// The value at a dotted path of the scene file (`scene["loads.tension"]`,
+    /// `scene["beam.stiffness"]`, `scene["loads.point[0].force"]`, `scene["fatigue"]`), every
+    /// value explicit as in `to_toml()`: a number, string, boolean, list or dict. A key the
+    /// scene does not have raises `KeyError` naming it and the keys that are there.
+    fn __getitem__<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
+        let doc: toml::Table =
+            self.inner.to_toml_string().parse().map_err(|e| {
+                errors::internal(py, &format!("cannot re-read the scene's TOML: {e}"))
+            })?;
+        let value = get_path(&doc, key).map_err(pyo3::exceptions::PyKeyError::new_err)?;
+        from_toml(py, value)
+    }
+
+    /// Whether `key` (a dotted path) is a key of the scene file (`"loads.waves" in scene`).
+    fn __contains__(&self, key: &str) -> bool {
+        self.inner
+            .to_toml_string()
+            .parse::<toml::Table>()
+            .is_ok_and(|doc| get_path(&doc, key).is_ok())
+    }
+
+    /// The pendulum lengths l₁..lₙ \[m\] (from `[beam]` or the `[pipe]`), base first.
+    #[getter]
+    fn lengths(&self) -> Vec<f64> {
+        self.inner.beam.lengths.clone()
+    }
+
+    /// The base pendulum's length l₁ \[m\]: the wellhead moment is M_w = M₀·l₁/2
+    /// (docs/conventions.md "The wellhead moment M_w").
+    #[getter]
+    fn l1(&self) -> f64 {
+        self.inner.beam.lengths[0]
+    }
+
+    /// The beam's length L = Σ lᵢ \[m\].
+    #[getter]
+    fn length(&self) -> f64 {
+        self.inner.beam.lengths.iter().sum()
+    }
+
+    /// The run's duration T = N h \[s\] (`time.steps` × `time.step`).
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.time.steps as f64 * self.inner.time.step
+    }
+
+    /// The pipe's section and derived values (`[pipe]`; None for a scene given by its beam):
+    /// `outer_diameter`, `wall_thickness`, `inner_diameter` \[m\], `steel_area` A_s =
+    /// π/4 (D_o² − D_i²) \[m²\], `second_moment` I = π/64 (D_o⁴ − D_i⁴) \[m⁴\],
+    /// `bending_stiffness` EI \[N m²\], `mass_per_length` μ = ρ_s A_s + ρ_c A_i + C_a ρ_w A_o
+    /// \[kg/m\] and `submerged_weight` w = g (ρ_s A_s + ρ_c A_i − ρ_w A_o) \[N/m\] with the
+    /// standard g = 9.80665 m/s² (the library's `Pipe`; the value for `loads.axial_weight`).
+    #[getter]
+    fn section<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(p) = &self.inner.pipe else {
+            return Ok(None);
+        };
+        let rho_w = self.inner.water.density;
+        let d = PyDict::new(py);
+        d.set_item("outer_diameter", p.outer_diameter)?;
+        d.set_item("wall_thickness", p.wall_thickness)?;
+        d.set_item("inner_diameter", p.inner_diameter())?;
+        d.set_item("steel_area", p.steel_area())?;
+        d.set_item("second_moment", p.second_moment())?;
+        d.set_item("bending_stiffness", p.bending_stiffness())?;
+        d.set_item("mass_per_length", p.mass_per_length(rho_w))?;
+        // Standard gravity: a riser's [loads] has gravity 0, its weight being `axial_weight`.
+        d.set_item(
+            "submerged_weight",
+            p.submerged_weight(rho_w, chainbeam::ocean::STANDARD_GRAVITY),
+        )?;
+        Ok(Some(d))
+    }
+
+    /// Whether the scene has a `[fatigue]` table (what `chainbeam.fatigue` needs).
+    #[getter]
+    fn has_fatigue(&self) -> bool {
+        self.inner.fatigue.is_some()
+    }
+
+    /// Whether the scene has an irregular sea (`[loads.waves]`).
+    #[getter]
+    fn has_waves(&self) -> bool {
+        self.inner.loads.waves.is_some()
+    }
+
     fn __repr__(&self) -> String {
         format!(
-            "chainbeam.Scene(n={}, steps={}, step={}, spatial={})",
+            "chainbeam.Scene(n={}, steps={}, step={}, duration={} s, length={} m, spatial={})",
             self.inner.n(),
             self.inner.time.steps,
             self.inner.time.step,
-            self.inner.is_spatial()
+            self.duration(),
+            self.length(),
+            if self.inner.is_spatial() {
+                "True"
+            } else {
+                "False"
+            }
         )
     }
 
@@ -207,6 +303,75 @@ fn to_toml(py: Python<'_>, key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Va
     ))
 }
 
+/// A TOML value as a Python object (integers as `int`, tables as `dict`).
+fn from_toml<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        toml::Value::String(s) => s.into_pyobject(py)?.into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Float(f) => f.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
+        toml::Value::Datetime(d) => d.to_string().into_pyobject(py)?.into_any(),
+        toml::Value::Array(a) => {
+            let list = PyList::empty(py);
+            for x in a {
+                list.append(from_toml(py, x)?)?;
+            }
+            list.into_any()
+        }
+        toml::Value::Table(t) => {
+            let d = PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, from_toml(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// The value at the dotted path `key` of `doc`, or a message naming the key and what is there.
+fn get_path<'a>(doc: &'a toml::Table, key: &str) -> Result<&'a toml::Value, String> {
+    let mut here: Option<&toml::Value> = None;
+    let mut table = Some(doc);
+    let mut walked = String::new();
+    for seg in key.split('.') {
+        let Some((name, index)) = split_segment(seg).filter(|(n, _)| !n.is_empty()) else {
+            return Err(format!(
+                "scene key `{key}`: `{seg}` is neither a key nor `name[index]`"
+            ));
+        };
+        let Some(t) = table else {
+            return Err(format!(
+                "scene key `{key}`: `{walked}` is a value, not a table: it has no keys below it"
+            ));
+        };
+        if !walked.is_empty() {
+            walked.push('.');
+        }
+        walked.push_str(seg);
+        let mut v = t.get(name).ok_or_else(|| {
+            let keys: Vec<&str> = t.keys().map(String::as_str).collect();
+            format!(
+                "scene key `{key}`: the scene has no `{walked}` (keys there: {})",
+                keys.join(", ")
+            )
+        })?;
+        if let Some(i) = index {
+            let arr = v.as_array().ok_or_else(|| {
+                format!("scene key `{key}`: `{name}` is not a list, it has no `[{i}]`")
+            })?;
+            v = arr.get(i).ok_or_else(|| {
+                format!(
+                    "scene key `{key}`: index {i} is out of range (the scene has {})",
+                    arr.len()
+                )
+            })?;
+        }
+        table = v.as_table();
+        here = Some(v);
+    }
+    here.ok_or_else(|| format!("scene key `{key}`: empty"))
+}
+
 /// One step of a dotted path: a key and, for `name[i]`, an index into an array of tables.
 fn split_segment(seg: &str) -> Option<(&str, Option<usize>)> {
     match seg.split_once('[') {
@@ -218,7 +383,49 @@ fn split_segment(seg: &str) -> Option<(&str, Option<usize>)> {
     }
 }
 
-/// Sets `value` at the dotted path `key` of `doc`, creating tables on the way.
+/// Puts `value` into `slot` (the value at `key`): a table into a table key by key, recursively
+/// (so that nothing of the scene's table is dropped); a table into a value, or a value into a
+/// table, is refused (the caller meant one or the other, and guessing would drop something).
+fn merge(py: Python<'_>, key: &str, slot: &mut toml::Value, value: toml::Value) -> PyResult<()> {
+    match (slot, value) {
+        (toml::Value::Table(old), toml::Value::Table(new)) => {
+            for (k, v) in new {
+                let sub = format!("{key}.{k}");
+                match old.get_mut(&k) {
+                    Some(existing) => merge(py, &sub, existing, v)?,
+                    None => {
+                        old.insert(k, v);
+                    }
+                }
+            }
+            Ok(())
+        }
+        (toml::Value::Table(_), v) => Err(scene_error(
+            py,
+            key,
+            &format!(
+                "is a table of the scene; give a dict of its keys (merged into it) or set them \
+                 one by one (`{key}.KEY`), not a {}",
+                v.type_str()
+            ),
+        )),
+        (old, toml::Value::Table(_)) => Err(scene_error(
+            py,
+            key,
+            &format!(
+                "is a {} of the scene, not a table: a dict cannot be merged into it",
+                old.type_str()
+            ),
+        )),
+        (old, v) => {
+            *old = v;
+            Ok(())
+        }
+    }
+}
+
+/// Sets `value` at the dotted path `key` of `doc`, creating tables on the way; a dict given for
+/// an existing table is merged into it ([`merge`]).
 fn set_path(py: Python<'_>, doc: &mut toml::Table, key: &str, value: toml::Value) -> PyResult<()> {
     let segs: Vec<&str> = key.split('.').collect();
     if key.is_empty() || segs.iter().any(|s| s.is_empty()) {
@@ -245,7 +452,12 @@ fn set_path(py: Python<'_>, doc: &mut toml::Table, key: &str, value: toml::Value
         let last = j + 1 == segs.len();
         match (index, last) {
             (None, true) => {
-                table.insert(name.to_string(), value);
+                match table.get_mut(name) {
+                    Some(slot) => merge(py, key, slot, value)?,
+                    None => {
+                        table.insert(name.to_string(), value);
+                    }
+                }
                 return Ok(());
             }
             (None, false) => {
@@ -271,8 +483,7 @@ fn set_path(py: Python<'_>, doc: &mut toml::Table, key: &str, value: toml::Value
                     )
                 })?;
                 if last {
-                    *slot = value;
-                    return Ok(());
+                    return merge(py, key, slot, value);
                 }
                 table = slot.as_table_mut().ok_or_else(|| {
                     scene_error(

@@ -358,18 +358,24 @@ impl Loop<'_> {
     {
         let (a, s) = (self.setup.a, &self.setup.settings);
         let mut mpc = mpc.map_err(|e| mpc_error(self.setup, self.model_file, e))?;
-        let spinner = progress.spinner(format!(
-            "closed loop: {} s, a plan every {} s over {} s",
-            self.scene.time.steps as f64 * self.scene.time.step,
-            s.interval,
-            s.horizon
-        ));
+        let seconds = self.scene.time.steps as f64 * self.scene.time.step;
+        // A bar over the decisions (one every interval; a wrong interval fails the loop, which
+        // then says why).
+        let decisions = (seconds / s.interval).round().max(0.0) as u64;
+        let bar = progress.bar(
+            decisions,
+            format!(
+                "closed loop: {seconds} s, a plan every {} s over {} s",
+                s.interval, s.horizon
+            ),
+        );
         let mut blamed = Blamed {
             inner: &mut mpc,
             failed: false,
+            bar: &bar,
         };
         let closed = run(self.scene, s.interval, &mut blamed);
-        spinner.finish_and_clear();
+        bar.finish_and_clear();
         // The controller's failures are the model's (its scene, its step); the others the
         // plant's.
         let failed_file = if blamed.failed {
@@ -382,10 +388,11 @@ impl Loop<'_> {
 }
 
 /// The controller, remembering whether it failed: its errors come from the `--model` scene, the
-/// loop's other errors from the plant's.
+/// loop's other errors from the plant's; each decision advances the progress bar.
 struct Blamed<'a, C> {
     inner: &'a mut C,
     failed: bool,
+    bar: &'a indicatif::ProgressBar,
 }
 
 impl SpatialController for Blamed<'_, Mpc<3>> {
@@ -396,6 +403,7 @@ impl SpatialController for Blamed<'_, Mpc<3>> {
     fn control(&mut self, obs: &Observation<'_, 3>) -> chainbeam::Result<[f64; 2]> {
         let u = SpatialController::control(self.inner, obs);
         self.failed = u.is_err();
+        self.bar.inc(1);
         u
     }
 
@@ -412,6 +420,7 @@ impl Controller for Blamed<'_, Mpc> {
     fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<f64> {
         let u = self.inner.control(obs);
         self.failed = u.is_err();
+        self.bar.inc(1);
         u
     }
 

@@ -51,6 +51,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 None => return Err(missing(p, "the scene has no tension (T = 0)")),
             },
             Parameter::AxialWeight => match &mut self.axial_weight {
+                Some(t) if !t.node_weights.is_empty() => {
+                    return Err(missing(p, "a stack-up's weights have no single w"))
+                }
                 Some(t) => t.weight = value,
                 None => return Err(missing(p, "the scene has no axial weight (w = 0)")),
             },
@@ -63,6 +66,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     }
                 }
                 None => return Err(missing(p, "the scene has no joint damping")),
+            },
+            Parameter::SoilModulus => match &mut self.soil {
+                Some(s) => s.modulus = value,
+                None => return Err(missing(p, "the scene has no node in the soil")),
             },
             Parameter::CurrentSpeed => match &mut self.current {
                 Some(c) if c.has_parameter(p) => c.speed = value,
@@ -111,7 +118,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::InteriorStiffness => true,
             Parameter::Tension => self.tension.is_some(),
             Parameter::JointDamping => self.joint_damping.as_ref().is_some_and(|j| j.is_uniform()),
-            Parameter::AxialWeight => self.axial_weight.is_some(),
+            Parameter::AxialWeight => self
+                .axial_weight
+                .as_ref()
+                .is_some_and(|t| t.node_weights.is_empty()),
+            Parameter::SoilModulus => self.soil.is_some(),
             Parameter::LoadForce(_)
             | Parameter::LoadForceX(_)
             | Parameter::LoadAmplitude { .. }

@@ -47,6 +47,7 @@ mod gravity;
 mod joint_damping;
 mod point_load;
 mod reaction_tip;
+mod soil;
 mod spring;
 mod waves;
 
@@ -63,6 +64,7 @@ pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
+pub use soil::SoilSprings;
 pub use spring::Springs;
 pub use waves::{WaveField, WaveInertia, WaveInputs};
 

@@ -99,11 +99,14 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
     ("mpc", &[("interval", "0.1")]),
 ];
 
+/// One table of [`stackup_text`]: (its path, its header, its (key, value) entries).
+type Table<'a> = (&'a str, &'a str, Vec<(&'a str, &'a str)>);
+
 /// A valid scene with a `[stackup]` (two segments, a body, a flex joint) and `[soil]`, with
 /// `set` = (table, key, value) replacing or adding one key of the stack-up's tables (the first
 /// of an array of tables). `elevation` replaces the flex joint's `above` (one of the two).
 fn stackup_text(set: Option<(&str, &str, &str)>) -> String {
-    let tables: [(&str, &str, Vec<(&str, &str)>); 5] = [
+    let tables: [Table; 5] = [
         ("stackup", "[stackup]", vec![]),
         (
             "stackup.segment",

@@ -301,3 +301,50 @@ fn bad_values_name_their_key() {
         assert_eq!(key_of(&text), key, "{to}");
     }
 }
+
+/// Waves on the stack-up: the shipped scene in a JONSWAP sea runs, and the nodes in the soil
+/// move no water. The waves' share of pendulum i's water momentum is Wᵢ = lᵢ Σ_{k≥i} m_k u_k
+/// and its inertia Gᵢ = lᵢ Σ_{k≥i} c_k u̇_k (docs/conventions.md "Waves on the chain"), so for
+/// every pendulum whose nodes up to the mudline are all in the soil, Wᵢ/lᵢ and Gᵢ/lᵢ are those of
+/// the pendulum just below the mudline: the soil's nodes add nothing (to 1e-12).
+#[test]
+fn waves_stop_at_the_mudline() {
+    let mut scene = shipped();
+    let mut w = chainbeam::scene::Waves::jonswap(2.0, 8.0);
+    w.components = Some(64);
+    w.lumping = chainbeam::scene::WaveLumping::Cell;
+    scene.loads.waves = Some(w);
+    scene.time.steps = 50;
+    scene.validate().unwrap();
+    let chain = Chain::<f64, 2>::from_scene(&scene).unwrap();
+    let field = chain.waves().expect("the scene has waves");
+    let y = joint_heights(&scene);
+    let last_soil = (0..scene.n())
+        .filter(|&i| y[i + 1] <= 60.0 + 1e-9)
+        .max()
+        .unwrap();
+    let l = &scene.beam.lengths;
+    for t in [3.0, 7.5] {
+        let (w0, g0) = (
+            field.momentum(last_soil, t) / l[last_soil],
+            field.inertia(last_soil, t) / l[last_soil],
+        );
+        assert!(
+            w0.abs() > 0.0 && g0.abs() > 0.0,
+            "the waves reach the wet nodes"
+        );
+        for (i, li) in l.iter().enumerate().take(last_soil) {
+            let (wi, gi) = (field.momentum(i, t) / li, field.inertia(i, t) / li);
+            assert!(
+                (wi - w0).abs() <= 1e-12 * w0.abs(),
+                "W at {i}: {wi} vs {w0}"
+            );
+            assert!(
+                (gi - g0).abs() <= 1e-12 * g0.abs(),
+                "G at {i}: {gi} vs {g0}"
+            );
+        }
+    }
+    let traj = chainbeam::simulate(&scene).unwrap().into_planar().unwrap();
+    assert!(traj.moment.iter().all(|x| x.is_finite()));
+}

@@ -443,7 +443,7 @@ impl Stackup {
             parts.push(self.part(i, body, water_density, stiffest));
         }
         let total: f64 = parts.iter().map(|p| p.length).sum();
-        let (cuts, springs) = self.cuts(&order, &parts, total, mudline)?;
+        let (cuts, springs) = self.cuts(&parts, total, mudline)?;
         let pieces = split(&parts, &cuts)?;
         let counts = allocate(n, &pieces)?;
         Ok(self.assemble(&pieces, &counts, &springs, support, mudline))
@@ -491,7 +491,6 @@ impl Stackup {
     #[allow(clippy::type_complexity)]
     fn cuts(
         &self,
-        order: &[(usize, bool)],
         parts: &[Piece],
         total: f64,
         mudline: f64,
@@ -517,10 +516,7 @@ impl Stackup {
             )?;
             let at = match (&f.above, f.elevation) {
                 (Some(name), None) => {
-                    let k = order
-                        .iter()
-                        .zip(&parts[..])
-                        .position(|(_, p)| self.part_name(p.part) == name);
+                    let k = parts.iter().position(|p| self.part_name(p.part) == name);
                     match k {
                         Some(k) => tops[k],
                         None => {

@@ -106,7 +106,7 @@ fn node_velocity(
             } else {
                 sea.cell_velocity_amplitudes((0.0, h1), v);
                 let share = h1 / (hi - lo);
-                v.iter_mut().for_each(|x| *x = *x * share);
+                v.iter_mut().for_each(|x| *x *= share);
             }
         }
         _ => v.iter_mut().for_each(|x| *x = Complex::new(0.0, 0.0)),

@@ -348,3 +348,17 @@ fn waves_stop_at_the_mudline() {
     let traj = chainbeam::simulate(&scene).unwrap().into_planar().unwrap();
     assert!(traj.moment.iter().all(|x| x.is_finite()));
 }
+
+/// A stack-up whose layout was not computed for its chain (a scene assembled in code) is refused
+/// by the validation, naming `stackup`, instead of reaching the model.
+#[test]
+fn a_stackup_without_its_layout_is_refused() {
+    let mut scene = shipped();
+    scene.stackup.as_mut().unwrap().layout = chainbeam::scene::Layout::default();
+    let err = scene.validate().unwrap_err();
+    match err.kind {
+        SceneErrorKind::InvalidValue { key, .. } => assert_eq!(key, "stackup"),
+        other => panic!("{other:?}"),
+    }
+    assert!(Chain::<f64, 2>::from_scene(&scene).is_err());
+}

@@ -103,9 +103,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The axial weight of a scene: `[loads] axial_weight` (w on every node's cell), or the
     /// stack-up's own per-node weights; `None` when it has none.
     fn axial_weight_of(scene: &Scene, lengths: &[D]) -> Option<AxialWeight<D>> {
-        let node_weights: Vec<D> = scene.stackup.as_ref().map_or_else(Vec::new, |st| {
-            st.layout.node_weights.iter().map(|&w| D::from(w)).collect()
-        });
+        let node_weights: Vec<D> = scene
+            .stackup
+            .as_ref()
+            .filter(|st| st.layout.node_weights.len() == scene.n())
+            .map_or_else(Vec::new, |st| {
+                st.layout.node_weights.iter().map(|&w| D::from(w)).collect()
+            });
         let some = scene.loads.axial_weight != 0.0 || node_weights.iter().any(|w| w.re() != 0.0);
         some.then(|| AxialWeight {
             weight: D::from(scene.loads.axial_weight),
@@ -159,8 +163,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 scene.water.density * (1.0 + pipe.added_mass_coefficient) * pipe.outer_area(),
                 None,
             ),
-            (None, Some(st)) => (0.0, Some(st.layout.node_inertia.clone())),
-            (None, None) => return Ok(None),
+            (None, Some(st)) if st.layout.node_inertia.len() == scene.n() => {
+                (0.0, Some(st.layout.node_inertia.clone()))
+            }
+            _ => return Ok(None),
         };
         let spec = w.sea_spec(scene.wave_depth())?;
         let t = scene.time;

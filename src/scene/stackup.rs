@@ -658,7 +658,8 @@ impl Stackup {
         let mut d = vec![0.0; n];
         let (mut f, mut s) = (0.0, 0.0);
         for i in (0..n).rev() {
-            f += self.layout.node_drag[i];
+            // A layout not computed for this chain (a scene assembled in code) has no drag.
+            f += self.layout.node_drag.get(i).copied().unwrap_or(0.0);
             if super::soil::water_height(mudline, y[i]).is_some() {
                 s += masses[i];
             }

@@ -370,6 +370,25 @@ impl Scene {
         if let Some(soil) = &self.soil {
             soil.check(b.lengths.iter().sum())?;
         }
+        if let Some(st) = &self.stackup {
+            let l = &st.layout;
+            let lens = [
+                l.node_weights.len(),
+                l.node_drag.len(),
+                l.node_inertia.len(),
+            ];
+            if lens.iter().any(|&m| m != n) {
+                return Err(SceneError::invalid(
+                    "stackup",
+                    format!(
+                        "its layout on the chain has {} nodes for a beam of {n} pendulums: a \
+                         stack-up's chain is built when the scene is read (`Scene::from_file`, \
+                         `Scene::from_toml_str`)",
+                        lens[0]
+                    ),
+                ));
+            }
+        }
         if let Some(objective) = &self.objective {
             objective.check()?;
         }

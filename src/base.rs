@@ -74,6 +74,9 @@ pub enum Parameter {
     /// All joint dampers c_j \[N·m·s/rad\] at the joints with a spring, set to one common value
     /// (`[beam] joint_damping`; the torque −c_j θ̇_j, docs/conventions.md "Joint damping").
     JointDamping,
+    /// The soil's p-y modulus at the mudline E₀ \[N/m²\] (`[soil] modulus`): every node's lateral
+    /// spring k_i = E₀ aᵢ + E₁ bᵢ is affine in it (docs/conventions.md "Soil springs").
+    SoilModulus,
 }
 
 /// Statistics of one step.

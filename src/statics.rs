@@ -6,7 +6,8 @@
 //! The energy and its derivatives come from the model's force terms ([`crate::model::terms`]):
 //! f = ∂U/∂q ([`Chain::potential_gradient`]) and K = ∂²U/∂q² ([`Chain::force_jacobian_product`],
 //! symmetric and block-tridiagonal, so a few products seeded on every third pendulum give all of
-//! it). A current's drag enters as its steady force at rest, Fᵢ(0) = Dᵢ Pᵢ|Pᵢ|
+//! it; with soil springs it is dense below the mudline, [`Chain::stiffness_reach`], and one
+//! product per pendulum gives it). A current's drag enters as its steady force at rest, Fᵢ(0) = Dᵢ Pᵢ|Pᵢ|
 //! ([`crate::model::CurrentDrag`], read from the model, so with the per-pendulum Dᵢ = D wᵢ of a
 //! `[pipe]` scene, [`Scene::drag_weights`]): independent of q, it adds −F(0) to f and nothing to
 //! K (the still-water drag has F(0) = 0). A locked tip (fixed-fixed, pinned-pinned, and the

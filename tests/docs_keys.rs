@@ -14,7 +14,8 @@ use std::path::Path;
 
 use chainbeam::scene::{
     ValueRange, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE, JOINT_DAMPING_RANGE,
-    LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, PERIOD_RANGE, SOIL_GRADIENT_RANGE,
+    SOIL_MODULUS_RANGE, SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 use chainbeam::{Scene, SceneErrorKind};
 
@@ -98,9 +99,101 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
     ("mpc", &[("interval", "0.1")]),
 ];
 
+/// One table of [`stackup_text`]: (its path, its header, its (key, value) entries).
+type Table<'a> = (&'a str, &'a str, Vec<(&'a str, &'a str)>);
+
+/// A valid scene with a `[stackup]` (two segments, a body, a flex joint) and `[soil]`, with
+/// `set` = (table, key, value) replacing or adding one key of the stack-up's tables (the first
+/// of an array of tables). `elevation` replaces the flex joint's `above` (one of the two).
+fn stackup_text(set: Option<(&str, &str, &str)>) -> String {
+    let tables: [Table; 5] = [
+        ("stackup", "[stackup]", vec![]),
+        (
+            "stackup.segment",
+            "[[stackup.segment]]",
+            vec![
+                ("name", "\"a\""),
+                ("length", "2.0"),
+                ("outer_diameter", "0.5"),
+                ("wall_thickness", "0.02"),
+                ("buoyancy_diameter", "0.8"),
+                ("buoyancy_density", "400.0"),
+            ],
+        ),
+        (
+            "stackup.body",
+            "[[stackup.body]]",
+            vec![
+                ("name", "\"c\""),
+                ("above", "\"b\""),
+                ("mass", "300.0"),
+                ("submerged_weight", "2000.0"),
+                ("height", "1.0"),
+            ],
+        ),
+        (
+            "stackup.flex_joint",
+            "[[stackup.flex_joint]]",
+            vec![("name", "\"f\""), ("above", "\"b\""), ("stiffness", "1e5")],
+        ),
+        (
+            "stackup.segment",
+            "[[stackup.segment]]",
+            vec![
+                ("name", "\"b\""),
+                ("length", "1.0"),
+                ("joints", "2"),
+                ("outer_diameter", "0.4"),
+                ("wall_thickness", "0.02"),
+            ],
+        ),
+    ];
+    let mut text = String::from(
+        "[beam]\npendulums = 7\nsupport = \"riser\"\n\n[time]\nstep = 0.001\nsteps = 5\n\n\
+         [loads]\ntension = 1e4\n\n",
+    );
+    let mut soil = vec![("mudline", "1.0"), ("modulus", "1e4")];
+    if let Some(("soil", k, v)) = set {
+        match soil.iter_mut().find(|e| e.0 == k) {
+            Some(e) => e.1 = v,
+            None => soil.push((k, v)),
+        }
+    }
+    text.push_str("[soil]\n");
+    for (k, v) in &soil {
+        text.push_str(&format!("{k} = {v}\n"));
+    }
+    let mut done = false;
+    for (table, header, mut entries) in tables {
+        if let Some((t, k, v)) = set {
+            if t == table && !done {
+                done = true;
+                if k == "elevation" {
+                    entries.retain(|e| e.0 != "above");
+                }
+                match entries.iter_mut().find(|e| e.0 == k) {
+                    Some(e) => e.1 = v,
+                    None => entries.push((k, v)),
+                }
+            }
+        }
+        text.push_str(&format!("\n{header}\n"));
+        for (k, v) in &entries {
+            text.push_str(&format!("{k} = {v}\n"));
+        }
+    }
+    text
+}
+
 /// The scene of [`SECTIONS`] with `set` = (table, key, value): the key's value replaced, or the
-/// key added to its table (the document root for table "").
+/// key added to its table (the document root for table ""); the stack-up's and the soil's tables
+/// are those of [`stackup_text`].
 fn render(set: Option<(&str, &str, &str)>) -> String {
+    if let Some((t, _, _)) = set {
+        if t == "soil" || t.starts_with("stackup") {
+            return stackup_text(set);
+        }
+    }
     let mut text = String::new();
     if let Some(("", key, value)) = set {
         text.push_str(&format!("{key} = {value}\n"));
@@ -153,6 +246,9 @@ fn accepted(table: &str) -> BTreeSet<String> {
                     match table {
                         "loads.point.harmonic" => "loads.point[0].harmonic[0]".to_string(),
                         "loads.current" => table.to_string(),
+                        "stackup.segment" | "stackup.body" | "stackup.flex_joint" => {
+                            format!("{table}[0]")
+                        }
                         _ => table.replace("loads.point", "loads.point[0]"),
                     }
                 )
@@ -187,7 +283,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 77, "number of documented keys");
+    assert_eq!(checked, 111, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -365,6 +461,47 @@ fn every_documented_key_is_read() {
         seen.insert(format!("loads.waves.{key}"));
         assert_ne!(waves(Some((key, value))), with_waves, "loads.waves.{key}");
     }
+    // `[soil]` and `[stackup]` on the stack-up scene of `stackup_text`.
+    let stack = Scene::from_toml_str(&stackup_text(None)).unwrap();
+    for (table, key, value) in [
+        ("soil", "mudline", "1.5"),
+        ("soil", "modulus", "2e4"),
+        ("soil", "gradient", "3e3"),
+        ("stackup", "foot", "\"pinned\""),
+        ("stackup.segment", "name", "\"z\""),
+        ("stackup.segment", "length", "2.5"),
+        ("stackup.segment", "joints", "2"),
+        ("stackup.segment", "outer_diameter", "0.6"),
+        ("stackup.segment", "wall_thickness", "0.03"),
+        ("stackup.segment", "youngs_modulus", "2e11"),
+        ("stackup.segment", "steel_density", "7800.0"),
+        ("stackup.segment", "contents_density", "1000.0"),
+        ("stackup.segment", "line_mass", "50.0"),
+        ("stackup.segment", "line_area", "0.01"),
+        ("stackup.segment", "buoyancy_diameter", "0.9"),
+        ("stackup.segment", "buoyancy_density", "300.0"),
+        ("stackup.segment", "hydrodynamic_diameter", "0.7"),
+        ("stackup.segment", "drag_coefficient", "1.2"),
+        ("stackup.segment", "added_mass_coefficient", "0.9"),
+        ("stackup.body", "name", "\"d\""),
+        ("stackup.body", "above", "\"a\""),
+        ("stackup.body", "mass", "400.0"),
+        ("stackup.body", "submerged_weight", "2500.0"),
+        ("stackup.body", "height", "1.2"),
+        ("stackup.body", "drag_area", "2.0"),
+        ("stackup.body", "added_mass", "50.0"),
+        ("stackup.body", "bending_stiffness", "1e8"),
+        ("stackup.flex_joint", "name", "\"g\""),
+        ("stackup.flex_joint", "stiffness", "2e5"),
+        ("stackup.flex_joint", "above", "\"a\""),
+        ("stackup.flex_joint", "elevation", "3.0"),
+    ] {
+        assert!(doc[table].contains_key(key), "{table}.{key} not documented");
+        seen.insert(format!("{table}.{key}"));
+        let text = stackup_text(Some((table, key, value)));
+        let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_ne!(scene, stack, "{table}.{key} = {value} changed nothing");
+    }
     for &(table, key, value) in settings {
         assert!(doc[table].contains_key(key), "{table}.{key} not documented");
         seen.insert(format!("{table}.{key}"));
@@ -409,6 +546,17 @@ fn documented_ranges_are_the_enforced_ones() {
     assert_eq!(cell("loads.point.harmonic", "period"), range(&PERIOD_RANGE));
     assert!(cell("control", "values").starts_with(&range(&FORCE_RANGE)));
     assert_eq!(cell("time", "step"), range(&STEP_RANGE));
+    assert_eq!(cell("soil", "modulus"), range(&SOIL_MODULUS_RANGE));
+    assert_eq!(cell("soil", "gradient"), range(&SOIL_GRADIENT_RANGE));
+    assert!(cell("soil", "mudline").starts_with(&range(&SOIL_MUDLINE_RANGE)));
+    // The stack-up's keys: each table's cell starts with the range the validation enforces.
+    for table in ["stackup.segment", "stackup.body", "stackup.flex_joint"] {
+        for (key, row) in &doc[table] {
+            if let Some(r) = chainbeam::scene::stackup_range_of(key) {
+                assert!(row[4].starts_with(&range(&r)), "{table}.{key}: {}", row[4]);
+            }
+        }
+    }
     assert_eq!(cell("beam", "pendulums"), format!("1 to {MAX_PENDULUMS}"));
     assert!(cell("time", "steps").starts_with(&format!("1 to {MAX_STEPS}")));
     // and the same numbers in the summary table of "Valid ranges"

@@ -52,7 +52,9 @@ fn spec_scene() -> Scene {
             joint_damping: Vec::new(),
         },
         pipe: None,
+        stackup: None,
         water: Default::default(),
+        soil: None,
         loads: Loads {
             gravity: 0.0,
             drag: 0.0,

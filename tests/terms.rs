@@ -17,6 +17,7 @@ use chainbeam::model::{
     BlockSym, CoupledAt, CoupledDissipativeTerm, Ctx, DissipationVisitor, DissipativeTerm,
     DualScratch, Embed, ForceTerm, HalfKick, HalfSteps, TermVisitor,
 };
+use chainbeam::scene::Soil;
 use chainbeam::{
     catalogue, Chain, Current, Harmonic, LoadSeries, Parameter, PointLoad, Scalar, Scene,
     SceneBuilder, Support,
@@ -25,7 +26,7 @@ use num_dual::{Dual, Dual64};
 
 /// A scene with every conservative term: springs (base, interior, tip), point loads of every
 /// kind (constant, time-windowed, a ramped sum of two harmonics, a time series), gravity, a
-/// control at node 4, and drag. `spatial`: the loads get x components (a vector force, a
+/// control at node 4, drag, and soil springs on the nodes below a mudline. `spatial`: the loads get x components (a vector force, a
 /// direction out of the yz-plane, an F_x column), so the spatial model's x terms are checked too;
 /// otherwise the same loads lie in the yz-plane and the planar model can run the scene.
 fn all_terms_scene(spatial: bool) -> Scene {
@@ -72,6 +73,12 @@ fn all_terms_scene(spatial: bool) -> Scene {
             LoadSeries::new("in code", rows).expect("valid rows"),
         ))
         .control_constant(4, -0.7)
+        // The mudline 2.5 m above the foot: nodes 1 and 2 in the soil, node 3's cell partly.
+        .soil(Soil {
+            mudline: 2.5,
+            modulus: 300.0,
+            gradient: 150.0,
+        })
         .build()
         .expect("valid scene")
 }
@@ -219,6 +226,7 @@ impl<D: Scalar, const DIM: usize> Check<D, DIM> {
             (Parameter::Mass, 1.0),
             (Parameter::Tension, 350.0),
             (Parameter::AxialWeight, 40.0),
+            (Parameter::SoilModulus, 300.0),
             (Parameter::LoadForce(0), 2.0),
             (Parameter::LoadForceX(0), 0.5),
             (Parameter::LoadForce(1), -1.5),
@@ -353,6 +361,7 @@ fn check_terms_of<D: Scalar, const DIM: usize>(scene: &Scene, more: &[&str]) {
         "control",
     ];
     expect.extend_from_slice(more);
+    expect.push("soil");
     assert_eq!(
         check.checked, expect,
         "every conservative term of the scene was checked"

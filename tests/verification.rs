@@ -150,6 +150,7 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::AxialWeight => s.loads.axial_weight,
         Parameter::JointDamping => s.beam.joint_damping[1],
         Parameter::DragCoefficient => s.pipe.unwrap().drag_coefficient,
+        Parameter::SoilModulus => s.soil.as_ref().unwrap().modulus,
     }
 }
 
@@ -625,6 +626,40 @@ fn gravity_windowed_loads_and_non_uniform_chains() {
             Parameter::AxialWeight,
             Parameter::InteriorStiffness,
             Parameter::Mass,
+            Parameter::Drag,
+        ],
+    );
+
+    // Soil springs (`[soil]`): the lower three nodes in a soil whose modulus grows with depth,
+    // the fourth's cell partly; the soil modulus's gradient.
+    let in_soil = Scene::builder(7)
+        .lengths(vec![0.8, 1.2, 1.0, 0.9, 1.1, 1.3, 0.7])
+        .masses(vec![1.5, 0.8, 1.2, 1.0, 0.7, 1.1, 0.9])
+        .stiffness(40.0)
+        .base_stiffness(80.0)
+        .tip_stiffness(60.0)
+        .support(Support::Riser)
+        .tension(300.0)
+        .axial_weight(25.0)
+        .drag(5.0)
+        .point_load(5, 30.0)
+        .control_per_step(7, per_step(steps, 3.0))
+        .soil(chainbeam::scene::Soil {
+            mudline: 3.3,
+            modulus: 40.0,
+            gradient: 15.0,
+        })
+        .steps(steps)
+        .build()
+        .unwrap();
+    check_scene(
+        "riser in soil, tension and axial weight, drag",
+        &in_soil,
+        &BendingObjective::summed_moment(),
+        &[
+            Parameter::SoilModulus,
+            Parameter::Tension,
+            Parameter::InteriorStiffness,
             Parameter::Drag,
         ],
     );

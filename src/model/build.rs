@@ -3,8 +3,8 @@
 
 use super::{
     AxialWeight, Chain, ControlForce, CurrentDrag, Drag, DragWeights, Gravity, HarmonicForce,
-    JointDamping, NodeDrag, PointLoad, PointLoads, Springs, TopTension, VesselMotion, WaveField,
-    WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
+    JointDamping, NodeDrag, PointLoad, PointLoads, SoilSprings, Springs, TopTension, VesselMotion,
+    WaveField, WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
@@ -65,8 +65,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 waves.clone(),
                 D::zero(),
                 DragWeights::new(None),
-                &lengths,
-                &masses,
+                (&lengths, &masses),
+                scene.mudline(),
             );
             NodeDrag::new(
                 pipe.drag_coefficient,
@@ -93,10 +93,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 tension: D::from(scene.loads.tension),
                 lengths: lengths.clone(),
             }),
-            axial_weight: (scene.loads.axial_weight != 0.0).then(|| AxialWeight {
-                weight: D::from(scene.loads.axial_weight),
-                lengths: lengths.clone(),
-            }),
+            axial_weight: Self::axial_weight_of(scene, &lengths),
             control: control_node.map(|node| ControlForce {
                 node,
                 lengths: lengths.clone(),
@@ -110,12 +107,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 let c = scene.loads.current.as_ref();
                 let d = D::from(scene.loads.drag);
                 let w = DragWeights::new(scene.drag_weights());
-                CurrentDrag::new(c, waves.clone(), d, w, &lengths, &masses)
+                let mudline = scene.mudline();
+                CurrentDrag::new(c, waves.clone(), d, w, (&lengths, &masses), mudline)
             }),
             wave_inertia: waves.map(WaveInertia::new),
             joint_damping,
             node_drag,
             vessel,
+            soil: scene
+                .soil
+                .as_ref()
+                .map(|s| SoilSprings::new(s, s.lumping(&b.lengths), &lengths))
+                .filter(|s| s.last > 0),
             lengths,
             masses,
         })
@@ -143,6 +146,24 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let motion = VesselMotion::new(&vessel, sea, t.steps + 1)
             .map_err(|e| Error::from(crate::scene::sea_error(e, None)))?;
         Ok(Some(std::sync::Arc::new(motion)))
+    }
+
+    /// The axial weight of a scene: `[loads] axial_weight` (w on every node's cell), or the
+    /// stack-up's own per-node weights; `None` when it has none.
+    fn axial_weight_of(scene: &Scene, lengths: &[D]) -> Option<AxialWeight<D>> {
+        let node_weights: Vec<D> = scene
+            .stackup
+            .as_ref()
+            .filter(|st| st.layout.node_weights.len() == scene.n())
+            .map_or_else(Vec::new, |st| {
+                st.layout.node_weights.iter().map(|&w| D::from(w)).collect()
+            });
+        let some = scene.loads.axial_weight != 0.0 || node_weights.iter().any(|w| w.re() != 0.0);
+        some.then(|| AxialWeight {
+            weight: D::from(scene.loads.axial_weight),
+            lengths: lengths.to_vec(),
+            node_weights,
+        })
     }
 
     /// The scene's point loads `[[loads.point]]` as model terms (their directions normalised).
@@ -182,8 +203,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// its sea realised on the scene's grid, the pipe's inertia coefficient
     /// ρ_w (1 + C_a) A_o and the nodes' masses.
     fn wave_field(scene: &Scene) -> Result<Option<std::sync::Arc<WaveField>>> {
-        let (Some(w), Some(pipe)) = (&scene.loads.waves, &scene.pipe) else {
+        let Some(w) = &scene.loads.waves else {
             return Ok(None);
+        };
+        let (inertia_per_length, node_inertia) = match (&scene.pipe, &scene.stackup) {
+            (Some(pipe), _) => (
+                scene.water.density * (1.0 + pipe.added_mass_coefficient) * pipe.outer_area(),
+                None,
+            ),
+            (None, Some(st)) if st.layout.node_inertia.len() == scene.n() => {
+                (0.0, Some(st.layout.node_inertia.clone()))
+            }
+            _ => return Ok(None),
         };
         let spec = w.sea_spec(scene.wave_depth())?;
         let t = scene.time;
@@ -194,13 +225,13 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let inputs = WaveInputs {
             lengths: scene.beam.lengths.clone(),
             masses: scene.beam.masses.clone(),
-            inertia_per_length: scene.water.density
-                * (1.0 + pipe.added_mass_coefficient)
-                * pipe.outer_area(),
+            inertia_per_length,
             direction: w.unit_direction(),
             rows: t.steps.div_ceil(every) + 1,
             every,
             cell_average: w.lumping == crate::scene::WaveLumping::Cell,
+            mudline: scene.mudline(),
+            node_inertia,
         };
         let field = WaveField::new(std::sync::Arc::new(sea), inputs).map_err(err)?;
         Ok(Some(std::sync::Arc::new(field)))
@@ -258,6 +289,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
             node_drag: self.node_drag.as_ref().map(|t| t.lift()),
             vessel: self.vessel.clone(),
+            soil: self.soil.as_ref().map(|t| t.lift()),
         }
     }
 }

@@ -25,7 +25,8 @@ pub use terms::{
     AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
     CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
     ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, NodeDrag, PointLoad,
-    PointLoads, ReactionTip, ReactionTipBar, Springs, TermVisitor, TopTension, WaveField,
+    PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor, TopTension,
+    WaveField,
     WaveInertia, WaveInputs,
 };
 
@@ -70,6 +71,8 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) node_drag: Option<NodeDrag<D, DIM>>,
     /// The vessel's motion of the tip ([`TipCondition::Prescribed`]).
     pub(crate) vessel: Option<std::sync::Arc<VesselMotion>>,
+    /// Lateral p-y springs on the nodes below the mudline (`[soil]`).
+    pub(crate) soil: Option<SoilSprings<D>>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -166,6 +169,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             v.visit(t)?;
         }
         if let Some(t) = &self.wave_inertia {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.soil {
             v.visit(t)?;
         }
         Ok(())
@@ -324,6 +330,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The joint damping term, if the scene has `[beam] joint_damping` with a damper > 0.
     pub fn joint_damping(&self) -> Option<&JointDamping<D>> {
         self.joint_damping.as_ref()
+    }
+
+    /// The largest |j − k| with a nonzero block K_jk of the stiffness K = ∂²U/∂q²: 1 (K is
+    /// block-tridiagonal: the springs couple neighbours, the other terms are linear in q) unless
+    /// the model has soil springs, whose energy ½ Σ kᵢ |rᵢ⊥|² couples every pendulum below a node
+    /// in the soil with every other (n). The statics extract K's blocks by colouring on it.
+    pub fn stiffness_reach(&self) -> usize {
+        if self.soil.is_some() {
+            self.n
+        } else {
+            1
+        }
     }
 
     /// Whether the model has the spring of joint i (0..=n).

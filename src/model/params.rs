@@ -66,6 +66,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 None => return Err(missing(p, "the scene has no tension (T = 0)")),
             },
             Parameter::AxialWeight => match &mut self.axial_weight {
+                Some(t) if !t.node_weights.is_empty() => {
+                    return Err(missing(p, "a stack-up's weights have no single w"))
+                }
                 Some(t) => t.weight = value,
                 None => return Err(missing(p, "the scene has no axial weight (w = 0)")),
             },
@@ -85,6 +88,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     _ => return Err(missing(p, "the scene has no current with a speed")),
                 }
             }
+            Parameter::SoilModulus => match &mut self.soil {
+                Some(s) => s.modulus = value,
+                None => return Err(missing(p, "the scene has no node in the soil")),
+            },
             Parameter::CurrentSpeed => match &mut self.current {
                 Some(c) if c.has_parameter(p) => c.speed = value,
                 Some(_) => return Err(missing(p, "a table profile has no single speed")),
@@ -136,7 +143,11 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::InteriorStiffness => true,
             Parameter::Tension => self.tension.is_some(),
             Parameter::JointDamping => self.joint_damping.as_ref().is_some_and(|j| j.is_uniform()),
-            Parameter::AxialWeight => self.axial_weight.is_some(),
+            Parameter::AxialWeight => self
+                .axial_weight
+                .as_ref()
+                .is_some_and(|t| t.node_weights.is_empty()),
+            Parameter::SoilModulus => self.soil.is_some(),
             Parameter::LoadForce(_)
             | Parameter::LoadForceX(_)
             | Parameter::LoadAmplitude { .. }

@@ -42,6 +42,7 @@ pub struct SceneBuilder {
     time: TimeGrid,
     control: Option<Control>,
     objective: Option<ObjectiveKind>,
+    soil: Option<super::Soil>,
 }
 
 impl SceneBuilder {
@@ -64,6 +65,7 @@ impl SceneBuilder {
             },
             control: None,
             objective: None,
+            soil: None,
         }
     }
 
@@ -258,6 +260,12 @@ impl SceneBuilder {
         self
     }
 
+    /// The soil below the mudline (`[soil]`: lateral p-y springs on the nodes in it).
+    pub fn soil(mut self, soil: super::Soil) -> Self {
+        self.soil = Some(soil);
+        self
+    }
+
     /// The validated scene.
     pub fn build(self) -> Result<Scene, SceneError> {
         check_size(self.n, self.time.steps)?;
@@ -276,7 +284,9 @@ impl SceneBuilder {
         let scene = Scene {
             beam,
             pipe: None,
+            stackup: None,
             water: super::Water::default(),
+            soil: self.soil,
             loads: self.loads,
             time: self.time,
             control: self.control,

@@ -196,17 +196,20 @@ impl Current {
         &self,
         drag: f64,
         weights: Option<&[f64]>,
-        lengths: &[f64],
-        masses: &[f64],
+        (lengths, masses): (&[f64], &[f64]),
+        mudline: f64,
     ) -> Vec<f64> {
-        let surface = self.surface.unwrap_or_else(|| lengths.iter().sum());
+        let surface = self
+            .surface
+            .unwrap_or_else(|| lengths.iter().sum::<f64>() - mudline);
         let s = self.speed().unwrap_or(0.0);
         let mut y = 0.0;
         let velocities: Vec<[f64; 2]> = lengths
             .iter()
             .map(|l| {
                 y += l;
-                let (a, b) = current_velocity(self, y, surface);
+                let (a, b) = super::water_height(mudline, y)
+                    .map_or(([0.0; 2], [0.0; 2]), |y| current_velocity(self, y, surface));
                 [s * a[0] + b[0], s * a[1] + b[1]]
             })
             .collect();
@@ -516,7 +519,8 @@ mod tests {
             let b = &scene.beam;
             let c = scene.loads.current.as_ref().unwrap();
             let w = scene.drag_weights();
-            let steady = c.steady_forces(scene.loads.drag, w.as_deref(), &b.lengths, &b.masses);
+            let steady =
+                c.steady_forces(scene.loads.drag, w.as_deref(), (&b.lengths, &b.masses), 0.0);
             let ctx = Ctx::new(0.0, 0.0, 0);
             for (i, s) in steady.iter().enumerate() {
                 let f = chain.dissipative_force(i, &[0.0; 2], &ctx).unwrap();

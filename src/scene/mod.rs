@@ -26,6 +26,8 @@ mod objective;
 mod pipe;
 mod raw;
 pub(crate) mod series;
+mod soil;
+mod stackup;
 mod validate;
 mod values;
 mod vessel;
@@ -49,12 +51,15 @@ pub use pipe::{
     drag_weights, DragModel, Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS,
 };
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
+pub use soil::{water_height, Soil, SoilLumping};
+pub use stackup::{Body, FlexJoint, Foot, Layout, Segment, Stackup, STANDARD_GRAVITY};
 pub use validate::{
     human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
     GRAVITY_RANGE, JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS,
-    MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+    MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE,
+    SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
-pub use validate::{max_trajectory_steps, trajectory_bytes};
+pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
 pub use vessel::{Rao, Vessel, DEFAULT_VESSEL_RAMP, MAX_RAO_ROWS};
 pub use waves::{sea_error, WaveLumping, WaveSpectrum, Waves, DEFAULT_GAMMA};
 
@@ -353,8 +358,14 @@ pub struct Scene {
     /// The beam described as a pipe (`[pipe]`), from which `beam`'s lengths, masses and spring
     /// constants were derived; `None` when they were given directly.
     pub pipe: Option<Pipe>,
+    /// The beam described as a riser system from the bottom up (`[stackup]`: segments, bodies,
+    /// flex joints), from which `beam` was derived; `None` otherwise.
+    pub stackup: Option<Stackup>,
     /// The water (`[water]`): depth and density.
     pub water: Water,
+    /// The seabed and the soil below it (`[soil]`): the mudline's height on the chain and the
+    /// lateral p-y modulus; `None`: the foot is at the seabed and no node is in the soil.
+    pub soil: Option<Soil>,
     /// Time grid.
     pub time: TimeGrid,
     /// Optional control.
@@ -394,13 +405,20 @@ impl Scene {
                 .is_some_and(|w| w.unit_direction()[0] != 0.0)
     }
 
-    /// The water depth d \[m\] of the waves (and the current): `[water] depth`, else the
-    /// current's `surface`, else the beam's length (its top at the mean surface).
+    /// The water depth d \[m\] of the waves (and the current), from the mudline: `[water]
+    /// depth`, else the current's `surface`, else the beam's length above the mudline (its top at
+    /// the mean surface).
     pub fn wave_depth(&self) -> f64 {
         self.water
             .depth
             .or_else(|| self.loads.current.as_ref().and_then(|c| c.surface))
-            .unwrap_or_else(|| self.beam.lengths.iter().sum())
+            .unwrap_or_else(|| self.beam.lengths.iter().sum::<f64>() - self.mudline())
+    }
+
+    /// The mudline's height above the chain's foot \[m\] (`[soil] mudline`; 0 without `[soil]`):
+    /// heights on the chain are mapped to the water by [`water_height`].
+    pub fn mudline(&self) -> f64 {
+        self.soil.map_or(0.0, |s| s.mudline)
     }
 
     /// Whether the scene's control is 2-axis (`values` written as pairs [u_x, u_z]).

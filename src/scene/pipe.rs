@@ -284,11 +284,15 @@ pub fn drag_weights(lengths: &[f64], masses: &[f64]) -> Vec<f64> {
 
 impl super::Scene {
     /// The per-pendulum factors wᵢ of the drag constant ([`drag_weights`]) for a scene built
-    /// from `[pipe]`, `None` for a scene whose beam is given by its lengths and masses (one D on
+    /// from `[pipe]` (from `[stackup]`: [`super::Stackup::drag_constants`]), `None` for a scene whose beam is given by its lengths and masses (one D on
     /// every pendulum, the thesis's eq. 2.4.4). Every reader of D (the model's drag terms, the
     /// statics through them, the scene check's load number, MPC's planning chain) takes them
     /// from here.
     pub fn drag_weights(&self) -> Option<Vec<f64>> {
+        if let Some(st) = &self.stackup {
+            let b = &self.beam;
+            return Some(st.drag_constants(&b.lengths, &b.masses, self.mudline()).1);
+        }
         self.pipe
             .map(|_| drag_weights(&self.beam.lengths, &self.beam.masses))
     }

@@ -41,7 +41,12 @@ pub(super) struct RawScene {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     water: Option<super::Water>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    soil: Option<super::Soil>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     loads: Option<RawLoads>,
+    // After `loads`: TOML writes the stack-up's arrays of tables after the plain tables.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    stackup: Option<super::Stackup>,
     time: RawTime,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     control: Option<RawControl>,
@@ -317,24 +322,29 @@ impl RawControl {
 impl RawScene {
     pub(super) fn from_scene(s: &Scene) -> Self {
         let b = &s.beam;
+        let given = s.pipe.is_none() && s.stackup.is_none();
+        let stack = s.stackup.is_some();
         RawScene {
             beam: RawBeam {
                 pendulums: to_i64(s.n()),
-                length: s.pipe.is_none().then(|| NumOrArray::compact(&b.lengths)),
-                mass: s.pipe.is_none().then(|| NumOrArray::compact(&b.masses)),
-                stiffness: s.pipe.is_none().then(|| NumOrArray::compact(&b.stiffness)),
+                length: given.then(|| NumOrArray::compact(&b.lengths)),
+                mass: given.then(|| NumOrArray::compact(&b.masses)),
+                stiffness: given.then(|| NumOrArray::compact(&b.stiffness)),
                 support: b.support,
-                base_stiffness: Some(b.base_stiffness),
-                tip_stiffness: Some(b.tip_stiffness),
+                base_stiffness: (!stack).then_some(b.base_stiffness),
+                tip_stiffness: (!stack).then_some(b.tip_stiffness),
                 reaction_force: b.reaction_force,
                 joint_damping: (!b.joint_damping.is_empty())
                     .then(|| NumOrArray::compact(&b.joint_damping)),
             },
             pipe: s.pipe,
             water: (!s.water.is_default()).then_some(s.water),
+            soil: s.soil,
+            stackup: s.stackup.clone(),
             loads: Some(RawLoads {
                 gravity: s.loads.gravity,
-                drag: s.loads.drag,
+                // The stack-up's drag comes from its coefficients (read back, it is recomputed).
+                drag: if stack { 0.0 } else { s.loads.drag },
                 tension: s.loads.tension,
                 axial_weight: s.loads.axial_weight,
                 point: s.loads.points.iter().map(RawPoint::from_load).collect(),
@@ -372,7 +382,7 @@ impl RawScene {
             None => Vec::new(),
             Some(c) => super::validate::joint_damping_layout(c, n, b.support)?,
         };
-        let mut beam = super::pipe::BeamKeys {
+        let keys = super::pipe::BeamKeys {
             n,
             length: b.length,
             mass: b.mass,
@@ -380,10 +390,21 @@ impl RawScene {
             end_springs: (b.base_stiffness, b.tip_stiffness),
             support: b.support,
             reaction_force: b.reaction_force,
-        }
-        .into_beam(self.pipe.as_ref(), &water)?;
+        };
+        let mut stackup = self.stackup;
+        let mut raw_loads = self.loads.unwrap_or_default();
+        let mut beam = match stackup.as_mut() {
+            Some(st) => {
+                let mudline = self.soil.map_or(0.0, |s| s.mudline);
+                let loads = (raw_loads.drag, raw_loads.axial_weight);
+                let beam =
+                    keys.into_stackup_beam(st, self.pipe.is_some(), loads, &water, mudline)?;
+                raw_loads.drag = st.drag_constants(&beam.lengths, &beam.masses, mudline).0;
+                beam
+            }
+            None => keys.into_beam(self.pipe.as_ref(), &water)?,
+        };
         beam.joint_damping = joint_damping;
-        let raw_loads = self.loads.unwrap_or_default();
         let mut points = Vec::with_capacity(raw_loads.point.len());
         for (i, p) in raw_loads.point.into_iter().enumerate() {
             points.push(p.into_load(i, n, dir)?);
@@ -440,7 +461,9 @@ impl RawScene {
         Ok(Scene {
             beam,
             pipe: self.pipe,
+            stackup,
             water,
+            soil: self.soil,
             loads: Loads {
                 gravity: raw_loads.gravity,
                 drag: raw_loads.drag,

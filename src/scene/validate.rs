@@ -122,6 +122,177 @@ pub const STEP_RANGE: ValueRange = ValueRange {
     why: "h² multiplies every force in the step and 2/h gives the multipliers μ",
 };
 
+/// Height of the mudline above the chain's foot \[m\] (`soil.mudline`): 0 to 10⁶ m.
+pub const SOIL_MUDLINE_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e6,
+    unit: "m",
+    why: "the mudline is a height on the beam, whose pendulums are at most 10⁶ m long",
+};
+/// Lateral p-y modulus of the soil at the mudline E₀ \[N/m²\] (`soil.modulus`): 0 to 10¹² N/m²
+/// (soft clays are 10⁵–10⁷, dense sands 10⁷–10⁸).
+pub const SOIL_MODULUS_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e12,
+    unit: "N/m²",
+    why: "h²·E_s·l/m is the step's soil number, and E_s·l the node's spring",
+};
+/// Increase of the p-y modulus with depth E₁ \[N/m³\] (`soil.gradient`): 0 to 10¹² N/m³.
+pub const SOIL_GRADIENT_RANGE: ValueRange = ValueRange {
+    min: 0.0,
+    max: 1e12,
+    unit: "N/m³",
+    why: "E₁·d·l is the spring of a node at depth d",
+};
+
+/// The ranges of `soil.mudline`, `soil.modulus` and `soil.gradient`, in that order.
+pub(super) fn soil_ranges() -> [ValueRange; 3] {
+    [SOIL_MUDLINE_RANGE, SOIL_MODULUS_RANGE, SOIL_GRADIENT_RANGE]
+}
+
+/// The ranges of the stack-up's values (`[stackup]`, docs/scene-format.md), indexed by
+/// [`StackupRange`].
+const STACKUP_RANGES: [ValueRange; 13] = [
+    ValueRange {
+        min: 1e-6,
+        max: 1e6,
+        unit: "m",
+        why: "lengths become the pendulums' lengths, within beam.length's range",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e6,
+        unit: "m",
+        why: "an elevation is a height on the stack-up, from its foot",
+    },
+    ValueRange {
+        min: 1e-6,
+        max: 1e3,
+        unit: "m",
+        why: "diameters and walls give the sections' areas and second moments",
+    },
+    ValueRange {
+        min: 1e3,
+        max: 1e15,
+        unit: "Pa",
+        why: "E·I/l is a joint's spring, within beam.stiffness's range",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e5,
+        unit: "kg/m³",
+        why: "densities give the masses and weights per length",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e6,
+        unit: "kg/m",
+        why: "the lines' mass joins the pipe's mass per length",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e4,
+        unit: "m²",
+        why: "areas give buoyancy and drag",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 100.0,
+        unit: "",
+        why: "C_d and C_a scale the Morison loads and the added mass",
+    },
+    ValueRange {
+        min: 1e-6,
+        max: 1e10,
+        unit: "kg",
+        why: "a body's mass becomes node masses, within beam.mass's range",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e10,
+        unit: "kg",
+        why: "the added mass joins the body's node masses",
+    },
+    ValueRange {
+        min: -1e12,
+        max: 1e12,
+        unit: "N",
+        why: "the weight enters the axial force, within the forces' range",
+    },
+    ValueRange {
+        min: 1e-6,
+        max: 1e18,
+        unit: "N·m²",
+        why: "E·I/l is a joint's spring, within beam.stiffness's range",
+    },
+    ValueRange {
+        min: 0.0,
+        max: 1e15,
+        unit: "N·m/rad",
+        why: "h²·k/(m·l²) is the step's spring number",
+    },
+];
+
+/// Which of the stack-up's ranges ([`stackup_ranges`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) enum StackupRange {
+    /// Segment joint lengths and body heights.
+    Length,
+    /// Flex-joint elevations.
+    Elevation,
+    /// Diameters and wall thicknesses.
+    Diameter,
+    /// Young's moduli.
+    Modulus,
+    /// Steel, contents and buoyancy densities.
+    Density,
+    /// The auxiliary lines' mass per length.
+    LineMass,
+    /// The lines' displaced area and the bodies' drag areas.
+    Area,
+    /// C_d and C_a.
+    Coefficient,
+    /// A body's mass.
+    BodyMass,
+    /// A body's added mass.
+    AddedMass,
+    /// A body's submerged weight.
+    BodyWeight,
+    /// A body's bending stiffness.
+    Ei,
+    /// A flex joint's stiffness.
+    Rotational,
+}
+
+/// The stack-up's ranges, indexed by [`StackupRange`] (each with its unit and why).
+pub(super) fn stackup_ranges() -> [ValueRange; 13] {
+    STACKUP_RANGES
+}
+
+/// The range of a stack-up key, for the documentation's check (tests/docs_keys.rs).
+pub fn stackup_range_of(key: &str) -> Option<ValueRange> {
+    use StackupRange as R;
+    let r = match key {
+        "length" | "height" => R::Length,
+        "elevation" => R::Elevation,
+        "outer_diameter" | "wall_thickness" | "buoyancy_diameter" | "hydrodynamic_diameter" => {
+            R::Diameter
+        }
+        "youngs_modulus" => R::Modulus,
+        "steel_density" | "contents_density" | "buoyancy_density" => R::Density,
+        "line_mass" => R::LineMass,
+        "line_area" | "drag_area" => R::Area,
+        "drag_coefficient" | "added_mass_coefficient" => R::Coefficient,
+        "mass" => R::BodyMass,
+        "added_mass" => R::AddedMass,
+        "submerged_weight" => R::BodyWeight,
+        "bending_stiffness" => R::Ei,
+        "stiffness" => R::Rotational,
+        _ => return None,
+    };
+    Some(STACKUP_RANGES[r as usize])
+}
+
 /// `bytes` for people, in binary units: `512 bytes`, `8.0 GiB`, `894.1 GiB`.
 pub fn human_bytes(bytes: u64) -> String {
     const UNITS: [&str; 7] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
@@ -213,6 +384,28 @@ impl Scene {
             }
         }
         self.water.check()?;
+        if let Some(soil) = &self.soil {
+            soil.check(b.lengths.iter().sum())?;
+        }
+        if let Some(st) = &self.stackup {
+            let l = &st.layout;
+            let lens = [
+                l.node_weights.len(),
+                l.node_drag.len(),
+                l.node_inertia.len(),
+            ];
+            if lens.iter().any(|&m| m != n) {
+                return Err(SceneError::invalid(
+                    "stackup",
+                    format!(
+                        "its layout on the chain has {} nodes for a beam of {n} pendulums: a \
+                         stack-up's chain is built when the scene is read (`Scene::from_file`, \
+                         `Scene::from_toml_str`)",
+                        lens[0]
+                    ),
+                ));
+            }
+        }
         if let Some(objective) = &self.objective {
             objective.check()?;
         }
@@ -337,7 +530,10 @@ impl Scene {
         let weights = self.drag_weights();
         let current = loads.current.as_ref().map_or_else(
             || vec![0.0; n],
-            |c| c.steady_forces(loads.drag, weights.as_deref(), &b.lengths, &b.masses),
+            |c| {
+                let chain = (&b.lengths[..], &b.masses[..]);
+                c.steady_forces(loads.drag, weights.as_deref(), chain, self.mudline())
+            },
         );
         let (mut worst_spring, mut at_spring) = (0.0f64, 0);
         let (mut worst_load, mut at_load) = (0.0f64, 0);
@@ -720,8 +916,8 @@ pub(super) fn check_finite(key: &str, x: f64) -> Result<(), SceneError> {
     }
 }
 
-/// `x` inside `range` (x is already known to be finite and of the right sign).
-fn check_range(key: &str, x: f64, range: &ValueRange) -> Result<(), SceneError> {
+/// `x` inside `range` (NaN is outside every range).
+pub(super) fn check_range(key: &str, x: f64, range: &ValueRange) -> Result<(), SceneError> {
     if range.contains(x) {
         return Ok(());
     }

@@ -163,12 +163,13 @@ impl Waves {
     /// `scene`'s time grid.
     pub(super) fn check(&self, scene: &Scene) -> Result<(), SceneError> {
         check_finite("loads.waves.direction", self.direction)?;
-        if scene.pipe.is_none() {
+        if scene.pipe.is_none() && scene.stackup.is_none() {
             return Err(SceneError::new(SceneErrorKind::MissingKey {
                 key: "pipe".to_string(),
                 note: Some(
                     "`[loads.waves]` needs the pipe's outer diameter and added-mass \
-                     coefficient for the wave inertia load ρ_w (1 + C_a) A_o l u̇"
+                     coefficient for the wave inertia load ρ_w (1 + C_a) A_o l u̇ (or a \
+                     `[stackup]`)"
                         .to_string(),
                 ),
             }));

@@ -91,16 +91,23 @@ impl Chart<2> for Angles {
         if bordered {
             rhs[n] = (0..n).map(|j| l[j] * phi[j].sin()).sum::<f64>() - chain.static_tip_target();
         }
-        for color in 0..3 {
+        // K couples pendulums up to `reach` apart (1: block-tridiagonal; soil springs: all).
+        let reach = chain.stiffness_reach();
+        let colours = (2 * reach + 1).min(n);
+        for color in 0..colours {
             for j in 0..n {
-                self.v[j] = if j % 3 == color { self.t[j] } else { [0.0; 2] };
+                self.v[j] = if j % colours == color {
+                    self.t[j]
+                } else {
+                    [0.0; 2]
+                };
                 self.kv[j] = [0.0; 2];
             }
             let s = &mut self.scratch;
             chain.force_jacobian_product(&self.q, &self.v, &ctx, 1.0, &mut self.kv, s)?;
             for j in 0..n {
-                for k in j.saturating_sub(1)..(j + 2).min(n) {
-                    if k % 3 == color {
+                for k in j.saturating_sub(reach)..(j + reach + 1).min(n) {
+                    if k % colours == color {
                         a[(j, k)] += dot(&self.t[j], &self.kv[j]);
                     }
                 }

@@ -114,9 +114,10 @@ impl Spheres {
         Ok(())
     }
 
-    /// Adds TⱼᵀKⱼₖTₖ: K is block-tridiagonal, so seeding the tangent direction s of every third
-    /// pendulum (3 colours × 2 directions = 6 products of [`Chain::force_jacobian_product`])
-    /// gives every block.
+    /// Adds TⱼᵀKⱼₖTₖ: K is block-tridiagonal (without soil springs, [`Chain::stiffness_reach`]),
+    /// so seeding the tangent direction s of every third pendulum (3 colours × 2 directions = 6
+    /// products of [`Chain::force_jacobian_product`]) gives every block; with soil springs K is
+    /// dense below the mudline and every pendulum is its own colour (2n products).
     fn add_stiffness(
         &mut self,
         chain: &Chain<f64, 3>,
@@ -124,17 +125,20 @@ impl Spheres {
         a: &mut DMatrix<f64>,
     ) -> Result<()> {
         let n = chain.n();
-        for color in 0..3 {
+        let reach = chain.stiffness_reach();
+        let colours = (2 * reach + 1).min(n);
+        for color in 0..colours {
             for s in 0..2 {
                 for j in 0..n {
-                    let on = j % 3 == color;
+                    let on = j % colours == color;
                     self.v[j] = if on { self.basis[j][s] } else { [0.0; 3] };
                     self.kv[j] = [0.0; 3];
                 }
                 let sc = &mut self.scratch;
                 chain.force_jacobian_product(&self.q, &self.v, ctx, 1.0, &mut self.kv, sc)?;
                 for j in 0..n {
-                    for k in (j.saturating_sub(1)..(j + 2).min(n)).filter(|k| k % 3 == color) {
+                    let near = j.saturating_sub(reach)..(j + reach + 1).min(n);
+                    for k in near.filter(|k| k % colours == color) {
                         for r in 0..2 {
                             a[(2 * j + r, 2 * k + s)] += dot(&self.basis[j][r], &self.kv[j]);
                         }

@@ -68,10 +68,18 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for TopTension<D> {
 /// the tip node n half a cell, w lₙ/2, so that the axial force in pendulum j is
 /// w Σ_{i≥j} (cell of node i) = w (L − y at the middle of pendulum j), the continuum's value.
 /// U = Σᵢ Fᵢ (yᵢ − yᵢ⁰) = Σⱼ lⱼ (Σ_{i≥j} Fᵢ) (e₂ᵀqⱼ − 1). Reads w as [`Parameter::AxialWeight`].
+///
+/// A chain built from `[stackup]` gives every node its own weight Fᵢ instead
+/// ([`crate::scene::Layout::node_weights`]: half of each adjacent pendulum's submerged weight,
+/// segment by segment, and half of a body's at each of its ends), so that the effective tension
+/// is T_e(y) = T − ∫_y^L w dy of the stack-up's own weights; it has no single w, and no
+/// [`Parameter::AxialWeight`].
 #[derive(Clone, Debug)]
 pub struct AxialWeight<D> {
     pub(crate) weight: D,
     pub(crate) lengths: Vec<D>,
+    /// The per-node weights Fᵢ \[N\] of a stack-up (empty: w times the node's cell).
+    pub(crate) node_weights: Vec<D>,
 }
 
 impl<D: Scalar> AxialWeight<D> {
@@ -80,14 +88,23 @@ impl<D: Scalar> AxialWeight<D> {
         AxialWeight {
             weight: D2::from(self.weight.re()),
             lengths: self.lengths.iter().map(|x| D2::from(x.re())).collect(),
+            node_weights: self.node_weights.iter().map(|x| D2::from(x.re())).collect(),
         }
     }
 
     /// Calls `f(j, lⱼ Σ_{i≥j} Fᵢ)` for j = n−1..0 (0-based pendulums; node i ends pendulum i).
     #[inline]
     fn for_each<E: Embed<D>>(&self, ctx: &Ctx<E>, mut f: impl FnMut(usize, E)) {
-        let w = ctx.param(Parameter::AxialWeight, self.weight);
         let n = self.lengths.len();
+        if !self.node_weights.is_empty() {
+            let mut acc = E::zero();
+            for j in (0..n).rev() {
+                acc += E::embed(self.node_weights[j]);
+                f(j, E::embed(self.lengths[j]) * acc);
+            }
+            return;
+        }
+        let w = ctx.param(Parameter::AxialWeight, self.weight);
         let mut acc = E::zero();
         for j in (0..n).rev() {
             let next = if j + 1 < n {
@@ -127,6 +144,6 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for AxialWeight<D> {
     }
 
     fn has_parameter(&self, p: Parameter) -> bool {
-        p == Parameter::AxialWeight
+        p == Parameter::AxialWeight && self.node_weights.is_empty()
     }
 }

@@ -35,7 +35,7 @@ use super::waves::WaveField;
 use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick, HalfSteps};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
-use crate::scene::{current_velocity, Current};
+use crate::scene::{current_velocity, water_height, Current};
 
 /// Drag relative to a current (module docs): F(p) = F_D(p − P) (Morison's form of
 /// [`super::Drag`]) with Pᵢ = lᵢ Σ_{k≥i} m_k U(y_k), added to ṗ. It replaces [`super::Drag`] when the
@@ -75,19 +75,22 @@ pub struct CurrentDrag<D, const DIM: usize> {
 impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
     /// The term for `current` (none: still water) and `waves` (none: no waves) with drag
     /// constant `drag` (times `weights` per pendulum) on a chain with these lengths and masses.
+    ///
+    /// A node's height is taken above the mudline at `mudline` (0: the chain's foot) by
+    /// [`water_height`]; a node below it, in the soil, has no water velocity.
     pub(crate) fn new(
         current: Option<&Current>,
         waves: Option<Arc<WaveField>>,
         drag: D,
         weights: DragWeights,
-        lengths: &[D],
-        masses: &[D],
+        (lengths, masses): (&[D], &[D]),
+        mudline: f64,
     ) -> Self {
         let still = Current::uniform(0.0, [0.0, 1.0]);
         let reads_speed = current.is_some_and(|c| c.speed().is_some());
         let current = current.unwrap_or(&still);
         let total: f64 = lengths.iter().map(|l| l.re()).sum();
-        let surface = current.surface.unwrap_or(total);
+        let surface = current.surface.unwrap_or(total - mudline);
         let embed = |v: [f64; 2]| {
             let mut out = [0.0; DIM];
             out[zi::<DIM>()] = v[1];
@@ -100,7 +103,9 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
         let (mut unit, mut fixed) = (Vec::new(), Vec::new());
         for l in lengths {
             y += l.re();
-            let (a, b) = current_velocity(current, y, surface);
+            let (a, b) = water_height(mudline, y).map_or(([0.0; 2], [0.0; 2]), |y| {
+                current_velocity(current, y, surface)
+            });
             unit.push(embed(a));
             fixed.push(embed(b));
         }

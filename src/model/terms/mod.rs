@@ -48,6 +48,7 @@ mod joint_damping;
 mod node_drag;
 mod point_load;
 mod reaction_tip;
+mod soil;
 mod spring;
 mod waves;
 
@@ -65,6 +66,7 @@ pub use joint_damping::JointDamping;
 pub use node_drag::{NodeDrag, NodeReverseScratch};
 pub use point_load::{HarmonicForce, PointLoad, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
+pub use soil::SoilSprings;
 pub use spring::Springs;
 pub use waves::{WaveField, WaveInertia, WaveInputs};
 

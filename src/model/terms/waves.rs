@@ -67,6 +67,53 @@ pub struct WaveInputs {
     /// ([`crate::ocean::Sea::cell_velocity_amplitudes`]) instead of taken at y_k
     /// (`[loads.waves] lumping = "cell"`).
     pub cell_average: bool,
+    /// The mudline's height above the chain's foot \[m\] (0: the foot is at the seabed): a
+    /// node's height in the sea is taken above it ([`crate::scene::water_height`]), and the nodes
+    /// below it (in the soil) have no wave kinematics.
+    pub mudline: f64,
+    /// Per node, the inertia coefficient over its cell ρ_w (1 + C_a) A c_k \[kg\] of a stack-up
+    /// ([`crate::scene::Layout::node_inertia`]); `None`: `inertia_per_length` times the cell.
+    pub node_inertia: Option<Vec<f64>>,
+}
+
+/// The complex amplitudes of node i's velocity (at its height y, or averaged over its cell
+/// [y − lᵢ/2, y + next/2]), its heights taken above the mudline by
+/// [`crate::scene::water_height`]: zero for a node in the soil; a cell that reaches into the
+/// soil averages the water's part over the whole cell (the soil's part moves no water).
+fn node_velocity(
+    sea: &Sea,
+    inputs: &WaveInputs,
+    (y, next): (f64, f64),
+    i: usize,
+    v: &mut [Complex<f64>],
+) {
+    let m = inputs.mudline;
+    let above = |h: f64| crate::scene::water_height(m, h);
+    if !inputs.cell_average {
+        match above(y) {
+            Some(h) => sea.velocity_amplitudes(h, v),
+            None => v.iter_mut().for_each(|x| *x = Complex::new(0.0, 0.0)),
+        }
+        return;
+    }
+    let (lo, hi) = (y - 0.5 * inputs.lengths[i], y + 0.5 * next);
+    if m == 0.0 {
+        sea.cell_velocity_amplitudes((lo, hi), v);
+        return;
+    }
+    match above(hi) {
+        Some(h1) if h1 > 0.0 => {
+            let h0 = lo - m;
+            if h0 >= 0.0 {
+                sea.cell_velocity_amplitudes((h0, h1), v);
+            } else {
+                sea.cell_velocity_amplitudes((0.0, h1), v);
+                let share = h1 / (hi - lo);
+                v.iter_mut().for_each(|x| *x *= share);
+            }
+        }
+        _ => v.iter_mut().for_each(|x| *x = Complex::new(0.0, 0.0)),
+    }
 }
 
 /// The wave kinematics of a chain over a record (module docs): Wᵢ(tₖ), Gᵢ(tₖ) and the surface
@@ -115,16 +162,11 @@ impl WaveField {
         let omega = sea.frequencies();
         for i in (0..n).rev() {
             let next = inputs.lengths.get(i + 1).copied().unwrap_or(0.0);
-            if inputs.cell_average {
-                let cell = (
-                    heights[i] - 0.5 * inputs.lengths[i],
-                    heights[i] + 0.5 * next,
-                );
-                sea.cell_velocity_amplitudes(cell, &mut v);
-            } else {
-                sea.velocity_amplitudes(heights[i], &mut v);
-            }
-            let cell = 0.5 * (inputs.lengths[i] + next) * inputs.inertia_per_length;
+            node_velocity(&sea, &inputs, (heights[i], next), i, &mut v);
+            let cell = match &inputs.node_inertia {
+                Some(c) => c[i],
+                None => 0.5 * (inputs.lengths[i] + next) * inputs.inertia_per_length,
+            };
             let l = inputs.lengths[i];
             for j in 0..nc {
                 sm[j] += v[j] * inputs.masses[i];

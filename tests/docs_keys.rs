@@ -229,6 +229,38 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
     if let Some(("loads.waves", k, v)) = set {
         text.push_str(&format!("[loads.waves]\n{k} = {v}\n"));
     }
+    // `[vessel]` needs `support = "vessel"`: rendered only when one of its keys is set.
+    if let Some((t @ ("vessel" | "vessel.rao"), k, v)) = set {
+        text = vessel_text(Some((t, k, v)));
+    }
+    text
+}
+
+/// The scene of [`SECTIONS`] held by a vessel (`support = "vessel"`), with `[vessel]` and a
+/// two-row `[vessel.rao]`, and `set` = (table, key, value) replaced or added.
+fn vessel_text(set: Option<(&str, &str, &str)>) -> String {
+    let mut vessel = vec![("offset", "0.5"), ("ramp", "2.0")];
+    let mut rao = vec![
+        ("period", "[5.0, 10.0]"),
+        ("amplitude", "[0.2, 0.9]"),
+        ("phase", "[-95.0, -90.0]"),
+    ];
+    if let Some((t, k, v)) = set {
+        let table = if t == "vessel" { &mut vessel } else { &mut rao };
+        match table.iter_mut().find(|e| e.0 == k) {
+            Some(e) => e.1 = v,
+            None => table.push((k, v)),
+        }
+    }
+    let mut text = render(None).replace("support = \"fixed-fixed\"", "support = \"vessel\"");
+    text.push_str("[vessel]\n");
+    for (k, v) in &vessel {
+        text.push_str(&format!("{k} = {v}\n"));
+    }
+    text.push_str("\n[vessel.rao]\n");
+    for (k, v) in &rao {
+        text.push_str(&format!("{k} = {v}\n"));
+    }
     text
 }
 
@@ -283,7 +315,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 111, "number of documented keys");
+    assert_eq!(checked, 118, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -502,6 +534,39 @@ fn every_documented_key_is_read() {
         let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_ne!(scene, stack, "{table}.{key} = {value} changed nothing");
     }
+    // `[vessel]` and `[vessel.rao]` on the vessel scene of `vessel_text`.
+    let held = Scene::from_toml_str(&vessel_text(None)).unwrap();
+    for (table, key, value) in [
+        ("vessel", "offset", "1.5"),
+        ("vessel", "ramp", "3.0"),
+        ("vessel.rao", "period", "[6.0, 10.0]"),
+        ("vessel.rao", "amplitude", "[0.3, 0.9]"),
+        ("vessel.rao", "phase", "[-80.0, -90.0]"),
+    ] {
+        assert!(doc[table].contains_key(key), "{table}.{key} not documented");
+        seen.insert(format!("{table}.{key}"));
+        let text = vessel_text(Some((table, key, value)));
+        let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        assert_ne!(scene, held, "{table}.{key} = {value} changed nothing");
+    }
+    // `pipe.drag_model = "morison"` leaves `loads.drag` out (it does not use it).
+    assert!(doc["pipe"].contains_key("drag_model"));
+    seen.insert("pipe.drag_model".to_string());
+    let momentum = pipe_base(None);
+    let text = render(None)
+        .replace("length = 1.0\n", "")
+        .replace("mass = 1.0\n", "")
+        .replace("stiffness = 100.0\n", "")
+        .replace("drag = 1.0\n", "");
+    let morison = Scene::from_toml_str(&format!(
+        "{text}[pipe]\nlength = 10.0\nouter_diameter = 0.5\nwall_thickness = 0.02\n\
+         drag_model = \"morison\"\n"
+    ))
+    .unwrap();
+    assert_ne!(
+        morison.pipe, momentum.pipe,
+        "pipe.drag_model changed nothing"
+    );
     for &(table, key, value) in settings {
         assert!(doc[table].contains_key(key), "{table}.{key} not documented");
         seen.insert(format!("{table}.{key}"));

@@ -26,8 +26,7 @@ pub use terms::{
     CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
     ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, NodeDrag, PointLoad,
     PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor, TopTension,
-    WaveField,
-    WaveInertia, WaveInputs,
+    WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};

@@ -7,9 +7,9 @@
 //! of time: it depends on no state, control or parameter, so every derivative of a step is that
 //! of the locked tip, and the adjoint and dual numbers need nothing more.
 //!
-//! X_w and Ẋ_w are kept on the scene's time grid tₖ = k h for the run (one inverse FFT of the
-//! components H(ωⱼ) aⱼ e^{iφⱼ} and iωⱼ H(ωⱼ) aⱼ e^{iφⱼ}, [`Sea::synthesize`]), and summed directly
-//! (O(N)) at any other time.
+//! X_w and Ẋ_w are kept on the scene's time grid tₖ = k h for the run (one inverse transform of
+//! the components H(ωⱼ) aⱼ e^{iφⱼ} and iωⱼ H(ωⱼ) aⱼ e^{iφⱼ}, [`Sea::synthesize`] with the plan of
+//! [`Sea::synthesis_rows`]: only the run's rows), and summed directly (O(N)) at any other time.
 
 use std::sync::Arc;
 
@@ -72,7 +72,9 @@ impl VesselMotion {
                         limit: crate::ocean::MAX_RECORD_BYTES,
                     })?;
                 record.resize(rows, [0.0; 2]);
-                let mut plan = sea.synthesis();
+                // Only the run's rows (a pruned transform when that is cheaper: a short run of a
+                // wave scene does not pay for the sea's whole repeat period).
+                let mut plan = sea.synthesis_rows(1, rows);
                 sea.synthesize((&amplitude, &rate), rows, &mut plan, |k, x, v| {
                     record[k] = [x, v];
                 });

@@ -18,7 +18,7 @@
 //!
 //! A published tabulated diagram, the North Atlantic table of IACS Rec. No. 34, and its
 //! reduction to 20 cells are in [`north_atlantic`] ([`reduced_north_atlantic`]). A diagram's
-//! CSV file is read by [`read_scatter_file`] ([`file`]).
+//! CSV file is read by [`read_scatter_file`] ([`mod@file`]).
 
 pub mod file;
 pub mod north_atlantic;

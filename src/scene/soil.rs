@@ -49,7 +49,7 @@ pub struct SoilLumping {
 
 impl Soil {
     /// Checks `soil.mudline`, `soil.modulus`, `soil.gradient` against their ranges
-    /// ([`super::validate::soil_ranges`]) and the mudline against the beam's length `total`.
+    /// (`soil_ranges` in the scene's validation) and the mudline against the beam's length `total`.
     ///
     /// # Errors
     /// [`SceneError`] naming the key.

@@ -61,10 +61,37 @@
 //! sampling noise), and a cell's sea does not change when rows are added, removed or reordered
 //! in the diagram (a seed derived from the row's index would). The price: the sampling error
 //! of the one realisation is shared by every cell and does not average out over the diagram;
-//! a record long against T_p (many cycles per cell) keeps it small.
+//! a record long against T_p (many cycles per cell) keeps it small, and several seeds
+//! ("Records") measure it.
+//!
+//! # Records
+//! A short-term sea state is taken as stationary over about three hours (DNV-RP-C205), and a
+//! fatigue analysis counts a 3-hour realisation per sea state after the start-up is discarded.
+//! [`ControlSettings::record`] sets the seconds counted after the spin-up: every run of a cell
+//! is then `spin_up` + `record` seconds long ([`with_record`]: N = ⌈spin_up/h⌉ + ⌈record/h⌉
+//! steps, rounded up to whole control intervals for a closed-loop controller), whatever the
+//! scene's `[time]` says; `None` keeps the scene's own `[time]`. The command line defaults it to
+//! [`PRACTICE_RECORD_S`] (3 hours) for every cell; a shorter record (`--record`) is for tests and
+//! quick looks, and is counted as what it is (`duration_s`). Ten minutes hold barely fifteen
+//! cycles of a 40 s mode: the damage of a 600 s record of the same sea is not the 3-hour one's.
+//!
+//! One realisation's damage scatters with its seed. With [`ControlSettings::seeds`] = K > 1,
+//! every cell runs K seas, the scene's `[loads.waves]` seed s, s + 1, …, s + K − 1 ([`with_seed`];
+//! the same K seeds in every cell, so seed i is one common draw over the whole diagram). The
+//! cell's damage is the mean over the seeds, D̄_s = Σᵢ D_{s,i}/K, which enters D_y and the life;
+//! [`CellOutcome::seed_damages`] keeps each seed's, and [`ControllerOutcome::seed_lives`] the life
+//! of each seed alone over the diagram, L_i = 1/(DFF · Σ_s p_s D_{s,i} Y/T_s): the spread of the
+//! life over seeds. K = 1 is exactly the single-seed study (D̄_s = D_{s,0} bit for bit).
+//!
+//! # Hot spots
+//! A scene with `[[fatigue.hotspot]]` gets each hot spot's damage per year and life
+//! ([`ControllerOutcome::hotspots`], [`crate::hotspots`]) for every controller: for `scene` and
+//! `none` from the same streamed run as the wellhead's base moment; for `constant`, `pd` and
+//! `mpc`, whose closed loop records the base moment only, by replaying the loop's decisions on
+//! the same plant ([`replay_joint_moments`]: the same states, one more simulation, no re-plan).
 //!
 //! # Work and order
-//! The (cell, controller) runs are independent: with the `parallel` feature they run on rayon's
+//! The (cell, seed, controller) runs are independent: with the `parallel` feature they run on rayon's
 //! pool, and the result (every number) is the same, in the same order, as sequentially.
 
 #[cfg(feature = "parallel")]
@@ -91,7 +118,7 @@ pub mod pd;
 pub const MAX_SCATTER_CELLS: usize = 10_000;
 
 /// The record a fatigue cell counts by default on the command line \[s\]: 3 hours, the
-/// duration over which a short-term sea state is taken as stationary (DNV-RP-C205 §3.3, module
+/// duration over which a short-term sea state is taken as stationary (DNV-RP-C205, module
 /// docs "Records").
 pub const PRACTICE_RECORD_S: f64 = 10_800.0;
 
@@ -337,6 +364,10 @@ pub struct ControlledRecord {
     pub force: Option<f64>,
     /// The PD law's gains (u_b \[N\], K_p \[N/(N·m)\], K_d \[N·s/(N·m)\]).
     pub gains: Option<[f64; 3]>,
+    /// A closed loop's decisions: the force \[N\] held over each control interval, in order
+    /// (`None` for `scene` and `none`), from which [`replay_joint_moments`] recomputes the
+    /// run's joint torques.
+    pub decisions: Option<Vec<f64>>,
 }
 
 /// One controller's outcome in one cell.
@@ -374,9 +405,8 @@ pub struct ControllerOutcome {
     /// The life of each seed alone, L_i = 1/(DFF · Σ_s p_s D_{c,s,i} Y/T_s) years, in seed
     /// order (one value, `life_years`, with one seed).
     pub seed_lives: Vec<f64>,
-    /// Per hot spot of the scene's `[[fatigue.hotspot]]` (empty without them, and for the
-    /// closed-loop controllers, whose plant records the base moment only): the damage per year
-    /// and life over the diagram, each cell's the mean over the seeds.
+    /// Per hot spot of the scene's `[[fatigue.hotspot]]` (empty without them): the damage per
+    /// year and life over the diagram, each cell's the mean over the seeds.
     pub hotspots: Vec<HotSpotOutcome>,
 }
 
@@ -523,6 +553,7 @@ pub fn run_controller(
             moment_x: None,
             force,
             gains,
+            decisions: Some(r.decisions.iter().map(|d| d.control).collect()),
         })
     };
     match kind {
@@ -542,6 +573,7 @@ pub fn run_controller(
                 moment_x: history.moment_x,
                 force: None,
                 gains: None,
+                decisions: None,
             })
         }
         ControllerKind::Constant => {
@@ -689,11 +721,21 @@ fn run_cell(
         None => scene,
     };
     let hotspots = &input.scene.hotspots;
-    let (record, hot) = if hotspots.is_empty() || kind.is_feedback() {
+    let (record, hot) = if hotspots.is_empty() {
         (
             run_controller(&scene, kind, &settings).map_err(run_err)?,
             None,
         )
+    } else if kind.is_feedback() {
+        let record = run_controller(&scene, kind, &settings).map_err(run_err)?;
+        let decisions = record.decisions.as_deref().unwrap_or(&[]);
+        let joints: Vec<usize> = hotspots
+            .iter()
+            .map(|h| crate::hotspots::nearest_joint(&scene.beam.lengths, h.elevation))
+            .collect();
+        let replay =
+            replay_joint_moments(&scene, settings.interval, decisions, &joints).map_err(run_err)?;
+        (record, Some(replay))
     } else {
         let (record, joints) = run_open_loop_joints(&scene, kind, hotspots).map_err(run_err)?;
         (record, Some(joints))
@@ -756,8 +798,64 @@ fn run_open_loop_joints(
         moment_x: history.base_moment_x.take(),
         force: None,
         gains: None,
+        decisions: None,
     };
     Ok((record, history))
+}
+
+/// The joint torques of a closed loop, recomputed by replaying its decisions on the plant of
+/// [`crate::mpc`]: the same plant, stepped with the same force held over each control interval,
+/// so the same states as the closed loop's, bit for bit (its base moment is checked against the
+/// closed loop's record in tests/hotspots.rs). The closed loop records the base moment only;
+/// this costs one more simulation of the record, not a re-plan.
+///
+/// # Errors
+/// The plant's ([`crate::mpc::Plant`]), [`MpcError::IntervalNotMultiple`], and
+/// [`MpcError::RunNotWhole`] when the decisions do not cover the run.
+pub fn replay_joint_moments(
+    scene: &Scene,
+    interval: f64,
+    decisions: &[f64],
+    joints: &[usize],
+) -> crate::Result<crate::hotspots::JointMoments> {
+    let mut plant = crate::mpc::Plant::<f64, 2>::new(scene)?;
+    let m = interval_steps(interval, plant.h())?;
+    let steps = plant.steps();
+    if steps != m * decisions.len() {
+        return Err(MpcError::RunNotWhole {
+            steps,
+            interval_steps: m,
+        }
+        .into());
+    }
+    let mut moment = vec![Vec::with_capacity(steps + 1); joints.len()];
+    let mut base = Vec::with_capacity(steps + 1);
+    let mut record = |plant: &crate::mpc::Plant<f64, 2>, moment: &mut [Vec<f64>]| {
+        crate::hotspots::push_joint_moments(
+            plant.chain(),
+            &plant.state().q,
+            joints,
+            moment,
+            &mut [],
+        );
+        base.push(plant.moment());
+    };
+    for &u in decisions {
+        plant.set_controls([0.0, u])?;
+        for _ in 0..m {
+            record(&plant, &mut moment);
+            plant.advance()?;
+        }
+    }
+    record(&plant, &mut moment);
+    Ok(crate::hotspots::JointMoments {
+        h: plant.h(),
+        joints: joints.to_vec(),
+        moment,
+        moment_x: None,
+        base_moment: base,
+        base_moment_x: None,
+    })
 }
 
 /// The scene with seed number `index` of a cell (module docs, "Records"): `[loads.waves]`

@@ -38,6 +38,7 @@
 
 use crate::error::{Error, Result};
 use crate::fatigue::{assess, Assessment, FatigueError, FatigueSpec, MomentHistory, MomentMeasure};
+use crate::model::Chain;
 use crate::scene::Scene;
 use crate::simulate::{simulate_streaming, StepObserver, StepView, StreamControls, StreamError};
 
@@ -172,26 +173,43 @@ impl StepObserver for JointSink {
         if DIM == 3 {
             self.base[1].push(m0x);
         }
-        let chain = step.chain();
-        let q = step.q();
-        let n = q.len();
-        let mut e2 = [0.0; DIM];
-        e2[DIM - 2] = 1.0;
-        for (s, &i) in self.joints.iter().enumerate() {
-            let k = if chain.has_spring(i) {
-                chain.springs()[i]
-            } else {
-                0.0
-            };
-            let a = if i == 0 { &e2 } else { &q[i - 1] };
-            let b = if i == n { &e2 } else { &q[i] };
-            let [mx, mz] = joint_moment(a, b, k);
-            self.moment[s].push(mz);
-            if DIM == 3 {
-                self.moment_x[s].push(mx);
-            }
-        }
+        push_joint_moments(
+            step.chain(),
+            step.q(),
+            &self.joints,
+            &mut self.moment,
+            &mut self.moment_x,
+        );
         Ok(())
+    }
+}
+
+/// Appends the torques of `joints` (0-based) at the attitudes `q` of `chain` ([`joint_moment`]
+/// with the chain's springs, 0 where the support has none): M_z to `moment[s]`, and in the
+/// spatial model M_x to `moment_x[s]`, s the joint's place in `joints`.
+pub fn push_joint_moments<const DIM: usize>(
+    chain: &Chain<f64, DIM>,
+    q: &[[f64; DIM]],
+    joints: &[usize],
+    moment: &mut [Vec<f64>],
+    moment_x: &mut [Vec<f64>],
+) {
+    let n = q.len();
+    let mut e2 = [0.0; DIM];
+    e2[DIM - 2] = 1.0;
+    for (s, &i) in joints.iter().enumerate() {
+        let k = if chain.has_spring(i) {
+            chain.springs()[i]
+        } else {
+            0.0
+        };
+        let a = if i == 0 { &e2 } else { &q[i - 1] };
+        let b = if i == n { &e2 } else { &q[i] };
+        let [mx, mz] = joint_moment(a, b, k);
+        moment[s].push(mz);
+        if DIM == 3 {
+            moment_x[s].push(mx);
+        }
     }
 }
 

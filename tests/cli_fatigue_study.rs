@@ -438,3 +438,42 @@ fn the_mpc_table_flags_and_spin_up() {
     assert_eq!(code, 1);
     assert!(stderr.contains("mpc.horizon"), "{stderr}");
 }
+
+/// A closed loop's cells carry `damage_ratio_to_none`, its damage over `none`'s in the same cell
+/// (`none` has none); a warning line on stderr names the controller and the cell exactly when
+/// the ratio is above 1 (the controller did worse than no control there), and the run exits 0.
+#[test]
+fn closed_loop_cells_carry_the_ratio_to_none() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), scene("riser")).unwrap();
+    let (code, out, stderr) = run(
+        dir.path(),
+        &[
+            "fatigue",
+            "s.toml",
+            "--controller",
+            "constant,pd",
+            "--record",
+            "4",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let v = json(&out);
+    let none = num(&v["controllers"]["none"]["cells"][0]["damage"]);
+    assert!(v["controllers"]["none"]["cells"][0]
+        .get("damage_ratio_to_none")
+        .is_none());
+    for name in ["constant", "pd"] {
+        let cell = &v["controllers"][name]["cells"][0];
+        let ratio = num(&cell["damage_ratio_to_none"]);
+        assert_eq!(ratio, num(&cell["damage"]) / none, "{name}");
+        let warned = stderr
+            .lines()
+            .any(|l| l.contains("warning") && l.contains(&format!("`{name}`, cell 0")));
+        assert_eq!(
+            warned,
+            ratio > 1.0,
+            "{name}: ratio {ratio}, stderr {stderr}"
+        );
+    }
+}

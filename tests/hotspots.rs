@@ -481,3 +481,67 @@ fn study_cells_default_to_three_hour_records() {
     assert_eq!(code, 0, "{stderr}");
     assert_eq!(num(&json(&out)["duration_s"]), 5.0);
 }
+
+/// `--controller none,constant,pd` on a scene with hot spots: every controller reports its hot
+/// spots and a critical one. The closed loops' joint torques come from their decisions replayed
+/// on the plant (`replay_joint_moments`); the replay's base moment is the closed loop's record
+/// bit for bit (the same states), and for `none` the study's hot-spot damage per year is the
+/// plain run's (the same streamed run).
+#[test]
+fn closed_loops_report_hot_spots_from_their_replayed_decisions() {
+    use chainbeam::fatigue_study::{
+        replay_joint_moments, run_controller, ControlSettings, ControllerKind,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = riser(7, 0.0, 200, THREE);
+    text.push_str("\n[control]\nnode = 6\nkind = \"constant\"\nvalues = [0.0]\n");
+    fs::write(dir.path().join("c.toml"), &text).unwrap();
+    let (code, out, stderr) = run(
+        dir.path(),
+        &[
+            "fatigue",
+            "c.toml",
+            "--controller",
+            "constant,pd",
+            "--record",
+            "10",
+            "--bound",
+            "5e4",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let v = json(&out);
+    let (code, plain, stderr) = run(dir.path(), &["fatigue", "c.toml", "--record", "10"]);
+    assert_eq!(code, 0, "{stderr}");
+    let plain = json(&plain);
+    for name in ["none", "constant", "pd"] {
+        let c = &v["controllers"][name];
+        let spots = c["hotspots"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{name}: {c}"));
+        assert_eq!(spots.len(), 3, "{name}");
+        assert!(c["critical"].is_string(), "{name}");
+        for (s, spot) in spots.iter().enumerate() {
+            assert!(num(&spot["damage_per_year"]) > 0.0, "{name} {s}");
+            if name == "none" {
+                let p = num(&plain["hotspots"][s]["damage_per_year"]);
+                assert!((num(&spot["damage_per_year"]) - p).abs() <= 1e-12 * p);
+            }
+        }
+    }
+    // The replay reproduces the closed loop's states.
+    let scene = Scene::from_toml_str(&text.replace("steps = 200", "steps = 200")).unwrap();
+    let settings = ControlSettings {
+        mpc: chainbeam::mpc::MpcOptions {
+            ocp: chainbeam::ocp::OcpOptions::default().with_bound(5e4),
+            ..Default::default()
+        },
+        ..ControlSettings::default()
+    };
+    let record = run_controller(&scene, ControllerKind::Pd, &settings).unwrap();
+    let decisions = record.decisions.as_deref().unwrap();
+    assert_eq!(decisions.len(), 100);
+    let replay = replay_joint_moments(&scene, settings.interval, decisions, &[0, 2, 6]).unwrap();
+    assert_eq!(replay.base_moment, record.moment);
+    assert_eq!(replay.moment[0].len(), record.moment.len());
+}

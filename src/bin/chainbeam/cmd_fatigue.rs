@@ -64,6 +64,22 @@ table (docs/scene-format.md); mpc plans on Σ|M₀|^m, m the S-N curve's first s
 --spin-up S: the first S seconds of every record (the start-up from the riser at rest, with the \
 current and the sea switched on at t = 0) are not counted.
 
+--record S: S seconds are counted after the spin-up (each run is spin-up + S long). Default: \
+10800 (3 hours) for every cell of a study (--scatter, --controller, --seeds K > 1); the scene's \
+own [time] for the plain run.
+
+--seeds K: K seas per cell, the scene's [loads.waves] seed s, s+1, …, s+K−1. JSON (K > 1): \
+seeds; per cell seed_damages, damage (their mean), damage_std (sample, K−1), damage_min, \
+damage_max; in the totals life_years_seeds, life_years_min, life_years_max.
+
+[[fatigue.hotspot]] (docs/scene-format.md): hotspots [{name, elevation, joint, joint_elevation, \
+damage, damage_per_year, life_years}] and critical (the shortest-lived one's name); the moment \
+at a hot spot is the joint torque k_j θ_j of the joint nearest its elevation. In a study, per \
+controller (a closed loop's decisions replayed on its plant).
+
+A cell of constant, pd or mpc has damage_ratio_to_none (its damage over none's); above 1 a \
+warning on stderr says the controller did worse than no control there.
+
 --scatter FILE: a CSV with header hs,tp,probability[,direction]; every cell sets the scene's \
 [loads.waves] hs, tp (direction) and keeps its seed (the same phases in every cell). JSON: \
 damage_per_year = Σ_s p_s·D_s·Y/T_s, life_years, cells [{hs, tp, probability, damage_per_year \

@@ -588,3 +588,85 @@ pub fn read_scatter(path: &Path) -> Result<Vec<ScatterCell>, CliError> {
     }
     Ok(cells)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::worse_than_none_line;
+    use chainbeam::fatigue::SeaState;
+    use chainbeam::fatigue_study::{
+        CellOutcome, ControllerKind, ControllerOutcome, Study, WorseThanNone,
+    };
+    use std::path::Path;
+
+    fn outcome(kind: ControllerKind, damages: &[f64]) -> ControllerOutcome {
+        ControllerOutcome {
+            kind,
+            damage_per_year: 0.0,
+            life_years: f64::INFINITY,
+            cells: damages
+                .iter()
+                .map(|&d| CellOutcome {
+                    sea: Some(SeaState {
+                        hs: 2.5,
+                        tp: 9.0,
+                        direction: None,
+                    }),
+                    probability: 0.5,
+                    damage: d,
+                    seed_damages: vec![d],
+                    duration_s: 1.0,
+                    damage_per_year: 0.0,
+                    force: None,
+                    gains: None,
+                })
+                .collect(),
+            seed_lives: vec![f64::INFINITY],
+            hotspots: Vec::new(),
+        }
+    }
+
+    /// Study::worse_than_none lists exactly the closed-loop cells above `none`'s damage (not the
+    /// equal or lower ones, nor `none` itself), and the warning names the scene, the controller,
+    /// the cell's sea, both damages and their ratio.
+    #[test]
+    fn worse_than_none_cells_and_their_warning() {
+        let study = Study {
+            controllers: vec![
+                outcome(ControllerKind::None, &[2.0, 2.0, 0.0]),
+                outcome(ControllerKind::Pd, &[3.0, 2.0, 0.0]),
+                outcome(ControllerKind::Mpc, &[1.0, 2.5, 0.0]),
+            ],
+        };
+        let w = study.worse_than_none();
+        assert_eq!(
+            w,
+            [
+                WorseThanNone {
+                    controller: ControllerKind::Pd,
+                    cell: 0,
+                    damage: 3.0,
+                    none: 2.0
+                },
+                WorseThanNone {
+                    controller: ControllerKind::Mpc,
+                    cell: 1,
+                    damage: 2.5,
+                    none: 2.0
+                }
+            ]
+        );
+        assert_eq!(study.damage_ratio_to_none(ControllerKind::Pd, 0), Some(1.5));
+        assert_eq!(study.damage_ratio_to_none(ControllerKind::Pd, 2), None);
+        let line = worse_than_none_line(Path::new("s.toml"), &w[0], &study);
+        assert!(
+            line.starts_with("s.toml: warning: controller `pd`, cell 0"),
+            "{line}"
+        );
+        assert!(line.contains("H_s = 2.5 m, T_p = 9 s"), "{line}");
+        assert!(
+            line.contains("3.000000e0") && line.contains("2.000000e0"),
+            "{line}"
+        );
+        assert!(line.contains("ratio 1.5000"), "{line}");
+    }
+}

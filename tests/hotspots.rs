@@ -334,7 +334,7 @@ fn seeds_spread_in_the_json() {
         .map(num)
         .collect();
     let mut expected = Vec::new();
-    let mut hot = vec![0.0; 3];
+    let mut hot = [0.0; 3];
     for seed in [7, 8, 9] {
         fs::write(dir.path().join("one.toml"), riser(seed, 0.0, 10, THREE)).unwrap();
         let (code, out, stderr) = run(dir.path(), &[&["fatigue", "one.toml"][..], &flags].concat());
@@ -530,7 +530,7 @@ fn closed_loops_report_hot_spots_from_their_replayed_decisions() {
         }
     }
     // The replay reproduces the closed loop's states.
-    let scene = Scene::from_toml_str(&text.replace("steps = 200", "steps = 200")).unwrap();
+    let scene = Scene::from_toml_str(&text).unwrap();
     let settings = ControlSettings {
         mpc: chainbeam::mpc::MpcOptions {
             ocp: chainbeam::ocp::OcpOptions::default().with_bound(5e4),

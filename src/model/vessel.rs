@@ -118,7 +118,8 @@ impl WaveSurge {
     fn at(&self, t: f64) -> [f64; 2] {
         let h = self.sea.step();
         let k = (t / h).round();
-        if k >= 0.0 && (k as usize) < self.record.len() && t == k * h {
+        // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record.
+        if k >= 0.0 && (k as usize) < self.record.len() && (t - k * h).abs() <= 0.0 {
             return self.record[k as usize];
         }
         [

@@ -275,6 +275,9 @@ fn control_settings(
         pd_gains: None,
         spin_up: SPIN_UP_S,
         mpc_fatigue_proxy: objective.or(t.objective) != Some(MpcPlanObjective::Sum),
+        // The scene's own [time] (this example sets it to the headline's record).
+        record: None,
+        seeds: 1,
     })
 }
 

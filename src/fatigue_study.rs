@@ -61,10 +61,37 @@
 //! sampling noise), and a cell's sea does not change when rows are added, removed or reordered
 //! in the diagram (a seed derived from the row's index would). The price: the sampling error
 //! of the one realisation is shared by every cell and does not average out over the diagram;
-//! a record long against T_p (many cycles per cell) keeps it small.
+//! a record long against T_p (many cycles per cell) keeps it small, and several seeds
+//! ("Records") measure it.
+//!
+//! # Records
+//! A short-term sea state is taken as stationary over about three hours (DNV-RP-C205), and a
+//! fatigue analysis counts a 3-hour realisation per sea state after the start-up is discarded.
+//! [`ControlSettings::record`] sets the seconds counted after the spin-up: every run of a cell
+//! is then `spin_up` + `record` seconds long ([`with_record`]: N = ⌈spin_up/h⌉ + ⌈record/h⌉
+//! steps, rounded up to whole control intervals for a closed-loop controller), whatever the
+//! scene's `[time]` says; `None` keeps the scene's own `[time]`. The command line defaults it to
+//! [`PRACTICE_RECORD_S`] (3 hours) for every cell; a shorter record (`--record`) is for tests and
+//! quick looks, and is counted as what it is (`duration_s`). Ten minutes hold barely fifteen
+//! cycles of a 40 s mode: the damage of a 600 s record of the same sea is not the 3-hour one's.
+//!
+//! One realisation's damage scatters with its seed. With [`ControlSettings::seeds`] = K > 1,
+//! every cell runs K seas, the scene's `[loads.waves]` seed s, s + 1, …, s + K − 1 ([`with_seed`];
+//! the same K seeds in every cell, so seed i is one common draw over the whole diagram). The
+//! cell's damage is the mean over the seeds, D̄_s = Σᵢ D_{s,i}/K, which enters D_y and the life;
+//! [`CellOutcome::seed_damages`] keeps each seed's, and [`ControllerOutcome::seed_lives`] the life
+//! of each seed alone over the diagram, L_i = 1/(DFF · Σ_s p_s D_{s,i} Y/T_s): the spread of the
+//! life over seeds. K = 1 is exactly the single-seed study (D̄_s = D_{s,0} bit for bit).
+//!
+//! # Hot spots
+//! A scene with `[[fatigue.hotspot]]` gets each hot spot's damage per year and life
+//! ([`ControllerOutcome::hotspots`], [`crate::hotspots`]) for every controller: for `scene` and
+//! `none` from the same streamed run as the wellhead's base moment; for `constant`, `pd` and
+//! `mpc`, whose closed loop records the base moment only, by replaying the loop's decisions on
+//! the same plant ([`replay_joint_moments`]: the same states, one more simulation, no re-plan).
 //!
 //! # Work and order
-//! The (cell, controller) runs are independent: with the `parallel` feature they run on rayon's
+//! The (cell, seed, controller) runs are independent: with the `parallel` feature they run on rayon's
 //! pool, and the result (every number) is the same, in the same order, as sequentially.
 
 #[cfg(feature = "parallel")]
@@ -89,6 +116,14 @@ pub mod pd;
 /// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
 /// each cell is a simulation per controller).
 pub const MAX_SCATTER_CELLS: usize = 10_000;
+
+/// The record a fatigue cell counts by default on the command line \[s\]: 3 hours, the
+/// duration over which a short-term sea state is taken as stationary (DNV-RP-C205, module
+/// docs "Records").
+pub const PRACTICE_RECORD_S: f64 = 10_800.0;
+
+/// The most seeds per cell.
+pub const MAX_SEEDS: usize = 1000;
 
 /// A controller of a fatigue study (module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -226,6 +261,23 @@ pub enum StudyError {
         /// The record's duration N h \[s\].
         duration_s: f64,
     },
+    /// A record to count that is not positive and finite, or whose run the scene cannot hold.
+    #[error("record = {record} s: {reason}")]
+    Record {
+        /// The record given \[s\].
+        record: f64,
+        /// Why.
+        reason: String,
+    },
+    /// Seeds per cell that are not in 1..=[`MAX_SEEDS`], more than one on a scene without a sea
+    /// to draw, or a seed past the largest.
+    #[error("seeds = {seeds}: {reason}")]
+    Seeds {
+        /// The number of seeds given.
+        seeds: usize,
+        /// Why.
+        reason: String,
+    },
     /// A run failed (a RATTLE step, a solve, settings that do not fit the scene).
     #[error("controller `{controller}`, cell {cell}: {source}")]
     Run {
@@ -266,6 +318,14 @@ pub struct ControlSettings {
     /// ([`ObjectiveKind::Power`], module docs "The controllers"), instead of
     /// [`MpcOptions::objective`]. Default `true`.
     pub mpc_fatigue_proxy: bool,
+    /// The record counted after the spin-up \[s\] (module docs, "Records"): every run is
+    /// `spin_up` + `record` seconds long ([`with_record`]). `None` (default): the scene's own
+    /// `[time]` grid, the spin-up included. The command line defaults it to
+    /// [`PRACTICE_RECORD_S`] (3 hours).
+    pub record: Option<f64>,
+    /// Seeds per cell K ≥ 1 (module docs, "Records"): the runs of a cell use the scene's
+    /// `[loads.waves]` seed s, s + 1, …, s + K − 1. Default 1.
+    pub seeds: usize,
 }
 
 impl Default for ControlSettings {
@@ -278,6 +338,8 @@ impl Default for ControlSettings {
             pd_gains: None,
             spin_up: 0.0,
             mpc_fatigue_proxy: true,
+            record: None,
+            seeds: 1,
         }
     }
 }
@@ -302,6 +364,10 @@ pub struct ControlledRecord {
     pub force: Option<f64>,
     /// The PD law's gains (u_b \[N\], K_p \[N/(N·m)\], K_d \[N·s/(N·m)\]).
     pub gains: Option<[f64; 3]>,
+    /// A closed loop's decisions: the force \[N\] held over each control interval, in order
+    /// (`None` for `scene` and `none`), from which [`replay_joint_moments`] recomputes the
+    /// run's joint torques.
+    pub decisions: Option<Vec<f64>>,
 }
 
 /// One controller's outcome in one cell.
@@ -311,8 +377,10 @@ pub struct CellOutcome {
     pub sea: Option<SeaState>,
     /// p_s.
     pub probability: f64,
-    /// Miner's sum D_{c,s} over the record.
+    /// Miner's sum D_{c,s} over the record: the mean over the seeds of `seed_damages`.
     pub damage: f64,
+    /// Miner's sum of each seed's record, in seed order (one value with one seed).
+    pub seed_damages: Vec<f64>,
     /// T_s \[s\].
     pub duration_s: f64,
     /// The cell's probability-weighted contribution p_s · D_{c,s} · Y/T_s per year.
@@ -334,6 +402,41 @@ pub struct ControllerOutcome {
     pub life_years: f64,
     /// Per cell, in the diagram's order.
     pub cells: Vec<CellOutcome>,
+    /// The life of each seed alone, L_i = 1/(DFF · Σ_s p_s D_{c,s,i} Y/T_s) years, in seed
+    /// order (one value, `life_years`, with one seed).
+    pub seed_lives: Vec<f64>,
+    /// Per hot spot of the scene's `[[fatigue.hotspot]]` (empty without them): the damage per
+    /// year and life over the diagram, each cell's the mean over the seeds.
+    pub hotspots: Vec<HotSpotOutcome>,
+}
+
+/// A hot spot's outcome over the diagram, for one controller.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HotSpotOutcome {
+    /// The hot spot's name.
+    pub name: String,
+    /// Its elevation \[m\].
+    pub elevation: f64,
+    /// D_y = Σ_s p_s · D̄_s · Y/T_s, D̄_s the mean over the seeds of cell s.
+    pub damage_per_year: f64,
+    /// 1/(DFF · D_y) years (+∞ without damage).
+    pub life_years: f64,
+    /// The hot spot's design fatigue factor DFF.
+    pub dff: f64,
+}
+
+/// A cell where a closed-loop controller's damage is above no control's
+/// ([`Study::worse_than_none`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorseThanNone {
+    /// The controller.
+    pub controller: ControllerKind,
+    /// The cell (0-based, in the diagram's order).
+    pub cell: usize,
+    /// Its damage D_{c,s} (mean over the seeds).
+    pub damage: f64,
+    /// No control's damage in the same cell.
+    pub none: f64,
 }
 
 /// The outcome of [`run_study`]: one entry per controller, in report order.
@@ -347,6 +450,36 @@ impl Study {
     /// The outcome of `kind`, if it was run.
     pub fn get(&self, kind: ControllerKind) -> Option<&ControllerOutcome> {
         self.controllers.iter().find(|c| c.kind == kind)
+    }
+
+    /// D_{c,s}/D_{none,s}, the damage of `kind` in cell s over no control's; `None` unless both
+    /// ran, or when no control does no damage there.
+    pub fn damage_ratio_to_none(&self, kind: ControllerKind, cell: usize) -> Option<f64> {
+        let (c, none) = (self.get(kind)?, self.get(ControllerKind::None)?);
+        let (d, d0) = (c.cells.get(cell)?.damage, none.cells.get(cell)?.damage);
+        (d0 > 0.0).then_some(d / d0)
+    }
+
+    /// Every (closed-loop controller, cell) whose damage is above no control's in that cell:
+    /// a controller that does worse than none there (in cell then report order).
+    pub fn worse_than_none(&self) -> Vec<WorseThanNone> {
+        let Some(none) = self.get(ControllerKind::None) else {
+            return Vec::new();
+        };
+        let mut out = Vec::new();
+        for (s, cell0) in none.cells.iter().enumerate() {
+            for c in self.controllers.iter().filter(|c| c.kind.is_feedback()) {
+                if let Some(cell) = c.cells.get(s).filter(|x| x.damage > cell0.damage) {
+                    out.push(WorseThanNone {
+                        controller: c.kind,
+                        cell: s,
+                        damage: cell.damage,
+                        none: cell0.damage,
+                    });
+                }
+            }
+        }
+        out
     }
 
     /// L(kind)/L(none) = D_y(none)/D_y(kind); `None` unless both ran and both lives are
@@ -420,6 +553,7 @@ pub fn run_controller(
             moment_x: None,
             force,
             gains,
+            decisions: Some(r.decisions.iter().map(|d| d.control).collect()),
         })
     };
     match kind {
@@ -439,6 +573,7 @@ pub fn run_controller(
                 moment_x: history.moment_x,
                 force: None,
                 gains: None,
+                decisions: None,
             })
         }
         ControllerKind::Constant => {
@@ -564,7 +699,7 @@ pub fn scene_sea_state(scene: &Scene) -> Option<SeaState> {
 /// One (cell, controller) run: the cell's scene, the record, its damage.
 fn run_cell(
     input: &StudyInput<'_>,
-    cell: usize,
+    (cell, seed): (usize, usize),
     kind: ControllerKind,
 ) -> Result<CellRun, StudyError> {
     let run_err = |source| StudyError::Run {
@@ -578,15 +713,44 @@ fn run_cell(
     if kind == ControllerKind::Mpc && settings.mpc_fatigue_proxy {
         settings.mpc.objective = fatigue_proxy(input.spec, input.scene)?;
     }
-    let record = match input.cells {
-        Some(cells) => {
-            let scene = with_sea_state(input.scene, &cells[cell].sea, cell)?;
-            run_controller(&scene, kind, &settings)
-        }
-        None => run_controller(input.scene, kind, &settings),
-    }
-    .map_err(run_err)?;
-    let skip = spin_up_steps(input.scene, input.settings.spin_up)?;
+    let scene = match input.cells {
+        Some(cells) => with_sea_state(input.scene, &cells[cell].sea, cell)?,
+        None => input.scene.clone(),
+    };
+    let scene = with_seed(&scene, seed)?;
+    let scene = match settings.record {
+        Some(record) => with_record(&scene, &settings, kind, record)?,
+        None => scene,
+    };
+    let hotspots = &input.scene.hotspots;
+    let (record, hot) = if hotspots.is_empty() {
+        (
+            run_controller(&scene, kind, &settings).map_err(run_err)?,
+            None,
+        )
+    } else if kind.is_feedback() {
+        let record = run_controller(&scene, kind, &settings).map_err(run_err)?;
+        let decisions = record.decisions.as_deref().unwrap_or(&[]);
+        let joints: Vec<usize> = hotspots
+            .iter()
+            .map(|h| crate::hotspots::nearest_joint(&scene.beam.lengths, h.elevation))
+            .collect();
+        let replay =
+            replay_joint_moments(&scene, settings.interval, decisions, &joints).map_err(run_err)?;
+        (record, Some(replay))
+    } else {
+        let (record, joints) = run_open_loop_joints(&scene, kind, hotspots).map_err(run_err)?;
+        (record, Some(joints))
+    };
+    let skip = spin_up_steps(&scene, input.settings.spin_up)?;
+    let hot_damages = match hot {
+        Some(joints) => crate::hotspots::assess_histories(&scene, hotspots, &joints, skip)
+            .map_err(run_err)?
+            .iter()
+            .map(|h| h.assessment.damage)
+            .collect(),
+        None => Vec::new(),
+    };
     let a = assess(
         input.spec,
         MomentHistory {
@@ -605,7 +769,166 @@ fn run_cell(
         },
         force: record.force,
         gains: record.gains,
+        hotspots: hot_damages,
     })
+}
+
+/// The open-loop run (`scene`, `none`) of a scene with hot spots: its base-moment record and
+/// the hot spots' joint torques from the same streamed run
+/// ([`crate::hotspots::joint_moment_history`]).
+fn run_open_loop_joints(
+    scene: &Scene,
+    kind: ControllerKind,
+    hotspots: &[crate::hotspots::HotSpotSpec],
+) -> crate::Result<(ControlledRecord, crate::hotspots::JointMoments)> {
+    let mut free;
+    let run = if kind == ControllerKind::None {
+        free = scene.clone();
+        free.control = None;
+        &free
+    } else {
+        scene
+    };
+    let joints: Vec<usize> = hotspots
+        .iter()
+        .map(|h| crate::hotspots::nearest_joint(&run.beam.lengths, h.elevation))
+        .collect();
+    let mut history = crate::hotspots::joint_moment_history(run, &joints)?;
+    let record = ControlledRecord {
+        duration_s: history.duration(),
+        moment: std::mem::take(&mut history.base_moment),
+        moment_x: history.base_moment_x.take(),
+        force: None,
+        gains: None,
+        decisions: None,
+    };
+    Ok((record, history))
+}
+
+/// The joint torques of a closed loop, recomputed by replaying its decisions on the plant of
+/// [`crate::mpc`]: the same plant, stepped with the same force held over each control interval,
+/// so the same states as the closed loop's, bit for bit (its base moment is checked against the
+/// closed loop's record in tests/hotspots.rs). The closed loop records the base moment only;
+/// this costs one more simulation of the record, not a re-plan.
+///
+/// # Errors
+/// The plant's ([`crate::mpc::Plant`]), [`MpcError::IntervalNotMultiple`], and
+/// [`MpcError::RunNotWhole`] when the decisions do not cover the run.
+pub fn replay_joint_moments(
+    scene: &Scene,
+    interval: f64,
+    decisions: &[f64],
+    joints: &[usize],
+) -> crate::Result<crate::hotspots::JointMoments> {
+    let mut plant = crate::mpc::Plant::<f64, 2>::new(scene)?;
+    let m = interval_steps(interval, plant.h())?;
+    let steps = plant.steps();
+    if steps != m * decisions.len() {
+        return Err(MpcError::RunNotWhole {
+            steps,
+            interval_steps: m,
+        }
+        .into());
+    }
+    let mut moment = vec![Vec::with_capacity(steps + 1); joints.len()];
+    let mut base = Vec::with_capacity(steps + 1);
+    let mut record = |plant: &crate::mpc::Plant<f64, 2>, moment: &mut [Vec<f64>]| {
+        crate::hotspots::push_joint_moments(
+            plant.chain(),
+            &plant.state().q,
+            joints,
+            moment,
+            &mut [],
+        );
+        base.push(plant.moment());
+    };
+    for &u in decisions {
+        plant.set_controls([0.0, u])?;
+        for _ in 0..m {
+            record(&plant, &mut moment);
+            plant.advance()?;
+        }
+    }
+    record(&plant, &mut moment);
+    Ok(crate::hotspots::JointMoments {
+        h: plant.h(),
+        joints: joints.to_vec(),
+        moment,
+        moment_x: None,
+        base_moment: base,
+        base_moment_x: None,
+    })
+}
+
+/// The scene with seed number `index` of a cell (module docs, "Records"): `[loads.waves]`
+/// `seed` + `index`; the scene itself for index 0.
+///
+/// # Errors
+/// [`StudyError::Seeds`] for index > 0 on a scene without `[loads.waves]`, or a seed past
+/// the largest the scene file can hold (2⁶³ − 1).
+pub fn with_seed(scene: &Scene, index: usize) -> Result<Scene, StudyError> {
+    if index == 0 {
+        return Ok(scene.clone());
+    }
+    let mut out = scene.clone();
+    let err = |reason: &str| StudyError::Seeds {
+        seeds: index + 1,
+        reason: reason.to_string(),
+    };
+    let waves = out.loads.waves.as_mut().ok_or_else(|| {
+        err("more than one seed needs a sea to draw ([loads.waves]); this scene has none")
+    })?;
+    waves.seed = waves
+        .seed
+        .checked_add(index as u64)
+        .filter(|&s| s <= i64::MAX as u64)
+        .ok_or_else(|| err("the seeds would pass 2^63 − 1"))?;
+    Ok(out)
+}
+
+/// The scene run for `spin_up` + `record` seconds (module docs, "Records"): N = ⌈spin_up/h⌉ +
+/// ⌈record/h⌉ steps, rounded up to whole control intervals for a closed-loop controller (so the
+/// counted record is at least `record`; its exact duration is the cell's `duration_s`).
+///
+/// # Errors
+/// [`StudyError::Record`] for a record that is not positive and finite, or a run the scene
+/// refuses (too many steps, a load series that does not cover it: the message names the key);
+/// [`StudyError::SpinUp`] for an invalid spin-up.
+pub fn with_record(
+    scene: &Scene,
+    settings: &ControlSettings,
+    kind: ControllerKind,
+    record: f64,
+) -> Result<Scene, StudyError> {
+    let err = |reason: String| StudyError::Record { record, reason };
+    if !(record.is_finite() && record > 0.0) {
+        return Err(err("must be positive and finite".into()));
+    }
+    let h = scene.time.step;
+    let spin_up = settings.spin_up;
+    if !(spin_up.is_finite() && spin_up >= 0.0) {
+        return Err(StudyError::SpinUp {
+            spin_up,
+            duration_s: spin_up + record,
+        });
+    }
+    let steps_of = |t: f64| (t / h * (1.0 - 1e-12)).ceil();
+    let mut steps = steps_of(spin_up) + steps_of(record).max(1.0);
+    // An interval that is not a multiple of h is the run's own error (naming the interval).
+    if let (true, Ok(m)) = (kind.is_feedback(), interval_steps(settings.interval, h)) {
+        let m = m as f64;
+        steps = (steps / m).ceil() * m;
+    }
+    if steps > crate::scene::MAX_STEPS as f64 {
+        return Err(err(format!(
+            "{steps} steps of h = {h} s, more than {} (time.steps' limit)",
+            crate::scene::MAX_STEPS
+        )));
+    }
+    let mut out = scene.clone();
+    out.time.steps = steps as usize;
+    out.validate().map_err(|e| err(e.to_string()))?;
+    Ok(out)
 }
 
 /// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of
@@ -637,12 +960,19 @@ pub fn spin_up_steps(scene: &Scene, spin_up: f64) -> Result<usize, StudyError> {
     Ok(steps as usize)
 }
 
+/// The mean of the seeds' Miner sums Σᵢ Dᵢ/K (one seed: D itself, bit for bit).
+fn combined_damage(seed_damages: &[f64]) -> f64 {
+    seed_damages.iter().sum::<f64>() / seed_damages.len() as f64
+}
+
 /// What a study keeps of one (cell, controller) run (not the record: a diagram of 30 cells of
 /// hour-long records would hold gigabytes).
 struct CellRun {
     damage: CellDamage,
     force: Option<f64>,
     gains: Option<[f64; 3]>,
+    /// The hot spots' Miner sums over the record (empty: none assessed).
+    hotspots: Vec<f64>,
 }
 
 /// Runs every controller on every cell and combines the cells (module docs). `on_run` is called
@@ -657,9 +987,24 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
         return Err(StudyError::NoControllers);
     }
     input.spec.validate()?;
-    spin_up_steps(input.scene, input.settings.spin_up)?;
+    let seeds = input.settings.seeds;
+    if !(1..=MAX_SEEDS).contains(&seeds) {
+        return Err(StudyError::Seeds {
+            seeds,
+            reason: format!("must be 1 to {MAX_SEEDS}"),
+        });
+    }
+    with_seed(input.scene, seeds - 1)?;
     for &kind in input.controllers {
         check_control_can_act(input.scene, kind)?;
+        match input.settings.record {
+            Some(record) => {
+                with_record(input.scene, input.settings, kind, record)?;
+            }
+            None => {
+                spin_up_steps(input.scene, input.settings.spin_up)?;
+            }
+        }
     }
     let n_cells = match input.cells {
         Some([]) => return Err(StudyError::NoCells),
@@ -681,11 +1026,13 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
         }
         None => 1,
     };
-    let jobs: Vec<(usize, ControllerKind)> = (0..n_cells)
-        .flat_map(|s| input.controllers.iter().map(move |&k| (s, k)))
+    let k_seeds = input.settings.seeds;
+    let jobs: Vec<((usize, usize), ControllerKind)> = (0..n_cells)
+        .flat_map(|s| (0..k_seeds).map(move |i| (s, i)))
+        .flat_map(|si| input.controllers.iter().map(move |&k| (si, k)))
         .collect();
-    let job = |&(s, k): &(usize, ControllerKind)| {
-        let r = run_cell(input, s, k);
+    let job = |&(si, k): &((usize, usize), ControllerKind)| {
+        let r = run_cell(input, si, k);
         on_run();
         r
     };
@@ -695,26 +1042,65 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
     let results: Vec<_> = jobs.iter().map(job).collect();
     let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
     let n_ctrl = input.controllers.len();
+    let run_of = |s: usize, i: usize, j: usize| &results[(s * k_seeds + i) * n_ctrl + j];
     let mut controllers = Vec::with_capacity(n_ctrl);
     for (j, &kind) in input.controllers.iter().enumerate() {
-        let runs: Vec<&CellRun> = (0..n_cells).map(|s| &results[s * n_ctrl + j]).collect();
-        let damages: Vec<CellDamage> = runs.iter().map(|r| r.damage).collect();
-        let combined = combine_scatter(&damages)?;
-        let cells = runs
-            .iter()
+        let seed_damages: Vec<Vec<f64>> = (0..n_cells)
+            .map(|s| {
+                (0..k_seeds)
+                    .map(|i| run_of(s, i, j).damage.damage)
+                    .collect()
+            })
+            .collect();
+        // Each cell's damage is the mean over its seeds (one seed: the value itself).
+        let cell_damages = |pick: &dyn Fn(usize) -> f64| -> Vec<CellDamage> {
+            (0..n_cells)
+                .map(|s| CellDamage {
+                    damage: pick(s),
+                    ..run_of(s, 0, j).damage
+                })
+                .collect()
+        };
+        let mean = combined_damage;
+        let combined = combine_scatter(&cell_damages(&|s| mean(&seed_damages[s])))?;
+        let mut seed_lives = Vec::with_capacity(k_seeds);
+        for i in 0..k_seeds {
+            let per_seed = combine_scatter(&cell_damages(&|s| seed_damages[s][i]))?;
+            seed_lives.push(life_years(per_seed.damage_per_year, input.spec.dff)?);
+        }
+        let mut hotspots = Vec::new();
+        let assessed = !run_of(0, 0, j).hotspots.is_empty();
+        for (h, spot) in input.scene.hotspots.iter().enumerate().filter(|_| assessed) {
+            let damage = |s: usize| {
+                let v: Vec<f64> = (0..k_seeds).map(|i| run_of(s, i, j).hotspots[h]).collect();
+                mean(&v)
+            };
+            let total = combine_scatter(&cell_damages(&damage))?;
+            hotspots.push(HotSpotOutcome {
+                name: spot.name.clone(),
+                elevation: spot.elevation,
+                damage_per_year: total.damage_per_year,
+                life_years: life_years(total.damage_per_year, spot.spec.dff)?,
+                dff: spot.spec.dff,
+            });
+        }
+        let cells = (0..n_cells)
             .zip(&combined.cells)
-            .enumerate()
-            .map(|(s, (run, &per_year))| CellOutcome {
-                sea: match input.cells {
-                    Some(c) => Some(c[s].sea),
-                    None => scene_sea_state(input.scene),
-                },
-                probability: run.damage.probability,
-                damage: run.damage.damage,
-                duration_s: run.damage.duration_s,
-                damage_per_year: per_year,
-                force: run.force,
-                gains: run.gains,
+            .map(|(s, &per_year)| {
+                let run = run_of(s, 0, j);
+                CellOutcome {
+                    sea: match input.cells {
+                        Some(c) => Some(c[s].sea),
+                        None => scene_sea_state(input.scene),
+                    },
+                    probability: run.damage.probability,
+                    damage: combined_damage(&seed_damages[s]),
+                    seed_damages: seed_damages[s].clone(),
+                    duration_s: run.damage.duration_s,
+                    damage_per_year: per_year,
+                    force: run.force,
+                    gains: run.gains,
+                }
             })
             .collect();
         controllers.push(ControllerOutcome {
@@ -722,6 +1108,8 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
             damage_per_year: combined.damage_per_year,
             life_years: life_years(combined.damage_per_year, input.spec.dff)?,
             cells,
+            seed_lives,
+            hotspots,
         });
     }
     Ok(Study { controllers })

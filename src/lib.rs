@@ -145,6 +145,7 @@ pub mod error;
 pub mod euler_bernoulli;
 pub mod fatigue;
 pub mod fatigue_study;
+pub mod hotspots;
 pub mod integrators;
 pub mod model;
 pub mod mpc;

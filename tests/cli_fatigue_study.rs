@@ -59,7 +59,14 @@ fn controllers_against_the_plain_run_and_a_simulation() {
     let plain = json(&plain);
     let (code, out, stderr) = run(
         dir.path(),
-        &["fatigue", "s.toml", "--controller", "constant,none"],
+        &[
+            "fatigue",
+            "s.toml",
+            "--controller",
+            "constant,none",
+            "--record",
+            "4",
+        ],
     );
     assert_eq!(code, 0, "{stderr}");
     let v = json(&out);
@@ -128,6 +135,8 @@ fn pd_and_mpc_report_lives() {
             "pd,mpc",
             "--horizon",
             "0.5",
+            "--record",
+            "4",
         ],
     );
     assert_eq!(code, 0, "{stderr}");
@@ -247,7 +256,17 @@ fn scatter_one_cell_and_additivity() {
         "hs,tp,probability\n3.0,9.0,1.0\n",
     )
     .unwrap();
-    let (code, out, stderr) = run(dir.path(), &["fatigue", "w.toml", "--scatter", "one.csv"]);
+    let (code, out, stderr) = run(
+        dir.path(),
+        &[
+            "fatigue",
+            "w.toml",
+            "--scatter",
+            "one.csv",
+            "--record",
+            "40",
+        ],
+    );
     assert_eq!(code, 0, "{stderr}");
     let v = json(&out);
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
@@ -263,7 +282,17 @@ fn scatter_one_cell_and_additivity() {
         text.push_str(&format!("{tp},{hs},{p}\n"));
     }
     fs::write(dir.path().join("three.csv"), text).unwrap();
-    let (code, out, stderr) = run(dir.path(), &["fatigue", "w.toml", "--scatter", "three.csv"]);
+    let (code, out, stderr) = run(
+        dir.path(),
+        &[
+            "fatigue",
+            "w.toml",
+            "--scatter",
+            "three.csv",
+            "--record",
+            "40",
+        ],
+    );
     assert_eq!(code, 0, "{stderr}");
     let v = json(&out);
     let cells = v["cells"].as_array().unwrap();
@@ -297,6 +326,8 @@ fn scatter_one_cell_and_additivity() {
             "three.csv",
             "--controller",
             "none",
+            "--record",
+            "40",
         ],
     );
     assert_eq!(code, 0, "{stderr}");
@@ -376,14 +407,19 @@ fn the_mpc_table_flags_and_spin_up() {
     let table = "\n[mpc]\nhorizon = 0.5\nbound = 3.0\ninterval = 0.1\nobjective = \"sum\"\n";
     fs::write(dir.path().join("s.toml"), scene("riser") + table).unwrap();
     let args = ["fatigue", "s.toml", "--controller", "mpc"];
-    let (code, out, stderr) = run(dir.path(), &args);
+    // The scene's 4 s counted (the default would be 3 hours).
+    let (code, out, stderr) = run(dir.path(), &[&args[..], &["--record", "4"]].concat());
     assert_eq!(code, 0, "{stderr}");
     let v = json(&out);
     assert_eq!(num(&v["settings"]["horizon"]), 0.5);
     assert_eq!(num(&v["settings"]["bound"]), 3.0);
     assert_eq!(v["settings"]["mpc_objective"].as_str(), Some("sum"));
     assert_eq!(num(&v["settings"]["spin_up"]), 0.0);
-    let flags = [&args[..], &["--horizon", "0.3", "--spin-up", "1.5"]].concat();
+    let flags = [
+        &args[..],
+        &["--horizon", "0.3", "--spin-up", "1.5", "--record", "2.5"],
+    ]
+    .concat();
     let (code, out, stderr) = run(dir.path(), &flags);
     assert_eq!(code, 0, "{stderr}");
     let w = json(&out);
@@ -413,4 +449,43 @@ fn the_mpc_table_flags_and_spin_up() {
     let (code, _, stderr) = run(dir.path(), &["fatigue", "bad.toml", "--controller", "mpc"]);
     assert_eq!(code, 1);
     assert!(stderr.contains("mpc.horizon"), "{stderr}");
+}
+
+/// A closed loop's cells carry `damage_ratio_to_none`, its damage over `none`'s in the same cell
+/// (`none` has none); a warning line on stderr names the controller and the cell exactly when
+/// the ratio is above 1 (the controller did worse than no control there), and the run exits 0.
+#[test]
+fn closed_loop_cells_carry_the_ratio_to_none() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.toml"), scene("riser")).unwrap();
+    let (code, out, stderr) = run(
+        dir.path(),
+        &[
+            "fatigue",
+            "s.toml",
+            "--controller",
+            "constant,pd",
+            "--record",
+            "4",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let v = json(&out);
+    let none = num(&v["controllers"]["none"]["cells"][0]["damage"]);
+    assert!(v["controllers"]["none"]["cells"][0]
+        .get("damage_ratio_to_none")
+        .is_none());
+    for name in ["constant", "pd"] {
+        let cell = &v["controllers"][name]["cells"][0];
+        let ratio = num(&cell["damage_ratio_to_none"]);
+        assert_eq!(ratio, num(&cell["damage"]) / none, "{name}");
+        let warned = stderr
+            .lines()
+            .any(|l| l.contains("warning") && l.contains(&format!("`{name}`, cell 0")));
+        assert_eq!(
+            warned,
+            ratio > 1.0,
+            "{name}: ratio {ratio}, stderr {stderr}"
+        );
+    }
 }

@@ -96,6 +96,10 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
         "fatigue",
         &[("outer_diameter", "0.5"), ("wall_thickness", "0.025")],
     ),
+    (
+        "fatigue.hotspot",
+        &[("name", "\"a\""), ("elevation", "1.0")],
+    ),
     ("mpc", &[("interval", "0.1")]),
 ];
 
@@ -199,7 +203,7 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
         text.push_str(&format!("{key} = {value}\n"));
     }
     for (table, entries) in SECTIONS {
-        if table.starts_with("loads.point") {
+        if table.starts_with("loads.point") || *table == "fatigue.hotspot" {
             text.push_str(&format!("[[{table}]]\n"));
         } else {
             text.push_str(&format!("[{table}]\n"));
@@ -281,6 +285,7 @@ fn accepted(table: &str) -> BTreeSet<String> {
                         "stackup.segment" | "stackup.body" | "stackup.flex_joint" => {
                             format!("{table}[0]")
                         }
+                        "fatigue.hotspot" => "fatigue.hotspot[0]".to_string(),
                         _ => table.replace("loads.point", "loads.point[0]"),
                     }
                 )
@@ -315,7 +320,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 118, "number of documented keys");
+    assert_eq!(checked, 129, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -372,6 +377,16 @@ fn every_documented_key_is_read() {
         ("fatigue", "thickness_exponent", "0.1"),
         ("fatigue", "reference_thickness", "0.032"),
         ("fatigue", "dff", "3.0"),
+        ("fatigue.hotspot", "name", "\"b\""),
+        ("fatigue.hotspot", "elevation", "2.0"),
+        ("fatigue.hotspot", "outer_diameter", "0.6"),
+        ("fatigue.hotspot", "wall_thickness", "0.03"),
+        ("fatigue.hotspot", "scf", "1.5"),
+        ("fatigue.hotspot", "curve", "\"F1\""),
+        ("fatigue.hotspot", "environment", "\"air\""),
+        ("fatigue.hotspot", "thickness_exponent", "0.1"),
+        ("fatigue.hotspot", "reference_thickness", "0.032"),
+        ("fatigue.hotspot", "dff", "3.0"),
         ("mpc", "interval", "0.2"),
         ("mpc", "horizon", "5.0"),
         ("mpc", "iterations", "2"),
@@ -655,7 +670,7 @@ fn documented_examples_are_valid_scenes() {
         .skip(1)
         .map(|b| b.split("```").next().unwrap())
         .collect();
-    assert_eq!(blocks.len(), 7);
+    assert_eq!(blocks.len(), 8);
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
     let mut scenes = Vec::new();
     for b in &blocks {
@@ -663,9 +678,11 @@ fn documented_examples_are_valid_scenes() {
         chainbeam::simulate(&scene).unwrap();
         scenes.push(scene);
     }
-    assert_eq!(scenes[4], chainbeam::catalogue::wave_riser());
-    assert!(scenes[5].is_spatial() && !scenes[4].is_spatial());
-    assert_eq!(scenes[6], chainbeam::catalogue::sheared_current());
+    // scenes[1] is the hot spots' example of `[[fatigue.hotspot]]`.
+    assert_eq!(scenes[1].hotspots.len(), 2);
+    assert_eq!(scenes[5], chainbeam::catalogue::wave_riser());
+    assert!(scenes[6].is_spatial() && !scenes[5].is_spatial());
+    assert_eq!(scenes[7], chainbeam::catalogue::sheared_current());
     assert_eq!(
         Scene::from_toml_str(blocks[0]).unwrap(),
         chainbeam::catalogue::riser(5)

@@ -239,7 +239,7 @@ fn the_committed_csv_runs_through_the_cli() {
     );
     let out = cargo_bin_cmd!("chainbeam")
         .current_dir(dir.path())
-        .args(["fatigue", "w.toml", "--scatter", csv])
+        .args(["fatigue", "w.toml", "--scatter", csv, "--record", "20"])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -74,6 +74,7 @@ fn spec_scene() -> Scene {
         }),
         objective: Some(ObjectiveKind::Final),
         fatigue: None,
+        hotspots: Vec::new(),
         mpc: None,
         vessel: None,
     }

@@ -292,6 +292,7 @@ impl SceneBuilder {
             control: self.control,
             objective: self.objective,
             fatigue: None,
+            hotspots: Vec::new(),
             mpc: None,
             vessel: (self.support == Support::Vessel).then(super::Vessel::default),
         };

@@ -43,6 +43,7 @@ pub use current::{
     MAX_POWER_EXPONENT,
 };
 pub use error::{SceneError, SceneErrorKind};
+pub use fatigue::MAX_HOTSPOT_NAME;
 pub use input::{
     read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
@@ -374,6 +375,9 @@ pub struct Scene {
     pub objective: Option<ObjectiveKind>,
     /// Optional `[fatigue]` table: the wellhead's section and S-N curve (`chainbeam fatigue`).
     pub fatigue: Option<crate::fatigue::FatigueSpec>,
+    /// The hot spots of `[[fatigue.hotspot]]` (empty: none; `chainbeam fatigue` then assesses
+    /// the wellhead alone, [`Scene::hot_spots`]).
+    pub hotspots: Vec<crate::hotspots::HotSpotSpec>,
     /// Optional `[mpc]` table: the closed-loop controllers' settings (`chainbeam fatigue`'s
     /// flags, which override it).
     pub mpc: Option<MpcTable>,

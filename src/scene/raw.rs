@@ -365,7 +365,10 @@ impl RawScene {
                 values: Some(RawValues::Many(RawControl::join_values(c))),
             }),
             objective: s.objective.map(RawObjective::from_kind),
-            fatigue: s.fatigue.as_ref().map(RawFatigue::from_spec),
+            fatigue: s
+                .fatigue
+                .as_ref()
+                .map(|f| RawFatigue::from_spec(f).with_hotspots(&s.hotspots)),
             mpc: s.mpc.as_ref().map(super::mpc::RawMpc::from_table),
             vessel: s.vessel.clone(),
         }
@@ -439,10 +442,11 @@ impl RawScene {
             .map(RawCurrent::into_current)
             .transpose()?;
         super::pipe::reconcile_surface(&water, current.as_mut())?;
-        let fatigue = self
-            .fatigue
-            .map(|f| f.into_spec(self.pipe.as_ref()))
-            .transpose()?;
+        let (fatigue, raw_hotspots) = match self.fatigue.map(RawFatigue::split_hotspots) {
+            Some((table, hotspots)) => (Some(table.into_spec(self.pipe.as_ref())?), hotspots),
+            None => (None, Vec::new()),
+        };
+        let hotspots = super::fatigue::hotspots_of(raw_hotspots, fatigue.as_ref())?;
         let base_length = beam.lengths.first().copied().unwrap_or(f64::NAN);
         // Without a [fatigue] table a [pipe]'s section serves (`Scene::fatigue_spec`).
         let assessed = fatigue.or_else(|| {
@@ -483,6 +487,7 @@ impl RawScene {
             control,
             objective,
             fatigue,
+            hotspots,
             mpc: self.mpc.map(super::mpc::RawMpc::into_table).transpose()?,
             vessel,
         })

@@ -444,6 +444,7 @@ impl Scene {
         if let Some(f) = &self.fatigue {
             f.validate().map_err(super::fatigue::scene_error)?;
         }
+        self.check_hotspots()?;
         self.check_step_numbers()
     }
 

@@ -354,6 +354,21 @@ fn controller_dict<'py>(py: Python<'py>, c: &ControllerOutcome) -> PyResult<Boun
         cells.append(cell_dict(py, cell)?)?;
     }
     d.set_item("cells", cells)?;
+    if !c.hotspots.is_empty() {
+        let spots = PyList::empty(py);
+        for h in &c.hotspots {
+            let x = PyDict::new(py);
+            x.set_item("name", &h.name)?;
+            x.set_item("elevation", h.elevation)?;
+            x.set_item("damage_per_year", h.damage_per_year)?;
+            x.set_item("life_years", Some(h.life_years).filter(|l| l.is_finite()))?;
+            spots.append(x)?;
+        }
+        d.set_item("hotspots", spots)?;
+        let critical =
+            chainbeam::hotspots::critical(c.hotspots.iter().map(|h| (h.damage_per_year, h.dff)));
+        d.set_item("critical", critical.map(|i| c.hotspots[i].name.clone()))?;
+    }
     Ok(d)
 }
 
@@ -381,8 +396,16 @@ fn study_dict<'py>(
     let d = PyDict::new(py);
     if !with_controllers {
         let c = controller_dict(py, &study.controllers[0])?;
-        for key in ["damage_per_year", "life_years", "cells"] {
-            d.set_item(key, c.get_item(key)?)?;
+        for key in [
+            "damage_per_year",
+            "life_years",
+            "hotspots",
+            "critical",
+            "cells",
+        ] {
+            if let Some(v) = c.get_item(key)? {
+                d.set_item(key, v)?;
+            }
         }
         return Ok(d);
     }
@@ -450,11 +473,21 @@ fn plain<'py>(
                 .collect();
             finite("cycles", cycles.as_flattened())?;
             finite("damage", &[a.damage, a.duration_s, a.damage_per_year])?;
+            let hot = if s.hotspots.is_empty() {
+                None
+            } else {
+                let hot = chainbeam::hotspots::assess_hot_spots(&s, &s.hotspots, skip)?;
+                for h in &hot {
+                    let key = format!("hotspots.{}", h.name);
+                    finite(&key, &[h.assessment.damage, h.assessment.damage_per_year])?;
+                }
+                Some(hot)
+            };
             ticker.tick();
-            Ok((cycles, a))
+            Ok((cycles, a, hot))
         })?,
     )?;
-    let (cycles, a) = a;
+    let (cycles, a, hot) = a;
     let d = PyDict::new(py);
     d.set_item(
         "cycles",
@@ -464,6 +497,29 @@ fn plain<'py>(
     d.set_item("duration_s", a.duration_s)?;
     d.set_item("damage_per_year", a.damage_per_year)?;
     d.set_item("life_years", Some(a.life_years).filter(|l| l.is_finite()))?;
+    if let Some(hot) = hot {
+        // The command line's `hotspots` and `critical` (cmd_fatigue.rs).
+        let spots = PyList::empty(py);
+        for h in &hot {
+            let x = PyDict::new(py);
+            x.set_item("name", &h.name)?;
+            x.set_item("elevation", h.elevation)?;
+            x.set_item("joint", h.joint + 1)?;
+            x.set_item("joint_elevation", h.joint_elevation)?;
+            x.set_item("damage", h.assessment.damage)?;
+            x.set_item("damage_per_year", h.assessment.damage_per_year)?;
+            let life = Some(h.assessment.life_years).filter(|l| l.is_finite());
+            x.set_item("life_years", life)?;
+            spots.append(x)?;
+        }
+        d.set_item("hotspots", spots)?;
+        let critical = chainbeam::hotspots::critical(
+            hot.iter()
+                .zip(&scene.hotspots)
+                .map(|(h, s)| (h.assessment.damage_per_year, s.spec.dff)),
+        );
+        d.set_item("critical", critical.map(|i| hot[i].name.clone()))?;
+    }
     Ok(d)
 }
 
@@ -602,14 +658,19 @@ pub fn _fatigue_combine<'py>(
                     damage_per_year: per_year,
                     force: r[j].3,
                     gains: r[j].4,
+                    seed_damages: vec![r[j].1],
                 })
                 .collect();
+            let life = life_years(total.damage_per_year, spec.dff)
+                .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?;
             outcomes.push(ControllerOutcome {
                 kind,
                 damage_per_year: total.damage_per_year,
-                life_years: life_years(total.damage_per_year, spec.dff)
-                    .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?,
+                life_years: life,
                 cells,
+                seed_lives: vec![life],
+                // The executor's one-cell runs return the wellhead's numbers only.
+                hotspots: Vec::new(),
             });
         }
         let study = Study {

@@ -6,7 +6,11 @@ use clap::Args;
 use serde::Serialize;
 
 use chainbeam::fatigue::{assess, Assessment, FatigueSpec, MomentHistory};
-use chainbeam::fatigue_study::spin_up_steps;
+use chainbeam::fatigue_study::{spin_up_steps, with_record, ControlSettings, ControllerKind};
+use chainbeam::hotspots::{
+    assess_histories, critical, joint_moment_history, nearest_joint, HotSpotAssessment,
+    HotSpotSpec, JointMoments,
+};
 use chainbeam::scene::read_text_file;
 use chainbeam::{moment_history, Scene};
 
@@ -60,6 +64,22 @@ table (docs/scene-format.md); mpc plans on Σ|M₀|^m, m the S-N curve's first s
 --spin-up S: the first S seconds of every record (the start-up from the riser at rest, with the \
 current and the sea switched on at t = 0) are not counted.
 
+--record S: S seconds are counted after the spin-up (each run is spin-up + S long). Default: \
+10800 (3 hours) for every cell of a study (--scatter, --controller, --seeds K > 1); the scene's \
+own [time] for the plain run.
+
+--seeds K: K seas per cell, the scene's [loads.waves] seed s, s+1, …, s+K−1. JSON (K > 1): \
+seeds; per cell seed_damages, damage (their mean), damage_std (sample, K−1), damage_min, \
+damage_max; in the totals life_years_seeds, life_years_min, life_years_max.
+
+[[fatigue.hotspot]] (docs/scene-format.md): hotspots [{name, elevation, joint, joint_elevation, \
+damage, damage_per_year, life_years}] and critical (the shortest-lived one's name); the moment \
+at a hot spot is the joint torque k_j θ_j of the joint nearest its elevation. In a study, per \
+controller (a closed loop's decisions replayed on its plant).
+
+A cell of constant, pd or mpc has damage_ratio_to_none (its damage over none's); above 1 a \
+warning on stderr says the controller did worse than no control there.
+
 --scatter FILE: a CSV with header hs,tp,probability[,direction]; every cell sets the scene's \
 [loads.waves] hs, tp (direction) and keeps its seed (the same phases in every cell). JSON: \
 damage_per_year = Σ_s p_s·D_s·Y/T_s, life_years, cells [{hs, tp, probability, damage_per_year \
@@ -97,6 +117,20 @@ pub struct FatigueArgs {
         conflicts_with = "series"
     )]
     pub spin_up: f64,
+    /// Count S seconds of every record after the spin-up (each run is spin-up + S long)
+    /// [default: 10800 (3 hours) for every cell of --scatter, --controller and --seeds; the
+    /// scene's own [time] for the plain assessment].
+    #[arg(
+        long,
+        value_name = "S",
+        conflicts_with = "series",
+        allow_negative_numbers = true
+    )]
+    pub record: Option<f64>,
+    /// Run K seeds per cell (the scene's [loads.waves] seed s, s+1, …, s+K−1) and report each
+    /// cell's mean damage and its spread over the seeds, and the life's spread.
+    #[arg(long, value_name = "K", default_value_t = 1, conflicts_with = "series")]
+    pub seeds: usize,
     /// What MPC plans on: `power` = Σ|M₀|^m with m the S-N curve's first slope (the fatigue
     /// proxy), or `sum` = Σ M₀² [default: mpc.objective, else power].
     #[arg(long, value_name = "KIND")]
@@ -121,6 +155,30 @@ struct FatigueReport {
     duration_s: f64,
     damage_per_year: f64,
     life_years: Option<f64>,
+    /// Per `[[fatigue.hotspot]]` (absent without them: today's JSON bit for bit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hotspots: Option<Vec<HotSpotJson>>,
+    /// The name of the shortest-lived hot spot.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    critical: Option<String>,
+}
+
+/// One hot spot in the JSON (the plain assessment's, and a study controller's).
+#[derive(Serialize)]
+pub struct HotSpotJson {
+    pub name: String,
+    pub elevation: f64,
+    /// The joint read, j = 1..n+1 (1: the base; absent in a study).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint: Option<usize>,
+    /// The joint's elevation s_j [m] (absent in a study).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_elevation: Option<f64>,
+    /// Miner's sum over the record (absent in a study).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damage: Option<f64>,
+    pub damage_per_year: f64,
+    pub life_years: Option<f64>,
 }
 
 /// A moment history: M₀, M₀ₓ of a spatial one, and the duration.
@@ -144,23 +202,90 @@ pub fn run(a: &FatigueArgs, progress: Progress) -> Result<(), CliError> {
     }
     refuse_overwrite(&[("--output", &out)], &inputs)?;
     let spec = fatigue_spec(&a.scene, &scene)?;
-    if a.controller.is_some() || a.scatter.is_some() {
+    if a.controller.is_some() || a.scatter.is_some() || a.seeds != 1 {
         let solved = study::solve(a, &scene, &spec, &progress)?;
-        return out.write_all(&study::report(a, &solved)?);
+        out.write_all(&study::report(a, &solved)?)?;
+        for w in study::warnings(a, &solved) {
+            eprintln!("{w}");
+        }
+        return Ok(());
     }
-    let assessment = solve(a, &scene, &spec, &progress)?;
-    out.write_all(&to_json(&report(&a.scene, &assessment)?)?)
+    let scene = match a.record {
+        Some(record) => {
+            let settings = ControlSettings {
+                spin_up: a.spin_up,
+                ..ControlSettings::default()
+            };
+            with_record(&scene, &settings, ControllerKind::Scene, record)
+                .map_err(|e| CliError::msg(format!("{}: --record: {e}", a.scene.display())))?
+        }
+        None => scene,
+    };
+    if a.series.is_some() && !scene.hotspots.is_empty() {
+        eprintln!(
+            "{}: warning: the [[fatigue.hotspot]] entries are not assessed with --series (they \
+             need the chain's joint angles, a series has the base moment only): the wellhead \
+             alone is reported",
+            a.scene.display()
+        );
+    }
+    let (assessment, hot) = solve(a, &scene, &spec, &progress)?;
+    let mut json = report(&a.scene, &assessment)?;
+    if let Some(hot) = hot {
+        let (spots, critical) = hotspots_json(&a.scene, &scene.hotspots, &hot)?;
+        json.hotspots = Some(spots);
+        json.critical = critical;
+    }
+    out.write_all(&to_json(&json)?)
 }
 
-/// The assessment of the simulated (or `--series`) moment history.
+/// The hot spots' JSON and the critical one's name; a non-finite number is refused naming the
+/// scene.
+fn hotspots_json(
+    scene_file: &Path,
+    specs: &[HotSpotSpec],
+    hot: &[HotSpotAssessment],
+) -> Result<(Vec<HotSpotJson>, Option<String>), CliError> {
+    let mut out = Vec::with_capacity(hot.len());
+    for h in hot {
+        let a = &h.assessment;
+        let key = format!("hotspots.{}", h.name);
+        check_finite(scene_file, &key, &[a.damage, a.damage_per_year])?;
+        out.push(HotSpotJson {
+            name: h.name.clone(),
+            elevation: h.elevation,
+            joint: Some(h.joint + 1),
+            joint_elevation: Some(h.joint_elevation),
+            damage: Some(a.damage),
+            damage_per_year: a.damage_per_year,
+            life_years: Some(a.life_years).filter(|l| l.is_finite()),
+        });
+    }
+    let critical = critical(
+        hot.iter()
+            .zip(specs)
+            .map(|(h, s)| (h.assessment.damage_per_year, s.spec.dff)),
+    )
+    .map(|i| hot[i].name.clone());
+    Ok((out, critical))
+}
+
+/// The assessment of the simulated (or `--series`) moment history, and the hot spots' of the
+/// same run (when the scene has `[[fatigue.hotspot]]` and no `--series`).
 fn solve(
     a: &FatigueArgs,
     scene: &Scene,
     spec: &FatigueSpec,
     progress: &Progress,
-) -> Result<Assessment, CliError> {
+) -> Result<(Assessment, Option<Vec<HotSpotAssessment>>), CliError> {
+    let mut joints = None;
     let history = match &a.series {
         Some(path) => read_series(path)?,
+        None if !scene.hotspots.is_empty() => {
+            let (h, j) = simulated_joints(&a.scene, scene, progress)?;
+            joints = Some(j);
+            h
+        }
         None => simulated(&a.scene, scene, progress)?,
     };
     let skip = match &a.series {
@@ -168,7 +293,7 @@ fn solve(
         None => spin_up_steps(scene, a.spin_up)
             .map_err(|e| CliError::msg(format!("{}: --spin-up: {e}", a.scene.display())))?,
     };
-    assess(
+    let wellhead = assess(
         spec,
         MomentHistory {
             duration_s: history.duration_s - skip as f64 * scene.time.step,
@@ -180,7 +305,42 @@ fn solve(
     .map_err(|e| {
         let file = a.series.as_deref().unwrap_or(&a.scene);
         CliError::msg(format!("{}: {e}", file.display()))
-    })
+    })?;
+    let hot = match joints {
+        Some(j) => Some(
+            assess_histories(scene, &scene.hotspots, &j, skip)
+                .map_err(|e| lib_error(&a.scene, e))?,
+        ),
+        None => None,
+    };
+    Ok((wellhead, hot))
+}
+
+/// The simulated base moment and the hot spots' joint torques, from one streamed run.
+fn simulated_joints(
+    path: &Path,
+    scene: &Scene,
+    progress: &Progress,
+) -> Result<(History, JointMoments), CliError> {
+    let spinner = progress.spinner(format!(
+        "simulating {} steps of a {}-pendulum beam",
+        scene.time.steps,
+        scene.n()
+    ));
+    let joints: Vec<usize> = scene
+        .hotspots
+        .iter()
+        .map(|h| nearest_joint(&scene.beam.lengths, h.elevation))
+        .collect();
+    let history = joint_moment_history(scene, &joints);
+    spinner.finish_and_clear();
+    let mut j = history.map_err(|e| lib_error(path, e))?;
+    let h = History {
+        duration_s: j.duration(),
+        moment: std::mem::take(&mut j.base_moment),
+        moment_x: j.base_moment_x.take(),
+    };
+    Ok((h, j))
 }
 
 /// The JSON of an assessment; a non-finite number is refused naming the scene.
@@ -203,6 +363,8 @@ fn report(scene_file: &Path, assessment: &Assessment) -> Result<FatigueReport, C
         duration_s: assessment.duration_s,
         damage_per_year: assessment.damage_per_year,
         life_years: Some(assessment.life_years).filter(|l| l.is_finite()),
+        hotspots: None,
+        critical: None,
     })
 }
 

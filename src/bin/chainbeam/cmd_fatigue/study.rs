@@ -8,14 +8,14 @@ use serde::Serialize;
 use chainbeam::fatigue::{FatigueSpec, ScatterCell};
 use chainbeam::fatigue_study::{
     run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
-    StudyInput,
+    StudyInput, WorseThanNone, PRACTICE_RECORD_S,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
 use chainbeam::scene::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 use chainbeam::Scene;
 
-use super::{FatigueArgs, MpcObjective};
+use super::{FatigueArgs, HotSpotJson, MpcObjective};
 use crate::cmd_mpc::setting_name;
 use crate::progress::Progress;
 use crate::{check_finite, check_force_flag, CliError};
@@ -35,6 +35,44 @@ struct CellJson {
     force: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     gains: Option<[f64; 3]>,
+    /// With more than one seed: the seeds' Miner sums (in seed order), their sample standard
+    /// deviation (K − 1 in the denominator), least and greatest; `damage` is their mean.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seed_damages: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    damage_std: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    damage_min: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    damage_max: Option<f64>,
+    /// A closed-loop controller's damage over no control's in the same cell (above 1: worse
+    /// than no control, also said on stderr).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    damage_ratio_to_none: Option<f64>,
+}
+
+/// With more than one seed, each seed's life and their range (`null`: an infinite life).
+#[derive(Serialize)]
+struct SeedLives {
+    life_years_seeds: Vec<Option<f64>>,
+    life_years_min: Option<f64>,
+    life_years_max: Option<f64>,
+}
+
+impl SeedLives {
+    /// `None` with one seed (the JSON keeps its shape).
+    fn of(lives: &[f64]) -> Option<Self> {
+        (lives.len() > 1).then(|| {
+            let finite = |l: f64| Some(l).filter(|l| l.is_finite());
+            let min = lives.iter().copied().fold(f64::INFINITY, f64::min);
+            let max = lives.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            SeedLives {
+                life_years_seeds: lives.iter().map(|&l| finite(l)).collect(),
+                life_years_min: finite(min),
+                life_years_max: finite(max),
+            }
+        })
+    }
 }
 
 /// One controller in the JSON.
@@ -42,6 +80,12 @@ struct CellJson {
 struct ControllerJson {
     damage_per_year: f64,
     life_years: Option<f64>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    seed_lives: Option<SeedLives>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hotspots: Option<Vec<HotSpotJson>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    critical: Option<String>,
     cells: Vec<CellJson>,
 }
 
@@ -89,6 +133,8 @@ struct SettingsJson {
     effort: f64,
     spin_up: f64,
     mpc_objective: &'static str,
+    record: Option<f64>,
+    seeds: usize,
 }
 
 /// `--controller` output.
@@ -97,18 +143,48 @@ struct ControllersReport {
     controllers: ByController<ControllerJson>,
     life_extension: ByController<Option<f64>>,
     settings: SettingsJson,
+    /// The seeds run, s..s+K−1 (with more than one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seeds: Option<Vec<u64>>,
 }
 
-/// `--scatter` output without `--controller`.
+/// `--scatter` (or `--seeds`) output without `--controller`.
 #[derive(Serialize)]
 struct ScatterReport {
     damage_per_year: f64,
     life_years: Option<f64>,
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    seed_lives: Option<SeedLives>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hotspots: Option<Vec<HotSpotJson>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    critical: Option<String>,
+    /// The seeds run, s..s+K−1 (with more than one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seeds: Option<Vec<u64>>,
     cells: Vec<CellJson>,
 }
 
-fn cell_json(c: &CellOutcome) -> CellJson {
+fn cell_json(c: &CellOutcome, ratio_to_none: Option<f64>) -> CellJson {
+    let k = c.seed_damages.len();
+    let spread = k > 1;
+    let std = {
+        let mean = c.damage;
+        let ss: f64 = c.seed_damages.iter().map(|d| (d - mean).powi(2)).sum();
+        (ss / (k.max(2) - 1) as f64).sqrt()
+    };
+    let min = c.seed_damages.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = c
+        .seed_damages
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
     CellJson {
+        seed_damages: spread.then(|| c.seed_damages.clone()),
+        damage_std: spread.then_some(std),
+        damage_min: spread.then_some(min),
+        damage_max: spread.then_some(max),
+        damage_ratio_to_none: ratio_to_none,
         hs: c.sea.map(|s| s.hs),
         tp: c.sea.map(|s| s.tp),
         direction: c.sea.and_then(|s| s.direction),
@@ -121,18 +197,92 @@ fn cell_json(c: &CellOutcome) -> CellJson {
     }
 }
 
-fn controller_json(scene_file: &Path, c: &ControllerOutcome) -> Result<ControllerJson, CliError> {
+fn controller_json(
+    scene_file: &Path,
+    study: &Study,
+    c: &ControllerOutcome,
+) -> Result<ControllerJson, CliError> {
     let key = format!("controllers.{}", c.kind.name());
     check_finite(scene_file, &key, &[c.damage_per_year])?;
     for cell in &c.cells {
         check_finite(scene_file, &key, &[cell.damage, cell.damage_per_year])?;
+        check_finite(scene_file, &key, &cell.seed_damages)?;
         check_finite(scene_file, &key, cell.gains.as_ref().map_or(&[][..], |g| g))?;
+    }
+    let mut hotspots = None;
+    let mut critical = None;
+    if !c.hotspots.is_empty() {
+        let mut spots = Vec::with_capacity(c.hotspots.len());
+        for h in &c.hotspots {
+            check_finite(scene_file, &format!("{key}.hotspots"), &[h.damage_per_year])?;
+            spots.push(HotSpotJson {
+                name: h.name.clone(),
+                elevation: h.elevation,
+                joint: None,
+                joint_elevation: None,
+                damage: None,
+                damage_per_year: h.damage_per_year,
+                life_years: Some(h.life_years).filter(|l| l.is_finite()),
+            });
+        }
+        critical =
+            chainbeam::hotspots::critical(c.hotspots.iter().map(|h| (h.damage_per_year, h.dff)))
+                .map(|i| c.hotspots[i].name.clone());
+        hotspots = Some(spots);
     }
     Ok(ControllerJson {
         damage_per_year: c.damage_per_year,
         life_years: Some(c.life_years).filter(|l| l.is_finite()),
-        cells: c.cells.iter().map(cell_json).collect(),
+        seed_lives: SeedLives::of(&c.seed_lives),
+        hotspots,
+        critical,
+        cells: c
+            .cells
+            .iter()
+            .enumerate()
+            .map(|(s, cell)| {
+                let ratio = c
+                    .kind
+                    .is_feedback()
+                    .then(|| study.damage_ratio_to_none(c.kind, s))
+                    .flatten();
+                cell_json(cell, ratio)
+            })
+            .collect(),
     })
+}
+
+/// One stderr line per (closed-loop controller, cell) whose damage is above no control's in
+/// that cell ([`Study::worse_than_none`]): the run still exits 0 with its outputs, and the
+/// cell's `damage_ratio_to_none` says the same, but a controller that does harm is never
+/// reported as a success in silence.
+pub fn warnings(a: &FatigueArgs, solved: &Solved) -> Vec<String> {
+    solved
+        .study
+        .worse_than_none()
+        .iter()
+        .map(|w| worse_than_none_line(&a.scene, w, &solved.study))
+        .collect()
+}
+
+fn worse_than_none_line(scene: &Path, w: &WorseThanNone, study: &Study) -> String {
+    let sea = study
+        .get(w.controller)
+        .and_then(|c| c.cells.get(w.cell))
+        .and_then(|c| c.sea)
+        .map_or_else(String::new, |s| {
+            format!(" (H_s = {} m, T_p = {} s)", s.hs, s.tp)
+        });
+    format!(
+        "{}: warning: controller `{}`, cell {}{sea}: damage {:.6e} above no control's {:.6e} \
+         (ratio {:.4}): the controller made the fatigue worse in this cell",
+        scene.display(),
+        w.controller.name(),
+        w.cell,
+        w.damage,
+        w.none,
+        w.damage / w.none
+    )
 }
 
 /// The flags of the closed-loop settings as an `[mpc]` table (`None`: not given), the values
@@ -172,6 +322,8 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
         pd_training: r.pd_training,
         spin_up: a.spin_up,
         mpc_fatigue_proxy: plan_objective(r) == MpcPlanObjective::Power,
+        record: Some(a.record.unwrap_or(PRACTICE_RECORD_S)),
+        seeds: a.seeds,
         ..ControlSettings::default()
     })
 }
@@ -181,6 +333,8 @@ fn flag_of(name: &str, flags: &MpcTable, table: Option<&MpcTable>) -> Option<Str
     let key = match name {
         "bounds" => "bound",
         "spin_up" => return Some("--spin-up".into()),
+        "record" => return Some("--record".into()),
+        "seeds" => return Some("--seeds".into()),
         other => other,
     };
     MPC_KEYS
@@ -212,6 +366,8 @@ fn study_error(a: &FatigueArgs, table: Option<&MpcTable>, e: StudyError) -> CliE
         | StudyError::DuplicateController { .. }
         | StudyError::NoControllers => CliError::msg(format!("--controller: {e}")),
         StudyError::SpinUp { .. } => CliError::msg(format!("{scene}: --spin-up: {e}")),
+        StudyError::Record { .. } => CliError::msg(format!("{scene}: --record: {e}")),
+        StudyError::Seeds { .. } => CliError::msg(format!("{scene}: --seeds: {e}")),
         StudyError::SeaState { .. } | StudyError::NoCells | StudyError::Fatigue(_)
             if a.scatter.is_some() =>
         {
@@ -226,6 +382,8 @@ fn study_error(a: &FatigueArgs, table: Option<&MpcTable>, e: StudyError) -> CliE
 pub struct Solved {
     study: Study,
     settings: MpcSettings,
+    /// The seeds run, with more than one.
+    seeds: Option<Vec<u64>>,
 }
 
 /// Runs the study the flags ask for.
@@ -255,8 +413,13 @@ pub fn solve(
     let settings = settings(a, &resolved)?;
     let n_cells = cells.as_ref().map_or(1, Vec::len);
     let bar = progress.bar(
-        (n_cells * kinds.len()) as u64,
-        format!("{} cells × {} controllers", n_cells, kinds.len()),
+        (n_cells * a.seeds * kinds.len()) as u64,
+        format!(
+            "{} cells × {} seeds × {} controllers",
+            n_cells,
+            a.seeds,
+            kinds.len()
+        ),
     );
     let input = StudyInput {
         scene,
@@ -268,38 +431,48 @@ pub fn solve(
     let study = run_study(&input, &|| bar.inc(1));
     bar.finish_and_clear();
     let study = study.map_err(|e| study_error(a, scene.mpc.as_ref(), e))?;
+    let seeds = (a.seeds > 1)
+        .then(|| {
+            scene
+                .loads
+                .waves
+                .map(|w| (0..a.seeds as u64).map(|i| w.seed + i).collect())
+        })
+        .flatten();
     Ok(Solved {
         study,
         settings: resolved,
+        seeds,
     })
 }
 
 /// The JSON of a study: per controller with `--controller`, else the scatter's plain run.
 pub fn report(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
     match &a.controller {
-        Some(_) => controllers_json(a, &solved.settings, &solved.study),
+        Some(_) => controllers_json(a, solved),
         None => {
             let c = &solved.study.controllers[0];
-            let c = controller_json(&a.scene, c)?;
+            let c = controller_json(&a.scene, &solved.study, c)?;
             crate::to_json(&ScatterReport {
                 damage_per_year: c.damage_per_year,
                 life_years: c.life_years,
+                seed_lives: c.seed_lives,
+                hotspots: c.hotspots,
+                critical: c.critical,
+                seeds: solved.seeds.clone(),
                 cells: c.cells,
             })
         }
     }
 }
 
-fn controllers_json(
-    a: &FatigueArgs,
-    settings: &MpcSettings,
-    study: &Study,
-) -> Result<String, CliError> {
+fn controllers_json(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError> {
+    let (settings, study) = (&solved.settings, &solved.study);
     let mut controllers = ByController::new();
     let mut extension = ByController::new();
     for c in &study.controllers {
         if let Some(slot) = controllers.slot(c.kind) {
-            *slot = Some(controller_json(&a.scene, c)?);
+            *slot = Some(controller_json(&a.scene, study, c)?);
         }
         if let Some(slot) = extension.slot(c.kind) {
             *slot = Some(study.life_extension(c.kind));
@@ -316,7 +489,10 @@ fn controllers_json(
             effort: settings.effort,
             spin_up: a.spin_up,
             mpc_objective: plan_objective(settings).name(),
+            record: Some(a.record.unwrap_or(PRACTICE_RECORD_S)),
+            seeds: a.seeds,
         },
+        seeds: solved.seeds.clone(),
     })
 }
 
@@ -326,4 +502,86 @@ fn controllers_json(
 /// name the file, the line and the column.
 pub fn read_scatter(path: &Path) -> Result<Vec<ScatterCell>, CliError> {
     chainbeam::fatigue::scatter::read_scatter_file(path).map_err(|e| CliError::msg(e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::worse_than_none_line;
+    use chainbeam::fatigue::SeaState;
+    use chainbeam::fatigue_study::{
+        CellOutcome, ControllerKind, ControllerOutcome, Study, WorseThanNone,
+    };
+    use std::path::Path;
+
+    fn outcome(kind: ControllerKind, damages: &[f64]) -> ControllerOutcome {
+        ControllerOutcome {
+            kind,
+            damage_per_year: 0.0,
+            life_years: f64::INFINITY,
+            cells: damages
+                .iter()
+                .map(|&d| CellOutcome {
+                    sea: Some(SeaState {
+                        hs: 2.5,
+                        tp: 9.0,
+                        direction: None,
+                    }),
+                    probability: 0.5,
+                    damage: d,
+                    seed_damages: vec![d],
+                    duration_s: 1.0,
+                    damage_per_year: 0.0,
+                    force: None,
+                    gains: None,
+                })
+                .collect(),
+            seed_lives: vec![f64::INFINITY],
+            hotspots: Vec::new(),
+        }
+    }
+
+    /// Study::worse_than_none lists exactly the closed-loop cells above `none`'s damage (not the
+    /// equal or lower ones, nor `none` itself), and the warning names the scene, the controller,
+    /// the cell's sea, both damages and their ratio.
+    #[test]
+    fn worse_than_none_cells_and_their_warning() {
+        let study = Study {
+            controllers: vec![
+                outcome(ControllerKind::None, &[2.0, 2.0, 0.0]),
+                outcome(ControllerKind::Pd, &[3.0, 2.0, 0.0]),
+                outcome(ControllerKind::Mpc, &[1.0, 2.5, 0.0]),
+            ],
+        };
+        let w = study.worse_than_none();
+        assert_eq!(
+            w,
+            [
+                WorseThanNone {
+                    controller: ControllerKind::Pd,
+                    cell: 0,
+                    damage: 3.0,
+                    none: 2.0
+                },
+                WorseThanNone {
+                    controller: ControllerKind::Mpc,
+                    cell: 1,
+                    damage: 2.5,
+                    none: 2.0
+                }
+            ]
+        );
+        assert_eq!(study.damage_ratio_to_none(ControllerKind::Pd, 0), Some(1.5));
+        assert_eq!(study.damage_ratio_to_none(ControllerKind::Pd, 2), None);
+        let line = worse_than_none_line(Path::new("s.toml"), &w[0], &study);
+        assert!(
+            line.starts_with("s.toml: warning: controller `pd`, cell 0"),
+            "{line}"
+        );
+        assert!(line.contains("H_s = 2.5 m, T_p = 9 s"), "{line}");
+        assert!(
+            line.contains("3.000000e0") && line.contains("2.000000e0"),
+            "{line}"
+        );
+        assert!(line.contains("ratio 1.5000"), "{line}");
+    }
 }

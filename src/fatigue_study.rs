@@ -278,6 +278,22 @@ pub enum StudyError {
         /// Why.
         reason: String,
     },
+    /// A cell index past the diagram's last ([`run_study_cell`]).
+    #[error("scatter cell {cell}: the diagram has {cells} cells")]
+    CellIndex {
+        /// The index given (0-based).
+        cell: usize,
+        /// The number of cells.
+        cells: usize,
+    },
+    /// Runs to combine that are not one per (cell, seed, controller) ([`combine_study`]).
+    #[error("{got} runs to combine where the study has {expected} (cell, seed, controller) runs")]
+    RunCount {
+        /// Cells × seeds × controllers.
+        expected: usize,
+        /// The runs given.
+        got: usize,
+    },
     /// A run failed (a RATTLE step, a solve, settings that do not fit the scene).
     #[error("controller `{controller}`, cell {cell}: {source}")]
     Run {
@@ -389,6 +405,59 @@ pub struct CellOutcome {
     pub force: Option<f64>,
     /// The PD law's gains in this cell.
     pub gains: Option<[f64; 3]>,
+}
+
+/// The spread of a cell's Miner sum over its seeds ([`CellOutcome::seed_spread`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeedSpread {
+    /// The sample standard deviation s = √(Σᵢ (Dᵢ − D̄)² / (K − 1)).
+    pub std: f64,
+    /// minᵢ Dᵢ.
+    pub min: f64,
+    /// maxᵢ Dᵢ.
+    pub max: f64,
+}
+
+impl CellOutcome {
+    /// With more than one seed, the spread of the seeds' Miner sums Dᵢ about their mean D̄
+    /// (`damage`); `None` with one seed.
+    pub fn seed_spread(&self) -> Option<SeedSpread> {
+        let k = self.seed_damages.len();
+        (k > 1).then(|| {
+            let ss: f64 = self
+                .seed_damages
+                .iter()
+                .map(|d| (d - self.damage).powi(2))
+                .sum();
+            let d = self.seed_damages.iter().copied();
+            SeedSpread {
+                std: (ss / (k - 1) as f64).sqrt(),
+                min: d.clone().fold(f64::INFINITY, f64::min),
+                max: d.fold(f64::NEG_INFINITY, f64::max),
+            }
+        })
+    }
+}
+
+/// The range of the lives of a controller's seeds ([`ControllerOutcome::seed_life_range`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LifeRange {
+    /// minᵢ Lᵢ \[years\] (+∞: no seed does damage).
+    pub min: f64,
+    /// maxᵢ Lᵢ \[years\].
+    pub max: f64,
+}
+
+impl ControllerOutcome {
+    /// With more than one seed, the least and greatest of the seeds' lives `seed_lives`; `None`
+    /// with one seed.
+    pub fn seed_life_range(&self) -> Option<LifeRange> {
+        let l = self.seed_lives.iter().copied();
+        (self.seed_lives.len() > 1).then(|| LifeRange {
+            min: l.clone().fold(f64::INFINITY, f64::min),
+            max: l.fold(f64::NEG_INFINITY, f64::max),
+        })
+    }
 }
 
 /// One controller over every cell.
@@ -860,6 +929,17 @@ pub fn replay_joint_moments(
     })
 }
 
+/// The seeds a study of `seeds` seeds per cell draws, s, s + 1, …, s + K − 1 (s the scene's
+/// `[loads.waves]` seed), as reports list them: `None` with one seed or without a sea.
+pub fn seeds_run(scene: &Scene, seeds: usize) -> Option<Vec<u64>> {
+    let w = scene.loads.waves.as_ref().filter(|_| seeds > 1)?;
+    Some(
+        (0..seeds as u64)
+            .map(|i| w.seed.saturating_add(i))
+            .collect(),
+    )
+}
+
 /// The scene with seed number `index` of a cell (module docs, "Records"): `[loads.waves]`
 /// `seed` + `index`; the scene itself for index 0.
 ///
@@ -965,24 +1045,26 @@ fn combined_damage(seed_damages: &[f64]) -> f64 {
     seed_damages.iter().sum::<f64>() / seed_damages.len() as f64
 }
 
-/// What a study keeps of one (cell, controller) run (not the record: a diagram of 30 cells of
-/// hour-long records would hold gigabytes).
-struct CellRun {
-    damage: CellDamage,
-    force: Option<f64>,
-    gains: Option<[f64; 3]>,
-    /// The hot spots' Miner sums over the record (empty: none assessed).
-    hotspots: Vec<f64>,
+/// What a study keeps of one (cell, seed, controller) run (not the record: a diagram of 30
+/// cells of hour-long records would hold gigabytes). [`run_study_cell`] returns them, for a
+/// caller that spreads cells over processes; [`combine_study`] combines them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellRun {
+    /// The cell's probability, the record's Miner sum at the wellhead and its duration.
+    pub damage: CellDamage,
+    /// The constant controller's force \[N\].
+    pub force: Option<f64>,
+    /// The PD law's gains.
+    pub gains: Option<[f64; 3]>,
+    /// The hot spots' Miner sums over the record, in the scene's `[[fatigue.hotspot]]` order
+    /// (empty: none assessed).
+    pub hotspots: Vec<f64>,
 }
 
-/// Runs every controller on every cell and combines the cells (module docs). `on_run` is called
-/// after each (cell, controller) run, from the thread that ran it (a progress bar).
-///
-/// # Errors
-/// [`StudyError::NoControllers`], [`StudyError::NoCells`], [`StudyError::ControlCannotAct`]
-/// before any run; the first failed run's error in (cell, controller) order; the combination's
-/// [`FatigueError`] (a probability outside \[0, 1\], a sum over 1).
-pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<Study, StudyError> {
+/// Checks a study's input before any run (module docs): the controllers, the seeds, the record
+/// or spin-up of every controller, the cells and their probabilities. Returns the number of
+/// cells (1 without a diagram).
+fn check_study_input(input: &StudyInput<'_>) -> Result<usize, StudyError> {
     if input.controllers.is_empty() {
         return Err(StudyError::NoControllers);
     }
@@ -1026,6 +1108,18 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
         }
         None => 1,
     };
+    Ok(n_cells)
+}
+
+/// Runs every controller on every cell and combines the cells (module docs). `on_run` is called
+/// after each (cell, controller) run, from the thread that ran it (a progress bar).
+///
+/// # Errors
+/// [`StudyError::NoControllers`], [`StudyError::NoCells`], [`StudyError::ControlCannotAct`]
+/// before any run; the first failed run's error in (cell, controller) order; the combination's
+/// [`FatigueError`] (a probability outside \[0, 1\], a sum over 1).
+pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<Study, StudyError> {
+    let n_cells = check_study_input(input)?;
     let k_seeds = input.settings.seeds;
     let jobs: Vec<((usize, usize), ControllerKind)> = (0..n_cells)
         .flat_map(|s| (0..k_seeds).map(move |i| (s, i)))
@@ -1041,7 +1135,49 @@ pub fn run_study(input: &StudyInput<'_>, on_run: &(dyn Fn() + Sync)) -> Result<S
     #[cfg(not(feature = "parallel"))]
     let results: Vec<_> = jobs.iter().map(job).collect();
     let results = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    combine_study(input, &results)
+}
+
+/// Runs cell `cell` of a study: each seed (seed-major) and each controller in the study's
+/// order, one after the other — what [`run_study`] runs for that cell. For a caller that
+/// spreads the cells over processes (the Python package's executor); [`combine_study`] then
+/// combines every cell's runs exactly as [`run_study`] does (the same numbers bit for bit).
+///
+/// # Errors
+/// As [`run_study`]; [`StudyError::CellIndex`] for a cell past the diagram's last.
+pub fn run_study_cell(input: &StudyInput<'_>, cell: usize) -> Result<Vec<CellRun>, StudyError> {
+    let n_cells = check_study_input(input)?;
+    if cell >= n_cells {
+        return Err(StudyError::CellIndex {
+            cell,
+            cells: n_cells,
+        });
+    }
+    let mut runs = Vec::with_capacity(input.settings.seeds * input.controllers.len());
+    for seed in 0..input.settings.seeds {
+        for &kind in input.controllers {
+            runs.push(run_cell(input, (cell, seed), kind)?);
+        }
+    }
+    Ok(runs)
+}
+
+/// Combines a study's runs (module docs): `results` holds every cell's [`run_study_cell`] runs,
+/// cell after cell (cell-major, then seed, then controller).
+///
+/// # Errors
+/// [`StudyError::RunCount`] when `results` does not hold one run per (cell, seed, controller);
+/// the combination's [`FatigueError`].
+pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Study, StudyError> {
+    let n_cells = input.cells.map_or(1, <[ScatterCell]>::len);
+    let k_seeds = input.settings.seeds;
     let n_ctrl = input.controllers.len();
+    if results.len() != n_cells * k_seeds * n_ctrl {
+        return Err(StudyError::RunCount {
+            expected: n_cells * k_seeds * n_ctrl,
+            got: results.len(),
+        });
+    }
     let run_of = |s: usize, i: usize, j: usize| &results[(s * k_seeds + i) * n_ctrl + j];
     let mut controllers = Vec::with_capacity(n_ctrl);
     for (j, &kind) in input.controllers.iter().enumerate() {

@@ -545,3 +545,67 @@ fn closed_loops_report_hot_spots_from_their_replayed_decisions() {
     assert_eq!(replay.base_moment, record.moment);
     assert_eq!(replay.moment[0].len(), record.moment.len());
 }
+
+/// A study spread cell by cell (`run_study_cell` for each cell, then `combine_study`: the
+/// Python package's executor path) is `run_study` bit for bit, seeds and hot spots included:
+/// two cells × two seeds × `none,constant` on the three hot spots. Runs that are not one per
+/// (cell, seed, controller) are refused, not combined.
+#[test]
+fn a_study_cell_by_cell_combines_to_the_whole_study() {
+    use chainbeam::fatigue::{ScatterCell, SeaState};
+    use chainbeam::fatigue_study::{
+        combine_study, run_study, run_study_cell, ControlSettings, ControllerKind, StudyError,
+        StudyInput,
+    };
+    let scene = Scene::from_toml_str(&riser(7, 0.0, 120, THREE)).unwrap();
+    let spec = scene.fatigue_spec().unwrap();
+    let cells: Vec<ScatterCell> = [(2.0, 8.0, 0.6), (3.0, 9.0, 0.4)]
+        .iter()
+        .map(|&(hs, tp, probability)| ScatterCell {
+            sea: SeaState {
+                hs,
+                tp,
+                direction: None,
+            },
+            probability,
+        })
+        .collect();
+    let settings = ControlSettings {
+        spin_up: 1.0,
+        record: Some(4.0),
+        seeds: 2,
+        ..ControlSettings::default()
+    };
+    let controllers = [ControllerKind::None, ControllerKind::Constant];
+    let input = StudyInput {
+        scene: &scene,
+        spec: &spec,
+        cells: Some(&cells),
+        controllers: &controllers,
+        settings: &settings,
+    };
+    let whole = run_study(&input, &|| {}).unwrap();
+    let mut runs = Vec::new();
+    for cell in 0..cells.len() {
+        runs.extend(run_study_cell(&input, cell).unwrap());
+    }
+    assert_eq!(runs.len(), 2 * 2 * 2);
+    let combined = combine_study(&input, &runs).unwrap();
+    assert_eq!(combined, whole);
+    let none = &whole.controllers[0];
+    assert_eq!(none.hotspots.len(), 3);
+    assert!(none.cells.iter().all(|c| c.seed_damages.len() == 2
+        && c.seed_damages[0] != c.seed_damages[1]
+        && c.seed_spread().is_some_and(|s| s.min < s.max)));
+    assert!(matches!(
+        combine_study(&input, &runs[1..]),
+        Err(StudyError::RunCount {
+            expected: 8,
+            got: 7
+        })
+    ));
+    assert!(matches!(
+        run_study_cell(&input, 2),
+        Err(StudyError::CellIndex { cell: 2, cells: 2 })
+    ));
+}

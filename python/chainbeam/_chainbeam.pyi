@@ -106,7 +106,7 @@ def mpc(
 ) -> dict[str, Any]: ...
 
 _Cell = tuple[float, float, float, float | None]
-_Run = tuple[float, float, float, float | None, list[float] | None]
+_Run = tuple[float, float, float, float | None, list[float] | None, list[float]]
 
 def _fatigue(
     scene: Scene,
@@ -117,7 +117,7 @@ def _fatigue(
 ) -> dict[str, Any]: ...
 def _fatigue_cell(
     scene: Scene,
-    cell: _Cell,
+    scatter: list[_Cell],
     index: int,
     controllers: list[str] | None,
     settings: dict[str, Any],

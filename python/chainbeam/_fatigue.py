@@ -3,7 +3,7 @@
 
 ``fatigue(scene, scatter=None, controllers=None, executor=None, *, interval=None, horizon=None,
 iterations=None, bound=None, effort=None, plan_pendulums=None, plan_step=None, pd_training=None,
-mpc_objective=None, spin_up=None, progress=False, duration=None)`` returns the command line's
+mpc_objective=None, spin_up=None, progress=False, duration=None, record=None, seeds=1)`` returns the command line's
 JSON as a :class:`FatigueResult` (a dict with the same fields, and tables: ``to_pandas()``,
 ``cells_frame()``, ``summary_frame()``, ``cycles_frame()``)
 (``json.load`` of ``chainbeam fatigue``'s output equals it, bit for bit, the keyword arguments
@@ -22,7 +22,21 @@ bad argument ``InvalidArgumentError`` with ``.key`` the argument:
 - ``controllers``: ``controllers`` (keyed by name: ``damage_per_year``, ``life_years``,
   ``cells``), ``life_extension`` (keyed by name: its life over the life without control) and
   ``settings`` (``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``spin_up``,
-  ``mpc_objective``: the values the run used, from the arguments or the scene's ``[mpc]``).
+  ``mpc_objective``, ``record``, ``seeds``: the values the run used, from the arguments or the
+  scene's ``[mpc]``).
+
+A study (``scatter``, ``controllers`` or ``seeds`` > 1) runs each cell for ``spin_up`` +
+``record`` seconds, ``record`` by default 10800 s (3 hours, the practice for a sea state; the
+command line's ``--record``): give a short ``record`` to explore quickly. ``seeds=K`` runs K
+seas per cell (the scene's ``[loads.waves]`` seed s, s+1, …, s+K−1, the same K in every cell):
+each cell's ``damage`` is the mean over its seeds and, with K > 1, the cell also has
+``seed_damages``, ``damage_std`` (sample, K − 1), ``damage_min``, ``damage_max``, and the totals
+``life_years_seeds``, ``life_years_min``, ``life_years_max``. A scene with
+``[[fatigue.hotspot]]`` entries gets ``hotspots`` (each ``name``, ``elevation``,
+``damage_per_year``, ``life_years``) and ``critical`` (the shortest-lived one's name), with or
+without an executor. A closed loop's cell with ``none`` in the study has
+``damage_ratio_to_none`` (above 1: worse than no control). ``duration`` [s] sets the length of
+the plain run (neither ``scatter``, ``controllers`` nor ``seeds``).
 
 ``reduced_north_atlantic()``: the published scatter diagram of the headline as a DataFrame
 (``hs``, ``tp``, ``probability``), ready for ``scatter=``.
@@ -33,8 +47,8 @@ the scene's ``[loads.waves]`` hs, tp (direction) and keeps its seed. ``controlle
 list or a sequence of ``none``, ``constant``, ``pd``, ``mpc`` (``none`` is always run).
 
 ``executor``: anything with ``submit(fn, *args)`` (``ProcessPoolExecutor``, a
-``dask.distributed.Client`` or its ``get_executor()``); each scatter cell (all its controllers)
-is one task, and the cells are combined as the command line combines them, so the result does
+``dask.distributed.Client`` or its ``get_executor()``); each scatter cell (all its seeds and
+controllers) is one task, and the cells are combined as the command line combines them, so the result does
 not depend on the executor or the number of workers, bit for bit. Without ``scatter`` the whole
 assessment is one task. A Ctrl-C (or any exception) while waiting cancels the tasks not yet
 started.
@@ -144,10 +158,11 @@ def _fatigue_task(
 
 
 def _cell_task(
-    scene: Scene, cell: Cell, index: int, names: list[str] | None, settings: dict[str, Any]
+    scene: Scene, cells: list[Cell], index: int, names: list[str] | None,
+    settings: dict[str, Any]
 ) -> list[Any]:
-    """Every controller on one cell (module level: it pickles)."""
-    return _chainbeam._fatigue_cell(scene, cell, index, names, settings)
+    """Every seed and controller on cell ``index`` of ``cells`` (module level: it pickles)."""
+    return _chainbeam._fatigue_cell(scene, cells, index, names, settings)
 
 
 def _optional(value: Any, kind: Any, name: str) -> Any:
@@ -198,6 +213,8 @@ def fatigue(
     spin_up: float | None = None,
     progress: ProgressArg = False,
     duration: float | None = None,
+    record: float | None = None,
+    seeds: int = 1,
 ) -> FatigueResult:
     """The wellhead's fatigue damage and life (``chainbeam fatigue``'s JSON as a dict; module
     docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
@@ -206,7 +223,9 @@ def fatigue(
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
-    ``duration`` [s]: every record's length instead of the scene's ``time.steps``.
+    ``duration`` [s]: the plain run's length instead of the scene's ``time.steps``;
+    ``record`` [s]: the seconds counted after the spin-up in every run of a study (``--record``;
+    not given: 10800, 3 hours); ``seeds``: seas per cell (``--seeds``; module docs).
 
     Raises:
         SceneError (no ``[fatigue]`` table, key ``fatigue``; a setting of the ``[mpc]`` table
@@ -224,6 +243,8 @@ def fatigue(
         "pd_training": _optional(pd_training, float, "pd_training"),
         "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
         "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
+        "record": _optional(record, float, "record"),
+        "seeds": _optional(seeds, int, "seeds"),
     }
     if spin_up is None:
         warnings.warn(
@@ -244,8 +265,8 @@ def fatigue(
             futures = [executor.submit(_fatigue_task, scene, None, names, settings)]
             (out,) = _gather(futures, r.callback)
             return FatigueResult(out)
-        futures = [executor.submit(_cell_task, scene, c, i, names, settings)
-                   for i, c in enumerate(cells)]
+        futures = [executor.submit(_cell_task, scene, cells, i, names, settings)
+                   for i in range(len(cells))]
         runs = _gather(futures, r.callback)
     return FatigueResult(_chainbeam._fatigue_combine(scene, cells, names, settings, runs))
 

@@ -34,14 +34,14 @@ SCRIPT = textwrap.dedent(
 
     def run(duration):
         if call == "fatigue":
-            cb.fatigue(scene, controllers="none,pd", spin_up=1.0, duration=duration)
+            cb.fatigue(scene, controllers="none,pd", spin_up=1.0, record=duration - 1.0)
         elif call == "fatigue-executor":
             import concurrent.futures as cf
             cells = [{"hs": 2.0 + 0.1 * i, "tp": 9.0, "probability": 1 / 8} for i in range(8)]
             with cf.ThreadPoolExecutor(1) as ex:
                 try:
                     cb.fatigue(scene, scatter=cells, controllers="none", spin_up=1.0,
-                               duration=duration, executor=ex)
+                               record=duration - 1.0, executor=ex)
                 finally:
                     ex.shutdown(wait=True, cancel_futures=True)
         else:

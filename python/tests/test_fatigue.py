@@ -19,6 +19,8 @@ from conftest import ROOT, wave_riser_toml
 
 # These calls compare with the command line, whose default --spin-up is 0: leaving spin_up out
 # is that default, and its warning (cb.StartUpWarning, test_fatigue_tables.py) is not the point.
+# A study counts 3-hour records by default (`record`, `--record`); the tests count the scene's
+# own 10 s (its 200 steps of 0.05 s), less any spin-up.
 pytestmark = pytest.mark.filterwarnings("ignore::chainbeam.StartUpWarning")
 
 # The 60 m riser of conftest.py (waves from 0°), a control at node 3, curve D in seawater with CP.
@@ -96,30 +98,33 @@ def test_plain_equals_cli(cli: str, files: tuple[Path, Path]) -> None:
 
 def test_scatter_equals_cli(cli: str, files: tuple[Path, Path]) -> None:
     scene, scatter = files
-    ref = cli_json(cli, str(scene), "--scatter", str(scatter))
+    ref = cli_json(cli, str(scene), "--scatter", str(scatter), "--record", "10")
     s = cb.Scene.from_file(scene)
-    got = cb.fatigue(s, scatter=scatter)
+    got = cb.fatigue(s, scatter=scatter, record=10.0)
     assert same(got, ref)
     # The same cells as a DataFrame and as mappings.
     df = pd.DataFrame(DIAGRAM, columns=["hs", "tp", "probability"])
-    assert same(cb.fatigue(s, scatter=df), ref)
+    assert same(cb.fatigue(s, scatter=df, record=10.0), ref)
     rows = [{"hs": hs, "tp": tp, "probability": p} for hs, tp, p in DIAGRAM]
-    assert same(cb.fatigue(s, scatter=rows), ref)
+    assert same(cb.fatigue(s, scatter=rows, record=10.0), ref)
 
 
 def test_controllers_on_executors_equal_cli(cli: str, files: tuple[Path, Path]) -> None:
     """`none,constant` on three cells: serial, on threads and on 2 processes = the command
     line, bit for bit (each cell is the same deterministic code wherever it runs)."""
     scene, scatter = files
-    ref = cli_json(cli, str(scene), "--scatter", str(scatter), "--controller", "none,constant")
+    ref = cli_json(cli, str(scene), "--scatter", str(scatter), "--controller", "none,constant",
+                   "--record", "10")
     assert list(ref["controllers"]) == ["none", "constant"]
     s = cb.Scene.from_file(scene)
-    serial = cb.fatigue(s, scatter=scatter, controllers="none,constant")
+    serial = cb.fatigue(s, scatter=scatter, controllers="none,constant", record=10.0)
     assert same(serial, ref)
     with ThreadPoolExecutor(2) as ex:
-        assert same(cb.fatigue(s, scatter=scatter, controllers=["constant"], executor=ex), ref)
+        assert same(cb.fatigue(s, scatter=scatter, controllers=["constant"], executor=ex,
+                               record=10.0), ref)
     with ProcessPoolExecutor(2) as ex:
-        assert same(cb.fatigue(s, scatter=scatter, controllers="none,constant", executor=ex), ref)
+        assert same(cb.fatigue(s, scatter=scatter, controllers="none,constant", executor=ex,
+                               record=10.0), ref)
 
 
 def test_reduced_north_atlantic_is_the_committed_csv() -> None:
@@ -146,8 +151,8 @@ def test_reduced_north_atlantic_equals_cli_scatter(cli: str, files: tuple[Path, 
     """The DataFrame as `scatter` = `chainbeam fatigue --scatter` of the committed CSV, bit for
     bit: the 20 cells, their damages and the total."""
     scene, _ = files
-    ref = cli_json(cli, str(scene), "--scatter", str(NORTH_ATLANTIC_CSV))
-    got = cb.fatigue(cb.Scene.from_file(scene), scatter=cb.reduced_north_atlantic())
+    ref = cli_json(cli, str(scene), "--scatter", str(NORTH_ATLANTIC_CSV), "--record", "10")
+    got = cb.fatigue(cb.Scene.from_file(scene), scatter=cb.reduced_north_atlantic(), record=10.0)
     assert len(got["cells"]) == 20 and got["damage_per_year"] > 0
     assert same(got, ref)
 
@@ -158,23 +163,24 @@ def test_mpc_table_settings_equal_cli(cli: str, tmp_path: Path) -> None:
     path = tmp_path / "m.toml"
     path.write_text(SCENE + MPC_TABLE)
     s = cb.Scene.from_file(path)
-    ref = cli_json(cli, str(path), "--controller", "constant,mpc", "--spin-up", "1.0")
-    got = cb.fatigue(s, controllers="constant,mpc", spin_up=1.0)
+    ref = cli_json(cli, str(path), "--controller", "constant,mpc", "--spin-up", "1.0",
+                   "--record", "9")
+    got = cb.fatigue(s, controllers="constant,mpc", spin_up=1.0, record=9.0)
     assert got["settings"] == {"interval": 0.5, "horizon": 1.0, "iterations": 2,
                                "bound": 2e4, "effort": 1e-3, "spin_up": 1.0,
-                               "mpc_objective": "sum"}
+                               "mpc_objective": "sum", "record": 9.0, "seeds": 1}
     assert same(got, ref)
     ref = cli_json(cli, str(path), "--controller", "mpc", "--horizon", "1.5",
-                   "--mpc-objective", "power")
-    got = cb.fatigue(s, controllers="mpc", horizon=1.5, mpc_objective="power")
+                   "--mpc-objective", "power", "--record", "10")
+    got = cb.fatigue(s, controllers="mpc", horizon=1.5, mpc_objective="power", record=10.0)
     assert got["settings"]["horizon"] == 1.5 and got["settings"]["bound"] == 2e4
     assert got["settings"]["mpc_objective"] == "power"
     assert same(got, ref)
     # Without the table, the defaults (the command line's).
     plain = cb.Scene.from_toml(SCENE)
-    assert cb.fatigue(plain, controllers="none")["settings"] == {
+    assert cb.fatigue(plain, controllers="none", record=10.0)["settings"] == {
         "interval": 0.1, "horizon": 3.0, "iterations": 1, "bound": 5.0, "effort": 0.01,
-        "spin_up": 0.0, "mpc_objective": "power"}
+        "spin_up": 0.0, "mpc_objective": "power", "record": 10.0, "seeds": 1}
 
 
 def test_mpc_table_refusals() -> None:
@@ -182,10 +188,10 @@ def test_mpc_table_refusals() -> None:
     an argument names the argument; the table's own checks refuse on reading the scene."""
     bad = cb.Scene.from_toml(SCENE + "\n[mpc]\ninterval = 0.07\n")
     with pytest.raises(cb.SceneError) as e:
-        cb.fatigue(bad, controllers="mpc")
+        cb.fatigue(bad, controllers="mpc", record=10.0)
     assert e.value.key == "mpc.interval"
     with pytest.raises(cb.InvalidArgumentError) as a:
-        cb.fatigue(cb.Scene.from_toml(SCENE), controllers="mpc", interval=0.07)
+        cb.fatigue(cb.Scene.from_toml(SCENE), controllers="mpc", interval=0.07, record=10.0)
     assert a.value.key == "interval"
     with pytest.raises(cb.SceneError) as e:
         cb.Scene.from_toml(SCENE + "\n[mpc]\nhorizon = -1.0\n")
@@ -223,3 +229,45 @@ def test_refusals(files: tuple[Path, Path]) -> None:
     with pytest.raises(cb.InvalidArgumentError) as a:
         cb.fatigue(s, scatter=[{"hs": 3.0, "tp": 9.0, "probability": 0.7}] * 2)
     assert a.value.key == "scatter"
+
+
+# The scene with two hot spots along the riser (docs/scene-format.md "[[fatigue.hotspot]]").
+HOTSPOTS = """
+[[fatigue.hotspot]]
+name = "wellhead"
+elevation = 0.0
+scf = 1.3
+
+[[fatigue.hotspot]]
+name = "weld 20 m"
+elevation = 20.0
+curve = "F1"
+"""
+
+
+def test_seeds_and_hot_spots_on_executors_equal_cli(cli: str, tmp_path: Path) -> None:
+    """Two seeds per cell and two hot spots, `none,constant` on two cells: serial and on 2
+    processes = `chainbeam fatigue --seeds 2` bit for bit (the executor's cells return every
+    seed's and hot spot's Miner sums, combined by the library's own combination); the seeds'
+    spread and the hot spots are in the result, and each cell's damage is its seeds' mean."""
+    path = tmp_path / "h.toml"
+    path.write_text(SCENE + HOTSPOTS)
+    scatter = tmp_path / "d.csv"
+    scatter.write_text("hs,tp,probability\n2.0,8.0,0.6\n3.0,9.0,0.4\n")
+    ref = cli_json(cli, str(path), "--scatter", str(scatter), "--controller", "none,constant",
+                   "--seeds", "2", "--record", "5", "--spin-up", "1")
+    s = cb.Scene.from_file(path)
+    kw: dict[str, Any] = dict(scatter=scatter, controllers="none,constant", seeds=2, record=5.0,
+                              spin_up=1.0)
+    serial = cb.fatigue(s, **kw)
+    assert same(serial, ref)
+    with ProcessPoolExecutor(2) as ex:
+        assert same(cb.fatigue(s, executor=ex, **kw), ref)
+    none = serial["controllers"]["none"]
+    assert [h["name"] for h in none["hotspots"]] == ["wellhead", "weld 20 m"]
+    assert none["critical"] in ("wellhead", "weld 20 m")
+    assert len(none["life_years_seeds"]) == 2
+    for cell in none["cells"]:
+        a, b = cell["seed_damages"]
+        assert a != b and cell["damage"] == (a + b) / 2
+        assert cell["damage_min"] == min(a, b) and cell["damage_max"] == max(a, b)

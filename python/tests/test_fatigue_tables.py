@@ -20,7 +20,7 @@ CELLS = [{"hs": 2.0, "tp": 8.0, "probability": 0.6}, {"hs": 3.0, "tp": 9.0, "pro
 
 def test_cells_by_controllers() -> None:
     s = cb.Scene.from_toml(SCENE)
-    r = cb.fatigue(s, scatter=CELLS, controllers="none,constant", spin_up=1.0)
+    r = cb.fatigue(s, scatter=CELLS, controllers="none,constant", spin_up=1.0, record=9.0)
     assert isinstance(r, dict) and isinstance(r, cb.FatigueResult)
     t = r.to_pandas()
     assert list(t.columns) == ["none", "constant"]
@@ -51,8 +51,8 @@ def test_plain_cycles_have_named_columns() -> None:
 
 def test_upper_case_controller_names_are_accepted() -> None:
     s = cb.Scene.from_toml(SCENE)
-    assert cb.fatigue(s, controllers="NONE", spin_up=1.0) == cb.fatigue(
-        s, controllers="none", spin_up=1.0
+    assert cb.fatigue(s, controllers="NONE", spin_up=1.0, record=9.0) == cb.fatigue(
+        s, controllers="none", spin_up=1.0, record=9.0
     )
 
 

@@ -59,13 +59,13 @@ def test_short_peak_period_is_a_scene_error(body: str, key: str) -> None:
 
 def test_one_bad_scatter_row_is_an_error_not_a_crash() -> None:
     out = run("cb.fatigue(scene, scatter=[{'hs': 2.0, 'tp': 9.0, 'probability': 0.5},"
-              " {'hs': 2.0, 'tp': 1e-3, 'probability': 0.5}])")
+              " {'hs': 2.0, 'tp': 1e-3, 'probability': 0.5}], record=10.0)")
     assert not out["ok"] and out["chainbeam"], out
     assert "tp" in out["msg"] and "components" in out["msg"], out
 
 
 def test_zero_probabilities_are_refused() -> None:
-    out = run("cb.fatigue(scene, scatter=[{'hs': 2.0, 'tp': 9.0, 'probability': 0.0}])")
+    out = run("cb.fatigue(scene, scatter=[{'hs': 2.0, 'tp': 9.0, 'probability': 0.0}], record=10.0)")
     assert not out["ok"] and out["key"] == "scatter" and "add up to 0" in out["msg"], out
 
 

@@ -40,12 +40,14 @@ def test_fatigue_counts_cells_times_controllers() -> None:
     s = cb.Scene.from_toml(wave_riser_toml(tail=FATIGUE))
     scatter = [{"hs": 2.0, "tp": 8.0, "probability": 0.5}, {"hs": 3.0, "tp": 9.0, "probability": 0.5}]
     log = Log()
-    cb.fatigue(s, scatter=scatter, controllers="none,constant", spin_up=1.0, progress=log)
+    cb.fatigue(s, scatter=scatter, controllers="none,constant", spin_up=1.0, record=9.0,
+               progress=log)
     log.check(4)
     # On an executor: one task per cell.
     log = Log()
     with cf.ThreadPoolExecutor(2) as ex:
-        cb.fatigue(s, scatter=scatter, controllers="none", spin_up=1.0, executor=ex, progress=log)
+        cb.fatigue(s, scatter=scatter, controllers="none", spin_up=1.0, record=9.0, executor=ex,
+                   progress=log)
     log.check(2)
 
 

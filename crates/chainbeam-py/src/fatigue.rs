@@ -10,12 +10,12 @@ use pyo3::types::{PyDict, PyList};
 
 use chainbeam::fatigue::scatter::reduced_north_atlantic;
 use chainbeam::fatigue::{
-    assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
-    ScatterCell, SeaState,
+    assess, CellDamage, FatigueError, FatigueSpec, MomentHistory, ScatterCell, SeaState,
 };
 use chainbeam::fatigue_study::{
-    run_study, spin_up_steps, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome,
-    Study, StudyError, StudyInput,
+    combine_study, run_study, run_study_cell, seeds_run, spin_up_steps, CellOutcome, CellRun,
+    ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError, StudyInput,
+    PRACTICE_RECORD_S,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
@@ -28,9 +28,35 @@ use crate::scene::Scene;
 /// A scatter cell as Python passes it: (hs, tp, probability, direction or None).
 type CellTuple = (f64, f64, f64, Option<f64>);
 
-/// One (cell, controller) run as it travels between processes: (probability, damage,
-/// duration_s, force, gains).
-type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>);
+/// One (cell, seed, controller) run as it travels between processes
+/// ([`chainbeam::fatigue_study::CellRun`]): (probability, damage, duration_s, force, gains,
+/// the hot spots' Miner sums).
+type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>, Vec<f64>);
+
+fn run_tuple(r: &CellRun) -> RunTuple {
+    let d = r.damage;
+    (
+        d.probability,
+        d.damage,
+        d.duration_s,
+        r.force,
+        r.gains,
+        r.hotspots.clone(),
+    )
+}
+
+fn cell_run(t: RunTuple) -> CellRun {
+    CellRun {
+        damage: CellDamage {
+            probability: t.0,
+            damage: t.1,
+            duration_s: t.2,
+        },
+        force: t.3,
+        gains: t.4,
+        hotspots: t.5,
+    }
+}
 
 /// The closed-loop settings as the package passes them: the command line's flags `--interval
 /// --horizon --iterations --bound --effort --plan-pendulums --plan-step --pd-training
@@ -52,6 +78,11 @@ pub struct Settings {
     pd_training: Option<f64>,
     mpc_objective: Option<String>,
     spin_up: f64,
+    /// The record counted after the spin-up in a study \[s\] (`None`: 3 hours, the command
+    /// line's `--record` default).
+    record: Option<f64>,
+    /// Seeds per cell (the command line's `--seeds`; `None`: 1).
+    seeds: Option<usize>,
 }
 
 impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
@@ -93,6 +124,8 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             pd_training: item(obj, "pd_training", NUMBER)?,
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
             spin_up,
+            record: item(obj, "record", NUMBER)?,
+            seeds: item(obj, "seeds", COUNT)?,
         })
     }
 }
@@ -130,6 +163,12 @@ struct Resolved {
     table: Option<MpcTable>,
     settings: MpcSettings,
     spin_up: f64,
+    /// The record counted after the spin-up \[s\].
+    record: f64,
+    /// Seeds per cell.
+    seeds: usize,
+    /// The seeds drawn, with more than one (`seeds_run`).
+    seeds_run: Option<Vec<u64>>,
 }
 
 impl Resolved {
@@ -188,6 +227,9 @@ impl Settings {
             table: scene.mpc,
             settings: given.resolve(scene.mpc.as_ref()),
             spin_up: self.spin_up,
+            record: self.record.unwrap_or(PRACTICE_RECORD_S),
+            seeds: self.seeds.unwrap_or(1),
+            seeds_run: seeds_run(scene, self.seeds.unwrap_or(1)),
         })
     }
 
@@ -218,6 +260,8 @@ impl Settings {
             pd_training: s.pd_training,
             spin_up: self.spin_up,
             mpc_fatigue_proxy: r.objective() == MpcPlanObjective::Power,
+            record: Some(r.record),
+            seeds: r.seeds,
             ..ControlSettings::default()
         };
         Ok((control, r))
@@ -342,18 +386,32 @@ fn cell_dict<'py>(py: Python<'py>, c: &CellOutcome) -> PyResult<Bound<'py, PyDic
     if let Some(g) = c.gains {
         d.set_item("gains", g.to_vec())?;
     }
+    if let Some(spread) = c.seed_spread() {
+        d.set_item("seed_damages", c.seed_damages.clone())?;
+        d.set_item("damage_std", spread.std)?;
+        d.set_item("damage_min", spread.min)?;
+        d.set_item("damage_max", spread.max)?;
+    }
     Ok(d)
 }
 
-fn controller_dict<'py>(py: Python<'py>, c: &ControllerOutcome) -> PyResult<Bound<'py, PyDict>> {
+/// One controller as the command line's JSON (`damage_ratio_to_none` per cell for a closed loop
+/// in a study with `none`).
+fn controller_dict<'py>(
+    py: Python<'py>,
+    study: &Study,
+    c: &ControllerOutcome,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("damage_per_year", c.damage_per_year)?;
-    d.set_item("life_years", Some(c.life_years).filter(|l| l.is_finite()))?;
-    let cells = PyList::empty(py);
-    for cell in &c.cells {
-        cells.append(cell_dict(py, cell)?)?;
+    let finite = |l: f64| Some(l).filter(|l| l.is_finite());
+    d.set_item("life_years", finite(c.life_years))?;
+    if let Some(range) = c.seed_life_range() {
+        let lives: Vec<Option<f64>> = c.seed_lives.iter().map(|&l| finite(l)).collect();
+        d.set_item("life_years_seeds", lives)?;
+        d.set_item("life_years_min", finite(range.min))?;
+        d.set_item("life_years_max", finite(range.max))?;
     }
-    d.set_item("cells", cells)?;
     if !c.hotspots.is_empty() {
         let spots = PyList::empty(py);
         for h in &c.hotspots {
@@ -369,6 +427,20 @@ fn controller_dict<'py>(py: Python<'py>, c: &ControllerOutcome) -> PyResult<Boun
             chainbeam::hotspots::critical(c.hotspots.iter().map(|h| (h.damage_per_year, h.dff)));
         d.set_item("critical", critical.map(|i| c.hotspots[i].name.clone()))?;
     }
+    let cells = PyList::empty(py);
+    for (i, cell) in c.cells.iter().enumerate() {
+        let cd = cell_dict(py, cell)?;
+        if let Some(r) = c
+            .kind
+            .is_feedback()
+            .then(|| study.damage_ratio_to_none(c.kind, i))
+            .flatten()
+        {
+            cd.set_item("damage_ratio_to_none", r)?;
+        }
+        cells.append(cd)?;
+    }
+    d.set_item("cells", cells)?;
     Ok(d)
 }
 
@@ -395,18 +467,24 @@ fn study_dict<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     if !with_controllers {
-        let c = controller_dict(py, &study.controllers[0])?;
+        let c = controller_dict(py, study, &study.controllers[0])?;
         for key in [
             "damage_per_year",
             "life_years",
+            "life_years_seeds",
+            "life_years_min",
+            "life_years_max",
             "hotspots",
             "critical",
-            "cells",
         ] {
             if let Some(v) = c.get_item(key)? {
                 d.set_item(key, v)?;
             }
         }
+        if let Some(seeds) = &r.seeds_run {
+            d.set_item("seeds", seeds.clone())?;
+        }
+        d.set_item("cells", c.get_item("cells")?)?;
         return Ok(d);
     }
     let (controllers, extension) = (PyDict::new(py), PyDict::new(py));
@@ -418,7 +496,7 @@ fn study_dict<'py>(
         ControllerKind::Mpc,
     ] {
         if let Some(c) = study.get(kind) {
-            controllers.set_item(kind.name(), controller_dict(py, c)?)?;
+            controllers.set_item(kind.name(), controller_dict(py, study, c)?)?;
             extension.set_item(kind.name(), study.life_extension(kind))?;
         }
     }
@@ -432,7 +510,12 @@ fn study_dict<'py>(
     settings.set_item("effort", s.effort)?;
     settings.set_item("spin_up", r.spin_up)?;
     settings.set_item("mpc_objective", r.objective().name())?;
+    settings.set_item("record", r.record)?;
+    settings.set_item("seeds", r.seeds)?;
     d.set_item("settings", settings)?;
+    if let Some(seeds) = &r.seeds_run {
+        d.set_item("seeds", seeds.clone())?;
+    }
     Ok(d)
 }
 
@@ -536,7 +619,7 @@ pub fn _fatigue<'py>(
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let progress = progress.as_ref().filter(|p| !p.is_none());
-    if scatter.is_none() && controllers.is_none() {
+    if scatter.is_none() && controllers.is_none() && settings.seeds.unwrap_or(1) <= 1 {
         // The controllers' settings are not used; their names are checked all the same.
         check(py, settings.resolve(&scene.inner))?;
         return plain(py, &scene.inner, settings.spin_up, progress);
@@ -569,14 +652,13 @@ pub fn _fatigue<'py>(
     study_dict(py, &study, with_controllers, &resolved)
 }
 
-/// Every controller on one scatter cell (a one-cell `run_study`): one (probability, damage,
-/// duration_s, force, gains) per controller, in the study's order. `index` is the cell's place in
-/// the diagram (for error messages).
+/// Every seed and controller on cell `index` of the diagram (`run_study_cell`): one run tuple
+/// per (seed, controller), seed-major, in the study's order.
 #[pyfunction]
 pub fn _fatigue_cell(
     py: Python<'_>,
     scene: &Scene,
-    cell: CellTuple,
+    scatter: Vec<CellTuple>,
     index: usize,
     controllers: Option<Vec<String>>,
     settings: Settings,
@@ -588,31 +670,24 @@ pub fn _fatigue_cell(
             let spec = spec(&s)?;
             let kinds = kinds(controllers.as_deref())?;
             let (control, resolved) = settings.control(&s)?;
-            let one = cells(&[cell]);
+            let cells = cells(&scatter);
             let input = StudyInput {
                 scene: &s,
                 spec: &spec,
-                cells: Some(&one),
+                cells: Some(&cells),
                 controllers: &kinds,
                 settings: &control,
             };
-            let study = with_pool(|| run_study(&input, &|| {}))
+            let runs = with_pool(|| run_study_cell(&input, index))
                 .map_err(Failure::Internal)?
                 .map_err(|e| study_error(e, index, Some(&resolved)))?;
-            Ok(study
-                .controllers
-                .iter()
-                .map(|c| {
-                    let r = &c.cells[0];
-                    (r.probability, r.damage, r.duration_s, r.force, r.gains)
-                })
-                .collect())
+            Ok(runs.iter().map(run_tuple).collect())
         })?,
     )
 }
 
-/// The cells' runs ([`_fatigue_cell`], one list per cell) combined as `run_study` combines them,
-/// as the command line's JSON.
+/// The cells' runs ([`_fatigue_cell`], one list per cell) combined as `run_study` combines them
+/// (`combine_study`: the same numbers bit for bit), as the command line's JSON.
 #[pyfunction]
 pub fn _fatigue_combine<'py>(
     py: Python<'py>,
@@ -626,56 +701,20 @@ pub fn _fatigue_combine<'py>(
     let combined = (|| -> Result<_, Failure> {
         let spec = spec(&scene.inner)?;
         let kinds = kinds(controllers.as_deref())?;
-        let (_, resolved) = settings.control(&scene.inner)?;
+        let (control, resolved) = settings.control(&scene.inner)?;
         let cells = cells(&scatter);
-        if runs.len() != cells.len() || runs.iter().any(|r| r.len() != kinds.len()) {
-            return Err(Failure::argument(
-                "runs",
-                "one run per controller for every cell is needed",
-            ));
-        }
-        let mut outcomes = Vec::with_capacity(kinds.len());
-        for (j, &kind) in kinds.iter().enumerate() {
-            let damages: Vec<CellDamage> = runs
-                .iter()
-                .map(|r| CellDamage {
-                    probability: r[j].0,
-                    damage: r[j].1,
-                    duration_s: r[j].2,
-                })
-                .collect();
-            let total = combine_scatter(&damages)
-                .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?;
-            let cells = runs
-                .iter()
-                .zip(&cells)
-                .zip(&total.cells)
-                .map(|((r, c), &per_year)| CellOutcome {
-                    sea: Some(c.sea),
-                    probability: r[j].0,
-                    damage: r[j].1,
-                    duration_s: r[j].2,
-                    damage_per_year: per_year,
-                    force: r[j].3,
-                    gains: r[j].4,
-                    seed_damages: vec![r[j].1],
-                })
-                .collect();
-            let life = life_years(total.damage_per_year, spec.dff)
-                .map_err(|e| study_error(StudyError::Fatigue(e), 0, None))?;
-            outcomes.push(ControllerOutcome {
-                kind,
-                damage_per_year: total.damage_per_year,
-                life_years: life,
-                cells,
-                seed_lives: vec![life],
-                // The executor's one-cell runs return the wellhead's numbers only.
-                hotspots: Vec::new(),
-            });
-        }
-        let study = Study {
-            controllers: outcomes,
+        let input = StudyInput {
+            scene: &scene.inner,
+            spec: &spec,
+            cells: Some(&cells),
+            controllers: &kinds,
+            settings: &control,
         };
+        let runs: Vec<CellRun> = runs.into_iter().flatten().map(cell_run).collect();
+        let study = combine_study(&input, &runs).map_err(|e| match e {
+            e @ StudyError::RunCount { .. } => Failure::argument("runs", e.to_string()),
+            e => study_error(e, 0, None),
+        })?;
         check_study(&study)?;
         Ok((study, resolved))
     })();

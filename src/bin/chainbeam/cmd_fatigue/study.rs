@@ -7,8 +7,8 @@ use serde::Serialize;
 
 use chainbeam::fatigue::{FatigueSpec, ScatterCell};
 use chainbeam::fatigue_study::{
-    run_study, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study, StudyError,
-    StudyInput, WorseThanNone, PRACTICE_RECORD_S,
+    run_study, seeds_run, CellOutcome, ControlSettings, ControllerKind, ControllerOutcome, Study,
+    StudyError, StudyInput, WorseThanNone, PRACTICE_RECORD_S,
 };
 use chainbeam::mpc::{Horizon, MpcOptions};
 use chainbeam::ocp::OcpOptions;
@@ -61,15 +61,13 @@ struct SeedLives {
 
 impl SeedLives {
     /// `None` with one seed (the JSON keeps its shape).
-    fn of(lives: &[f64]) -> Option<Self> {
-        (lives.len() > 1).then(|| {
+    fn of(c: &ControllerOutcome) -> Option<Self> {
+        c.seed_life_range().map(|range| {
             let finite = |l: f64| Some(l).filter(|l| l.is_finite());
-            let min = lives.iter().copied().fold(f64::INFINITY, f64::min);
-            let max = lives.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             SeedLives {
-                life_years_seeds: lives.iter().map(|&l| finite(l)).collect(),
-                life_years_min: finite(min),
-                life_years_max: finite(max),
+                life_years_seeds: c.seed_lives.iter().map(|&l| finite(l)).collect(),
+                life_years_min: finite(range.min),
+                life_years_max: finite(range.max),
             }
         })
     }
@@ -166,24 +164,12 @@ struct ScatterReport {
 }
 
 fn cell_json(c: &CellOutcome, ratio_to_none: Option<f64>) -> CellJson {
-    let k = c.seed_damages.len();
-    let spread = k > 1;
-    let std = {
-        let mean = c.damage;
-        let ss: f64 = c.seed_damages.iter().map(|d| (d - mean).powi(2)).sum();
-        (ss / (k.max(2) - 1) as f64).sqrt()
-    };
-    let min = c.seed_damages.iter().copied().fold(f64::INFINITY, f64::min);
-    let max = c
-        .seed_damages
-        .iter()
-        .copied()
-        .fold(f64::NEG_INFINITY, f64::max);
+    let spread = c.seed_spread();
     CellJson {
-        seed_damages: spread.then(|| c.seed_damages.clone()),
-        damage_std: spread.then_some(std),
-        damage_min: spread.then_some(min),
-        damage_max: spread.then_some(max),
+        seed_damages: spread.map(|_| c.seed_damages.clone()),
+        damage_std: spread.map(|s| s.std),
+        damage_min: spread.map(|s| s.min),
+        damage_max: spread.map(|s| s.max),
         damage_ratio_to_none: ratio_to_none,
         hs: c.sea.map(|s| s.hs),
         tp: c.sea.map(|s| s.tp),
@@ -233,7 +219,7 @@ fn controller_json(
     Ok(ControllerJson {
         damage_per_year: c.damage_per_year,
         life_years: Some(c.life_years).filter(|l| l.is_finite()),
-        seed_lives: SeedLives::of(&c.seed_lives),
+        seed_lives: SeedLives::of(c),
         hotspots,
         critical,
         cells: c
@@ -431,14 +417,7 @@ pub fn solve(
     let study = run_study(&input, &|| bar.inc(1));
     bar.finish_and_clear();
     let study = study.map_err(|e| study_error(a, scene.mpc.as_ref(), e))?;
-    let seeds = (a.seeds > 1)
-        .then(|| {
-            scene
-                .loads
-                .waves
-                .map(|w| (0..a.seeds as u64).map(|i| w.seed + i).collect())
-        })
-        .flatten();
+    let seeds = seeds_run(scene, a.seeds);
     Ok(Solved {
         study,
         settings: resolved,

@@ -26,7 +26,6 @@ import peer  # noqa: E402
 from pipe import Riser, Sea  # noqa: E402
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(HERE)))
-CHAIN_STEP = 0.0125  # s, riser_300m.toml's step at n = 80
 SAMPLE = 0.1  # s, the times both codes are compared at
 STATIC_DURATION = 200.0  # s: the drag in the current settles the riser in ≈ 100 s
 
@@ -73,10 +72,10 @@ def settling(t: np.ndarray, m: np.ndarray) -> float:
 def static_case(
     name: str, current: chain.Current, riser: Riser, settings: peer.PeerSettings, args
 ) -> StaticRow:
-    steps = int(round(STATIC_DURATION / CHAIN_STEP))
-    every = int(round(SAMPLE / CHAIN_STEP))
+    steps = int(round(STATIC_DURATION / args.chain_step))
+    every = int(round(SAMPLE / args.chain_step))
     scene = chain.scene_toml(
-        riser, current, None, CHAIN_STEP, steps,
+        riser, current, None, args.chain_step, steps,
         f"Peer comparison, static: the riser in a {current.profile} current",
     )
     c = chain.run(args.chainbeam, riser, scene, os.path.join(args.out, f"{name}.toml"), False, every)
@@ -113,18 +112,14 @@ def wave_case(
     settings: peer.PeerSettings, args,
 ) -> WaveRow:
     duration = waves.period
-    steps = int(round(duration / CHAIN_STEP))
+    steps = int(round(duration / args.chain_step))
     scene = chain.scene_toml(
-        riser, current, waves, CHAIN_STEP, steps,
+        riser, current, waves, args.chain_step, steps,
         f"Peer comparison, irregular sea: H_s = {waves.hs} m, T_p = {waves.tp} s, and a current",
     )
     c = chain.run(args.chainbeam, riser, scene, os.path.join(args.out, f"{name}.toml"), True, 1)
     # The sea both codes see: the chain's η(t) over one repeat period, taken apart by a DFT.
-    sea = Sea.from_elevation(c.eta[:steps], CHAIN_STEP)
-    if len(sea.omega) != waves.components:
-        raise RuntimeError(
-            f"the chain's η has {len(sea.omega)} components, the scene {waves.components}"
-        )
+    sea = Sea.from_elevation(c.eta[:steps], args.chain_step, waves.components)
     rebuilt = sea.elevation(c.t[: steps + 1])
     eta_err = float(np.max(np.abs(rebuilt - c.eta)) / np.max(np.abs(c.eta)))
     heights = riser.node_heights()
@@ -136,7 +131,12 @@ def wave_case(
         lambda k, t: (water + u[k % len(u)], a[k % len(a)]),
         int(round(SAMPLE / dt)), os.path.join(args.out, name),
     )
-    every = int(round(SAMPLE / CHAIN_STEP))
+    np.savez(
+        os.path.join(args.out, f"{name}-samples.npz"),
+        t=p.t, chain_moment=c.moment[:: int(round(SAMPLE / args.chain_step))],
+        peer_moment=p.moment, peer_tension=p.top_tension, peer_top_z=p.top_z,
+    )
+    every = int(round(SAMPLE / args.chain_step))
     tc, mc, zc = c.t[::every], c.moment[::every], c.offsets[::every]
     if len(tc) != len(p.t) or np.max(np.abs(tc - p.t)) > 1e-9:
         raise RuntimeError("the two codes' sample times differ")
@@ -172,13 +172,21 @@ def main() -> None:
     parser.add_argument("--hs", type=float, default=4.9)
     parser.add_argument("--tp", type=float, default=9.9)
     parser.add_argument("--components", type=int, default=425)
+    parser.add_argument(
+        "--chain-step", type=float, default=0.0125,
+        help="s, the chain's h (riser_300m.toml's at n = 80); must divide T_p/6 and 0.1 s",
+    )
+    parser.add_argument(
+        "--tensioner-gain", type=float, default=peer.PeerSettings.tensioner_gain,
+        help="the fraction of MoorDyn's top-tension error corrected per 0.01 s step",
+    )
     args = parser.parse_args()
     os.makedirs(args.out, exist_ok=True)
 
     import moordyn  # noqa: F401  (fail early, before the chain's runs)
 
     riser = Riser(segments=args.segments)
-    settings = peer.PeerSettings()
+    settings = peer.PeerSettings(tensioner_gain=args.tensioner_gain)
     results: dict[str, object] = {
         "riser": {
             "segments": riser.segments,
@@ -187,6 +195,7 @@ def main() -> None:
             "bending_stiffness": riser.bending_stiffness,
         },
         "peer_settings": asdict(settings),
+        "chain_step": args.chain_step,
     }
     if args.case in ("static", "all"):
         rows = [
@@ -219,9 +228,10 @@ def main() -> None:
               f"{row.peer_std_top_half:.6e}  {100 * row.offset_std_diff:+.2f} %")
         print(f"  MoorDyn's top tension: σ(T/T₀ − 1) = {row.peer_tension_dev:.2e}; "
               f"η from the components: {row.eta_reconstruction:.1e} of max |η|")
-    with open(os.path.join(args.out, "results.json"), "w", encoding="utf-8") as f:
+    path = os.path.join(args.out, f"results-{args.case}.json")
+    with open(path, "w", encoding="utf-8") as f:
         json.dump(results, f, indent=2)
-    print(f"\nresults: {os.path.join(args.out, 'results.json')}")
+    print(f"\nresults: {path}")
 
 
 if __name__ == "__main__":

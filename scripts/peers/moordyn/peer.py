@@ -133,6 +133,7 @@ def run(
 
     n = riser.segments
     tmp = workdir or tempfile.mkdtemp(prefix="chainbeam-moordyn-")
+    os.makedirs(tmp, exist_ok=True)
     path = os.path.join(tmp, "riser.txt")
     with open(path, "w", encoding="utf-8") as f:
         f.write(input_file(riser, settings))

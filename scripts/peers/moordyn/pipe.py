@@ -111,14 +111,22 @@ class Sea:
     period: float  # s
 
     @staticmethod
-    def from_elevation(eta: np.ndarray, step: float) -> "Sea":
-        """The components of a periodic record η(kh), k = 0..M−1, M h one period (exact DFT)."""
+    def from_elevation(eta: np.ndarray, step: float, components: int) -> "Sea":
+        """The components j = 1..N of a periodic record η(kh), k = 0..M−1, M h one period
+        (an exact DFT: cⱼ = (2/M) Σₖ η(kh) e^{−2πi jk/M}). Every bin above N must be round-off
+        (below 1e-12 of the largest), else the record is not the sea it is said to be."""
         m = len(eta)
         spectrum = np.fft.rfft(eta) * (2.0 / m)
-        j = np.arange(len(spectrum))
-        keep = (j > 0) & (np.abs(spectrum) > 0.0)
+        above = np.abs(spectrum[components + 1 :])
+        largest = np.max(np.abs(spectrum))
+        if len(above) and np.max(above) > 1e-12 * largest:
+            raise ValueError(
+                f"the record has a component above bin {components}: "
+                f"{np.max(above) / largest:.1e} of the largest"
+            )
         period = m * step
-        return Sea(omega=2.0 * math.pi * j[keep] / period, amplitude=spectrum[keep], period=period)
+        j = np.arange(1, components + 1)
+        return Sea(omega=2.0 * math.pi * j / period, amplitude=spectrum[j], period=period)
 
     def elevation(self, t: np.ndarray) -> np.ndarray:
         return np.real(np.exp(1j * np.outer(t, self.omega)) @ self.amplitude)

@@ -47,7 +47,7 @@ class PeerSettings:
     coupling_step: float = 0.01  # s, one moordyn.Step (and one kinematics update)
     internal_step: float = 2.5e-4  # s, MoorDyn's dtM (RK2; the axial waves need ≲ 1e-3 s)
     axial_damping_ratio: float = 0.8  # MoorDyn's BA as −ζ: damps the line's axial modes only
-    tensioner_gain: float = 0.02  # fraction of the tension error corrected per coupling step
+    tensioner_gain: float = 0.1  # fraction of the tension error corrected per coupling step
 
 
 def unstretched_length(riser: Riser) -> float:

@@ -293,7 +293,10 @@ pub mod stage;
 
 pub use crate::error::{HorizonShape, OcpError};
 pub use condensed::Condensed;
-pub use options::{Curvature, IterationRecord, OcpOptions, OcpResult, Termination};
+pub use options::{
+    Curvature, IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult,
+    Termination,
+};
 pub use solver::Solver;
 
 use crate::adjoint::{ControlMap, ControlProblem, Objective};

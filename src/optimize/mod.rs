@@ -230,12 +230,10 @@ pub enum Method {
     /// [`Method::Riccati`]: the sensitivities of the bending moments to θ by forward dual
     /// numbers and a dense box QP, with NL2SOL's structured secant term for the residual
     /// curvature. Its cost per iteration grows with N times the number of parameters, so it is
-    /// the faster choice for few parameters, not for long per-step horizons. Table 3.4
-    /// (`cargo bench --bench ocp -- ocp_table_3_4`): all ten rows converge in 14–18 ms in total
-    /// (`riccati` 29–31 ms, trust region 101 ms, L-BFGS 126 ms), at the trust region's
-    /// objective on five rows, lower on rows 1 (22.93 against 27.25) and 10, higher on row 3
-    /// (another local minimum, +0.16 %) and by 1.5–2.4·10⁻⁶ on rows 6 and 8 (other local
-    /// minima, which `riccati` avoids on these rows). A stalled run is finished by the trust
+    /// the faster choice for few parameters (thesis Table 3.4's eleven per-step forces: about
+    /// half the Riccati solver's time, `docs/benchmarks.md`), not for long per-step horizons.
+    /// The two may end in different local minima of a nonconvex problem, which is why
+    /// [`Method::Auto`] runs both when it picks this one. A stalled run is finished by the trust
     /// region as for `riccati`.
     Condensed,
 }

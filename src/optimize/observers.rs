@@ -9,7 +9,7 @@
 //! [`Executor::add_observer`](argmin::core::Executor::add_observer) receives one bridge, which
 //! turns every argmin iteration into an [`ObservedState`] holding θ, J(θ) and ∇_θJ(θ), numbered
 //! over the whole run, and hands it, with argmin's key-value log of that iteration (plus
-//! `grad_norm` = ‖∇_θJ‖), to the user's observers under their [`ObserverMode`]s (argmin's own
+//! `grad_norm` = ‖∇_θJ‖), to the user's observers under their [`ObserverMode`](super::ObserverMode)s (argmin's own
 //! [`Observers`] container does the filtering, so `NewBest` and `Every(k)` mean what they mean
 //! in argmin). Then:
 //! - `observe_init` once, at the start θ₀ (iteration 0), with the solver's name;

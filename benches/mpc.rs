@@ -1,4 +1,4 @@
-//! Receding-horizon control (issue 14) on `catalogue::mpc_riser` (n = 10, D = 10 kg/m, an
+//! Receding-horizon control on `catalogue::mpc_riser` (n = 10, D = 10 kg/m, an
 //! irregular sea at node 5 in a sheared current, h = 0.01 s), a decision every 0.1 s,
 //! |u| ≤ 5 N, ρ = 0.01.
 //!

@@ -1,4 +1,4 @@
-//! A 3-hour sea state on the real-scale riser (issue 30, item 5): `chainbeam::simulate` of
+//! A 3-hour sea state on the real-scale riser: `chainbeam::simulate` of
 //! `examples/scenes/riser_300m.toml`'s riser and sea for 3 hours (the model's wave record by
 //! inverse FFT, then the RATTLE run with the wellhead moment history), the streamed
 //! `moment_history` of the same run (no stored trajectory), and the wave record alone
@@ -13,7 +13,7 @@
 //! 10 × (0.3 + 0.6 + 6) s plus one warm-up run each on an idle core): its wave record alone
 //! (`wave_record`: the whole 3-hour repeat period, as for any run), `moment_history` of the
 //! file's 600 s (`moment_history_600s`, 48 000 steps) and `moment_history` of 3 hours
-//! (`moment_history_3h`, 864 000 steps: THE figure of issue 30 item 5, the run that
+//! (`moment_history_3h`, 864 000 steps: the figure that matters for fatigue, the run that
 //! `chainbeam simulate examples/scenes/riser_300m.toml --columns t,moment --every 16` makes with
 //! `time.steps = 864000`). The 3-hour time is also wave record + 18 × (600 s run − wave
 //! record) to the sampling noise, a check on the split (docs/scene-format.md "Real-scale

@@ -57,7 +57,7 @@
 //! ```
 
 use chainbeam::ocp::{self, Curvature, OcpOptions};
-use chainbeam::optimize::{minimize, Method, OptimOptions};
+use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 use chainbeam::{
     catalogue, simulate_with_controls, BendingObjective, ControlProblem, Parametrisation,
     PerStepControl, PiecewiseControl, Result, Scene,
@@ -210,10 +210,24 @@ fn solve_with(
         method: m,
         bound: Some(set.umax),
         max_iters: set.max_iters.unwrap_or(5000),
-        progress: set.history,
         ..OptimOptions::default()
     };
-    let r = minimize(problem, theta0, &opts)?;
+    // --history: the iterations, recorded by an observer and printed after the run.
+    let history = History::default();
+    let mut minimizer = Minimizer::new(problem, opts);
+    if set.history {
+        minimizer = minimizer.add_observer(history.clone(), ObserverMode::Always);
+    }
+    let r = minimizer.run(theta0)?;
+    for h in history.records() {
+        eprintln!(
+            "iter {:>5}  cost {:.12e}  |g| {:.3e}{}",
+            h.iteration,
+            h.objective,
+            h.gradient_norm,
+            if h.polish { "  (polish)" } else { "" }
+        );
+    }
     Ok(Outcome {
         controls: r.controls.clone(),
         objective: r.objective,

@@ -1,4 +1,4 @@
-//! Receding-horizon control of the riser against waves (issue 14): the closed loop of
+//! Receding-horizon control of the riser against waves: the closed loop of
 //! `catalogue::mpc_riser` (n = 10, an irregular sea at node 5, 60 s, a decision every 0.1 s)
 //! under no control, the best constant force, a tuned PD law on the base moment, MPC with a
 //! perfect model and MPC with a wrong model, printed as a table. The MPC rows re-plan with the

@@ -1,4 +1,4 @@
-//! The convergence study of the real-scale risers (issue 30; docs/scene-format.md "Real-scale
+//! The convergence study of the real-scale risers (docs/scene-format.md "Real-scale
 //! risers"): the wellhead moment M₀(t) of a pipe scene (`examples/scenes/riser_300m.toml`,
 //! `riser_1000m.toml`) simulated with other numbers of pendulums n and steps h, over the same sea
 //! (the realisation does not depend on h: its repeat period is 3 h, a whole number of steps).

@@ -1,4 +1,4 @@
-//! The headline of issue 31: the fatigue life of a wellhead in a North Atlantic wave climate
+//! The README's headline: the fatigue life of a wellhead in a North Atlantic wave climate
 //! without control, with the best constant force, a tuned PD law and MPC at the platform, and
 //! the CPU time each took (`chainbeam::fatigue_study::run_study`, the library behind
 //! `chainbeam fatigue --scatter FILE --controller none,constant,pd,mpc`).
@@ -29,8 +29,8 @@
 //!   current's offset and the sea's first periods) are not counted (docs/cli.md, "The start of
 //!   a record").
 //! - The wellhead: the pipe's section, DNV-RP-C203 curve F1 in seawater with cathodic
-//!   protection, SCF 1.2, DFF 10 (our choices for a girth weld at a subsea wellhead; OCEAN.md §4
-//!   gives 3–10 for the DFF).
+//!   protection, SCF 1.2, DFF 10 (our choices for a girth weld at a subsea wellhead;
+//!   DNV-RP-C203 practice is 3–10 for the DFF, docs/fatigue.md).
 //! - The wave climate: the North Atlantic scatter diagram of IACS Rec. No. 34 (as printed in
 //!   KR Guidance RA-03-E (2025), Pt 3 Annex 3-2, Table 3; `chainbeam::fatigue::scatter`
 //!   cites it) reduced to 20 cells: 2 m × 2 s groups of its classes, T_z → T_p by its

@@ -274,7 +274,7 @@ pub fn long_horizon() -> Scene {
     )
 }
 
-/// A load out of the yz-plane (docs/scene-format.md, issue 13): the thesis riser (k₁ = k₁₁ = 2000, no drag)
+/// A load out of the yz-plane (docs/scene-format.md): the thesis riser (k₁ = k₁₁ = 2000, no drag)
 /// with F = 2 N at node 5 at 45° between x and z, `force = [√2, √2]`, h = 0.01 s, N = 1000
 /// (t ∈ [0, 10] s). Spatial: [`crate::simulate()`] runs the spatial model, and by the model's
 /// rotational symmetry about y the deflection is the in-plane one of [`riser`]`(5)`'s load turned
@@ -289,7 +289,7 @@ pub fn oblique_riser() -> Scene {
     )
 }
 
-/// The 2-axis control scene of issue 13: [`oblique_riser`] (F = 2 N at node 5 at 45° between x
+/// A 2-axis control on an oblique load: [`oblique_riser`] (F = 2 N at node 5 at 45° between x
 /// and z, no drag, h = 0.01 s, N = 1000) with a 2-axis piecewise control [u_x, u_z] at node 10 of
 /// 10 pieces of 1 s (initial guess 0) and the objective c_sum = Σ |M₀(t_k)|². Spatial; by the
 /// rotational symmetry about y its optimal control points along the load.
@@ -308,7 +308,7 @@ pub fn oblique_control() -> Scene {
 /// Period of the waves of [`wave_riser`] and [`wave_series`] \[s\].
 pub const WAVE_PERIOD: f64 = 8.0;
 
-/// A regular wave's force on the riser (issue 13): the thesis riser (k₁ = k₁₁ = 2000) with drag
+/// A regular wave's force on the riser: the thesis riser (k₁ = k₁₁ = 2000) with drag
 /// D = 10 kg/m and a harmonic load F_z(t) = 2 N · sin(2π t/8 s) at node 5, ramped in over the
 /// first period (8 s), h = 0.01 s, N = 3200 (t ∈ [0, 32] s, four periods). Piecewise control at
 /// node 10 with 32 pieces of 1 s (initial guess 0), objective c_sum = Σ M₀(t_k)²: planar, so
@@ -347,8 +347,8 @@ fn mpc_sea() -> Vec<Harmonic> {
     ]
 }
 
-/// The closed-loop scene of issue 14 ([`crate::mpc`]): [`wave_riser`]'s riser and drag
-/// (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
+/// The closed-loop scene of receding-horizon control ([`crate::mpc`]): [`wave_riser`]'s riser
+/// and drag (D = 10 kg/m) under an irregular sea at node 5, F_z(t) = 2 N · sin(2π t/8 s) +
 /// 0.5 N · sin(2π t/5.3 s + 1), ramped in over the first 8 s, h = 0.01 s, N = 6000
 /// (t ∈ [0, 60] s), in a sheared current along +z, 0.1 m/s at the surface falling linearly to
 /// 0.02 m/s at the seabed (its steady drag bends the riser one way, a mean base moment of about
@@ -370,8 +370,8 @@ pub fn mpc_riser() -> Scene {
     )
 }
 
-/// The spatial closed-loop scene of issue 28 (item 4): [`mpc_riser`]'s riser, drag and current
-/// (along +z, 0.1 m/s at the surface falling linearly to 0.02 m/s at the seabed) with its sea
+/// The spatial closed-loop scene (MPC with a 2-axis control): [`mpc_riser`]'s riser, drag and
+/// current (along +z, 0.1 m/s at the surface falling linearly to 0.02 m/s at the seabed) with its sea
 /// at node 5 coming from another direction, 60° from +z toward +x (F(t) = (2 N sin(2π t/8 s) +
 /// 0.5 N sin(2π t/5.3 s + 1)) (sin 60°, cos 60°), ramped in over 8 s), h = 0.01 s, N = 3000
 /// (t ∈ [0, 30] s); a 2-axis control at node 10 (the platform; a spatial closed loop,
@@ -429,7 +429,7 @@ pub fn wave_series_rows() -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// A measured-style load history (issue 13): [`wave_riser`]'s riser and drag with the load at
+/// A measured-style load history: [`wave_riser`]'s riser and drag with the load at
 /// node 5 read from the time series `wave_series.csv` ([`wave_series_rows`]: an oblique sea of two
 /// wave components, so the scene is spatial), ramped in over 8 s, N = 3200 (t ∈ [0, 32] s). No
 /// control (2-axis controls: [`oblique_control`]).
@@ -449,7 +449,7 @@ pub fn wave_series() -> Scene {
     )
 }
 
-/// A sheared current on the riser (issue 13): [`wave_riser`]'s riser with drag D = 10 kg/m in a
+/// A sheared current on the riser: [`wave_riser`]'s riser with drag D = 10 kg/m in a
 /// current along +z that falls linearly from 0.3 m/s at the surface (the top node) to
 /// 0.05 m/s at the seabed (the base), h = 0.01 s, N = 1000 (t ∈ [0, 10] s). The drag acts on
 /// the motion relative to the water (docs/conventions.md), so the riser drifts downstream toward
@@ -468,7 +468,7 @@ pub fn sheared_current() -> Scene {
     )
 }
 
-/// A current that turns with depth (issue 13): [`sheared_current`]'s riser and drag in a
+/// A current that turns with depth: [`sheared_current`]'s riser and drag in a
 /// tabulated current (depth below the surface, speed, direction from +z toward +x):
 /// 0.3 m/s along +z at the surface, 0.2 m/s at 45° at 5 m depth, 0.1 m/s along +x at the seabed
 /// (10 m), interpolated linearly in depth. Spatial (the current has x components); no control.

@@ -1,4 +1,4 @@
-//! The wellhead's fatigue life under control, over a scatter diagram (issue 31, OCEAN.md §4):
+//! The wellhead's fatigue life under control, over a scatter diagram (docs/fatigue.md):
 //! every controller run on every sea state, each run's moment history counted by rainflow and
 //! Miner's rule, the cells combined into damage per year, life and life extension.
 //!
@@ -30,8 +30,9 @@
 //!   (destabilising) or unbounded gains; it minimises the closed loop's Σ M₀² + ρ h Σ u².
 //! - MPC plans on the fatigue proxy Σ|M₀(t_k)|^m (+ ρ h Σ u²), m the S-N curve's first slope
 //!   ([`fatigue_proxy`]; [`ControlSettings::mpc_fatigue_proxy`], else
-//!   [`MpcOptions::objective`]): "MPC plans on the proxy, reports the real damage" (issue 31
-//!   item 5; the rainflow damage itself has no Gauss-Newton form).
+//!   [`MpcOptions::objective`]): MPC plans on the proxy and the study reports the real damage
+//!   (the rainflow damage itself has no Gauss-Newton form; docs/fatigue.md, "Fatigue as an
+//!   objective").
 //!
 //! Every damage reported is the rainflow damage of the moment the controller leaves.
 //!

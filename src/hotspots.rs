@@ -32,8 +32,8 @@
 //! implies.
 //!
 //! # The assessment
-//! Each hot spot's moment history (N·m, [`fatigue::MomentMeasure::Wellhead`]) goes through
-//! [`fatigue::assess`] with the hot spot's own section, SCF, S-N curve and DFF; the critical hot
+//! Each hot spot's moment history (N·m, [`crate::fatigue::MomentMeasure::Wellhead`]) goes through
+//! [`crate::fatigue::assess`] with the hot spot's own section, SCF, S-N curve and DFF; the critical hot
 //! spot is the shortest-lived ([`critical`]).
 
 use crate::error::{Error, Result};

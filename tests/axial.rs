@@ -1,4 +1,4 @@
-//! Axial loads (`[loads] tension`, `axial_weight`; OCEAN.md §1): the lateral stiffening of a
+//! Axial loads (`[loads] tension`, `axial_weight`; docs/ocean.md "From a pipe to a chain"): the lateral stiffening of a
 //! tensioned beam comes from the chain's length constraints alone. Checked against closed forms:
 //! the natural frequencies of a tensioned pinned-pinned beam-column, the static deflection of a
 //! tensioned pinned beam under a uniform lateral load, the deflection of a string whose tension
@@ -88,7 +88,7 @@ fn pinned_frequencies(scene: &Scene) -> Vec<f64> {
 
 /// Reference: a pinned-pinned Euler-Bernoulli beam-column under axial tension T has
 /// ω_j = (jπ/L)² √(EI/μ) √(1 + T L²/(j²π² EI)) (e.g. Blevins, *Formulas for Natural Frequency
-/// and Mode Shape*, Table 8-16; OCEAN.md §1). At n = 40, modes 1–3, within 1 %, for T from 0 to
+/// and Mode Shape*, Table 8-16). At n = 40, modes 1–3, within 1 %, for T from 0 to
 /// a tension-dominated T L²/(π² EI) ≈ 41; and a compression below the Euler load π²EI/L² ≈ 9.87 N (T = −5 N) lowers it as the
 /// same formula says.
 #[test]

@@ -763,25 +763,25 @@ fn describe(name: &str) -> String {
              EI = 1000 Nm^2, mass 10 kg, discretised by n = 20 pendulums, base spring 2k, F = 2 N at \
              the tip."
             .into(),
-        "oblique_riser" => "Issue 13 (out-of-plane loads): the thesis riser with F = 2 N at node 5 at \
+        "oblique_riser" => "Out-of-plane loads: the thesis riser with F = 2 N at node 5 at \
              45 degrees between x and z (force = [fx, fz] = [sqrt 2, sqrt 2]), no drag, t in [0, 10] s. \
              Spatial: simulate runs the spatial model and fills in the x columns."
             .into(),
-        "oblique_control" => "Issue 13 (2-axis control): the oblique riser (F = 2 N at node 5 at 45 \
+        "oblique_control" => "A 2-axis control: the oblique riser (F = 2 N at node 5 at 45 \
              degrees, force = [sqrt 2, sqrt 2]) with a 2-axis piecewise control [u_x, u_z] at node 10, \
              10 pieces of 1 s (initial guess 0), objective c_sum = sum of |M0(t_k)|^2, t in [0, 10] s. \
              Spatial; the optimal control points along the load (rotational symmetry)."
             .into(),
-        "wave_riser" => "Issue 13 (waves): the riser with drag D = 10 kg/m and a harmonic load \
+        "wave_riser" => "A regular wave: the riser with drag D = 10 kg/m and a harmonic load \
              2 N sin(2 pi t / 8 s) at node 5, ramped in over 8 s, t in [0, 32] s; piecewise control at \
              node 10 (32 pieces of 1 s), objective c_sum = sum of M0(t_k)^2 (chainbeam optimize \
              counters the wave)."
             .into(),
-        "wave_series" => "Issue 13 (load histories): the riser with drag D = 10 kg/m and the load at \
+        "wave_series" => "A load history: the riser with drag D = 10 kg/m and the load at \
              node 5 read from the time series wave_series.csv (t, fx, fz; an oblique sea of two wave \
              components, linearly interpolated), ramped in over 8 s, t in [0, 32] s. Spatial."
             .into(),
-        "spatial_mpc_riser" => "Issue 28 item 4 (MPC in the spatial model): the riser of mpc_riser \
+        "spatial_mpc_riser" => "MPC in the spatial model: the riser of mpc_riser \
              (drag D = 10 kg/m, control at node 10) in a sheared current along +z (0.1 m/s at the \
              surface falling linearly to 0.02 m/s at the seabed) while the sea comes from 60 degrees \
              (from +z toward +x): 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1) at node 5, \
@@ -789,13 +789,13 @@ fn describe(name: &str) -> String {
              (u_x, u_z) every interval on the vector moment, objective c_sum = sum of |M0(t_k)|^2 \
              (docs/cli.md)."
             .into(),
-        "mpc_riser" => "Issue 14 (closed loop): the riser with drag D = 10 kg/m under an irregular \
+        "mpc_riser" => "Closed-loop control: the riser with drag D = 10 kg/m under an irregular \
              sea at node 5, 2 N sin(2 pi t / 8 s) + 0.5 N sin(2 pi t / 5.3 s + 1), ramped in over \
              8 s, in a sheared current (along +z, 0.1 m/s at the surface falling linearly to \
              0.02 m/s at the seabed), t in [0, 60] s; control at node 10 (the platform), objective c_sum = sum of \
              M0(t_k)^2. chainbeam mpc decides the control every interval (docs/cli.md)."
             .into(),
-        "mpc_riser_wrong_model" => "Issue 14 (closed loop, model mismatch): a wrong model of \
+        "mpc_riser_wrong_model" => "Closed-loop control with a model mismatch: a wrong model of \
              mpc_riser for chainbeam mpc --model: drag 7 instead of 10 kg/m, the current 20 % too \
              strong, and a forecast of the sea without its 5.3 s component and with the 8 s wave \
              20 % too weak (1.6 N). The plant is mpc_riser.toml."
@@ -804,12 +804,12 @@ fn describe(name: &str) -> String {
              at node 5, per-step control at node 10 (1001 zeros as initial guess), objective \
              c_sum = sum of M0(t_k)^2, t in [0, 10] s."
             .into(),
-        "sheared_current" => "Issue 13 (current): the riser with drag D = 10 kg/m in a current along +z \
+        "sheared_current" => "A sheared current: the riser with drag D = 10 kg/m in a current along +z \
              falling linearly from 0.3 m/s at the surface (top node) to 0.05 m/s at the seabed; the \
              drag acts on the motion relative to the water. Piecewise control at node 10 (10 pieces \
              of 1 s), objective c_sum = sum of M0(t_k)^2, t in [0, 10] s."
             .into(),
-        "turning_current" => "Issue 13 (current): the riser with drag D = 10 kg/m in a tabulated current \
+        "turning_current" => "A current turning with depth: the riser with drag D = 10 kg/m in a tabulated current \
              turning with depth: rows (depth m, speed m/s, direction deg from +z toward +x), along +z \
              at the surface, 45 deg at 5 m, along +x at the seabed (10 m). Spatial; t in [0, 10] s."
             .into(),

@@ -80,7 +80,7 @@ fn every_hostile_case_gives_its_message() {
     }
 }
 
-/// Issue 27, item 1: no subcommand writes onto any of its inputs — the scene, its load series,
+/// No subcommand writes onto any of its inputs — the scene, its load series,
 /// the `--controls` file, the `--model` scene and its series — through any name (a symbolic
 /// link, a `./` path, a hard link), with `--output` nor with `mpc --summary`. Each refusal is one
 /// line naming the output, the flag and the input, and leaves every file as it was (before the
@@ -270,7 +270,7 @@ fn run_measured(args: &[&str]) -> Usage {
     }
 }
 
-/// Issue 27, item 2: `/dev/zero` and `/dev/urandom` as the scene (every subcommand), the
+/// `/dev/zero` and `/dev/urandom` as the scene (every subcommand), the
 /// `--controls` file, the `--model` scene and a load's series file fail with one line naming the
 /// device, within a second of CPU time and with a peak resident memory far below the documented
 /// input limit of 1 GiB (`chainbeam::scene::MAX_INPUT_BYTES`, docs/scene-format.md "Size
@@ -320,7 +320,7 @@ fn devices_as_inputs_fail_at_once_in_bounded_memory() {
     }
 }
 
-/// Issue 27, item 2: a regular file over the input limit is refused by its size, before a byte
+/// A regular file over the input limit is refused by its size, before a byte
 /// is read, as a scene, a `--controls` file and a series file (sparse files, so the test writes
 /// nothing); the message names the file and the limit.
 #[cfg(unix)]
@@ -356,7 +356,7 @@ fn inputs_over_the_limit_are_refused_by_their_size() {
     }
 }
 
-/// Issue 27, item 5: an output name of 250 and of 255 bytes (the longest a file name may be) is
+/// An output name of 250 and of 255 bytes (the longest a file name may be) is
 /// written; before, the temporary name `.NAME.PID.I.tmp` passed the 255-byte limit and the run
 /// failed with "File name too long".
 #[test]
@@ -380,7 +380,7 @@ fn the_longest_output_names_are_written() {
     }
 }
 
-/// Issue 27, item 7: `optimize`'s default is `--method auto`, a documented choice reported in
+/// `optimize`'s default is `--method auto`, a documented choice reported in
 /// the JSON (`method`, `method_choice`) and by `--progress`, and never worse than L-BFGS, the
 /// former default (the reference: the same scene with `--method lbfgs`):
 /// - the riser's per-step c_sum with effort (Table 3.4's control, n = 10, 11 parameters ≤
@@ -457,7 +457,7 @@ fn the_default_method_is_chosen_and_reported() {
         auto["method"]
     );
     assert!(ja <= jl, "auto {ja} > lbfgs {jl}");
-    // Spatial (issue 28 item 4): the condensed solver, which runs the spatial model, and the
+    // Spatial: the condensed solver, which runs the spatial model, and the
     // reason says why (a spatial problem of 1 parameter, at most 4(2n + 1)).
     let o = run(&["optimize".as_ref(), scene("oblique_riser.toml").as_os_str()]);
     assert_success(&o);
@@ -472,7 +472,7 @@ fn the_default_method_is_chosen_and_reported() {
     );
 }
 
-/// Issue 27, item 7: `control.values` as one number stands for every value equal (N + 1 for a
+/// `control.values` as one number stands for every value equal (N + 1 for a
 /// per-step control) and left out for zeros: `gradient` reports the controls it evaluated at,
 /// which must be the N + 1 = 11 values written out (the reference: the same scene with the array
 /// typed in full gives the same JSON). Before, both scenes were refused.

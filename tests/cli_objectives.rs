@@ -1,5 +1,5 @@
 //! The command line takes the power objective Σ_k |M₀(t_k)|^p (`[objective] kind = "power",
-//! exponent = p`, issue 28 item 3): `gradient` and `optimize` with the structured solvers.
+//! exponent = p`): `gradient` and `optimize` with the structured solvers.
 
 #[allow(dead_code)]
 #[path = "../examples/tables/thesis.rs"]

@@ -271,7 +271,7 @@ fn optimize_converges_and_two_axis_controls_round_trip() {
     assert_eq!(g["controls"], opt["controls"]);
     assert!(rel(g["objective"].as_f64().unwrap(), c) <= 1e-12);
     let gn = g["gradient_norm"].as_f64().unwrap();
-    // `auto` takes the condensed solver (spatial since issue 28 item 4), whose reported gradient
+    // `auto` takes the condensed solver (which runs the spatial model), whose reported gradient
     // is its own, exact: equal to the adjoint's to round-off relative to the start's gradient.
     let o = run(&["gradient", s(&path)]);
     assert_success(&o);
@@ -319,8 +319,7 @@ fn a_pairs_file_on_a_planar_scene_runs_the_spatial_model() {
     assert!(rows.iter().map(|r| r[x10]).fold(0.0f64, f64::min) < -1e-3);
 }
 
-/// `--method riccati` on spatial scenes (issue 28 item 4: the Riccati solver with two controls
-/// per stage): it runs in the spatial model, converges, and reaches the objective of
+/// `--method riccati` on spatial scenes (the Riccati solver with two controls per stage): it runs in the spatial model, converges, and reaches the objective of
 /// `--method condensed` (an independent method on the same problem) to 1e-9 relative. The
 /// planar riser still runs it (tests/cli_riccati.rs checks its numbers).
 #[test]
@@ -515,7 +514,7 @@ fn json_keys_of_spatial_runs_are_documented() {
     }
 }
 
-/// `chainbeam mpc` on a spatial scene (issue 28 item 4): a small riser (n = 4, D = 10 kg/m) in a
+/// `chainbeam mpc` on a spatial scene (a spatial closed loop): a small riser (n = 4, D = 10 kg/m) in a
 /// current along +z with a wave from 60° (an x component), 1 s of closed loop with a 0.5 s
 /// horizon: the run succeeds with either solver, writes the spatial columns (moment_x,
 /// control_x, and the baselines' x columns), keeps each force component in the box, reports

@@ -1,4 +1,4 @@
-//! `chainbeam simulate` with waves (issue 30): the `eta` column, `--columns` and `--every`.
+//! `chainbeam simulate` with waves (`[loads.waves]`): the `eta` column, `--columns` and `--every`.
 //!
 //! References: η(t_k) against the direct sum Σⱼ aⱼ cos(ωⱼ t_k + φⱼ) of the scene's sea
 //! (`Sea::elevation`, component by component, independent of the FFT); `--columns` and

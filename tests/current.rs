@@ -1,4 +1,4 @@
-//! Drag relative to a current along the depth (issue 13): F = F_D(p − P) (Morison's drag,
+//! Drag relative to a current along the depth: F = F_D(p − P) (Morison's drag,
 //! transversally −D |r_⊥| r_⊥ with the Euclidean norm, axially −D r_y|r_y|) with
 //! Pᵢ = lᵢ Σ_{k≥i} m_k U(y_k) (docs/conventions.md, "Drag in a current").
 //!

@@ -1,4 +1,4 @@
-//! Morison's drag is the same in every transverse direction (issue 28, item 2;
+//! Morison's drag is the same in every transverse direction (
 //! docs/conventions.md "Drag"): it acts on the transverse relative momentum with its Euclidean
 //! norm, so turning every load, the current and the control about the beam's axis y by ψ turns
 //! the whole motion by ψ.
@@ -7,7 +7,7 @@
 //! elementwise drag bit for bit, tests/core.rs, tests/current.rs), rotated by ψ in the (x, z)
 //! plane; the spatial run must equal it to 1e-9 m at every node and step (the model is exactly
 //! rotation-invariant, so the difference is round-off over deflections of 0.05 m and more). The
-//! thesis's per-component drag missed this by 5e-3 m at 45° (issue 28).
+//! thesis's per-component drag missed this by 5e-3 m at 45°.
 
 use chainbeam::*;
 

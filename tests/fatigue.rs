@@ -180,7 +180,7 @@ fn non_finite_samples_are_typed_errors() {
     );
 }
 
-/// Curve D against OCEAN.md §4 (air log ā₁ = 12.164, log ā₂ = 15.606; seawater with CP
+/// Curve D against docs/fatigue.md "S-N curves" (air log ā₁ = 12.164, log ā₂ = 15.606; seawater with CP
 /// log ā₁ = 11.764, log ā₂ = 15.606), and every class's two segments meeting at the standard's
 /// knee (N = 10⁷ in air, 10⁶ in seawater with CP) to the tables' rounding — a typo in the table
 /// would break this.
@@ -316,7 +316,7 @@ fn uniform(rng: &mut ChaCha8Rng) -> f64 {
     (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
-/// Narrow-band check (OCEAN.md §4): a stationary Gaussian stress with a flat spectrum over
+/// Narrow-band check (docs/fatigue.md "Miner's rule, a year, a life"): a stationary Gaussian stress with a flat spectrum over
 /// f₀ · [0.97, 1.03] (64 components, random frequencies and phases from ChaCha8 seed 31),
 /// σ = 20 MPa, 3·10⁵ mean periods at 32 samples per period; one-slope curve m = 3, log ā = 12.
 /// Rayleigh closed form E[D] = ν₀ T/ā (2√2 σ)^m Γ(1 + m/2), ν₀ = √(m₂/m₀) of the realised

@@ -1,4 +1,4 @@
-//! `[objective] kind = "fatigue"` (issue 31 item 5, OCEAN.md §5): the rainflow Miner damage D(θ)
+//! `[objective] kind = "fatigue"` (docs/fatigue.md, "Fatigue as an objective"): the rainflow Miner damage D(θ)
 //! of the wellhead stress as an objective, its value, its exact adjoint gradient, and the
 //! refusals.
 //!

@@ -1,4 +1,4 @@
-//! Structural (joint) damping (issue 28 item 1, docs/conventions.md "Joint damping"): the torque
+//! Structural (joint) damping (docs/conventions.md "Joint damping"): the torque
 //! −c_j θ̇_j at every joint.
 //!
 //! Reference: the closed form of stiffness-proportional (Rayleigh) damping. The springs' energy

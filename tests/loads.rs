@@ -1,4 +1,4 @@
-//! The loads a riser really sees (issue 13, part A): vector loads in the transverse plane,
+//! The loads a riser really sees: vector loads in the transverse plane,
 //! harmonic loads and time series, the choice of the planar or spatial model, the gradients with
 //! respect to the load parameters, and bad input.
 //!

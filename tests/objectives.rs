@@ -1,4 +1,4 @@
-//! Objectives as one type everywhere (issue 28 item 3), proved with the power objective
+//! Objectives as one type everywhere (`Objective`), proved with the power objective
 //! Σ_k |M₀(t_k)|^p (`PowerObjective`, scene `[objective] kind = "power", exponent = p`):
 //! its adjoint gradient against forward dual numbers (1e-12) and central differences (1e-6),
 //! its Hessian-vector products against differences of the adjoint gradient, the Riccati
@@ -318,8 +318,7 @@ fn structured_solvers_derivatives_of_the_power_objective() {
 /// c_sum); each run reaches the trust region's objective (1e-6 relative) or a lower one, or
 /// ends at another local minimum of this nonconvex problem (as for c_sum, `ocp` module docs:
 /// row 9), which the check below certifies: the trust region started at its point lowers J by
-/// at most 1e-9 relative. How many rows reach it is printed and bounded below (measured:
-/// see the report of issue 28).
+/// at most 1e-9 relative. How many rows reach it is printed and bounded below.
 #[test]
 fn structured_solvers_reach_the_trust_region_on_table_3_4_with_p_4() {
     // Σ M₀⁴ is flat where the moments are small (its curvature 12 M₀² vanishes with them):

@@ -1,10 +1,10 @@
-//! Issue 28 item 4: the structured solvers in the spatial model — a 2-axis control
+//! The structured solvers in the spatial model — a 2-axis control
 //! u = (u_x, u_z) per decision and the vector wellhead moment (M₀ₓ, M₀_z) in the objective
 //! Σ (M₀ₓ² + M₀_z²) + ρ h Σ |u|² (and Σ |M₀|^p).
 //!
 //! References:
 //! - Rotational symmetry: the model is invariant under rotations about the beam's axis y (drag
-//!   included, issue 28 item 2, tests/drag_rotation.rs), so a planar scene turned by ψ about y
+//!   included, tests/drag_rotation.rs), so a planar scene turned by ψ about y
 //!   (load, current and control direction turned) has the same optimal objective as the planar
 //!   scene, reached at the turned controls (u_x, u_z) = (sin ψ·u, cos ψ·u). The planar optimum
 //!   comes from the planar solver (an independent model: `Chain<f64, 2>`); the spatial one must
@@ -318,7 +318,7 @@ fn auto_picks_riccati_for_long_spatial_horizons() {
     assert_eq!(choose_method(&short, &opts).method, Method::Condensed);
 }
 
-/// MPC in the spatial model (issue 28 item 4): the closed loop of the planar riser (drag,
+/// MPC in the spatial model: the closed loop of the planar riser (drag,
 /// sheared current, a harmonic sea) and of the same scene turned by 45° about the beam's axis
 /// (load, current turned; the spatial plant and a 2-axis controller, `Mpc::spatial`) have the
 /// same closed-loop c_sum = Σ |M₀(t_k)|² to 1e-9 relative and the turned forces

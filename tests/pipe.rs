@@ -1,4 +1,4 @@
-//! A riser described as a pipe (`[pipe]`, `[water]`; OCEAN.md §1): the chain's lᵢ, mᵢ (with
+//! A riser described as a pipe (`[pipe]`, `[water]`; docs/ocean.md "From a pipe to a chain"): the chain's lᵢ, mᵢ (with
 //! added mass, half a cell at the free tip) and kᵢ = EI/l (2EI/l at a clamp) from the section and
 //! materials. Its first frequency converges to Euler-Bernoulli's at order 2 in n; the thesis-style
 //! lumping with a full cell at the tip (`catalogue::scaled_cantilever`) only at order 1.
@@ -50,7 +50,7 @@ fn first_frequency(scene: &Scene) -> f64 {
 }
 
 /// Reference: ω₁ = (β₁L)² √(EI/(μ L⁴)) with the pipe's EI and μ = ρ_s A_s + ρ_c A_i + C_a ρ_w A_o,
-/// computed here from the section (OCEAN.md §1), independently of the library's `Pipe`.
+/// computed here from the section (docs/ocean.md "From a pipe to a chain"), independently of the library's `Pipe`.
 #[test]
 fn pipe_first_frequency_converges_at_order_two() {
     let (do_, t, len) = (0.5334f64, 0.0254f64, 300.0);

@@ -1,4 +1,4 @@
-//! The per-pendulum Morison drag constant of a `[pipe]` scene (issue 30; docs/conventions.md
+//! The per-pendulum Morison drag constant of a `[pipe]` scene (docs/conventions.md
 //! "Equivalent drag constant"): pendulum i takes Dᵢ = D wᵢ, wᵢ = l₁S₁/(lᵢSᵢ)
 //! (Sᵢ = Σ_{k≥i} m_k), so every pendulum gets the same share of its Morison load.
 //!

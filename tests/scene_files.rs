@@ -533,7 +533,7 @@ fn missing_keys() {
         "loads.point[0].force",
         missing,
     );
-    // `control.values` left out is legal since issue 27 (zeros: docs/scene-format.md).
+    // `control.values` left out is legal (zeros: docs/scene-format.md).
     let zeros = parse(&mutate("values = [0.5]\n", "")).unwrap();
     assert_eq!(zeros.control.unwrap().values, vec![0.0]);
     expect_err(&mutate("kind = 'constant'\n", ""), "control.kind", missing);
@@ -571,7 +571,7 @@ fn wrong_types() {
             ("pendulums = 3", "pendulums = 3.0", "beam.pendulums"),
             ("steps = 4", "steps = '4'", "time.steps"),
             ("node = 2", "node = 2.5", "loads.point[0].node"),
-            // One number is legal since issue 27 (every value equal); a string still names the key.
+            // One number is legal (every value equal); a string still names the key.
             ("values = [0.5]", "values = 'half'", "control.values"),
             ("values = [0.5]", "values = {u = 0.5}", "control.values"),
             ("values = [0.5]", "values = [0.5, {}]", "control.values[1]"),
@@ -944,7 +944,7 @@ fn reaction_force_control_must_act_at_the_tip() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Hostile inputs (issue 11): each file under tests/hostile_scenes/ states the message it must
+// Hostile inputs: each file under tests/hostile_scenes/ states the message it must
 // produce in `# expect:` lines (reading the file fails with a message containing each) or
 // `# expect-simulate:` lines (the file is valid and `simulate` fails with that message).
 // ---------------------------------------------------------------------------------------------

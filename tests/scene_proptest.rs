@@ -249,7 +249,7 @@ fn valid_scene() -> impl Strategy<Value = SceneFile> {
                         _ => ("piecewise", &c.values[..c.pieces]),
                     };
                     e.push(entry("kind", format!("\"{kind}\""), true, false, false));
-                    // Not required: an absent `control.values` means zeros (issue 27 item 7).
+                    // Not required: an absent `control.values` means zeros.
                     e.push(entry(
                         "values",
                         num_or_array(false, values),

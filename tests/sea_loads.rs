@@ -1,4 +1,4 @@
-//! Irregular waves on a riser (issue 30, `[loads.waves]`; docs/scene-format.md, OCEAN.md §2–3):
+//! Irregular waves on a riser (`[loads.waves]`; docs/scene-format.md, docs/ocean.md):
 //! the keys and their errors, the per-pendulum wave kinematics of the model against the direct
 //! sum of the Airy components (an independent evaluation: `Sea::velocity` / `Sea::acceleration`
 //! cosine by cosine), and the round trip through a scene file.

@@ -1,4 +1,4 @@
-//! Issue 13, "2-axis control" and "bending moment in 3D": a control u = (u_x, u_z) in the
+//! Two-axis controls and the bending moment in 3D: a control u = (u_x, u_z) in the
 //! transverse plane with constant, per-step and piecewise parametrisations (θ = (θ_x; θ_z)),
 //! the base moment vector M₀ = (M₀ₓ, M₀_z) and the objectives on |M₀|².
 //!

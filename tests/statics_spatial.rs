@@ -1,4 +1,4 @@
-//! Statics in the spatial model (issue 13, item 5): Newton on the product of spheres
+//! Statics in the spatial model: Newton on the product of spheres
 //! (`statics::static_equilibrium_spatial`, module docs of `chainbeam::statics`).
 //!
 //! References: the planar statics (Newton in the absolute angles, an independent
@@ -190,8 +190,7 @@ fn settle(scene: &Scene, target: f64, t_max: f64) -> Settled {
     }
 }
 
-/// The turning current's static offset (issue 13 item 5, as the thesis checks its statics in
-/// §2.4.4): the catalogue's riser in the tabulated current that turns from +z at the surface to
+/// The turning current's static offset (checked as the thesis checks its statics in §2.4.4): the catalogue's riser in the tabulated current that turns from +z at the surface to
 /// +x at the seabed (D = 10) settles, in a long simulation in the spatial model, onto the spatial
 /// static solution. The tolerance is the simulation's own bound on its remaining transient
 /// ([`settle`]), plus round-off.

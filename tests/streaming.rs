@@ -1,4 +1,4 @@
-//! The streaming simulation (`simulate_streaming`, `moment_history`; issue 30 item 5) against the
+//! The streaming simulation (`simulate_streaming`, `moment_history`: a 3-hour record in O(n) memory) against the
 //! stored trajectory of `simulate` on the same scene. Reference: `simulate` itself, the
 //! library's tested path (thesis scenes, the wave riser, spatial scenes); a streamed run takes
 //! the same RATTLE steps from the same state and evaluates the same formulas, so every number

@@ -302,7 +302,7 @@ fn a_stalled_riccati_run_is_finished_by_the_trust_region() {
     assert!(r.theta.iter().all(|u| u.abs() <= bound));
 }
 
-/// Issue 27 item 7: the automatic choice (the default) reaches Table 3.4's objectives equal to
+/// The automatic choice of method (the default) reaches Table 3.4's objectives equal to
 /// L-BFGS's (the former default; the reference here is that independent method's run) up to
 /// round-off, or lower, on every bounded row: condensed, and Riccati from the same start, keeping
 /// the lower (`optimize::choice`; condensed alone ends 0.155 % above L-BFGS on row 3).

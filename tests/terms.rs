@@ -311,7 +311,7 @@ impl<D: Scalar, const DIM: usize> TermVisitor<D, DIM> for Check<D, DIM> {
 }
 
 /// [`all_terms_scene`] described as a pipe (for the inertia coefficient) in irregular waves
-/// (`[loads.waves]`, issue 30) at 40° (spatial) or 180° (planar), with a current in the spatial
+/// (`[loads.waves]`) at 40° (spatial) or 180° (planar), with a current in the spatial
 /// case: the wave inertia load joins the conservative terms and the drag is relative to the
 /// water (current + waves).
 fn waves_scene(spatial: bool) -> Scene {
@@ -814,7 +814,7 @@ fn drag_slope_overrides_carry_derivatives() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Joint damping (issue 28 item 1): the coupled dissipative term F = −Gᵀ C G q̇ (docs/conventions.md
+// Joint damping: the coupled dissipative term F = −Gᵀ C G q̇ (docs/conventions.md
 // "Joint damping"), checked like every term against its own definition.
 
 /// [`current_scene`] (a current and the drag relative to it, 6 pendulums, riser support) with

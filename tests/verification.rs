@@ -1,5 +1,4 @@
-//! Verification of every derivative away from the small angles of `tests/adjoint.rs` (issue 10,
-//! "What must be shown"): the discrete adjoint and its Hessian-vector products at large deflection
+//! Verification of every derivative away from the small angles of `tests/adjoint.rs`: the discrete adjoint and its Hessian-vector products at large deflection
 //! across both branches of the spring function s(x) and past 90° joints; the spatial model's
 //! adjoint; gravity, time-windowed loads and non-uniform lengths and masses; symplecticity of the
 //! RATTLE step asserted directly (JᵀΩJ = Ω on the constraint manifold) and its reversibility; the

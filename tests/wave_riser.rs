@@ -1,4 +1,4 @@
-//! A pipe riser in a current and irregular waves (issue 30, "What must be shown"):
+//! A pipe riser in a current and irregular waves (docs/ocean.md): what the model must show:
 //!
 //! - **Rotational symmetry**: the waves and the current turned together by ψ = 30°, 45°, 120°
 //!   about the riser's axis y give the planar run (ψ = 0) rotated by ψ, to 1e-9 m at every node

@@ -1,4 +1,4 @@
-//! Irregular seas (`chainbeam::ocean`, OCEAN.md §2, DNV-RP-C205 §3.5): dispersion limits, the
+//! Irregular seas (`chainbeam::ocean`, docs/ocean.md "Irregular seas", DNV-RP-C205 §3.5): dispersion limits, the
 //! 3-hour statistics H_s = 4σ_η and T_p against the scene's values, the spectrum of η and of
 //! the particle velocity against S(ω) and the Airy transfer function, the FFT record against
 //! the direct sum, and the seed's reproducibility (against the RFC 8439 ChaCha20 test vector).

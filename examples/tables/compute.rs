@@ -323,7 +323,7 @@ pub fn table_3_4() -> Result<Vec<Row>> {
 }
 
 /// Table 3.4 with `method` (`tables --method lbfgs` reproduces the former default, for the
-/// before/after comparison of issue 27).
+/// comparison of the automatic choice with it).
 pub fn table_3_4_with(method: Method) -> Result<Vec<Row>> {
     (1..=10)
         .map(|node| {

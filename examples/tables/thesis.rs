@@ -1,5 +1,5 @@
-//! The thesis's published optimisation results (Nøst 2023, Tables 3.1-3.4), transcribed from
-//! `shared/thesis.txt`.
+//! The thesis's published optimisation results (Nøst, *Optimal Control of Multibody Dynamics
+//! with Applications*, NTNU 2023, Tables 3.1-3.4), transcribed from the thesis.
 
 /// Table 3.1: constant u \[N\] and c for the load at node i = 1..10.
 pub const TABLE_3_1: [(f64, f64); 10] = [

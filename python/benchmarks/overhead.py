@@ -1,7 +1,7 @@
 """Python's overhead on a long simulation: `chainbeam.simulate` against the library call
 `chainbeam::simulate` alone, timed inside the same extension (`_chainbeam._time_library_simulate`:
-the same compiled code on the same kind of worker thread, nothing handed to numpy) — issue 29:
-≤ 5 % at 10⁵ steps.
+the same compiled code on the same kind of worker thread, nothing handed to numpy) — the
+target: ≤ 5 % at 10⁵ steps.
 
     python python/benchmarks/overhead.py [STEPS] [REPEATS] [--malloc default|warm|cold]
 

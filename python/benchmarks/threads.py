@@ -1,4 +1,5 @@
-"""Two threads simulating at once against one (issue 29: ≤ 1.3× the wall time of one).
+"""Two threads simulating at once against one (the target: ≤ 1.3× the wall time of one, since
+the extension releases the GIL while it simulates).
 
     python python/benchmarks/threads.py [STEPS] [REPEATS]
 

@@ -1,4 +1,5 @@
-//! The fatigue objective (issue 31 item 5, OCEAN.md §5): the rainflow Miner damage D(θ) of the
+//! The fatigue objective (docs/fatigue.md, "Fatigue as an objective"): the rainflow Miner
+//! damage D(θ) of the
 //! wellhead stress, J = D(M₀(t_0), …, M₀(t_N)) + ρ h Σ |u_k|², scene `[objective] kind =
 //! "fatigue"` with the scene's `[fatigue]` table.
 

@@ -1,4 +1,5 @@
-//! The rainflow damage of a base-moment history as a differentiable function of it (OCEAN.md §5):
+//! The rainflow damage of a base-moment history as a differentiable function of it
+//! (docs/fatigue.md, "Fatigue as an objective"):
 //! what `[objective] kind = "fatigue"` minimises ([`crate::FatigueObjective`]).
 //!
 //! For the history M₀(t_k) (and M₀ₓ(t_k) of a spatial run), k = 0..N, the hot-spot stress is

@@ -1,5 +1,5 @@
 //! The rainflow damage as a differentiable function of the stress history, and its smooth proxy
-//! (OCEAN.md §5).
+//! (docs/fatigue.md, "Fatigue as an objective").
 //!
 //! **Rainflow damage.** For a fixed pairing of turning points the damage is
 //!

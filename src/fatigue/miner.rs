@@ -1,5 +1,5 @@
 //! Miner's rule, annual damage, fatigue life and the combination of a scatter diagram
-//! (DNV-RP-C203 §2.3, OCEAN.md §4).
+//! (DNV-RP-C203 §2.3, docs/fatigue.md).
 //!
 //! - Miner's sum over counted cycles: D = Σ nᵢ/N(Δσᵢ) (DNV-RP-C203 eq. 2.3.1), nᵢ = 1 for a full
 //!   cycle and ½ for a half cycle.

@@ -1,6 +1,6 @@
 //! Fatigue of the wellhead: hot-spot stress from the base moment, rainflow counting
 //! (ASTM E1049-85), DNV-RP-C203 S-N curves, Miner's rule, annual damage and life, scatter
-//! diagrams, and the damage's gradient with respect to the stress history (OCEAN.md §4–5).
+//! diagrams, and the damage's gradient with respect to the stress history (docs/fatigue.md).
 //!
 //! The chain of a fatigue assessment, each link its own module:
 //! 1. [`HotSpot`] (`stress`): σ(t) = SCF · M_w(t) · (D_o/2)/I in MPa, M_w = M₀ · l₁/2 the
@@ -169,7 +169,7 @@ pub struct FatigueSpec {
     pub wall_thickness: f64,
     /// Stress concentration factor (`scf`, default 1).
     pub scf: f64,
-    /// DNV-RP-C203 class (`curve`, default `"D"`, OCEAN.md §4's example).
+    /// DNV-RP-C203 class (`curve`, default `"D"`, a common class for girth welds).
     pub curve: DnvClass,
     /// Environment (`environment`, default `"seawater-cp"`: a subsea wellhead under cathodic
     /// protection).

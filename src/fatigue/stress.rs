@@ -1,4 +1,4 @@
-//! The hot-spot stress at the wellhead from the base bending moment (OCEAN.md §4):
+//! The hot-spot stress at the wellhead from the base bending moment (docs/fatigue.md):
 //!
 //! σ(t) = SCF · M_w(t) · (D_o/2) / I,  I = π/64 (D_o⁴ − D_i⁴),  D_i = D_o − 2t,
 //!

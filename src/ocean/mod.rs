@@ -1,4 +1,5 @@
-//! Irregular seas (OCEAN.md §2; DNV-RP-C205 §3.5): wave spectra, the finite-depth dispersion
+//! Irregular seas (docs/ocean.md "Irregular seas"; DNV-RP-C205 §3.5): wave spectra, the
+//! finite-depth dispersion
 //! relation, a seeded realisation of a sea state and its linear (Airy) kinematics over a whole
 //! record, evaluated by inverse FFT.
 //!

@@ -1,4 +1,5 @@
-//! A seeded realisation of a sea state and its linear (Airy) kinematics (OCEAN.md §2).
+//! A seeded realisation of a sea state and its linear (Airy) kinematics (docs/ocean.md
+//! "Irregular seas").
 //!
 //! The realisation is a sum of N components at equally spaced frequencies
 //! ωⱼ = j Δω, j = 1..N, Δω = 2π/T_r:

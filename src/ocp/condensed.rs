@@ -74,7 +74,7 @@ use super::globalise::{
 };
 use super::horizon::{available_threads, ControlHorizon};
 use super::line_search::Traj;
-use super::options::{OcpOptions, OcpResult, Termination};
+use super::options::{IterationObserver, OcpOptions, OcpResult, Termination};
 use super::sensitivities::{balanced, residual_gradients, sens_row, SensChunk};
 use super::stage::{Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
@@ -468,7 +468,17 @@ impl<const DIM: usize> Condensed<DIM> {
     /// # Errors
     /// As [`Condensed::set_point`]; a failed simulation of the nominal.
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
-        super::globalise::run(self, theta0)
+        super::globalise::run(self, theta0, None)
+    }
+
+    /// [`Condensed::solve`] with an observer called after every accepted iteration (θ, J and
+    /// the record of the step); it may stop the run ([`Termination::Stopped`]).
+    pub fn solve_observed(
+        &mut self,
+        theta0: &[f64],
+        observer: IterationObserver<'_>,
+    ) -> Result<OcpResult> {
+        super::globalise::run(self, theta0, Some(observer))
     }
 
     /// The QP step and the line search, raising μ until a step is accepted (into `trial`), or
@@ -565,6 +575,10 @@ impl<const DIM: usize> Outer for Condensed<DIM> {
 
     fn nominal_cost(&self) -> f64 {
         self.horizon.nominal.cost
+    }
+
+    fn theta(&self) -> Vec<f64> {
+        Condensed::theta(self)
     }
 
     fn set_point(&mut self, theta: &[f64]) -> Result<f64> {

@@ -4,7 +4,7 @@
 
 use faer::Mat;
 
-use super::iterate::Arc;
+use super::iterate::RolloutMode;
 use super::riccati::StageJacobians;
 use super::solver::Solver;
 use super::stage::{tangent, JacobiansMut, StageAt, StagePoint};
@@ -117,7 +117,7 @@ impl Solver {
         if !self.sweep(true)? {
             return Err(OcpError::UnboundedStage { mu }.into());
         }
-        self.linear_rollout(1.0, Arc::ClosedLoop);
+        self.linear_rollout(1.0, RolloutMode::ClosedLoop);
         let stages = &self.horizon.theta_stage;
         Ok(stages.iter().map(|&k| self.qp.dv_t[k]).collect())
     }

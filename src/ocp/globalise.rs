@@ -8,7 +8,9 @@
 
 use std::time::Instant;
 
-use super::options::{IterationRecord, OcpOptions, OcpResult, Termination};
+use super::options::{
+    IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult, Termination,
+};
 use crate::error::Result;
 
 /// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
@@ -46,6 +48,8 @@ pub(crate) trait Outer {
     fn options(&self) -> &OcpOptions;
     /// J of the nominal.
     fn nominal_cost(&self) -> f64;
+    /// θ of the nominal.
+    fn theta(&self) -> Vec<f64>;
     /// Makes θ (projected onto the box) the nominal; J.
     fn set_point(&mut self, theta: &[f64]) -> Result<f64>;
     /// The exact gradient at the nominal; returns the projected gradient norm.
@@ -66,12 +70,17 @@ pub(crate) trait Outer {
 
 /// Runs a solver from θ₀ (projected onto the box): iterations of linearisation, stopping tests,
 /// the model's step with its line search and the Levenberg schedule until one ends the run.
-pub(crate) fn run<S: Outer>(solver: &mut S, theta0: &[f64]) -> Result<OcpResult> {
+/// `observer`, if any, sees every accepted iteration and may stop the run.
+pub(crate) fn run<S: Outer>(
+    solver: &mut S,
+    theta0: &[f64],
+    mut observer: Option<IterationObserver<'_>>,
+) -> Result<OcpResult> {
     let t0 = Instant::now();
     solver.begin();
     let mut pr = Progress::new(solver.set_point(theta0)?);
     let termination = loop {
-        if let Some(t) = iterate(solver, &mut pr)? {
+        if let Some(t) = iterate(solver, &mut pr, &mut observer)? {
             break t;
         }
     };
@@ -80,7 +89,11 @@ pub(crate) fn run<S: Outer>(solver: &mut S, theta0: &[f64]) -> Result<OcpResult>
 
 /// One iteration: the exact gradient and the stopping tests, the model's step and its line
 /// search, the history and the regularisation schedule. `Some` ends the run.
-fn iterate<S: Outer>(solver: &mut S, pr: &mut Progress) -> Result<Option<Termination>> {
+fn iterate<S: Outer>(
+    solver: &mut S,
+    pr: &mut Progress,
+    observer: &mut Option<IterationObserver<'_>>,
+) -> Result<Option<Termination>> {
     let opts = solver.options().clone();
     if pr.budget_spent(&opts) {
         return Ok(Some(Termination::Budget));
@@ -107,6 +120,17 @@ fn iterate<S: Outer>(solver: &mut S, pr: &mut Progress) -> Result<Option<Termina
         alpha: acc.alpha,
         regularisation: pr.mu,
     });
+    if let (Some(watch), Some(record)) = (observer.as_mut(), pr.history.last()) {
+        let theta = solver.theta();
+        let report = IterationReport {
+            iteration: pr.iterations,
+            theta: &theta,
+            record,
+        };
+        if watch(&report).is_break() {
+            return Ok(Some(Termination::Stopped));
+        }
+    }
     // Below J's resolution only the projected gradient shows progress: stop when it has not
     // fallen by 10 % over several such steps.
     if pr.roundoff.stalled(acc.roundoff, pg) {

@@ -486,7 +486,6 @@ mod tests {
             }
             let hs = h.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             let eps = 1e-5;
-            let mut worst = 0.0f64;
             for j in 0..nd {
                 let mut shifted = |s: f64| {
                     let mut z = xi.clone();
@@ -503,14 +502,12 @@ mod tests {
                 for r in 0..nd {
                     let fd = (gp[r] - gm[r]) / (2.0 * eps);
                     let an = h[j * nd + r];
-                    worst = worst.max((fd - an).abs() / hs);
                     assert!(
                         (fd - an).abs() <= 1e-6 * hs,
                         "k = {k}: H[{r}, {j}] = {an:e}, differences {fd:e} (scale {hs:e})"
                     );
                 }
             }
-            eprintln!("k = {k}: |H|max {hs:e}, worst differenced mismatch {worst:e}, |g| {gs:e}");
             // Symmetric, as a Hessian.
             for j in 0..nd {
                 for r in 0..j {

@@ -7,9 +7,9 @@ use super::jacobians::{JacobianStore, PREFETCH_AHEAD};
 use super::riccati::{dot, StageJacobians};
 use super::second_order::SecondOrder;
 
-/// How [`QpIterate::linearised`] moves the controls.
+/// How [`QpIterate::linearised`] moves the controls along a linearised rollout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Arc {
+pub(crate) enum RolloutMode {
     /// Closed loop with the Riccati gains, clamped to the box.
     ClosedLoop,
     /// Closed loop, unclamped, recording the direction Δv in `dir`.
@@ -133,19 +133,19 @@ impl QpIterate {
     /// A rollout of the *linearised* dynamics from the model point δ with step length α:
     /// closed loop with the gains of the last Riccati pass, Δv_i = clamp(α k_i + K_i Δz_k)
     /// (clamped to the box about the model point; unclamped and recorded in `dir` for
-    /// [`Arc::Direction`]), or open loop to clamp(u + α dir) ([`Arc::Projected`]);
+    /// [`RolloutMode::Direction`]), or open loop to clamp(u + α dir) ([`RolloutMode::Projected`]);
     /// Δz_{k+1} = Ã_k Δz_k + B̃_k Δv_k, written to `dv_t`, `dz_t` as δ + Δ. Returns the model of J
     /// at δ + Δ without the proximal term: Σ ℓ_k(R + ∂R/∂φ₁ δφ₁, u + δu, w + δw) (+ the
-    /// second-order terms of the exact model), or 0 for [`Arc::Direction`] (its caller gets
+    /// second-order terms of the exact model), or 0 for [`RolloutMode::Direction`] (its caller gets
     /// the value from the Newton step; with the exact model the value would read every H_k
     /// once more). Needs every stage Jacobian in memory.
     pub fn linearised<const DIM: usize>(
         &mut self,
         lm: &LinearModel<'_, DIM>,
         alpha: f64,
-        mode: Arc,
+        mode: RolloutMode,
     ) -> f64 {
-        let value = mode != Arc::Direction;
+        let value = mode != RolloutMode::Direction;
         let hz = lm.horizon;
         let (nz, m, steps) = (self.nz, self.m, hz.steps);
         let nxi = hz.model.nx();
@@ -163,11 +163,11 @@ impl QpIterate {
                 let u0 = nom.control(k, a) + self.dv[i];
                 *da = if hz.free[k] {
                     match mode {
-                        Arc::Projected => (u0 + alpha * self.dir[i]).clamp(lo, hi) - u0,
+                        RolloutMode::Projected => (u0 + alpha * self.dir[i]).clamp(lo, hi) - u0,
                         _ => {
                             let g = &lm.gain[i * nz..(i + 1) * nz];
                             let x = alpha * lm.ff[i] + dot(g, dz);
-                            if mode == Arc::Direction {
+                            if mode == RolloutMode::Direction {
                                 self.dir[i] = x;
                                 x
                             } else {

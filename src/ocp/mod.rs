@@ -20,7 +20,7 @@
 //! [`PiecewiseControl`](crate::PiecewiseControl)), and the box lower ≤ θ ≤ upper. The costs are
 //! those of [`ControlProblem::value`]; without the rate penalty J is exactly that function.
 //!
-//! # The method (choices, measured on the long-horizon scene)
+//! # The method
 //! - **Stage structure** ([`stage`]): one control per stage through the shifted state
 //!   x̂_k = (q_k, p̂_k), tangent coordinates ξ = (φ, ω) (2n per stage instead of 4n), Jacobians
 //!   A_k, B_k by `DualSVec64<8>` through the one generic RATTLE step (its derivative-only Newton
@@ -97,43 +97,6 @@
 //!   (the same code as H_k's, `hessian::stage_vjp`: 3 ms at N = 10³ against 22.7 ms for the
 //!   Jacobian sweep), then one parallel pass of forward and reverse dual steps gives A_k, B_k
 //!   and H_k together: about twice a Gauss-Newton iteration's Jacobian pass.
-//! - **Measured and dropped.** Mehrotra's predictor-corrector for the interior point (the
-//!   affine direction by a factor pass, the corrector by a solve-only pass: the recursion's
-//!   vectors with the gains and Q_uu kept, O(n_z²) per stage): 48 → 31 factor passes at
-//!   N = 10³, but its QP solutions, as inexact as allowed, led the outer iteration elsewhere:
-//!   12 iterations instead of 10 (farm-bench wall ratio 1.04), 18 instead of 12 with
-//!   ρ = 0.001 (ratio 1.29; away from the optimum the exact model's QP is not convex and the
-//!   affine step, τ = 0, aims badly), 16 instead of 18 at N = 3000, |u| ≤ 5 → 4 (ratio 0.70).
-//!   Not a clear gain; the plain path-following (σ = 0.1, 0.01 after long steps) stays. So
-//!   did it against the step-length form of Mehrotra's centering rule, σ = (1 − α)³ in
-//!   [0.001, 0.1] (α the shorter of the primal and dual steps): 11 % fewer Riccati passes and
-//!   10 % less time summed over 14 variants of the long-horizon scene (`--umax`, `--rho`,
-//!   `--rate`, `--steps`, `--pieces`, `--curvature`), N = 10³ 38 passes instead of 48, but
-//!   N = 10⁴ one iteration more (3.39 s against 2.98 s) and N = 10⁵ no faster. A
-//!   hand-written f64 tangent step instead of the dual numbers would save little: the dual
-//!   step costs about 1.3 f64 steps per direction (10 per chunk of 8), near the floor of one
-//!   linearised step per direction that any forward-mode Jacobian of 2n + 1 directions pays.
-//!   What the dual steps did spend beyond arithmetic was removed instead, each change
-//!   keeping every real part bit for bit: the spring function and the tridiagonal solves of
-//!   first-order duals from their real parts (`spring_s` lifted by its slope; [`crate::tridiag`]
-//!   by the implicit function theorem on the real factors), the drag's slope in closed form
-//!   (no nested duals in the reverse step), and two tiny helpers inlined (out-of-line calls
-//!   with AVX-512 state transitions): Jacobians 13.4 → 11.4 ms, the exact model's pass
-//!   32.5 → 23.3 ms at N = 10³ (`ocp_parts`), the solve at N = 10⁴ and 10⁵ 0.90 of the time
-//!   (farm-bench). A dynamic split of the stages over the threads (16 chunks per thread
-//!   instead of one half each, whose H_k times differed by 4–10 %) and fusing the Riccati
-//!   stage's three products with Ãᵀ into one hand-written loop measured no faster (as extra
-//!   columns of the faer product they are: one pass 1.75 → 1.65 ms at N = 10³, unchanged
-//!   beyond the caches). Splitting each Riccati stage's products over the two threads (half
-//!   of the columns each, one spin barrier per stage) ran at 0.8–0.9× the single thread's
-//!   speed in a microbenchmark of the pass's products: every stage hands half of S to the
-//!   other core, which costs more than the halved product saves, so the interior point's
-//!   passes stay on one thread. Nor was reusing the previous
-//!   iteration's H_k (A_k, B_k and the gradient recomputed exactly, half the H pass's cost)
-//!   after a full warm-face step the model predicted within 10 % adopted: neutral at
-//!   N = 10³–5·10³, 10 iterations instead of 11 at 10⁵ (its 10th step happened to end below
-//!   the tolerance), but 39 iterations instead of 34 with [`Curvature::Exact`], where it also
-//!   fired far from the optimum.
 //! - **Start**: a horizon may start from a given state at t₀
 //!   ([`ControlProblem::starting_from`]): the rollouts start there and the loads see
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending
@@ -141,73 +104,25 @@
 //!   p₀ = p̂₀ − (h/2) u₀ P(q₀) b like every later stage ([`stage`]), so B₀ and the costate
 //!   gradient carry it (tests/start.rs: equal to the adjoint's to 10⁻¹⁴).
 //!
-//! # Measured (2-core machine, `examples/long_horizon.rs`, `benches/ocp.rs`)
-//! Long-horizon scene, |u| ≤ 5 N, ρ = 0.01, from u = 0, to ‖pg‖ ≤ 10⁻⁸‖g₀‖, wall time of the
-//! release build (fat LTO, `target-cpu=native`: README); the trust-region row at N = 10³ is
-//! CPU seconds of an earlier build on a loaded machine.
+//! # Performance
+//! One iteration costs a rollout, the stage Jacobians (in parallel over the stages) and a few
+//! Riccati passes: O(N) in the horizon, about 22–70 forward simulations of the same horizon per
+//! iteration. On the long-horizon scene (N = 10³ per-step controls, a force box, a small effort
+//! penalty) the default converges in about 11 iterations and a third of a second, where L-BFGS
+//! does not converge in 5000 iterations and the trust region needs minutes; the time per
+//! iteration stays linear in N up to 10⁵. For a handful of decisions over a horizon
+//! ([`crate::mpc`]'s pieces, thesis Table 3.4) prefer [`Condensed`]. The measurements, with the
+//! commands that give them and the designs tried and dropped, are in `docs/benchmarks.md`;
+//! the design itself is explained in `docs/riccati.md`.
 //!
-//! | N | method | time | iterations | J | Σ M₀² | note |
-//! |---|---|---|---|---|---|---|
-//! | 10³ | this solver (default: Gauss-Newton, then exact) | 0.29–0.36 s (criterion 289 ms) | 11 (7 + 4) | 1507.481361068 | 1507.2286 | the trust region's optimum; pg/‖g₀‖ = 1.5·10⁻⁹ |
-//! | 10³ | this solver, Gauss-Newton throughout | 0.54 s | 23 | 1507.481362441 | 1507.2287 | the same optimum at the tolerance; 4.5·10⁻⁹ |
-//! | 10³ | L-BFGS | 9.1 s | 5000 (limit) | 1507.489974383 | 1507.2448 | not converged, pg/‖g₀‖ = 1.0·10⁻⁵ |
-//! | 10³ | trust region (exact HVPs) | 243.5 s | 119 | 1507.481361068 | 1507.2286 | converged (1.4·10⁻⁹); 50333 HVPs |
-//! | 10⁴ | this solver | 2.83–2.91 s | 11 | 1509.506385425 | 1507.2286 | 3.7·10⁻⁹ (Gauss-Newton: 3.2 s, 14 iterations) |
-//! | 10⁴ | L-BFGS | 102.5 s | 5000 (limit) | 1509.698222128 | 1507.4462 | not converged, 1.6·10⁻⁴ |
-//! | 10⁵ | this solver | 26.4–30.2 s | 11 | 1529.756629004 | 1507.2286 | 9.2·10⁻¹⁰; 31.6 s wall at 30.2 s, 900 MB peak (Gauss-Newton, an earlier build: 222.7 s, 15) |
-//! | 10⁵ | L-BFGS | 1164 s | 5000 (limit) | 1532.922287883 | 1510.4200 | not converged, 2.0·10⁻³; 132 MB peak |
+//! # Observing a run
+//! [`Solver::solve_observed`] and [`Condensed::solve_observed`] call an
+//! [`IterationObserver`] after every accepted iteration with θ and the iteration's
+//! [`IterationRecord`]; it may stop the run ([`Termination::Stopped`]). Nothing is printed:
+//! [`OcpResult::history`] keeps the records of a run that was not observed.
 //!
-//! The times are those `long_horizon` prints (the solve alone; the machine's speed drifts by
-//! 10–30 % over minutes, which the ranges include: N = 10⁵ printed 26.4, 30.1, 30.2 and, in a
-//! slow phase, 38.2 s; `farm-bench` pairs against the uniform interior-point start of the
-//! previous build gave wall ratios 0.94, 1.00 and 0.86 at N = 10³, 10⁴, 10⁵, and
-//! `cargo bench --bench ocp -- ocp_solve/riccati/1000` a median of 289 ms for both). Time per
-//! iteration 26 ms, 0.26 s and 2.7 s: linear in N within 1.05× (the passes over the stored
-//! Jacobians prefetch them; without, 10⁴ and 10⁵ cost 1.1× and 1.35× of linear). The parts
-//! at N = 10³ (`cargo bench --bench ocp -- ocp_parts`): forward simulation 0.65 ms; rollout +
-//! stage Jacobians + costate sweep 11.4 ms (17.5 simulations, two threads); one Riccati pass
-//! with its linearised rollout 1.65 ms (2.5 simulations; 19.5 ms at N = 10⁴, 3.0 simulations
-//! of 6.49 ms: beyond the caches the pass streams 3.2 kB of A_k per stage, twice per
-//! interior-point iteration, and huge pages for them did not help, `GLIBC_TUNABLES=
-//! glibc.malloc.hugetlb=1` at N = 10⁵: farm-bench wall ratio 1.00); the exact model's extra —
-//! costate sweep, A_k, B_k and H_k of every stage (a forward and a reverse dual step per
-//! chunk) and a Riccati pass with them — 23.3 ms (36 simulations; 246 ms at N = 10⁴). A
-//! Gauss-Newton iteration thus costs about 22–35 simulations (one pass on the warm face, or
-//! 2–7 interior-point iterations, each a Riccati pass and a linearised rollout), an exact one
-//! about 40–70; the default run averages 40 of these simulations at N = 10³ (36 Riccati
-//! passes in 11 iterations; a sinusoidal control, `ocp_parts/forward`). Against a simulation
-//! at the optimum, where the beam rests in the middle of the horizon and RATTLE's Newton
-//! needs one iteration per step (0.50 ms at N = 10³, 4.1 ms at 10⁴), the ratio
-//! `long_horizon` prints is 46, 62–65 and 69 at N = 10³, 10⁴, 10⁵. Of the targets,
-//! 3 s at N = 10⁴, ≤ 30 iterations, the linear scaling and Table 3.4's time are met; 0.3 s at
-//! N = 10³ and 30 s at 10⁵ are met in the machine's fast phases and missed by up to 20 % and
-//! 27 % in its slow ones; ≤ 20 simulations per iteration is not met: the cheapest iteration
-//! this design has (Gauss-Newton, one pass on the warm face, one rollout) is ≈ 22 of them,
-//! and it reaches the time targets by spending more per iteration (interior-point passes
-//! while the active set settles, the exact model near the end) on fewer iterations. The
-//! yardstick is cheap (0.65 µs per step at n = 10): the Jacobians alone are 2n + 1 = 21
-//! linearised steps per stage, about 10 simulations on two threads at the floor of forward
-//! mode, before any QP pass (≈ 3 simulations each). N = 10⁵ needs an 11th iteration because
-//! its 10th ends just above the tolerance (projected gradient 2.1·10⁻³ against
-//! 10⁻⁸‖g₀‖ = 1.0·10⁻³): near the optimum the exact Newton steps on the warm face (model
-//! gradient solved to 10⁻¹³, decrease predicted to 1.000000 of the actual one) reduce the
-//! true projected gradient slowly where J is curved by ρh = 10⁻⁴ alone, spread evenly over
-//! the ~10⁵ controls of the horizon's static middle, where the beam is at rest against the
-//! constant load.
-//!
-//! Table 3.4 (per-step, N = 10, no effort penalty, each row bounded by the thesis's largest
-//! |u_k|): all ten rows converge; against the trust region the objectives are equal on rows
-//! 1–7, lower on row 8 (1.5·10⁻⁹ relative), both at J ≈ 0 on row 10 (3·10⁻¹³ against
-//! 5·10⁻²¹), and higher on row 9 (6.0236·10⁻⁶ against 6.0208·10⁻⁶, another local minimum,
-//! which the exact Hessian from the start avoids). Which local minimum a row ends in follows
-//! the solver's path: before the interior point started centred ([`Solver`]'s QP) rows 3 and
-//! 6 ended above the trust region's minima and row 2 below (30.09 against 32.89).
-//! 29–31 ms for the ten rows through `minimize` (four criterion runs; trust region 101 ms,
-//! L-BFGS 126 ms; [`Condensed`], `Method::Condensed`: 14–18 ms, against this solver higher
-//! objectives on rows 3, 6 and 8 and lower ones on rows 1 (22.93) and 9;
-//! `cargo bench --bench ocp -- ocp_table_3_4`).
-//!
-//! Supported: the planar model (`DIM = 2`) and the spatial model (`DIM = 3`, below),
+//! # Supported problems
+//! The planar model (`DIM = 2`) and the spatial model (`DIM = 3`, below),
 //! with a free tip (cantilever, riser), every objective
 //! with a Gauss-Newton form ℓ_k = ½ w_k r_k(M₀)² + e_k u_k²
 //! ([`Objective::gauss_newton`], `ocp/cost.rs`: c and c_sum of
@@ -293,7 +208,10 @@ pub mod stage;
 
 pub use crate::error::{HorizonShape, OcpError};
 pub use condensed::Condensed;
-pub use options::{Curvature, IterationRecord, OcpOptions, OcpResult, Termination};
+pub use options::{
+    Curvature, IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult,
+    Termination,
+};
 pub use solver::Solver;
 
 use crate::adjoint::{ControlMap, ControlProblem, Objective};

@@ -140,6 +140,11 @@ pub enum Termination {
     /// Several steps in a row predicted a decrease below J's round-off while the gradient
     /// stayed above the tolerance.
     RoundOff,
+    /// The iteration observer asked to stop
+    /// ([`Solver::solve_observed`](super::Solver::solve_observed),
+    /// [`Condensed::solve_observed`](super::Condensed::solve_observed)); the gradient norms of
+    /// the result are those of the last evaluation, before the last step (not converged).
+    Stopped,
 }
 
 impl std::fmt::Display for Termination {
@@ -154,6 +159,7 @@ impl std::fmt::Display for Termination {
                 "no descent step found with the regularisation at its limit"
             }
             Termination::RoundOff => "predicted decrease below the round-off of J",
+            Termination::Stopped => "stopped by the iteration observer",
         })
     }
 }
@@ -170,6 +176,26 @@ pub struct IterationRecord {
     /// Relative proximal weight μ/mean(Q_uu) of the accepted step.
     pub regularisation: f64,
 }
+
+/// One accepted iteration as an observer of
+/// [`Solver::solve_observed`](super::Solver::solve_observed) or
+/// [`Condensed::solve_observed`](super::Condensed::solve_observed) sees it, after the step.
+#[derive(Clone, Copy, Debug)]
+pub struct IterationReport<'a> {
+    /// The iteration's number, from 1.
+    pub iteration: usize,
+    /// θ after the step (the new nominal).
+    pub theta: &'a [f64],
+    /// J after the step, the projected gradient before it, the step length and the
+    /// regularisation (the record the result's history keeps).
+    pub record: &'a IterationRecord,
+}
+
+/// The observer of a structured solve: called after every accepted iteration;
+/// [`ControlFlow::Break`](std::ops::ControlFlow::Break) ends the run with
+/// [`Termination::Stopped`] at the point reached.
+pub type IterationObserver<'a> =
+    &'a mut dyn FnMut(&IterationReport<'_>) -> std::ops::ControlFlow<()>;
 
 /// The outcome of [`solve`](super::solve).
 #[derive(Clone, Debug, PartialEq)]

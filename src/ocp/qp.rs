@@ -5,7 +5,7 @@
 
 use super::horizon::ControlHorizon;
 use super::interior::{Controls, StepLengths};
-use super::iterate::{Arc, LinearModel};
+use super::iterate::{LinearModel, RolloutMode};
 use super::solver::Solver;
 use crate::error::Result;
 
@@ -36,7 +36,7 @@ struct InteriorStep {
 impl<const DIM: usize> Solver<DIM> {
     /// The linearised rollout of [`super::iterate::QpIterate::linearised`] on the current
     /// nominal, stored Jacobians and Riccati pass.
-    fn linearised(&mut self, alpha: f64, mode: Arc) -> f64 {
+    fn linearised(&mut self, alpha: f64, mode: RolloutMode) -> f64 {
         let (steps, nz) = (self.horizon.steps, self.nz);
         let second = &self.second;
         let lm = LinearModel {
@@ -53,20 +53,20 @@ impl<const DIM: usize> Solver<DIM> {
     /// with step length α, written to the iterate's trial; returns the model of J there
     /// without the proximal term. Needs every stage Jacobian in memory. For the direction
     /// alone see [`Solver::direction_rollout`].
-    pub(super) fn linear_rollout(&mut self, alpha: f64, mode: Arc) -> f64 {
+    pub(super) fn linear_rollout(&mut self, alpha: f64, mode: RolloutMode) -> f64 {
         debug_assert!(
-            mode != Arc::Direction,
+            mode != RolloutMode::Direction,
             "no value for a direction: direction_rollout"
         );
         self.linearised(alpha, mode)
     }
 
     /// The interior point's direction: the rollout of [`Solver::linear_rollout`] in
-    /// [`Arc::Direction`] mode at α = 1, without the model value (its caller gets the value
+    /// [`RolloutMode::Direction`] mode at α = 1, without the model value (its caller gets the value
     /// from the Newton step, [`Solver::advance`]; with the exact model the value would read
     /// every H_k once more).
     fn direction_rollout(&mut self) {
-        self.linearised(1.0, Arc::Direction);
+        self.linearised(1.0, RolloutMode::Direction);
     }
 
     /// The QP's solution on a guessed face: the controls of the nominal that sit exactly on a
@@ -92,7 +92,7 @@ impl<const DIM: usize> Solver<DIM> {
         if !any || !self.sweep(true)? {
             return Ok(None);
         }
-        let q_plain = self.linear_rollout(1.0, Arc::ClosedLoop);
+        let q_plain = self.linear_rollout(1.0, RolloutMode::ClosedLoop);
         self.qp.take_trial();
         // The model gradient at the new point (the gains of the Riccati pass are kept).
         self.qp.active.fill(false);
@@ -279,7 +279,7 @@ impl<const DIM: usize> Solver<DIM> {
             };
         }
         self.qp.at_nominal();
-        let q_plain = self.linear_rollout(1.0, Arc::Projected);
+        let q_plain = self.linear_rollout(1.0, RolloutMode::Projected);
         self.qp.take_trial();
         self.qp.active.fill(false);
         self.sweep(false)?;
@@ -319,7 +319,7 @@ impl<const DIM: usize> Solver<DIM> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::iterate::Arc;
+    use super::super::iterate::RolloutMode;
     use super::super::{OcpOptions, Solver};
     use super::InteriorStep;
     use crate::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
@@ -368,7 +368,7 @@ mod tests {
                 scale > 0.0 && err <= 1e-10 * scale,
                 "error {err:e}, scale {scale:e}"
             );
-            let q_rollout = s.linear_rollout(0.0, Arc::Projected);
+            let q_rollout = s.linear_rollout(0.0, RolloutMode::Projected);
             assert!(
                 (q - q_rollout).abs() <= 1e-12 * q_rollout.abs(),
                 "{q} against {q_rollout}"

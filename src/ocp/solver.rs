@@ -10,7 +10,7 @@ use super::horizon::ControlHorizon;
 use super::interior::InteriorPoint;
 use super::iterate::QpIterate;
 use super::jacobians::{JacobianStore, PREFETCH_AHEAD};
-use super::options::{OcpOptions, OcpResult, Termination};
+use super::options::{IterationObserver, OcpOptions, OcpResult, Termination};
 use super::riccati::{Riccati, RiccatiShape, StageInput};
 use super::second_order::SecondOrderModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
@@ -120,7 +120,20 @@ impl<const DIM: usize> Solver<DIM> {
     /// box-constrained QP is solved by Riccati-based projected Newton, globalised by closed-loop
     /// rollouts with backtracking and a proximal (Levenberg) weight (module docs).
     pub fn solve(&mut self, theta0: &[f64]) -> Result<OcpResult> {
-        super::globalise::run(self, theta0)
+        super::globalise::run(self, theta0, None)
+    }
+
+    /// [`Solver::solve`] with an observer called after every accepted iteration (θ, J and the
+    /// record of the step); it may stop the run ([`Termination::Stopped`]).
+    ///
+    /// # Errors
+    /// As [`Solver::solve`].
+    pub fn solve_observed(
+        &mut self,
+        theta0: &[f64],
+        observer: IterationObserver<'_>,
+    ) -> Result<OcpResult> {
+        super::globalise::run(self, theta0, Some(observer))
     }
 
     /// What the backward pass needs of stage k at the model point δ (the current inner
@@ -362,6 +375,10 @@ impl<const DIM: usize> Outer for Solver<DIM> {
         self.horizon.nominal.cost
     }
 
+    fn theta(&self) -> Vec<f64> {
+        Solver::theta(self)
+    }
+
     fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
         Solver::set_point(self, theta)
     }
@@ -440,7 +457,7 @@ impl<const DIM: usize> Outer for Solver<DIM> {
     /// The result at the final nominal.
     fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
         // The true gradient at the final nominal (the QP iterations overwrite the costates).
-        let stale = termination == Termination::Budget;
+        let stale = matches!(termination, Termination::Budget | Termination::Stopped);
         if termination == Termination::RegularisationLimit || stale {
             self.riccati.grad.copy_from_slice(&self.gtrue);
         }

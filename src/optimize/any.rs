@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::adjoint::{BendingObjective, ControlMap, ControlProblem, Parametrisation};
 use crate::error::Result;
-use crate::ocp::{OcpOptions, OcpResult};
+use crate::ocp::{IterationObserver, OcpOptions, OcpResult};
 use crate::scene::{Scene, SceneError, SceneErrorKind};
 
 use super::{HessianVec, OptimProblem, ProblemShape};
@@ -117,16 +117,26 @@ impl OptimProblem for AnyProblem {
     fn shape(&self) -> Option<ProblemShape> {
         self.optim().shape()
     }
-    fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+    fn riccati(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
         match self {
-            AnyProblem::Planar(p) => p.riccati(theta0, options),
-            AnyProblem::Spatial(p) => p.riccati(theta0, options),
+            AnyProblem::Planar(p) => p.riccati(theta0, options, observer),
+            AnyProblem::Spatial(p) => p.riccati(theta0, options, observer),
         }
     }
-    fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
+    fn condensed(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
         match self {
-            AnyProblem::Planar(p) => p.condensed(theta0, options),
-            AnyProblem::Spatial(p) => p.condensed(theta0, options),
+            AnyProblem::Planar(p) => p.condensed(theta0, options, observer),
+            AnyProblem::Spatial(p) => p.condensed(theta0, options, observer),
         }
     }
 }

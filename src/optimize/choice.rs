@@ -10,7 +10,7 @@
 
 use std::fmt;
 
-use super::{Method, Minimizer, OptimOptions, OptimProblem, OptimResult};
+use super::{Method, Minimizer, OptimOptions, OptimProblem, OptimResult, Termination};
 use crate::error::Result;
 
 /// The automatic choice of method ([`choose_method`]) and what came of it: the method, the
@@ -156,9 +156,6 @@ pub(super) fn run_auto<Q: OptimProblem + ?Sized>(
 ) -> Result<OptimResult> {
     let clock = std::time::Instant::now();
     let mut choice = choose_method(m.problem, &m.opts);
-    if m.opts.progress {
-        eprintln!("method auto: {choice}");
-    }
     let lbfgs = OptimOptions {
         method: Method::Lbfgs,
         ..m.opts.clone()
@@ -178,12 +175,13 @@ pub(super) fn run_auto<Q: OptimProblem + ?Sized>(
     structured.validate()?;
     super::check_start(m.problem, theta0)?;
     super::riccati::check_start_point(m.problem, theta0, &structured)?;
-    let first = super::riccati::run(m.problem, theta0, &structured);
+    let first = super::riccati::run(m, theta0, &structured);
     if let Ok(r) = &first {
-        if r.converged {
+        // An observer that stopped the run stops the call: no fallback, no companion.
+        if r.converged || matches!(r.termination, Termination::Observer { .. }) {
             let mut kept = first.expect("checked Ok");
             let planar = m.problem.shape().is_some_and(|s| s.dim == 2);
-            if choice.method == Method::Condensed && planar {
+            if choice.method == Method::Condensed && planar && kept.converged {
                 kept = companion(m, theta0, kept, &mut choice);
             }
             kept.seconds = clock.elapsed().as_secs_f64();
@@ -217,9 +215,6 @@ pub(super) fn run_auto<Q: OptimProblem + ?Sized>(
         why,
         kept: kept.method,
     });
-    if m.opts.progress {
-        eprintln!("method auto: {choice}");
-    }
     kept.seconds = clock.elapsed().as_secs_f64();
     kept.choice = Some(choice);
     Ok(kept)
@@ -241,7 +236,7 @@ fn companion<Q: OptimProblem + ?Sized>(
         method: Method::Riccati,
         ..m.opts.clone()
     };
-    let other = super::riccati::run(m.problem, theta0, &opts);
+    let other = super::riccati::run(m, theta0, &opts);
     let (kept, note) = match other {
         Ok(r) if r.converged && r.objective < condensed.objective * (1.0 - 1e-12) => {
             let note = format!(

@@ -29,8 +29,7 @@
 //! - [`supervisor`]: our stopping rules around argmin's solvers, the restarts, [`Termination`];
 //! - [`bounds`]: the sine reparametrisation of force bounds ([`Bounds`]) and the KKT measure;
 //! - [`polish`]: the gradient polish;
-//! - [`observers`]: user observers ([`Minimizer::add_observer`], [`History`],
-//!   [`ProgressObserver`]).
+//! - [`observers`]: user observers ([`Minimizer::add_observer`], [`History`]).
 //!
 //! # The argmin problem
 //! [`ArgminAdapter`] is the problem as an argmin problem: it implements [`CostFunction`],
@@ -140,9 +139,12 @@
 //!
 //! # Observers
 //! [`Minimizer::add_observer`] takes any argmin [`Observe`] on [`ObservedState`] (θ, J, ∇_θJ)
-//! with an [`ObserverMode`]; they are driven through each executor's
-//! [`add_observer`](argmin::core::Executor::add_observer) (module [`observers`]). [`History`]
-//! records the iterates; [`OptimOptions::progress`] adds [`ProgressObserver`].
+//! with an [`ObserverMode`]; every solver calls them, the argmin ones through each executor's
+//! [`add_observer`](argmin::core::Executor::add_observer) and the structured ones
+//! ([`Method::Riccati`], [`Method::Condensed`]) after each of their accepted iterations
+//! (module [`observers`]). [`History`] records the iterates. The library prints nothing: what a
+//! run did is in its [`OptimResult`] (with [`Method::Auto`], [`OptimResult::choice`] says which
+//! method ran and why) and in what its observers saw; a program decides what to show.
 //!
 //! # Reference
 //! J. Nocedal, S. J. Wright, *Numerical Optimization*, 2nd ed., Springer 2006: L-BFGS (Alg. 7.5),
@@ -174,7 +176,7 @@ pub use adapter::{ArgminAdapter, EvalCounts, HessianOperator};
 pub use any::{scene_start, AnyProblem, SpatialProblem, Values, RICCATI_PLANAR};
 pub use bounds::{Bounds, ACTIVE_BOUND_TOL};
 pub use choice::{choose_method, condensed_max_params, Fallback, MethodChoice};
-pub use observers::{History, ObservedState, ProgressObserver, Record};
+pub use observers::{History, ObservedState, Record};
 pub use polish::POLISH_COST_TOL;
 pub use problem::{
     ineffective_params, resolved_control_limit, HessianVec, NoEffectCheck, OptimProblem,
@@ -228,12 +230,10 @@ pub enum Method {
     /// [`Method::Riccati`]: the sensitivities of the bending moments to θ by forward dual
     /// numbers and a dense box QP, with NL2SOL's structured secant term for the residual
     /// curvature. Its cost per iteration grows with N times the number of parameters, so it is
-    /// the faster choice for few parameters, not for long per-step horizons. Table 3.4
-    /// (`cargo bench --bench ocp -- ocp_table_3_4`): all ten rows converge in 14–18 ms in total
-    /// (`riccati` 29–31 ms, trust region 101 ms, L-BFGS 126 ms), at the trust region's
-    /// objective on five rows, lower on rows 1 (22.93 against 27.25) and 10, higher on row 3
-    /// (another local minimum, +0.16 %) and by 1.5–2.4·10⁻⁶ on rows 6 and 8 (other local
-    /// minima, which `riccati` avoids on these rows). A stalled run is finished by the trust
+    /// the faster choice for few parameters (thesis Table 3.4's eleven per-step forces: about
+    /// half the Riccati solver's time, `docs/benchmarks.md`), not for long per-step horizons.
+    /// The two may end in different local minima of a nonconvex problem, which is why
+    /// [`Method::Auto`] runs both when it picks this one. A stalled run is finished by the trust
     /// region as for `riccati`.
     Condensed,
 }
@@ -330,8 +330,6 @@ pub struct OptimOptions {
     /// Newton steps of the gradient polish (module docs); 0 turns it off. Default 5: from where
     /// cost-based globalisation stalls one or two quadratically convergent steps suffice.
     pub polish_steps: usize,
-    /// Print iteration, cost and ‖g‖ to stderr through an argmin observer. Default `false`.
-    pub progress: bool,
     /// The second-order model of [`Method::Riccati`] ([`crate::ocp::Curvature`]; ignored by
     /// the other methods). Default [`Curvature::Auto`](crate::ocp::Curvature::Auto):
     /// Gauss-Newton, then the exact Hessian from the first step Gauss-Newton predicts poorly.
@@ -356,7 +354,6 @@ impl Default for OptimOptions {
             cg_max_iters: None,
             max_restarts: 3,
             polish_steps: 5,
-            progress: false,
             curvature: crate::ocp::Curvature::Auto,
         }
     }
@@ -489,9 +486,12 @@ pub struct OptimResult {
     pub choice: Option<MethodChoice>,
 }
 
-/// [`minimize`] with observers: argmin's builder style. The observers see the argmin solvers'
-/// iterations (L-BFGS, the trust region, Newton-CG), not the structured solvers' ([`Method::Auto`]
-/// may choose one): ask for a method to observe it.
+/// [`minimize`] with observers: argmin's builder style. Every solver shows its iterations to
+/// the observers: L-BFGS, the trust region and Newton-CG through argmin, the Riccati and
+/// condensed solvers after each accepted iteration (module [`observers`]). When one call runs
+/// several solvers one after the other ([`Method::Auto`]'s fallback or its Riccati companion
+/// run, a structured run finished by the trust region), each is shown as a run of its own:
+/// `observe_init` with its name, its iterations, `observe_final`.
 ///
 /// ```
 /// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
@@ -571,7 +571,7 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         check_start(problem, theta0)?;
         if matches!(opts.method, Method::Riccati | Method::Condensed) {
             riccati::check_start_point(problem, theta0, opts)?;
-            return riccati::run(problem, theta0, opts);
+            return riccati::run(self, theta0, opts);
         }
         if opts.method != Method::Lbfgs && problem.hessian().is_none() {
             return Err(adapter::no_hessian());
@@ -593,10 +593,12 @@ impl<'p, Q: OptimProblem + ?Sized> Minimizer<'p, Q> {
         };
         let scale = if gnorm0 > 0.0 { first / gnorm0 } else { 1.0 };
         let adapter = adapter.with_scale(scale);
-        let observers = observers::observers_with_progress(&self.observers, opts.progress);
-        if !observers.is_empty() {
-            let mut relay =
-                observers::Relay::new(observers, opts.max_iters as u64, opts.target_cost);
+        if !self.observers.is_empty() {
+            let mut relay = observers::Relay::new(
+                self.observers.clone(),
+                opts.max_iters as u64,
+                opts.target_cost,
+            );
             if let Err(e) = relay.init(opts.method.name(), &start) {
                 *adapter.shared.observer_stop.borrow_mut() = Some(e.to_string());
             }

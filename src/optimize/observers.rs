@@ -9,7 +9,7 @@
 //! [`Executor::add_observer`](argmin::core::Executor::add_observer) receives one bridge, which
 //! turns every argmin iteration into an [`ObservedState`] holding θ, J(θ) and ∇_θJ(θ), numbered
 //! over the whole run, and hands it, with argmin's key-value log of that iteration (plus
-//! `grad_norm` = ‖∇_θJ‖), to the user's observers under their [`ObserverMode`]s (argmin's own
+//! `grad_norm` = ‖∇_θJ‖), to the user's observers under their [`ObserverMode`](super::ObserverMode)s (argmin's own
 //! [`Observers`] container does the filtering, so `NewBest` and `Every(k)` mean what they mean
 //! in argmin). Then:
 //! - `observe_init` once, at the start θ₀ (iteration 0), with the solver's name;
@@ -19,12 +19,18 @@
 //! - `observe_final` once, at the result, with argmin's `SolverConverged` as the termination
 //!   reason of a converged run and `SolverExit(why)` otherwise.
 //!
+//! The structured solvers ([`Method::Riccati`](super::Method::Riccati),
+//! [`Method::Condensed`](super::Method::Condensed)) are shown the same way: `observe_init` at
+//! θ₀, `observe_iter` after each accepted iteration (log keys `alpha`, `regularisation`,
+//! `projected_grad_norm` before the step), `observe_final` at the result, with θ, J and ∇_θJ
+//! evaluated by the problem itself.
+//!
 //! An observer that returns an error stops the run: [`minimize`](super::minimize) returns the
 //! point reached with [`Termination::Observer`].
 
 use std::sync::{Arc, Mutex};
 
-use argmin::core::observers::{Observe, ObserverMode, Observers};
+use argmin::core::observers::{Observe, Observers};
 use argmin::core::{IterState, KvValue, State, TerminationReason, KV};
 
 use super::point::Point;
@@ -52,22 +58,27 @@ impl Relay {
         }
     }
 
-    fn show(&mut self, p: &Point) -> ObservedState {
+    fn show(&mut self, at: Seen<'_>) -> ObservedState {
         let mut s = self
             .state
             .take()
             .unwrap_or_default()
-            .param(p.theta.clone())
-            .cost(p.value)
-            .gradient(p.grad_theta.clone());
+            .param(at.theta.to_vec())
+            .cost(at.value)
+            .gradient(at.gradient.to_vec());
         s.update();
         s
     }
 
     /// Iteration 0: the start.
     pub(crate) fn init(&mut self, name: &str, p: &Point) -> Result<(), ArgminError> {
-        let s = self.show(p);
-        let kv = KV::new().merge(grad_kv(p));
+        self.init_at(name, Seen::of(p))
+    }
+
+    /// Iteration 0 at `at`.
+    pub(crate) fn init_at(&mut self, name: &str, at: Seen<'_>) -> Result<(), ArgminError> {
+        let s = self.show(at);
+        let kv = KV::new().merge(grad_kv(at.gradient));
         let out = self.observers.observe_init(name, &s, &kv);
         self.state = Some(s);
         out
@@ -75,8 +86,13 @@ impl Relay {
 
     /// One iteration ending at `p`, with the solver's log `kv`.
     pub(crate) fn iter(&mut self, p: &Point, kv: &KV) -> Result<(), ArgminError> {
-        let mut s = self.show(p);
-        let kv = kv.clone().merge(grad_kv(p));
+        self.iter_at(Seen::of(p), kv)
+    }
+
+    /// One iteration ending at `at`, with the solver's log `kv`.
+    pub(crate) fn iter_at(&mut self, at: Seen<'_>, kv: &KV) -> Result<(), ArgminError> {
+        let mut s = self.show(at);
+        let kv = kv.clone().merge(grad_kv(at.gradient));
         let out = self.observers.observe_iter(&s, &kv);
         s.increment_iter();
         self.state = Some(s);
@@ -85,7 +101,12 @@ impl Relay {
 
     /// The end of the run at `p`.
     pub(crate) fn finish(&mut self, p: &Point, t: &Termination) -> Result<(), ArgminError> {
-        let s = self.show(p).terminate_with(if t.is_converged() {
+        self.finish_at(Seen::of(p), t)
+    }
+
+    /// The end of the run at `at`.
+    pub(crate) fn finish_at(&mut self, at: Seen<'_>, t: &Termination) -> Result<(), ArgminError> {
+        let s = self.show(at).terminate_with(if t.is_converged() {
             TerminationReason::SolverConverged
         } else {
             TerminationReason::SolverExit(t.to_string())
@@ -96,45 +117,28 @@ impl Relay {
     }
 }
 
-fn grad_kv(p: &Point) -> KV {
-    let mut kv = KV::new();
-    kv.insert("grad_norm", KvValue::Float(norm(&p.grad_theta)));
-    kv
+/// A point as the observers are shown it: θ, J(θ) and ∇_θJ(θ).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Seen<'a> {
+    pub(crate) theta: &'a [f64],
+    pub(crate) value: f64,
+    pub(crate) gradient: &'a [f64],
 }
 
-/// Prints the start, then iteration, J and ‖∇J‖ after each iteration to stderr (what
-/// [`OptimOptions::progress`](super::OptimOptions::progress) adds).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ProgressObserver;
-
-impl Observe<ObservedState> for ProgressObserver {
-    fn observe_init(
-        &mut self,
-        name: &str,
-        state: &ObservedState,
-        _kv: &KV,
-    ) -> Result<(), ArgminError> {
-        eprintln!("{name}: start, cost {:.12e}", state.get_cost());
-        Ok(())
+impl<'a> Seen<'a> {
+    fn of(p: &'a Point) -> Self {
+        Seen {
+            theta: &p.theta,
+            value: p.value,
+            gradient: &p.grad_theta,
+        }
     }
+}
 
-    fn observe_iter(&mut self, state: &ObservedState, kv: &KV) -> Result<(), ArgminError> {
-        let g = kv
-            .get("grad_norm")
-            .and_then(KvValue::get_float)
-            .map_or_else(|| "-".to_string(), |g| format!("{g:.3e}"));
-        let polish = kv
-            .get("polish")
-            .and_then(KvValue::get_bool)
-            .unwrap_or(false);
-        eprintln!(
-            "iter {:>5}  cost {:.12e}  |g| {g}{}",
-            state.get_iter() + 1,
-            state.get_cost(),
-            if polish { "  (polish)" } else { "" }
-        );
-        Ok(())
-    }
+fn grad_kv(gradient: &[f64]) -> KV {
+    let mut kv = KV::new();
+    kv.insert("grad_norm", KvValue::Float(norm(gradient)));
+    kv
 }
 
 /// One entry of a [`History`].
@@ -227,16 +231,4 @@ impl Observe<ObservedState> for History {
         self.push(&s, kv);
         Ok(())
     }
-}
-
-/// The observers of a [`Minimizer`](super::Minimizer), each with its [`ObserverMode`].
-pub(crate) fn observers_with_progress(
-    user: &Observers<ObservedState>,
-    progress: bool,
-) -> Observers<ObservedState> {
-    let mut all = user.clone();
-    if progress {
-        all.push(ProgressObserver, ObserverMode::Always);
-    }
-    all
 }

@@ -9,7 +9,7 @@
 
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
 use crate::error::{Error, Result};
-use crate::ocp::{OcpOptions, OcpResult};
+use crate::ocp::{IterationObserver, OcpOptions, OcpResult};
 
 /// A differentiable objective J(θ) of n real parameters: what the optimisers need.
 ///
@@ -104,18 +104,33 @@ pub trait OptimProblem {
     /// Runs the structured Riccati solver ([`Method::Riccati`](super::Method::Riccati),
     /// [`crate::ocp`]) from θ₀, if the problem has one (default `None`: refused).
     ///
+    /// `observer`, if given, is called after every accepted iteration and may stop the run
+    /// ([`IterationObserver`]).
+    ///
     /// # Errors
     /// The solver's typed error (e.g. an unsupported objective, tip or control map).
-    fn riccati(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
+    fn riccati(
+        &self,
+        _theta0: &[f64],
+        _options: &OcpOptions,
+        _observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
         None
     }
 
     /// Runs the condensed Gauss-Newton solver ([`Method::Condensed`](super::Method::Condensed),
     /// [`crate::ocp::Condensed`]) from θ₀, if the problem has one (default `None`: refused).
     ///
+    /// `observer` as for [`OptimProblem::riccati`].
+    ///
     /// # Errors
     /// The solver's typed error (as [`OptimProblem::riccati`]).
-    fn condensed(&self, _theta0: &[f64], _options: &OcpOptions) -> Option<Result<OcpResult>> {
+    fn condensed(
+        &self,
+        _theta0: &[f64],
+        _options: &OcpOptions,
+        _observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
         None
     }
 
@@ -279,24 +294,56 @@ impl_optim_problem! {
     2,
     /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of an objective in
     /// Gauss-Newton form ([`Objective::gauss_newton`]).
-    fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::solve(self, theta0, options))
+    fn riccati(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Solver::new(self, options).and_then(|mut s| match observer {
+            Some(o) => s.solve_observed(theta0, o),
+            None => s.solve(theta0),
+        }))
     }
     /// [`crate::ocp::Condensed`]: the same problems as the Riccati solver.
-    fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))
+    fn condensed(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| match observer {
+            Some(o) => c.solve_observed(theta0, o),
+            None => c.solve(theta0),
+        }))
     }
 }
 impl_optim_problem! {
     3,
     /// [`crate::ocp::solve`] in the spatial model: the 2-axis control (two controls per stage)
     /// and the vector moment.
-    fn riccati(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::solve(self, theta0, options))
+    fn riccati(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Solver::new(self, options).and_then(|mut s| match observer {
+            Some(o) => s.solve_observed(theta0, o),
+            None => s.solve(theta0),
+        }))
     }
     /// [`crate::ocp::Condensed`] in the spatial model: the 2-axis control and the vector moment.
-    fn condensed(&self, theta0: &[f64], options: &OcpOptions) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| c.solve(theta0)))
+    fn condensed(
+        &self,
+        theta0: &[f64],
+        options: &OcpOptions,
+        observer: Option<IterationObserver<'_>>,
+    ) -> Option<Result<OcpResult>> {
+        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| match observer {
+            Some(o) => c.solve_observed(theta0, o),
+            None => c.solve(theta0),
+        }))
     }
 }
 

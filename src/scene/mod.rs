@@ -342,8 +342,8 @@ pub enum ObjectiveKind {
         /// The exponent p (finite, ≥ 2: [`ObjectiveKind::check`]).
         exponent: f64,
     },
-    /// The rainflow Miner damage D of the wellhead stress ([`crate::FatigueObjective`], issue 31
-    /// item 5): `kind = "fatigue"`, resolved when the scene is read from its `[fatigue]` table
+    /// The rainflow Miner damage D of the wellhead stress ([`crate::FatigueObjective`],
+    /// docs/fatigue.md): `kind = "fatigue"`, resolved when the scene is read from its `[fatigue]` table
     /// and l₁ (a scene file writes it back as `kind = "fatigue"`; not serialised otherwise).
     #[serde(skip)]
     Fatigue(crate::fatigue::WellheadDamage),

@@ -1,4 +1,5 @@
-//! A riser described as a pipe (`[pipe]`, `[water]`; OCEAN.md §1, docs/scene-format.md): the
+//! A riser described as a pipe (`[pipe]`, `[water]`; docs/ocean.md "From a pipe to a chain",
+//! docs/scene-format.md): the
 //! chain's lengths, masses and spring constants from the pipe's section and materials.
 
 use serde::{Deserialize, Serialize};
@@ -177,14 +178,14 @@ impl Pipe {
     }
 
     /// Submerged weight per unit length w = g (ρ_s A_s + ρ_c A_i − ρ_w A_o) \[N/m\] (the value
-    /// for `[loads] axial_weight`; OCEAN.md §1).
+    /// for `[loads] axial_weight`; docs/ocean.md "From a pipe to a chain").
     pub fn submerged_weight(&self, water_density: f64, g: f64) -> f64 {
         g * (self.steel_density * self.steel_area() + self.contents_density * self.inner_area()
             - water_density * self.outer_area())
     }
 
     /// Morison drag per unit length ½ ρ_w C_d D_o \[kg/m²\]: a node of cell length l moving at
-    /// v relative to the water feels −½ ρ_w C_d D_o l |v| v (OCEAN.md §3).
+    /// v relative to the water feels −½ ρ_w C_d D_o l |v| v (Morison's drag, docs/ocean.md).
     pub fn drag_per_length(&self, water_density: f64) -> f64 {
         0.5 * water_density * self.drag_coefficient * self.outer_diameter
     }
@@ -225,7 +226,8 @@ impl Pipe {
         Ok(())
     }
 
-    /// The chain of n pendulums of this pipe (OCEAN.md §1): lᵢ = L/n; node masses mᵢ = μ l and
+    /// The chain of n pendulums of this pipe (docs/ocean.md "From a pipe to a chain"): lᵢ = L/n;
+    /// node masses mᵢ = μ l and
     /// half a cell, μ l/2, at the tip (the lumping whose first frequency converges at order 2 in
     /// n, tests/pipe.rs); interior springs k = EI/l; a clamped end (the base of a cantilever,
     /// riser or fixed-fixed beam, the tip of a riser or fixed-fixed beam) 2EI/l unless

@@ -37,7 +37,8 @@ pub enum WaveLumping {
     Cell,
 }
 
-/// An irregular sea state (`[loads.waves]`, OCEAN.md §2): a spectrum given by H_s and T_p, a
+/// An irregular sea state (`[loads.waves]`, docs/ocean.md "Irregular seas"): a spectrum given by
+/// H_s and T_p, a
 /// mean direction and a seeded realisation. The water depth is `[water] depth`
 /// ([`Scene::wave_depth`]).
 #[derive(Clone, Copy, Debug, PartialEq)]

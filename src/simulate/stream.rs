@@ -1,6 +1,6 @@
 //! Streaming simulation: the states t_k, k = 0..=N, handed to an observer as they are produced
 //! ([`simulate_streaming`]), so that a long run holds O(n) memory instead of the O(N·n) of a
-//! stored [`Trajectory`](super::Trajectory) (issue 30, item 5: a 3-hour sea state of the 300 m
+//! stored [`Trajectory`](super::Trajectory) (a 3-hour sea state of the 300 m
 //! riser, `examples/scenes/riser_300m.toml`, is 864 000 steps of 60 pendulums, ≈ 2.5 GB as a
 //! planar trajectory of q, p, λ and μ at 48 bytes per pendulum and step). [`moment_history`]
 //! keeps only the base moment (O(N) values), which is all the fatigue path reads.

@@ -87,7 +87,6 @@ fn options(a: &OptimizeArgs) -> Result<OptimOptions, Failure> {
         grad_tol: a.gtol.unwrap_or(defaults.grad_tol),
         bound: a.bound,
         bounds: a.bounds,
-        progress: false,
         ..defaults
     })
 }

@@ -13,7 +13,7 @@
 //! The same guidance, II.5.(3)(E), gives the table's spectrum: the two-parameter
 //! Pierson-Moskowitz (Bretschneider) sea
 //! S(ω | H_s, T_z) = H_s²/(4π) (2π/T_z)⁴ ω⁻⁵ exp(−(1/π) (2π/T_z)⁴ ω⁻⁴).
-//! It is [`crate::ocean::SpectrumKind::PiersonMoskowitz`] (OCEAN.md §2) with
+//! It is [`crate::ocean::SpectrumKind::PiersonMoskowitz`] (docs/ocean.md "Irregular seas") with
 //! ω_p⁴ = 4/(5π) (2π/T_z)⁴ (set dS/dω = 0), i.e. T_p = (5π/4)^¼ T_z ≈ 1.4077 T_z
 //! ([`tp_over_tz`]): the conversion this module applies. A scene run on these cells should keep
 //! γ = 1 (a Pierson-Moskowitz sea) to be the table's sea.

@@ -1,4 +1,5 @@
-//! Axial loads along the beam's axis y (OCEAN.md §1, docs/conventions.md "Axial loads"): the top
+//! Axial loads along the beam's axis y (docs/ocean.md "From a pipe to a chain",
+//! docs/conventions.md "Axial loads"): the top
 //! tension at the tip and the submerged weight on every node. Neither adds a stiffness of its own:
 //! the lateral stiffening of the effective tension T_e(y) = T − w (L − y) comes from the length
 //! constraints, through the geometry.

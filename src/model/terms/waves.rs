@@ -1,4 +1,4 @@
-//! Irregular waves on the chain (OCEAN.md §2–3, docs/conventions.md "Waves"): the wave
+//! Irregular waves on the chain (docs/ocean.md, docs/conventions.md "Waves"): the wave
 //! kinematics of every pendulum over the whole record, precomputed by inverse FFT, and the
 //! Froude-Krylov + added-mass inertia load. The waves' drag is the drag relative to the water
 //! ([`super::CurrentDrag`]), whose water momentum P(t) gains the waves' share.
@@ -52,7 +52,8 @@ pub struct WaveInputs {
     pub lengths: Vec<f64>,
     /// Node masses mᵢ \[kg\] (the weights of the water momentum, as for the current).
     pub masses: Vec<f64>,
-    /// Inertia coefficient per unit length ρ_w (1 + C_a) A_o \[kg/m\] (OCEAN.md §3).
+    /// Inertia coefficient per unit length ρ_w (1 + C_a) A_o \[kg/m\] (the Morison inertia term,
+    /// docs/ocean.md "The loads of the water on the pipe").
     pub inertia_per_length: f64,
     /// Unit direction (d_x, d_z) of the waves in the transverse plane.
     pub direction: [f64; 2],
@@ -428,7 +429,8 @@ impl WaveField {
     }
 }
 
-/// The Froude-Krylov + added-mass inertia load of the waves (OCEAN.md §3): the force
+/// The Froude-Krylov + added-mass inertia load of the waves (docs/ocean.md, "The loads of the
+/// water on the pipe"): the force
 /// F_k = ρ_w (1 + C_a) A_o c_k u̇_k(t) e on node k along the mean direction e, a known function
 /// of time and depth. Conservative in q: U = −Σ_k F_k · r_k with r_k = Σ_{j≤k} l_j q_j, so
 /// U = −Σⱼ Gⱼ(t) e · qⱼ and ∂U/∂qⱼ = −Gⱼ(t) e (transverse components) with Gⱼ of

@@ -171,7 +171,6 @@ fn solves_equal_dense<const DIM: usize>(case: Case) {
     band.solve(&ch, (&q, &c), (h, &ctx), &mut pb).unwrap();
     solve_half_step(&mut dense, &ch, (&q, &c), (h, &ctx), &mut pd).unwrap();
     let (e, scale) = rel(&pb, &pd);
-    println!("n {:2} DIM {DIM} {:?}: p½ {e:.1e}", case.n, case.support);
     assert!(e <= 1e-12 && scale > 0.1, "{case:?}: p½ {e:.1e}");
     // The half step moved p: the dampers (and drag) act.
     assert!(rel(&pd, &c).0 > 1e-4, "{case:?}: p½ = c");
@@ -180,7 +179,6 @@ fn solves_equal_dense<const DIM: usize>(case: Case) {
     band.apply_w_transpose(&mut sb);
     dense.apply_w_transpose(&mut sd);
     let (e, _) = rel(&sb, &sd);
-    println!("n {:2} DIM {DIM} {:?}: Wᵀs {e:.1e}", case.n, case.support);
     assert!(e <= 1e-12, "{case:?}: Wᵀs {e:.1e}");
     band.factor_newton(&ch, (&q, &qnew), h).unwrap();
     dense.factor_newton(&ch, (&q, &qnew), h).unwrap();
@@ -196,10 +194,6 @@ fn solves_equal_dense<const DIM: usize>(case: Case) {
             dense.newton_solve(&mut xd);
         }
         let e = rel_flat(&xb, &xd);
-        println!(
-            "n {:2} DIM {DIM} transpose {transpose}: J solve {e:.1e}",
-            case.n
-        );
         assert!(
             e <= 1e-12,
             "{case:?} transpose {transpose}: J solve {e:.1e}"
@@ -268,15 +262,6 @@ fn trajectories_equal_dense<const DIM: usize>(case: Case) {
     let ps = |t: &[State<f64, DIM>]| t.iter().map(|s| s.p.clone()).collect::<Vec<_>>();
     let (eq, _) = rel_steps(&qs(&a), &qs(&b));
     let (ep, pmax) = rel_steps(&ps(&a), &ps(&b));
-    println!(
-        "n {:2} DIM {DIM} {:?} reaction {} drag {}: q {eq:.1e}, p {ep:.1e} (max |p| {pmax:.2}), \
-         Newton counts differ at {differ} of {} steps",
-        case.n,
-        case.support,
-        case.reaction,
-        case.drag,
-        ia.len()
-    );
     assert!(eq <= 1e-12, "{case:?}: q {eq:.1e}");
     assert!(ep <= 1e-12, "{case:?}: p {ep:.1e}");
     assert!(pmax > 0.01, "{case:?}: the beam moves ({pmax})");
@@ -329,7 +314,6 @@ fn dual_equal<const DIM: usize>(case: Case) {
     };
     let (ea, eb): (Vec<_>, Vec<_>) = (a.iter().map(eps).collect(), b.iter().map(eps).collect());
     let (e, scale) = rel_steps(&ea, &eb);
-    println!("DIM {DIM}: ∂(q, p)/∂c {e:.1e} relative (max {scale:.2e})");
     assert!(
         scale > 1e-6,
         "the dampers' derivative is exercised ({scale})"
@@ -400,10 +384,6 @@ fn adjoint_equals_dual<const DIM: usize>(support: Support, reaction: bool) {
     let g_fwd = forward_value(&chain.lift::<Dual64>(), h, steps, &ud, &obj)
         .unwrap()
         .eps;
-    println!(
-        "{what}: dJ/du·d {g_fwd:.6e}, adjoint {:.1e} relative",
-        ((g_adj - g_fwd) / g_fwd).abs()
-    );
     assert!(g_fwd.abs() > 1e-8, "{what}: exercised");
     assert!(
         (g_adj - g_fwd).abs() <= 1e-12 * g_fwd.abs(),
@@ -415,10 +395,6 @@ fn adjoint_equals_dual<const DIM: usize>(support: Support, reaction: bool) {
         ch.set_parameter(p, Dual64::new(at, 1.0)).unwrap();
         let fwd = forward_value(&ch, h, steps, &ud, &obj).unwrap().eps;
         let a = adj.parameter_gradient[i];
-        println!(
-            "{what}: dJ/d{p:?} {fwd:.6e}, adjoint {:.1e} relative",
-            ((a - fwd) / fwd).abs()
-        );
         assert!(fwd.abs() > 1e-10, "{what}: {p:?} exercised");
         assert!(
             (a - fwd).abs() <= 1e-12 * fwd.abs(),

@@ -230,7 +230,6 @@ impl SolverArgs {
             grad_tol: self.gtol.unwrap_or(defaults.grad_tol),
             bound,
             bounds,
-            progress: false,
             ..defaults
         })
     }

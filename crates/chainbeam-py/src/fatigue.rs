@@ -659,6 +659,8 @@ pub fn _fatigue_combine<'py>(
                     force: r[j].3,
                     gains: r[j].4,
                     seed_damages: vec![r[j].1],
+                    // The executor's one-cell runs do not carry the thrust yet.
+                    thrust: None,
                 })
                 .collect();
             let life = life_years(total.damage_per_year, spec.dff)
@@ -671,6 +673,8 @@ pub fn _fatigue_combine<'py>(
                 seed_lives: vec![life],
                 // The executor's one-cell runs return the wellhead's numbers only.
                 hotspots: Vec::new(),
+                thrust_rms: None,
+                thrust_peak: None,
             });
         }
         let study = Study {

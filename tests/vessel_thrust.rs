@@ -365,3 +365,47 @@ fn constant_thrust_lowers_the_moment_and_mpc_refuses_typed() {
         "{e:?}"
     );
 }
+
+/// `chainbeam fatigue`'s thrust report: a PD law (given gains, no tuning) run as a fatigue
+/// controller on a thrust scene reports (rms, peak) of the thrust the plant applied, the same
+/// numbers as the closed loop's own record (recomputed here from its per-step thrusts), within
+/// the bound; `none` reports zero thrust, and a scene whose control is a force reports none.
+#[test]
+fn fatigue_controllers_report_the_thrust_they_applied() {
+    use chainbeam::fatigue_study::{run_controller, thrust_stats, ControlSettings, ControllerKind};
+    let (bound, rate) = (1.0, 5.0);
+    let mut s = scene(10.0, 300);
+    if let Some(v) = s.vessel.as_mut() {
+        v.thrust_bound = Some(bound);
+        v.thrust_rate_bound = Some(rate);
+    }
+    let settings = ControlSettings {
+        interval: 0.05,
+        pd_gains: Some([0.0, 50.0, 5.0]),
+        ..ControlSettings::default()
+    };
+    let pd = run_controller(&s, ControllerKind::Pd, &settings).unwrap();
+    let [rms, peak] = pd.thrust.expect("a thrust scene reports its thrust");
+    // The same loop by hand: the PD law clamps at the thrust bound (control_bound).
+    let mut law = mpc::PdLaw {
+        bias: 0.0,
+        kp: 50.0,
+        kd: 5.0,
+        bound,
+    };
+    let r = mpc::run_closed_loop(&s, 0.05, &mut law).unwrap();
+    let [rms_ref, peak_ref] = thrust_stats(&r.control);
+    let direct = (r.control.iter().map(|f| f * f).sum::<f64>() / r.control.len() as f64).sqrt();
+    assert_eq!([rms, peak], [rms_ref, peak_ref]);
+    assert!((rms - direct).abs() <= 1e-15 * direct);
+    assert!(
+        rms > 0.0 && peak <= bound && rms <= peak,
+        "rms {rms}, peak {peak}"
+    );
+    let none = run_controller(&s, ControllerKind::None, &settings).unwrap();
+    assert_eq!(none.thrust, Some([0.0, 0.0]));
+    let force = catalogue::riser(5);
+    let none = run_controller(&force, ControllerKind::None, &settings).unwrap();
+    assert_eq!(none.thrust, None);
+    println!("pd thrust rms {rms} N, peak {peak} N");
+}

@@ -118,11 +118,13 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         let Some((bound, change)) = self.limits else {
             return self.command;
         };
-        let c = self.command.re().clamp(-bound, bound);
-        let target = if c == self.command.re() {
-            self.command
+        let c = self.command.re();
+        let target = if c > bound {
+            D::from(bound)
+        } else if c < -bound {
+            D::from(-bound)
         } else {
-            D::from(c)
+            self.command
         };
         let d = target.re() - prev.re();
         if d > change {

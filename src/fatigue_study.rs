@@ -385,6 +385,18 @@ pub struct ControlledRecord {
     /// (`None` for `scene` and `none`), from which [`replay_joint_moments`] recomputes the
     /// run's joint torques.
     pub decisions: Option<Vec<f64>>,
+    /// The thrust applied, when the control is the thrust on the vessel: (rms, peak) \[N\] of
+    /// F_k over k = 0..N ([`thrust_stats`]; `none`: zero); `None` otherwise.
+    pub thrust: Option<[f64; 2]>,
+}
+
+/// (rms, peak) of the thrusts F_0..F_N: (Σ F_k²/(N + 1))^½ and max |F_k| \[N\].
+pub fn thrust_stats(thrust: &[f64]) -> [f64; 2] {
+    if thrust.is_empty() {
+        return [0.0; 2];
+    }
+    let ms = thrust.iter().map(|f| f * f).sum::<f64>() / thrust.len() as f64;
+    [ms.sqrt(), thrust.iter().fold(0.0f64, |m, f| m.max(f.abs()))]
 }
 
 /// One controller's outcome in one cell.
@@ -406,6 +418,9 @@ pub struct CellOutcome {
     pub force: Option<f64>,
     /// The PD law's gains in this cell.
     pub gains: Option<[f64; 3]>,
+    /// The thrust on the vessel in this cell (a thrust scene): (rms over its seeds' records,
+    /// the largest |F| of any seed) \[N\].
+    pub thrust: Option<[f64; 2]>,
 }
 
 /// The spread of a cell's Miner sum over its seeds ([`CellOutcome::seed_spread`]).
@@ -478,6 +493,12 @@ pub struct ControllerOutcome {
     /// Per hot spot of the scene's `[[fatigue.hotspot]]` (empty without them): the damage per
     /// year and life over the diagram, each cell's the mean over the seeds.
     pub hotspots: Vec<HotSpotOutcome>,
+    /// The thrust on the vessel over the diagram (a thrust scene): the rms
+    /// (Σ_s p_s F²_rms,s / Σ_s p_s)^½ \[N\], the cells' mean squares weighted by their
+    /// probabilities.
+    pub thrust_rms: Option<f64>,
+    /// The largest |F| of any cell and seed \[N\].
+    pub thrust_peak: Option<f64>,
 }
 
 /// A hot spot's outcome over the diagram, for one controller.
@@ -593,7 +614,9 @@ pub fn check_control_can_act(scene: &Scene, kind: ControllerKind) -> Result<(), 
     }
     let n = scene.n();
     let node = scene.control.as_ref().map_or(n, |c| c.node);
-    let locked = scene.beam.support.holds_tip() && !scene.beam.reaction_force;
+    // The vessel's thrust moves the top the vessel holds: it can act.
+    let locked =
+        scene.beam.support.holds_tip() && !scene.beam.reaction_force && scene.thrust().is_none();
     if locked && node == n {
         return Err(StudyError::ControlCannotAct {
             controller: kind.name(),
@@ -614,10 +637,13 @@ pub fn run_controller(
     kind: ControllerKind,
     settings: &ControlSettings,
 ) -> crate::Result<ControlledRecord> {
-    let (interval, bound, effort) = (settings.interval, settings.bound(), settings.mpc.effort);
+    let (interval, effort) = (settings.interval, settings.mpc.effort);
+    let bound = control_bound(scene, settings);
+    let thrust_scene = scene.thrust().is_some();
     let closed = |c: &mut dyn Controller, force, gains| {
         let r = run_closed_loop(scene, interval, c)?;
         Ok(ControlledRecord {
+            thrust: thrust_scene.then(|| thrust_stats(&r.control)),
             duration_s: r.summary.simulated_seconds,
             moment: r.moment,
             moment_x: None,
@@ -637,7 +663,14 @@ pub fn run_controller(
                 scene
             };
             let history = moment_history(run)?;
+            // The thrust of `scene` is its `[control]` per step (none: zero).
+            let thrust = match (thrust_scene, kind) {
+                (false, _) => None,
+                (true, ControllerKind::None) => Some([0.0; 2]),
+                (true, _) => Some(thrust_stats(&scene_controls(run)?)),
+            };
             Ok(ControlledRecord {
+                thrust,
                 duration_s: history.duration(),
                 moment: history.moment,
                 moment_x: history.moment_x,
@@ -648,7 +681,11 @@ pub fn run_controller(
         }
         ControllerKind::Constant => {
             let training = training_scene(scene, settings)?;
-            let (mut c, _) = ConstantForce::best(&training, bound, effort)?;
+            let mut c = if scene.thrust().is_some() {
+                ConstantForce::best_thrust(&training, bound, effort)?.0
+            } else {
+                ConstantForce::best(&training, bound, effort)?.0
+            };
             let force = c.u;
             closed(&mut c, Some(force), None)
         }
@@ -664,6 +701,37 @@ pub fn run_controller(
     }
 }
 
+/// The per-step controls u_0..u_N a scene's `[control]` applies (none: zeros).
+///
+/// # Errors
+/// The scene's model errors.
+fn scene_controls(scene: &Scene) -> crate::Result<Vec<f64>> {
+    use crate::adjoint::ControlMap;
+    let steps = scene.time.steps;
+    let Some(c) = scene.control.as_ref() else {
+        return Ok(vec![0.0; steps + 1]);
+    };
+    let mut u = vec![0.0; steps + 1];
+    match c.kind {
+        crate::scene::ControlKind::Constant => u.fill(c.values[0]),
+        crate::scene::ControlKind::PerStep => u.copy_from_slice(&c.values),
+        crate::scene::ControlKind::Piecewise => {
+            let map = crate::adjoint::PiecewiseControl {
+                steps,
+                pieces: c.values.len(),
+            };
+            map.controls(&c.values, &mut u);
+        }
+    }
+    Ok(u)
+}
+
+/// The bound of the closed-loop controllers' control on `scene`: the vessel's `thrust_bound`
+/// when the control is the thrust on the vessel, else [`ControlSettings::bound`].
+pub fn control_bound(scene: &Scene, settings: &ControlSettings) -> f64 {
+    scene.thrust().map_or(settings.bound(), |t| t.bound)
+}
+
 /// The PD law of a cell ([`ControlSettings::pd_gains`], or tuned on the first
 /// [`ControlSettings::pd_training`] seconds of `scene`'s record in the scaled, bounded
 /// parameters of [`pd::ScaledPdTuning`] from [`pd::PD_START`]: positive loop gains only).
@@ -672,7 +740,8 @@ pub fn run_controller(
 /// The tuning's errors ([`PdTuning::new`], [`pd::PdScales::of`], [`minimize`]);
 /// [`crate::error::ValueError`] naming `pd_training` for a window that is not positive.
 pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw> {
-    let (interval, bound, effort) = (settings.interval, settings.bound(), settings.mpc.effort);
+    let (interval, effort) = (settings.interval, settings.mpc.effort);
+    let bound = control_bound(scene, settings);
     if let Some([bias, kp, kd]) = settings.pd_gains {
         return Ok(PdLaw {
             bias,
@@ -839,6 +908,7 @@ fn run_cell(
         },
         force: record.force,
         gains: record.gains,
+        thrust: record.thrust,
         hotspots: hot_damages,
     })
 }
@@ -871,6 +941,11 @@ fn run_open_loop_joints(
         force: None,
         gains: None,
         decisions: None,
+        thrust: match (run.thrust().is_some(), kind) {
+            (false, _) => None,
+            (true, ControllerKind::None) => Some([0.0; 2]),
+            (true, _) => Some(thrust_stats(&scene_controls(run)?)),
+        },
     };
     Ok((record, history))
 }
@@ -1057,6 +1132,8 @@ pub struct CellRun {
     pub force: Option<f64>,
     /// The PD law's gains.
     pub gains: Option<[f64; 3]>,
+    /// (rms, peak) of the thrust \[N\] (a thrust scene; [`thrust_stats`]).
+    pub thrust: Option<[f64; 2]>,
     /// The hot spots' Miner sums over the record, in the scene's `[[fatigue.hotspot]]` order
     /// (empty: none assessed).
     pub hotspots: Vec<f64>,
@@ -1221,6 +1298,34 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
                 dff: spot.spec.dff,
             });
         }
+        // The thrust of a cell over its seeds: rms of the seeds' records, the largest peak.
+        let cell_thrust = |s: usize| -> Option<[f64; 2]> {
+            let per_seed: Option<Vec<[f64; 2]>> =
+                (0..k_seeds).map(|i| run_of(s, i, j).thrust).collect();
+            per_seed.filter(|v| !v.is_empty()).map(|v| {
+                let ms = v.iter().map(|t| t[0] * t[0]).sum::<f64>() / v.len() as f64;
+                [ms.sqrt(), v.iter().fold(0.0f64, |m, t| m.max(t[1]))]
+            })
+        };
+        let thrusts: Option<Vec<(f64, [f64; 2])>> = (0..n_cells)
+            .map(|s| cell_thrust(s).map(|t| (run_of(s, 0, j).damage.probability, t)))
+            .collect();
+        let (thrust_rms, thrust_peak) = match &thrusts {
+            Some(t) if !t.is_empty() => {
+                let weight: f64 = t.iter().map(|(p, _)| p).sum();
+                let ms: f64 = t.iter().map(|(p, x)| p * x[0] * x[0]).sum();
+                let rms = if weight > 0.0 {
+                    (ms / weight).sqrt()
+                } else {
+                    0.0
+                };
+                (
+                    Some(rms),
+                    Some(t.iter().fold(0.0f64, |m, (_, x)| m.max(x[1]))),
+                )
+            }
+            _ => (None, None),
+        };
         let cells = (0..n_cells)
             .zip(&combined.cells)
             .map(|(s, &per_year)| {
@@ -1237,6 +1342,7 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
                     damage_per_year: per_year,
                     force: run.force,
                     gains: run.gains,
+                    thrust: cell_thrust(s),
                 }
             })
             .collect();
@@ -1247,6 +1353,8 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
             cells,
             seed_lives,
             hotspots,
+            thrust_rms,
+            thrust_peak,
         });
     }
     Ok(Study { controllers })

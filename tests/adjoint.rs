@@ -19,6 +19,7 @@ fn scene(support: Support, load_node: usize, drag: f64, steps: usize) -> Scene {
             offset: 0.02,
             ramp: 0.08,
             rao: None,
+            ..Vessel::default()
         });
     }
     s.loads.drag = drag;

@@ -321,7 +321,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 129, "number of documented keys");
+    assert_eq!(checked, 134, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -555,6 +555,11 @@ fn every_documented_key_is_read() {
     for (table, key, value) in [
         ("vessel", "offset", "1.5"),
         ("vessel", "ramp", "3.0"),
+        ("vessel", "mass", "5e7"),
+        ("vessel", "added_mass", "2e6"),
+        ("vessel", "damping", "4e5"),
+        ("vessel", "thrust_bound", "2e6"),
+        ("vessel", "thrust_rate_bound", "1e5"),
         ("vessel.rao", "period", "[6.0, 10.0]"),
         ("vessel.rao", "amplitude", "[0.3, 0.9]"),
         ("vessel.rao", "phase", "[-80.0, -90.0]"),

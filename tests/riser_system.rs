@@ -111,6 +111,7 @@ fn the_step_stays_of_order_two_with_a_moving_top() {
             offset: 0.05,
             ramp: 0.2,
             rao: None,
+            ..Vessel::default()
         });
         s.loads.drag = 10.0;
         let steps = (0.1 / h).round() as usize;
@@ -320,6 +321,7 @@ fn a_static_offset_bends_the_riser_as_the_closed_form_says() {
         offset: z0,
         ramp: 1.0,
         rao: None,
+        ..Vessel::default()
     });
     let sol = static_equilibrium(&s).unwrap();
     let a = (t / ei).sqrt();
@@ -756,6 +758,7 @@ fn node_morison_only_dissipates() {
             offset: 5.0,
             ramp: 10.0,
             rao: None,
+            ..Vessel::default()
         });
         let tr = simulate(&s).unwrap();
         tr.energy()[201..]

@@ -106,7 +106,9 @@ def mpc(
 ) -> dict[str, Any]: ...
 
 _Cell = tuple[float, float, float, float | None]
-_Run = tuple[float, float, float, float | None, list[float] | None, list[float]]
+_Run = tuple[
+    float, float, float, float | None, list[float] | None, list[float], list[float] | None
+]
 
 def _fatigue(
     scene: Scene,

@@ -194,7 +194,7 @@ impl<D: Scalar, const DIM: usize> Start<D, DIM> {
         let mut v = vec![[D::zero(); DIM]; n];
         chain.apply_inverse_mass(&st.p, &mut v);
         ops.apply(&st.q, &v, &mut r);
-        if chain.tip_condition() == TipCondition::Reaction {
+        if chain.has_driven_tip() {
             r[n] -= st.tip_target[1];
         }
         let vmax = v.iter().flatten().fold(0.0f64, |m, x| m.max(x.re().abs()));

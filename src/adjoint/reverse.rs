@@ -3,7 +3,7 @@
 //! constraint operator). See the module docs of [`crate::adjoint`] for the equations.
 
 use super::tape::StateView;
-use crate::base::{Parameter, Scalar, TipCondition};
+use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use crate::model::terms::NodeReverseScratch;
 use crate::model::{BlockSym, Chain, CoupledAt, Ctx, DualScratch, NodeDrag, ReactionTip};
@@ -115,6 +115,12 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         self.first_half(sk, sk1, &ctx0, cot)?;
         if let Some(tip) = self.ch.reaction_tip() {
             self.tip_target(&tip, k, (u_k, u_k1), cot);
+        } else if let Some(drive) = self.ch.thrust_drive() {
+            // The vessel under thrust (model::ThrustDrive): its linear map's transpose.
+            let bar = drive.reverse(cot.tip_bar, self.h);
+            cot.ubar[k] += bar.controls.0;
+            cot.ubar[k + 1] += bar.controls.1;
+            cot.tip_bar = bar.target;
         }
         Ok(())
     }
@@ -160,7 +166,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 cot.qbar[i][d] -= y * self.bbar[i][d] + self.rhs[i] * self.tmp2[i][d];
             }
         }
-        if ch.tip_condition() == TipCondition::Reaction {
+        if ch.has_driven_tip() {
             let n = ch.n();
             cot.tip_bar[1] += self.rhs[n];
             if let Some(ip) = self.mass_param {
@@ -347,7 +353,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 .map_err(|zp| singular(k, zp))?;
         }
         ops.add_transpose(sk1.q, &self.rhs, -D::one(), &mut cot.qbar);
-        if ch.tip_condition() == TipCondition::Reaction {
+        if ch.has_driven_tip() {
             cot.tip_bar[0] += self.rhs[ch.n()];
         }
         if let Some(ip) = self.mass_param {

@@ -16,6 +16,17 @@ pub enum StepperError {
         /// The method, e.g. `SHAKE`.
         method: &'static str,
     },
+    /// RATTLE's control half-kick of a force on the riser does not apply when the control is
+    /// the thrust on the vessel (`[vessel]` thrust keys): the thrust moves the top's constraint
+    /// instead.
+    #[error(
+        "invalid argument `control`: {method} needs a control force on the riser, and the \
+         control of this scene is the thrust on the vessel"
+    )]
+    ThrustControlUnsupported {
+        /// What was asked, e.g. `a control half-kick`.
+        method: &'static str,
+    },
     /// The method does not implement the vessel's prescribed tip (`support = "vessel"`): only
     /// RATTLE does.
     #[error(

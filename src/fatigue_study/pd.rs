@@ -66,8 +66,16 @@ impl PdScales {
             });
         }
         let chain = Chain::<f64, 2>::from_scene(&calm)?;
+        // A constant thrust F holds the vessel at F/c from its offset (the steady state of
+        // (m + m_a) ẍ = F − c ẋ); a force on the riser enters the statics itself.
+        let thrust = scene.thrust();
         let moment = |u: f64| -> Result<f64> {
-            let s = static_equilibrium_at(&calm, 0.0, u)?;
+            let (mut held, mut force) = (calm.clone(), u);
+            if let (Some(t), Some(v)) = (thrust, held.vessel.as_mut()) {
+                v.offset += u / t.damping;
+                force = 0.0;
+            }
+            let s = static_equilibrium_at(&held, 0.0, force)?;
             let q: Vec<[f64; 2]> = s.attitudes.iter().map(|a| [a[1], a[2]]).collect();
             Ok(chain.base_moment(&q))
         };

@@ -35,7 +35,12 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             (Support::Vessel, _) => TipCondition::Prescribed,
             _ => TipCondition::Free,
         };
-        let control_node = scene.control.as_ref().map(|c| c.node);
+        // A thrust scene's control is the thrust on the vessel, not a force on the riser.
+        let control_node = scene
+            .control
+            .as_ref()
+            .map(|c| c.node)
+            .filter(|_| scene.thrust().is_none());
         if let (TipCondition::Reaction, Some(c)) = (tip, control_node) {
             if c != n {
                 return Err(ModelError::ReactionTipControlNode { node: c, n }.into());

@@ -32,7 +32,7 @@ pub use terms::{
 pub use crate::base::{Parameter, Scalar, TipCondition};
 pub use crate::error::ModelError;
 use crate::error::{Error, Result};
-pub use vessel::VesselMotion;
+pub use vessel::{ThrustDrive, ThrustDriveBar, VesselMotion};
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
 /// term of docs/conventions.md ([`terms`]), generic over the scalar `D` and the dimension `DIM` (2: planar,
@@ -201,6 +201,21 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.vessel.as_ref().map(|v| v.at(t).map(D::from))
     }
 
+    /// The vessel's thrust drive when the control is the thrust on the vessel (`[vessel]` thrust
+    /// keys, [`ThrustDrive`]), `None` otherwise.
+    #[inline]
+    pub fn thrust_drive(&self) -> Option<ThrustDrive> {
+        self.vessel.as_ref().and_then(|v| v.thrust().copied())
+    }
+
+    /// Whether the tip's target is a state driven by the control: the reaction-force tip
+    /// ([`ReactionTip`]) or the vessel under its thrust ([`ThrustDrive`]). The control is then
+    /// not a force term, and the adjoint carries the target's cotangent.
+    #[inline]
+    pub fn has_driven_tip(&self) -> bool {
+        self.tip == TipCondition::Reaction || self.thrust_drive().is_some()
+    }
+
     /// Where a static equilibrium holds the tip's z: the vessel's mean offset Z₀ for a
     /// prescribed tip, 0 for a locked one.
     pub fn static_tip_target(&self) -> f64 {
@@ -353,13 +368,17 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.control.as_ref().map(|c| c.node)
     }
 
-    /// Sets (or removes) the node the control acts at (1..=n).
+    /// Sets (or removes) the node the control acts at (1..=n). In a thrust scene
+    /// ([`Chain::thrust_drive`]) the control is the thrust on the vessel and no force term is
+    /// added (the node is checked, then ignored).
     pub fn set_control_node(&mut self, node: Option<usize>) -> Result<()> {
         if let Some(c) = node {
             if c == 0 || c > self.n {
                 return Err(ModelError::ControlNodeOutOfRange { node: c, n: self.n }.into());
             }
         }
+        // The thrust on the vessel is the control of a thrust scene: no force on the riser.
+        let node = node.filter(|_| self.thrust_drive().is_none());
         self.control = node.map(|node| ControlForce {
             node,
             lengths: self.lengths.clone(),

@@ -7,12 +7,19 @@
 //! of time: it depends on no state, control or parameter, so every derivative of a step is that
 //! of the locked tip, and the adjoint and dual numbers need nothing more.
 //!
+//! **The vessel as the actuator** (`[vessel]` `mass`, ..., [`crate::scene::Thrust`]): the top
+//! follows Z(t) = P(t) + x_v(t), P the prescribed part above and x_v the vessel's low-frequency
+//! surge under the thrust F, (m + m_a) ẍ_v = F − c ẋ_v ([`ThrustDrive`]). x_v is a state of the
+//! step, driven by the control: [`ThrustDrive`] integrates it with the step's own split and
+//! writes the transpose of that linear map for the adjoint.
+//!
 //! X_w and Ẋ_w are kept on the scene's time grid tₖ = k h for the run (one inverse transform of
 //! the components H(ωⱼ) aⱼ e^{iφⱼ} and iωⱼ H(ωⱼ) aⱼ e^{iφⱼ}, [`Sea::synthesize`] with the plan of
 //! [`Sea::synthesis_rows`]: only the run's rows), and summed directly (O(N)) at any other time.
 
 use std::sync::Arc;
 
+use crate::base::Scalar;
 use crate::ocean::{Complex, Sea, SeaError};
 use crate::scene::Vessel;
 
@@ -21,6 +28,90 @@ use crate::scene::Vessel;
 pub struct VesselMotion {
     vessel: Vessel,
     waves: Option<WaveSurge>,
+    thrust: Option<ThrustDrive>,
+}
+
+/// The vessel's surge under the thrust, (m + m_a) ẍ_v = F − c ẋ_v, one-way coupled (the
+/// riser's top reaction is left out: docs/conventions.md "The vessel as the actuator"), stepped
+/// with RATTLE's split and its damping read at the half step (as the riser's drag is):
+///
+/// ```text
+/// v_{k+½} = (v_k + h/(2M) F_k) / (1 + h c/(2M))
+/// x_{k+1} = x_k + h v_{k+½}
+/// v_{k+1} = v_{k+½} (1 − h c/(2M)) + h/(2M) F_{k+1}          M = m + m_a
+/// ```
+///
+/// (Störmer–Verlet when c = 0; second order and, for c > 0, the trapezoidal rule of the
+/// damping, unconditionally stable.) The step's tip constraint reads Z = P + x_v, Ż = Ṗ + v_v;
+/// the state keeps (Z, Ż) (the `tip_target` of the RATTLE state) and x_v = Z − P(t). The map
+/// is linear in (Z, Ż, F_k, F_{k+1}), so its transpose ([`ThrustDrive::reverse`]) is written by
+/// hand; tests/vessel_thrust.rs checks the adjoint built on it against Dual64 and central
+/// differences.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThrustDrive {
+    /// 1/M = 1/(m + m_a) \[1/kg\].
+    pub inv_mass: f64,
+    /// c \[N·s/m\].
+    pub damping: f64,
+}
+
+/// The cotangents of one reverse step of [`ThrustDrive`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThrustDriveBar<D> {
+    /// (Z̄_k, Ż̄_k).
+    pub target: [D; 2],
+    /// (F̄_k, F̄_{k+1}): contributions to the thrusts' cotangents.
+    pub controls: (D, D),
+}
+
+impl ThrustDrive {
+    /// The drive of a thrust actuator.
+    pub fn new(thrust: &crate::scene::Thrust) -> Self {
+        ThrustDrive {
+            inv_mass: 1.0 / (thrust.mass + thrust.added_mass),
+            damping: thrust.damping,
+        }
+    }
+
+    /// (h/(2M), h c/(2M)).
+    fn factors(&self, h: f64) -> (f64, f64) {
+        let a = 0.5 * h * self.inv_mass;
+        (a, a * self.damping)
+    }
+
+    /// First half: (Z_{k+1}, v_{k+½}) from the target (Z_k, Ż_k), the prescribed part
+    /// (P_k, Ṗ_k) at t_k and P_{k+1} at t_{k+1}, and F_k (type docs).
+    pub fn first_half<D: Scalar>(
+        &self,
+        [z, zd]: [D; 2],
+        (prescribed, p_next): ([f64; 2], f64),
+        f_k: D,
+        h: f64,
+    ) -> (D, D) {
+        let (a, b) = self.factors(h);
+        let v_half = (zd - D::from(prescribed[1]) + f_k * a) * (1.0 / (1.0 + b));
+        let x_next = z - D::from(prescribed[0]) + v_half * h;
+        (x_next + D::from(p_next), v_half)
+    }
+
+    /// Second half: Ż_{k+1} = Ṗ_{k+1} + v_{k+½}(1 − h c/(2M)) + h/(2M) F_{k+1}.
+    pub fn second_half<D: Scalar>(&self, v_half: D, pdot_next: f64, f_k1: D, h: f64) -> D {
+        let (a, b) = self.factors(h);
+        v_half * (1.0 - b) + f_k1 * a + D::from(pdot_next)
+    }
+
+    /// The transpose of one step (Z_k, Ż_k, F_k, F_{k+1}) ↦ (Z_{k+1}, Ż_{k+1}) applied to
+    /// (Z̄_{k+1}, Ż̄_{k+1}): v̄_{k+½} = (1 − h c/(2M)) Ż̄_{k+1} + h Z̄_{k+1}, Z̄_k = Z̄_{k+1},
+    /// Ż̄_k = v̄_{k+½}/(1 + h c/(2M)), F̄_k = h/(2M) Ż̄_k, F̄_{k+1} = h/(2M) Ż̄_{k+1}.
+    pub fn reverse<D: Scalar>(&self, [z_bar, zd_bar]: [D; 2], h: f64) -> ThrustDriveBar<D> {
+        let (a, b) = self.factors(h);
+        let v_half_bar = zd_bar * (1.0 - b) + z_bar * h;
+        let zd_k_bar = v_half_bar * (1.0 / (1.0 + b));
+        ThrustDriveBar {
+            target: [z_bar, zd_k_bar],
+            controls: (zd_k_bar * a, zd_bar * a),
+        }
+    }
 }
 
 /// The wave-frequency surge d_z X_w(t) of a vessel with a RAO in a sea.
@@ -90,6 +181,7 @@ impl VesselMotion {
         Ok(VesselMotion {
             vessel: vessel.clone(),
             waves,
+            thrust: vessel.thrust().as_ref().map(ThrustDrive::new),
         })
     }
 
@@ -107,6 +199,11 @@ impl VesselMotion {
         };
         let z = self.vessel.offset + x;
         [rho * z, rho_dot * z + rho * v]
+    }
+
+    /// The thrust drive of a vessel whose control is its thrust, `None` for a prescribed top.
+    pub fn thrust(&self) -> Option<&ThrustDrive> {
+        self.thrust.as_ref()
     }
 
     /// The mean position the top settles at, Z₀ (the static equilibrium's target).

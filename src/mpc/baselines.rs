@@ -102,6 +102,32 @@ impl ConstantForce {
     }
 }
 
+impl ConstantForce {
+    /// The best constant thrust of a scene whose control is the thrust on the vessel
+    /// ([`crate::scene::Thrust`]): the same problem, min_F Σ_k M₀(t_k)² + ρ h (N + 1) F²,
+    /// |F| ≤ `bound`, by [`minimize`] on the adjoint gradient (the structured solvers do not take
+    /// the vessel's tip yet: [`crate::error::OcpError::UnsupportedTip`]). The optimum is that of
+    /// the thrust held from t = 0; the plant then ramps to it at the rate bound.
+    ///
+    /// # Errors
+    /// The problem's and the optimiser's errors.
+    pub fn best_thrust(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OptimResult)> {
+        let steps = scene.time.steps;
+        let map = PiecewiseControl { steps, pieces: 1 };
+        let objective = BendingObjective::summed_moment().with_effort(effort);
+        let problem = ControlProblem::new(scene, map, objective)?;
+        let options = OptimOptions {
+            bounds: Some(crate::optimize::Bounds::symmetric(bound)?),
+            first_step: 0.01 * bound,
+            trust_radius: 0.1 * bound,
+            max_trust_radius: bound,
+            ..OptimOptions::default()
+        };
+        let r = minimize(&problem, &[0.0], &options)?;
+        Ok((ConstantForce { u: r.theta[0] }, r))
+    }
+}
+
 impl Controller for ConstantForce {
     fn name(&self) -> String {
         "constant".into()

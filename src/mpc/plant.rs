@@ -39,6 +39,15 @@ use crate::steppers::Stepper;
 /// beam is at rest, p_0 = 0 whatever u_0) and there is no such state; nor for a reaction-force
 /// tip, whose control is not a force term.
 ///
+/// # The vessel under thrust
+/// In a scene whose control is the thrust on the vessel ([`crate::scene::Thrust`]) the plant is
+/// the actuator as well: the control a controller sets is the thrust it commands, and the thrust
+/// applied at t_k is that command clipped to ±F_max and then moved from the thrust of t_{k−1}
+/// by at most Ḟ_max h (the thrust before t₀ is 0). Between decisions the applied thrust keeps
+/// moving toward the command at that rate. So |F_k| ≤ F_max and |F_k − F_{k−1}| ≤ Ḟ_max h at
+/// every step whatever a controller asks for; [`Plant::control`] is the applied thrust. In
+/// other scenes the command is applied as it is, bit for bit as before.
+///
 /// # The spatial plant
 /// `DIM = 3` is the spatial model of a scene whose loads or current have an x component, with a
 /// 2-axis control u = (u_x, u_z) ([`Plant::set_controls`]): the x components are the chain's x
@@ -60,6 +69,10 @@ pub struct Plant<D: Scalar, const DIM: usize = 2> {
     /// (q_k, p̂_k) and the step k it was computed at ([`Plant::update_state_before_kick`]).
     before_kick: State<D, DIM>,
     before_kick_at: Option<usize>,
+    /// The vessel's thrust limits (F_max, Ḟ_max h) in a thrust scene (type docs).
+    limits: Option<(f64, f64)>,
+    /// The commanded control (the applied one is `u`, through `limits`).
+    command: D,
 }
 
 impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
@@ -92,7 +105,35 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
             u_prev: D::zero(),
             velocity: vec![[D::zero(); DIM]; scene.n()],
             before_kick_at: None,
+            limits: scene
+                .thrust()
+                .map(|t| (t.bound, t.rate_bound * scene.time.step)),
+            command: D::zero(),
         })
+    }
+
+    /// The thrust applied after `prev` toward the command (type docs, "The vessel under
+    /// thrust"); the command itself without limits. The clips pass no derivative.
+    fn limited(&self, prev: D) -> D {
+        let Some((bound, change)) = self.limits else {
+            return self.command;
+        };
+        let c = self.command.re();
+        let target = if c > bound {
+            D::from(bound)
+        } else if c < -bound {
+            D::from(-bound)
+        } else {
+            self.command
+        };
+        let d = target.re() - prev.re();
+        if d > change {
+            prev + D::from(change)
+        } else if d < -change {
+            prev - D::from(change)
+        } else {
+            target
+        }
     }
 
     /// The current step index k.
@@ -128,10 +169,7 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
     /// # Errors
     /// [`Error::SingularSystem`] from the projection.
     pub fn update_state_before_kick(&mut self) -> Result<()> {
-        if self.k == 0
-            || self.before_kick_at == Some(self.k)
-            || self.chain().reaction_tip().is_some()
-        {
+        if self.k == 0 || self.before_kick_at == Some(self.k) || self.chain().has_driven_tip() {
             return Ok(());
         }
         let (hat, st) = (&mut self.before_kick, &self.state);
@@ -165,7 +203,8 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
 
     /// (q_k, p̂_k), the state at t_k with the momentum of the step into t_k taken with zero
     /// control in its second half-kick (type docs), if [`Plant::update_state_before_kick`]
-    /// computed it at this step; `None` at k = 0 and for a reaction-force tip. It does not
+    /// computed it at this step; `None` at k = 0, for a reaction-force tip and for the vessel
+    /// under thrust (whose control is not a force on the riser). It does not
     /// depend on the control set at t_k.
     pub fn state_before_kick(&self) -> Option<&State<D, DIM>> {
         (self.before_kick_at == Some(self.k)).then_some(&self.before_kick)
@@ -229,7 +268,8 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
                 index: self.k,
             });
         }
-        self.u = u;
+        self.command = u;
+        self.u = self.limited(if self.k == 0 { D::zero() } else { self.u_prev });
         self.apply()
     }
 
@@ -256,7 +296,8 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
             let k = self.k;
             self.stepper.chain_mut().control_x[k] = ux;
         }
-        self.u = u;
+        self.command = u;
+        self.u = self.limited(if self.k == 0 { D::zero() } else { self.u_prev });
         self.apply()
     }
 
@@ -296,8 +337,10 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
             let (k, ux) = (self.k, self.control_x());
             self.stepper.chain_mut().control_x[k + 1] = ux;
         }
-        Stepper::step(&mut self.stepper, &mut self.state, self.k, self.u, self.u)?;
+        let next = self.limited(self.u);
+        Stepper::step(&mut self.stepper, &mut self.state, self.k, self.u, next)?;
         self.u_prev = self.u;
+        self.u = next;
         self.k += 1;
         Ok(())
     }

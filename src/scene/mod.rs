@@ -61,7 +61,11 @@ pub use validate::{
     SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
-pub use vessel::{Rao, Vessel, DEFAULT_VESSEL_RAMP, MAX_RAO_ROWS};
+pub use vessel::{
+    Rao, Thrust, Vessel, DEFAULT_THRUST_BOUND, DEFAULT_THRUST_RATE_BOUND,
+    DEFAULT_VESSEL_ADDED_MASS, DEFAULT_VESSEL_DAMPING, DEFAULT_VESSEL_MASS, DEFAULT_VESSEL_RAMP,
+    MAX_RAO_ROWS,
+};
 pub use waves::{sea_error, WaveLumping, WaveSpectrum, Waves, DEFAULT_GAMMA};
 
 use raw::RawScene;

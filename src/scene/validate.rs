@@ -464,6 +464,9 @@ impl Scene {
             ));
         }
         check_control_count(c.kind, c.values.len(), self.time.steps)?;
+        if let Some(thrust) = self.thrust() {
+            self.check_thrust_control(c, &thrust)?;
+        }
         if let Some(vx) = &c.values_x {
             if vx.len() != c.values.len() {
                 return Err(SceneError::count(
@@ -515,7 +518,9 @@ impl Scene {
         };
         let loads = &self.loads;
         let total_mass: f64 = b.masses.iter().sum();
-        let max_u = self.control.as_ref().map_or(0.0, |c| {
+        // A thrust on the vessel is not a load on the riser (it moves the top's constraint).
+        let riser_control = self.control.as_ref().filter(|_| self.thrust().is_none());
+        let max_u = riser_control.map_or(0.0, |c| {
             let vx = c.values_x.as_deref().unwrap_or(&[]);
             let ux = |i: usize| vx.get(i).copied().unwrap_or(0.0);
             let mag = c.values.iter().enumerate().map(|(i, u)| ux(i).hypot(*u));
@@ -789,6 +794,64 @@ impl Scene {
 }
 
 impl Scene {
+    /// The vessel's thrust actuator ([`crate::scene::Thrust`]) of a `support = "vessel"` scene
+    /// whose `[vessel]` gives a thrust key; `None` otherwise.
+    pub fn thrust(&self) -> Option<crate::scene::Thrust> {
+        if self.beam.support != Support::Vessel {
+            return None;
+        }
+        self.vessel.as_ref().and_then(|v| v.thrust())
+    }
+
+    /// A `[control]` of a thrust scene is the thrust on the vessel: it acts at the top (node n,
+    /// where the vessel holds the riser), within ±`thrust_bound`, and a per-step or piecewise
+    /// thrust changes by at most `thrust_rate_bound`·h from one time t_k to the next.
+    fn check_thrust_control(
+        &self,
+        c: &Control,
+        thrust: &crate::scene::Thrust,
+    ) -> Result<(), SceneError> {
+        let n = self.n();
+        if c.node != n {
+            return Err(SceneError::invalid(
+                "control.node",
+                format!(
+                    "with the vessel's thrust keys the control is the thrust on the vessel, which \
+                     holds the top: it acts at node {n}, not {}",
+                    c.node
+                ),
+            ));
+        }
+        for (i, &u) in c.values.iter().enumerate() {
+            if u.abs() > thrust.bound {
+                return Err(SceneError::invalid(
+                    format!("control.values[{i}]"),
+                    format!(
+                        "a thrust of {u} N exceeds vessel.thrust_bound = {} N",
+                        thrust.bound
+                    ),
+                ));
+            }
+        }
+        let max_change = thrust.rate_bound * self.time.step;
+        if c.kind != crate::scene::ControlKind::Constant {
+            for (i, w) in c.values.windows(2).enumerate() {
+                let change = (w[1] - w[0]).abs();
+                if change > max_change * (1.0 + 1e-12) {
+                    return Err(SceneError::invalid(
+                        format!("control.values[{}]", i + 1),
+                        format!(
+                            "the thrust changes by {change} N in one step of {} s, more than \
+                             vessel.thrust_rate_bound · h = {max_change} N",
+                            self.time.step
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// `[vessel]` belongs to `support = "vessel"` and its values are valid; the vessel holds the
     /// tip's z only, so its scenes are planar.
     fn check_vessel(&self) -> Result<(), SceneError> {

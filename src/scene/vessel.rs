@@ -41,6 +41,60 @@ pub struct Vessel {
     /// The surge response amplitude operator; `None`: the vessel does not move with the waves.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rao: Option<Rao>,
+    /// The vessel's mass m \[kg\] (the thrust actuator, [`Thrust`]; default
+    /// [`DEFAULT_VESSEL_MASS`] when another thrust key is given).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<f64>,
+    /// The surge added mass m_a \[kg\] (default [`DEFAULT_VESSEL_ADDED_MASS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<f64>,
+    /// The linear surge damping c \[N·s/m\] (default [`DEFAULT_VESSEL_DAMPING`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// The thrust bound F_max \[N\]: |F| ≤ F_max (default [`DEFAULT_THRUST_BOUND`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thrust_bound: Option<f64>,
+    /// The thrust rate bound Ḟ_max \[N/s\]: |dF/dt| ≤ Ḟ_max (default
+    /// [`DEFAULT_THRUST_RATE_BOUND`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thrust_rate_bound: Option<f64>,
+}
+
+/// Default vessel mass m \[kg\]: a deepwater drillship's displacement, about 10⁵ t
+/// (docs/scene-format.md "[vessel]" cites the magnitudes).
+pub const DEFAULT_VESSEL_MASS: f64 = 1.0e8;
+/// Default surge added mass m_a \[kg\]: 5 % of the default mass (a ship's surge added mass is a
+/// few per cent of its displacement).
+pub const DEFAULT_VESSEL_ADDED_MASS: f64 = 5.0e6;
+/// Default linear surge damping c \[N·s/m\]: (m + m_a)/c = 150 s, the slow surge time constant
+/// of a dynamically positioned vessel.
+pub const DEFAULT_VESSEL_DAMPING: f64 = 7.0e5;
+/// Default thrust bound F_max \[N\]: the surge thrust of six azimuth thrusters of about 5 MW.
+pub const DEFAULT_THRUST_BOUND: f64 = 3.0e6;
+/// Default thrust rate bound Ḟ_max \[N/s\]: full thrust reached in 15 s.
+pub const DEFAULT_THRUST_RATE_BOUND: f64 = 2.0e5;
+
+/// The thrust actuator of a vessel (`[vessel]` `mass`, `added_mass`, `damping`, `thrust_bound`,
+/// `thrust_rate_bound`; docs/conventions.md "The vessel as the actuator"): the control is the
+/// thrust F on the vessel, whose low-frequency surge x_v obeys
+///
+/// ```text
+/// (m + m_a) ẍ_v = F − c ẋ_v,     |F| ≤ F_max,   |dF/dt| ≤ Ḟ_max,
+/// ```
+///
+/// and the top follows Z(t) = ρ(t)(Z₀ + d_z X_w(t)) + x_v(t).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thrust {
+    /// m \[kg\].
+    pub mass: f64,
+    /// m_a \[kg\].
+    pub added_mass: f64,
+    /// c \[N·s/m\].
+    pub damping: f64,
+    /// F_max \[N\].
+    pub bound: f64,
+    /// Ḟ_max \[N/s\].
+    pub rate_bound: f64,
 }
 
 fn default_ramp() -> f64 {
@@ -53,6 +107,11 @@ impl Default for Vessel {
             offset: 0.0,
             ramp: DEFAULT_VESSEL_RAMP,
             rao: None,
+            mass: None,
+            added_mass: None,
+            damping: None,
+            thrust_bound: None,
+            thrust_rate_bound: None,
         }
     }
 }
@@ -166,7 +225,29 @@ impl Vessel {
         }
     }
 
-    /// Checks `offset` (finite), `ramp` (finite, non-negative) and the RAO.
+    /// The thrust actuator, when any of its keys is given (the others take their defaults);
+    /// `None`: the top is prescribed (offset, ramp and RAO only) and a control is a force on the
+    /// riser, as before these keys existed.
+    pub fn thrust(&self) -> Option<Thrust> {
+        let keys = [
+            self.mass,
+            self.added_mass,
+            self.damping,
+            self.thrust_bound,
+            self.thrust_rate_bound,
+        ];
+        keys.iter().any(Option::is_some).then(|| Thrust {
+            mass: self.mass.unwrap_or(DEFAULT_VESSEL_MASS),
+            added_mass: self.added_mass.unwrap_or(DEFAULT_VESSEL_ADDED_MASS),
+            damping: self.damping.unwrap_or(DEFAULT_VESSEL_DAMPING),
+            bound: self.thrust_bound.unwrap_or(DEFAULT_THRUST_BOUND),
+            rate_bound: self.thrust_rate_bound.unwrap_or(DEFAULT_THRUST_RATE_BOUND),
+        })
+    }
+
+    /// Checks `offset` (finite), `ramp` (finite, non-negative), the RAO and the thrust keys
+    /// (`mass` positive, `added_mass` and `damping` non-negative, `thrust_bound` and
+    /// `thrust_rate_bound` positive; all finite).
     ///
     /// # Errors
     /// [`SceneError`] naming the `vessel.*` key.
@@ -190,6 +271,29 @@ impl Vessel {
                  from the straight riser at rest, with the top over the wellhead"
                     .to_string(),
             ));
+        }
+        for (key, value, positive) in [
+            ("vessel.mass", self.mass, true),
+            ("vessel.added_mass", self.added_mass, false),
+            ("vessel.damping", self.damping, false),
+            ("vessel.thrust_bound", self.thrust_bound, true),
+            ("vessel.thrust_rate_bound", self.thrust_rate_bound, true),
+        ] {
+            let Some(v) = value else { continue };
+            let ok = v.is_finite() && if positive { v > 0.0 } else { v >= 0.0 };
+            if !ok {
+                let what = if positive { "positive" } else { "non-negative" };
+                let unit = match key {
+                    "vessel.damping" => "N·s/m",
+                    "vessel.thrust_bound" => "N",
+                    "vessel.thrust_rate_bound" => "N/s",
+                    _ => "kg",
+                };
+                return Err(SceneError::invalid(
+                    key,
+                    format!("must be finite and {what} [{unit}], got {v}"),
+                ));
+            }
         }
         match &self.rao {
             Some(r) => r.check(),

@@ -50,6 +50,12 @@
 //! k ↔ k + 1, h ↔ −h (the constraint of a position is read at that position's time), so the step
 //! is symmetric and of order 2 (tests/vessel.rs measures it); with Z ≡ 0 it is the fixed-fixed
 //! step bit for bit.
+//!
+//! **The vessel under thrust** (`[vessel]` thrust keys, [`crate::model::ThrustDrive`]): the top
+//! follows Z = P(t) + x_v with the vessel's surge x_v a state driven by the control (the thrust),
+//! stepped by the same split as the reaction-force tip's target (with the vessel's linear
+//! damping read at the half step); the state's target (Z, Ż) carries it, and the constraints
+//! are those of the prescribed tip with Z_{k+1}, Ż_{k+1} from the drive.
 
 pub use crate::base::StepStats;
 
@@ -296,10 +302,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         for (o, f) in ws.a.iter_mut().zip(ws.force.iter()) {
             *o = f.map(|x| -x);
         }
-        // The tip's rate: the vessel's Ż(t_k) for a prescribed tip, else 0 (at rest).
-        let target = match self.chain.prescribed_tip(t) {
-            Some([_, v]) => v,
-            None => D::zero(),
+        // The tip's rate: the state's Ż_k for a vessel under thrust, the vessel's Ż(t_k) for a
+        // prescribed tip, else 0 (at rest).
+        let target = match (self.chain.thrust_drive(), self.chain.prescribed_tip(t)) {
+            (Some(_), _) => state.tip_target[1],
+            (None, Some([_, v])) => v,
+            (None, None) => D::zero(),
         };
         let q = &state.q;
         projection_solve(
@@ -348,6 +356,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         out: &mut [[D; DIM]],
     ) -> Result<()> {
         refuse_reaction_tip(&self.chain, "a control half-kick")?;
+        if self.chain.thrust_drive().is_some() {
+            return Err(super::StepperError::ThrustControlUnsupported {
+                method: "a control half-kick",
+            }
+            .into());
+        }
         let ws = &mut self.ws;
         self.chain.control_force(u, ux, &mut ws.a)?;
         projection_solve(
@@ -430,14 +444,20 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     }
 
     /// Tip target of the reaction-force variant (Störmer–Verlet for m_n ζ̈ = −u): (ζ_{k+1},
-    /// v_{k+½}); of a prescribed tip: (Z(t_{k+1}), 0); zeros for other tips.
+    /// v_{k+½}); of the vessel under thrust ([`crate::model::ThrustDrive`]): (Z_{k+1}, the
+    /// vessel's v_{k+½}); of a prescribed tip: (Z(t_{k+1}), 0); zeros for other tips.
     fn tip_half_kick(&self, state: &State<D, DIM>, k: usize, u_k: D) -> (D, D) {
-        match self.chain.reaction_tip() {
-            Some(tip) => tip.first_half(state.tip_target, u_k, self.h),
-            None => match self.chain.prescribed_tip(self.time(k + 1)) {
-                Some([z, _]) => (z, D::zero()),
-                None => (D::zero(), D::zero()),
-            },
+        if let Some(tip) = self.chain.reaction_tip() {
+            return tip.first_half(state.tip_target, u_k, self.h);
+        }
+        let next = self.chain.vessel().map(|v| v.at(self.time(k + 1)));
+        match (self.chain.thrust_drive(), next) {
+            (Some(drive), Some([z1, _])) => {
+                let now = self.chain.vessel().map_or([0.0; 2], |v| v.at(self.time(k)));
+                drive.first_half(state.tip_target, (now, z1), u_k, self.h)
+            }
+            (None, Some([z, _])) => (D::from(z), D::zero()),
+            _ => (D::zero(), D::zero()),
         }
     }
 
@@ -601,18 +621,24 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 }
             }
         }
-        let v_next = match (ch.reaction_tip(), ch.prescribed_tip(t1)) {
-            (Some(tip), _) => {
+        let v_next = match (ch.reaction_tip(), ch.thrust_drive(), ch.prescribed_tip(t1)) {
+            (Some(tip), _, _) => {
                 let v = tip.second_half(v_half, u_k1, h);
                 state.tip_target = [zeta_next, v];
                 v
             }
+            // The vessel under thrust: Ż_{k+1} = Ṗ(t_{k+1}) + its surge velocity.
+            (None, Some(drive), Some([_, pdot])) => {
+                let v = drive.second_half(v_half, pdot.re(), u_k1, h);
+                state.tip_target = [zeta_next, v];
+                v
+            }
             // The vessel's Ż(t_{k+1}): Ĝ(q_{k+1}) M⁻¹ p_{k+1} = Ż on the tip row.
-            (None, Some([z, v])) => {
+            (None, None, Some([z, v])) => {
                 state.tip_target = [z, v];
                 v
             }
-            (None, None) => D::zero(),
+            (None, _, None) => D::zero(),
         };
         projection_solve(
             ch,

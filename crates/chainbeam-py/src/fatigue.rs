@@ -30,8 +30,16 @@ type CellTuple = (f64, f64, f64, Option<f64>);
 
 /// One (cell, seed, controller) run as it travels between processes
 /// ([`chainbeam::fatigue_study::CellRun`]): (probability, damage, duration_s, force, gains,
-/// the hot spots' Miner sums).
-type RunTuple = (f64, f64, f64, Option<f64>, Option<[f64; 3]>, Vec<f64>);
+/// the hot spots' Miner sums, the thrust's (rms, peak)).
+type RunTuple = (
+    f64,
+    f64,
+    f64,
+    Option<f64>,
+    Option<[f64; 3]>,
+    Vec<f64>,
+    Option<[f64; 2]>,
+);
 
 fn run_tuple(r: &CellRun) -> RunTuple {
     let d = r.damage;
@@ -42,6 +50,7 @@ fn run_tuple(r: &CellRun) -> RunTuple {
         r.force,
         r.gains,
         r.hotspots.clone(),
+        r.thrust,
     )
 }
 
@@ -55,6 +64,7 @@ fn cell_run(t: RunTuple) -> CellRun {
         force: t.3,
         gains: t.4,
         hotspots: t.5,
+        thrust: t.6,
     }
 }
 
@@ -386,6 +396,10 @@ fn cell_dict<'py>(py: Python<'py>, c: &CellOutcome) -> PyResult<Bound<'py, PyDic
     if let Some(g) = c.gains {
         d.set_item("gains", g.to_vec())?;
     }
+    if let Some([rms, peak]) = c.thrust {
+        d.set_item("thrust_rms", rms)?;
+        d.set_item("thrust_peak", peak)?;
+    }
     if let Some(spread) = c.seed_spread() {
         d.set_item("seed_damages", c.seed_damages.clone())?;
         d.set_item("damage_std", spread.std)?;
@@ -426,6 +440,12 @@ fn controller_dict<'py>(
         let critical =
             chainbeam::hotspots::critical(c.hotspots.iter().map(|h| (h.damage_per_year, h.dff)));
         d.set_item("critical", critical.map(|i| c.hotspots[i].name.clone()))?;
+    }
+    if let Some(rms) = c.thrust_rms {
+        d.set_item("thrust_rms", rms)?;
+    }
+    if let Some(peak) = c.thrust_peak {
+        d.set_item("thrust_peak", peak)?;
     }
     let cells = PyList::empty(py);
     for (i, cell) in c.cells.iter().enumerate() {

@@ -56,8 +56,9 @@ skipped.
 scene (or every cell) in the closed loop of `chainbeam mpc` (--interval, --horizon, --iterations, \
 --bound, --effort as there): constant = the best constant force of the record, pd = a PD law on \
 M₀ with tuned gains, mpc = receding horizon. JSON: controllers.NAME.{damage_per_year, \
-life_years, cells} and life_extension.NAME = its life over the life without control. A control \
-at a node the supports lock is refused. The controllers' flags default to the scene's [mpc] \
+life_years, cells} and life_extension.NAME = its life over the life without control; with the \
+vessel's thrust as the control (the [vessel] thrust keys) also thrust_rms and thrust_peak [N]. A \
+control at a node the supports lock is refused. The controllers' flags default to the scene's [mpc] \
 table (docs/scene-format.md); mpc plans on Σ|M₀|^m, m the S-N curve's first slope \
 (--mpc-objective).
 

@@ -35,6 +35,11 @@ struct CellJson {
     force: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     gains: Option<[f64; 3]>,
+    /// The thrust on the vessel in the cell (a thrust scene) \[N\].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    thrust_rms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    thrust_peak: Option<f64>,
     /// With more than one seed: the seeds' Miner sums (in seed order), their sample standard
     /// deviation (K − 1 in the denominator), least and greatest; `damage` is their mean.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -84,6 +89,12 @@ struct ControllerJson {
     hotspots: Option<Vec<HotSpotJson>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     critical: Option<String>,
+    /// The thrust on the vessel over the diagram (a thrust scene) \[N\]: the
+    /// probability-weighted rms and the peak ([`ControllerOutcome::thrust_rms`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    thrust_rms: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    thrust_peak: Option<f64>,
     cells: Vec<CellJson>,
 }
 
@@ -180,6 +191,8 @@ fn cell_json(c: &CellOutcome, ratio_to_none: Option<f64>) -> CellJson {
         duration_s: c.duration_s,
         force: c.force,
         gains: c.gains,
+        thrust_rms: c.thrust.map(|t| t[0]),
+        thrust_peak: c.thrust.map(|t| t[1]),
     }
 }
 
@@ -222,6 +235,8 @@ fn controller_json(
         seed_lives: SeedLives::of(c),
         hotspots,
         critical,
+        thrust_rms: c.thrust_rms,
+        thrust_peak: c.thrust_peak,
         cells: c
             .cells
             .iter()
@@ -512,10 +527,13 @@ mod tests {
                     damage_per_year: 0.0,
                     force: None,
                     gains: None,
+                    thrust: None,
                 })
                 .collect(),
             seed_lives: vec![f64::INFINITY],
             hotspots: Vec::new(),
+            thrust_rms: None,
+            thrust_peak: None,
         }
     }
 

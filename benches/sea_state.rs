@@ -20,6 +20,8 @@
 //! risers").
 //!
 //! Group `wave_setup_10s` times the set-up of a 10 s run of the same sea (`wave_setup`).
+//! Group `riser_300m_system_3h` times 3 hours of the riser system held by its vessel
+//! (`examples/scenes/riser_300m_system.toml`, `riser_system`).
 //!
 //! Run with `cargo bench --bench sea_state` (ten samples each; the report's time per iteration
 //! is the time of one whole run; target for 3 hours ≤ 10 s, ≥ 1000× real time). One group:
@@ -155,5 +157,27 @@ fn wave_setup(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, sea_state, wave_setup);
+/// The riser system as an engineer runs it (`examples/scenes/riser_300m_system.toml`: the
+/// stack-up from the conductor in the soil to the vessel, Morison's drag node by node, the
+/// file's converged n and h) for 3 hours after its start: `moment_history` (streamed, the run
+/// that `chainbeam simulate riser_300m_system.toml --columns t,moment --every 100` makes with
+/// `time.steps` = 3 h / h; docs/riser-system.md "Speed"). Flat sampling, ten runs.
+/// `cargo bench --bench sea_state -- riser_300m_system_3h`.
+fn riser_system(c: &mut Criterion) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes/riser_300m_system.toml");
+    let mut scene = Scene::from_file(path).expect("the shipped scene");
+    scene.time.steps = (10_800.0 / scene.time.step).round() as usize;
+    scene.validate().unwrap();
+    let mut g = c.benchmark_group("riser_300m_system_3h");
+    g.sampling_mode(SamplingMode::Flat);
+    g.sample_size(10);
+    g.warm_up_time(Duration::from_millis(1));
+    g.measurement_time(Duration::from_secs(1));
+    g.bench_function("moment_history_3h", |b| {
+        b.iter(|| black_box(moment_history(black_box(&scene)).unwrap().moment.len()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, sea_state, wave_setup, riser_system);
 criterion_main!(benches);

@@ -929,14 +929,22 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
         }
     }
     // Every shipped file is a catalogue scene, except the real-scale risers written by hand from
-    // their sources (checked and run in tests/wave_riser.rs and tests/stackup.rs).
+    // their sources (checked and run in tests/wave_riser.rs, tests/stackup.rs and
+    // tests/riser_scenes.rs).
     for entry in fs::read_dir(&dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_some_and(|e| e == "toml") {
             let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
             assert!(
                 all.iter().any(|(name, _)| *name == stem)
-                    || ["riser_300m", "riser_1000m", "riser_300m_stackup"].contains(&stem.as_str()),
+                    || [
+                        "riser_300m",
+                        "riser_1000m",
+                        "riser_300m_stackup",
+                        "riser_300m_system",
+                        "riser_1000m_system",
+                    ]
+                    .contains(&stem.as_str()),
                 "{} is not a catalogue scene",
                 path.display()
             );

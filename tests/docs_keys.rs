@@ -321,7 +321,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 134, "number of documented keys");
+    assert_eq!(checked, 135, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -516,6 +516,7 @@ fn every_documented_key_is_read() {
         ("soil", "modulus", "2e4"),
         ("soil", "gradient", "3e3"),
         ("stackup", "foot", "\"pinned\""),
+        ("stackup", "drag_model", "\"morison\""),
         ("stackup.segment", "name", "\"z\""),
         ("stackup.segment", "length", "2.5"),
         ("stackup.segment", "joints", "2"),

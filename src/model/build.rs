@@ -62,25 +62,40 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let node_morison = scene
             .pipe
             .filter(|p| p.drag_model == crate::scene::DragModel::Morison);
-        let water_drag = node_morison.is_none()
+        // A stack-up's Morison drag: each node's own coefficient from its segments and bodies.
+        let stackup_morison = scene
+            .stackup
+            .as_ref()
+            .filter(|st| st.drag_model == crate::scene::DragModel::Morison)
+            .filter(|st| st.layout.node_drag.len() == n);
+        let morison = node_morison.is_some() || stackup_morison.is_some();
+        let water_drag = !morison
             && (scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0));
-        let node_drag = node_morison.map(|pipe| {
-            let water = CurrentDrag::new(
+        let water = || {
+            CurrentDrag::new(
                 scene.loads.current.as_ref(),
                 waves.clone(),
                 D::zero(),
                 DragWeights::new(None),
                 (&lengths, &masses),
                 scene.mudline(),
-            );
-            NodeDrag::new(
+            )
+        };
+        let node_drag = match (node_morison, stackup_morison) {
+            (Some(pipe), _) => Some(NodeDrag::new(
                 pipe.drag_coefficient,
                 0.5 * scene.water.density * pipe.outer_diameter,
                 &b.lengths,
                 &b.masses,
-                water,
-            )
-        });
+                water(),
+            )),
+            (None, Some(st)) => Some(NodeDrag::from_node_coefficients(
+                &st.layout.node_drag,
+                &b.masses,
+                water(),
+            )),
+            (None, None) => None,
+        };
         Ok(Chain {
             n,
             inv_lengths: lengths.iter().map(|l| l.recip()).collect(),

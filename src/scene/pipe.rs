@@ -63,7 +63,7 @@ pub enum DragModel {
 }
 
 impl DragModel {
-    fn is_momentum(&self) -> bool {
+    pub(super) fn is_momentum(&self) -> bool {
         *self == DragModel::Momentum
     }
 }

@@ -402,7 +402,10 @@ impl RawScene {
                 let loads = (raw_loads.drag, raw_loads.axial_weight);
                 let beam =
                     keys.into_stackup_beam(st, self.pipe.is_some(), loads, &water, mudline)?;
-                raw_loads.drag = st.drag_constants(&beam.lengths, &beam.masses, mudline).0;
+                // Morison's drag node by node takes no momentum-drag constant.
+                if st.drag_model == super::DragModel::Momentum {
+                    raw_loads.drag = st.drag_constants(&beam.lengths, &beam.masses, mudline).0;
+                }
                 beam
             }
             None => keys.into_beam(self.pipe.as_ref(), &water)?,

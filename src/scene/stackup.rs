@@ -16,7 +16,7 @@ use std::f64::consts::PI;
 
 use super::error::{SceneError, SceneErrorKind};
 use super::validate::{check_range, stackup_ranges, StackupRange};
-use super::{Beam, Support};
+use super::{Beam, DragModel, Support};
 
 /// Standard gravity g \[m/s²\] of the stack-up's weights (ISO 80000-3).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
@@ -156,6 +156,11 @@ pub struct Stackup {
     /// How the foot is held (default clamped).
     #[serde(default)]
     pub foot: Foot,
+    /// How the water's drag acts (`[stackup] drag_model`, default [`DragModel::Momentum`]):
+    /// the momentum drag per pendulum from the segments' coefficients, or Morison's drag node by
+    /// node with each node's own ½ ρ_w C_d D_h over its wet cell and the bodies' ½ ρ_w C_dA.
+    #[serde(default, skip_serializing_if = "DragModel::is_momentum")]
+    pub drag_model: DragModel,
     /// The segments, from the bottom up.
     #[serde(rename = "segment")]
     pub segments: Vec<Segment>,
@@ -401,7 +406,7 @@ impl Stackup {
     /// density and the mudline's height; fills [`Stackup::layout`].
     ///
     /// # Errors
-    /// [`SceneError`] naming the `stackup.*` key, `beam.support` (riser or cantilever only) or
+    /// [`SceneError`] naming the `stackup.*` key, `beam.support` (riser, vessel or cantilever) or
     /// `beam.pendulums` (fewer than the stack-up's pieces).
     pub fn beam(
         &mut self,
@@ -410,10 +415,14 @@ impl Stackup {
         water_density: f64,
         mudline: f64,
     ) -> Result<Beam, SceneError> {
-        if !matches!(support, Support::Riser | Support::Cantilever) {
+        if !matches!(
+            support,
+            Support::Riser | Support::Cantilever | Support::Vessel
+        ) {
             return Err(SceneError::invalid(
                 "beam.support",
-                "a stack-up stands on its foot: support `riser` (held at the top by a spring) or \
+                "a stack-up stands on its foot: support `riser` (held at the top by a spring), \
+                 `vessel` (the top held by the vessel, through the upper flex joint) or \
                  `cantilever` (free top)",
             ));
         }
@@ -613,7 +622,7 @@ impl Stackup {
             Foot::Pinned => 0.0,
         };
         let mut tip = match support {
-            Support::Riser => 1.0 / half(n - 1),
+            Support::Riser | Support::Vessel => 1.0 / half(n - 1),
             _ => 0.0,
         };
         let mut y = 0.0;

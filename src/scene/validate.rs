@@ -388,6 +388,25 @@ impl Scene {
             soil.check(b.lengths.iter().sum())?;
         }
         if let Some(st) = &self.stackup {
+            if st.drag_model == super::DragModel::Morison && !self.beam.joint_damping.is_empty() {
+                return Err(SceneError::invalid(
+                    "beam.joint_damping",
+                    "the joint damping and `stackup.drag_model = \"morison\"` are not combined \
+                     yet (each couples the pendulums' half step in its own way)"
+                        .to_string(),
+                ));
+            }
+            if st.drag_model == super::DragModel::Morison && self.loads.drag != 0.0 {
+                return Err(SceneError::invalid(
+                    "loads.drag",
+                    format!(
+                        "is the momentum drag's constant D, which `stackup.drag_model = \
+                         \"morison\"` does not use (each node's drag comes from its segments \
+                         and bodies): leave it 0, got {}",
+                        self.loads.drag
+                    ),
+                ));
+            }
             let l = &st.layout;
             let lens = [
                 l.node_weights.len(),
@@ -423,10 +442,14 @@ impl Scene {
             check_point_load(i, p, n)?;
         }
         if let Some(c) = &self.loads.current {
-            // Morison's node drag acts through the pipe's C_d, not D (which must then be 0).
+            // Morison's node drag acts through the pipe's (the stack-up's) C_d, not D (then 0).
             let node_drag = self
                 .pipe
-                .is_some_and(|p| p.drag_model == super::DragModel::Morison);
+                .is_some_and(|p| p.drag_model == super::DragModel::Morison)
+                || self
+                    .stackup
+                    .as_ref()
+                    .is_some_and(|st| st.drag_model == super::DragModel::Morison);
             c.check(if node_drag { 1.0 } else { self.loads.drag })?;
         }
         check_positive("time.step", self.time.step)?;

@@ -69,6 +69,23 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         }
     }
 
+    /// The term from each node's own drag coefficient κₖ = ½ ρ_w C_d D_h cₖ \[kg/m\] (a
+    /// stack-up's [`crate::scene::Layout::node_drag`]: per segment its C_d and hydrodynamic
+    /// diameter over the node's wet cell, and a body's ½ ρ_w C_dA split to its end nodes), on a
+    /// chain with these masses: Dₖ = κₖ/mₖ². The parameter [`Parameter::DragCoefficient`] is then
+    /// a factor on every κₖ (1 as built), ∂J/∂factor = Σ_segments C_d ∂J/∂C_d.
+    pub(crate) fn from_node_coefficients(
+        kappa: &[f64],
+        masses: &[f64],
+        water: CurrentDrag<D, DIM>,
+    ) -> Self {
+        NodeDrag {
+            cd: D::one(),
+            per_cd: kappa.iter().zip(masses).map(|(k, m)| k / (m * m)).collect(),
+            water,
+        }
+    }
+
     /// The same term over another scalar (real parts).
     pub(crate) fn lift<D2: Scalar>(&self) -> NodeDrag<D2, DIM> {
         NodeDrag {

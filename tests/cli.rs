@@ -936,7 +936,13 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
             let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
             assert!(
                 all.iter().any(|(name, _)| *name == stem)
-                    || ["riser_300m", "riser_1000m", "riser_300m_stackup"].contains(&stem.as_str()),
+                    || [
+                        "riser_300m",
+                        "riser_1000m",
+                        "riser_300m_stackup",
+                        "riser_300m_design",
+                    ]
+                    .contains(&stem.as_str()),
                 "{} is not a catalogue scene",
                 path.display()
             );

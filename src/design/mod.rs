@@ -56,7 +56,8 @@ mod optimise;
 mod scatter;
 
 pub use optimise::{
-    optimise, sensitivities, DesignIterate, DesignOptions, DesignOutcome, Sensitivity,
+    optimise, sensitivities, DesignIterate, DesignOptions, DesignOutcome, IterateCallback,
+    Sensitivity,
 };
 pub use scatter::{CellGradient, DesignPoint, DesignStudy, Execution, ScatterGradient, Want};
 

@@ -50,6 +50,9 @@ pub struct DesignIterate {
     pub simulations: usize,
 }
 
+/// A callback that receives each iterate ([`DesignOptions::on_iterate`]).
+pub type IterateCallback = Arc<dyn Fn(&DesignIterate) + Send + Sync>;
+
 /// How the optimiser runs its cells and reports its iterates.
 #[derive(Clone, Default)]
 pub struct DesignOptions {
@@ -57,7 +60,7 @@ pub struct DesignOptions {
     pub execution: Execution,
     /// Called with every iterate as it is accepted (the command line prints it to stderr); the
     /// library prints nothing.
-    pub on_iterate: Option<Arc<dyn Fn(&DesignIterate) + Send + Sync>>,
+    pub on_iterate: Option<IterateCallback>,
 }
 
 /// What [`optimise`] found.
@@ -217,7 +220,8 @@ impl Transform {
         (0..z.len())
             .map(|i| {
                 let (lo, hi) = self.bounds[i];
-                if z[i] == self.z0[i] {
+                // θ(z0) = θ0 exactly (the start's evaluation is reused), bit for bit.
+                if z[i].to_bits() == self.z0[i].to_bits() {
                     return self.theta0[i];
                 }
                 let t = self.theta0[i] + (hi - lo) * (sigmoid(z[i]) - sigmoid(self.z0[i]));
@@ -333,7 +337,7 @@ struct Recorder {
     shared: Arc<Shared>,
     dff: f64,
     iterates: Arc<Mutex<Vec<DesignIterate>>>,
-    on_iterate: Option<Arc<dyn Fn(&DesignIterate) + Send + Sync>>,
+    on_iterate: Option<IterateCallback>,
 }
 
 impl Recorder {

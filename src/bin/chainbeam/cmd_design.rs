@@ -289,7 +289,7 @@ pub fn run(a: &DesignArgs, progress: Progress, quiet: bool) -> Result<(), CliErr
                     it.simulations,
                     design_line(&line_names, &it.values)
                 );
-            }) as Arc<dyn Fn(&DesignIterate) + Send + Sync>
+            }) as chainbeam::design::IterateCallback
         });
         let options = DesignOptions {
             execution: Execution::Parallel,

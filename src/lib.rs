@@ -141,6 +141,7 @@ pub mod base;
 pub mod cancel;
 pub mod catalogue;
 pub mod constraints;
+pub mod design;
 pub mod error;
 pub mod euler_bernoulli;
 pub mod fatigue;

@@ -943,6 +943,7 @@ fn shipped_scenes_match_catalogue_validate_and_simulate() {
                         "riser_300m_stackup",
                         "riser_300m_system",
                         "riser_1000m_system",
+                        "riser_300m_design",
                     ]
                     .contains(&stem.as_str()),
                 "{} is not a catalogue scene",

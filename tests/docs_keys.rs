@@ -102,6 +102,15 @@ const SECTIONS: &[(&str, &[(&str, &str)])] = &[
         &[("name", "\"a\""), ("elevation", "1.0")],
     ),
     ("mpc", &[("interval", "0.1")]),
+    ("design", &[("max_iterations", "5")]),
+    (
+        "design.parameter",
+        &[
+            ("name", "\"beam.base_stiffness\""),
+            ("lower", "10.0"),
+            ("upper", "1000.0"),
+        ],
+    ),
 ];
 
 /// One table of [`stackup_text`]: (its path, its header, its (key, value) entries).
@@ -203,8 +212,17 @@ fn render(set: Option<(&str, &str, &str)>) -> String {
     if let Some(("", key, value)) = set {
         text.push_str(&format!("{key} = {value}\n"));
     }
+    // `[design]` names a base spring within bounds, which other settings (a support without
+    // one, another spring) would leave: rendered only when one of its keys is set.
+    let design = matches!(set, Some((t, _, _)) if t.starts_with("design"));
     for (table, entries) in SECTIONS {
-        if table.starts_with("loads.point") || *table == "fatigue.hotspot" {
+        if table.starts_with("design") && !design {
+            continue;
+        }
+        if table.starts_with("loads.point")
+            || *table == "fatigue.hotspot"
+            || *table == "design.parameter"
+        {
             text.push_str(&format!("[[{table}]]\n"));
         } else {
             text.push_str(&format!("[{table}]\n"));
@@ -269,6 +287,15 @@ fn vessel_text(set: Option<(&str, &str, &str)>) -> String {
     text
 }
 
+/// `text` without its `[design]` tables (the last of [`SECTIONS`]): a `[pipe]` derives the base
+/// spring, which then leaves the design's bounds.
+fn without_design(text: String) -> String {
+    match text.split_once("[design]\n") {
+        Some((head, _)) => head.to_string(),
+        None => text,
+    }
+}
+
 /// The keys the parser accepts in `table`, from its unknown-key error.
 fn accepted(table: &str) -> BTreeSet<String> {
     let text = render(Some((table, "not_a_key", "1")));
@@ -287,6 +314,7 @@ fn accepted(table: &str) -> BTreeSet<String> {
                             format!("{table}[0]")
                         }
                         "fatigue.hotspot" => "fatigue.hotspot[0]".to_string(),
+                        "design.parameter" => "design.parameter[0]".to_string(),
                         _ => table.replace("loads.point", "loads.point[0]"),
                     }
                 )
@@ -321,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 135, "number of documented keys");
+    assert_eq!(checked, 142, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -397,6 +425,11 @@ fn every_documented_key_is_read() {
         ("mpc", "plan_step", "0.02"),
         ("mpc", "pd_training", "1.0"),
         ("mpc", "objective", "\"sum\""),
+        ("design", "max_iterations", "7"),
+        ("design", "tolerance", "1e-3"),
+        ("design.parameter", "name", "\"beam.tip_stiffness\""),
+        ("design.parameter", "lower", "20.0"),
+        ("design.parameter", "upper", "500.0"),
     ];
     let doc = documented();
     let mut seen = BTreeSet::new();
@@ -441,7 +474,7 @@ fn every_documented_key_is_read() {
             None => {}
         }
         let body: String = pipe.iter().map(|(k, v)| format!("{k} = {v}\n")).collect();
-        let text = render(None)
+        let text = without_design(render(None))
             .replace("length = 1.0\n", "")
             .replace("mass = 1.0\n", "")
             .replace("stiffness = 100.0\n", "");
@@ -483,7 +516,7 @@ fn every_documented_key_is_read() {
             None => {}
         }
         let body: String = w.iter().map(|(k, v)| format!("{k} = {v}\n")).collect();
-        let text = render(None)
+        let text = without_design(render(None))
             .replace("length = 1.0\n", "")
             .replace("mass = 1.0\n", "")
             .replace("stiffness = 100.0\n", "");
@@ -571,11 +604,18 @@ fn every_documented_key_is_read() {
         let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
         assert_ne!(scene, held, "{table}.{key} = {value} changed nothing");
     }
+    // `design.parameter.role = "uncertainty"` takes no bounds.
+    assert!(doc["design.parameter"].contains_key("role"));
+    seen.insert("design.parameter.role".to_string());
+    let text = render(Some(("design", "max_iterations", "5")))
+        .replace("lower = 10.0\nupper = 1000.0\n", "role = \"uncertainty\"\n");
+    let scene = Scene::from_toml_str(&text).unwrap_or_else(|e| panic!("{e}\n{text}"));
+    assert_ne!(scene, base, "design.parameter.role changed nothing");
     // `pipe.drag_model = "morison"` leaves `loads.drag` out (it does not use it).
     assert!(doc["pipe"].contains_key("drag_model"));
     seen.insert("pipe.drag_model".to_string());
     let momentum = pipe_base(None);
-    let text = render(None)
+    let text = without_design(render(None))
         .replace("length = 1.0\n", "")
         .replace("mass = 1.0\n", "")
         .replace("stiffness = 100.0\n", "")

@@ -77,6 +77,7 @@ fn spec_scene() -> Scene {
         hotspots: Vec::new(),
         mpc: None,
         vessel: None,
+        design: None,
     }
 }
 

@@ -295,6 +295,7 @@ impl SceneBuilder {
             hotspots: Vec::new(),
             mpc: None,
             vessel: (self.support == Support::Vessel).then(super::Vessel::default),
+            design: None,
         };
         scene.validate()?;
         Ok(scene)

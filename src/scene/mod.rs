@@ -18,6 +18,7 @@
 
 mod builder;
 mod current;
+mod design;
 mod error;
 mod fatigue;
 mod input;
@@ -388,6 +389,9 @@ pub struct Scene {
     /// The vessel that holds the top (`[vessel]`), with `support = "vessel"` only (which
     /// defaults it: a vessel that holds the top still over the wellhead).
     pub vessel: Option<Vessel>,
+    /// Optional `[design]` table: the parameters a fatigue design may change and their bounds
+    /// (`chainbeam design`, [`crate::design`]).
+    pub design: Option<crate::design::DesignTable>,
 }
 
 impl Scene {

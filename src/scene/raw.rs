@@ -58,6 +58,8 @@ pub(super) struct RawScene {
     mpc: Option<super::mpc::RawMpc>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     vessel: Option<super::Vessel>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    design: Option<super::design::RawDesign>,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -371,6 +373,7 @@ impl RawScene {
                 .map(|f| RawFatigue::from_spec(f).with_hotspots(&s.hotspots)),
             mpc: s.mpc.as_ref().map(super::mpc::RawMpc::from_table),
             vessel: s.vessel.clone(),
+            design: s.design.as_ref().map(super::design::RawDesign::from_table),
         }
     }
 
@@ -493,6 +496,10 @@ impl RawScene {
             hotspots,
             mpc: self.mpc.map(super::mpc::RawMpc::into_table).transpose()?,
             vessel,
+            design: self
+                .design
+                .map(super::design::RawDesign::into_table)
+                .transpose()?,
         })
     }
 }

@@ -428,6 +428,7 @@ impl Scene {
         if let Some(objective) = &self.objective {
             objective.check()?;
         }
+        self.check_design()?;
         check_finite("loads.tension", self.loads.tension)?;
         check_range("loads.tension", self.loads.tension, &FORCE_RANGE)?;
         check_finite("loads.axial_weight", self.loads.axial_weight)?;

@@ -26,6 +26,7 @@
 //! [`controls_io`] reads `--controls` files; [`output`] writes results safely; [`npy`] is the
 //! NumPy writer; [`progress`] draws spinners.
 
+mod cmd_design;
 mod cmd_fatigue;
 mod cmd_gradient;
 mod cmd_mpc;
@@ -146,6 +147,10 @@ enum Command {
     /// Fatigue damage and life of the wellhead (rainflow, DNV-RP-C203 S-N curves; JSON).
     #[command(long_about = cmd_fatigue::LONG_ABOUT)]
     Fatigue(cmd_fatigue::FatigueArgs),
+    /// The design (top tension, flex-joint stiffness) that maximises the wellhead's fatigue
+    /// life over a scatter diagram, with exact adjoint gradients.
+    #[command(long_about = cmd_design::LONG_ABOUT)]
+    Design(cmd_design::DesignArgs),
 }
 
 /// A failure reported to the user: one line on stderr and a non-zero exit status.
@@ -277,5 +282,6 @@ fn run(cli: Cli) -> Result<(), CliError> {
         Command::Explore(a) => cmd_optimize::run_explore(&a, progress),
         Command::Mpc(a) => cmd_mpc::run(&a, progress),
         Command::Fatigue(a) => cmd_fatigue::run(&a, progress),
+        Command::Design(a) => cmd_design::run(&a, progress, cli.quiet),
     }
 }

@@ -1,0 +1,312 @@
+//! Design for fatigue: the exact gradient of the wellhead's expected annual damage over a
+//! scatter diagram with respect to physical design parameters, and the bounded design that
+//! maximises the wellhead's life (`chainbeam design`, Python's `chainbeam.design`).
+//!
+//! # The objective
+//! For the design θ (the values of the [`DesignParameter`]s) and cell s of the diagram
+//! (probability p_s, a record of T_s seconds counted after the spin-up, Miner's sum D_s(θ) of the
+//! wellhead stress over it), the expected damage per year and the life are
+//! ```text
+//! D_y(θ) = Σ_s p_s · D_s(θ) · Y/T_s,      L(θ) = 1/(DFF · D_y(θ)) years,
+//! ∂D_y/∂θ_i = Σ_s p_s · (∂D_s/∂θ_i) · Y/T_s,
+//! ```
+//! Y = 365.25 · 86400 s: the combination of `chainbeam fatigue --scatter`
+//! ([`crate::fatigue::combine_scatter`]), the cells in the diagram's order. D_s is the rainflow
+//! damage at the wellhead that `chainbeam fatigue` reports for the same record (the fatigue
+//! objective's history term, [`crate::FatigueObjective`]; the spin-up's samples are left out of
+//! the count as there), and ∂D_s/∂θ_i comes from one adjoint sweep of the cell's record
+//! ([`crate::ControlProblem::adjoint`] with the physical parameters): every parameter's
+//! derivative from one forward and one reverse pass, whatever their number. The damage is
+//! piecewise smooth in θ (docs of [`crate::fatigue::damage`]): the gradient is that of the
+//! rainflow pairing at θ, exact there; a pairing change is a kink.
+//!
+//! The hot spot is the wellhead, whose moment M_w = M₀ · l₁/2 the adjoint's objectives read. The
+//! `[[fatigue.hotspot]]` entries at other joints are not part of this objective: their joint
+//! torques are not a history term of the adjoint.
+//!
+//! # The parameters ([`DesignParameter`])
+//! The top tension T (`loads.tension`), the lower flex joint's rotational stiffness (the base
+//! spring k₁, `beam.base_stiffness`, which is also the k₁ of the wellhead moment), the upper
+//! flex joint's (the tip spring, `beam.tip_stiffness`), and the soil's p-y modulus at the mudline
+//! (`soil.modulus`), an uncertainty by default ([`Role::Uncertainty`]): its sensitivity is
+//! reported, it is not optimised. Each maps to one [`crate::Parameter`] whose exact adjoint
+//! gradient the library has; the scene's value is the model's value (the chain is built from
+//! the scene with the parameter set).
+//!
+//! # Cells and executors
+//! The cells are independent: [`DesignStudy::evaluate`] runs them serially or on rayon's pool
+//! ([`Execution`]), and [`DesignStudy::run_cell`] runs one (the Python package sends these to a
+//! Dask cluster). Each cell's numbers do not depend on where it ran, and
+//! [`DesignStudy::combine`] sums them in the diagram's order, so the damage and its gradient are
+//! the same bit for bit on any executor.
+//!
+//! # The optimiser ([`optimise`])
+//! L-BFGS (argmin's, through [`crate::optimize::minimize`]) on ln D_y, the scaled objective (a
+//! damage spans orders of magnitude; its logarithm's gradient does not), in unbounded variables
+//! z with the bounds by a smooth transform,
+//! ```text
+//! θ_i = lo_i + (hi_i − lo_i) · σ(z_i),   σ(z) = 1/(1 + e^{−z}),
+//! ∂ ln D_y/∂z_i = (1/D_y) · ∂D_y/∂θ_i · (hi_i − lo_i) σ(z_i)(1 − σ(z_i)),
+//! ```
+//! so every iterate lies within its bounds, and z is O(1) over the box whatever the parameter's
+//! unit. It starts at the scene's own design and stops when ‖∇_z ln D_y‖ ≤ `tolerance`
+//! (`[design] tolerance`), after `max_iterations`, or when a step no longer changes ln D_y.
+
+mod optimise;
+mod scatter;
+
+pub use optimise::{
+    optimise, sensitivities, DesignIterate, DesignOptions, DesignOutcome, IterateCallback,
+    Sensitivity,
+};
+pub use scatter::{CellGradient, DesignPoint, DesignStudy, Execution, ScatterGradient, Want};
+
+use thiserror::Error;
+
+use crate::base::Parameter;
+use crate::fatigue_study::StudyError;
+use crate::scene::Scene;
+
+/// A physical parameter a fatigue design may change or test (module docs), named by its scene
+/// key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DesignParameter {
+    /// The top tension T \[N\] (`loads.tension`; [`Parameter::Tension`]).
+    Tension,
+    /// The lower flex joint's rotational stiffness, the base spring k₁ \[N·m/rad\]
+    /// (`beam.base_stiffness`; [`Parameter::BaseStiffness`]).
+    BaseStiffness,
+    /// The upper flex joint's rotational stiffness, the tip spring k_{n+1} \[N·m/rad\]
+    /// (`beam.tip_stiffness`; [`Parameter::TipStiffness`]).
+    TipStiffness,
+    /// The soil's p-y modulus at the mudline E₀ \[N/m²\] (`soil.modulus`;
+    /// [`Parameter::SoilModulus`]): an uncertainty by default.
+    SoilModulus,
+}
+
+impl DesignParameter {
+    /// Every design parameter, in the order of the module docs.
+    pub const ALL: [DesignParameter; 4] = [
+        DesignParameter::Tension,
+        DesignParameter::BaseStiffness,
+        DesignParameter::TipStiffness,
+        DesignParameter::SoilModulus,
+    ];
+
+    /// The scene key that names it (`loads.tension`, `beam.base_stiffness`,
+    /// `beam.tip_stiffness`, `soil.modulus`): its name in `[design]` and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            DesignParameter::Tension => "loads.tension",
+            DesignParameter::BaseStiffness => "beam.base_stiffness",
+            DesignParameter::TipStiffness => "beam.tip_stiffness",
+            DesignParameter::SoilModulus => "soil.modulus",
+        }
+    }
+
+    /// The parameter of that name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The names, quoted and comma-separated (for an error naming an unknown one).
+    pub fn names() -> String {
+        Self::ALL
+            .iter()
+            .map(|p| format!("\"{}\"", p.name()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Its unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            DesignParameter::Tension => "N",
+            DesignParameter::BaseStiffness | DesignParameter::TipStiffness => "N·m/rad",
+            DesignParameter::SoilModulus => "N/m²",
+        }
+    }
+
+    /// The library's parameter, whose adjoint gradient this is.
+    pub fn parameter(self) -> Parameter {
+        match self {
+            DesignParameter::Tension => Parameter::Tension,
+            DesignParameter::BaseStiffness => Parameter::BaseStiffness,
+            DesignParameter::TipStiffness => Parameter::TipStiffness,
+            DesignParameter::SoilModulus => Parameter::SoilModulus,
+        }
+    }
+
+    /// The role it has when `[design]` does not say: the soil modulus is an uncertainty, the
+    /// others are design choices.
+    pub fn default_role(self) -> Role {
+        match self {
+            DesignParameter::SoilModulus => Role::Uncertainty,
+            _ => Role::Design,
+        }
+    }
+
+    /// The scene's value of the parameter.
+    ///
+    /// # Errors
+    /// Why the scene's model does not have it (no base or tip spring for its support, no
+    /// tension, no `[soil]`).
+    pub fn value(self, scene: &Scene) -> Result<f64, &'static str> {
+        let (base, tip) = scene.beam.support.end_springs();
+        match self {
+            DesignParameter::Tension if scene.loads.tension > 0.0 => Ok(scene.loads.tension),
+            DesignParameter::Tension => Err("the scene has no top tension (loads.tension = 0)"),
+            DesignParameter::BaseStiffness if base => Ok(scene.beam.base_stiffness),
+            DesignParameter::TipStiffness if tip => Ok(scene.beam.tip_stiffness),
+            DesignParameter::BaseStiffness | DesignParameter::TipStiffness => {
+                Err("the support has no spring at that end")
+            }
+            DesignParameter::SoilModulus => scene
+                .soil
+                .map(|s| s.modulus)
+                .ok_or("the scene has no [soil] table"),
+        }
+    }
+
+    /// Sets the parameter's value on the scene (the scene's model then has it: the chain is
+    /// built from these fields). The value is not checked here ([`Scene::validate`] does).
+    pub fn set(self, scene: &mut Scene, value: f64) {
+        match self {
+            DesignParameter::Tension => scene.loads.tension = value,
+            DesignParameter::BaseStiffness => scene.beam.base_stiffness = value,
+            DesignParameter::TipStiffness => scene.beam.tip_stiffness = value,
+            DesignParameter::SoilModulus => {
+                if let Some(s) = scene.soil.as_mut() {
+                    s.modulus = value;
+                }
+            }
+        }
+    }
+}
+
+/// What a parameter of `[design]` is: optimised within its bounds, or an uncertainty whose
+/// sensitivity alone is reported.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// A design choice: optimised within its bounds.
+    Design,
+    /// An uncertain property of the site (the soil): not optimised, its sensitivity reported.
+    Uncertainty,
+}
+
+impl Role {
+    /// `design` or `uncertainty`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Design => "design",
+            Role::Uncertainty => "uncertainty",
+        }
+    }
+
+    /// The role of that name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Role::Design, Role::Uncertainty]
+            .into_iter()
+            .find(|r| r.name() == name)
+    }
+}
+
+/// One `[[design.parameter]]`: the parameter, its role, and its bounds (lower, upper) in its
+/// unit for a design choice (`None` for an uncertainty).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreeParameter {
+    /// The parameter.
+    pub parameter: DesignParameter,
+    /// Design choice or uncertainty.
+    pub role: Role,
+    /// (lower, upper), 0 < lower < upper, for a design choice.
+    pub bounds: Option<(f64, f64)>,
+}
+
+/// The `[design]` table (docs/scene-format.md "[design]").
+#[derive(Clone, Debug, PartialEq)]
+pub struct DesignTable {
+    /// The parameters, in the file's order.
+    pub parameters: Vec<FreeParameter>,
+    /// The optimiser's iteration limit (`max_iterations`, default
+    /// [`DesignTable::DEFAULT_MAX_ITERATIONS`]).
+    pub max_iterations: usize,
+    /// Stop when ‖∇_z ln D_y‖ ≤ `tolerance` (module docs; default
+    /// [`DesignTable::DEFAULT_TOLERANCE`]).
+    pub tolerance: f64,
+}
+
+impl DesignTable {
+    /// The default iteration limit: each iteration costs a line search of one or a few
+    /// scatter-diagram evaluations, and a handful of parameters converge in tens.
+    pub const DEFAULT_MAX_ITERATIONS: usize = 30;
+    /// The largest iteration limit.
+    pub const MAX_ITERATIONS: usize = 1000;
+    /// The default gradient tolerance on ‖∇_z ln D_y‖: a unit move of z (a sizeable part of a
+    /// bound's range) changes the life by less than 0.01 %.
+    pub const DEFAULT_TOLERANCE: f64 = 1e-4;
+
+    /// The design choices (role [`Role::Design`]) with their bounds.
+    pub fn design_choices(&self) -> Vec<(DesignParameter, (f64, f64))> {
+        self.parameters
+            .iter()
+            .filter_map(|p| p.bounds.map(|b| (p.parameter, b)))
+            .collect()
+    }
+}
+
+/// Why a design could not be evaluated or optimised; each names the key, cell or parameter.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum DesignError {
+    /// The scene has no `[design]` table (or none with a design choice, for an optimisation).
+    #[error("{reason} (docs/scene-format.md \"[design]\")")]
+    NoDesign {
+        /// What is missing.
+        reason: &'static str,
+    },
+    /// The scene has neither a `[fatigue]` table nor a `[pipe]` whose section could serve.
+    #[error("the scene has no [fatigue] table (nor a [pipe] whose section could serve)")]
+    NoFatigueSpec,
+    /// A parameter of the request is not one the scene's model has.
+    #[error("{name}: {reason}")]
+    NotInModel {
+        /// The parameter's name.
+        name: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+    /// A design vector of the wrong length or with a value that is not finite.
+    #[error("design values: {reason}")]
+    BadValues {
+        /// What is wrong.
+        reason: String,
+    },
+    /// The study's own errors (the diagram, a cell's sea state, the record, the spin-up).
+    #[error(transparent)]
+    Study(#[from] StudyError),
+    /// A cell's run (its adjoint sweep) failed.
+    #[error("cell {cell}: {source}")]
+    Run {
+        /// The cell (0-based, in the diagram's order).
+        cell: usize,
+        /// The library's error.
+        source: Box<crate::Error>,
+    },
+    /// The design does no damage (D_y = 0): its life is infinite and ln D_y, the optimiser's
+    /// objective, is not defined.
+    #[error(
+        "the design {values} does no damage over the diagram (an infinite life): nothing to \
+         optimise"
+    )]
+    NoDamage {
+        /// The design, as `name = value` pairs.
+        values: String,
+    },
+    /// The optimiser's own error (its options, a failed line search that could not restart).
+    #[error("optimiser: {source}")]
+    Optimiser {
+        /// The library's error.
+        source: Box<crate::Error>,
+    },
+}

@@ -114,9 +114,7 @@ use crate::simulate::moment_history;
 
 pub mod pd;
 
-/// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
-/// each cell is a simulation per controller).
-pub const MAX_SCATTER_CELLS: usize = 10_000;
+pub use crate::fatigue::scatter::MAX_SCATTER_CELLS;
 
 /// The record a fatigue cell counts by default on the command line \[s\]: 3 hours, the
 /// duration over which a short-term sea state is taken as stationary (DNV-RP-C205, module

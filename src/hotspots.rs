@@ -37,22 +37,12 @@
 //! spot is the shortest-lived ([`critical`]).
 
 use crate::error::{Error, Result};
-use crate::fatigue::{assess, Assessment, FatigueError, FatigueSpec, MomentHistory, MomentMeasure};
+use crate::fatigue::{assess, Assessment, FatigueError, MomentHistory, MomentMeasure};
 use crate::model::Chain;
 use crate::scene::Scene;
 use crate::simulate::{simulate_streaming, StepObserver, StepView, StreamControls, StreamError};
 
-/// A hot spot of the scene (`[[fatigue.hotspot]]`, docs/scene-format.md).
-#[derive(Clone, Debug, PartialEq)]
-pub struct HotSpotSpec {
-    /// Its name (`name`, unique in the scene), as the report names it.
-    pub name: String,
-    /// Elevation e above the chain's base \[m\] (`elevation`, 0 ≤ e ≤ the chain's length).
-    pub elevation: f64,
-    /// The section, SCF, S-N curve, environment and DFF of the hot spot (every key the
-    /// `[fatigue]` table has, defaulting to the table's value).
-    pub spec: FatigueSpec,
-}
+pub use crate::scene::HotSpotSpec;
 
 /// The elevations s_j = Σ_{i<j} l_i of the joints j = 1..n+1 of a straight chain with pendulum
 /// lengths `lengths` (n + 1 values: 0 first, the chain's length last).

@@ -20,6 +20,10 @@
 //! reduction to 20 cells are in [`north_atlantic`] ([`reduced_north_atlantic`]). A diagram's
 //! CSV file is read by [`read_scatter_file`] ([`mod@file`]).
 
+/// The most cells a scatter diagram may have (a published diagram has tens to a few hundred;
+/// each cell is a simulation per controller).
+pub const MAX_SCATTER_CELLS: usize = 10_000;
+
 pub mod file;
 pub mod north_atlantic;
 

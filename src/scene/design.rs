@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::{Scene, SceneError, SceneErrorKind};
-use crate::design::{DesignParameter, DesignTable, FreeParameter, Role};
+use crate::base::Parameter;
 
 /// The file's `[design]` table.
 #[derive(Serialize, Deserialize)]
@@ -191,5 +191,193 @@ impl Scene {
             }
         }
         Ok(())
+    }
+}
+
+/// A physical parameter a fatigue design may change or test (module docs), named by its scene
+/// key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum DesignParameter {
+    /// The top tension T \[N\] (`loads.tension`; [`Parameter::Tension`]).
+    Tension,
+    /// The lower flex joint's rotational stiffness, the base spring k₁ \[N·m/rad\]
+    /// (`beam.base_stiffness`; [`Parameter::BaseStiffness`]).
+    BaseStiffness,
+    /// The upper flex joint's rotational stiffness, the tip spring k_{n+1} \[N·m/rad\]
+    /// (`beam.tip_stiffness`; [`Parameter::TipStiffness`]).
+    TipStiffness,
+    /// The soil's p-y modulus at the mudline E₀ \[N/m²\] (`soil.modulus`;
+    /// [`Parameter::SoilModulus`]): an uncertainty by default.
+    SoilModulus,
+}
+
+impl DesignParameter {
+    /// Every design parameter, in the order of the module docs.
+    pub const ALL: [DesignParameter; 4] = [
+        DesignParameter::Tension,
+        DesignParameter::BaseStiffness,
+        DesignParameter::TipStiffness,
+        DesignParameter::SoilModulus,
+    ];
+
+    /// The scene key that names it (`loads.tension`, `beam.base_stiffness`,
+    /// `beam.tip_stiffness`, `soil.modulus`): its name in `[design]` and in the JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            DesignParameter::Tension => "loads.tension",
+            DesignParameter::BaseStiffness => "beam.base_stiffness",
+            DesignParameter::TipStiffness => "beam.tip_stiffness",
+            DesignParameter::SoilModulus => "soil.modulus",
+        }
+    }
+
+    /// The parameter of that name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The names, quoted and comma-separated (for an error naming an unknown one).
+    pub fn names() -> String {
+        Self::ALL
+            .iter()
+            .map(|p| format!("\"{}\"", p.name()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// Its unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            DesignParameter::Tension => "N",
+            DesignParameter::BaseStiffness | DesignParameter::TipStiffness => "N·m/rad",
+            DesignParameter::SoilModulus => "N/m²",
+        }
+    }
+
+    /// The library's parameter, whose adjoint gradient this is.
+    pub fn parameter(self) -> Parameter {
+        match self {
+            DesignParameter::Tension => Parameter::Tension,
+            DesignParameter::BaseStiffness => Parameter::BaseStiffness,
+            DesignParameter::TipStiffness => Parameter::TipStiffness,
+            DesignParameter::SoilModulus => Parameter::SoilModulus,
+        }
+    }
+
+    /// The role it has when `[design]` does not say: the soil modulus is an uncertainty, the
+    /// others are design choices.
+    pub fn default_role(self) -> Role {
+        match self {
+            DesignParameter::SoilModulus => Role::Uncertainty,
+            _ => Role::Design,
+        }
+    }
+
+    /// The scene's value of the parameter.
+    ///
+    /// # Errors
+    /// Why the scene's model does not have it (no base or tip spring for its support, no
+    /// tension, no `[soil]`).
+    pub fn value(self, scene: &Scene) -> Result<f64, &'static str> {
+        let (base, tip) = scene.beam.support.end_springs();
+        match self {
+            DesignParameter::Tension if scene.loads.tension > 0.0 => Ok(scene.loads.tension),
+            DesignParameter::Tension => Err("the scene has no top tension (loads.tension = 0)"),
+            DesignParameter::BaseStiffness if base => Ok(scene.beam.base_stiffness),
+            DesignParameter::TipStiffness if tip => Ok(scene.beam.tip_stiffness),
+            DesignParameter::BaseStiffness | DesignParameter::TipStiffness => {
+                Err("the support has no spring at that end")
+            }
+            DesignParameter::SoilModulus => scene
+                .soil
+                .map(|s| s.modulus)
+                .ok_or("the scene has no [soil] table"),
+        }
+    }
+
+    /// Sets the parameter's value on the scene (the scene's model then has it: the chain is
+    /// built from these fields). The value is not checked here ([`Scene::validate`] does).
+    pub fn set(self, scene: &mut Scene, value: f64) {
+        match self {
+            DesignParameter::Tension => scene.loads.tension = value,
+            DesignParameter::BaseStiffness => scene.beam.base_stiffness = value,
+            DesignParameter::TipStiffness => scene.beam.tip_stiffness = value,
+            DesignParameter::SoilModulus => {
+                if let Some(s) = scene.soil.as_mut() {
+                    s.modulus = value;
+                }
+            }
+        }
+    }
+}
+
+/// What a parameter of `[design]` is: optimised within its bounds, or an uncertainty whose
+/// sensitivity alone is reported.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// A design choice: optimised within its bounds.
+    Design,
+    /// An uncertain property of the site (the soil): not optimised, its sensitivity reported.
+    Uncertainty,
+}
+
+impl Role {
+    /// `design` or `uncertainty`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Design => "design",
+            Role::Uncertainty => "uncertainty",
+        }
+    }
+
+    /// The role of that name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Role::Design, Role::Uncertainty]
+            .into_iter()
+            .find(|r| r.name() == name)
+    }
+}
+
+/// One `[[design.parameter]]`: the parameter, its role, and its bounds (lower, upper) in its
+/// unit for a design choice (`None` for an uncertainty).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FreeParameter {
+    /// The parameter.
+    pub parameter: DesignParameter,
+    /// Design choice or uncertainty.
+    pub role: Role,
+    /// (lower, upper), 0 < lower < upper, for a design choice.
+    pub bounds: Option<(f64, f64)>,
+}
+
+/// The `[design]` table (docs/scene-format.md "[design]").
+#[derive(Clone, Debug, PartialEq)]
+pub struct DesignTable {
+    /// The parameters, in the file's order.
+    pub parameters: Vec<FreeParameter>,
+    /// The optimiser's iteration limit (`max_iterations`, default
+    /// [`DesignTable::DEFAULT_MAX_ITERATIONS`]).
+    pub max_iterations: usize,
+    /// Stop when ‖∇_z ln D_y‖ ≤ `tolerance` (module docs; default
+    /// [`DesignTable::DEFAULT_TOLERANCE`]).
+    pub tolerance: f64,
+}
+
+impl DesignTable {
+    /// The default iteration limit: each iteration costs a line search of one or a few
+    /// scatter-diagram evaluations, and a handful of parameters converge in tens.
+    pub const DEFAULT_MAX_ITERATIONS: usize = 30;
+    /// The largest iteration limit.
+    pub const MAX_ITERATIONS: usize = 1000;
+    /// The default gradient tolerance on ‖∇_z ln D_y‖: a unit move of z (a sizeable part of a
+    /// bound's range) changes the life by less than 0.01 %.
+    pub const DEFAULT_TOLERANCE: f64 = 1e-4;
+
+    /// The design choices (role [`Role::Design`]) with their bounds.
+    pub fn design_choices(&self) -> Vec<(DesignParameter, (f64, f64))> {
+        self.parameters
+            .iter()
+            .filter_map(|p| p.bounds.map(|b| (p.parameter, b)))
+            .collect()
     }
 }

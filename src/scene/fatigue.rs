@@ -9,7 +9,18 @@ use crate::fatigue::{
 };
 
 use super::{Pipe, Scene, SceneError, SceneErrorKind};
-use crate::hotspots::HotSpotSpec;
+
+/// A hot spot of the scene (`[[fatigue.hotspot]]`, docs/scene-format.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HotSpotSpec {
+    /// Its name (`name`, unique in the scene), as the report names it.
+    pub name: String,
+    /// Elevation e above the chain's base \[m\] (`elevation`, 0 ≤ e ≤ the chain's length).
+    pub elevation: f64,
+    /// The section, SCF, S-N curve, environment and DFF of the hot spot (every key the
+    /// `[fatigue]` table has, defaulting to the table's value).
+    pub spec: FatigueSpec,
+}
 
 impl Scene {
     /// The wellhead's fatigue assessment as the scene defines it: its `[fatigue]` table (whose

@@ -43,8 +43,9 @@ pub use current::{
     current_velocity, direction_of_angle, Current, CurrentProfile, DEFAULT_POWER_EXPONENT,
     MAX_POWER_EXPONENT,
 };
+pub use design::{DesignParameter, DesignTable, FreeParameter, Role};
 pub use error::{SceneError, SceneErrorKind};
-pub use fatigue::MAX_HOTSPOT_NAME;
+pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
 pub use input::{
     read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
@@ -382,7 +383,7 @@ pub struct Scene {
     pub fatigue: Option<crate::fatigue::FatigueSpec>,
     /// The hot spots of `[[fatigue.hotspot]]` (empty: none; `chainbeam fatigue` then assesses
     /// the wellhead alone, [`Scene::hot_spots`]).
-    pub hotspots: Vec<crate::hotspots::HotSpotSpec>,
+    pub hotspots: Vec<HotSpotSpec>,
     /// Optional `[mpc]` table: the closed-loop controllers' settings (`chainbeam fatigue`'s
     /// flags, which override it).
     pub mpc: Option<MpcTable>,
@@ -391,7 +392,7 @@ pub struct Scene {
     pub vessel: Option<Vessel>,
     /// Optional `[design]` table: the parameters a fatigue design may change and their bounds
     /// (`chainbeam design`, [`crate::design`]).
-    pub design: Option<crate::design::DesignTable>,
+    pub design: Option<DesignTable>,
 }
 
 impl Scene {

@@ -7,15 +7,15 @@
 //! (any order, each once, no other column), then one cell per row: H_s \[m\] > 0, T_p \[s\] > 0, a
 //! probability in \[0, 1\] and a finite direction \[°\]. Fields are trimmed; lines starting with
 //! `#` are comments. The diagram is checked as a whole where it is read: at least one cell, at
-//! most [`crate::fatigue_study::MAX_SCATTER_CELLS`], and probabilities that
+//! most [`MAX_SCATTER_CELLS`], and probabilities that
 //! add up to more than 0 and at most 1 ([`crate::fatigue::combine_scatter`]'s rules).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use super::MAX_SCATTER_CELLS;
 use super::{ScatterCell, SeaState};
 use crate::fatigue::{combine_scatter, CellDamage, FatigueError};
-use crate::fatigue_study::MAX_SCATTER_CELLS;
 use crate::scene::{read_text_file, ReadErrorKind};
 
 /// The columns of a scatter CSV, in the order of [`ScatterCell`]'s fields.

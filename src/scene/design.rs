@@ -350,7 +350,7 @@ pub struct FreeParameter {
     pub bounds: Option<(f64, f64)>,
 }
 
-/// The `[design]` table (docs/scene-format.md "[design]").
+/// The `[design]` table (docs/scene-format.md "\[design\]").
 #[derive(Clone, Debug, PartialEq)]
 pub struct DesignTable {
     /// The parameters, in the file's order.

@@ -61,7 +61,7 @@ pub struct Vessel {
 }
 
 /// Default vessel mass m \[kg\]: a deepwater drillship's displacement, about 10⁵ t
-/// (docs/scene-format.md "[vessel]" cites the magnitudes).
+/// (docs/scene-format.md "\[vessel\]" cites the magnitudes).
 pub const DEFAULT_VESSEL_MASS: f64 = 1.0e8;
 /// Default surge added mass m_a \[kg\]: 5 % of the default mass (a ship's surge added mass is a
 /// few per cent of its displacement).

@@ -1,4 +1,4 @@
-//! Wellhead fatigue (issue 31, beyond the thesis): where in the wave climate the damage comes
+//! Wellhead fatigue (beyond the thesis): where in the wave climate the damage comes
 //! from, and what control does to the moment that makes it.
 //!
 //! * `fatigue_scatter`: left, the damage per year each (H_s, T_p) cell of the reduced
@@ -21,11 +21,11 @@ use chainbeam::Scene;
 pub fn entries() -> Vec<Entry> {
     vec![Entry {
         id: "fatigue_scatter",
-        caption: "(beyond the thesis, issue 31) Left: the wellhead's damage per year from each \
+        caption: "(beyond the thesis) Left: the wellhead's damage per year from each \
                   (H_s, T_p) cell of a northern North Sea wave climate (the Kvitebjørn joint \
                   model reduced to 11 cells), without control, on the 300 m riser. Right: the \
                   base moment M₀(t) without control and under MPC (the closed-loop riser of \
-                  issue 14), whose rainflow damage the note gives.",
+                  the MPC figure), whose rainflow damage the note gives.",
         make: fig_fatigue,
     }]
 }

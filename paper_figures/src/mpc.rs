@@ -1,4 +1,4 @@
-//! Closed-loop control of the riser (issue 14): the base moment M₀(t) under no control, the best
+//! Closed-loop control of the riser (beyond the thesis): the base moment M₀(t) under no control, the best
 //! constant force, a tuned PD law on M₀ and receding-horizon control (perfect and wrong model).
 
 use crate::plot::{color, Figure, Legend, Panel, Res, Series};
@@ -15,7 +15,7 @@ pub fn entries() -> Vec<Entry> {
     vec![
     Entry {
         id: "mpc_moment",
-        caption: "(beyond the thesis, issue 14) The base bending moment M₀(t) of the riser under \
+        caption: "(beyond the thesis) The base bending moment M₀(t) of the riser under \
                   an irregular sea at node 5 in a sheared current, and a control force at the \
                   platform: no control, the best constant force, a PD law on M₀ with tuned gains, and receding-horizon \
                   control (3 s horizon, a decision every 0.1 s, 1 Gauss-Newton iteration per \
@@ -24,7 +24,7 @@ pub fn entries() -> Vec<Entry> {
     },
     Entry {
         id: "mpc_horizon",
-        caption: "(beyond the thesis, issue 14) Speed against accuracy of receding-horizon \
+        caption: "(beyond the thesis) Speed against accuracy of receding-horizon \
                   control on the same scene: closed-loop Σ M₀² (log scale) against the mean \
                   re-plan time, for horizons of 1 to 5 s (a decision every 0.1 s, 1 \
                   Gauss-Newton iteration per re-plan, perfect model), re-planned by the \

@@ -1,4 +1,4 @@
-//! Figures of issue 13 (beyond the thesis): loads out of the plane and a 2-axis control.
+//! Figures beyond the thesis: loads out of the plane and a 2-axis control.
 //!
 //! * `load_45_symmetry`: a load at 45° between x and z deflects the riser along 45° by exactly
 //!   as much as the same load in the plane (the model is symmetric under rotations about the
@@ -21,7 +21,7 @@ pub fn entries() -> Vec<Entry> {
     vec![
         Entry {
             id: "load_45_symmetry",
-            caption: "(issue 13, verification) A load at 45° between x and z deflects the riser \
+            caption: "(verification) A load at 45° between x and z deflects the riser \
                       along 45° by as much as the same load in the y–z plane (rotational \
                       symmetry about the beam's axis): the tip's path in the transverse plane and \
                       the deflection magnitude over time.",
@@ -30,7 +30,7 @@ pub fn entries() -> Vec<Entry> {
         Entry {
             id: "riser_current_wave_control",
             caption:
-                "(issue 13) A riser under a sheared current (along x) plus a wave load \
+                "(beyond the thesis) A riser under a sheared current (along x) plus a wave load \
                       (along z), uncontrolled and optimally controlled by a 2-axis platform force: \
                       the riser in the xy and zy projections and the base-moment magnitude |M₀|(t).",
             make: riser_current_wave_control,
@@ -99,7 +99,7 @@ fn load_45_symmetry(ctx: &Ctx) -> Res<Made> {
     })
 }
 
-/// The riser of issue 13's current-and-wave figure: the thesis riser with drag D = 10 kg/m in a
+/// The riser of the current-and-wave figure: the thesis riser with drag D = 10 kg/m in a
 /// current along +x falling linearly from 0.3 m/s at the top to 0.05 m/s at the base, a wave
 /// load 2 N sin(2π t/8 s) along z at node 9 ramped in over 4 s, and a 2-axis piecewise control
 /// at node 10 (the platform), `pieces` pieces, initial guess 0.

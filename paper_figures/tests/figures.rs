@@ -55,7 +55,7 @@ fn quick_run_writes_png_svg_and_index() {
     // the optimiser finds the thesis's minimum u = −2 N, and the calibration reports its fit
     assert!(index.contains("at u* = −2 N"));
     assert!(index.contains("RMS residual"));
-    // issue 13: the 45° load deflects as far as the in-plane one; the 2-axis control is optimised
+    // Loads out of the plane: the 45° load deflects as far as the in-plane one; the 2-axis control is optimised
     assert!(index.contains("## load_45_symmetry") && index.contains("rotational symmetry"));
     assert!(index.contains("## riser_current_wave_control") && index.contains("c_sum falls from"));
     let _ = std::fs::remove_dir_all(&out);

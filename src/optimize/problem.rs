@@ -203,76 +203,76 @@ pub fn resolved_control_limit<P: ControlMap, O: Objective, const DIM: usize>(
 /// [`OptimProblem`] for the planar (`DIM = 2`) and the spatial (`DIM = 3`) control problems:
 /// the same methods, both with [`OptimProblem::riccati`] and [`OptimProblem::condensed`].
 macro_rules! impl_optim_problem {
-    ($dim:literal, $($riccati:tt)*) => {
+    ($dim:literal) => {
         impl<P: ControlMap, O: Objective> OptimProblem for ControlProblem<P, O, $dim> {
-        fn n_params(&self) -> usize {
-            ControlProblem::n_params(self)
-        }
-        /// One forward simulation, no adjoint.
-        fn value(&self, theta: &[f64]) -> Result<f64> {
-            ControlProblem::value(self, theta)
-        }
-        fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
-            ControlProblem::value_and_gradient(self, theta)
-        }
-        fn gradient(&self, theta: &[f64]) -> Result<Vec<f64>> {
-            ControlProblem::gradient(self, theta)
-        }
-        fn hessian(&self) -> Option<&dyn HessianVec> {
-            Some(self)
-        }
-        fn controls(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
-            Some(ControlProblem::controls(self, theta))
-        }
-        /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (the
-        /// magnitude of a 2-axis control; how
-        /// strongly θᵢ reaches the forces; 1 for every built-in parametrisation): the largest
-        /// resolved force, in θᵢ's units. (For a nonlinear [`ControlMap`], aᵢ is its response to a
-        /// unit θᵢ at θ = 0.)
-        fn param_scales(&self) -> Vec<f64> {
-            let limit = resolved_control_limit(self);
-            let n = ControlProblem::n_params(self);
-            (0..n)
-                .map(|i| {
-                    let mut e = vec![0.0; n];
-                    e[i] = 1.0;
-                    let a = ControlProblem::control_magnitudes(self, &e)
-                        .map(|u| u.iter().fold(0.0f64, |m, x| m.max(x.abs())))
-                        .unwrap_or(0.0);
-                    if a > 0.0 && a.is_finite() {
-                        limit / a
-                    } else {
-                        limit
-                    }
-                })
-                .collect()
-        }
-        /// Every force |u_k| ≤ [`resolved_control_limit`] (|u_k| = √(u_{x,k}² + u_{z,k}²) for a
-        /// 2-axis control); otherwise [`Error::ControlOutOfRange`].
-        fn check_range(&self, theta: &[f64]) -> Result<()> {
-            let u = if self.is_two_axis() {
-                ControlProblem::control_magnitudes(self, theta)?
-            } else {
-                ControlProblem::controls(self, theta)?
-            };
-            let limit = resolved_control_limit(self);
-            match u.iter().position(|x| x.abs() > limit) {
-                Some(k) => Err(Error::ControlOutOfRange {
-                    index: k,
-                    value: u[k],
-                    limit,
-                }),
-                None => Ok(()),
+            fn n_params(&self) -> usize {
+                ControlProblem::n_params(self)
             }
-        }
-        fn shape(&self) -> Option<ProblemShape> {
-            let chain = self.chain();
-            Some(ProblemShape {
-                params: ControlProblem::n_params(self),
-                steps: self.steps(),
-                pendulums: chain.n(),
-                dim: $dim,
-                structured: self
+            /// One forward simulation, no adjoint.
+            fn value(&self, theta: &[f64]) -> Result<f64> {
+                ControlProblem::value(self, theta)
+            }
+            fn value_and_gradient(&self, theta: &[f64]) -> Result<(f64, Vec<f64>)> {
+                ControlProblem::value_and_gradient(self, theta)
+            }
+            fn gradient(&self, theta: &[f64]) -> Result<Vec<f64>> {
+                ControlProblem::gradient(self, theta)
+            }
+            fn hessian(&self) -> Option<&dyn HessianVec> {
+                Some(self)
+            }
+            fn controls(&self, theta: &[f64]) -> Option<Result<Vec<f64>>> {
+                Some(ControlProblem::controls(self, theta))
+            }
+            /// sᵢ = F_max / aᵢ with F_max = [`resolved_control_limit`] and aᵢ = max_k |u_k(eᵢ)| (the
+            /// magnitude of a 2-axis control; how
+            /// strongly θᵢ reaches the forces; 1 for every built-in parametrisation): the largest
+            /// resolved force, in θᵢ's units. (For a nonlinear [`ControlMap`], aᵢ is its response to a
+            /// unit θᵢ at θ = 0.)
+            fn param_scales(&self) -> Vec<f64> {
+                let limit = resolved_control_limit(self);
+                let n = ControlProblem::n_params(self);
+                (0..n)
+                    .map(|i| {
+                        let mut e = vec![0.0; n];
+                        e[i] = 1.0;
+                        let a = ControlProblem::control_magnitudes(self, &e)
+                            .map(|u| u.iter().fold(0.0f64, |m, x| m.max(x.abs())))
+                            .unwrap_or(0.0);
+                        if a > 0.0 && a.is_finite() {
+                            limit / a
+                        } else {
+                            limit
+                        }
+                    })
+                    .collect()
+            }
+            /// Every force |u_k| ≤ [`resolved_control_limit`] (|u_k| = √(u_{x,k}² + u_{z,k}²) for a
+            /// 2-axis control); otherwise [`Error::ControlOutOfRange`].
+            fn check_range(&self, theta: &[f64]) -> Result<()> {
+                let u = if self.is_two_axis() {
+                    ControlProblem::control_magnitudes(self, theta)?
+                } else {
+                    ControlProblem::controls(self, theta)?
+                };
+                let limit = resolved_control_limit(self);
+                match u.iter().position(|x| x.abs() > limit) {
+                    Some(k) => Err(Error::ControlOutOfRange {
+                        index: k,
+                        value: u[k],
+                        limit,
+                    }),
+                    None => Ok(()),
+                }
+            }
+            fn shape(&self) -> Option<ProblemShape> {
+                let chain = self.chain();
+                Some(ProblemShape {
+                    params: ControlProblem::n_params(self),
+                    steps: self.steps(),
+                    pendulums: chain.n(),
+                    dim: $dim,
+                    structured: self
                         .objective()
                         .gauss_newton(crate::adjoint::MomentStage {
                             k: 0,
@@ -281,71 +281,46 @@ macro_rules! impl_optim_problem {
                             moment: 0.0,
                         })
                         .is_some()
-                    && chain.tip_condition() == crate::TipCondition::Free
-                    && chain.control_node().is_some(),
-            })
-        }
-            $($riccati)*
+                        && chain.tip_condition() == crate::TipCondition::Free
+                        && chain.control_node().is_some(),
+                })
+            }
+            /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of an objective in
+            /// Gauss-Newton form ([`Objective::gauss_newton`]); in the spatial model the 2-axis
+            /// control (two controls per stage) and the vector moment.
+            fn riccati(
+                &self,
+                theta0: &[f64],
+                options: &OcpOptions,
+                observer: Option<IterationObserver<'_>>,
+            ) -> Option<Result<OcpResult>> {
+                Some(
+                    crate::ocp::Solver::new(self, options).and_then(|mut s| match observer {
+                        Some(o) => s.solve_observed(theta0, o),
+                        None => s.solve(theta0),
+                    }),
+                )
+            }
+            /// [`crate::ocp::Condensed`]: the same problems as the Riccati solver.
+            fn condensed(
+                &self,
+                theta0: &[f64],
+                options: &OcpOptions,
+                observer: Option<IterationObserver<'_>>,
+            ) -> Option<Result<OcpResult>> {
+                Some(
+                    crate::ocp::Condensed::new(self, options).and_then(|mut c| match observer {
+                        Some(o) => c.solve_observed(theta0, o),
+                        None => c.solve(theta0),
+                    }),
+                )
+            }
         }
     };
 }
 
-impl_optim_problem! {
-    2,
-    /// [`crate::ocp::solve`]: per-step, piecewise and constant controls of an objective in
-    /// Gauss-Newton form ([`Objective::gauss_newton`]).
-    fn riccati(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-        observer: Option<IterationObserver<'_>>,
-    ) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Solver::new(self, options).and_then(|mut s| match observer {
-            Some(o) => s.solve_observed(theta0, o),
-            None => s.solve(theta0),
-        }))
-    }
-    /// [`crate::ocp::Condensed`]: the same problems as the Riccati solver.
-    fn condensed(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-        observer: Option<IterationObserver<'_>>,
-    ) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| match observer {
-            Some(o) => c.solve_observed(theta0, o),
-            None => c.solve(theta0),
-        }))
-    }
-}
-impl_optim_problem! {
-    3,
-    /// [`crate::ocp::solve`] in the spatial model: the 2-axis control (two controls per stage)
-    /// and the vector moment.
-    fn riccati(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-        observer: Option<IterationObserver<'_>>,
-    ) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Solver::new(self, options).and_then(|mut s| match observer {
-            Some(o) => s.solve_observed(theta0, o),
-            None => s.solve(theta0),
-        }))
-    }
-    /// [`crate::ocp::Condensed`] in the spatial model: the 2-axis control and the vector moment.
-    fn condensed(
-        &self,
-        theta0: &[f64],
-        options: &OcpOptions,
-        observer: Option<IterationObserver<'_>>,
-    ) -> Option<Result<OcpResult>> {
-        Some(crate::ocp::Condensed::new(self, options).and_then(|mut c| match observer {
-            Some(o) => c.solve_observed(theta0, o),
-            None => c.solve(theta0),
-        }))
-    }
-}
+impl_optim_problem!(2);
+impl_optim_problem!(3);
 
 impl<P: ControlMap, O: Objective, const DIM: usize> HessianVec for ControlProblem<P, O, DIM> {
     /// Forward-over-adjoint ([`ControlProblem::hessian_vec`]).

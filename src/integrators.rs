@@ -1,5 +1,5 @@
 //! A thin comparison layer over the [`crate::steppers`] (RATTLE, SHAKE, projected RK4), for
-//! speed-against-accuracy and stability comparisons (`paper_figures`, `tests/integrators.rs`).
+//! speed-against-accuracy and stability comparisons (`paper_figures`, `tests/steppers/integrators.rs`).
 //!
 //! The methods themselves live in [`crate::steppers`], one file each, generic over the scalar and
 //! the dimension; see their module docs for the maths. This module adds:

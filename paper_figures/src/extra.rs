@@ -222,7 +222,7 @@ fn wp_energy(ctx: &Ctx) -> Res<Made> {
             "{}. RATTLE's and SHAKE's energy errors oscillate within a fixed bound (symplectic; \
              SHAKE's unprojected central-difference momenta make its bound larger), while the \
              explicit projected RK4 loses energy steadily (it damps the fast modes) until it \
-             settles far below. Asserted in `tests/integrators.rs`.",
+             settles far below. Asserted in `tests/steppers/integrators.rs`.",
             notes.join("; ")
         ),
     })

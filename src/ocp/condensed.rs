@@ -54,7 +54,7 @@
 //! g = Σ_k w_k Σ_c R_{k,c}∇R_{k,c} + (…), H = Σ_k w_k Σ_c ∇R_{k,c}∇R_{k,c}ᵀ + (…), and the secant
 //! term's y from the same gradients. Tested against the adjoint (gradient and J to 10⁻¹²) and,
 //! on a planar scene turned about the beam's axis, against the planar optimum (J to 10⁻⁹,
-//! turned controls), in tests/ocp_spatial.rs.
+//! turned controls), in tests/ocp/ocp_spatial.rs.
 //!
 //! # Globalisation and convergence
 //! As the Riccati solver: a Levenberg weight μ·mean(diag H) on the QP, an open-loop line search

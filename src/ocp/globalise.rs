@@ -236,7 +236,7 @@ pub(crate) fn backtrack(
 /// trusted about 1/α times too far (a proximal term ½ μ δv² shortens a Newton step by
 /// λ/(λ + μ) along a direction of curvature λ). With ×4 alone a run of α = 0.1 steps took six
 /// iterations to lift μ from 10⁻⁶ to where full steps passed, and Gauss-Newton stalled at J's
-/// round-off on Table 3.4 rows 1 and 3 (tests/tables.rs now converges on all ten).
+/// round-off on Table 3.4 rows 1 and 3 (tests/scene/tables.rs now converges on all ten).
 pub(crate) fn next_mu(mu: f64, acc: &Accepted) -> f64 {
     if acc.alpha >= 1.0 && acc.ratio > 0.75 {
         if mu * 0.25 < MU_MIN {

@@ -264,7 +264,7 @@ impl Watch {
 /// positive semi-definite model misses negative curvature of J (no effort penalty, or a chain
 /// near folding; Table 3.4 rows 1 and 3 with Gauss-Newton throughout stalled until the
 /// regularisation learnt to rise with shortened steps, `ocp::globalise`), or the tolerance is
-/// below what floating point resolves (`tests/tables.rs` forces the hand-over so). [`minimize`](super::minimize) then continues from
+/// below what floating point resolves (`tests/scene/tables.rs` forces the hand-over so). [`minimize`](super::minimize) then continues from
 /// its point with the trust region on exact Hessian-vector products (which sees that
 /// curvature) and returns *that* result: `method` is [`Method::TrustRegion`], the counts and
 /// the time add both phases. Without Hessian-vector products, or if the trust region fails to

@@ -269,7 +269,7 @@ pub(super) fn stackup_ranges() -> [ValueRange; 13] {
     STACKUP_RANGES
 }
 
-/// The range of a stack-up key, for the documentation's check (tests/docs_keys.rs).
+/// The range of a stack-up key, for the documentation's check (tests/scene/docs_keys.rs).
 pub fn stackup_range_of(key: &str) -> Option<ValueRange> {
     use StackupRange as R;
     let r = match key {

@@ -1,5 +1,5 @@
 //! A physical parameter's derivative of J = c_sum checked three ways, shared by
-//! `tests/current.rs`, `tests/loads.rs` and `tests/wave_riser.rs`: the discrete adjoint against
+//! `tests/model/current.rs`, `tests/model/loads.rs` and `tests/fatigue/wave_riser.rs`: the discrete adjoint against
 //! forward-mode dual numbers through the same simulation (1e-12 relative, the exactness the
 //! adjoint promises) and a five-point central difference against them (1e-6 relative).
 #![allow(dead_code)]

@@ -12,7 +12,7 @@ pub fn row(node: usize) -> (ControlProblem, f64) {
         BendingObjective::summed_moment(),
     )
     .unwrap();
-    let bound = crate::thesis::TABLE_3_4[node - 1]
+    let bound = super::thesis::TABLE_3_4[node - 1]
         .0
         .iter()
         .fold(0.0f64, |m, u| m.max(u.abs()));

@@ -1,0 +1,19 @@
+//! The `chainbeam` command line: every subcommand, its outputs and its refusals.
+//!
+//! One test crate (`cargo test --test cli`); each file is a module, so a single file's tests
+//! run with `cargo test --test cli FILE::` (the file name without `.rs`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cli;
+mod cli_controls;
+mod cli_fatigue;
+mod cli_fatigue_study;
+mod cli_hostile;
+mod cli_mpc;
+mod cli_objectives;
+mod cli_output;
+mod cli_riccati;
+mod cli_spatial;
+mod cli_waves;

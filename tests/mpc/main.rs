@@ -1,0 +1,7 @@
+//! Closed-loop control: the receding-horizon controller and its reduced planning model.
+//!
+//! One test crate (`cargo test --test mpc`); each file is a module, so a single file's tests
+//! run with `cargo test --test mpc FILE::` (the file name without `.rs`).
+
+mod mpc;
+mod mpc_planning;

@@ -23,6 +23,10 @@ use nalgebra::{DMatrix, DVector};
 use num_dual::{Dual64, HyperDual64};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
+use gradient_check::Tolerance;
+
 // ---------------------------------------------------------------------------------------------
 // Shared helpers
 // ---------------------------------------------------------------------------------------------
@@ -164,7 +168,7 @@ struct Worst {
 
 /// Checks the physical-parameter gradients of an adjoint result against `Dual64` forward mode
 /// (1e-12 relative to the derivative itself) and central finite differences (1e-6 relative, step
-/// 1e-5 of the parameter).
+/// 1e-5 of the parameter), by [`gradient_check::assert_close`].
 fn check_parameters<O: Objective, const DIM: usize>(
     label: &str,
     scene: &Scene,
@@ -176,35 +180,41 @@ fn check_parameters<O: Objective, const DIM: usize>(
 ) {
     let (h, steps) = (scene.time.step, scene.time.steps);
     let ud: Vec<Dual64> = u.iter().map(|&x| Dual64::from(x)).collect();
-    for (&p, &a) in params.iter().zip(&adj.parameter_gradient) {
+    let (mut fwd, mut fd) = (Vec::new(), Vec::new());
+    for &p in params {
         let v = nominal(scene, p);
         let mut cd = chain.lift::<Dual64>();
         cd.set_parameter(p, Dual64::new(v, 1.0)).unwrap();
-        let fwd = forward_value(&cd, h, steps, &ud, obj).unwrap().eps;
-        let e = (a - fwd).abs() / fwd.abs();
-        assert!(
-            e <= 1e-12,
-            "{label}: dJ/d{p:?}: adjoint {a:e} vs forward {fwd:e} (rel {e:.1e})"
-        );
-        worst.param_fwd = worst.param_fwd.max(e);
-        let eps = 1e-5 * v.abs();
+        fwd.push(forward_value(&cd, h, steps, &ud, obj).unwrap().eps);
         let at = |x: f64| {
             let mut c = chain.clone();
             c.set_parameter(p, x).unwrap();
             forward_value(&c, h, steps, u, obj).unwrap()
         };
-        let fd = (at(v + eps) - at(v - eps)) / (2.0 * eps);
-        let e = (fd - fwd).abs() / fwd.abs();
-        assert!(
-            e <= 1e-6,
-            "{label}: dJ/d{p:?}: FD {fd:e} vs forward {fwd:e}"
-        );
-        worst.param_fd = worst.param_fd.max(e);
+        fd.push(gradient_check::central(&at, v, 1e-5 * v.abs()));
     }
+    let label = format!("{label}: dJ/d{params:?}");
+    let e = gradient_check::assert_close(
+        &format!("{label}, adjoint"),
+        &adj.parameter_gradient,
+        &fwd,
+        "forward-mode Dual64",
+        Tolerance::relative(1e-12),
+    );
+    worst.param_fwd = worst.param_fwd.max(e);
+    let e = gradient_check::assert_close(
+        &format!("{label}, central difference (step 1e-5 of the parameter)"),
+        &fd,
+        &fwd,
+        "forward-mode Dual64",
+        Tolerance::relative(1e-6),
+    );
+    worst.param_fd = worst.param_fd.max(e);
 }
 
 /// Checks ∂J/∂u_k of an adjoint result, every k, against `Dual64` forward mode (1e-12 relative to
-/// max_k |∂J/∂u_k|) and central finite differences (1e-6 of the same scale).
+/// max_k |∂J/∂u_k|) and central finite differences (1e-6 of the same scale), by
+/// [`gradient_check::assert_close`].
 fn check_controls<O: Objective, const DIM: usize>(
     label: &str,
     chain: &Chain<f64, DIM>,
@@ -217,34 +227,37 @@ fn check_controls<O: Objective, const DIM: usize>(
     let scale = max_abs(g);
     assert!(scale > 0.0, "{label}: zero gradient checks nothing");
     let cd = chain.lift::<Dual64>();
+    let (mut fwd, mut fd) = (Vec::new(), Vec::new());
     for k in 0..=steps {
         let ud: Vec<Dual64> = u
             .iter()
             .enumerate()
             .map(|(i, &x)| Dual64::new(x, f64::from(u8::from(i == k))))
             .collect();
-        let fwd = forward_value(&cd, h, steps, &ud, obj).unwrap().eps;
-        let e = (g[k] - fwd).abs() / scale;
-        assert!(
-            e <= 1e-12,
-            "{label}: dJ/du_{k}: adjoint {:e} vs forward {fwd:e}",
-            g[k]
-        );
-        worst.control_fwd = worst.control_fwd.max(e);
-        let eps = 1e-5 * u[k].abs().max(1.0);
-        let at = |d: f64| {
+        fwd.push(forward_value(&cd, h, steps, &ud, obj).unwrap().eps);
+        let at = |x: f64| {
             let mut v = u.to_vec();
-            v[k] += d;
+            v[k] = x;
             forward_value(chain, h, steps, &v, obj).unwrap()
         };
-        let fd = (at(eps) - at(-eps)) / (2.0 * eps);
-        let e = (fd - fwd).abs() / scale;
-        assert!(
-            e <= 1e-6,
-            "{label}: dJ/du_{k}: FD {fd:e} vs forward {fwd:e}"
-        );
-        worst.control_fd = worst.control_fd.max(e);
+        fd.push(gradient_check::central(&at, u[k], 1e-5 * u[k].abs().max(1.0)));
     }
+    let e = gradient_check::assert_close(
+        &format!("{label}: dJ/du, adjoint"),
+        &g[..=steps],
+        &fwd,
+        "forward-mode Dual64",
+        Tolerance::of_scale(1e-12, scale),
+    );
+    worst.control_fwd = worst.control_fwd.max(e);
+    let e = gradient_check::assert_close(
+        &format!("{label}: dJ/du, central difference (step 1e-5 max(|u_k|, 1))"),
+        &fd,
+        &fwd,
+        "forward-mode Dual64",
+        Tolerance::of_scale(1e-6, scale),
+    );
+    worst.control_fd = worst.control_fd.max(e);
 }
 
 // ---------------------------------------------------------------------------------------------

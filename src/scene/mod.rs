@@ -21,7 +21,6 @@ mod current;
 mod design;
 mod error;
 mod fatigue;
-mod input;
 mod mpc;
 mod objective;
 mod pipe;
@@ -46,8 +45,8 @@ pub use current::{
 pub use design::{DesignParameter, DesignTable, FreeParameter, Role};
 pub use error::{SceneError, SceneErrorKind};
 pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
-pub use input::{
-    read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
+pub use crate::input::{
+    human_bytes, read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
 pub use mpc::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 pub use pipe::{
@@ -57,7 +56,7 @@ pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use soil::{water_height, Soil, SoilLumping};
 pub use stackup::{Body, FlexJoint, Foot, Layout, Segment, Stackup, STANDARD_GRAVITY};
 pub use validate::{
-    human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
+    ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
     GRAVITY_RANGE, JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS,
     MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE,
     SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,

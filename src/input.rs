@@ -17,11 +17,10 @@ use std::fmt;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
-use super::validate::human_bytes;
 
 /// The largest input file read (1 GiB): a scene, a series, a controls or a model file, a
 /// regular file or a stream. Far above any valid input (a per-step control of
-/// [`MAX_STEPS`](super::MAX_STEPS) values is about 250 MB of text).
+/// [`MAX_STEPS`](crate::scene::MAX_STEPS) values is about 250 MB of text).
 pub const MAX_INPUT_BYTES: u64 = 1 << 30;
 
 /// Bytes read per block (and checked for text before the next block is read).
@@ -308,5 +307,21 @@ mod tests {
                 size: None
             }
         );
+    }
+}
+
+/// `bytes` for people, in binary units: `512 bytes`, `8.0 GiB`, `894.1 GiB`.
+pub fn human_bytes(bytes: u64) -> String {
+    const UNITS: [&str; 7] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut x = bytes as f64;
+    let mut unit = 0;
+    while x >= 1024.0 && unit + 1 < UNITS.len() {
+        x /= 1024.0;
+        unit += 1;
+    }
+    if unit == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{x:.1} {}", UNITS[unit])
     }
 }

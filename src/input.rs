@@ -17,7 +17,6 @@ use std::fmt;
 use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 
-
 /// The largest input file read (1 GiB): a scene, a series, a controls or a model file, a
 /// regular file or a stream. Far above any valid input (a per-step control of
 /// [`MAX_STEPS`](crate::scene::MAX_STEPS) values is about 250 MB of text).

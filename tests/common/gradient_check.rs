@@ -90,7 +90,13 @@ impl Tolerance {
 /// ...). A failure names `label`, the worst component (by error over its bound), both values,
 /// the error and the bound. Returns the worst error in units of its scale (|e_i| / scale_i), the
 /// number the tests print next to their tolerance. A non-finite value or error fails.
-pub fn assert_close(label: &str, got: &[f64], reference: &[f64], source: &str, tol: Tolerance) -> f64 {
+pub fn assert_close(
+    label: &str,
+    got: &[f64],
+    reference: &[f64],
+    source: &str,
+    tol: Tolerance,
+) -> f64 {
     assert_eq!(
         got.len(),
         reference.len(),

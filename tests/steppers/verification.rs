@@ -240,7 +240,11 @@ fn check_controls<O: Objective, const DIM: usize>(
             v[k] = x;
             forward_value(chain, h, steps, &v, obj).unwrap()
         };
-        fd.push(gradient_check::central(&at, u[k], 1e-5 * u[k].abs().max(1.0)));
+        fd.push(gradient_check::central(
+            &at,
+            u[k],
+            1e-5 * u[k].abs().max(1.0),
+        ));
     }
     let e = gradient_check::assert_close(
         &format!("{label}: dJ/du, adjoint"),

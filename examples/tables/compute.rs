@@ -1,6 +1,6 @@
 //! The computation behind the `tables` example (Nøst 2023, Tables 3.1-3.4 on the riser scene),
-//! shared with `tests/scene/tables.rs`, which includes this file and `thesis.rs` with `#[path]` and
-//! asserts every row against the thesis as the notes below describe.
+//! shared with `tests/scene/tables.rs` (its crate's `main.rs` declares this file and `thesis.rs`
+//! with `#[path]`), which asserts every row against the thesis as the notes below describe.
 //!
 //! How each table is solved (single shooting, exact adjoint gradients), and what each row is
 //! checked against:

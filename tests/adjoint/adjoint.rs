@@ -9,8 +9,7 @@ use chainbeam::catalogue;
 use chainbeam::*;
 use num_dual::Dual64;
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
+use crate::gradient_check;
 use gradient_check::Tolerance;
 
 /// A thesis riser scene (docs/conventions.md) with another support, drag and horizon. The vessel

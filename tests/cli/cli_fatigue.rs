@@ -3,8 +3,7 @@
 
 use std::fs;
 
-#[path = "../common/fatigue_cli.rs"]
-mod fatigue_cli;
+use crate::fatigue_cli;
 
 use chainbeam::fatigue::{assess, MomentHistory};
 use chainbeam::{simulate, Scene};

@@ -7,8 +7,7 @@ use std::process::Output;
 
 use assert_cmd::cargo::cargo_bin_cmd;
 
-#[path = "../common/wave_riser4_toml.rs"]
-mod wave_riser4_toml;
+use crate::wave_riser4_toml;
 use wave_riser4_toml::PLANAR as SCENE;
 
 fn run(dir: &Path, args: &[&str]) -> Output {

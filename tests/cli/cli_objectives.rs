@@ -2,8 +2,7 @@
 //! exponent = p`): `gradient` and `optimize` with the structured solvers.
 
 #[allow(dead_code)]
-#[path = "../../examples/tables/thesis.rs"]
-mod thesis;
+use crate::thesis;
 
 use chainbeam::{catalogue, ControlProblem, Parametrisation, PerStepControl, PowerObjective};
 

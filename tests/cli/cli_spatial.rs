@@ -13,8 +13,7 @@
 //! symmetry of the drag-free riser about its axis y for the direction of the optimal control.
 
 use crate::common;
-#[path = "../common/wave_riser4_toml.rs"]
-mod wave_riser4_toml;
+use crate::wave_riser4_toml;
 
 use std::fs;
 use std::path::{Path, PathBuf};

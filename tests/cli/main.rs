@@ -6,6 +6,14 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/fatigue_cli.rs"]
+mod fatigue_cli;
+#[path = "../../examples/tables/thesis.rs"]
+mod thesis;
+#[path = "../common/wave_riser4_toml.rs"]
+mod wave_riser4_toml;
+
 mod cli;
 mod cli_controls;
 mod cli_fatigue;

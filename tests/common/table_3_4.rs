@@ -1,4 +1,5 @@
-//! The Table 3.4 problems as the tests use them (included with `#[path]` next to `mod thesis`).
+//! The Table 3.4 problems as the tests use them (declared with `#[path]` next to `mod thesis` in a
+//! test crate's `main.rs`).
 
 use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 

@@ -19,8 +19,7 @@ use chainbeam::hotspots::{joint_moment, joint_moment_history, nearest_joint};
 use chainbeam::statics::static_equilibrium;
 use chainbeam::{Chain, Scene};
 
-#[path = "../common/fatigue_cli.rs"]
-mod fatigue_cli;
+use crate::fatigue_cli;
 use fatigue_cli::{json, run};
 
 /// A 60 m steel riser (6 pendulums of 10 m, 533.4 × 22.2 mm) under 1 MN top tension in a JONSWAP

@@ -7,6 +7,14 @@
 #[path = "../common/fatigue_support.rs"]
 mod fatigue_support;
 
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/fatigue_cli.rs"]
+mod fatigue_cli;
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
+#[path = "../common/rotation.rs"]
+mod rotation;
+
 mod fatigue;
 mod fatigue_objective;
 mod fatigue_scatter;

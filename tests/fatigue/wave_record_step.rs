@@ -22,8 +22,7 @@ use chainbeam::adjoint::{adjoint_gradient, forward_value};
 use chainbeam::*;
 use num_dual::Dual64;
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
+use crate::gradient_check;
 
 const H: f64 = 0.05;
 

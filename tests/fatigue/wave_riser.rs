@@ -18,10 +18,8 @@ use chainbeam::adjoint::{adjoint_gradient, forward_value};
 use chainbeam::*;
 use num_dual::Dual64;
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
-#[path = "../common/rotation.rs"]
-mod rotation;
+use crate::gradient_check;
+use crate::rotation;
 
 const H: f64 = 0.05;
 

@@ -10,8 +10,7 @@ use chainbeam::statics::static_equilibrium;
 use chainbeam::*;
 use num_dual::Dual64;
 
-#[path = "../common/settle.rs"]
-mod settle;
+use crate::settle;
 
 /// Least-squares slope of log(y) against log(x).
 fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {

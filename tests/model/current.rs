@@ -15,10 +15,8 @@
 use chainbeam::statics::{static_equilibrium, static_equilibrium_at};
 use chainbeam::*;
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
-#[path = "../common/settle.rs"]
-mod settle;
+use crate::gradient_check;
+use crate::settle;
 
 const H: f64 = 0.01;
 

@@ -11,10 +11,8 @@
 
 use chainbeam::*;
 
-#[path = "../common/rotation.rs"]
-mod rotation;
-#[path = "../common/turned_riser.rs"]
-mod turned_riser;
+use crate::rotation;
+use crate::turned_riser;
 
 const STEPS: usize = 400;
 

@@ -4,6 +4,16 @@
 //! One test crate (`cargo test --test model`); each file is a module, so a single file's tests
 //! run with `cargo test --test model FILE::` (the file name without `.rs`).
 
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
+#[path = "../common/rotation.rs"]
+mod rotation;
+#[path = "../common/settle.rs"]
+mod settle;
+#[path = "../common/turned_riser.rs"]
+mod turned_riser;
+
 mod axial;
 mod core;
 mod current;

@@ -24,8 +24,7 @@ use chainbeam::{
 };
 use num_dual::{Dual, Dual64};
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
+use crate::gradient_check;
 use gradient_check::Tolerance;
 
 /// A scene with every conservative term: springs (base, interior, tip), point loads of every

@@ -3,8 +3,7 @@
 //! reproduces the open-loop optimum (to the solver's tolerance), warm starts save iterations,
 //! plant and model may differ, bounds hold, the baselines and the PD gradient, bad settings.
 
-#[path = "../common/wave_riser4.rs"]
-mod wave_riser4;
+use crate::wave_riser4;
 
 use chainbeam::error::{Requirement, ValueError};
 use chainbeam::mpc::{

@@ -5,11 +5,9 @@
 //! solver's, bounds, a moving start, and honest failure.
 
 #[allow(dead_code)]
-#[path = "../../examples/tables/thesis.rs"]
-mod thesis;
+use crate::thesis;
 
-#[path = "../common/table_3_4.rs"]
-mod table_3_4;
+use crate::table_3_4;
 
 use chainbeam::ocp::{Condensed, OcpError, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};

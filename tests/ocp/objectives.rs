@@ -7,10 +7,8 @@
 //! region's objective), `mpc`, the command line, and bad exponents.
 
 #[allow(dead_code)]
-#[path = "../../examples/tables/thesis.rs"]
-mod thesis;
-#[path = "../common/wave_riser4.rs"]
-mod wave_riser4;
+use crate::thesis;
+use crate::wave_riser4;
 
 use chainbeam::adjoint::forward_value;
 use chainbeam::mpc::{run_closed_loop, Horizon, Mpc, MpcOptions, MpcSolver};

@@ -3,11 +3,9 @@
 //! Gauss-Newton Hessian, its optima against the trust region, bounds and honest failure.
 
 #[allow(dead_code)]
-#[path = "../../examples/tables/thesis.rs"]
-mod thesis;
+use crate::thesis;
 
-#[path = "../common/table_3_4.rs"]
-mod table_3_4;
+use crate::table_3_4;
 
 use chainbeam::ocp::{solve, OcpError, OcpOptions, Solver, Termination};
 use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};

@@ -23,8 +23,7 @@ use chainbeam::ocp::{self, Condensed, OcpOptions, Solver};
 use chainbeam::optimize::{choose_method, Method, OptimOptions};
 use chainbeam::*;
 
-#[path = "../common/turned_riser.rs"]
-mod turned_riser;
+use crate::turned_riser;
 
 const STEPS: usize = 120;
 const PIECES: usize = 12;

@@ -4,13 +4,10 @@
 //! References: the thesis's printed values (transcribed in `examples/tables/thesis.rs`) and, for
 //! the misprints, the thesis's own controls replayed in our model.
 
-#[path = "../../examples/tables/compute.rs"]
-mod compute;
-#[path = "../../examples/tables/thesis.rs"]
-mod thesis;
+use crate::compute;
+use crate::thesis;
 
-#[path = "../common/table_3_4.rs"]
-mod table_3_4;
+use crate::table_3_4;
 
 use chainbeam::optimize::resolved_control_limit;
 use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};

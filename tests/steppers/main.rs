@@ -8,6 +8,10 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
+
 mod columns;
 mod euler_bernoulli;
 mod integrators;

@@ -23,8 +23,7 @@ use nalgebra::{DMatrix, DVector};
 use num_dual::{Dual64, HyperDual64};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-#[path = "../common/gradient_check.rs"]
-mod gradient_check;
+use crate::gradient_check;
 use gradient_check::Tolerance;
 
 // ---------------------------------------------------------------------------------------------

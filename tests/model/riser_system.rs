@@ -433,8 +433,8 @@ fn bad_vessel_tables_name_their_key() {
 fn only_rattle_steps_a_tip_held_by_the_vessel() {
     let scene = riser_300m_vessel("", 8, 0.05, 10);
     for method in [
-        chainbeam::integrators::Method::Shake,
-        chainbeam::integrators::Method::ProjectedRk4,
+        chainbeam::integrators::IntegratorMethod::Shake,
+        chainbeam::integrators::IntegratorMethod::ProjectedRk4,
     ] {
         let err = chainbeam::integrators::Integrator::new(&scene, method, 0.05)
             .map(|_| ())

@@ -4,7 +4,7 @@
 //! allocating per step.
 
 use chainbeam::catalogue;
-use chainbeam::integrators::{integrate, Integrator, Method};
+use chainbeam::integrators::{integrate, Integrator, IntegratorMethod};
 use chainbeam::steppers::{ProjectedRk4, Rattle, Shake, Stepper, StepperError};
 use chainbeam::{Chain, Error, Parameter, Scalar, Scene};
 use num_dual::Dual64;
@@ -56,8 +56,8 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 #[test]
 fn shake_positions_equal_rattle_positions_without_drag() {
     let scene = catalogue::thesis_cantilever();
-    let mut r = Integrator::new(&scene, Method::Rattle, 0.01).unwrap();
-    let mut s = Integrator::new(&scene, Method::Shake, 0.01).unwrap();
+    let mut r = Integrator::new(&scene, IntegratorMethod::Rattle, 0.01).unwrap();
+    let mut s = Integrator::new(&scene, IntegratorMethod::Shake, 0.01).unwrap();
     for _ in 0..300 {
         r.step().unwrap();
         s.step().unwrap();
@@ -77,16 +77,24 @@ fn rattle_matches_library_simulation() {
     let mut scene = catalogue::thesis_cantilever();
     scene.time.steps = 100;
     let traj = chainbeam::simulate(&scene).unwrap();
-    let it = integrate(&scene, Method::Rattle, 0.01, 100, 100, |_| {}).unwrap();
+    let it = integrate(&scene, IntegratorMethod::Rattle, 0.01, 100, 100, |_| {}).unwrap();
     let a = traj.positions(100).last().unwrap()[2];
     assert!((a - tip(&it)[1]).abs() < 1e-13);
 }
 
 /// Tip position error at T = 0.5 s against a fine projected-RK4 reference.
-fn error_at(method: Method, h: f64) -> f64 {
+fn error_at(method: IntegratorMethod, h: f64) -> f64 {
     let scene = catalogue::thesis_cantilever();
     let t = 0.5;
-    let reference = integrate(&scene, Method::ProjectedRk4, 1.0e-4, 5000, 5000, |_| {}).unwrap();
+    let reference = integrate(
+        &scene,
+        IntegratorMethod::ProjectedRk4,
+        1.0e-4,
+        5000,
+        5000,
+        |_| {},
+    )
+    .unwrap();
     let steps = (t / h).round() as usize;
     let it = integrate(&scene, method, h, steps, steps, |_| {}).unwrap();
     dist(tip(&it), tip(&reference))
@@ -94,13 +102,13 @@ fn error_at(method: Method, h: f64) -> f64 {
 
 #[test]
 fn convergence_orders() {
-    let e1 = error_at(Method::Rattle, 0.004);
-    let e2 = error_at(Method::Rattle, 0.002);
+    let e1 = error_at(IntegratorMethod::Rattle, 0.004);
+    let e2 = error_at(IntegratorMethod::Rattle, 0.002);
     let p = (e1 / e2).log2();
     assert!((1.7..2.4).contains(&p), "RATTLE order {p}");
     // Pre-asymptotic at these steps: the measured ratio climbs from 8 toward 16 as h shrinks.
-    let e1 = error_at(Method::ProjectedRk4, 0.001);
-    let e2 = error_at(Method::ProjectedRk4, 0.0005);
+    let e1 = error_at(IntegratorMethod::ProjectedRk4, 0.001);
+    let e2 = error_at(IntegratorMethod::ProjectedRk4, 0.0005);
     let p = (e1 / e2).log2();
     assert!(p > 3.2, "projected RK4 order {p} ({e1:e}, {e2:e})");
 }
@@ -113,7 +121,7 @@ fn rattle_energy_bounded_where_explicit_method_drifts() {
     let scene = catalogue::thesis_cantilever();
     let h = 0.01;
     let steps = 100_000;
-    let run = |m: Method| {
+    let run = |m: IntegratorMethod| {
         let mut e = Vec::new();
         integrate(&scene, m, h, steps, 100, |it| e.push(it.energy())).unwrap();
         let de: Vec<f64> = e.iter().map(|x| (x - e[0]).abs()).collect();
@@ -122,13 +130,13 @@ fn rattle_energy_bounded_where_explicit_method_drifts() {
         let second = de[half..].iter().cloned().fold(0.0, f64::max);
         (first, second, de[half], *de.last().unwrap())
     };
-    for m in [Method::Rattle, Method::Shake] {
+    for m in [IntegratorMethod::Rattle, IntegratorMethod::Shake] {
         let (first, second, _, _) = run(m);
         assert!(second < 1e-4, "{}: energy error {second}", m.name());
         assert!(second <= 1.5 * first, "{}: {first} then {second}", m.name());
     }
-    let (_, second_r, _, _) = run(Method::Rattle);
-    let (_, _, mid, end) = run(Method::ProjectedRk4);
+    let (_, second_r, _, _) = run(IntegratorMethod::Rattle);
+    let (_, _, mid, end) = run(IntegratorMethod::ProjectedRk4);
     assert!(
         end >= mid,
         "explicit energy error not one-sided: {mid} then {end}"
@@ -143,7 +151,14 @@ fn rattle_energy_bounded_where_explicit_method_drifts() {
 fn explicit_method_fails_with_typed_error_beyond_its_stability_limit() {
     let scene = catalogue::thesis_cantilever();
     // The explicit method is linearly stable to h ≈ 0.021 on this beam; at 0.03 it blows up.
-    let res = integrate(&scene, Method::ProjectedRk4, 0.03, 2000, 2000, |_| {});
+    let res = integrate(
+        &scene,
+        IntegratorMethod::ProjectedRk4,
+        0.03,
+        2000,
+        2000,
+        |_| {},
+    );
     match res {
         Err(Error::NonFinite { .. })
         | Err(Error::Folded { .. })
@@ -159,7 +174,7 @@ fn folding_is_a_typed_error_for_every_method() {
     let scene = catalogue::scaled_cantilever(10, 10.0, 10.0, 10.0, 2.0);
     let mut scene = scene;
     scene.loads.points[0].force = 500.0;
-    for m in Method::ALL {
+    for m in IntegratorMethod::ALL {
         let res = integrate(&scene, m, 0.001, 20_000, 20_000, |_| {});
         match res {
             Err(Error::Folded { angle_deg, .. }) => assert!(angle_deg > 170.0),
@@ -180,8 +195,8 @@ fn folding_is_a_typed_error_for_every_method() {
 fn locked_tip_and_drag_are_supported() {
     let scene = catalogue::dissipative_fixed_fixed(10.0);
     let h = 0.005;
-    let r = integrate(&scene, Method::Rattle, h, 200, 200, |_| {}).unwrap();
-    for m in [Method::Shake, Method::ProjectedRk4] {
+    let r = integrate(&scene, IntegratorMethod::Rattle, h, 200, 200, |_| {}).unwrap();
+    for m in [IntegratorMethod::Shake, IntegratorMethod::ProjectedRk4] {
         let it = integrate(&scene, m, h, 200, 200, |_| {}).unwrap();
         assert!(it.constraint_residual() < 1e-12, "{}", m.name());
         let d = r
@@ -199,14 +214,18 @@ fn reaction_tip_and_bad_step_are_rejected() {
     let mut scene = catalogue::fixed_fixed();
     scene.beam.reaction_force = true;
     assert!(matches!(
-        Integrator::new(&scene, Method::Shake, 0.01),
+        Integrator::new(&scene, IntegratorMethod::Shake, 0.01),
         Err(Error::Stepper(StepperError::ReactionTipUnsupported {
             method: "SHAKE"
         }))
     ));
-    assert!(Integrator::new(&scene, Method::Rattle, 0.01).is_ok());
+    assert!(Integrator::new(&scene, IntegratorMethod::Rattle, 0.01).is_ok());
     assert!(matches!(
-        Integrator::new(&catalogue::thesis_cantilever(), Method::ProjectedRk4, -1.0),
+        Integrator::new(
+            &catalogue::thesis_cantilever(),
+            IntegratorMethod::ProjectedRk4,
+            -1.0
+        ),
         Err(Error::Stepper(StepperError::StepNotPositive { h: -1.0 }))
     ));
 }

@@ -118,7 +118,7 @@
 //! # Observing a run
 //! [`Solver::solve_observed`] and [`Condensed::solve_observed`] call an
 //! [`IterationObserver`] after every accepted iteration with θ and the iteration's
-//! [`IterationRecord`]; it may stop the run ([`Termination::Stopped`]). Nothing is printed:
+//! [`IterationRecord`]; it may stop the run ([`OcpTermination::Stopped`]). Nothing is printed:
 //! [`OcpResult::history`] keeps the records of a run that was not observed.
 //!
 //! # Supported problems
@@ -158,7 +158,7 @@
 //! (H_k by forward-over-reverse steps, `hessian.rs`) is planar: in the spatial model the
 //! iteration is Gauss-Newton throughout ([`Curvature`] is ignored there), so where the residual
 //! stays large it converges linearly and may end at J's round-off
-//! ([`Termination::RoundOff`]) rather than at the gradient tolerance, as the planar
+//! ([`OcpTermination::RoundOff`]) rather than at the gradient tolerance, as the planar
 //! Gauss-Newton run does on the same problem (tests/ocp/ocp_spatial.rs: per-step, ρ = 0.1, the
 //! objective within 10⁻⁹ of the planar exact model's). A planar problem runs `Solver<2>`,
 //! whose arithmetic is that of the planar solver before (`tables --json` identical).
@@ -210,7 +210,7 @@ pub use crate::error::{HorizonShape, OcpError};
 pub use condensed::Condensed;
 pub use options::{
     Curvature, IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult,
-    Termination,
+    OcpTermination,
 };
 pub use solver::Solver;
 

@@ -9,7 +9,7 @@ use crate::thesis;
 
 use crate::table_3_4;
 
-use chainbeam::ocp::{Condensed, OcpError, OcpOptions, Solver, Termination};
+use chainbeam::ocp::{Condensed, OcpError, OcpOptions, OcpTermination, Solver};
 use chainbeam::optimize::{minimize, riccati_options, Method, OptimOptions};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl, PiecewiseControl,
@@ -194,7 +194,7 @@ fn budget_and_errors_are_reported() {
     };
     let r = Condensed::new(&p, &opts).unwrap().solve(&zero).unwrap();
     assert!(!r.converged);
-    assert_eq!(r.termination, Termination::MaxIterations);
+    assert_eq!(r.termination, OcpTermination::MaxIterations);
     let rt = Condensed::new(
         &p,
         &OcpOptions {
@@ -205,7 +205,7 @@ fn budget_and_errors_are_reported() {
     .unwrap()
     .solve(&zero)
     .unwrap();
-    assert_eq!(rt.termination, Termination::Budget);
+    assert_eq!(rt.termination, OcpTermination::Budget);
     assert_eq!(rt.theta, r.theta, "the same step, bit for bit");
     assert_eq!(rt.jacobian_passes + 1, r.jacobian_passes);
     let mut c = Condensed::new(&p, &OcpOptions::default()).unwrap();

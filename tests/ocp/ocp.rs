@@ -7,7 +7,7 @@ use crate::thesis;
 
 use crate::table_3_4;
 
-use chainbeam::ocp::{solve, OcpError, OcpOptions, Solver, Termination};
+use chainbeam::ocp::{solve, OcpError, OcpOptions, OcpTermination, Solver};
 use chainbeam::optimize::{minimize, Method, OptimOptions, OptimResult};
 use chainbeam::{
     catalogue, BendingObjective, ControlProblem, Error, Parametrisation, PerStepControl,
@@ -413,7 +413,7 @@ fn non_convergence_and_bad_input_are_reported() {
     )
     .unwrap();
     assert!(!r.converged);
-    assert_eq!(r.termination, Termination::MaxIterations);
+    assert_eq!(r.termination, OcpTermination::MaxIterations);
     assert!(r.projected_gradient_norm > 1e-8 * r.initial_gradient_norm);
     assert_eq!(r.iterations, 1);
 
@@ -431,7 +431,7 @@ fn non_convergence_and_bad_input_are_reported() {
     )
     .unwrap();
     assert!(!rt.converged);
-    assert_eq!(rt.termination, Termination::Budget);
+    assert_eq!(rt.termination, OcpTermination::Budget);
     assert_eq!(rt.theta, r.theta);
     assert_eq!(rt.objective.to_bits(), r.objective.to_bits());
     assert_eq!(rt.jacobian_passes + 1, r.jacobian_passes);

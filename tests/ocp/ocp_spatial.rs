@@ -210,7 +210,7 @@ fn riccati_cases() -> [(Parametrisation, BendingObjective); 2] {
 /// spatial model runs) at steps below J's round-off, where the planar Gauss-Newton run of the
 /// per-step case ends too (41 iterations, J within 4e-12 of the exact model's optimum).
 fn done(r: &ocp::OcpResult) -> bool {
-    r.converged || r.termination == ocp::Termination::RoundOff
+    r.converged || r.termination == ocp::OcpTermination::RoundOff
 }
 
 /// The Riccati solver (2 controls per stage in the spatial model): the planar scene turned by

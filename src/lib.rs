@@ -178,7 +178,7 @@ pub use scene::{
 };
 pub use scene::{Current, CurrentProfile, Rao, Vessel};
 pub use simulate::{
-    moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
+    moment_history, simulate_streaming, MomentSeries, StepObserver, StepView, StreamControls,
     StreamError, StreamSummary,
 };
 pub use simulate::{

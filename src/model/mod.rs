@@ -22,11 +22,11 @@ mod vessel;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
-    CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
-    ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, NodeDrag, PointLoad,
-    PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor, TopTension,
-    WaveField, WaveInertia, WaveInputs,
+    AxialWeight, BlockSym, ChainPointLoad, ControlForce, CoupledAt, CoupledDissipativeTerm,
+    CoupledVisitor, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights,
+    DualScratch, Embed, ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping,
+    NodeDrag, PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor,
+    TopTension, WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};

@@ -64,7 +64,7 @@ pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
 pub use node_drag::{NodeDrag, NodeReverseScratch};
-pub use point_load::{HarmonicForce, PointLoad, PointLoads};
+pub use point_load::{ChainPointLoad, HarmonicForce, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use soil::SoilSprings;
 pub use spring::Springs;

@@ -1,7 +1,6 @@
 //! The command line takes the power objective Σ_k |M₀(t_k)|^p (`[objective] kind = "power",
 //! exponent = p`): `gradient` and `optimize` with the structured solvers.
 
-#[allow(dead_code)]
 use crate::thesis;
 
 use chainbeam::{catalogue, ControlProblem, Parametrisation, PerStepControl, PowerObjective};

@@ -9,6 +9,7 @@ mod common;
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
 #[path = "../common/fatigue_cli.rs"]
 mod fatigue_cli;
+#[allow(dead_code)] // not every table is read here
 #[path = "../../examples/tables/thesis.rs"]
 mod thesis;
 #[path = "../common/wave_riser4_toml.rs"]

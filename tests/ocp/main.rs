@@ -7,6 +7,7 @@
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
 #[path = "../common/table_3_4.rs"]
 mod table_3_4;
+#[allow(dead_code)] // not every table is read here
 #[path = "../../examples/tables/thesis.rs"]
 mod thesis;
 #[path = "../common/turned_riser.rs"]

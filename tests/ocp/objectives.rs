@@ -6,7 +6,6 @@
 //! method of `optimize` on Table 3.4's scene (p = 2 bit for bit c_sum, p = 4 at the trust
 //! region's objective), `mpc`, the command line, and bad exponents.
 
-#[allow(dead_code)]
 use crate::thesis;
 use crate::wave_riser4;
 

@@ -2,7 +2,6 @@
 //! its stage Jacobians against finite differences, its Gauss-Newton step against a dense
 //! Gauss-Newton Hessian, its optima against the trust region, bounds and honest failure.
 
-#[allow(dead_code)]
 use crate::thesis;
 
 use crate::table_3_4;

@@ -4,8 +4,6 @@
 //! A_k, against dual numbers carried along the whole horizon), its optima against the Riccati
 //! solver's, bounds, a moving start, and honest failure.
 
-use crate::thesis;
-
 use crate::table_3_4;
 
 use chainbeam::ocp::{Condensed, OcpError, OcpOptions, OcpTermination, Solver};

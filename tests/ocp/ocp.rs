@@ -2,8 +2,6 @@
 //! its stage Jacobians against finite differences, its Gauss-Newton step against a dense
 //! Gauss-Newton Hessian, its optima against the trust region, bounds and honest failure.
 
-use crate::thesis;
-
 use crate::table_3_4;
 
 use chainbeam::ocp::{solve, OcpError, OcpOptions, OcpTermination, Solver};

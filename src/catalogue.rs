@@ -278,7 +278,7 @@ pub fn long_horizon() -> Scene {
 /// with F = 2 N at node 5 at 45° between x and z, `force = [√2, √2]`, h = 0.01 s, N = 1000
 /// (t ∈ [0, 10] s). Spatial: [`crate::simulate()`] runs the spatial model, and by the model's
 /// rotational symmetry about y the deflection is the in-plane one of [`riser`]`(5)`'s load turned
-/// by 45° (tests/loads.rs). No control (a 2-axis control on the same load: [`oblique_control`]).
+/// by 45° (tests/model/loads.rs). No control (a 2-axis control on the same load: [`oblique_control`]).
 pub fn oblique_riser() -> Scene {
     let f = std::f64::consts::SQRT_2;
     known_good(
@@ -473,7 +473,7 @@ pub fn sheared_current() -> Scene {
 /// 0.3 m/s along +z at the surface, 0.2 m/s at 45° at 5 m depth, 0.1 m/s along +x at the seabed
 /// (10 m), interpolated linearly in depth. Spatial (the current has x components); no control.
 /// h = 0.01 s, N = 1000. The riser drifts toward the static offset of
-/// `statics::static_equilibrium`, solved in the spatial model (tests/statics_spatial.rs).
+/// `statics::static_equilibrium`, solved in the spatial model (tests/model/statics_spatial.rs).
 pub fn turning_current() -> Scene {
     known_good(
         riser_chain_without_load()

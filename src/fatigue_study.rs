@@ -951,7 +951,7 @@ fn run_open_loop_joints(
 /// The joint torques of a closed loop, recomputed by replaying its decisions on the plant of
 /// [`crate::mpc`]: the same plant, stepped with the same force held over each control interval,
 /// so the same states as the closed loop's, bit for bit (its base moment is checked against the
-/// closed loop's record in tests/hotspots.rs). The closed loop records the base moment only;
+/// closed loop's record in tests/fatigue/hotspots.rs). The closed loop records the base moment only;
 /// this costs one more simulation of the record, not a re-plan.
 ///
 /// # Errors

@@ -27,7 +27,7 @@
 //! (M_x, M_z) = k₁ (θ₁/sin θ₁) (x₁, z₁)/l₁: the wellhead moment M_w = k₁ (x₁, z₁)/l₁ = M₀ l₁/2 of
 //! `fatigue::MomentMeasure::ChainM0` times θ₁/sin θ₁ = 1 + θ₁²/6 + … (docs/conventions.md "The
 //! wellhead moment M_w": M_w is the torque linearised at the straight beam, sin θ₁ for θ₁). The two
-//! are the same function of the state up to that factor, sample by sample; tests/hotspots.rs
+//! are the same function of the state up to that factor, sample by sample; tests/fatigue/hotspots.rs
 //! checks the identity to 10⁻¹² and the two damages at elevation 0 against the bound the factor
 //! implies.
 //!

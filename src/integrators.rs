@@ -1,12 +1,12 @@
 //! A thin comparison layer over the [`crate::steppers`] (RATTLE, SHAKE, projected RK4), for
-//! speed-against-accuracy and stability comparisons (`paper_figures`, `tests/integrators.rs`).
+//! speed-against-accuracy and stability comparisons (`paper_figures`, `tests/steppers/integrators.rs`).
 //!
 //! The methods themselves live in [`crate::steppers`], one file each, generic over the scalar and
 //! the dimension; see their module docs for the maths. This module adds:
 //! * [`Run`]: any [`Stepper`] together with **its own** state, a constant control and a step
 //!   counter, with the quantities the comparisons read (energy, node positions, constraint
 //!   residual, Newton work);
-//! * [`Integrator`]: one [`Run`] per [`Method`], for picking a method at run time over the planar
+//! * [`Integrator`]: one [`Run`] per [`IntegratorMethod`], for picking a method at run time over the planar
 //!   `f64` model. Each variant holds its stepper and that stepper's state together, so no method
 //!   can be handed another method's state.
 //!
@@ -25,7 +25,7 @@ use crate::steppers::{
 
 /// Which integrator.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Method {
+pub enum IntegratorMethod {
     /// RATTLE (the library's integrator, [`Rattle`]).
     Rattle,
     /// SHAKE (thesis §1.6) with central-difference momenta ([`Shake`]).
@@ -35,16 +35,20 @@ pub enum Method {
     ProjectedRk4,
 }
 
-impl Method {
+impl IntegratorMethod {
     /// Every method, in a stable order.
-    pub const ALL: [Method; 3] = [Method::Rattle, Method::Shake, Method::ProjectedRk4];
+    pub const ALL: [IntegratorMethod; 3] = [
+        IntegratorMethod::Rattle,
+        IntegratorMethod::Shake,
+        IntegratorMethod::ProjectedRk4,
+    ];
 
     /// A short human-readable name.
     pub fn name(self) -> &'static str {
         match self {
-            Method::Rattle => "RATTLE",
-            Method::Shake => "SHAKE",
-            Method::ProjectedRk4 => "projected RK4",
+            IntegratorMethod::Rattle => "RATTLE",
+            IntegratorMethod::Shake => "SHAKE",
+            IntegratorMethod::ProjectedRk4 => "projected RK4",
         }
     }
 }
@@ -243,7 +247,7 @@ impl Integrator {
     /// `method` is not RATTLE and the scene uses the reaction-force tip / a tip held by the
     /// vessel; the
     /// scene's own validation errors; and any error of the first step's set-up (SHAKE's starter).
-    pub fn new(scene: &Scene, method: Method, h: f64) -> Result<Self> {
+    pub fn new(scene: &Scene, method: IntegratorMethod, h: f64) -> Result<Self> {
         let mut chain = Chain::<f64, 2>::from_scene(scene)?;
         let u = constant_control(scene)?;
         if scene.control.is_none() {
@@ -256,22 +260,31 @@ impl Integrator {
     ///
     /// # Errors
     /// As [`Integrator::new`], and [`StepperError::NonFiniteControl`] for a non-finite `u`.
-    pub fn from_chain(chain: Chain<f64, 2>, method: Method, h: f64, u: f64) -> Result<Self> {
+    pub fn from_chain(
+        chain: Chain<f64, 2>,
+        method: IntegratorMethod,
+        h: f64,
+        u: f64,
+    ) -> Result<Self> {
         Ok(match method {
-            Method::Rattle => Integrator::Rattle(Box::new(Run::new(Rattle::new(chain, h)?, u)?)),
-            Method::Shake => Integrator::Shake(Box::new(Run::new(Shake::new(chain, h)?, u)?)),
-            Method::ProjectedRk4 => {
+            IntegratorMethod::Rattle => {
+                Integrator::Rattle(Box::new(Run::new(Rattle::new(chain, h)?, u)?))
+            }
+            IntegratorMethod::Shake => {
+                Integrator::Shake(Box::new(Run::new(Shake::new(chain, h)?, u)?))
+            }
+            IntegratorMethod::ProjectedRk4 => {
                 Integrator::ProjectedRk4(Box::new(Run::new(ProjectedRk4::new(chain, h)?, u)?))
             }
         })
     }
 
     /// The method.
-    pub fn method(&self) -> Method {
+    pub fn method(&self) -> IntegratorMethod {
         match self {
-            Integrator::Rattle(_) => Method::Rattle,
-            Integrator::Shake(_) => Method::Shake,
-            Integrator::ProjectedRk4(_) => Method::ProjectedRk4,
+            Integrator::Rattle(_) => IntegratorMethod::Rattle,
+            Integrator::Shake(_) => IntegratorMethod::Shake,
+            Integrator::ProjectedRk4(_) => IntegratorMethod::ProjectedRk4,
         }
     }
 
@@ -345,7 +358,7 @@ impl Integrator {
 /// As [`Integrator::new`] and [`Integrator::step`].
 pub fn integrate(
     scene: &Scene,
-    method: Method,
+    method: IntegratorMethod,
     h: f64,
     steps: usize,
     every: usize,

@@ -147,6 +147,9 @@ pub mod euler_bernoulli;
 pub mod fatigue;
 pub mod fatigue_study;
 pub mod hotspots;
+// The bounded reader of every input file (re-exported by `scene`): below `scene` and `fatigue`,
+// which both read files through it.
+mod input;
 pub mod integrators;
 pub mod model;
 pub mod mpc;
@@ -175,7 +178,7 @@ pub use scene::{
 };
 pub use scene::{Current, CurrentProfile, Rao, Vessel};
 pub use simulate::{
-    moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
+    moment_history, simulate_streaming, MomentSeries, StepObserver, StepView, StreamControls,
     StreamError, StreamSummary,
 };
 pub use simulate::{

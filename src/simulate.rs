@@ -21,7 +21,7 @@ mod columns;
 mod stream;
 pub use columns::TrajectoryColumns;
 pub use stream::{
-    moment_history, simulate_streaming, MomentHistory, StepObserver, StepView, StreamControls,
+    moment_history, simulate_streaming, MomentSeries, StepObserver, StepView, StreamControls,
     StreamError, StreamSummary,
 };
 

@@ -54,7 +54,7 @@
 //! H δ = −∇U (δⱼₖ above is Kronecker's) and retracts, qⱼ ← qⱼ(δ), then re-centres the chart at
 //! the new iterate (new bases Tⱼ). The retraction agrees with the sphere's geodesics to second
 //! order, so this is Newton's method on the manifold and converges quadratically (measured in
-//! tests/statics_spatial.rs: 2 to 6 iterations from the straight beam). K is seeded on the
+//! tests/model/statics_spatial.rs: 2 to 6 iterations from the straight beam). K is seeded on the
 //! tangent directions aⱼ and bⱼ of every third pendulum: six products give every block.
 //!
 //! A spatial beam without end springs (pinned-pinned) has no isolated equilibrium: its tip is

@@ -1,6 +1,6 @@
 //! The computation behind the `tables` example (Nøst 2023, Tables 3.1-3.4 on the riser scene),
-//! shared with `tests/tables.rs`, which includes this file and `thesis.rs` with `#[path]` and
-//! asserts every row against the thesis as the notes below describe.
+//! shared with `tests/scene/tables.rs` (its crate's `main.rs` declares this file and `thesis.rs`
+//! with `#[path]`), which asserts every row against the thesis as the notes below describe.
 //!
 //! How each table is solved (single shooting, exact adjoint gradients), and what each row is
 //! checked against:
@@ -25,7 +25,7 @@
 //!   condensed run and keeps the lower (condensed alone ends in other local minima on rows 3,
 //!   +0.15 %, and 6, +1.5·10⁻⁶). Against `--method lbfgs` (the former default) the bounded rows
 //!   reach the same objectives to round-off (≤ 5.9·10⁻¹³ relative) or lower (rows 1, 9, 10:
-//!   other local minima; `tests/tables.rs` `table_3_4_auto_is_never_above_lbfgs`). Measured
+//!   other local minima; `tests/scene/tables.rs` `table_3_4_auto_is_never_above_lbfgs`). Measured
 //!   26 Nov 2026 (release, `tables --table 3.4 --json --method auto|lbfgs`, 3 alternating
 //!   pairs, machine idle, load ~1 on 2 cores): the bounded rows' optimisation 64–72 ms against
 //!   216–217 ms (`--method condensed` alone: 21 ms, with the two higher rows); earlier, condensed
@@ -36,7 +36,7 @@
 // The test that includes this file reads only some of the fields.
 #![allow(dead_code)]
 
-use crate::thesis;
+use super::thesis;
 use chainbeam::adjoint::FinalMomentResidual as FinalMoment;
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{

@@ -10,7 +10,7 @@
 //! ```
 //!
 //! How each table is solved and what each row is checked against: see `compute.rs` (shared
-//! with `tests/tables.rs`, which asserts every row).
+//! with `tests/scene/tables.rs`, which asserts every row).
 
 mod compute;
 mod thesis;

@@ -7,7 +7,7 @@ use crate::plot::{color, Figure, Legend, Panel, Res, Series, GREY};
 use crate::{Ctx, Entry, Made};
 use chainbeam::catalogue;
 use chainbeam::euler_bernoulli::{static_cantilever, EbSupport, EulerBernoulli};
-use chainbeam::integrators::{integrate, Integrator, Method};
+use chainbeam::integrators::{integrate, Integrator, IntegratorMethod};
 use chainbeam::statics::static_equilibrium;
 use chainbeam::Scene;
 use std::time::Instant;
@@ -61,7 +61,12 @@ fn max_node_distance(a: &[[f64; 2]], b: &[[f64; 2]]) -> f64 {
 }
 
 /// Runs `method` to `t_end` with step h: (final node positions, CPU seconds per run).
-fn timed_run(scene: &Scene, method: Method, h: f64, t_end: f64) -> Option<(Vec<[f64; 2]>, f64)> {
+fn timed_run(
+    scene: &Scene,
+    method: IntegratorMethod,
+    h: f64,
+    t_end: f64,
+) -> Option<(Vec<[f64; 2]>, f64)> {
     // h is adjusted so that the run ends exactly at t_end
     let steps = ((t_end / h).round() as usize).max(1);
     let h = t_end / steps as f64;
@@ -81,7 +86,7 @@ fn work_precision(ctx: &Ctx, scene: Scene, name: &str, title: &str) -> Res<Made>
     let h_ref = if ctx.quick { 1e-4 } else { 2e-5 };
     let reference = integrate(
         &scene,
-        Method::ProjectedRk4,
+        IntegratorMethod::ProjectedRk4,
         h_ref,
         (t_end / h_ref).round() as usize,
         usize::MAX,
@@ -103,7 +108,7 @@ fn work_precision(ctx: &Ctx, scene: Scene, name: &str, title: &str) -> Res<Made>
     .loglog()
     .legend(Legend::UpperRight);
     let mut summary = Vec::new();
-    for (c, m) in Method::ALL.into_iter().enumerate() {
+    for (c, m) in IntegratorMethod::ALL.into_iter().enumerate() {
         let mut pts = Vec::new();
         let mut failed = Vec::new();
         for &h in &hs {
@@ -137,7 +142,11 @@ fn work_precision(ctx: &Ctx, scene: Scene, name: &str, title: &str) -> Res<Made>
             color(c),
         )
         .markers();
-        p.push(if m == Method::Shake { s.dashed() } else { s });
+        p.push(if m == IntegratorMethod::Shake {
+            s.dashed()
+        } else {
+            s
+        });
     }
     let files = ctx.save(&Figure::single(name, p))?;
     Ok(Made {
@@ -188,7 +197,7 @@ fn wp_energy(ctx: &Ctx) -> Res<Made> {
     .logy()
     .legend(Legend::LowerRight);
     let mut notes = Vec::new();
-    for (c, m) in Method::ALL.into_iter().enumerate() {
+    for (c, m) in IntegratorMethod::ALL.into_iter().enumerate() {
         let mut it = Integrator::new(&scene, m, h)?;
         let e0 = it.energy();
         let mut pts = Vec::new();
@@ -213,7 +222,11 @@ fn wp_energy(ctx: &Ctx) -> Res<Made> {
             None => format!("{}: final window {last:.1e} J ({secs:.2} s)", m.name()),
         });
         let s = Series::line(m.name(), pts, color(c)).width(1);
-        p.push(if m == Method::Shake { s.dashed() } else { s });
+        p.push(if m == IntegratorMethod::Shake {
+            s.dashed()
+        } else {
+            s
+        });
     }
     let files = ctx.save(&Figure::single("work_precision_energy", p))?;
     Ok(Made {
@@ -222,7 +235,7 @@ fn wp_energy(ctx: &Ctx) -> Res<Made> {
             "{}. RATTLE's and SHAKE's energy errors oscillate within a fixed bound (symplectic; \
              SHAKE's unprojected central-difference momenta make its bound larger), while the \
              explicit projected RK4 loses energy steadily (it damps the fast modes) until it \
-             settles far below. Asserted in `tests/integrators.rs`.",
+             settles far below. Asserted in `tests/steppers/integrators.rs`.",
             notes.join("; ")
         ),
     })
@@ -230,7 +243,7 @@ fn wp_energy(ctx: &Ctx) -> Res<Made> {
 
 /// Whether `method` integrates `scene` stably with step h to t_end: no typed error and an energy
 /// error below 10% of the largest kinetic energy seen (drag-free scenes).
-fn stable(scene: &Scene, method: Method, h: f64, t_end: f64) -> bool {
+fn stable(scene: &Scene, method: IntegratorMethod, h: f64, t_end: f64) -> bool {
     let steps = ((t_end / h).round() as usize).max(50);
     let Ok(mut it) = Integrator::new(scene, method, h) else {
         return false;
@@ -251,7 +264,7 @@ fn stable(scene: &Scene, method: Method, h: f64, t_end: f64) -> bool {
 }
 
 /// Largest stable h by bisection in log h between 1e-6 and 0.5.
-fn h_max(scene: &Scene, method: Method, t_end: f64, iters: usize) -> f64 {
+fn h_max(scene: &Scene, method: IntegratorMethod, t_end: f64, iters: usize) -> f64 {
     let (mut lo, mut hi) = (1e-6f64, 0.5f64);
     if stable(scene, method, hi, t_end) {
         return hi;
@@ -282,7 +295,7 @@ fn stability_k(ctx: &Ctx) -> Res<Made> {
     .loglog()
     .legend(Legend::UpperRight);
     let mut rows = Vec::new();
-    for (c, m) in Method::ALL.into_iter().enumerate() {
+    for (c, m) in IntegratorMethod::ALL.into_iter().enumerate() {
         let pts: Vec<(f64, f64)> = ks
             .iter()
             .map(|&k| {
@@ -294,7 +307,11 @@ fn stability_k(ctx: &Ctx) -> Res<Made> {
             .collect();
         rows.push(format!("{}: slope {:.2}", m.name(), fit_slope(&pts)));
         let s = Series::line(m.name(), pts, color(c)).markers();
-        p.push(if m == Method::Shake { s.dashed() } else { s });
+        p.push(if m == IntegratorMethod::Shake {
+            s.dashed()
+        } else {
+            s
+        });
     }
     // Störmer–Verlet's linear limit 2/ω_max on the equivalent finite-difference beam
     let sv: Vec<(f64, f64)> = ks
@@ -338,7 +355,7 @@ fn stability_n(ctx: &Ctx) -> Res<Made> {
     .loglog()
     .legend(Legend::UpperRight);
     let mut rows = Vec::new();
-    for (c, m) in Method::ALL.into_iter().enumerate() {
+    for (c, m) in IntegratorMethod::ALL.into_iter().enumerate() {
         let pts: Vec<(f64, f64)> = ns
             .iter()
             .map(|&n| {
@@ -348,7 +365,11 @@ fn stability_n(ctx: &Ctx) -> Res<Made> {
             .collect();
         rows.push(format!("{}: slope {:.2}", m.name(), fit_slope(&pts)));
         let s = Series::line(m.name(), pts, color(c)).markers();
-        p.push(if m == Method::Shake { s.dashed() } else { s });
+        p.push(if m == IntegratorMethod::Shake {
+            s.dashed()
+        } else {
+            s
+        });
     }
     let files = ctx.save(&Figure::single("stability_pendulums", p))?;
     Ok(Made {

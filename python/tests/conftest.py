@@ -36,7 +36,7 @@ def scenes() -> Path:
     return SCENES
 
 
-# The 60 m riser of tests/cli_fatigue_study.rs: 6 pendulums, a JONSWAP sea (seed 7) from
+# The 60 m riser of tests/cli/cli_fatigue_study.rs: 6 pendulums, a JONSWAP sea (seed 7) from
 # `direction` degrees (0: the planar model), a uniform 0.3 m/s current, 10 s of 0.05 s.
 WAVE_RISER = """[beam]
 pendulums = 6

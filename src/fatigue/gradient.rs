@@ -22,7 +22,7 @@
 //! continuous at the knee ([`SnCurve`]) — but its gradient jumps: [`damage_gradient`] returns
 //! the gradient of the pairing the count found at σ, i.e. one of the one-sided gradients, and
 //! at the knee the governing segment's (the m₁ segment's at Δσ ≥ Δσ*). An optimiser may see a
-//! kink there; the tests check both sides of a tie (tests/fatigue.rs).
+//! kink there; the tests check both sides of a tie (tests/fatigue/fatigue.rs).
 //!
 //! **Smooth proxy.** J_m = Σ_k |σ_k|^m with ∂J_m/∂σ_k = m |σ_k|^(m−1) sgn σ_k, m the S-N
 //! curve's first slope; as a least-squares sum J_m = Σ_k r_k², r_k = |σ_k|^(m/2).

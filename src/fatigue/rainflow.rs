@@ -15,7 +15,7 @@
 //! 3. **Residue.** At the end of the record every range left on the stack is a half cycle.
 //!
 //! The standard's worked example (Fig. 6, Table 4: −2, 1, −3, 5, −1, 3, −4, 4, −2) gives half
-//! cycles of ranges 3, 6, 9 and 4, and full cycles of 4 and 8 (tests/fatigue.rs).
+//! cycles of ranges 3, 6, 9 and 4, and full cycles of 4 and 8 (tests/fatigue/fatigue.rs).
 
 use super::FatigueError;
 

@@ -17,7 +17,7 @@
 //! load about the base (a cantilever with a tip force P: k₁θ₁ = P·L exactly, whatever k₁ is), and
 //! on a pipe's chain (k₁ = 2EI/l₁ at a clamp, `Pipe::beam`) it is EI·2z₁/l₁², the ghost-node
 //! finite difference of EI·w″(0) (docs/conventions.md "The wellhead moment M_w";
-//! tests/fatigue_wellhead.rs checks P·L at n = 20 and 80 against the Euler-Bernoulli closed form).
+//! tests/fatigue/fatigue_wellhead.rs checks P·L at n = 20 and 80 against the Euler-Bernoulli closed form).
 //! The thesis's own chains (l₁ = 1 m, k₁ = 2k) have M_w = M₀/2.
 //!
 //! In a spatial scene the base moment is a vector (M₀ₓ, M₀_z) (docs/conventions.md) and the stress

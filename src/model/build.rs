@@ -2,9 +2,9 @@
 //! keys, docs/scene-format.md) and lifting it to another scalar ([`Chain::lift`]).
 
 use super::{
-    AxialWeight, Chain, ControlForce, CurrentDrag, Drag, DragWeights, Gravity, HarmonicForce,
-    JointDamping, NodeDrag, PointLoad, PointLoads, SoilSprings, Springs, TopTension, VesselMotion,
-    WaveField, WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
+    AxialWeight, Chain, ChainPointLoad, ControlForce, CurrentDrag, Drag, DragWeights, Gravity,
+    HarmonicForce, JointDamping, NodeDrag, PointLoads, SoilSprings, Springs, TopTension,
+    VesselMotion, WaveField, WaveInertia, WaveInputs, DEFAULT_FOLD_LIMIT_DEG,
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
@@ -187,7 +187,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     }
 
     /// The scene's point loads `[[loads.point]]` as model terms (their directions normalised).
-    fn point_loads(scene: &Scene) -> Vec<PointLoad<D>> {
+    fn point_loads(scene: &Scene) -> Vec<ChainPointLoad<D>> {
         scene
             .loads
             .points
@@ -195,7 +195,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             .enumerate()
             .map(|(i, pl)| {
                 let norm = pl.direction[0].hypot(pl.direction[1]);
-                PointLoad {
+                ChainPointLoad {
                     node: pl.node,
                     force: D::from(pl.force),
                     force_x: D::from(pl.force_x),

@@ -5,8 +5,8 @@
 //! (components (y, z), qᵢ ∈ S¹ in the yz-plane) and `DIM = 3` the spatial one (components
 //! (x, y, z), qᵢ ∈ S²). Every load of the thesis acts along z and the beam starts straight along
 //! +y, so x stays exactly 0 in the spatial model; the planar model therefore reproduces it exactly
-//! (tested to 0 difference in `tests/core.rs` and, with every kind of point load, in
-//! `tests/loads.rs`) while storing and computing two components instead of three. A point load
+//! (tested to 0 difference in `tests/model/core.rs` and, with every kind of point load, in
+//! `tests/model/loads.rs`) while storing and computing two components instead of three. A point load
 //! with an x component (docs/scene-format.md) needs the spatial model: [`Chain::from_scene`] refuses such a
 //! scene for `DIM = 2` ([`Error::NeedsSpatialModel`]), and [`crate::simulate()`] picks the model. The step's cost is dominated by the per-joint scalar work (spring function, Newton
 //! and projection solves), so the measured saving is modest: 3D/2D ≈ 1.08 at n = 100
@@ -22,11 +22,11 @@ mod vessel;
 pub use geometry::{arccos_squared, joint_angle_squared, spring_s, spring_s_ds, yi, zi};
 pub(crate) use geometry::{dot, e2};
 pub use terms::{
-    AxialWeight, BlockSym, ControlForce, CoupledAt, CoupledDissipativeTerm, CoupledVisitor, Ctx,
-    CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights, DualScratch, Embed,
-    ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping, NodeDrag, PointLoad,
-    PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor, TopTension,
-    WaveField, WaveInertia, WaveInputs,
+    AxialWeight, BlockSym, ChainPointLoad, ControlForce, CoupledAt, CoupledDissipativeTerm,
+    CoupledVisitor, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights,
+    DualScratch, Embed, ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping,
+    NodeDrag, PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor,
+    TopTension, WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};

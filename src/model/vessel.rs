@@ -45,7 +45,7 @@ pub struct VesselMotion {
 /// damping, unconditionally stable.) The step's tip constraint reads Z = P + x_v, Ż = Ṗ + v_v;
 /// the state keeps (Z, Ż) (the `tip_target` of the RATTLE state) and x_v = Z − P(t). The map
 /// is linear in (Z, Ż, F_k, F_{k+1}), so its transpose ([`ThrustDrive::reverse`]) is written by
-/// hand; tests/vessel_thrust.rs checks the adjoint built on it against Dual64 and central
+/// hand; tests/model/vessel_thrust.rs checks the adjoint built on it against Dual64 and central
 /// differences.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ThrustDrive {

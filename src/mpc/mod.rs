@@ -56,7 +56,7 @@
 //! of t_k exactly as the plant then applies it, and a re-plan is exactly the tail of the run
 //! it continues (at k = 0 the beam is at rest, p_0 = 0 whatever u_0, and the plan starts from
 //! it as it is). With a perfect model and the horizon to the end the closed loop reproduces
-//! the open-loop optimum to the solver's tolerance (tests/mpc.rs: 6.2·10⁻¹⁰ in the forces,
+//! the open-loop optimum to the solver's tolerance (tests/mpc/mpc.rs: 6.2·10⁻¹⁰ in the forces,
 //! 7.9·10⁻¹⁴ in J; a start that held the observed p_k fixed left the first force short by a
 //! half-kick: 1.0 % and 1.8·10⁻³).
 //!
@@ -74,7 +74,7 @@
 //! θ = (θ_x; θ_z), each component within the box, with the condensed or the Riccati solver in
 //! the spatial model ([`crate::ocp`], "The spatial model"), from the observed state or its map
 //! onto a reduced planning model ([`planning`], whose map is written over the dimension).
-//! Tested in tests/ocp_spatial.rs: the closed loop of a scene turned by 45° about the beam's
+//! Tested in tests/ocp/ocp_spatial.rs: the closed loop of a scene turned by 45° about the beam's
 //! axis is the planar closed loop turned (c_sum to 10⁻⁹, forces to 10⁻⁸ N), with either solver.
 //!
 //! # Which solver re-plans ([`MpcSolver`])
@@ -110,7 +110,7 @@
 //! model: 15.3 % and 26.0 %); the two solvers' loops differ by 0.2 % (the one-iteration
 //! re-plans are not converged, and their line searches differ, open loop against Riccati
 //! feedback; solved to the tolerance every plan gives the same optimum with either,
-//! tests/cli_mpc.rs). Such a loop amplifies round-off: making the stage derivatives' Newton
+//! tests/cli/cli_mpc.rs). Such a loop amplifies round-off: making the stage derivatives' Newton
 //! update use real-part matrices (commit 3b183b0, derivative parts changed at the 10⁻¹⁴ level)
 //! moved the condensed loop's c_sum from 9256.7 to 9307.5 (0.5 %) and the 1 s horizon's (both
 //! solvers) by 2–5 %: differences of that size between builds or solvers are not findings.

@@ -7,7 +7,7 @@
 /// 5 % everywhere), to a relative step of 4 ε. `depth = ∞` gives the deep-water k = ω²/g;
 /// ω ≤ 0 gives 0. Uses `libm`'s tanh: the same bits on every machine.
 ///
-/// Limits: k d → ∞ gives k → ω²/g, k d → 0 gives k → ω/√(g d) (tested in `tests/waves.rs`).
+/// Limits: k d → ∞ gives k → ω²/g, k d → 0 gives k → ω/√(g d) (tested in `tests/fatigue/waves.rs`).
 pub fn wavenumber(omega: f64, depth: f64, g: f64) -> f64 {
     if omega <= 0.0 {
         return 0.0;

@@ -510,7 +510,7 @@ impl Sea {
     /// the transform is exact to round-off whatever the size of the exponents; the sum is the
     /// same trigonometric sum as the full transform's (the same sea: the components, amplitudes
     /// and phases are untouched), its values differ from the full FFT's by round-off
-    /// (measured 10⁻¹⁶ of the series' amplitude sum, `tests/sea_domain.rs`).
+    /// (measured 10⁻¹⁶ of the series' amplitude sum, `tests/fatigue/sea_domain.rs`).
     ///
     /// The choice is made from the sizes alone (the zoom when 2 P log₂ P < L log₂ L / 2, the
     /// margin keeping the full transform, and its bits, for runs of a good part of the repeat

@@ -54,13 +54,13 @@
 //! g = Σ_k w_k Σ_c R_{k,c}∇R_{k,c} + (…), H = Σ_k w_k Σ_c ∇R_{k,c}∇R_{k,c}ᵀ + (…), and the secant
 //! term's y from the same gradients. Tested against the adjoint (gradient and J to 10⁻¹²) and,
 //! on a planar scene turned about the beam's axis, against the planar optimum (J to 10⁻⁹,
-//! turned controls), in tests/ocp_spatial.rs.
+//! turned controls), in tests/ocp/ocp_spatial.rs.
 //!
 //! # Globalisation and convergence
 //! As the Riccati solver: a Levenberg weight μ·mean(diag H) on the QP, an open-loop line search
 //! on rollouts of θ + αδ (α = 1 first, then the quadratic interpolation in [α/10, α/2],
 //! accepted when J̄ − J(α) ≥ c·(−ΔJ(α))), and the projected gradient for convergence
-//! ([`OcpOptions`] tolerances, [`Termination`]).
+//! ([`OcpOptions`] tolerances, [`OcpTermination`]).
 
 use std::time::Instant;
 
@@ -74,7 +74,7 @@ use super::globalise::{
 };
 use super::horizon::{available_threads, ControlHorizon};
 use super::line_search::Traj;
-use super::options::{IterationObserver, OcpOptions, OcpResult, Termination};
+use super::options::{IterationObserver, OcpOptions, OcpResult, OcpTermination};
 use super::sensitivities::{balanced, residual_gradients, sens_row, SensChunk};
 use super::stage::{Stepper, CHUNK};
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
@@ -472,7 +472,7 @@ impl<const DIM: usize> Condensed<DIM> {
     }
 
     /// [`Condensed::solve`] with an observer called after every accepted iteration (θ, J and
-    /// the record of the step); it may stop the run ([`Termination::Stopped`]).
+    /// the record of the step); it may stop the run ([`OcpTermination::Stopped`]).
     pub fn solve_observed(
         &mut self,
         theta0: &[f64],
@@ -611,11 +611,11 @@ impl<const DIM: usize> Outer for Condensed<DIM> {
         self.horizon.take_trial();
     }
 
-    fn stalled(&mut self, _target: f64) -> Result<Termination> {
-        Ok(Termination::RoundOff)
+    fn stalled(&mut self, _target: f64) -> Result<OcpTermination> {
+        Ok(OcpTermination::RoundOff)
     }
 
-    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
+    fn report(&mut self, termination: OcpTermination, pr: Progress, t0: Instant) -> OcpResult {
         let theta = self.theta();
         let gn = self.grad.iter().map(|x| x * x).sum::<f64>().sqrt();
         let hz = &self.horizon;
@@ -637,7 +637,7 @@ impl<const DIM: usize> Outer for Condensed<DIM> {
             jacobian_passes: self.linearisations,
             backward_passes: 0,
             seconds: t0.elapsed().as_secs_f64(),
-            converged: termination == Termination::Converged,
+            converged: termination == OcpTermination::Converged,
             termination,
             history: pr.history,
         }

@@ -9,12 +9,12 @@
 use std::time::Instant;
 
 use super::options::{
-    IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult, Termination,
+    IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult, OcpTermination,
 };
 use crate::error::Result;
 
 /// Consecutive round-off steps without a 10 % decrease of the projected gradient after which
-/// the run stops ([`Termination::RoundOff`]).
+/// the run stops ([`OcpTermination::RoundOff`]).
 const MAX_ROUNDOFF_STEPS: usize = 10;
 /// Predicted decreases below this fraction of max(|J|, 10⁻⁶ J₀) are not resolved by J: J's
 /// noise is its floating-point round-off (2·10⁻¹³ relative on the thesis riser, see
@@ -63,9 +63,9 @@ pub(crate) trait Outer {
     fn take_step(&mut self);
     /// How a run ends whose steps below J's round-off stopped lowering the projected gradient
     /// (tolerance `target`).
-    fn stalled(&mut self, target: f64) -> Result<Termination>;
+    fn stalled(&mut self, target: f64) -> Result<OcpTermination>;
     /// The result at the final nominal.
-    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult;
+    fn report(&mut self, termination: OcpTermination, pr: Progress, t0: Instant) -> OcpResult;
 }
 
 /// Runs a solver from θ₀ (projected onto the box): iterations of linearisation, stopping tests,
@@ -93,10 +93,10 @@ fn iterate<S: Outer>(
     solver: &mut S,
     pr: &mut Progress,
     observer: &mut Option<IterationObserver<'_>>,
-) -> Result<Option<Termination>> {
+) -> Result<Option<OcpTermination>> {
     let opts = solver.options().clone();
     if pr.budget_spent(&opts) {
-        return Ok(Some(Termination::Budget));
+        return Ok(Some(OcpTermination::Budget));
     }
     let pg = solver.linearise()?;
     let (stop, target, gref) = pr.stop_test(&opts, pg, solver.gradient());
@@ -108,9 +108,9 @@ fn iterate<S: Outer>(
         Step::Rejected => {
             pr.mu = raise_mu(pr.mu);
             let limit = pr.mu > opts.max_regularisation;
-            return Ok(limit.then_some(Termination::RegularisationLimit));
+            return Ok(limit.then_some(OcpTermination::RegularisationLimit));
         }
-        Step::NoModel => return Ok(Some(Termination::RegularisationLimit)),
+        Step::NoModel => return Ok(Some(OcpTermination::RegularisationLimit)),
     };
     solver.take_step();
     pr.iterations += 1;
@@ -128,7 +128,7 @@ fn iterate<S: Outer>(
             record,
         };
         if watch(&report).is_break() {
-            return Ok(Some(Termination::Stopped));
+            return Ok(Some(OcpTermination::Stopped));
         }
     }
     // Below J's resolution only the projected gradient shows progress: stop when it has not
@@ -236,7 +236,7 @@ pub(crate) fn backtrack(
 /// trusted about 1/α times too far (a proximal term ½ μ δv² shortens a Newton step by
 /// λ/(λ + μ) along a direction of curvature λ). With ×4 alone a run of α = 0.1 steps took six
 /// iterations to lift μ from 10⁻⁶ to where full steps passed, and Gauss-Newton stalled at J's
-/// round-off on Table 3.4 rows 1 and 3 (tests/tables.rs now converges on all ten).
+/// round-off on Table 3.4 rows 1 and 3 (tests/scene/tables.rs now converges on all ten).
 pub(crate) fn next_mu(mu: f64, acc: &Accepted) -> f64 {
     if acc.alpha >= 1.0 && acc.ratio > 0.75 {
         if mu * 0.25 < MU_MIN {
@@ -329,24 +329,24 @@ impl Progress {
     }
 
     /// The stopping tests on the projected gradient `pg` (the gradient `grad` sets ‖∇J(θ₀)‖ at
-    /// the first call): [`Termination::Converged`] at max(grad_tol, rel_grad_tol ‖g₀‖),
-    /// [`Termination::MaxIterations`] at the limit. Returns the tolerance as well, and
+    /// the first call): [`OcpTermination::Converged`] at max(grad_tol, rel_grad_tol ‖g₀‖),
+    /// [`OcpTermination::MaxIterations`] at the limit. Returns the tolerance as well, and
     /// ‖g₀‖.
     pub fn stop_test(
         &mut self,
         opts: &OcpOptions,
         pg: f64,
         grad: &[f64],
-    ) -> (Option<Termination>, f64, f64) {
+    ) -> (Option<OcpTermination>, f64, f64) {
         self.last_pg = pg;
         let gref = *self
             .g0
             .get_or_insert_with(|| grad.iter().map(|g| g * g).sum::<f64>().sqrt());
         let target = opts.grad_tol.max(opts.rel_grad_tol * gref);
         let stop = if pg <= target {
-            Some(Termination::Converged)
+            Some(OcpTermination::Converged)
         } else if self.iterations >= opts.max_iters {
-            Some(Termination::MaxIterations)
+            Some(OcpTermination::MaxIterations)
         } else {
             None
         };

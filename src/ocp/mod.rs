@@ -92,7 +92,7 @@
 //!   iterations after 7 Gauss-Newton ones (projected gradient 0.52, 4.8·10⁻³, 2.2·10⁻²,
 //!   2.5·10⁻⁴, then 2·10⁻⁶). Without an effort penalty (ρ = 0) and near folding (Table 3.4 rows 1 and 3)
 //!   Gauss-Newton alone stalled at J's round-off while μ rose ×4 per shortened step; with the
-//!   1/α rise it converges on all ten rows, as the default does (tests/tables.rs).
+//!   1/α rise it converges on all ten rows, as the default does (tests/scene/tables.rs).
 //!   In an exact iteration the costates come first, by one reverse step per stage in f64
 //!   (the same code as H_k's, `hessian::stage_vjp`: 3 ms at N = 10³ against 22.7 ms for the
 //!   Jacobian sweep), then one parallel pass of forward and reverse dual steps gives A_k, B_k
@@ -102,7 +102,7 @@
 //!   t₀ + k h, as in the adjoint. With the control's half-kick pending
 //!   ([`ControlProblem::starting_before_kick`], the given momentum is p̂₀) stage 0 applies
 //!   p₀ = p̂₀ − (h/2) u₀ P(q₀) b like every later stage ([`stage`]), so B₀ and the costate
-//!   gradient carry it (tests/start.rs: equal to the adjoint's to 10⁻¹⁴).
+//!   gradient carry it (tests/steppers/start.rs: equal to the adjoint's to 10⁻¹⁴).
 //!
 //! # Performance
 //! One iteration costs a rollout, the stage Jacobians (in parallel over the stages) and a few
@@ -118,7 +118,7 @@
 //! # Observing a run
 //! [`Solver::solve_observed`] and [`Condensed::solve_observed`] call an
 //! [`IterationObserver`] after every accepted iteration with θ and the iteration's
-//! [`IterationRecord`]; it may stop the run ([`Termination::Stopped`]). Nothing is printed:
+//! [`IterationRecord`]; it may stop the run ([`OcpTermination::Stopped`]). Nothing is printed:
 //! [`OcpResult::history`] keeps the records of a run that was not observed.
 //!
 //! # Supported problems
@@ -149,7 +149,7 @@
 //! per stage) come from the same dual-number stage map in the spatial chart of [`stage`]
 //! (δφ_{i,a} = e_a·δqᵢ, δω_{i,a} = e_a·(M⁻¹δp)ᵢ in the basis e_a(qᵢ) of the tangent plane, the
 //! chart the closed-loop rollouts measure their deviations in, so the costate gradient is the
-//! adjoint's: tests/ocp_spatial.rs, to 10⁻¹²); the residual's gradient and Gauss-Newton
+//! adjoint's: tests/ocp/ocp_spatial.rs, to 10⁻¹²); the residual's gradient and Gauss-Newton
 //! curvature act on both angles of pendulum 1 (l_x = w J_Rᵀ R, l_xx = w J_RᵀJ_R with
 //! J_R = ∂R/∂M₀ ∂M₀/∂φ₁); the recursion carries m controls per stage (Q_uu m × m, K m × n_z;
 //! with m = 1 the planar scalar code, bit for bit), the interior point one pair of bound
@@ -158,8 +158,8 @@
 //! (H_k by forward-over-reverse steps, `hessian.rs`) is planar: in the spatial model the
 //! iteration is Gauss-Newton throughout ([`Curvature`] is ignored there), so where the residual
 //! stays large it converges linearly and may end at J's round-off
-//! ([`Termination::RoundOff`]) rather than at the gradient tolerance, as the planar
-//! Gauss-Newton run does on the same problem (tests/ocp_spatial.rs: per-step, ρ = 0.1, the
+//! ([`OcpTermination::RoundOff`]) rather than at the gradient tolerance, as the planar
+//! Gauss-Newton run does on the same problem (tests/ocp/ocp_spatial.rs: per-step, ρ = 0.1, the
 //! objective within 10⁻⁹ of the planar exact model's). A planar problem runs `Solver<2>`,
 //! whose arithmetic is that of the planar solver before (`tables --json` identical).
 //!
@@ -210,7 +210,7 @@ pub use crate::error::{HorizonShape, OcpError};
 pub use condensed::Condensed;
 pub use options::{
     Curvature, IterationObserver, IterationRecord, IterationReport, OcpOptions, OcpResult,
-    Termination,
+    OcpTermination,
 };
 pub use solver::Solver;
 

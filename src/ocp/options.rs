@@ -32,7 +32,7 @@ pub struct OcpOptions {
     /// Whether a run that spends its [`max_iters`](Self::max_iters) evaluates the gradient at
     /// its last iterate (one more pass of stage Jacobians and costates) to report it. Default
     /// `true`. `false` is the real-time iteration of a receding-horizon controller, which only
-    /// needs the step: the run then ends with [`Termination::Budget`], and the result's
+    /// needs the step: the run then ends with [`OcpTermination::Budget`], and the result's
     /// gradient norms are those at the start of the last iteration (the last point where the
     /// gradient was evaluated). Measured on `mpc_riser` with one iteration per re-plan, this
     /// halves the Jacobian passes (2 → 1 per re-plan).
@@ -126,7 +126,7 @@ impl OcpOptions {
 
 /// Why a run stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Termination {
+pub enum OcpTermination {
     /// The projected gradient met the tolerance.
     Converged,
     /// [`OcpOptions::max_iters`] accepted steps without convergence.
@@ -147,19 +147,19 @@ pub enum Termination {
     Stopped,
 }
 
-impl std::fmt::Display for Termination {
+impl std::fmt::Display for OcpTermination {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
-            Termination::Converged => "converged (projected gradient below the tolerance)",
-            Termination::MaxIterations => "iteration limit reached",
-            Termination::Budget => {
+            OcpTermination::Converged => "converged (projected gradient below the tolerance)",
+            OcpTermination::MaxIterations => "iteration limit reached",
+            OcpTermination::Budget => {
                 "iteration budget spent (final gradient not evaluated: real-time iteration)"
             }
-            Termination::RegularisationLimit => {
+            OcpTermination::RegularisationLimit => {
                 "no descent step found with the regularisation at its limit"
             }
-            Termination::RoundOff => "predicted decrease below the round-off of J",
-            Termination::Stopped => "stopped by the iteration observer",
+            OcpTermination::RoundOff => "predicted decrease below the round-off of J",
+            OcpTermination::Stopped => "stopped by the iteration observer",
         })
     }
 }
@@ -193,7 +193,7 @@ pub struct IterationReport<'a> {
 
 /// The observer of a structured solve: called after every accepted iteration;
 /// [`ControlFlow::Break`](std::ops::ControlFlow::Break) ends the run with
-/// [`Termination::Stopped`] at the point reached.
+/// [`OcpTermination::Stopped`] at the point reached.
 pub type IterationObserver<'a> =
     &'a mut dyn FnMut(&IterationReport<'_>) -> std::ops::ControlFlow<()>;
 
@@ -210,11 +210,11 @@ pub struct OcpResult {
     pub controls: Vec<f64>,
     /// The x components u_{x,0..N} of a 2-axis control (spatial model; empty otherwise).
     pub controls_x: Vec<f64>,
-    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds); after [`Termination::Budget`], at
+    /// ‖∇J(θ)‖₂ at the result (not zero at active bounds); after [`OcpTermination::Budget`], at
     /// the start of the last iteration.
     pub gradient_norm: f64,
     /// ‖θ − Π_box(θ − ∇J)‖₂ at the result: the first-order optimality measure; after
-    /// [`Termination::Budget`], at the start of the last iteration.
+    /// [`OcpTermination::Budget`], at the start of the last iteration.
     pub projected_gradient_norm: f64,
     /// ‖∇J(θ₀)‖₂ at the start.
     pub initial_gradient_norm: f64,
@@ -233,7 +233,7 @@ pub struct OcpResult {
     /// Whether the projected-gradient test stopped the run.
     pub converged: bool,
     /// Why the run stopped.
-    pub termination: Termination,
+    pub termination: OcpTermination,
     /// One record per accepted iteration.
     pub history: Vec<IterationRecord>,
 }

@@ -10,7 +10,7 @@ use super::horizon::ControlHorizon;
 use super::interior::InteriorPoint;
 use super::iterate::QpIterate;
 use super::jacobians::{JacobianStore, PREFETCH_AHEAD};
-use super::options::{IterationObserver, OcpOptions, OcpResult, Termination};
+use super::options::{IterationObserver, OcpOptions, OcpResult, OcpTermination};
 use super::riccati::{Riccati, RiccatiShape, StageInput};
 use super::second_order::SecondOrderModel;
 use crate::adjoint::{ControlMap, ControlProblem, Objective};
@@ -124,7 +124,7 @@ impl<const DIM: usize> Solver<DIM> {
     }
 
     /// [`Solver::solve`] with an observer called after every accepted iteration (θ, J and the
-    /// record of the step); it may stop the run ([`Termination::Stopped`]).
+    /// record of the step); it may stop the run ([`OcpTermination::Stopped`]).
     ///
     /// # Errors
     /// As [`Solver::solve`].
@@ -445,20 +445,23 @@ impl<const DIM: usize> Outer for Solver<DIM> {
 
     /// Steps below J's round-off stopped lowering the projected gradient: converged if the
     /// swept gradient meets the tolerance.
-    fn stalled(&mut self, target: f64) -> Result<Termination> {
+    fn stalled(&mut self, target: f64) -> Result<OcpTermination> {
         self.costate()?;
         Ok(if self.projected_norm() <= target {
-            Termination::Converged
+            OcpTermination::Converged
         } else {
-            Termination::RoundOff
+            OcpTermination::RoundOff
         })
     }
 
     /// The result at the final nominal.
-    fn report(&mut self, termination: Termination, pr: Progress, t0: Instant) -> OcpResult {
+    fn report(&mut self, termination: OcpTermination, pr: Progress, t0: Instant) -> OcpResult {
         // The true gradient at the final nominal (the QP iterations overwrite the costates).
-        let stale = matches!(termination, Termination::Budget | Termination::Stopped);
-        if termination == Termination::RegularisationLimit || stale {
+        let stale = matches!(
+            termination,
+            OcpTermination::Budget | OcpTermination::Stopped
+        );
+        if termination == OcpTermination::RegularisationLimit || stale {
             self.riccati.grad.copy_from_slice(&self.gtrue);
         }
         self.qp.at_nominal();
@@ -494,7 +497,7 @@ impl<const DIM: usize> Outer for Solver<DIM> {
             jacobian_passes: self.store.passes,
             backward_passes: self.backward_passes,
             seconds: t0.elapsed().as_secs_f64(),
-            converged: termination == Termination::Converged,
+            converged: termination == OcpTermination::Converged,
             termination,
             history: pr.history,
         }

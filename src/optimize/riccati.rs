@@ -264,7 +264,7 @@ impl Watch {
 /// positive semi-definite model misses negative curvature of J (no effort penalty, or a chain
 /// near folding; Table 3.4 rows 1 and 3 with Gauss-Newton throughout stalled until the
 /// regularisation learnt to rise with shortened steps, `ocp::globalise`), or the tolerance is
-/// below what floating point resolves (`tests/tables.rs` forces the hand-over so). [`minimize`](super::minimize) then continues from
+/// below what floating point resolves (`tests/scene/tables.rs` forces the hand-over so). [`minimize`](super::minimize) then continues from
 /// its point with the trust region on exact Hessian-vector products (which sees that
 /// curvature) and returns *that* result: `method` is [`Method::TrustRegion`], the counts and
 /// the time add both phases. Without Hessian-vector products, or if the trust region fails to
@@ -302,24 +302,26 @@ fn finish_by_trust_region<Q: OptimProblem + ?Sized>(
 fn result(r: OcpResult, opts: &OptimOptions, stop: Option<String>) -> OptimResult {
     let tolerance_met = r.projected_gradient_norm <= opts.grad_tol;
     let termination = match r.termination {
-        ocp::Termination::Converged if tolerance_met => Termination::GradientTolerance {
+        ocp::OcpTermination::Converged if tolerance_met => Termination::GradientTolerance {
             gradient_norm: r.projected_gradient_norm,
             tolerance: opts.grad_tol,
         },
-        ocp::Termination::Converged => Termination::RelativeGradientTolerance {
+        ocp::OcpTermination::Converged => Termination::RelativeGradientTolerance {
             gradient_norm: r.projected_gradient_norm,
             initial: r.initial_gradient_norm,
             tolerance: opts.rel_grad_tol,
         },
         // `minimize` keeps `final_gradient` on; a budget is an iteration limit all the same.
-        ocp::Termination::MaxIterations | ocp::Termination::Budget => Termination::MaxIterations {
-            max_iters: opts.max_iters,
-        },
+        ocp::OcpTermination::MaxIterations | ocp::OcpTermination::Budget => {
+            Termination::MaxIterations {
+                max_iters: opts.max_iters,
+            }
+        }
         // No accepted decrease (regularisation at its limit, or below J's round-off).
-        ocp::Termination::RegularisationLimit | ocp::Termination::RoundOff => {
+        ocp::OcpTermination::RegularisationLimit | ocp::OcpTermination::RoundOff => {
             Termination::LineSearchStalled
         }
-        ocp::Termination::Stopped => Termination::Observer {
+        ocp::OcpTermination::Stopped => Termination::Observer {
             message: stop.unwrap_or_default(),
         },
     };

@@ -21,7 +21,6 @@ mod current;
 mod design;
 mod error;
 mod fatigue;
-mod input;
 mod mpc;
 mod objective;
 mod pipe;
@@ -38,6 +37,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::input::{
+    human_bytes, read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
+};
 pub use builder::SceneBuilder;
 pub use current::{
     current_velocity, direction_of_angle, Current, CurrentProfile, DEFAULT_POWER_EXPONENT,
@@ -46,9 +48,6 @@ pub use current::{
 pub use design::{DesignParameter, DesignTable, FreeParameter, Role};
 pub use error::{SceneError, SceneErrorKind};
 pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
-pub use input::{
-    read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
-};
 pub use mpc::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 pub use pipe::{
     drag_weights, DragModel, Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS,
@@ -56,13 +55,13 @@ pub use pipe::{
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use soil::{water_height, Soil, SoilLumping};
 pub use stackup::{Body, FlexJoint, Foot, Layout, Segment, Stackup, STANDARD_GRAVITY};
+pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
 pub use validate::{
-    human_bytes, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
-    GRAVITY_RANGE, JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS,
-    MAX_STEP_NUMBER, MAX_TRAJECTORY_BYTES, PERIOD_RANGE, SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE,
+    ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,
+    JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER,
+    MAX_TRAJECTORY_BYTES, PERIOD_RANGE, SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE,
     SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
-pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
 pub use vessel::{
     Rao, Thrust, Vessel, DEFAULT_THRUST_BOUND, DEFAULT_THRUST_RATE_BOUND,
     DEFAULT_VESSEL_ADDED_MASS, DEFAULT_VESSEL_DAMPING, DEFAULT_VESSEL_MASS, DEFAULT_VESSEL_RAMP,

@@ -229,7 +229,7 @@ impl Pipe {
     /// The chain of n pendulums of this pipe (docs/ocean.md "From a pipe to a chain"): lᵢ = L/n;
     /// node masses mᵢ = μ l and
     /// half a cell, μ l/2, at the tip (the lumping whose first frequency converges at order 2 in
-    /// n, tests/pipe.rs); interior springs k = EI/l; a clamped end (the base of a cantilever,
+    /// n, tests/model/pipe.rs); interior springs k = EI/l; a clamped end (the base of a cantilever,
     /// riser or fixed-fixed beam, the tip of a riser or fixed-fixed beam) 2EI/l unless
     /// `end_springs` = (base, tip) gives it (a flex joint).
     ///

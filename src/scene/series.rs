@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::input::{read_text_file, ReadErrorKind, MAX_INPUT_BYTES};
+use crate::input::{read_text_file, ReadErrorKind, MAX_INPUT_BYTES};
 
 use super::validate::FORCE_RANGE;
 use super::{SceneError, SceneErrorKind};

@@ -4,6 +4,7 @@
 use super::values::{to_i64, NumOrArray};
 use super::{Control, ControlKind, PointLoad, Scene, SceneError, SceneErrorKind, Support};
 use crate::base::StepStats;
+use crate::input::human_bytes;
 
 /// Largest number of pendulums n a scene may have.
 pub const MAX_PENDULUMS: usize = 1_000_000;
@@ -269,7 +270,7 @@ pub(super) fn stackup_ranges() -> [ValueRange; 13] {
     STACKUP_RANGES
 }
 
-/// The range of a stack-up key, for the documentation's check (tests/docs_keys.rs).
+/// The range of a stack-up key, for the documentation's check (tests/scene/docs_keys.rs).
 pub fn stackup_range_of(key: &str) -> Option<ValueRange> {
     use StackupRange as R;
     let r = match key {
@@ -291,22 +292,6 @@ pub fn stackup_range_of(key: &str) -> Option<ValueRange> {
         _ => return None,
     };
     Some(STACKUP_RANGES[r as usize])
-}
-
-/// `bytes` for people, in binary units: `512 bytes`, `8.0 GiB`, `894.1 GiB`.
-pub fn human_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 7] = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut x = bytes as f64;
-    let mut unit = 0;
-    while x >= 1024.0 && unit + 1 < UNITS.len() {
-        x /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} bytes")
-    } else {
-        format!("{x:.1} {}", UNITS[unit])
-    }
 }
 
 /// Number of constraints of a planar chain with this support: one length constraint per pendulum,

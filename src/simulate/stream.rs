@@ -350,7 +350,7 @@ fn stream_chain<const DIM: usize, O: StepObserver>(
 /// The base moment history of a simulated scene: M₀(t_k) and, in the spatial model, M₀ₓ(t_k),
 /// k = 0..=N ([`moment_history`]).
 #[derive(Clone, Debug, PartialEq)]
-pub struct MomentHistory {
+pub struct MomentSeries {
     /// The step h \[s\].
     pub h: f64,
     /// M₀(t_k) = 2 k₁ z₁ / l₁² \[N m\] (eq. 3.1.3), N + 1 values.
@@ -359,7 +359,7 @@ pub struct MomentHistory {
     pub moment_x: Option<Vec<f64>>,
 }
 
-impl MomentHistory {
+impl MomentSeries {
     /// Number of steps N.
     pub fn steps(&self) -> usize {
         self.moment.len().saturating_sub(1)
@@ -400,7 +400,7 @@ impl StepObserver for MomentSink {
 /// # Errors
 /// As [`simulate()`](super::simulate); [`Error::TrajectoryTooLarge`] if the allocator refuses
 /// the N + 1 values.
-pub fn moment_history(scene: &Scene) -> Result<MomentHistory> {
+pub fn moment_history(scene: &Scene) -> Result<MomentSeries> {
     let steps = scene.time.steps;
     let spatial = scene.is_spatial();
     let values = (steps + 1) * if spatial { 2 } else { 1 };
@@ -428,7 +428,7 @@ pub fn moment_history(scene: &Scene) -> Result<MomentHistory> {
         Err(StreamError::Simulation(e)) => return Err(e),
         Err(StreamError::Observer(never)) => match never {},
     }
-    Ok(MomentHistory {
+    Ok(MomentSeries {
         h: scene.time.step,
         moment: sink.moment,
         moment_x: spatial.then_some(sink.moment_x),

@@ -1,4 +1,4 @@
-//! What the `chainbeam fatigue` tests share (tests/cli_fatigue.rs, tests/cli_fatigue_study.rs):
+//! What the `chainbeam fatigue` tests share (tests/cli/cli_fatigue.rs, tests/cli/cli_fatigue_study.rs):
 //! the thesis riser's `[beam]` table, a `[fatigue]` table for a small steel tube, and running
 //! the binary in a directory.
 #![allow(dead_code)]

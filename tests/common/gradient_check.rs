@@ -1,12 +1,22 @@
-//! A physical parameter's derivative of J = c_sum checked three ways, shared by
-//! `tests/current.rs`, `tests/loads.rs` and `tests/wave_riser.rs`: the discrete adjoint against
-//! forward-mode dual numbers through the same simulation (1e-12 relative, the exactness the
-//! adjoint promises) and a five-point central difference against them (1e-6 relative).
+//! The one gradient check of the tests: a derivative against its reference (forward-mode dual
+//! numbers through the same simulation, a central difference, or a closed form), component by
+//! component, within a stated tolerance, reporting the worst component and where its reference
+//! comes from. Used by the adjoint, verification, current, load and wave tests.
+//!
+//! Also the physical-parameter check of a J = c_sum run shared by `tests/model/current.rs`,
+//! `tests/model/loads.rs` and `tests/fatigue/wave_riser.rs`: the discrete adjoint against
+//! forward-mode dual numbers (1e-12 relative, the exactness the adjoint promises) and a
+//! five-point central difference against them (1e-6 relative).
 #![allow(dead_code)]
 
 use chainbeam::adjoint::{adjoint_gradient, forward_value};
 use chainbeam::*;
 use num_dual::Dual64;
+
+/// The central difference (f(x + d) − f(x − d))/(2d): truncation O(d²) for a smooth f.
+pub fn central(f: &dyn Fn(f64) -> f64, x: f64, d: f64) -> f64 {
+    (f(x + d) - f(x - d)) / (2.0 * d)
+}
 
 /// The five-point central difference (8(f(x + d) − f(x − d)) − (f(x + 2d) − f(x − 2d)))/(12d):
 /// truncation O(d⁴) for a smooth f.
@@ -14,9 +24,127 @@ pub fn five_point(f: &dyn Fn(f64) -> f64, x: f64, d: f64) -> f64 {
     (8.0 * (f(x + d) - f(x - d)) - (f(x + 2.0 * d) - f(x - 2.0 * d))) / (12.0 * d)
 }
 
+/// What a component's error is measured against.
+#[derive(Clone, Copy, Debug)]
+pub enum Scale {
+    /// |reference_i|: relative to the component itself.
+    Component,
+    /// A fixed scale, such as the gradient's largest component max_k |g_k|.
+    Fixed(f64),
+    /// max(|reference_i|, s): relative to the component, but never to less than s.
+    AtLeast(f64),
+}
+
+/// A component passes when |got_i − reference_i| ≤ `rel` · scale_i + `abs`, scale_i by [`Scale`].
+#[derive(Clone, Copy, Debug)]
+pub struct Tolerance {
+    pub rel: f64,
+    pub scale: Scale,
+    pub abs: f64,
+}
+
+impl Tolerance {
+    /// `rel` relative to each component.
+    pub fn relative(rel: f64) -> Self {
+        Tolerance {
+            rel,
+            scale: Scale::Component,
+            abs: 0.0,
+        }
+    }
+
+    /// `rel` of the fixed scale `s`.
+    pub fn of_scale(rel: f64, s: f64) -> Self {
+        Tolerance {
+            rel,
+            scale: Scale::Fixed(s),
+            abs: 0.0,
+        }
+    }
+
+    /// `rel` of max(|reference_i|, `s`).
+    pub fn at_least(rel: f64, s: f64) -> Self {
+        Tolerance {
+            rel,
+            scale: Scale::AtLeast(s),
+            abs: 0.0,
+        }
+    }
+
+    /// The same with an absolute floor `abs` added to the bound.
+    pub fn plus(self, abs: f64) -> Self {
+        Tolerance { abs, ..self }
+    }
+
+    fn scale_of(&self, reference: f64) -> f64 {
+        match self.scale {
+            Scale::Component => reference.abs(),
+            Scale::Fixed(s) => s,
+            Scale::AtLeast(s) => reference.abs().max(s),
+        }
+    }
+}
+
+/// Asserts every component of `got` within `tol` of `reference` (same length); `source` says
+/// where the reference comes from ("forward-mode Dual64", "central difference, step 1e-5 θ",
+/// ...). A failure names `label`, the worst component (by error over its bound), both values,
+/// the error and the bound. Returns the worst error in units of its scale (|e_i| / scale_i), the
+/// number the tests print next to their tolerance. A non-finite value or error fails.
+pub fn assert_close(
+    label: &str,
+    got: &[f64],
+    reference: &[f64],
+    source: &str,
+    tol: Tolerance,
+) -> f64 {
+    assert_eq!(
+        got.len(),
+        reference.len(),
+        "{label}: {} components against {} of the reference ({source})",
+        got.len(),
+        reference.len()
+    );
+    let mut worst_scaled = 0.0f64;
+    // (index, error / bound); a NaN error counts as infinitely far.
+    let mut worst: Option<(usize, f64)> = None;
+    for (i, (&g, &r)) in got.iter().zip(reference).enumerate() {
+        let e = (g - r).abs();
+        let scale = tol.scale_of(r);
+        let bound = tol.rel * scale + tol.abs;
+        let ratio = if e <= bound {
+            if bound > 0.0 {
+                e / bound
+            } else {
+                0.0
+            }
+        } else if e.is_nan() || bound.is_nan() {
+            f64::INFINITY
+        } else {
+            // over the bound (also when the bound is 0): at least 1.
+            (e / bound).max(1.0 + f64::EPSILON)
+        };
+        if worst.is_none_or(|(_, w)| ratio > w) {
+            worst = Some((i, ratio));
+        }
+        worst_scaled = worst_scaled.max(e / scale.max(f64::MIN_POSITIVE));
+    }
+    if let Some((i, ratio)) = worst {
+        let (g, r) = (got[i], reference[i]);
+        let e = (g - r).abs();
+        let bound = tol.rel * tol.scale_of(r) + tol.abs;
+        assert!(
+            ratio <= 1.0,
+            "{label}: worst component {i} of {}: {g:e} vs {r:e} ({source}): |difference| {e:.2e} > \
+             bound {bound:.2e} ({tol:?})",
+            got.len()
+        );
+    }
+    worst_scaled
+}
+
 /// Asserts one derivative dJ/d`label`: it acts (|fwd| > 1e-8), the adjoint's `adjoint` equals
 /// forward-mode Dual64's `fwd` to 1e-12 and the central difference `fd` equals it to 1e-6
-/// (relative).
+/// (relative), by [`assert_close`].
 pub fn assert_derivative(label: &str, adjoint: f64, fwd: f64, fd: f64) {
     println!(
         "dJ/d{label} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} (relative)",
@@ -24,13 +152,20 @@ pub fn assert_derivative(label: &str, adjoint: f64, fwd: f64, fd: f64) {
         (fd - fwd).abs() / fwd.abs()
     );
     assert!(fwd.abs() > 1e-8, "{label} is exercised");
-    assert!(
-        (adjoint - fwd).abs() <= 1e-12 * fwd.abs(),
-        "{label}: {adjoint} vs {fwd}"
+    let label = format!("dJ/d{label}");
+    assert_close(
+        &format!("{label}, adjoint"),
+        &[adjoint],
+        &[fwd],
+        "forward-mode Dual64",
+        Tolerance::relative(1e-12),
     );
-    assert!(
-        (fd - fwd).abs() <= 1e-6 * fwd.abs(),
-        "{label}: FD {fd} vs {fwd}"
+    assert_close(
+        &format!("{label}, five-point central difference"),
+        &[fd],
+        &[fwd],
+        "forward-mode Dual64",
+        Tolerance::relative(1e-6),
     );
 }
 

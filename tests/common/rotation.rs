@@ -1,5 +1,5 @@
 //! A spatial run against the planar run turned about the beam's axis y, shared by
-//! `tests/drag_rotation.rs` and `tests/wave_riser.rs` (the model is invariant under rotations
+//! `tests/model/drag_rotation.rs` and `tests/fatigue/wave_riser.rs` (the model is invariant under rotations
 //! about y, so the turned scene's exact discrete trajectory is the planar one turned).
 
 use chainbeam::*;

@@ -1,4 +1,4 @@
-//! A planar beam run until it settles, shared by `tests/core.rs` and `tests/current.rs` (their
+//! A planar beam run until it settles, shared by `tests/model/core.rs` and `tests/model/current.rs` (their
 //! references for the static solver: thesis §2.4.4 checks eq. 2.4.4's damped beams the same way).
 
 use chainbeam::*;

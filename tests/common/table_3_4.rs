@@ -1,4 +1,5 @@
-//! The Table 3.4 problems as the tests use them (included with `#[path]` next to `mod thesis`).
+//! The Table 3.4 problems as the tests use them (declared with `#[path]` next to `mod thesis` in a
+//! test crate's `main.rs`).
 
 use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 
@@ -12,7 +13,7 @@ pub fn row(node: usize) -> (ControlProblem, f64) {
         BendingObjective::summed_moment(),
     )
     .unwrap();
-    let bound = crate::thesis::TABLE_3_4[node - 1]
+    let bound = super::thesis::TABLE_3_4[node - 1]
         .0
         .iter()
         .fold(0.0f64, |m, u| m.max(u.abs()));

@@ -1,4 +1,4 @@
-//! The turned riser shared by `tests/drag_rotation.rs` and `tests/ocp_spatial.rs`: a 10-pendulum
+//! The turned riser shared by `tests/model/drag_rotation.rs` and `tests/ocp/ocp_spatial.rs`: a 10-pendulum
 //! riser (base and tip springs 2000 N·m/rad, drag 3.0) in a linearly sheared current (0.3 m/s at
 //! the surface, 0.05 m/s at the base) with a 2 N point load on pendulum 5, both turned by ψ from
 //! the z axis in the horizontal plane, so that direction (sin ψ, cos ψ) carries the whole load.

@@ -1,4 +1,4 @@
-//! The small wave-driven riser shared by tests/mpc.rs and tests/objectives.rs.
+//! The small wave-driven riser shared by tests/mpc/mpc.rs and tests/ocp/objectives.rs.
 
 use chainbeam::{Harmonic, ObjectiveKind, PointLoad, Scene, Support};
 

@@ -1,5 +1,5 @@
 //! A small wave-driven riser as a scene file for the command-line tests: planar
-//! (tests/cli_mpc.rs) and in space (tests/cli_spatial.rs).
+//! (tests/cli/cli_mpc.rs) and in space (tests/cli/cli_spatial.rs).
 #![allow(dead_code)]
 
 /// A small riser (n = 4, D = 10 kg/m) with a wave of period 2 s at node 2 (amplitude 2 N,

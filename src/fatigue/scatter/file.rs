@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use super::MAX_SCATTER_CELLS;
 use super::{ScatterCell, SeaState};
 use crate::fatigue::{combine_scatter, CellDamage, FatigueError};
-use crate::scene::{read_text_file, ReadErrorKind};
+use crate::input::{read_text_file, ReadErrorKind};
 
 /// The columns of a scatter CSV, in the order of [`ScatterCell`]'s fields.
 pub const SCATTER_COLUMNS: [&str; 4] = ["hs", "tp", "probability", "direction"];

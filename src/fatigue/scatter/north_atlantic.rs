@@ -7,7 +7,7 @@
 //! observations. Derived from BMT's Global Wave Statistics" (areas 8, 9, 15 and 16 of Global
 //! Wave Statistics; the text names it IACS Rec. No. 34). H_s and T_z are the class midpoints
 //! (1 m × 1 s classes). [`NORTH_ATLANTIC_OCCURRENCES`] is that table cell by cell; its rows and
-//! columns add up to the table's printed totals within their rounding (tests/fatigue_scatter.rs)
+//! columns add up to the table's printed totals within their rounding (tests/fatigue/fatigue_scatter.rs)
 //! and the whole to 100 000.
 //!
 //! The same guidance, II.5.(3)(E), gives the table's spectrum: the two-parameter

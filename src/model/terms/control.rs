@@ -86,7 +86,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for ControlForce<D> {
     }
 
     /// Hand-written w · ∂F/∂u = Σ_{j<c} l_j w_{j,z} (called twice per adjoint step; proven equal
-    /// to the dual-derived default in `tests/terms.rs`).
+    /// to the dual-derived default in `tests/model/terms.rs`).
     fn control_contraction(
         &self,
         _q: &[[D; DIM]],
@@ -98,7 +98,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for ControlForce<D> {
     }
 
     /// Hand-written w · ∂F/∂u_x = Σ_{j<c} l_j w_{j,x} in the spatial model, 0 in the planar one
-    /// (proven equal to the dual-derived default in `tests/spatial_control.rs`).
+    /// (proven equal to the dual-derived default in `tests/adjoint/spatial_control.rs`).
     fn control_x_contraction(
         &self,
         _q: &[[D; DIM]],

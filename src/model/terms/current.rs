@@ -17,7 +17,7 @@
 //!
 //! p − P = lᵢ Σ_{k≥i} m_k (v_k − U_k) is linear in the relative velocities, so this is the
 //! Morison-type drag on v − U in the thesis's momentum form: with U = 0 it *is* eq. 2.4.4 (P = 0
-//! and p − 0 = p exactly, so the simulation is equal in IEEE arithmetic, tests/current.rs), and
+//! and p − 0 = p exactly, so the simulation is equal in IEEE arithmetic, tests/model/current.rs), and
 //! at rest (p = 0) it is the steady force D |P_⊥| P_⊥ along the current (transversally).
 //!
 //! On a chain built from `[pipe]` D is the per-pendulum Dᵢ = D wᵢ ([`super::DragWeights`],

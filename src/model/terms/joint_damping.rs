@@ -16,7 +16,7 @@
 //! semidefinite (G: q̇ ↦ θ̇), so the power F·q̇ = −Σ_j c_j |θ̇_j|² ≤ 0. At rest F = 0: the statics
 //! never see it. For small motion about the straight beam θ̇_j is the rate of the spring's angle
 //! θ_j, so dampers with c_j/k_j = α at every spring are stiffness-proportional (Rayleigh) damping
-//! C = α K, under which mode j decays with ζ_j = α ω_j / 2 (tests/joint_damping.rs).
+//! C = α K, under which mode j decays with ζ_j = α ω_j / 2 (tests/model/joint_damping.rs).
 
 use super::coupled::{CoupledAt, CoupledDissipativeTerm};
 use super::{Ctx, Embed};
@@ -140,7 +140,7 @@ impl<D: Scalar, const DIM: usize> CoupledDissipativeTerm<D, DIM> for JointDampin
 
     /// Closed form of ∇_q (w·F(q, v)): w·F = −Σ_j c_j θ̇_j(w)·θ̇_j(v) is bilinear and symmetric
     /// in (w, v), and ∂(qᵢ × aᵢ)·X/∂qᵢ = aᵢ × X, so block i is −(wᵢ × τᵢ(v) + vᵢ × τᵢ(w));
-    /// tested equal to the trait's dual-number default (tests/terms.rs).
+    /// tested equal to the trait's dual-number default (tests/model/terms.rs).
     fn force_q_vjp(
         &self,
         at: CoupledAt<'_, D, DIM>,

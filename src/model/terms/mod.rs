@@ -13,7 +13,7 @@
 //!   [`ForceTerm::control_x_contraction`] for the x component u_x of a 2-axis control (seed u_x).
 //!
 //! A term may override a derived product with a hand-written fast path (the springs do, for K v,
-//! because the step's adjoint calls it twice per step); `tests/terms.rs` checks every override
+//! because the step's adjoint calls it twice per step); `tests/model/terms.rs` checks every override
 //! against the dual-derived default to 1e-12, and every force against the dual gradient of the
 //! energy, for every term in both dimensions and for `f64` and `Dual64` chains.
 //!
@@ -64,7 +64,7 @@ pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
 pub use node_drag::{NodeDrag, NodeReverseScratch};
-pub use point_load::{HarmonicForce, PointLoad, PointLoads};
+pub use point_load::{ChainPointLoad, HarmonicForce, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use soil::SoilSprings;
 pub use spring::Springs;

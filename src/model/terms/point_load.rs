@@ -25,7 +25,7 @@ pub struct HarmonicForce<D> {
 /// One point load as the model uses it: at time t the force vector
 /// F(t) = w(t) ρ(t) [(F_x, F_z) + d Σⱼ Aⱼ sin(2π t/Tⱼ + φⱼ) + S(t)] (see [`crate::PointLoad`]).
 #[derive(Clone, Debug)]
-pub struct PointLoad<D> {
+pub struct ChainPointLoad<D> {
     /// Node 1..=n.
     pub node: usize,
     /// The constant force's z component F_z (thesis sign: enters U as +F z).
@@ -48,7 +48,7 @@ pub struct PointLoad<D> {
     pub scene_index: usize,
 }
 
-impl<D> PointLoad<D> {
+impl<D> ChainPointLoad<D> {
     /// Whether the load acts at time t (half-open window [start, end), with a relative tolerance
     /// of 1e-9 so that t = k h lands on the intended side of a window edge).
     #[inline]
@@ -67,7 +67,7 @@ impl<D> PointLoad<D> {
     }
 }
 
-impl<D: Scalar> PointLoad<D> {
+impl<D: Scalar> ChainPointLoad<D> {
     /// The force (F_x, F_z) at the context's time (zero outside the window), its parameters read
     /// through [`Ctx::param`] so that their derivatives come from this one definition.
     #[inline]
@@ -102,9 +102,9 @@ impl<D: Scalar> PointLoad<D> {
         [fx, fz]
     }
 
-    fn lift<D2: Scalar>(&self) -> PointLoad<D2> {
+    fn lift<D2: Scalar>(&self) -> ChainPointLoad<D2> {
         let l = |x: D| D2::from(x.re());
-        PointLoad {
+        ChainPointLoad {
             node: self.node,
             force: l(self.force),
             force_x: l(self.force_x),
@@ -146,13 +146,13 @@ impl<D: Scalar> PointLoad<D> {
 #[derive(Clone, Debug)]
 pub struct PointLoads<D> {
     /// Sorted by node, descending.
-    pub(crate) loads: Vec<PointLoad<D>>,
+    pub(crate) loads: Vec<ChainPointLoad<D>>,
     pub(crate) lengths: Vec<D>,
 }
 
 impl<D: Scalar> PointLoads<D> {
     /// The loads on a chain with pendulum lengths `lengths`.
-    pub(crate) fn new(mut loads: Vec<PointLoad<D>>, lengths: Vec<D>) -> Self {
+    pub(crate) fn new(mut loads: Vec<ChainPointLoad<D>>, lengths: Vec<D>) -> Self {
         loads.sort_by_key(|l| std::cmp::Reverse(l.node));
         PointLoads { loads, lengths }
     }
@@ -160,13 +160,13 @@ impl<D: Scalar> PointLoads<D> {
     /// The same loads over another scalar (real parts).
     pub(crate) fn lift<D2: Scalar>(&self) -> PointLoads<D2> {
         PointLoads {
-            loads: self.loads.iter().map(PointLoad::lift).collect(),
+            loads: self.loads.iter().map(ChainPointLoad::lift).collect(),
             lengths: self.lengths.iter().map(|x| D2::from(x.re())).collect(),
         }
     }
 
     /// The load of scene index `i`, if the model has it.
-    pub(crate) fn by_scene_index(&mut self, i: usize) -> Option<&mut PointLoad<D>> {
+    pub(crate) fn by_scene_index(&mut self, i: usize) -> Option<&mut ChainPointLoad<D>> {
         self.loads.iter_mut().find(|l| l.scene_index == i)
     }
 

@@ -16,7 +16,7 @@ use crate::base::Scalar;
 /// v_{k+½} = v_k − h/(2 m_n) u_k,   ζ_{k+1} = ζ_k + h v_{k+½},   v_{k+1} = v_{k+½} − h/(2 m_n) u_{k+1}.
 /// ```
 /// The map is linear in (ζ, v, u), so its transpose ([`ReactionTip::reverse`]) is written by
-/// hand; `tests/terms.rs` checks it against the Dual64 derivatives of the forward map.
+/// hand; `tests/model/terms.rs` checks it against the Dual64 derivatives of the forward map.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReactionTip<D> {
     /// 1/m_n, the inverse tip mass.

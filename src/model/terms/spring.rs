@@ -122,7 +122,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for Springs<D> {
     }
 
     /// Hand-written K v (the adjoint calls it twice per step; `cargo bench --bench step --
-    /// force_jvp` measures it against the dual-derived default, `tests/terms.rs` proves them
+    /// force_jvp` measures it against the dual-derived default, `tests/model/terms.rs` proves them
     /// equal): for the spring between a and b (x = a·b), σ = b·v_a + a·v_b,
     /// (K v)_a = −k [s v_b + s′ σ b], (K v)_b = −k [s v_a + s′ σ a].
     fn force_jvp(

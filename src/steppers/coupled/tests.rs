@@ -322,7 +322,7 @@ fn dual_equal<const DIM: usize>(case: Case) {
 }
 
 /// The adjoint's reverse step through the band solves (Wᵀ = A⁻ᵀ, Jᵀ by the transposed augmented
-/// system, bordered by the tip) with the tips tests/terms.rs does not cover: a locked tip and the
+/// system, bordered by the tip) with the tips tests/model/terms.rs does not cover: a locked tip and the
 /// reaction-force tip (fixed-fixed, so that M₀ = 2k₁z₁/l₁² is not zero), planar and spatial, dampers beside a drag in a current. The gradient of
 /// J = Σ M₀² along a direction of the per-step controls and with respect to the dampers' value
 /// and the mass = forward-mode Dual64 of the same discrete map to 1e-12 relative.

@@ -1,0 +1,6 @@
+//! The fatigue design: the exact design gradient of the scatter-diagram damage.
+//!
+//! One test crate (`cargo test --test design`); each file is a module, so a single file's tests
+//! run with `cargo test --test design FILE::` (the file name without `.rs`).
+
+mod design;

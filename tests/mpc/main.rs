@@ -1,0 +1,11 @@
+//! Closed-loop control: the receding-horizon controller and its reduced planning model.
+//!
+//! One test crate (`cargo test --test mpc`); each file is a module, so a single file's tests
+//! run with `cargo test --test mpc FILE::` (the file name without `.rs`).
+
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/wave_riser4.rs"]
+mod wave_riser4;
+
+mod mpc;
+mod mpc_planning;

@@ -1,7 +1,8 @@
 //! The convergence study of the riser-system scenes (examples/scenes/riser_300m_system.toml,
 //! riser_1000m_system.toml; docs/riser-system.md): the moment at each hot spot
-//! (`[[fatigue.hotspot]]`, the joint torque M_j = k_j θ_j at the joint nearest its elevation)
-//! with other numbers of pendulums n and steps h.
+//! (`[[fatigue.hotspot]]`: the joint torques M_j = k_j θ_j interpolated linearly in elevation
+//! between the two joints around it, `hotspots::interpolation_joints`) with other numbers of
+//! pendulums n and steps h.
 //!
 //! For each (n, h), the scene file is read again with `pendulums` and `step` replaced (a
 //! stack-up's chain is laid out when the file is read: its pendulum ends fall on the parts' ends,
@@ -20,7 +21,9 @@
 
 use std::time::Instant;
 
-use chainbeam::hotspots::{joint_elevations, joint_moment, joint_moment_history, nearest_joint};
+use chainbeam::hotspots::{
+    hot_spot_joints, interpolation_joints, joint_elevations, joint_moment, joint_moment_history,
+};
 use chainbeam::statics::static_equilibrium;
 use chainbeam::{Chain, Scene};
 
@@ -96,7 +99,7 @@ fn main() {
     let (t0, t_end): (f64, f64) = (args[2].parse().unwrap(), args[3].parse().unwrap());
     let ns: Vec<usize> = list(&args[4]);
     let hs: Vec<f64> = list(&args[5]);
-    println!("n,h,hotspot,elevation,joint_elevation,static_M,mean_M,std_M,cpu_s,wall_s");
+    println!("n,h,hotspot,elevation,joints,static_M,mean_M,std_M,cpu_s,wall_s");
     for &n in &ns {
         for &h in &hs {
             let steps = (t_end / h).round() as usize;
@@ -108,11 +111,8 @@ fn main() {
                 }
             };
             let ys = joint_elevations(&scene.beam.lengths);
-            let joints: Vec<usize> = scene
-                .hotspots
-                .iter()
-                .map(|s| nearest_joint(&scene.beam.lengths, s.elevation))
-                .collect();
+            // Two joints per hot spot (the lower and the upper one around its elevation).
+            let joints = hot_spot_joints(&scene.beam.lengths, &scene.hotspots);
             let (statics, all) = static_moments(&scene, &joints);
             if let Some(soil) = scene.soil {
                 let (mut best, mut at_y) = (0.0f64, 0.0);
@@ -142,16 +142,23 @@ fn main() {
             };
             let first = (t0 / h).round() as usize;
             for (s, spot) in scene.hotspots.iter().enumerate() {
-                let window = &history.moment[s][first..];
+                let w = interpolation_joints(&scene.beam.lengths, spot.elevation);
+                let (a, b) = (&history.moment[2 * s], &history.moment[2 * s + 1]);
+                let window: Vec<f64> = a[first..]
+                    .iter()
+                    .zip(&b[first..])
+                    .map(|(&a, &b)| w.blend(a, b))
+                    .collect();
                 let len = window.len() as f64;
                 let mean = window.iter().sum::<f64>() / len;
                 let var = window.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / len;
                 println!(
-                    "{n},{h},{},{},{:.3},{:.6e},{mean:.6e},{:.6e},{cpu:.2},{wall:.2}",
+                    "{n},{h},{},{},{:.3}/{:.3},{:.6e},{mean:.6e},{:.6e},{cpu:.2},{wall:.2}",
                     spot.name,
                     spot.elevation,
-                    ys[joints[s]],
-                    statics[s],
+                    ys[w.lower],
+                    ys[w.upper],
+                    w.blend(statics[2 * s], statics[2 * s + 1]),
                     var.sqrt()
                 );
             }

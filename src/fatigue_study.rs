@@ -868,10 +868,7 @@ fn run_cell(
     } else if kind.is_feedback() {
         let record = run_controller(&scene, kind, &settings).map_err(run_err)?;
         let decisions = record.decisions.as_deref().unwrap_or(&[]);
-        let joints: Vec<usize> = hotspots
-            .iter()
-            .map(|h| crate::hotspots::nearest_joint(&scene.beam.lengths, h.elevation))
-            .collect();
+        let joints = crate::hotspots::hot_spot_joints(&scene.beam.lengths, hotspots);
         let replay =
             replay_joint_moments(&scene, settings.interval, decisions, &joints).map_err(run_err)?;
         (record, Some(replay))
@@ -927,10 +924,7 @@ fn run_open_loop_joints(
     } else {
         scene
     };
-    let joints: Vec<usize> = hotspots
-        .iter()
-        .map(|h| crate::hotspots::nearest_joint(&run.beam.lengths, h.elevation))
-        .collect();
+    let joints = crate::hotspots::hot_spot_joints(&run.beam.lengths, hotspots);
     let mut history = crate::hotspots::joint_moment_history(run, &joints)?;
     let record = ControlledRecord {
         duration_s: history.duration(),

@@ -1,15 +1,25 @@
 //! Hot spots along the riser: the fatigue of named sections at given elevations (the wellhead
 //! datum, the conductor below the mudline, a casing connector, a riser joint's weld …), each from
-//! the chain's joint torque at the joint nearest its elevation (docs/conventions.md "Hot spots:
-//! the joint torque M_j").
+//! the chain's joint torques interpolated in elevation between the two joints around it
+//! (docs/conventions.md "Hot spots: the joint torque M_j").
 //!
 //! # The moment at a hot spot
 //! Joint j (j = 1..n+1) links pendulum j−1 to pendulum j (pendulum 0 and pendulum n+1 are the
 //! vertical e₂ of the supports); its spring k_j carries the torque M_j = k_j θ_j, θ_j = ∠(q_{j−1},
 //! q_j) the angle whose energy ½k_jθ_j² the model integrates (`model::terms::spring`). Its
 //! elevation is the straight chain's, s_j = Σ_{i<j} l_i above the chain's base (joint 1 at 0, joint
-//! n+1 at the top). A hot spot at elevation e takes the joint with the least |s_j − e|, the lower
-//! one of two at the same distance ([`nearest_joint`]).
+//! n+1 at the top). A hot spot at elevation e reads the moment interpolated linearly in elevation
+//! between the two joints around it ([`interpolation_joints`]):
+//!
+//! M(e) = (1 − w) M_a + w M_b,   w = (e − s_a)/(s_b − s_a),   s_a ≤ e < s_b,
+//!
+//! per component; a hot spot within 10⁻⁹ of the chain's length of a joint (a flex joint, a part's
+//! end, the wellhead datum) reads that joint alone, w = 0. Why not the nearest joint: a joint's
+//! torque approximates the bending moment at its own elevation, and as n changes the joint
+//! nearest a fixed elevation jumps along the riser, so the nearest joint's moment does not
+//! converge in n where the moment varies over a few pendulum lengths (the conductor below the
+//! mudline); the interpolant reads the moment at the hot spot's own elevation and converges with
+//! the joint torques.
 //!
 //! As a vector in the transverse axes (x, z), with the sign convention of the wellhead moment
 //! (each component the moment that bends the pipe toward that axis):
@@ -57,8 +67,8 @@ pub fn joint_elevations(lengths: &[f64]) -> Vec<f64> {
     s
 }
 
-/// The 0-based index i = j − 1 of the joint nearest `elevation` (module docs): the least
-/// |s_j − e|, the lower joint on a tie.
+/// The 0-based index i = j − 1 of the joint nearest `elevation`: the least |s_j − e|, the lower
+/// joint on a tie (the hot spots read [`interpolation_joints`] instead, module docs).
 pub fn nearest_joint(lengths: &[f64], elevation: f64) -> usize {
     let s = joint_elevations(lengths);
     let mut best = 0;
@@ -68,6 +78,73 @@ pub fn nearest_joint(lengths: &[f64], elevation: f64) -> usize {
         }
     }
     best
+}
+
+/// The joints a hot spot at `elevation` reads (module docs): the lower joint a (0-based i = j − 1)
+/// with s_a ≤ e, the upper one b = a + 1, and the upper one's weight w = (e − s_a)/(s_b − s_a);
+/// `upper == lower` and w = 0 when e lies within 10⁻⁹ of the chain's length of a joint (or at or
+/// beyond the chain's ends).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointInterpolation {
+    /// The joint at or below the elevation (0-based).
+    pub lower: usize,
+    /// The joint above it (0-based; `lower` when the elevation is a joint's).
+    pub upper: usize,
+    /// The upper joint's weight w in [0, 1).
+    pub weight: f64,
+}
+
+impl JointInterpolation {
+    /// (1 − w) a + w b, and a itself (bit for bit) when w = 0.
+    #[inline]
+    pub fn blend(&self, a: f64, b: f64) -> f64 {
+        if self.weight == 0.0 {
+            a
+        } else {
+            (1.0 - self.weight) * a + self.weight * b
+        }
+    }
+}
+
+/// The two joints around `elevation` and the upper one's weight ([`JointInterpolation`], module
+/// docs) on a straight chain with pendulum lengths `lengths`.
+pub fn interpolation_joints(lengths: &[f64], elevation: f64) -> JointInterpolation {
+    let s = joint_elevations(lengths);
+    let top = s.len() - 1;
+    let tol = 1e-9 * s[top].abs().max(1.0);
+    let at = |j: usize| JointInterpolation {
+        lower: j,
+        upper: j,
+        weight: 0.0,
+    };
+    if let Some(j) = (0..=top).find(|&j| (s[j] - elevation).abs() <= tol) {
+        return at(j);
+    }
+    if elevation <= s[0] {
+        return at(0);
+    }
+    if elevation >= s[top] {
+        return at(top);
+    }
+    // s[a] < e < s[a + 1]: the last joint below e.
+    let a = s.partition_point(|&y| y < elevation) - 1;
+    JointInterpolation {
+        lower: a,
+        upper: a + 1,
+        weight: (elevation - s[a]) / (s[a + 1] - s[a]),
+    }
+}
+
+/// The joints whose torques the hot spots read, two per hot spot in their order (lower, upper of
+/// [`interpolation_joints`]): what [`joint_moment_history`] records for [`assess_histories`].
+pub fn hot_spot_joints(lengths: &[f64], hotspots: &[HotSpotSpec]) -> Vec<usize> {
+    hotspots
+        .iter()
+        .flat_map(|h| {
+            let w = interpolation_joints(lengths, h.elevation);
+            [w.lower, w.upper]
+        })
+        .collect()
 }
 
 /// θ/sin θ from y = sin²θ = ‖a×b‖² and x = cos θ = a·b: the series of arcsin(√y)/√y near y = 0
@@ -267,10 +344,13 @@ pub struct HotSpotAssessment {
     pub name: String,
     /// Its elevation \[m\] (as given).
     pub elevation: f64,
-    /// The joint it reads (0-based i = j − 1; joint j of the module docs).
+    /// The joint at or below its elevation (0-based i = j − 1; joint j of the module docs): the
+    /// joint it reads when it lies on one, else the lower of the two it interpolates between.
     pub joint: usize,
-    /// The joint's elevation s_j \[m\].
+    /// That joint's elevation s_j \[m\].
     pub joint_elevation: f64,
+    /// The two joints and the weight its moment is interpolated with (module docs).
+    pub interpolation: JointInterpolation,
     /// The assessment of its moment history (damage, damage per year, life, cycles).
     pub assessment: Assessment,
 }
@@ -289,8 +369,9 @@ pub fn critical(lives: impl IntoIterator<Item = (f64, f64)>) -> Option<usize> {
 }
 
 /// Every hot spot of `hotspots` on `scene` run with its own controls, the first `skip` steps
-/// left out of the count (the spin-up): one streamed run, then each moment history through
-/// [`assess`] with the hot spot's spec (module docs).
+/// left out of the count (the spin-up): one streamed run, then each hot spot's moment history
+/// (interpolated in elevation between its two joints, module docs) through [`assess`] with the
+/// hot spot's spec.
 ///
 /// # Errors
 /// The run's ([`joint_moment_history`]); a hot spot's [`FatigueError`] (its spec, a non-finite
@@ -301,29 +382,54 @@ pub fn assess_hot_spots(
     hotspots: &[HotSpotSpec],
     skip: usize,
 ) -> Result<Vec<HotSpotAssessment>> {
-    let joints: Vec<usize> = hotspots
-        .iter()
-        .map(|h| nearest_joint(&scene.beam.lengths, h.elevation))
-        .collect();
+    let joints = hot_spot_joints(&scene.beam.lengths, hotspots);
     let history = joint_moment_history(scene, &joints)?;
     assess_histories(scene, hotspots, &history, skip)
 }
 
 /// The hot spots' assessments of a run's joint torques ([`joint_moment_history`] at the joints
-/// of `hotspots`, in their order), the first `skip` steps left out.
+/// [`hot_spot_joints`] gives for `hotspots`: two per hot spot, in their order), the first `skip`
+/// steps left out; each hot spot's moment is interpolated between its two joints (module docs).
 ///
 /// # Errors
-/// As [`assess_hot_spots`].
+/// As [`assess_hot_spots`]; [`FatigueError::InvalidSpec`] naming `joint` when `history` does
+/// not hold the joints of [`hot_spot_joints`].
 pub fn assess_histories(
     scene: &Scene,
     hotspots: &[HotSpotSpec],
     history: &JointMoments,
     skip: usize,
 ) -> Result<Vec<HotSpotAssessment>> {
-    let elevations = joint_elevations(&scene.beam.lengths);
+    let lengths = &scene.beam.lengths;
+    let elevations = joint_elevations(lengths);
+    let expected = hot_spot_joints(lengths, hotspots);
+    if history.joints != expected {
+        return Err(FatigueError::InvalidSpec {
+            key: "joint",
+            value: history.joints.len() as f64,
+            reason: "the joint-torque history must hold the hot spots' joints \
+                     (hotspots::hot_spot_joints: two per hot spot)",
+        }
+        .into());
+    }
     let mut out = Vec::with_capacity(hotspots.len());
     for (s, h) in hotspots.iter().enumerate() {
-        let moment = &history.moment[s];
+        let w = interpolation_joints(lengths, h.elevation);
+        let blend = |m: &[Vec<f64>]| -> Option<Vec<f64>> {
+            (w.weight != 0.0).then(|| {
+                let (a, b) = (&m[2 * s], &m[2 * s + 1]);
+                a.iter().zip(b).map(|(&a, &b)| w.blend(a, b)).collect()
+            })
+        };
+        let blended = blend(&history.moment);
+        let blended_x = history.moment_x.as_deref().and_then(blend);
+        let moment = blended
+            .as_deref()
+            .unwrap_or(history.moment[2 * s].as_slice());
+        let moment_x = history
+            .moment_x
+            .as_deref()
+            .map(|m| blended_x.as_deref().unwrap_or(m[2 * s].as_slice()));
         if skip + 2 > moment.len() {
             return Err(FatigueError::InvalidSpec {
                 key: "spin_up",
@@ -337,16 +443,16 @@ pub fn assess_histories(
             MomentHistory {
                 duration_s: history.duration() - skip as f64 * history.h,
                 moment: &moment[skip..],
-                moment_x: history.moment_x.as_ref().map(|m| &m[s][skip..]),
+                moment_x: moment_x.map(|m| &m[skip..]),
                 measure: MomentMeasure::Wellhead,
             },
         )?;
-        let joint = history.joints[s];
         out.push(HotSpotAssessment {
             name: h.name.clone(),
             elevation: h.elevation,
-            joint,
-            joint_elevation: elevations[joint],
+            joint: w.lower,
+            joint_elevation: elevations[w.lower],
+            interpolation: w,
             assessment,
         });
     }
@@ -412,5 +518,40 @@ mod tests {
         assert_eq!(critical([(1e-3, 3.0), (3e-3, 1.0)]), Some(0));
         assert_eq!(critical([(0.0, 1.0), (0.0, 1.0)]), Some(0));
         assert_eq!(critical(std::iter::empty()), None);
+    }
+
+    /// The joints around an elevation and the upper one's weight: (e − s_a)/(s_b − s_a) between
+    /// joints, the joint alone (w = 0) at a joint, within the 10⁻⁹ tolerance and at the ends;
+    /// the blend is linear and returns the lower value's bits at w = 0.
+    #[test]
+    fn interpolation_between_the_joints_around_an_elevation() {
+        let l = [2.0, 4.0, 2.0];
+        let at = |e: f64| interpolation_joints(&l, e);
+        let w = at(3.0);
+        assert_eq!((w.lower, w.upper), (1, 2));
+        assert_eq!(w.weight, 0.25);
+        assert_eq!(w.blend(8.0, 4.0), 7.0);
+        for (e, j) in [
+            (0.0, 0),
+            (2.0, 1),
+            (6.0 + 1e-10, 2),
+            (8.0, 3),
+            (-1.0, 0),
+            (9.0, 3),
+        ] {
+            assert_eq!(
+                at(e),
+                JointInterpolation {
+                    lower: j,
+                    upper: j,
+                    weight: 0.0
+                },
+                "{e}"
+            );
+        }
+        let third = 0.1f64 / 3.0;
+        assert_eq!(at(0.0).blend(third, f64::NAN).to_bits(), third.to_bits());
+        let w = at(7.5);
+        assert_eq!((w.lower, w.upper, w.weight), (2, 3, 0.75));
     }
 }

@@ -17,6 +17,7 @@
 
 pub mod dispersion;
 pub mod spectrum;
+mod synthesis;
 pub mod waves;
 
 pub use dispersion::wavenumber;

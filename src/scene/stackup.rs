@@ -8,7 +8,7 @@
 //! The chain runs from the foot of the lowest segment (node 0, y = 0) upward. Pendulum ends fall
 //! on every segment's end, every body's ends, every flex joint and the mudline (`[soil] mudline`);
 //! between them the pipe pieces share the rest of `beam.pendulums` in proportion to their length
-//! (largest remainders, at least one each). A body is one pendulum: rigid within itself, its mass,
+//! times their segment's `refinement` (default 1; largest remainders, at least one each). A body is one pendulum: rigid within itself, its mass,
 //! weight and drag split half to each end node.
 
 use serde::{Deserialize, Serialize};
@@ -103,6 +103,11 @@ pub struct Segment {
     /// Added-mass coefficient C_a (default 1.0).
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub added_mass_coefficient: f64,
+    /// Relative density of pendulums r (default 1): the pipe pieces share `beam.pendulums` in
+    /// proportion to length × r, so a segment with r = 2 gets pendulums half as long as one with
+    /// r = 1 (shorter pendulums where the moment varies fast, longer ones in uniform joints).
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub refinement: f64,
 }
 
 /// A rigid lumped body (`[[stackup.body]]`): BOP, LMRP, a wellhead housing modelled as a mass.
@@ -197,6 +202,8 @@ pub struct Layout {
 #[derive(Clone, Debug)]
 struct Piece {
     part: usize,
+    /// The segment's `refinement` (1 for a body).
+    refinement: f64,
     length: f64,
     /// Mass per length with added mass \[kg/m\] (a body: its total over its height).
     mu: f64,
@@ -327,6 +334,11 @@ impl Segment {
             &key("added_mass_coefficient"),
             self.added_mass_coefficient,
             coefficient,
+        )?;
+        check_range(
+            &key("refinement"),
+            self.refinement,
+            &r[StackupRange::Refinement as usize],
         )
     }
 }
@@ -464,6 +476,7 @@ impl Stackup {
             let m = b.mass + b.added_mass;
             return Piece {
                 part: self.segments.len() + i,
+                refinement: 1.0,
                 length: b.height,
                 mu: m / b.height,
                 w: b.submerged_weight / b.height,
@@ -478,6 +491,7 @@ impl Stackup {
         let area = PI / 4.0 * dh * dh;
         Piece {
             part: i,
+            refinement: s.refinement,
             length: s.length * f64::from(s.joints),
             mu: s.mass_in_air() + s.added_mass_coefficient * rho_w * area,
             w: s.submerged_weight(rho_w),
@@ -741,7 +755,7 @@ fn split(parts: &[Piece], cuts: &[f64]) -> Result<Vec<Piece>, SceneError> {
 }
 
 /// Pendulums per piece: one per body; the rest of n shared by the pipe pieces in proportion to
-/// their length (at least one each, largest remainders).
+/// their length times their segment's `refinement` (at least one each, largest remainders).
 fn allocate(n: usize, pieces: &[Piece]) -> Result<Vec<usize>, SceneError> {
     let bodies = pieces.iter().filter(|p| p.body).count();
     let pipes = pieces.len() - bodies;
@@ -757,7 +771,10 @@ fn allocate(n: usize, pieces: &[Piece]) -> Result<Vec<usize>, SceneError> {
         ));
     }
     let free = n - bodies;
-    let pipe_length: f64 = pieces.iter().filter(|p| !p.body).map(|p| p.length).sum();
+    // The weighted length r·L (r = 1: L exactly, so the shares are those of the plain lengths
+    // bit for bit).
+    let weighted = |p: &Piece| p.length * p.refinement;
+    let pipe_length: f64 = pieces.iter().filter(|p| !p.body).map(weighted).sum();
     let mut counts = vec![1usize; pieces.len()];
     let mut spare = free - pipes;
     // Ideal shares beyond the first pendulum each, then the largest remainders.
@@ -766,7 +783,7 @@ fn allocate(n: usize, pieces: &[Piece]) -> Result<Vec<usize>, SceneError> {
         if p.body {
             continue;
         }
-        let ideal = free as f64 * p.length / pipe_length;
+        let ideal = free as f64 * weighted(p) / pipe_length;
         let extra = ((ideal - 1.0).max(0.0).floor() as usize).min(spare);
         counts[i] += extra;
         spare -= extra;

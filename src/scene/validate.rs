@@ -153,7 +153,7 @@ pub(super) fn soil_ranges() -> [ValueRange; 3] {
 
 /// The ranges of the stack-up's values (`[stackup]`, docs/scene-format.md), indexed by
 /// [`StackupRange`].
-const STACKUP_RANGES: [ValueRange; 13] = [
+const STACKUP_RANGES: [ValueRange; 14] = [
     ValueRange {
         min: 1e-6,
         max: 1e6,
@@ -232,6 +232,12 @@ const STACKUP_RANGES: [ValueRange; 13] = [
         unit: "N·m/rad",
         why: "h²·k/(m·l²) is the step's spring number",
     },
+    ValueRange {
+        min: 1e-3,
+        max: 1e3,
+        unit: "",
+        why: "a segment's share of the pendulums is its length times its refinement",
+    },
 ];
 
 /// Which of the stack-up's ranges ([`stackup_ranges`]).
@@ -263,10 +269,12 @@ pub(super) enum StackupRange {
     Ei,
     /// A flex joint's stiffness.
     Rotational,
+    /// A segment's relative density of pendulums.
+    Refinement,
 }
 
 /// The stack-up's ranges, indexed by [`StackupRange`] (each with its unit and why).
-pub(super) fn stackup_ranges() -> [ValueRange; 13] {
+pub(super) fn stackup_ranges() -> [ValueRange; 14] {
     STACKUP_RANGES
 }
 
@@ -289,6 +297,7 @@ pub fn stackup_range_of(key: &str) -> Option<ValueRange> {
         "submerged_weight" => R::BodyWeight,
         "bending_stiffness" => R::Ei,
         "stiffness" => R::Rotational,
+        "refinement" => R::Refinement,
         _ => return None,
     };
     Some(STACKUP_RANGES[r as usize])

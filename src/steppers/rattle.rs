@@ -177,6 +177,9 @@ struct Workspace<D, const DIM: usize> {
     real_w: Vec<BlockSym<D, DIM>>,
     /// The coupled half step of a model with coupled dissipative terms (joint damping).
     coupled: Option<CoupledHalf<D, DIM>>,
+    /// The water's momentum P(t_k + h/2) of a model with Morison's drag node by node, read
+    /// once per step ([`crate::model::NodeDrag::water_momenta`]); empty without that term.
+    water: Vec<[D; DIM]>,
 }
 
 /// RATTLE for a [`Chain`], with its workspace. `step` does not allocate.
@@ -220,6 +223,11 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             coupled: chain
                 .has_coupled_dissipation()
                 .then(|| CoupledHalf::new(&chain)),
+            water: if chain.node_drag().is_some() {
+                v.clone()
+            } else {
+                Vec::new()
+            },
         };
         Ok(Rattle {
             chain,
@@ -494,13 +502,22 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let updates = derivative_updates::<D>();
         let mut extra_done = 0;
         let mut iterations = 0;
+        // The dissipative terms are read at t_k + h/2 in both halves; the node drag's water
+        // momentum P(t_k + h/2) once for the step (not per node and iteration).
+        let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
+        if let Some(nd) = ch.node_drag() {
+            nd.water_momenta(&dctx, &mut ws.water);
+        }
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
-            let dctx = ch.dissipation_ctx(self.t0 + k as f64 * h, h, k);
             match ws.coupled.as_mut().filter(|_| COUPLED) {
-                None => {
-                    half_step_momentum(ch, &state.q, (&ws.a, &ws.lam), (h, &dctx), &mut ws.half)
-                }
+                None => half_step_momentum(
+                    ch,
+                    &state.q,
+                    (&ws.a, &ws.lam),
+                    (h, &dctx, &ws.water),
+                    &mut ws.half,
+                ),
                 Some(cpl) => {
                     let half = &mut ws.half;
                     half.c.copy_from_slice(&ws.a);
@@ -605,7 +622,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         if let Some(nd) = ch.node_drag() {
             // + h/2 Q(p½), Q = A⁻¹ F(A(p½ − P)) (model::NodeDrag); tmp and qnew are scratch here.
             let ls = (ch.lengths(), ch.inverse_lengths());
-            nd.generalised_force(&ws.half.phalf, ls, &dctx, &mut ws.tmp, &mut ws.qnew);
+            let water = (&dctx, ws.water.as_slice());
+            nd.generalised_force_in(&ws.half.phalf, ls, water, &mut ws.tmp, &mut ws.qnew);
             for (a, f) in ws.a.iter_mut().zip(&ws.qnew) {
                 for d in 0..DIM {
                     a[d] += f[d] * hh;
@@ -716,12 +734,12 @@ struct HalfStep<D, const DIM: usize> {
 
 /// c = a − h/2 Ĝ(q_k)ᵀλ and p_{k+½} solving p − (h/2) Σ_T F_T(p) = c block by block
 /// ([`Chain::dissipative_half_step`]; p = c without dissipative terms), with W = ∂p_{k+½}/∂c
-/// (left at I without them).
+/// (left at I without them); `water` is the node drag's P(t_k + h/2) (empty without it).
 fn half_step_momentum<D: Scalar, const DIM: usize>(
     ch: &Chain<D, DIM>,
     q: &[[D; DIM]],
     (a, lam): (&[[D; DIM]], &[D]),
-    (h, ctx): (f64, &Ctx<D>),
+    (h, ctx, water): (f64, &Ctx<D>, &[[D; DIM]]),
     out: &mut HalfStep<D, DIM>,
 ) {
     out.c.copy_from_slice(a);
@@ -729,7 +747,7 @@ fn half_step_momentum<D: Scalar, const DIM: usize>(
         .add_transpose(q, lam, D::from(-0.5 * h), &mut out.c);
     if let Some(nd) = ch.node_drag() {
         let ls = (ch.lengths(), ch.inverse_lengths());
-        nd.implicit_half_step(&out.c, ls, (h, ctx), &mut out.phalf, &mut out.w);
+        nd.implicit_half_step(&out.c, ls, (h, ctx, water), &mut out.phalf, &mut out.w);
         return;
     }
     match ch.dissipation_count() {

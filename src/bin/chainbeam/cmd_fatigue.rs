@@ -8,7 +8,7 @@ use serde::Serialize;
 use chainbeam::fatigue::{assess, Assessment, FatigueSpec, MomentHistory};
 use chainbeam::fatigue_study::{spin_up_steps, with_record, ControlSettings, ControllerKind};
 use chainbeam::hotspots::{
-    assess_histories, critical, joint_moment_history, nearest_joint, HotSpotAssessment,
+    assess_histories, critical, hot_spot_joints, joint_moment_history, HotSpotAssessment,
     HotSpotSpec, JointMoments,
 };
 use chainbeam::scene::read_text_file;
@@ -75,7 +75,8 @@ damage_max; in the totals life_years_seeds, life_years_min, life_years_max.
 
 [[fatigue.hotspot]] (docs/scene-format.md): hotspots [{name, elevation, joint, joint_elevation, \
 damage, damage_per_year, life_years}] and critical (the shortest-lived one's name); the moment \
-at a hot spot is the joint torque k_j θ_j of the joint nearest its elevation. In a study, per \
+at a hot spot is the joint torques k_j θ_j interpolated linearly in elevation between the two \
+joints around it (joint: the lower one, or the joint it lies on). In a study, per \
 controller (a closed loop's decisions replayed on its plant).
 
 A cell of constant, pd or mpc has damage_ratio_to_none (its damage over none's); above 1 a \
@@ -169,7 +170,8 @@ struct FatigueReport {
 pub struct HotSpotJson {
     pub name: String,
     pub elevation: f64,
-    /// The joint read, j = 1..n+1 (1: the base; absent in a study).
+    /// The joint read, j = 1..n+1 (1: the base; absent in a study): the one the hot spot lies
+    /// on, else the lower of the two its moment is interpolated between.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub joint: Option<usize>,
     /// The joint's elevation s_j [m] (absent in a study).
@@ -328,11 +330,7 @@ fn simulated_joints(
         scene.time.steps,
         scene.n()
     ));
-    let joints: Vec<usize> = scene
-        .hotspots
-        .iter()
-        .map(|h| nearest_joint(&scene.beam.lengths, h.elevation))
-        .collect();
+    let joints = hot_spot_joints(&scene.beam.lengths, &scene.hotspots);
     let history = joint_moment_history(scene, &joints);
     spinner.finish_and_clear();
     let mut j = history.map_err(|e| lib_error(path, e))?;

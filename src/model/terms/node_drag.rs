@@ -126,6 +126,45 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         }
     }
 
+    /// The water's momentum P at the context's time (current and waves) into `out`, P_k as
+    /// [`CurrentDrag::momentum`] gives it: a known function of time, the same for every
+    /// evaluation of one step's half steps (both read it at t_k + h/2), so the step reads it
+    /// once per step for [`NodeDrag::implicit_half_step`] and
+    /// [`NodeDrag::generalised_force_in`] instead of once per node, Newton iteration and pass.
+    pub fn water_momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = std::array::from_fn(|d| self.water.momentum(k, d, ctx));
+        }
+    }
+
+    /// y = A (p − P) with P given (`water`, [`NodeDrag::water_momenta`]): the same arithmetic
+    /// as [`NodeDrag::node_momenta`], bit for bit.
+    fn node_momenta_in(p: &[[D; DIM]], inv_lengths: &[D], water: &[[D; DIM]], y: &mut [[D; DIM]]) {
+        let n = p.len();
+        let mut next = [D::zero(); DIM];
+        for k in (0..n).rev() {
+            let il = inv_lengths[k];
+            let cur: [D; DIM] = std::array::from_fn(|d| (p[k][d] - water[k][d]) * il);
+            y[k] = std::array::from_fn(|d| cur[d] - next[d]);
+            next = cur;
+        }
+    }
+
+    /// Q(p) of [`NodeDrag::generalised_force`] with the water's momentum P given (`water`,
+    /// [`NodeDrag::water_momenta`] at the context's time): the same values bit for bit.
+    pub fn generalised_force_in(
+        &self,
+        p: &[[D; DIM]],
+        (lengths, inv_lengths): (&[D], &[D]),
+        (ctx, water): (&Ctx<D>, &[[D; DIM]]),
+        y: &mut [[D; DIM]],
+        out: &mut [[D; DIM]],
+    ) {
+        Self::node_momenta_in(p, inv_lengths, water, y);
+        self.node_forces(y, ctx, out);
+        suffix_scale(out, lengths);
+    }
+
     /// The node forces F(y) (transverse Morison, no axial part) into `f`.
     pub fn node_forces<E: Embed<D>>(&self, y: &[[E; DIM]], ctx: &Ctx<E>, f: &mut [[E; DIM]]) {
         for (k, (f, y)) in f.iter_mut().zip(y).enumerate() {
@@ -149,15 +188,16 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
 
     /// The implicit half step p − (h/2) Q(p) = c: b = A(c − P), yₖ the drag's root of
     /// y − (h/2) F(y) = b at each node, p = A⁻¹ y + P; `omega` gets Ωₖ = ∂yₖ/∂bₖ (axial 1).
+    /// `water` is P at the context's time ([`NodeDrag::water_momenta`]).
     pub fn implicit_half_step(
         &self,
         c: &[[D; DIM]],
         (lengths, inv_lengths): (&[D], &[D]),
-        (h, ctx): (f64, &Ctx<D>),
+        (h, ctx, water): (f64, &Ctx<D>, &[[D; DIM]]),
         p: &mut [[D; DIM]],
         omega: &mut [BlockSym<D, DIM>],
     ) {
-        self.node_momenta(c, inv_lengths, ctx, p);
+        Self::node_momenta_in(c, inv_lengths, water, p);
         let ax = DIM - 2;
         for (k, (y, w)) in p.iter_mut().zip(omega.iter_mut()).enumerate() {
             let b = *y;
@@ -168,9 +208,9 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
             *w = om;
         }
         suffix_scale(p, lengths);
-        for (k, pk) in p.iter_mut().enumerate() {
+        for (pk, w) in p.iter_mut().zip(water) {
             for d in 0..DIM {
-                pk[d] += self.water.momentum(k, d, ctx);
+                pk[d] += w[d];
             }
         }
     }

@@ -172,6 +172,7 @@
 
 mod baselines;
 pub mod planning;
+pub mod prediction;
 mod plant;
 mod receding;
 

@@ -15,6 +15,7 @@
 //!   --amplitude A       the forcing's bound [N] (default: the vessel's thrust bound in a thrust
 //!                        scene, else [mpc] bound, else 5e4)
 //!   --interval T        the forcing's pieces [s] (default [mpc] interval, else 1)
+//!   --rate R            the forcing moves at most R [N/s] (default: jumps between pieces)
 //!   --elevation E       the moment's joint: nearest E [m] above the base (default 0, M_w)
 //!   --thrust            a `support = "vessel"` scene without thrust keys: the vessel's thrust
 //!                        (the documented default mass, damping and bounds) is the control
@@ -36,6 +37,7 @@ struct Args {
     seed: u64,
     amplitude: Option<f64>,
     interval: Option<f64>,
+    rate: Option<f64>,
     elevation: f64,
     thrust: bool,
 }
@@ -59,6 +61,7 @@ fn parse() -> Result<Args, String> {
         seed: 1,
         amplitude: None,
         interval: None,
+        rate: None,
         elevation: 0.0,
         thrust: false,
     };
@@ -87,6 +90,7 @@ fn parse() -> Result<Args, String> {
             }
             "--amplitude" => a.amplitude = Some(number("--amplitude", &value()?)?),
             "--interval" => a.interval = Some(number("--interval", &value()?)?),
+            "--rate" => a.rate = Some(number("--rate", &value()?)?),
             "--elevation" => a.elevation = number("--elevation", &value()?)?,
             "--thrust" => a.thrust = true,
             f if f.starts_with("--") => return Err(format!("unknown flag {f}")),
@@ -203,13 +207,13 @@ fn run() -> Result<(), String> {
     };
     println!(
         "Plan vs plant over {} s from t0 = {:?} s; {}; drag {}; forcing ±{amplitude} N pieces of \
-         {interval} s, seed {}; moment at the joint nearest {} m.\n",
-        a.horizon, a.starts, a.scene, a.drag, a.seed, a.elevation
+         {interval} s, rate bound {:?} N/s, seed {}; moment at the joint nearest {} m.\n",
+        a.horizon, a.starts, a.scene, a.drag, a.rate, a.seed, a.elevation
     );
     println!(
-        "| H_s [m] | T_p [s] | plan n_p @ h_p | e_total | e_response | e_unforced | e_response per start (min–max) | rms plant ΔM [N·m] | plant s/horizon | plan s/horizon |"
+        "| H_s [m] | T_p [s] | plan n_p @ h_p | e_total | e_response | e_unforced | e_response per start (min–max) | rms plant ΔM [N·m] | plant s/horizon | plan s/horizon | joint plant/plan [m] |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for cell in cells {
         let mut scene = base.clone();
         if let Some((hs, tp)) = cell {
@@ -235,6 +239,7 @@ fn run() -> Result<(), String> {
                 interval,
                 amplitude,
                 seed: a.seed,
+                rate: a.rate,
             },
             elevation: a.elevation,
         };
@@ -248,7 +253,7 @@ fn run() -> Result<(), String> {
                         PlanModel::Plant => "plant".to_string(),
                         PlanModel::Reduced { pendulums, step } => format!("{pendulums} @ {step} s"),
                     };
-                    println!("| {hs:.2} | {tp:.2} | {name} | fails: {e} | | | | | | |");
+                    println!("| {hs:.2} | {tp:.2} | {name} | fails: {e} | | | | | | | |");
                     continue;
                 }
             };
@@ -263,7 +268,7 @@ fn run() -> Result<(), String> {
                 / r.starts.len() as f64)
                 .sqrt();
             println!(
-                "| {hs:.2} | {tp:.2} | {} @ {} s | {} | {} | {} | {}–{} | {dm:.3e} | {:.3} | {:.3} |",
+                "| {hs:.2} | {tp:.2} | {} @ {} s | {} | {} | {} | {}–{} | {dm:.3e} | {:.3} | {:.3} | {:.2}/{:.2} |",
                 r.plan_pendulums,
                 r.plan_step,
                 percent(r.total),
@@ -272,7 +277,9 @@ fn run() -> Result<(), String> {
                 percent(lo),
                 percent(hi),
                 r.plant_seconds,
-                r.plan_seconds
+                r.plan_seconds,
+                r.joint_elevations[0],
+                r.joint_elevations[1]
             );
         }
     }

@@ -30,6 +30,7 @@ fn setup(plan: PlanModel) -> PredictionSetup {
             interval: 1.0,
             amplitude: 5e4,
             seed: 7,
+            rate: None,
         },
         elevation: 0.0,
     }

@@ -76,6 +76,9 @@ pub struct Forcing {
     pub amplitude: f64,
     /// The seed of the draw.
     pub seed: u64,
+    /// A rate bound \[N/s\] of the forcing's own (each step moves u by at most it times h), or
+    /// `None`: pieces with jumps (a thrust scene's rate bound applies in either case).
+    pub rate: Option<f64>,
 }
 
 /// What to measure ([`predict`]).
@@ -148,7 +151,7 @@ pub enum PredictionError {
     /// A number of the setup out of its range.
     #[error("`{name}` must be {requirement}, got {value}")]
     Value {
-        /// `horizon`, `starts`, `interval`, `amplitude` or `elevation`.
+        /// `horizon`, `starts`, `interval`, `amplitude`, `rate` or `elevation`.
         name: &'static str,
         /// The value given.
         value: f64,
@@ -297,6 +300,9 @@ impl PlantRuns {
             f.amplitude > 0.0,
             "positive and finite [N]",
         )?;
+        if let Some(rate) = f.rate {
+            check("rate", rate, rate > 0.0, "positive and finite [N/s]")?;
+        }
         check(
             "elevation",
             setup.elevation,
@@ -468,7 +474,12 @@ fn forcing(scene: &Scene, f: &Forcing, n_steps: usize) -> Vec<f64> {
     let draws: Vec<f64> = (0..pieces)
         .map(|_| f.amplitude * (2.0 * (rng.next_u64() as f64 / 2f64.powi(64)) - 1.0))
         .collect();
-    let limits = scene.thrust().map(|t| (t.bound, t.rate_bound * h));
+    let thrust = scene.thrust().map(|t| (t.bound, t.rate_bound * h));
+    let own = f.rate.map(|r| (f64::INFINITY, r * h));
+    let limits = match (thrust, own) {
+        (Some((b, c)), Some((_, d))) => Some((b, c.min(d))),
+        (t, o) => t.or(o),
+    };
     let mut u = Vec::with_capacity(n_steps + 1);
     let mut prev = 0.0;
     for k in 0..=n_steps {

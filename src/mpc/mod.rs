@@ -172,8 +172,8 @@
 
 mod baselines;
 pub mod planning;
-pub mod prediction;
 mod plant;
+pub mod prediction;
 mod receding;
 
 pub use baselines::{

@@ -68,14 +68,21 @@ use crate::model::{Chain, TipCondition};
 use crate::scene::{DragModel, ObjectiveKind, Scene, SceneErrorKind, Support};
 use crate::steppers::rattle::State;
 
-/// The planning model of `scene` with `pendulums` pendulums at step `step` (module docs).
+/// The planning model of `scene` with `pendulums` pendulums at step `step` (module docs): the
+/// `[pipe]` or the `[stackup]` rebuilt with n_p pendulums.
 ///
 /// # Errors
-/// [`MpcError::PlanWithoutPipe`] for a scene without `[pipe]`; [`MpcError::PlanPendulums`] for
-/// `pendulums` not in 1..=n; [`MpcError::PlanSupport`] for a beam whose tip is locked or a
-/// reaction-force tip (the map keeps no tip constraint); [`crate::error::ValueError::OutOfRange`] naming
-/// `plan_step` for a step that is not positive and finite; the rebuilt scene's errors.
+/// [`MpcError::PlanWithoutPipe`] for a scene with neither `[pipe]` nor `[stackup]`;
+/// [`MpcError::PlanPendulums`] for `pendulums` not in 1..=n; [`MpcError::PlanSupport`] for a
+/// beam whose tip is locked (fixed-fixed, pinned-pinned) or a reaction-force tip (the map keeps
+/// only the vessel's constraint); [`crate::error::ValueError::OutOfRange`] naming `plan_step`
+/// for a step that is not positive and finite; a `beam.joint_damping` of a stack-up (not
+/// rebuilt); the rebuilt scene's errors (a stack-up's fewer pendulums than pieces: naming
+/// `beam.pendulums`).
 pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scene> {
+    if scene.pipe.is_none() && scene.stackup.is_none() {
+        return Err(MpcError::PlanWithoutPipe.into());
+    }
     let n = scene.n();
     if pendulums == 0 || pendulums > n {
         return Err(MpcError::PlanPendulums { pendulums, n }.into());

@@ -173,6 +173,7 @@
 mod baselines;
 pub mod planning;
 mod plant;
+pub mod prediction;
 mod receding;
 
 pub use baselines::{

@@ -24,6 +24,22 @@
 //! same share of Morison's load; the control node
 //! and point loads at node j moved to the node at the same height, round(j n_p/n) (at least 1).
 //!
+//! # A stack-up ([`planning_scene`] of a `[stackup]` scene)
+//! The stack-up rebuilt with n_p pendulums by its own rule ([`crate::scene::Stackup::beam`]):
+//! every segment and body kept as a piece, each piece's pendulums allotted in proportion to its
+//! length, the foot, the soil, the flex joints and the bodies as the scene gives them, the
+//! nodes' Morison coefficients (or the momentum drag's D and weights) of the rebuilt layout; a
+//! point load or the control at the node of the nearest height. The fewest pendulums is the
+//! stack-up's number of pieces (fewer: the stack-up's error naming `beam.pendulums`).
+//!
+//! # The tip held by the vessel
+//! With `support = "vessel"` the top's z is held by the constraint Σ lᵢ qᵢ,z = Z(t) (and its
+//! rate). The sampled chords of the map below put the model's top node where the plant's is but
+//! their sum falls short of it by the chords' sag, Σ (l_{p,J} − |X_J − X_{J−1}|) Q_J,z; the map
+//! therefore shifts every chord by one α toward z (Newton, to round-off) and every Q̇_J by one
+//! β Π_J e_z so that the model's state satisfies both, and copies the vessel's own state
+//! (Z, Ż: the `tip_target` of a thrust scene) one to one.
+//!
 //! # The objective
 //! The model's M₀ = 2k₁z₁/l₁² = (2/l₁) M_w, with M_w = k₁ θ₁ the wellhead moment of the base
 //! spring, so the same M_w weighs (l/l_p)² less in the model, and a sum over steps weighs h/h_p
@@ -47,53 +63,92 @@
 
 use super::Observation;
 use crate::error::{MpcError, Requirement, Result};
-use crate::model::Chain;
-use crate::scene::{ObjectiveKind, Scene};
+use crate::hotspots::joint_elevations;
+use crate::model::{Chain, TipCondition};
+use crate::scene::{DragModel, ObjectiveKind, Scene, SceneErrorKind, Support};
 use crate::steppers::rattle::State;
 
-/// The planning model of `scene` with `pendulums` pendulums at step `step` (module docs).
+/// The planning model of `scene` with `pendulums` pendulums at step `step` (module docs): the
+/// `[pipe]` or the `[stackup]` rebuilt with n_p pendulums.
 ///
 /// # Errors
-/// [`MpcError::PlanWithoutPipe`] for a scene without `[pipe]`; [`MpcError::PlanPendulums`] for
-/// `pendulums` not in 1..=n; [`MpcError::PlanSupport`] for a beam whose tip is locked or a
-/// reaction-force tip (the map keeps no tip constraint); [`crate::error::ValueError::OutOfRange`] naming
-/// `plan_step` for a step that is not positive and finite; the rebuilt scene's errors.
+/// [`MpcError::PlanWithoutPipe`] for a scene with neither `[pipe]` nor `[stackup]`;
+/// [`MpcError::PlanPendulums`] for `pendulums` not in 1..=n; [`MpcError::PlanSupport`] for a
+/// beam whose tip is locked (fixed-fixed, pinned-pinned) or a reaction-force tip (the map keeps
+/// only the vessel's constraint); [`crate::error::ValueError::OutOfRange`] naming `plan_step`
+/// for a step that is not positive and finite; a `beam.joint_damping` of a stack-up (not
+/// rebuilt); the rebuilt scene's errors (a stack-up's fewer pendulums than pieces: naming
+/// `beam.pendulums`).
 pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scene> {
-    let pipe = scene.pipe.ok_or(MpcError::PlanWithoutPipe)?;
+    if scene.pipe.is_none() && scene.stackup.is_none() {
+        return Err(MpcError::PlanWithoutPipe.into());
+    }
     let n = scene.n();
     if pendulums == 0 || pendulums > n {
         return Err(MpcError::PlanPendulums { pendulums, n }.into());
     }
-    let locked = scene.beam.support.holds_tip();
+    // A vessel's prescribed (or thrust-driven) top is kept by the map (`StateMap`, "The tip
+    // held by the vessel"); a locked or reaction-force tip is not.
+    let support = scene.beam.support;
+    let locked = support.holds_tip() && support != Support::Vessel;
     if locked || scene.beam.reaction_force {
         return Err(MpcError::PlanSupport.into());
     }
     Requirement::PositiveFinite
         .check("plan_step", step)
         .map_err(MpcError::from)?;
-    // A clamped end's spring is 2EI/l, which the coarser chain recomputes; a flex joint's given
-    // stiffness is a property of the joint and is kept.
-    let clamped = 2.0 * pipe.bending_stiffness() / scene.beam.lengths[0];
-    let given = |k: f64| ((k - clamped).abs() > 1e-12 * clamped).then_some(k);
-    let end_springs = (
-        given(scene.beam.base_stiffness),
-        given(scene.beam.tip_stiffness),
-    );
     let mut out = scene.clone();
-    out.beam = pipe.beam(
-        pendulums,
-        scene.beam.support,
-        scene.water.density,
-        end_springs,
-    )?;
+    match (scene.pipe, scene.stackup.as_ref()) {
+        (Some(pipe), _) => {
+            // A clamped end's spring is 2EI/l, which the coarser chain recomputes; a flex
+            // joint's given stiffness is a property of the joint and is kept.
+            let clamped = 2.0 * pipe.bending_stiffness() / scene.beam.lengths[0];
+            let given = |k: f64| ((k - clamped).abs() > 1e-12 * clamped).then_some(k);
+            let end_springs = (
+                given(scene.beam.base_stiffness),
+                given(scene.beam.tip_stiffness),
+            );
+            out.beam = pipe.beam(pendulums, support, scene.water.density, end_springs)?;
+            // D ∝ 1/l; the per-pendulum weights follow from the rebuilt beam
+            // (`Scene::drag_weights`).
+            out.loads.drag *= pendulums as f64 / n as f64;
+        }
+        (None, Some(stackup)) => {
+            if scene.beam.joint_damping.iter().any(|&c| c != 0.0) {
+                return Err(crate::scene::SceneError::new(SceneErrorKind::InvalidValue {
+                    key: "beam.joint_damping".into(),
+                    reason: "a reduced planning model of a stack-up does not rebuild the joint \
+                             damping; plan on the full model (plan_pendulums = n)"
+                        .into(),
+                })
+                .into());
+            }
+            // The stack-up's own chain of n_p pendulums (module docs, "A stack-up").
+            let mut stackup = stackup.clone();
+            let mudline = scene.soil.as_ref().map_or(0.0, |s| s.mudline);
+            out.beam = stackup.beam(pendulums, support, scene.water.density, mudline)?;
+            if stackup.drag_model == DragModel::Momentum {
+                out.loads.drag = stackup
+                    .drag_constants(&out.beam.lengths, &out.beam.masses, mudline)
+                    .0;
+            }
+            out.stackup = Some(stackup);
+        }
+        (None, None) => return Err(MpcError::PlanWithoutPipe.into()),
+    }
     out.time.step = step;
     // A wave record every r steps of the plant: as close on the model's grid, not longer.
     if let Some(w) = out.loads.waves.as_mut() {
         w.fit_record_step(step);
     }
-    // D ∝ 1/l; the per-pendulum weights follow from the rebuilt beam (`Scene::drag_weights`).
-    out.loads.drag *= pendulums as f64 / n as f64;
-    let node = |j: usize| ((j * pendulums) as f64 / n as f64).round().max(1.0) as usize;
+    let node: Box<dyn Fn(usize) -> usize> = if scene.stackup.is_some() {
+        // The node at the nearest height of the stack-up's uneven chain.
+        let plant = joint_elevations(&scene.beam.lengths);
+        let model = joint_elevations(&out.beam.lengths);
+        Box::new(move |j: usize| nearest_joint_of(&model, plant[j.min(n)]).max(1))
+    } else {
+        Box::new(|j: usize| ((j * pendulums) as f64 / n as f64).round().max(1.0) as usize)
+    };
     for load in &mut out.loads.points {
         load.node = node(load.node);
     }
@@ -102,6 +157,17 @@ pub fn planning_scene(scene: &Scene, pendulums: usize, step: f64) -> Result<Scen
     }
     out.validate()?;
     Ok(out)
+}
+
+/// The index of the elevation in `s` nearest `e` (the lower one on a tie).
+fn nearest_joint_of(s: &[f64], e: f64) -> usize {
+    let mut best = 0;
+    for (i, sj) in s.iter().enumerate() {
+        if (sj - e).abs() < (s[best] - e).abs() {
+            best = i;
+        }
+    }
+    best
 }
 
 /// The factor c by which the planning model's objective is the plant's (module docs, "The
@@ -193,10 +259,66 @@ impl<const DIM: usize> StateMap<DIM> {
             out.q[j] = chord;
             self.model_qdot[j] = v;
         }
+        if self.model.tip_condition() == TipCondition::Prescribed {
+            self.hold_top(&mut out.q);
+        }
         self.model.apply_mass(&self.model_qdot, &mut out.p);
         out.multipliers = None;
-        out.tip_target = [0.0; 2];
+        // The vessel's state (Z, Ż) of a thrust scene, one to one (zero in other scenes).
+        out.tip_target = state.tip_target;
         Ok(())
+    }
+
+    /// Puts the model's top where the plant's is (module docs, "The tip held by the vessel"):
+    /// Σ l_J Q_J,z = X_{n_p,z} by Newton on a common shift α of the chords toward z,
+    /// Q_J = (C_J + α e_z)/|C_J + α e_z|, then Σ l_J Q̇_J,z = W_{n_p,z} by the common
+    /// Q̇_J += β Π_J e_z, β = (W_z − Σ l_J Q̇_J,z)/Σ l_J (1 − Q_J,z²), after projecting Q̇_J
+    /// onto the tangent of the corrected Q_J.
+    fn hold_top(&mut self, q: &mut [[f64; DIM]]) {
+        let z = DIM - 1;
+        let np = self.model.n();
+        let (top, top_rate) = (self.x[np][z], self.w[np][z]);
+        let lengths = self.model.lengths();
+        // The chords C_J (unit) stay in `q`; α is applied to copies.
+        let mut alpha = 0.0;
+        for _ in 0..4 {
+            let (mut f, mut df) = (-top, 0.0);
+            for (c, &l) in q.iter().zip(lengths) {
+                let mut v = *c;
+                v[z] += alpha;
+                let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                let qz = v[z] / norm;
+                f += l * qz;
+                df += l * (1.0 - qz * qz) / norm;
+            }
+            if df <= 0.0 || f == 0.0 {
+                break;
+            }
+            alpha -= f / df;
+        }
+        for c in q.iter_mut() {
+            c[z] += alpha;
+            let norm = c.iter().map(|x| x * x).sum::<f64>().sqrt();
+            c.iter_mut().for_each(|x| *x /= norm);
+        }
+        let (mut rate, mut weight) = (0.0, 0.0);
+        for ((c, v), &l) in q.iter().zip(self.model_qdot.iter_mut()).zip(lengths) {
+            let along: f64 = (0..DIM).map(|d| v[d] * c[d]).sum();
+            for d in 0..DIM {
+                v[d] -= along * c[d];
+            }
+            rate += l * v[z];
+            weight += l * (1.0 - c[z] * c[z]);
+        }
+        if weight > 0.0 {
+            let beta = (top_rate - rate) / weight;
+            for (c, v) in q.iter().zip(self.model_qdot.iter_mut()) {
+                for d in 0..DIM {
+                    let e = if d == z { 1.0 } else { 0.0 };
+                    v[d] += beta * (e - c[d] * c[z]);
+                }
+            }
+        }
     }
 
     /// X_J and W_J at the model's node arc lengths on the plant's polyline.

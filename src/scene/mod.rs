@@ -49,7 +49,7 @@ pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
 pub use input::{
     read_text_file, read_text_file_limited, ReadError, ReadErrorKind, MAX_INPUT_BYTES,
 };
-pub use mpc::{MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
+pub use mpc::{Forecast, MpcPlanObjective, MpcSettings, MpcTable, MPC_KEYS};
 pub use pipe::{
     drag_weights, DragModel, Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS,
 };

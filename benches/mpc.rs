@@ -72,6 +72,8 @@ fn bench_replan(c: &mut Criterion) {
         moment_x: 0.0,
         moment_rate_x: 0.0,
         control_x: 0.0,
+        previous_state: plant.previous_state(),
+        previous_control: plant.previous_control(),
     };
     for (solver, name) in SOLVERS {
         for horizon in [1.0, 2.0, 3.0, 4.0] {

@@ -210,6 +210,7 @@ def fatigue(
     plan_step: float | None = None,
     pd_training: float | None = None,
     mpc_objective: str | None = None,
+    forecast: str | None = None,
     spin_up: float | None = None,
     progress: ProgressArg = False,
     duration: float | None = None,
@@ -218,8 +219,8 @@ def fatigue(
 ) -> FatigueResult:
     """The wellhead's fatigue damage and life (``chainbeam fatigue``'s JSON as a dict; module
     docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
-    ``plan_step``, ``pd_training``, ``mpc_objective`` (``"power"`` or ``"sum"``): the
-    closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    ``plan_step``, ``pd_training``, ``mpc_objective`` (``"power"`` or ``"sum"``), ``forecast``
+    (``"perfect"`` or ``"none"``: what MPC's plan knows of the sea ahead): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
@@ -242,6 +243,7 @@ def fatigue(
         "plan_step": _optional(plan_step, float, "plan_step"),
         "pd_training": _optional(pd_training, float, "pd_training"),
         "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
+        "forecast": _optional(forecast, str, "forecast"),
         "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
         "record": _optional(record, float, "record"),
         "seeds": _optional(seeds, int, "seeds"),

@@ -92,6 +92,25 @@ pub enum MpcError {
          plans with the condensed solver (solver condensed or auto)"
     )]
     RiccatiPlanar,
+    /// MPC through the vessel's thrust in the spatial model: the thrust drives the vessel's
+    /// surge along z, and its plan is written in the planar model.
+    #[error(
+        "MPC through the vessel's thrust plans in the planar model only (loads, current and \
+         waves along z)"
+    )]
+    ThrustSpatial,
+    /// A plan through the vessel's thrust on a model whose step is not the plant's (the plan
+    /// starts from the plant's state one step back).
+    #[error("MPC through the vessel's thrust plans at the plant's step h = {plant} s, the model's is {model} s")]
+    ThrustStep {
+        /// The model's step \[s\].
+        model: f64,
+        /// The plant's step \[s\].
+        plant: f64,
+    },
+    /// `forecast = "none"` on a scene without `[loads.waves]`: there is no sea to leave out.
+    #[error("forecast \"none\" leaves the waves out of the plan: the scene has no [loads.waves]")]
+    ForecastWithoutSea,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -115,6 +134,8 @@ impl MpcError {
             MpcError::PastEnd { .. } => "steps",
             MpcError::Value(v) => v.argument(),
             MpcError::RiccatiPlanar => "solver",
+            MpcError::ThrustSpatial | MpcError::ThrustStep { .. } => "model",
+            MpcError::ForecastWithoutSea => "forecast",
         }
     }
 }

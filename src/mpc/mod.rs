@@ -77,6 +77,54 @@
 //! Tested in tests/ocp/ocp_spatial.rs: the closed loop of a scene turned by 45° about the beam's
 //! axis is the planar closed loop turned (c_sum to 10⁻⁹, forces to 10⁻⁸ N), with either solver.
 //!
+//! # MPC through the vessel's thrust
+//! In a scene whose control is the thrust F on the vessel ([`crate::scene::Thrust`]: the top
+//! follows the vessel's surge, (m + m_a) ẍ_v = F − c ẋ_v) [`Mpc`] plans thrust *commands*, one
+//! per control interval, and the plant applies them through its thrusters ([`Plant`], "The
+//! vessel under thrust"): the command clipped to ±F_max, the thrust moved toward it by at most
+//! Ḟ_max h per step. The structured Gauss-Newton solvers above cannot take this problem (their
+//! minimal coordinates cannot hold a prescribed tip, [`crate::error::OcpError::UnsupportedTip`]),
+//! so a re-plan is solved another way, exactly:
+//! - **The plan models the thrusters** (src/mpc/thrust.rs): its per-step thrusts are the
+//!   plant's clipping of the commands, F_i = F_{i−1} + clamp(clamp(θ_j, ±F_max) − F_{i−1},
+//!   ±Ḟ_max h), so the rate bound is respected by the plant's clipping and the plan predicts
+//!   that clipping exactly (no penalty keeps the plan inside; the commands are boxed to ±F_max).
+//!   A command beyond what the rate lets the thrust reach within its interval changes no thrust
+//!   when moved: a penalty σ Σ_j (θ_j − F_{end of j})², zero for a reached command, removes that
+//!   flat direction without changing the optimal thrusts.
+//! - **The gradient is exact**: the horizon's moment objective over the per-step thrusts is the
+//!   library's generic control problem ([`ControlProblem`](crate::ControlProblem) with one
+//!   control per step, the path the best constant thrust takes), its gradient by the discrete
+//!   adjoint through RATTLE and the vessel's surge; the thrusters' map is transposed by hand
+//!   (∂F_i/∂θ_j = 1 where the command is reached, ∂F_i/∂F_{i−1} = 1 where the rate clips).
+//! - **The step is a bounded L-BFGS** ([`crate::optimize::minimize`], `Method::Lbfgs` with the
+//!   box ±F_max) with a fixed budget per re-plan ([`MpcOptions::thrust_iterations`], default 5;
+//!   the first plan [`MpcOptions::first_iterations`]), warm-started from the previous plan
+//!   shifted by one interval: a real-time iteration in the sense above. (A Gauss-Newton step on
+//!   dual-number sensitivities of the moments to the few commands would model the curvature
+//!   better; it is not written.)
+//! - **The start**: the plant re-takes the step into t_k with the thrust F_k the new command
+//!   gives, and that thrust enters both the vessel's velocity and the riser's momentum at t_k.
+//!   The plan therefore starts one step back, from the plant's state at t_{k−1}
+//!   ([`Observation::previous_state`]) with its thrust F_{k−1} fixed, and its first step is the
+//!   plant's re-taken step: a re-plan is exactly the tail of the run it continues, and with a
+//!   perfect model and the horizon to the end the closed loop reproduces the open-loop optimum
+//!   (tests/mpc_vessel.rs).
+//!
+//! A thrust plan runs on the model scene at the plant's step (a reduced planning model keeps
+//! no held tip: [`MpcOptions::plan_pendulums`] is refused for it), in the planar model.
+//!
+//! # What the plan knows
+//! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on
+//! the model scene's sea as it is (with a perfect model, the plant's own future); `none` plans
+//! on a calm sea, the model scene without `[loads.waves]`, from the observed state. Calm rather
+//! than "the present kinematics frozen": a wave's water velocity reverses within half a period
+//! (4 s at T_p = 8 s), so holding today's velocity over a 20 s horizon predicts a steady drag
+//! the sea never applies, while the calm sea predicts none of the future load and keeps the
+//! motion the waves have already caused (it is in the observed state). Without waves the
+//! vessel's wave-frequency motion is gone from the plan too, and the plan's vessel starts from
+//! the observed position and velocity. The plant always runs the true sea.
+//!
 //! # Which solver re-plans ([`MpcSolver`])
 //! A 3 s horizon is 300 steps but only 30 decisions. The Riccati solver linearises every step
 //! (21 dual-number directions per step for n = 10, then several Riccati passes over 300
@@ -175,7 +223,9 @@ pub mod planning;
 mod plant;
 pub mod prediction;
 mod receding;
+mod thrust;
 
+pub use crate::scene::Forecast;
 pub use baselines::{
     pd_closed_loop_cost, pd_closed_loop_cost_spatial, ConstantForce, NoControl, PdLaw, PdTuning,
     SpatialConstantForce, SpatialPdLaw,
@@ -228,6 +278,12 @@ pub struct Observation<'a, const DIM: usize = 2> {
     pub moment_rate_x: f64,
     /// The x component of the control held so far (N; 0 in the planar model).
     pub control_x: f64,
+    /// The state at t_{k−1}, from which the plant re-takes the step into t_k with the control
+    /// decided now ([`Plant::previous_state`]); `None` at k = 0.
+    pub previous_state: Option<&'a State<f64, DIM>>,
+    /// The control applied at t_{k−1} (N; 0 at k = 0): the thrust of the step into t_k's first
+    /// half in a scene whose control is the thrust on the vessel.
+    pub previous_control: f64,
 }
 
 /// A feedback law: one force per control interval from what it observes.
@@ -452,6 +508,8 @@ fn closed_loop<const DIM: usize>(
             moment_x,
             moment_rate_x,
             control_x: plant.control_x(),
+            previous_state: plant.previous_state(),
+            previous_control: plant.previous_control(),
         };
         let clock = Instant::now();
         let u = controller.decide(&obs)?;

@@ -210,6 +210,21 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         (self.before_kick_at == Some(self.k)).then_some(&self.before_kick)
     }
 
+    /// The state at t_{k−1}, from which [`Plant::set_control`] re-takes the step into t_k;
+    /// `None` at k = 0.
+    pub fn previous_state(&self) -> Option<&State<D, DIM>> {
+        (self.k > 0).then_some(&self.prev)
+    }
+
+    /// The control applied at t_{k−1} (zero at k = 0).
+    pub fn previous_control(&self) -> D {
+        if self.k == 0 {
+            D::zero()
+        } else {
+            self.u_prev
+        }
+    }
+
     /// The model.
     pub fn chain(&self) -> &Chain<D, DIM> {
         Stepper::chain(&self.stepper)

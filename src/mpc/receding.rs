@@ -2,12 +2,14 @@
 //! Riccati) from the observed state, warm-started from the previous plan.
 
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
+use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
-use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
+use crate::adjoint::{BendingObjective, ControlProblem, PerStepControl, PiecewiseControl};
 use crate::error::{MpcError, Requirement, Result, ValueError};
 use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
-use crate::scene::{Control, ControlKind, ObjectiveKind, Scene};
+use crate::optimize::{minimize, Bounds, Method, OptimOptions};
+use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Scene};
 use crate::steppers::rattle::State;
 
 /// How far a plan looks ahead.
@@ -97,6 +99,13 @@ pub struct MpcOptions {
     /// weight and the rate penalty are rescaled so that the plan minimises the plant's
     /// objective in the model's units ([`super::planning`], "The objective").
     pub plan_step: Option<f64>,
+    /// What the plan knows of the sea ahead. Default [`Forecast::Perfect`].
+    pub forecast: Forecast,
+    /// Iterations of the bounded L-BFGS of a re-plan through the vessel's thrust (a scene whose
+    /// control is the thrust: [`crate::mpc`], "MPC through the vessel's thrust"; each costs
+    /// about one simulation and one adjoint sweep of the horizon, more when its line search
+    /// backtracks). Default 5; the first plan takes [`MpcOptions::first_iterations`].
+    pub thrust_iterations: usize,
 }
 
 impl Default for MpcOptions {
@@ -112,6 +121,8 @@ impl Default for MpcOptions {
             ocp: OcpOptions::default().with_bound(5.0),
             plan_pendulums: None,
             plan_step: None,
+            forecast: Forecast::Perfect,
+            thrust_iterations: 5,
         }
     }
 }
@@ -149,6 +160,19 @@ pub struct Mpc<const DIM: usize = 2> {
     /// solver's relative test stopped a plan at a capped projected gradient
     /// ([`capped_convergence`]).
     budget_only: bool,
+    /// The plan through the vessel's thrust (a thrust scene), `None` otherwise.
+    thrust: Option<ThrustState>,
+}
+
+/// What a controller through the vessel's thrust keeps between re-plans.
+#[derive(Clone, Debug)]
+struct ThrustState {
+    actuator: Actuator,
+    /// The per-step problem of the last horizon length (in steps), cloned and started from
+    /// each observation.
+    template: Option<(usize, ControlProblem<PerStepControl, BendingObjective>)>,
+    /// The last re-plan's result.
+    last: Option<crate::optimize::OptimResult>,
 }
 
 impl Mpc {
@@ -206,6 +230,7 @@ impl<const DIM: usize> Mpc<DIM> {
         for (name, v) in [
             ("iterations", options.iterations),
             ("first_iterations", options.first_iterations),
+            ("thrust_iterations", options.thrust_iterations),
         ] {
             ValueError::check_count(name, v).map_err(MpcError::from)?;
         }
@@ -214,6 +239,24 @@ impl<const DIM: usize> Mpc<DIM> {
             .map_err(MpcError::from)?;
         options.objective.check()?;
         let mut model = model.clone();
+        if options.forecast == Forecast::None {
+            if model.loads.waves.is_none() {
+                return Err(MpcError::ForecastWithoutSea.into());
+            }
+            model.loads.waves = None;
+        }
+        let thrust = match model.thrust() {
+            Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
+            Some(t) => Some(ThrustState {
+                actuator: Actuator {
+                    bound: t.bound,
+                    change: t.rate_bound * model.time.step,
+                },
+                template: None,
+                last: None,
+            }),
+            None => None,
+        };
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);
         model.control = Some(Control {
             node,
@@ -236,6 +279,7 @@ impl<const DIM: usize> Mpc<DIM> {
             planning,
             record: None,
             budget_only: false,
+            thrust,
         })
     }
 
@@ -489,18 +533,120 @@ fn capped_convergence(r: &OcpResult, opts: &OcpOptions) -> bool {
         && r.projected_gradient_norm > CAPPED_STEP * width
 }
 
+impl Mpc {
+    /// A re-plan through the vessel's thrust ([`crate::mpc`], "MPC through the vessel's
+    /// thrust"): the commands of the horizon by the bounded L-BFGS on the exact adjoint
+    /// gradient, from the previous plan shifted by one interval, within the iteration budget.
+    fn replan_thrust(&mut self, obs: &Observation<'_>) -> Result<()> {
+        let pieces = self.horizon_pieces(obs)?;
+        if (obs.h - self.model.time.step).abs() > 1e-12 * obs.h {
+            return Err(MpcError::ThrustStep {
+                model: self.model.time.step,
+                plant: obs.h,
+            }
+            .into());
+        }
+        // From t_{k−1} with its thrust fixed (the plant re-takes the step into t_k with the
+        // command decided now), or from rest at t = 0.
+        let (lead, start) = match obs.previous_state {
+            Some(prev) if obs.k > 0 => (1, Some(prev)),
+            _ => (0, None),
+        };
+        let steps = lead + pieces * self.model_steps;
+        let record = self.record_chain(obs, pieces + 1)?;
+        let state = self.thrust.as_mut().expect("a thrust controller");
+        if state.template.as_ref().map(|t| t.0) != Some(steps) {
+            let mut scene = self.model.clone();
+            scene.time.steps = steps;
+            hold_series_past_end(&mut scene);
+            let objective = BendingObjective {
+                kind: self.options.objective,
+                effort: self.options.effort,
+            };
+            let problem = ControlProblem::new(&scene, PerStepControl { steps }, objective)?
+                .with_chain(record);
+            state.template = Some((steps, problem));
+        }
+        let template = &state.template.as_ref().expect("set above").1;
+        if template.chain().n() != obs.state.q.len() {
+            return Err(MpcError::ModelSize {
+                model: template.chain().n(),
+                plant: obs.state.q.len(),
+            }
+            .into());
+        }
+        let problem = match start {
+            Some(prev) => template
+                .clone()
+                .starting_from(prev.clone(), (obs.k - 1) as f64 * obs.h)?,
+            None => template.clone(),
+        };
+        let actuator = state.actuator;
+        self.warm_start(pieces);
+        for w in &mut self.warm {
+            *w = w.clamp(-actuator.bound, actuator.bound);
+        }
+        let mut plan = ThrustPlan {
+            problem: &problem,
+            actuator,
+            m: self.model_steps,
+            lead,
+            before: obs.previous_control,
+            pieces,
+            sigma: 0.0,
+        };
+        // σ: the penalty of a command a whole F_max away from its thrust weighs 10⁻³ of the
+        // warm start's moment objective (any σ > 0 leaves the optimal thrusts as they are).
+        let (u0, _) = plan.thrusts(&self.warm);
+        let j0 = problem.value(&u0)?;
+        plan.sigma = 1e-3 * j0.abs() / (pieces as f64 * actuator.bound * actuator.bound);
+        let opts = OptimOptions {
+            method: Method::Lbfgs,
+            max_iters: if self.decisions == 0 {
+                self.options.first_iterations
+            } else {
+                self.options.thrust_iterations
+            },
+            bounds: Some(Bounds::symmetric(actuator.bound)?),
+            first_step: 0.01 * actuator.bound,
+            trust_radius: 0.1 * actuator.bound,
+            max_trust_radius: actuator.bound,
+            polish_steps: 0,
+            ..OptimOptions::default()
+        };
+        let r = minimize(&plan, &self.warm, &opts)?;
+        self.plan.clone_from(&r.theta);
+        let state = self.thrust.as_mut().expect("a thrust controller");
+        state.last = Some(r);
+        self.decisions += 1;
+        Ok(())
+    }
+
+    /// The last re-plan's result through the vessel's thrust (`None` for a force control).
+    pub fn last_thrust_result(&self) -> Option<&crate::optimize::OptimResult> {
+        self.thrust.as_ref().and_then(|t| t.last.as_ref())
+    }
+}
+
 impl Controller for Mpc {
     fn name(&self) -> String {
         "mpc".into()
     }
 
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
-        self.replan(obs)?;
+        if self.thrust.is_some() {
+            self.replan_thrust(obs)?;
+        } else {
+            self.replan(obs)?;
+        }
         Ok(self.plan[0])
     }
 
     fn last_iterations(&self) -> Option<usize> {
-        self.last.as_ref().map(|r| r.iterations)
+        match &self.thrust {
+            Some(t) => t.last.as_ref().map(|r| r.iterations),
+            None => self.last.as_ref().map(|r| r.iterations),
+        }
     }
 }
 

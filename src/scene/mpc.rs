@@ -29,6 +29,39 @@ impl MpcPlanObjective {
     }
 }
 
+/// What the plan knows of the sea ahead (`[mpc] forecast`, [`crate::mpc`] "What the plan
+/// knows"). The plant always runs the true sea.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Forecast {
+    /// The model scene's sea as it is: with a perfect model, the plant's own future waves.
+    #[default]
+    Perfect,
+    /// No future waves: the plan runs on a calm sea (the model scene without `[loads.waves]`,
+    /// so without the waves' loads and the vessel's wave-frequency motion; the current, the
+    /// point loads and the mean offset kept), from the observed state, which carries the
+    /// motion the waves have caused up to now.
+    None,
+}
+
+impl Forecast {
+    /// The name in the scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Forecast::Perfect => "perfect",
+            Forecast::None => "none",
+        }
+    }
+
+    /// The forecast of a name ([`Forecast::name`]); `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "perfect" => Some(Forecast::Perfect),
+            "none" => Some(Forecast::None),
+            _ => None,
+        }
+    }
+}
+
 /// The `[mpc]` table (module docs): `None` for a key not given.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MpcTable {
@@ -50,10 +83,12 @@ pub struct MpcTable {
     pub pd_training: Option<f64>,
     /// `objective`: what MPC plans on (`"power"` or `"sum"`).
     pub objective: Option<MpcPlanObjective>,
+    /// `forecast`: what MPC's plan knows of the sea ahead (`"perfect"` or `"none"`).
+    pub forecast: Option<Forecast>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 9] = [
+pub const MPC_KEYS: [&str; 10] = [
     "interval",
     "horizon",
     "iterations",
@@ -63,6 +98,7 @@ pub const MPC_KEYS: [&str; 9] = [
     "plan_step",
     "pd_training",
     "objective",
+    "forecast",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
@@ -89,6 +125,8 @@ pub struct MpcSettings {
     pub pd_training: Option<f64>,
     /// What MPC plans on (default: the command's own, see the type's docs).
     pub objective: Option<MpcPlanObjective>,
+    /// What MPC's plan knows of the sea ahead (default [`Forecast::Perfect`]).
+    pub forecast: Forecast,
 }
 
 impl MpcSettings {
@@ -179,6 +217,7 @@ impl MpcTable {
             plan_step: self.plan_step.or(t.plan_step),
             pd_training: self.pd_training.or(t.pd_training),
             objective: self.objective.or(t.objective),
+            forecast: self.forecast.or(t.forecast).unwrap_or_default(),
         }
     }
 
@@ -194,6 +233,7 @@ impl MpcTable {
             "plan_step" => self.plan_step.is_some(),
             "pd_training" => self.pd_training.is_some(),
             "objective" => self.objective.is_some(),
+            "forecast" => self.forecast.is_some(),
             _ => false,
         }
     }
@@ -227,6 +267,8 @@ pub(super) struct RawMpc {
     pd_training: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     objective: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    forecast: Option<String>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -263,6 +305,7 @@ impl RawMpc {
             plan_step: t.plan_step,
             pd_training: t.pd_training,
             objective: t.objective.map(|o| o.name().to_string()),
+            forecast: t.forecast.map(|f| f.name().to_string()),
         }
     }
 
@@ -302,6 +345,18 @@ impl RawMpc {
                 ))
             }
         };
+        let forecast = self
+            .forecast
+            .as_deref()
+            .map(|f| {
+                Forecast::from_name(f).ok_or_else(|| {
+                    SceneError::invalid(
+                        "mpc.forecast",
+                        format!("unknown forecast `{f}` (one of perfect, none)"),
+                    )
+                })
+            })
+            .transpose()?;
         Ok(MpcTable {
             interval: positive("interval", self.interval)?,
             horizon: positive("horizon", self.horizon)?,
@@ -312,6 +367,7 @@ impl RawMpc {
             plan_step: positive("plan_step", self.plan_step)?,
             pd_training: positive("pd_training", self.pd_training)?,
             objective,
+            forecast,
         })
     }
 }

@@ -335,9 +335,9 @@ fn closed_loop_thrust_respects_its_bound_and_rate_at_every_step() {
 
 /// The best constant thrust (by the adjoint gradient, the structured solvers refusing the
 /// vessel's tip) lowers c_sum below no thrust on a riser pushed by a point load; the
-/// receding-horizon controller refuses the vessel's tip with a typed error.
+/// receding-horizon controller in the spatial model refuses the thrust with a typed error.
 #[test]
-fn constant_thrust_lowers_the_moment_and_mpc_refuses_typed() {
+fn constant_thrust_lowers_the_moment_and_spatial_mpc_refuses_typed() {
     let s = scene(10.0, 100);
     let (c, r) = mpc::ConstantForce::best_thrust(&s, 3.0, 0.0).unwrap();
     let problem = ControlProblem::new(
@@ -356,12 +356,11 @@ fn constant_thrust_lowers_the_moment_and_mpc_refuses_typed() {
     );
     assert!(r.objective < none, "J {} vs {none}", r.objective);
     assert!(c.u.abs() <= 3.0);
-    let mut short = s.clone();
-    short.time.steps = 10;
-    let e = mpc::Mpc::new(&short, 0.05, mpc::MpcOptions::default())
-        .and_then(|mut m| mpc::run_closed_loop(&short, 0.05, &mut m).map(|_| ()));
+    // MPC plans through the thrust in the planar model (tests/mpc_vessel.rs); the spatial
+    // model's is refused, typed.
+    let e = mpc::Mpc::spatial(&s, 0.05, mpc::MpcOptions::default()).map(|_| ());
     assert!(
-        matches!(e, Err(Error::Ocp(error::OcpError::UnsupportedTip { .. }))),
+        matches!(e, Err(Error::Mpc(mpc::MpcError::ThrustSpatial))),
         "{e:?}"
     );
 }

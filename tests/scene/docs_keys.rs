@@ -425,6 +425,7 @@ fn every_documented_key_is_read() {
         ("mpc", "plan_step", "0.02"),
         ("mpc", "pd_training", "1.0"),
         ("mpc", "objective", "\"sum\""),
+        ("mpc", "forecast", "\"none\""),
         ("design", "max_iterations", "7"),
         ("design", "tolerance", "1e-3"),
         ("design.parameter", "name", "\"beam.tip_stiffness\""),

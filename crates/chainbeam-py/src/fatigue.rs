@@ -87,6 +87,8 @@ pub struct Settings {
     plan_step: Option<f64>,
     pd_training: Option<f64>,
     mpc_objective: Option<String>,
+    /// `forecast` ("perfect" or "none"; `None`: not given).
+    forecast: Option<String>,
     spin_up: f64,
     /// The record counted after the spin-up in a study \[s\] (`None`: 3 hours, the command
     /// line's `--record` default).
@@ -133,6 +135,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             plan_step: item(obj, "plan_step", NUMBER)?,
             pd_training: item(obj, "pd_training", NUMBER)?,
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
+            forecast: item(obj, "forecast", "\"perfect\" or \"none\"")?,
             spin_up,
             record: item(obj, "record", NUMBER)?,
             seeds: item(obj, "seeds", COUNT)?,
@@ -221,6 +224,15 @@ impl Settings {
                 ))
             }
         };
+        let forecast = match self.forecast.as_deref() {
+            None => None,
+            Some(name) => Some(chainbeam::scene::Forecast::from_name(name).ok_or_else(|| {
+                Failure::argument(
+                    "forecast",
+                    format!("unknown forecast {name:?}; expected \"perfect\" or \"none\""),
+                )
+            })?),
+        };
         let given = MpcTable {
             interval: self.interval,
             horizon: self.horizon,
@@ -231,6 +243,7 @@ impl Settings {
             plan_step: self.plan_step,
             pd_training: self.pd_training,
             objective,
+            forecast,
         };
         Ok(Resolved {
             given,
@@ -265,6 +278,7 @@ impl Settings {
                 ocp: OcpOptions::default().with_bound(s.bound),
                 plan_pendulums: s.plan_pendulums,
                 plan_step: s.plan_step,
+                forecast: s.forecast,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,

@@ -14,7 +14,7 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
-use chainbeam::scene::{MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
+use chainbeam::scene::{Forecast, MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
 use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -142,6 +142,21 @@ pub struct MpcFlags {
     /// mpc.plan_step, else the model's time.step].
     #[arg(long, value_name = "S")]
     pub plan_step: Option<f64>,
+    /// What MPC's plan knows of the sea ahead: `perfect` = the model scene's waves, `none` = a
+    /// calm sea beyond the observed state (the plant always runs the true sea) [default:
+    /// mpc.forecast, else perfect].
+    #[arg(long, value_name = "KIND")]
+    pub forecast: Option<ForecastArg>,
+}
+
+/// `--forecast`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ForecastArg {
+    /// the model scene's waves ahead
+    Perfect,
+    /// no waves ahead: the plan runs on a calm sea from the observed state
+    None,
 }
 
 impl MpcFlags {
@@ -156,6 +171,10 @@ impl MpcFlags {
             effort: self.effort,
             plan_pendulums: self.plan_pendulums,
             plan_step: self.plan_step,
+            forecast: self.forecast.map(|f| match f {
+                ForecastArg::Perfect => Forecast::Perfect,
+                ForecastArg::None => Forecast::None,
+            }),
             ..MpcTable::default()
         }
     }
@@ -293,6 +312,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         },
         plan_pendulums: s.plan_pendulums,
         plan_step: s.plan_step,
+        forecast: s.forecast,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);

@@ -318,6 +318,7 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
             ocp: OcpOptions::default().with_bound(r.bound),
             plan_pendulums: r.plan_pendulums,
             plan_step: r.plan_step,
+            forecast: r.forecast,
             ..MpcOptions::default()
         },
         pd_training: r.pd_training,

@@ -77,6 +77,11 @@ pub enum Parameter {
     /// The soil's p-y modulus at the mudline E₀ \[N/m²\] (`[soil] modulus`): every node's lateral
     /// spring k_i = E₀ aᵢ + E₁ bᵢ is affine in it (docs/conventions.md "Soil springs").
     SoilModulus,
+    /// The spring k_{j+1} of interior joint `j` alone (1 ≤ j ≤ n − 1, the joint between
+    /// pendulums j and j + 1, 1-based pendulums): a stack-up's flex joint away from the ends
+    /// (`[[stackup.flex_joint]]`), whose torque −k_{j+1} s(q_{j}·q_{j+1}) it scales. The end
+    /// springs are [`Parameter::BaseStiffness`] and [`Parameter::TipStiffness`].
+    JointStiffness(usize),
 }
 
 /// Statistics of one step.

@@ -30,6 +30,12 @@ plain, over a scatter diagram and with controllers, its cells optionally spread 
 line's numbers; :func:`reduced_north_atlantic` is the published scatter diagram (IACS Rec. 34)
 of the headline as a DataFrame to pass as ``scatter``. The controllers' settings default to the
 scene's ``[mpc]`` table, as on the command line.
+
+Design for fatigue (:func:`design`: ``chainbeam design``'s JSON as a dict): the exact
+sensitivities of the wellhead's annual damage over a scatter diagram with respect to the
+scene's ``[design]`` parameters, and the bounded design that maximises its life, the cells of
+every evaluation optionally spread over an executor (``design(scene, scatter=...,
+executor=client)``) with the same numbers bit for bit.
 """
 
 from __future__ import annotations
@@ -44,6 +50,7 @@ from ._api import (
     simulate,
 )
 from ._chainbeam import Scene, __version__
+from ._design import design
 from ._fatigue import fatigue, reduced_north_atlantic
 from ._fatigue_result import FatigueResult
 from ._errors import (
@@ -66,6 +73,7 @@ __all__ = [
     "mpc",
     "fatigue",
     "reduced_north_atlantic",
+    "design",
     "sweep",
     "to_parquet",
     "Trajectory",

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __version__: str
-__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "gradient_wrt", "_cancel_running", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "_read_scatter", "__version__"]
+__all__ = ["Scene", "_scene_from_state", "simulate", "_time_library_simulate", "_LibraryTrajectory", "gradient", "gradient_wrt", "_cancel_running", "optimize", "mpc", "_fatigue", "_fatigue_cell", "_fatigue_combine", "_reduced_north_atlantic", "_read_scatter", "_design", "_design_cell", "__version__"]
 
 @final
 class Scene:
@@ -133,3 +133,23 @@ def _fatigue_combine(
 ) -> dict[str, Any]: ...
 def _reduced_north_atlantic() -> list[tuple[float, float, float]]: ...
 def _read_scatter(path: str) -> list[tuple[float, float, float, float | None]]: ...
+def _design(
+    scene: Scene,
+    scatter: list[_Cell] | None,
+    sensitivities: bool,
+    record: float | None,
+    spin_up: float,
+    runner: Callable[[list[str], list[float], bool], list[tuple[float, float, float, list[float]]]]
+    | None = None,
+    on_iterate: Callable[[dict[str, Any]], Any] | None = None,
+) -> str: ...
+def _design_cell(
+    scene: Scene,
+    scatter: list[_Cell] | None,
+    index: int,
+    names: list[str],
+    values: list[float],
+    gradient: bool,
+    record: float | None,
+    spin_up: float,
+) -> tuple[float, float, float, list[float]]: ...

@@ -7,7 +7,8 @@ a closed loop, iterations of an optimiser) and the bindings hand the count to th
 calling thread about every 50 ms while the computation runs with the GIL released. What a unit is
 depends on the call: ``fatigue`` counts (cell, controller) runs, ``mpc`` control decisions of
 every closed loop it runs, ``optimize`` iterations out of ``max_iters`` (a single start; with
-``starts`` > 1, starts), ``sweep`` cases.
+``starts`` > 1, starts), ``sweep`` cases, ``design`` iterations out of ``[design]
+max_iterations`` (its bar also shows each iterate's damage, life, gradient norm and design).
 """
 
 from __future__ import annotations
@@ -45,6 +46,9 @@ class _Plain:
         print(f"{self.desc}: {done}/{total} {self.unit}{pct}", file=sys.stderr, flush=True)
         self.shown = self.state
 
+    def note(self, text: str) -> None:
+        print(f"{self.desc}: {text}", file=sys.stderr, flush=True)
+
     def close(self) -> None:
         if self.shown != self.state:
             self._line()
@@ -61,6 +65,9 @@ class _Tqdm:
             self.bar.total = total
         self.bar.n = done
         self.bar.refresh()
+
+    def note(self, text: str) -> None:
+        self.bar.set_postfix_str(text, refresh=True)
 
     def close(self) -> None:
         self.bar.close()
@@ -99,6 +106,12 @@ class Reporter:
                 "InvalidArgument",
                 "progress",
             )
+
+    def note(self, text: str) -> None:
+        """Shows ``text`` (a design iterate's numbers) on the bar: tqdm's postfix, or a line on
+        standard error; nothing for a callable."""
+        if self._bar is not None:
+            self._bar.note(text)
 
     def __enter__(self) -> "Reporter":
         return self

@@ -29,7 +29,9 @@
 //! spring k₁, `beam.base_stiffness`, which is also the k₁ of the wellhead moment), the upper
 //! flex joint's (the tip spring, `beam.tip_stiffness`), and the soil's p-y modulus at the mudline
 //! (`soil.modulus`), an uncertainty by default ([`Role::Uncertainty`]): its sensitivity is
-//! reported, it is not optimised. Each maps to one [`crate::Parameter`] whose exact adjoint
+//! reported, it is not optimised; and, in a scene with a `[stackup]`, the rotational stiffness
+//! of each named flex joint (`stackup.flex_joint.<name>.stiffness`: the joint spring where it
+//! sits, base, tip or interior). Each maps to one [`crate::Parameter`] whose exact adjoint
 //! gradient the library has; the scene's value is the model's value (the chain is built from
 //! the scene with the parameter set).
 //!
@@ -53,12 +55,14 @@
 //! (`[design] tolerance`), after `max_iterations`, or when a step no longer changes ln D_y.
 
 mod optimise;
+mod report;
 mod scatter;
 
 pub use optimise::{
-    optimise, sensitivities, DesignIterate, DesignOptions, DesignOutcome, IterateCallback,
-    Sensitivity,
+    optimise, sensitivities, sensitivities_with, CellRunner, DesignIterate, DesignOptions,
+    DesignOutcome, IterateCallback, Sensitivity,
 };
+pub use report::{DesignReport, ReportCell, ReportIterate, ReportPoint};
 pub use scatter::{CellGradient, DesignPoint, DesignStudy, Execution, ScatterGradient, Want};
 
 use thiserror::Error;
@@ -83,7 +87,7 @@ pub enum DesignError {
     #[error("{name}: {reason}")]
     NotInModel {
         /// The parameter's name.
-        name: &'static str,
+        name: String,
         /// Why.
         reason: &'static str,
     },

@@ -15,7 +15,7 @@ use crate::optimize::observers::ObservedState;
 use crate::optimize::{Method, Minimizer, OptimOptions, OptimProblem};
 
 /// The sensitivity of the annual damage to one parameter at a design.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Sensitivity {
     /// The parameter.
     pub parameter: DesignParameter,
@@ -53,14 +53,58 @@ pub struct DesignIterate {
 /// A callback that receives each iterate ([`DesignOptions::on_iterate`]).
 pub type IterateCallback = Arc<dyn Fn(&DesignIterate) + Send + Sync>;
 
+/// A caller's runner of the cells of one evaluation: every cell of the study at the design, by
+/// [`DesignStudy::run_cell`] wherever the caller likes (the Python package sends each to an
+/// executor: a process pool, a Dask cluster), returned in the diagram's order. The study
+/// combines them ([`DesignStudy::combine`]), so the result is the same bit for bit as
+/// [`Execution::Serial`]'s when each cell is `run_cell`'s.
+pub type CellRunner = Arc<
+    dyn Fn(&DesignPoint<'_>, Want) -> Result<Vec<super::CellGradient>, DesignError> + Send + Sync,
+>;
+
 /// How the optimiser runs its cells and reports its iterates.
 #[derive(Clone, Default)]
 pub struct DesignOptions {
-    /// Where the cells of every evaluation run.
+    /// Where the cells of every evaluation run (unless `runner` is given).
     pub execution: Execution,
     /// Called with every iterate as it is accepted (the command line prints it to stderr); the
     /// library prints nothing.
     pub on_iterate: Option<IterateCallback>,
+    /// The caller's runner of the cells of every evaluation, instead of `execution`.
+    pub runner: Option<CellRunner>,
+}
+
+impl DesignOptions {
+    /// D_y and ∂D_y/∂θ at `point`: the cells by `runner` when given (checked by
+    /// [`DesignStudy::check`] first, their number checked after, combined by
+    /// [`DesignStudy::combine`]), else [`DesignStudy::evaluate`] on `execution`.
+    ///
+    /// # Errors
+    /// [`DesignStudy::evaluate`]'s, or the runner's; [`DesignError::BadValues`] when the runner
+    /// returns another number of cells than the study has.
+    pub fn evaluate(
+        &self,
+        study: &DesignStudy<'_>,
+        point: &DesignPoint<'_>,
+        want: Want,
+        on_cell: &(dyn Fn() + Sync),
+    ) -> Result<ScatterGradient, DesignError> {
+        let Some(runner) = &self.runner else {
+            return study.evaluate(point, want, self.execution, on_cell);
+        };
+        study.check(point)?;
+        let cells = runner(point, want)?;
+        if cells.len() != study.n_cells() {
+            return Err(DesignError::BadValues {
+                reason: format!(
+                    "the cell runner returned {} cells for a diagram of {}",
+                    cells.len(),
+                    study.n_cells()
+                ),
+            });
+        }
+        DesignStudy::combine(cells)
+    }
 }
 
 /// What [`optimise`] found.
@@ -85,6 +129,9 @@ pub struct DesignOutcome {
     pub converged: bool,
     /// Why the run stopped.
     pub termination: String,
+    /// The cells at the optimised design (their damages: the adjoint sweeps' values that give
+    /// `damage_per_year`), in the diagram's order.
+    pub cells: Vec<super::CellGradient>,
     /// Cell runs in all (the sensitivities' included).
     pub simulations: usize,
     /// Wall-clock time \[s\].
@@ -102,16 +149,32 @@ fn pairs(params: &[DesignParameter], values: &[f64]) -> String {
 }
 
 /// The parameters a sensitivity table covers: the `[design]` table's (every role), or every
-/// [`DesignParameter`] the scene's model has when it has no `[design]`.
+/// [`DesignParameter`] the scene's model has when it has no `[design]` (the stack-up's flex
+/// joints included, those not at an end spring already counted).
 fn table_parameters(study: &DesignStudy<'_>) -> Vec<FreeParameter> {
+    let scene = study.scene;
+    let flex = scene.stackup.iter().flat_map(|st| {
+        st.flex_joints
+            .iter()
+            .map(|f| DesignParameter::FlexJoint(f.name.clone()))
+    });
+    let mut seen = Vec::new();
     match &study.scene.design {
         Some(t) => t.parameters.clone(),
         None => DesignParameter::ALL
             .into_iter()
-            .filter(|p| p.value(study.scene).is_ok())
+            .chain(flex)
+            .filter(|p| p.value(scene).is_ok())
+            .filter(|p| match p.parameter(scene) {
+                Some(q) if !seen.contains(&q) => {
+                    seen.push(q);
+                    true
+                }
+                _ => false,
+            })
             .map(|parameter| FreeParameter {
-                parameter,
                 role: parameter.default_role(),
+                parameter,
                 bounds: None,
             })
             .collect(),
@@ -129,7 +192,7 @@ fn sensitivity_table(
         .zip(values)
         .zip(&g.gradient)
         .map(|((p, &value), &d)| Sensitivity {
-            parameter: p.parameter,
+            parameter: p.parameter.clone(),
             role: p.role,
             value,
             damage_per_year: d,
@@ -149,19 +212,36 @@ pub fn sensitivities(
     execution: Execution,
     on_cell: &(dyn Fn() + Sync),
 ) -> Result<(ScatterGradient, Vec<Sensitivity>), DesignError> {
+    let options = DesignOptions {
+        execution,
+        ..DesignOptions::default()
+    };
+    sensitivities_with(study, &options, on_cell)
+}
+
+/// [`sensitivities`] with the cells run as `options` says ([`DesignOptions::evaluate`]: on
+/// its `execution` or by its `runner`).
+///
+/// # Errors
+/// As [`sensitivities`]; the runner's.
+pub fn sensitivities_with(
+    study: &DesignStudy<'_>,
+    options: &DesignOptions,
+    on_cell: &(dyn Fn() + Sync),
+) -> Result<(ScatterGradient, Vec<Sensitivity>), DesignError> {
     let params = table_parameters(study);
     if params.is_empty() {
         return Err(DesignError::NoDesign {
             reason: "the scene's model has none of the design parameters",
         });
     }
-    let names: Vec<DesignParameter> = params.iter().map(|p| p.parameter).collect();
+    let names: Vec<DesignParameter> = params.iter().map(|p| p.parameter.clone()).collect();
     let values = scene_values(study, &names)?;
     let point = DesignPoint {
         params: &names,
         values: &values,
     };
-    let g = study.evaluate(&point, Want::Gradient, execution, on_cell)?;
+    let g = options.evaluate(study, &point, Want::Gradient, on_cell)?;
     let table = sensitivity_table(&params, &values, &g);
     Ok((g, table))
 }
@@ -265,7 +345,7 @@ struct LogDamage<'a> {
     study: &'a DesignStudy<'a>,
     params: Vec<DesignParameter>,
     transform: Transform,
-    execution: Execution,
+    options: DesignOptions,
     shared: Arc<Shared>,
 }
 
@@ -279,8 +359,8 @@ impl LogDamage<'_> {
             values: theta,
         };
         let g = self
-            .study
-            .evaluate(&point, Want::Gradient, self.execution, &|| {})?;
+            .options
+            .evaluate(self.study, &point, Want::Gradient, &|| {})?;
         self.shared
             .simulations
             .fetch_add(self.study.n_cells(), Ordering::Relaxed);
@@ -421,15 +501,15 @@ pub fn optimise(
         .dff;
     // The start: every [design] parameter's gradient from one sweep per cell.
     let all = table_parameters(study);
-    let names: Vec<DesignParameter> = all.iter().map(|p| p.parameter).collect();
+    let names: Vec<DesignParameter> = all.iter().map(|p| p.parameter.clone()).collect();
     let values = scene_values(study, &names)?;
     let point = DesignPoint {
         params: &names,
         values: &values,
     };
-    let g0 = study.evaluate(&point, Want::Gradient, options.execution, &|| {})?;
+    let g0 = options.evaluate(study, &point, Want::Gradient, &|| {})?;
     let sens = sensitivity_table(&all, &values, &g0);
-    let free: Vec<DesignParameter> = choices.iter().map(|c| c.0).collect();
+    let free: Vec<DesignParameter> = choices.iter().map(|c| c.0.clone()).collect();
     let bounds: Vec<(f64, f64)> = choices.iter().map(|c| c.1).collect();
     let index: Vec<usize> = free
         .iter()
@@ -458,7 +538,7 @@ pub fn optimise(
         study,
         params: free.clone(),
         transform: transform.clone(),
-        execution: options.execution,
+        options: options.clone(),
         shared: Arc::clone(&shared),
     };
     let iterates = Arc::new(Mutex::new(Vec::new()));
@@ -526,6 +606,7 @@ pub fn optimise(
         sensitivities: sens,
         converged: r.converged,
         termination: r.termination.to_string(),
+        cells: last.cells,
         simulations: shared.simulations.load(Ordering::Relaxed),
         seconds: started.elapsed().as_secs_f64(),
     })

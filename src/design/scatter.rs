@@ -155,12 +155,28 @@ impl DesignStudy<'_> {
                 reason: format!("{} values for {} parameters", values.len(), params.len()),
             });
         }
+        let mut lib = Vec::with_capacity(params.len());
         for (i, (p, v)) in params.iter().zip(values).enumerate() {
             p.value(self.scene)
                 .map_err(|reason| DesignError::NotInModel {
                     name: p.name(),
                     reason,
                 })?;
+            let q = p
+                .parameter(self.scene)
+                .ok_or_else(|| DesignError::NotInModel {
+                    name: p.name(),
+                    reason: "the scene's model has no such parameter",
+                })?;
+            if lib.contains(&q) {
+                return Err(DesignError::BadValues {
+                    reason: format!(
+                        "{} is the same spring as another parameter of the design",
+                        p.name()
+                    ),
+                });
+            }
+            lib.push(q);
             if !v.is_finite() {
                 return Err(DesignError::BadValues {
                     reason: format!("{} = {v} is not finite", p.name()),
@@ -266,7 +282,20 @@ impl DesignStudy<'_> {
         let damage =
             WellheadDamage::new(&spec, scene.moment_measure()).map_err(StudyError::from)?;
         let objective = CountedDamage { damage, skip };
-        let lib: Vec<crate::Parameter> = point.params.iter().map(|p| p.parameter()).collect();
+        let lib = point
+            .params
+            .iter()
+            .map(|p| p.parameter(&scene))
+            .collect::<Option<Vec<crate::Parameter>>>()
+            .ok_or_else(|| DesignError::NotInModel {
+                name: point
+                    .params
+                    .iter()
+                    .find(|p| p.parameter(&scene).is_none())
+                    .map(DesignParameter::name)
+                    .unwrap_or_default(),
+                reason: "the scene's model has no such parameter",
+            })?;
         let lib = (want == Want::Gradient).then_some(&lib[..]);
         let (damage, gradient) = if scene.is_spatial() {
             cell_sweep::<3>(&scene, objective, lib)

@@ -13,6 +13,16 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
         match p {
             Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
+            Parameter::JointStiffness(j) => {
+                if !(1..n).contains(&j) || !self.springs.present[j] {
+                    return Err(missing(
+                        p,
+                        "no interior joint with a spring there (1 ≤ j ≤ n − 1; the end springs \
+                         are BaseStiffness and TipStiffness)",
+                    ));
+                }
+                self.springs.k[j] = value;
+            }
             Parameter::BaseStiffness => {
                 if !self.springs.present[0] {
                     return Err(missing(p, "the support has no base spring"));
@@ -141,6 +151,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::BaseStiffness => self.springs.present[0],
             Parameter::TipStiffness => self.springs.present[self.n],
             Parameter::InteriorStiffness => true,
+            Parameter::JointStiffness(j) => (1..self.n).contains(&j) && self.springs.present[j],
             Parameter::Tension => self.tension.is_some(),
             Parameter::JointDamping => self.joint_damping.as_ref().is_some_and(|j| j.is_uniform()),
             Parameter::AxialWeight => self

@@ -42,7 +42,7 @@ impl RawDesign {
                 .parameters
                 .iter()
                 .map(|p| RawDesignParameter {
-                    name: p.parameter.name().to_string(),
+                    name: p.parameter.name(),
                     role: Some(p.role.name().to_string()),
                     lower: p.bounds.map(|b| b.0),
                     upper: p.bounds.map(|b| b.1),
@@ -196,7 +196,7 @@ impl Scene {
 
 /// A physical parameter a fatigue design may change or test (module docs), named by its scene
 /// key.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub enum DesignParameter {
     /// The top tension T \[N\] (`loads.tension`; [`Parameter::Tension`]).
     Tension,
@@ -209,10 +209,22 @@ pub enum DesignParameter {
     /// The soil's p-y modulus at the mudline E₀ \[N/m²\] (`soil.modulus`;
     /// [`Parameter::SoilModulus`]): an uncertainty by default.
     SoilModulus,
+    /// The rotational stiffness \[N·m/rad\] of the stack-up's flex joint of this name
+    /// (`[[stackup.flex_joint]]` `name`), named `stackup.flex_joint.<name>.stiffness` (e.g.
+    /// `stackup.flex_joint.lower flex joint.stiffness`). Its spring is the chain's joint
+    /// spring where the flex joint sits ([`crate::scene::Layout::flex_joints`]): the base spring
+    /// ([`Parameter::BaseStiffness`]), the tip spring ([`Parameter::TipStiffness`]) or an
+    /// interior one ([`Parameter::JointStiffness`]).
+    FlexJoint(String),
 }
 
+/// The prefix and suffix of a flex joint's design parameter name.
+const FLEX_PREFIX: &str = "stackup.flex_joint.";
+const FLEX_SUFFIX: &str = ".stiffness";
+
 impl DesignParameter {
-    /// Every design parameter, in the order of the module docs.
+    /// Every design parameter but the stack-up's flex joints (which a scene names), in the
+    /// order of the module docs.
     pub const ALL: [DesignParameter; 4] = [
         DesignParameter::Tension,
         DesignParameter::BaseStiffness,
@@ -221,18 +233,27 @@ impl DesignParameter {
     ];
 
     /// The scene key that names it (`loads.tension`, `beam.base_stiffness`,
-    /// `beam.tip_stiffness`, `soil.modulus`): its name in `[design]` and in the JSON.
-    pub fn name(self) -> &'static str {
+    /// `beam.tip_stiffness`, `soil.modulus`, `stackup.flex_joint.<name>.stiffness`): its name
+    /// in `[design]` and in the JSON.
+    pub fn name(&self) -> String {
         match self {
-            DesignParameter::Tension => "loads.tension",
-            DesignParameter::BaseStiffness => "beam.base_stiffness",
-            DesignParameter::TipStiffness => "beam.tip_stiffness",
-            DesignParameter::SoilModulus => "soil.modulus",
+            DesignParameter::Tension => "loads.tension".into(),
+            DesignParameter::BaseStiffness => "beam.base_stiffness".into(),
+            DesignParameter::TipStiffness => "beam.tip_stiffness".into(),
+            DesignParameter::SoilModulus => "soil.modulus".into(),
+            DesignParameter::FlexJoint(name) => format!("{FLEX_PREFIX}{name}{FLEX_SUFFIX}"),
         }
     }
 
-    /// The parameter of that name.
+    /// The parameter of that name (a flex joint's whatever its name: the scene it is used with
+    /// must have it, [`DesignParameter::value`]).
     pub fn from_name(name: &str) -> Option<Self> {
+        if let Some(joint) = name
+            .strip_prefix(FLEX_PREFIX)
+            .and_then(|r| r.strip_suffix(FLEX_SUFFIX))
+        {
+            return (!joint.is_empty()).then(|| DesignParameter::FlexJoint(joint.to_string()));
+        }
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
 
@@ -241,32 +262,54 @@ impl DesignParameter {
         Self::ALL
             .iter()
             .map(|p| format!("\"{}\"", p.name()))
+            .chain([format!("\"{FLEX_PREFIX}<name>{FLEX_SUFFIX}\"")])
             .collect::<Vec<_>>()
             .join(", ")
     }
 
     /// Its unit.
-    pub fn unit(self) -> &'static str {
+    pub fn unit(&self) -> &'static str {
         match self {
             DesignParameter::Tension => "N",
-            DesignParameter::BaseStiffness | DesignParameter::TipStiffness => "N·m/rad",
+            DesignParameter::BaseStiffness
+            | DesignParameter::TipStiffness
+            | DesignParameter::FlexJoint(_) => "N·m/rad",
             DesignParameter::SoilModulus => "N/m²",
         }
     }
 
-    /// The library's parameter, whose adjoint gradient this is.
-    pub fn parameter(self) -> Parameter {
-        match self {
+    /// The library's parameter of the scene's model, whose adjoint gradient this is (`None`:
+    /// the scene has no flex joint of that name).
+    pub fn parameter(&self, scene: &Scene) -> Option<Parameter> {
+        Some(match self {
             DesignParameter::Tension => Parameter::Tension,
             DesignParameter::BaseStiffness => Parameter::BaseStiffness,
             DesignParameter::TipStiffness => Parameter::TipStiffness,
             DesignParameter::SoilModulus => Parameter::SoilModulus,
-        }
+            DesignParameter::FlexJoint(_) => {
+                let j = self.flex_joint(scene)?.1;
+                match j {
+                    0 => Parameter::BaseStiffness,
+                    j if j == scene.beam.lengths.len() => Parameter::TipStiffness,
+                    j => Parameter::JointStiffness(j),
+                }
+            }
+        })
+    }
+
+    /// The index in `[[stackup.flex_joint]]` and the chain's joint of a flex joint's parameter.
+    fn flex_joint(&self, scene: &Scene) -> Option<(usize, usize)> {
+        let DesignParameter::FlexJoint(name) = self else {
+            return None;
+        };
+        let st = scene.stackup.as_ref()?;
+        let i = st.flex_joints.iter().position(|f| &f.name == name)?;
+        Some((i, *st.layout.flex_joints.get(i)?))
     }
 
     /// The role it has when `[design]` does not say: the soil modulus is an uncertainty, the
     /// others are design choices.
-    pub fn default_role(self) -> Role {
+    pub fn default_role(&self) -> Role {
         match self {
             DesignParameter::SoilModulus => Role::Uncertainty,
             _ => Role::Design,
@@ -278,7 +321,7 @@ impl DesignParameter {
     /// # Errors
     /// Why the scene's model does not have it (no base or tip spring for its support, no
     /// tension, no `[soil]`).
-    pub fn value(self, scene: &Scene) -> Result<f64, &'static str> {
+    pub fn value(&self, scene: &Scene) -> Result<f64, &'static str> {
         let (base, tip) = scene.beam.support.end_springs();
         match self {
             DesignParameter::Tension if scene.loads.tension > 0.0 => Ok(scene.loads.tension),
@@ -292,12 +335,32 @@ impl DesignParameter {
                 .soil
                 .map(|s| s.modulus)
                 .ok_or("the scene has no [soil] table"),
+            DesignParameter::FlexJoint(_) => match self.flex_joint(scene) {
+                Some((i, _)) => Ok(scene
+                    .stackup
+                    .as_ref()
+                    .map_or(f64::NAN, |st| st.flex_joints[i].stiffness)),
+                None => Err("the scene has no [[stackup.flex_joint]] of that name"),
+            },
         }
     }
 
     /// Sets the parameter's value on the scene (the scene's model then has it: the chain is
-    /// built from these fields). The value is not checked here ([`Scene::validate`] does).
-    pub fn set(self, scene: &mut Scene, value: f64) {
+    /// built from these fields; a flex joint's both in `[[stackup.flex_joint]]` and in the
+    /// beam's spring at its joint). The value is not checked here ([`Scene::validate`] does).
+    pub fn set(&self, scene: &mut Scene, value: f64) {
+        if let Some((i, j)) = self.flex_joint(scene) {
+            if let Some(st) = scene.stackup.as_mut() {
+                st.flex_joints[i].stiffness = value;
+            }
+            let n = scene.beam.lengths.len();
+            match j {
+                0 => scene.beam.base_stiffness = value,
+                j if j == n => scene.beam.tip_stiffness = value,
+                j => scene.beam.stiffness[j - 1] = value,
+            }
+            return;
+        }
         match self {
             DesignParameter::Tension => scene.loads.tension = value,
             DesignParameter::BaseStiffness => scene.beam.base_stiffness = value,
@@ -307,6 +370,7 @@ impl DesignParameter {
                     s.modulus = value;
                 }
             }
+            DesignParameter::FlexJoint(_) => {}
         }
     }
 }
@@ -340,7 +404,7 @@ impl Role {
 
 /// One `[[design.parameter]]`: the parameter, its role, and its bounds (lower, upper) in its
 /// unit for a design choice (`None` for an uncertainty).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FreeParameter {
     /// The parameter.
     pub parameter: DesignParameter,
@@ -377,7 +441,7 @@ impl DesignTable {
     pub fn design_choices(&self) -> Vec<(DesignParameter, (f64, f64))> {
         self.parameters
             .iter()
-            .filter_map(|p| p.bounds.map(|b| (p.parameter, b)))
+            .filter_map(|p| p.bounds.map(|b| (p.parameter.clone(), b)))
             .collect()
     }
 }

@@ -196,6 +196,10 @@ pub struct Layout {
     pub node_inertia: Vec<f64>,
     /// The bending stiffness EI of each pendulum \[N·m²\].
     pub bending_stiffness: Vec<f64>,
+    /// The joint of each flex joint, in `[[stackup.flex_joint]]`'s order: 0 the base spring,
+    /// n the tip spring, 1..n − 1 the spring between pendulums j and j + 1 (the beam's
+    /// `stiffness[j − 1]`).
+    pub flex_joints: Vec<usize>,
 }
 
 /// One uniform stretch of the chain between two forced pendulum ends.
@@ -613,6 +617,7 @@ impl Stackup {
             node_drag: vec![0.0; n],
             node_inertia: vec![0.0; n],
             bending_stiffness: pend.iter().map(|p| p.ei).collect(),
+            flex_joints: Vec::with_capacity(springs.len()),
         };
         let mut y = 0.0;
         for (j, (p, &l)) in pend.iter().zip(&lengths).enumerate() {
@@ -647,6 +652,7 @@ impl Stackup {
         }
         for &(at, k) in springs {
             let j = nearest(&joint_heights, at);
+            layout.flex_joints.push(j);
             match j {
                 0 => base = k,
                 j if j == n => tip = k,

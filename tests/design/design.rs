@@ -196,7 +196,7 @@ fn design_gradient_matches_dual_numbers_cell_by_cell() {
         for (i, p) in PARAMS.iter().enumerate() {
             let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
             chain
-                .set_parameter(p.parameter(), Dual64::new(v[i], 1.0))
+                .set_parameter(p.parameter(&cs).unwrap(), Dual64::new(v[i], 1.0))
                 .unwrap();
             let u = vec![Dual64::from(0.0); steps + 1];
             let d = chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective)

@@ -8,11 +8,12 @@
 //!
 //! Module map: [`scene`] the `Scene` class; [`run`] GIL release, interrupts and rayon pools;
 //! [`errors`] the library's errors as Python exceptions; [`calls`] simulate and gradient;
-//! [`optim`] optimize and mpc; [`fatigue`] the fatigue assessment and studies.
+//! [`optim`] optimize and mpc; [`fatigue`] the fatigue assessment and studies; [`design`] the design for fatigue.
 
 use pyo3::prelude::*;
 
 mod calls;
+mod design;
 mod errors;
 mod fatigue;
 mod optim;
@@ -38,6 +39,8 @@ fn _chainbeam(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fatigue::_fatigue_combine, m)?)?;
     m.add_function(wrap_pyfunction!(fatigue::_reduced_north_atlantic, m)?)?;
     m.add_function(wrap_pyfunction!(fatigue::_read_scatter, m)?)?;
+    m.add_function(wrap_pyfunction!(design::_design, m)?)?;
+    m.add_function(wrap_pyfunction!(design::_design_cell, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -33,6 +33,17 @@ impl<D: Scalar> Springs<D> {
         }
     }
 
+    /// The parameter spring i is read as when `seed` is seeded: [`Parameter::JointStiffness`]
+    /// of an interior joint when that joint's spring alone is seeded, else
+    /// [`Springs::parameter`].
+    #[inline]
+    fn parameter_at(&self, i: usize, seed: Option<Parameter>) -> Parameter {
+        match seed {
+            Some(p @ Parameter::JointStiffness(j)) if j == i => p,
+            _ => self.parameter(i),
+        }
+    }
+
     /// The same springs over another scalar (real parts).
     pub(crate) fn lift<D2: Scalar>(&self) -> Springs<D2> {
         Springs {
@@ -77,7 +88,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for Springs<D> {
         for i in 0..self.k.len() {
             if self.present[i] {
                 let (a, b) = Self::ends(q, i, &e);
-                let k = ctx.param(self.parameter(i), self.k[i]);
+                let k = ctx.param(self.parameter_at(i, ctx.seed), self.k[i]);
                 u += k * arccos_squared(dot(a, b)) * 0.5;
             }
         }
@@ -96,7 +107,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for Springs<D> {
             if x.re() < self.fold_cos {
                 return Err(self.folded(ctx.step, i, x));
             }
-            let ks = ctx.param(self.parameter(i), self.k[i]) * spring_s(x);
+            let ks = ctx.param(self.parameter_at(i, ctx.seed), self.k[i]) * spring_s(x);
             if i > 0 {
                 for d in 0..DIM {
                     out[i - 1][d] -= ks * b[d];
@@ -115,6 +126,7 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for Springs<D> {
         let n = self.k.len() - 1;
         match p {
             Parameter::InteriorStiffness => n > 1,
+            Parameter::JointStiffness(j) => (1..n).contains(&j) && self.present[j],
             Parameter::BaseStiffness => self.present[0],
             Parameter::TipStiffness => self.present[n],
             _ => false,

@@ -109,7 +109,7 @@
 //!   ([`Observation::previous_state`]) with its thrust F_{k−1} fixed, and its first step is the
 //!   plant's re-taken step: a re-plan is exactly the tail of the run it continues, and with a
 //!   perfect model and the horizon to the end the closed loop reproduces the open-loop optimum
-//!   (tests/mpc_vessel.rs).
+//!   (tests/mpc/mpc_vessel.rs).
 //!
 //! A thrust plan runs on the model scene at the plant's step (a reduced planning model keeps
 //! no held tip: [`MpcOptions::plan_pendulums`] is refused for it), in the planar model.

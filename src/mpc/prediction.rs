@@ -25,7 +25,7 @@
 //! chooses wrong forces.
 //!
 //! With n_p = n and h_p = h the map is the identity up to round-off and the plan's rollout
-//! repeats the plant's steps: every error is at round-off level (tests/plan_prediction.rs).
+//! repeats the plant's steps: every error is at round-off level (tests/mpc/plan_prediction.rs).
 //!
 //! # The cost
 //! [`PredictionReport::plant_seconds`] and [`PredictionReport::plan_seconds`] are the wall

@@ -48,7 +48,7 @@
 //! l(q_{k+1}) = Z(t_{k+1}) and L M⁻¹ p_{k+1} = Ż(t_{k+1}), both at the end of the step, where the
 //! locked tip has 0. Each half of the step then stays the adjoint of the other under
 //! k ↔ k + 1, h ↔ −h (the constraint of a position is read at that position's time), so the step
-//! is symmetric and of order 2 (tests/vessel.rs measures it); with Z ≡ 0 it is the fixed-fixed
+//! is symmetric and of order 2 (tests/model/riser_system.rs measures it); with Z ≡ 0 it is the fixed-fixed
 //! step bit for bit.
 //!
 //! **The vessel under thrust** (`[vessel]` thrust keys, [`crate::model::ThrustDrive`]): the top

@@ -4,3 +4,4 @@
 //! run with `cargo test --test design FILE::` (the file name without `.rs`).
 
 mod design;
+mod design_stackup;

@@ -1,6 +1,6 @@
 //! Hot spots along the riser (`[[fatigue.hotspot]]`, `chainbeam::hotspots`, docs/conventions.md
 //! "Hot spots: the joint torque M_j"): the moment at a hot spot is the joint torque k_j θ_j, here
-//! at hot spots that lie on joints (tests/hotspot_interpolation.rs: between joints).
+//! at hot spots that lie on joints (tests/fatigue/hotspot_interpolation.rs: between joints).
 //!
 //! References, each independent of the code under test:
 //! - statics: at equilibrium the spring of joint j balances the moment about node j−1 of every
@@ -41,7 +41,7 @@ fn riser(seed: u64, direction: f64, steps: usize, hotspots: &str) -> String {
 
 /// Three hot spots: the wellhead datum, a riser weld at 20 m (F1, SCF 1.3, DFF 3: on joint 3)
 /// and the top joint at 60 m (the upper flex joint's spring): each on a joint, so each reads that
-/// joint's torque alone (tests/hotspot_interpolation.rs covers hot spots between joints).
+/// joint's torque alone (tests/fatigue/hotspot_interpolation.rs covers hot spots between joints).
 const THREE: &str = "\n[[fatigue.hotspot]]\nname = \"wellhead\"\nelevation = 0.0\n\
                      \n[[fatigue.hotspot]]\nname = \"weld\"\nelevation = 20.0\nscf = 1.3\n\
                      curve = \"F1\"\ndff = 3.0\n\

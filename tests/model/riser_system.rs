@@ -552,7 +552,9 @@ fn the_node_half_step_solves_its_equation_and_its_jacobian_is_a_inverse_omega_a(
     let ls = (chain.lengths(), chain.inverse_lengths());
     let ctx = Ctx::new(37.0, 0.0, 0);
     let (mut p, mut om) = (vec![[0.0; 2]; n], vec![BlockSym::identity(); n]);
-    nd.implicit_half_step(&c, ls, (h, &ctx), &mut p, &mut om);
+    let mut water = vec![[0.0; 2]; n];
+    nd.water_momenta(&ctx, &mut water);
+    nd.implicit_half_step(&c, ls, (h, &ctx, &water), &mut p, &mut om);
     let mut q = vec![[0.0; 2]; n];
     chain.add_node_drag(&p, &ctx, -0.5 * h, &mut q);
     let scale = c.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -569,6 +571,8 @@ fn the_node_half_step_solves_its_equation_and_its_jacobian_is_a_inverse_omega_a(
     let nd_d = chain_d.node_drag().unwrap();
     let ls_d = (chain_d.lengths(), chain_d.inverse_lengths());
     let ctx_d = Ctx::new(37.0, Dual64::from(0.0), 0);
+    let mut water_d = vec![[Dual64::from(0.0); 2]; n];
+    nd_d.water_momenta(&ctx_d, &mut water_d);
     for j in 0..n {
         for e in 0..2 {
             let cd: Vec<[Dual64; 2]> = (0..n)
@@ -582,7 +586,7 @@ fn the_node_half_step_solves_its_equation_and_its_jacobian_is_a_inverse_omega_a(
                 vec![[Dual64::from(0.0); 2]; n],
                 vec![BlockSym::identity(); n],
             );
-            nd_d.implicit_half_step(&cd, ls_d, (h, &ctx_d), &mut pd, &mut omd);
+            nd_d.implicit_half_step(&cd, ls_d, (h, &ctx_d, &water_d), &mut pd, &mut omd);
             // W e = A⁻¹ Ω A e, with (A x)ₖ = xₖ/lₖ − xₖ₊₁/lₖ₊₁ and A⁻¹ the suffix sums times l.
             let l = chain.lengths();
             let y: Vec<[f64; 2]> = (0..n)

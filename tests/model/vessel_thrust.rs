@@ -356,7 +356,7 @@ fn constant_thrust_lowers_the_moment_and_spatial_mpc_refuses_typed() {
     );
     assert!(r.objective < none, "J {} vs {none}", r.objective);
     assert!(c.u.abs() <= 3.0);
-    // MPC plans through the thrust in the planar model (tests/mpc_vessel.rs); the spatial
+    // MPC plans through the thrust in the planar model (tests/mpc/mpc_vessel.rs); the spatial
     // model's is refused, typed.
     let e = mpc::Mpc::spatial(&s, 0.05, mpc::MpcOptions::default()).map(|_| ());
     assert!(

@@ -9,3 +9,5 @@ mod wave_riser4;
 
 mod mpc;
 mod mpc_planning;
+mod mpc_vessel;
+mod plan_prediction;

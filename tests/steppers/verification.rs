@@ -153,6 +153,8 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::JointDamping => s.beam.joint_damping[1],
         Parameter::DragCoefficient => s.pipe.unwrap().drag_coefficient,
         Parameter::SoilModulus => s.soil.as_ref().unwrap().modulus,
+        // k_j of interior joint j is the scene's beam.stiffness[j − 1] (model::build).
+        Parameter::JointStiffness(j) => s.beam.stiffness[j - 1],
     }
 }
 

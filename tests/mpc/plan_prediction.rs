@@ -11,7 +11,7 @@ use chainbeam::{Chain, Rattle, Scene, State};
 
 /// examples/scenes/riser_300m.toml (the 300 m drilling riser in a current and a JONSWAP sea)
 /// as 16 pendulums at h = 0.05 s: the same pipe, loads and sea as a test-sized chain (the
-/// planning model's own rebuild, tests/mpc_planning.rs uses the same).
+/// planning model's own rebuild, tests/mpc/mpc_planning.rs uses the same).
 fn riser() -> Scene {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),

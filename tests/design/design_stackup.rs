@@ -311,3 +311,30 @@ fn unknown_flex_joints_are_refused_naming_the_key() {
         scene
     );
 }
+
+/// The shipped system design scene (examples/scenes/riser_300m_system_design.toml, the README's
+/// worked example) reads, builds a chain, and frees the tension and the named lower flex joint
+/// with the bounds its comments state (f = 1.1 and 2.0 of 1.344615e6 N; 1e5 to 1e8 N·m/rad).
+#[test]
+fn the_shipped_system_design_scene_frees_tension_and_the_lower_flex_joint() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/scenes/riser_300m_system_design.toml");
+    let scene = Scene::from_file(&path).unwrap();
+    Chain::<f64, 2>::from_scene(&scene).unwrap();
+    let table = scene.design.as_ref().expect("a [design] table");
+    let freed: Vec<_> = table
+        .parameters
+        .iter()
+        .map(|p| (p.parameter.clone(), p.bounds))
+        .collect();
+    assert_eq!(
+        freed,
+        vec![
+            (DesignParameter::Tension, Some((1.4790765e6, 2.68923e6))),
+            (
+                DesignParameter::FlexJoint("lower flex joint".into()),
+                Some((1.0e5, 1.0e8))
+            ),
+        ]
+    );
+}

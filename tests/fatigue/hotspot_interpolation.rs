@@ -5,7 +5,7 @@
 //!
 //! References, each independent of the code under test:
 //! - statics: a cantilever with a tip force P has joint torques k_j θ_j = P·(y_n − y_{j−1})
-//!   exactly at any deflection (the moment balance about node j−1, tests/hotspots.rs). Between
+//!   exactly at any deflection (the moment balance about node j−1, tests/fatigue/hotspots.rs). Between
 //!   two joints the moment of the tip force about the material point at arclength e of the rigid
 //!   pendulum is P·(y_n − y(e)) with y(e) = (1 − w)·y_{j−1} + w·y_j, w the point's fraction of
 //!   the pendulum: linear in w, so the interpolated torque must equal it to the statics'
@@ -20,7 +20,7 @@ use chainbeam::hotspots::{
 use chainbeam::statics::static_equilibrium;
 use chainbeam::{Chain, Scene};
 
-/// The cantilever of tests/hotspots.rs (10 pendulums of 1 m, tip force 4 N: θ₁ > 0.1 rad): the
+/// The cantilever of tests/fatigue/hotspots.rs (10 pendulums of 1 m, tip force 4 N: θ₁ > 0.1 rad): the
 /// torque interpolated at 2.5 m and 6.2 m is the tip force's moment about that material point.
 #[test]
 fn interpolated_torque_is_the_moment_at_the_material_point() {
@@ -64,7 +64,7 @@ fn interpolated_torque_is_the_moment_at_the_material_point() {
     }
 }
 
-/// The 60 m riser of tests/hotspots.rs (6 pendulums of 10 m in a JONSWAP sea and a current) with
+/// The 60 m riser of tests/fatigue/hotspots.rs (6 pendulums of 10 m in a JONSWAP sea and a current) with
 /// a hot spot at 21 m (between joints 3 and 4, w = 0.1) and one on joint 3 (20 m): the first's
 /// damage is `assess` of the blended torques of the same run, the second's of joint 3's alone.
 #[test]

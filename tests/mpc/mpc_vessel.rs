@@ -5,7 +5,7 @@
 //! References: the open-loop optimum of the same thrust problem over the whole run, computed
 //! independently by [`minimize`] on the library's piecewise-control problem (the path of the best
 //! constant thrust), which a perfect-model MPC with the horizon to the end must reproduce
-//! (principle of optimality, as tests/mpc.rs for the top force); the thrusters' limits, checked
+//! (principle of optimality, as tests/mpc/mpc.rs for the top force); the thrusters' limits, checked
 //! at every step of a closed loop; what the plan knows of the sea (`forecast`).
 
 use chainbeam::adjoint::BendingObjective;
@@ -17,7 +17,7 @@ use chainbeam::*;
 /// The thesis riser (n = 10, l = 1 m, m = 1 kg, h = 0.01 s, the point load at node 5, D = 10)
 /// held by a vessel of the thesis's scale (m + m_a = 0.6 kg, c = 2 N·s/m: a thrust of 1 N moves
 /// the top by centimetres in a second), the thrust as the control (the scene of
-/// tests/vessel_thrust.rs), with thrust and rate bounds.
+/// tests/model/vessel_thrust.rs), with thrust and rate bounds.
 fn scene(steps: usize, bound: f64, rate: f64) -> Scene {
     let mut s = catalogue::riser(5);
     s.beam.support = Support::Vessel;

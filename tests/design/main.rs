@@ -3,5 +3,9 @@
 //! One test crate (`cargo test --test design`); each file is a module, so a single file's tests
 //! run with `cargo test --test design FILE::` (the file name without `.rs`).
 
+// Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
+
 mod design;
 mod design_stackup;

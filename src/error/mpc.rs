@@ -65,11 +65,11 @@ pub enum MpcError {
         /// The plant's N.
         steps: usize,
     },
-    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`]) of a scene without
-    /// `[pipe]`: the coarser chain is rebuilt from the pipe's description.
+    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`]) of a scene with
+    /// neither `[pipe]` nor `[stackup]`: the coarser chain is rebuilt from their description.
     #[error(
-        "a reduced planning model needs a scene with a [pipe] table, from which the coarser \
-         chain is built"
+        "a reduced planning model needs a scene with a [pipe] or [stackup] table, from which the \
+         coarser chain is built"
     )]
     PlanWithoutPipe,
     /// A planning model's number of pendulums outside 1..=n.
@@ -80,10 +80,12 @@ pub enum MpcError {
         /// The plant's n.
         n: usize,
     },
-    /// A reduced planning model of a beam whose tip is held by a constraint (fixed-fixed,
-    /// pinned-pinned, a reaction-force tip), which the state map does not keep.
+    /// A reduced planning model of a beam whose tip is locked by a constraint (fixed-fixed,
+    /// pinned-pinned, a reaction-force tip), which the state map does not keep (a tip held by the
+    /// vessel it keeps).
     #[error(
-        "a reduced planning model needs a free tip or a tip spring (support cantilever or riser)"
+        "a reduced planning model needs a free tip, a tip spring or a tip held by the vessel \
+         (support cantilever, riser or vessel)"
     )]
     PlanSupport,
     /// The Riccati solver asked for in the spatial model, where only the condensed one plans.
@@ -108,6 +110,15 @@ pub enum MpcError {
         /// The plant's step \[s\].
         plant: f64,
     },
+    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`],
+    /// [`crate::mpc::MpcOptions::plan_step`]) for a plan through the vessel's thrust: the thrust
+    /// re-plan starts from the plant's own state one step back, so it plans on the model scene
+    /// at the plant's resolution.
+    #[error(
+        "MPC through the vessel's thrust plans on the model scene itself: plan_pendulums and \
+         plan_step are not taken for it"
+    )]
+    ThrustPlanReduced,
     /// `forecast = "none"` on a scene without `[loads.waves]`: there is no sea to leave out.
     #[error("forecast \"none\" leaves the waves out of the plan: the scene has no [loads.waves]")]
     ForecastWithoutSea,
@@ -136,6 +147,7 @@ impl MpcError {
             MpcError::RiccatiPlanar => "solver",
             MpcError::ThrustSpatial | MpcError::ThrustStep { .. } => "model",
             MpcError::ForecastWithoutSea => "forecast",
+            MpcError::ThrustPlanReduced => "plan_pendulums",
         }
     }
 }

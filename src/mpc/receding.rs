@@ -247,6 +247,7 @@ impl<const DIM: usize> Mpc<DIM> {
         }
         let thrust = match model.thrust() {
             Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
+            Some(_) if planning.is_some() => return Err(MpcError::ThrustPlanReduced.into()),
             Some(t) => Some(ThrustState {
                 actuator: Actuator {
                     bound: t.bound,

@@ -113,7 +113,7 @@
 //!
 //! A thrust plan runs on the model scene at the plant's step, in the planar model: a reduced
 //! planning model ([`MpcOptions::plan_pendulums`], `plan_step`) is refused for it
-//! ([`MpcError::ThrustPlanReduced`](crate::error::MpcError::ThrustPlanReduced)), because the
+//! ([`MpcError::ThrustPlanReduced`]), because the
 //! re-plan starts from the plant's own state one step back. The map onto a coarser stack-up
 //! with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s predicts the 300 m
 //! system's wellhead connector to 3 %, docs/mpc.md); planning the thrust on it is not built yet.

@@ -5,6 +5,8 @@
 //! run with `cargo test --test model FILE::` (the file name without `.rs`).
 
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/beam_column.rs"]
+mod beam_column;
 #[path = "../common/gradient_check.rs"]
 mod gradient_check;
 #[path = "../common/rotation.rs"]

@@ -4,13 +4,13 @@
 //! References: the fixed-fixed step (a vessel that holds the top still is exactly that beam), the
 //! vessel's prescribed Z(t) (the constraint the step imposes), Richardson ratios of RATTLE's error
 //! (order 2), an independent finite-element beam-column model for the natural periods (Hermite
-//! cubic elements with the geometric stiffness of the effective tension, written here), and the
-//! closed form of a tensioned beam whose clamped top is displaced.
+//! cubic elements with the geometric stiffness of the effective tension, tests/common/
+//! beam_column.rs, shared with tests/model/riser_scenes.rs), and the closed form of a tensioned
+//! beam whose clamped top is displaced.
 
+use crate::beam_column::{chain_frequencies, BeamColumn, Element, TopRotation};
 use chainbeam::statics::static_equilibrium;
 use chainbeam::{catalogue, simulate, Chain, Rao, Scene, SceneTrajectory, Support, Vessel};
-use nalgebra::DMatrix;
-use num_dual::{DualNum, HyperDual64};
 use std::f64::consts::PI;
 
 fn riser_300m() -> String {
@@ -138,63 +138,12 @@ fn the_step_stays_of_order_two_with_a_moving_top() {
     }
 }
 
-/// The chain's natural frequencies ω (ascending) linearised about the straight beam: K φ = ω² M φ
-/// in the pendulum angles θ (qⱼ = (cos θⱼ, sin θⱼ)), K the Hessian of the chain's own potential
-/// energy by hyper-dual numbers, M = Lᵀ diag(m) L with zᵢ = Σ_{j≤i} lⱼθⱼ; a held tip
-/// (Σ lⱼθⱼ = 0) eliminates θₙ.
-fn chain_frequencies(scene: &Scene) -> Vec<f64> {
-    let chain = Chain::<f64, 2>::from_scene(scene)
-        .unwrap()
-        .lift::<HyperDual64>();
-    let n = chain.n();
-    let l = &scene.beam.lengths;
-    let k = DMatrix::from_fn(n, n, |a, b| {
-        let q: Vec<[HyperDual64; 2]> = (0..n)
-            .map(|j| {
-                let e = |c: usize| f64::from(u8::from(j == c));
-                let th = HyperDual64::new(0.0, e(a), e(b), 0.0);
-                [th.cos(), th.sin()]
-            })
-            .collect();
-        chain
-            .potential_energy(&q, 0.0, HyperDual64::from(0.0))
-            .eps1eps2
-    });
-    let lz = DMatrix::from_fn(n, n, |i, j| if j <= i { l[j] } else { 0.0 });
-    let m = lz.transpose() * DMatrix::from_diagonal(&scene.beam.masses.clone().into()) * &lz;
-    let (k, m) = if scene.beam.support.holds_tip() {
-        let b = DMatrix::from_fn(n, n - 1, |i, j| match i {
-            i if i == n - 1 => -l[j] / l[n - 1],
-            i => f64::from(u8::from(i == j)),
-        });
-        (b.transpose() * k * &b, b.transpose() * m * &b)
-    } else {
-        (k, m)
-    };
-    generalized_eigen(k, m)
-}
-
-/// ω of K φ = ω² M φ (M positive definite), ascending.
-fn generalized_eigen(k: DMatrix<f64>, m: DMatrix<f64>) -> Vec<f64> {
-    let ci = m.cholesky().unwrap().l().try_inverse().unwrap();
-    let a = &ci * k * ci.transpose();
-    let a = (&a + a.transpose()) * 0.5;
-    let mut w: Vec<f64> = a
-        .symmetric_eigenvalues()
-        .iter()
-        .map(|x| x.max(0.0).sqrt())
-        .collect();
-    w.sort_by(f64::total_cmp);
-    w
-}
-
-/// An independent model: a tensioned Euler-Bernoulli beam-column EI w⁗ − (T_e w′)′ + μ ẅ = 0,
-/// T_e(y) = T − w_s (L − y), in `elements` Hermite cubic elements (stiffness EI/l³ [12, 6l, …],
-/// geometric stiffness T_e/(30 l) [36, 3l, …] at the element's mid-height, consistent mass
-/// μl/420 [156, 22l, …]; e.g. Przemieniecki, *Theory of Matrix Structural Analysis*, §5, §11).
-/// Base clamped (w = w′ = 0), top rotation clamped (w′ = 0, the chain's tip spring 2EI/l) or
-/// free (no tip spring), top deflection free or held (w = 0).
-struct BeamColumn {
+/// An independent model (`beam_column::BeamColumn`): a tensioned Euler-Bernoulli beam-column
+/// EI w⁗ − (T_e w′)′ + μ ẅ = 0 of the uniform pipe, T_e(y) = T − w_s (L − y) at each element's
+/// mid-height, in `elements` equal Hermite cubic elements. Base clamped (w = w′ = 0), top
+/// rotation clamped (w′ = 0, the chain's tip spring 2EI/l) or free (no tip spring), top
+/// deflection free or held (w = 0).
+struct UniformPipe {
     length: f64,
     ei: f64,
     mu: f64,
@@ -206,53 +155,34 @@ struct BeamColumn {
     elements: usize,
 }
 
-impl BeamColumn {
+impl UniformPipe {
     fn frequencies(&self) -> Vec<f64> {
         let ne = self.elements;
         let l = self.length / ne as f64;
-        let dofs = 2 * (ne + 1);
-        let (mut k, mut m) = (DMatrix::zeros(dofs, dofs), DMatrix::zeros(dofs, dofs));
-        let ke = [
-            [12.0, 6.0 * l, -12.0, 6.0 * l],
-            [6.0 * l, 4.0 * l * l, -6.0 * l, 2.0 * l * l],
-            [-12.0, -6.0 * l, 12.0, -6.0 * l],
-            [6.0 * l, 2.0 * l * l, -6.0 * l, 4.0 * l * l],
-        ];
-        let kg = [
-            [36.0, 3.0 * l, -36.0, 3.0 * l],
-            [3.0 * l, 4.0 * l * l, -3.0 * l, -l * l],
-            [-36.0, -3.0 * l, 36.0, -3.0 * l],
-            [3.0 * l, -l * l, -3.0 * l, 4.0 * l * l],
-        ];
-        let me = [
-            [156.0, 22.0 * l, 54.0, -13.0 * l],
-            [22.0 * l, 4.0 * l * l, 13.0 * l, -3.0 * l * l],
-            [54.0, 13.0 * l, 156.0, -22.0 * l],
-            [-13.0 * l, -3.0 * l * l, -22.0 * l, 4.0 * l * l],
-        ];
-        for e in 0..ne {
-            let y = (e as f64 + 0.5) * l;
-            let te = self.tension - self.weight * (self.length - y);
-            for a in 0..4 {
-                for b in 0..4 {
-                    let (i, j) = (2 * e + a, 2 * e + b);
-                    k[(i, j)] += self.ei / (l * l * l) * ke[a][b] + te / (30.0 * l) * kg[a][b];
-                    m[(i, j)] += self.mu * l / 420.0 * me[a][b];
+        let elements = (0..ne)
+            .map(|e| {
+                let y = (e as f64 + 0.5) * l;
+                Element {
+                    length: l,
+                    ei: self.ei,
+                    mu: self.mu,
+                    tension: self.tension - self.weight * (self.length - y),
+                    soil: 0.0,
+                    end_mass: 0.0,
                 }
-            }
+            })
+            .collect();
+        BeamColumn {
+            elements,
+            hinges: Vec::new(),
+            top_held: self.top_held,
+            top_rotation: if self.top_pinned {
+                TopRotation::Free
+            } else {
+                TopRotation::Clamped
+            },
         }
-        let mut fixed = vec![0, 1];
-        if !self.top_pinned {
-            fixed.push(dofs - 1);
-        }
-        if self.top_held {
-            fixed.push(dofs - 2);
-        }
-        let free: Vec<usize> = (0..dofs).filter(|d| !fixed.contains(d)).collect();
-        let pick = |a: &DMatrix<f64>| {
-            DMatrix::from_fn(free.len(), free.len(), |i, j| a[(free[i], free[j])])
-        };
-        generalized_eigen(pick(&k), pick(&m))
+        .frequencies()
     }
 }
 
@@ -273,7 +203,7 @@ fn riser_300m_periods_match_a_beam_column_model_free_and_held() {
             scene.beam.tip_stiffness = 0.0;
         }
         let pipe = scene.pipe.unwrap();
-        let fe = BeamColumn {
+        let fe = UniformPipe {
             length: pipe.length,
             ei: pipe.bending_stiffness(),
             mu: pipe.mass_per_length(scene.water.density),

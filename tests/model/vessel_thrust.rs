@@ -8,6 +8,7 @@
 //! tests/adjoint/adjoint.rs; the vessel's discrete surge against the closed-form solution of the linear
 //! ODE under a constant thrust (an order-2 scheme: the error falls 4× per halved step).
 
+use crate::gradient_check::{assert_close, central, Tolerance};
 use chainbeam::adjoint::{forward_value, BendingObjective, Objective};
 use chainbeam::catalogue;
 use chainbeam::*;
@@ -51,7 +52,11 @@ fn start(n: usize, steps: usize) -> Vec<f64> {
 /// tests/adjoint/adjoint.rs). The round-off is relative to the terms the gradient sums: with an effort
 /// weight ρ the scale is also that of the effort's own gradient 2ρh u (mapped to θ), which the
 /// moment's part nearly cancels at these thrusts (a sum 80 times smaller than either part, seen
-/// with ρ = 0.5). Returns the worst relative deviations (forward, FD).
+/// with ρ = 0.5). Every comparison goes through the one gradient check
+/// (tests/common/gradient_check.rs: `central`, `assert_close`) with the tolerances above: the
+/// thrust's gradient within 1e-12 · max(|forward|, scale) of forward mode and 1e-6 · scale of the
+/// central difference (step 1e-4 · max(|θ_j|, 1)), the parameters' within 5e-12 |forward| +
+/// 1e-300. Returns the worst deviations (forward: over max(|forward_j|, scale), FD: over scale).
 fn check<O: Objective + Clone>(
     label: &str,
     s: &Scene,
@@ -94,37 +99,44 @@ fn check<O: Objective + Clone>(
     let scale = g_effort.iter().fold(scale, |a, b| a.max(b.abs()));
 
     let chain_d = prob.chain_as::<Dual64>();
-    let (mut worst_fwd, mut worst_fd): (f64, f64) = (0.0, 0.0);
-    for j in 0..map.n_params() {
-        let th: Vec<Dual64> = theta
-            .iter()
-            .enumerate()
-            .map(|(i, &t)| Dual64::new(t, f64::from(u8::from(i == j))))
-            .collect();
-        let mut u = vec![Dual64::from(0.0); steps + 1];
-        map.controls(&th, &mut u);
-        let fwd = forward_value(&chain_d, s.time.step, steps, &u, &obj)
-            .unwrap()
-            .eps;
-        let e = (g[j] - fwd).abs();
-        assert!(
-            e <= 1e-12 * fwd.abs().max(scale),
-            "{label}: dJ/dF_{j}: adjoint {} vs forward {fwd} (scale {scale:e})",
-            g[j]
-        );
-        worst_fwd = worst_fwd.max(e / scale);
-        let eps = FD_STEP * theta[j].abs().max(1.0);
-        let (mut tp, mut tm) = (theta.clone(), theta.clone());
-        tp[j] += eps;
-        tm[j] -= eps;
-        let fd = (prob.value(&tp).unwrap() - prob.value(&tm).unwrap()) / (2.0 * eps);
-        assert!(
-            (fd - g[j]).abs() <= 1e-6 * scale,
-            "{label}: FD {fd} vs adjoint {}",
-            g[j]
-        );
-        worst_fd = worst_fd.max((fd - g[j]).abs() / scale);
-    }
+    let fwd: Vec<f64> = (0..map.n_params())
+        .map(|j| {
+            let th: Vec<Dual64> = theta
+                .iter()
+                .enumerate()
+                .map(|(i, &t)| Dual64::new(t, f64::from(u8::from(i == j))))
+                .collect();
+            let mut u = vec![Dual64::from(0.0); steps + 1];
+            map.controls(&th, &mut u);
+            forward_value(&chain_d, s.time.step, steps, &u, &obj)
+                .unwrap()
+                .eps
+        })
+        .collect();
+    let worst_fwd = assert_close(
+        &format!("{label}: dJ/dF, adjoint"),
+        &g,
+        &fwd,
+        "forward-mode Dual64 with the thrust seeded",
+        Tolerance::at_least(1e-12, scale),
+    );
+    let fd: Vec<f64> = (0..map.n_params())
+        .map(|j| {
+            let at = |x: f64| {
+                let mut t = theta.clone();
+                t[j] = x;
+                prob.value(&t).unwrap()
+            };
+            central(&at, theta[j], FD_STEP * theta[j].abs().max(1.0))
+        })
+        .collect();
+    let worst_fd = assert_close(
+        &format!("{label}: dJ/dF, adjoint against central differences"),
+        &g,
+        &fd,
+        "central differences, step 1e-4 max(|θ_j|, 1)",
+        Tolerance::of_scale(1e-6, scale),
+    );
     let nominal = |p: Parameter| match p {
         Parameter::InteriorStiffness => 1000.0,
         Parameter::BaseStiffness | Parameter::TipStiffness => 2000.0,
@@ -139,18 +151,23 @@ fn check<O: Objective + Clone>(
         .into_iter()
         .map(Dual64::from)
         .collect();
-    for (pi, &p) in params.iter().enumerate() {
-        let mut ch = prob.chain_as::<Dual64>();
-        ch.set_parameter(p, Dual64::new(nominal(p), 1.0)).unwrap();
-        let fwd = forward_value(&ch, s.time.step, steps, &u, &obj)
-            .unwrap()
-            .eps;
-        let a = adj.parameter_gradient[pi];
-        assert!(
-            (a - fwd).abs() <= 5e-12 * fwd.abs() + 1e-300,
-            "{label}: dJ/d{p:?}: adjoint {a} vs forward {fwd}"
-        );
-    }
+    let fwd: Vec<f64> = params
+        .iter()
+        .map(|&p| {
+            let mut ch = prob.chain_as::<Dual64>();
+            ch.set_parameter(p, Dual64::new(nominal(p), 1.0)).unwrap();
+            forward_value(&ch, s.time.step, steps, &u, &obj)
+                .unwrap()
+                .eps
+        })
+        .collect();
+    assert_close(
+        &format!("{label}: dJ/d{params:?}, adjoint"),
+        &adj.parameter_gradient,
+        &fwd,
+        "forward-mode Dual64 with the parameter seeded",
+        Tolerance::relative(5e-12).plus(1e-300),
+    );
     (worst_fwd, worst_fd)
 }
 

@@ -1,6 +1,6 @@
 """Design for fatigue (``chainbeam design``): the exact sensitivities of the wellhead's expected
 annual damage over a scatter diagram with respect to the scene's ``[design]`` parameters, and
-the bounded L-BFGS design that maximises its life, optionally with the cells spread over an
+the bounded (projected) L-BFGS design that maximises its life, optionally with the cells spread over an
 executor.
 
 ``design(scene, scatter=None, *, sensitivities=False, record=None, spin_up=None, executor=None,
@@ -14,8 +14,10 @@ name: ``loads.tension``, ``beam.base_stiffness``, ...), ``relative_sensitivities
 ``life_years``), ``design`` (``{name: value}``, the optimised design; not with
 ``sensitivities=True``), ``damage_per_year``, ``life_years``, ``iterates`` (every iterate, the
 start first: ``iteration``, ``design``, ``damage_per_year``, ``life_years``,
-``gradient_norm``, ``simulations``), ``converged``, ``termination``, ``simulations`` (cell runs:
-adjoint sweeps), ``seconds``, ``record_s``, ``spin_up_s`` and ``cells`` (``hs``, ``tp``
+``gradient_norm``, ``simulations``, ``adjoint_sweeps``, ``forward_runs``), ``converged``,
+``termination``, ``simulations`` (cell runs: ``adjoint_sweeps``, each a forward and a reverse
+pass, plus ``forward_runs``, line-search trials that need the value alone), ``adjoint_sweeps``,
+``forward_runs``, ``seconds``, ``record_s``, ``spin_up_s`` and ``cells`` (``hs``, ``tp``
 [, ``direction``], ``probability``, ``damage``, ``duration_s`` at the reported design).
 
 ``scatter``: as :func:`chainbeam.fatigue`'s (a CSV path, a DataFrame, a sequence of mappings;

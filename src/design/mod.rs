@@ -20,10 +20,16 @@
 //! piecewise smooth in θ (docs of [`crate::fatigue::damage`]): the gradient is that of the
 //! rainflow pairing at θ, exact there; a pairing change is a kink.
 //!
-//! The hot spot is the wellhead, whose moment M_w = M₀ · l₁/2 the adjoint's objectives read. The
-//! `[[fatigue.hotspot]]` entries at other joints are not part of this objective: their joint
-//! torques are not a history term of the adjoint.
-//!
+//! # The hot spot
+//! By default the hot spot is the chain's base, the wellhead, whose moment M_w = M₀ · l₁/2 the
+//! adjoint's objectives read (its history term). `[design] hotspot = "NAME"` makes it a
+//! `[[fatigue.hotspot]]` instead: D_s is then the rainflow damage of that hot spot's moment,
+//! interpolated in elevation between the two joints around it ([`crate::hotspots`]), with its
+//! own section, SCF, S-N curve and DFF, the damage `chainbeam fatigue` reports for it. Its
+//! gradient comes from the damage linearised at the run's rainflow pairing, J = Σ_k g_k M(t_k)
+//! with g_k = ∂D_s/∂M(t_k) from a forward run, whose adjoint seed is the blend of the two joints'
+//! seeds (`design::hotspot`): a forward run and an adjoint sweep per cell, in the planar model.
+
 //! # The parameters ([`DesignParameter`])
 //! The top tension T (`loads.tension`), the lower flex joint's rotational stiffness (the base
 //! spring k₁, `beam.base_stiffness`, which is also the k₁ of the wellhead moment), the upper
@@ -43,27 +49,46 @@
 //! the same bit for bit on any executor.
 //!
 //! # The optimiser ([`optimise`])
-//! L-BFGS (argmin's, through [`crate::optimize::minimize`]) on ln D_y, the scaled objective (a
-//! damage spans orders of magnitude; its logarithm's gradient does not), in unbounded variables
-//! z with the bounds by a smooth transform,
+//! A projected L-BFGS with an active set ([`minimise_box`], in the manner of L-BFGS-B) on ln D_y,
+//! the scaled objective (a damage spans orders of magnitude; its logarithm's gradient does not),
+//! in the design choices scaled by the logarithms of their bounds to the unit box,
 //! ```text
-//! θ_i = lo_i + (hi_i − lo_i) · σ(z_i),   σ(z) = 1/(1 + e^{−z}),
-//! ∂ ln D_y/∂z_i = (1/D_y) · ∂D_y/∂θ_i · (hi_i − lo_i) σ(z_i)(1 − σ(z_i)),
+//! u_i = ln(θ_i/lo_i) / ln(hi_i/lo_i) ∈ [0, 1],      θ_i = lo_i · (hi_i/lo_i)^{u_i},
+//! ∂ ln D_y/∂u_i = (1/D_y) · ∂D_y/∂θ_i · θ_i ln(hi_i/lo_i),
 //! ```
-//! so every iterate lies within its bounds, and z is O(1) over the box whatever the parameter's
-//! unit. It starts at the scene's own design and stops when ‖∇_z ln D_y‖ ≤ `tolerance`
-//! (`[design] tolerance`), after `max_iterations`, or when a step no longer changes ln D_y.
+//! so that a unit of u is a parameter's whole range whatever its unit, and a stiffness spanning
+//! decades moves by factors (every bound is positive, `[design]`). A bound is reached exactly: a
+//! step that would leave the box lands on the bound, and a variable on a bound whose gradient
+//! pushes outward is held there (active) while the others move. The first step is the steepest
+//! descent scaled so that its longest component spans its variable's whole range (a damage
+//! monotone in a parameter sends it to its bound in one step); later steps are L-BFGS steps on
+//! the free variables, each accepted by Armijo's condition along the projected path. It starts
+//! at the scene's own design and stops, converged, when the projected gradient's norm
+//! ‖P(u − ∇_u ln D_y) − u‖_∞ (zero exactly at a first-order optimum, bounds included) is at most
+//! `tolerance` (`[design] tolerance`), or after `max_iterations`, or when no trial decreases ln D_y
+//! (a kink of the rainflow pairing).
+//!
+//! # Counting the simulations
+//! An evaluation with the gradient runs one adjoint sweep per cell: a forward pass over the
+//! cell's record and a reverse pass back over it (counted as one cell run, `adjoint_sweeps`);
+//! a line-search trial that needs the value alone runs one forward pass per cell (counted as one
+//! cell run, `forward_runs`). The reports give both and their sum, `simulations`.
 
+mod hotspot;
 mod optimise;
 mod report;
 mod scatter;
+mod search;
 
 pub use optimise::{
     optimise, sensitivities, sensitivities_with, CellRunner, DesignIterate, DesignOptions,
     DesignOutcome, IterateCallback, Sensitivity,
 };
-pub use report::{DesignReport, ReportCell, ReportIterate, ReportPoint};
+pub use report::{DesignReport, ReportCell, ReportHotSpot, ReportIterate, ReportPoint};
 pub use scatter::{CellGradient, DesignPoint, DesignStudy, Execution, ScatterGradient, Want};
+pub use search::{
+    minimise_box, projected_gradient_norm, BoxOutcome, BoxSearch, BoxStep, BoxTermination, BoxValue,
+};
 
 use thiserror::Error;
 
@@ -117,6 +142,39 @@ pub enum DesignError {
     NoDamage {
         /// The design, as `name = value` pairs.
         values: String,
+    },
+    /// The `[design] hotspot` names no `[[fatigue.hotspot]]` of the scene.
+    #[error(
+        "design.hotspot = {name:?}: the scene has no [[fatigue.hotspot]] of that name \
+         (docs/scene-format.md \"[design]\")"
+    )]
+    NoHotSpot {
+        /// The name asked for.
+        name: String,
+    },
+    /// The objective at a hot spot needs the planar model (a cell's sea or the scene made the
+    /// run spatial, where a joint's torque has two components).
+    #[error(
+        "design.hotspot = {name:?}: the objective at a hot spot needs a planar run (no load, \
+         current, wave direction or control along x)"
+    )]
+    HotSpotSpatial {
+        /// The hot spot.
+        name: String,
+    },
+    /// A pendulum around the hot spot stopped pointing upward (its angle from the vertical
+    /// reached 90°), where the hot spot's joint angles are no longer those the adjoint reads.
+    #[error(
+        "design.hotspot = {name:?}: cell {cell}: a pendulum around the hot spot does not point \
+         upward at step {step} (a folded chain)"
+    )]
+    HotSpotFolded {
+        /// The hot spot.
+        name: String,
+        /// The cell (0-based, in the diagram's order).
+        cell: usize,
+        /// The step.
+        step: usize,
     },
     /// The optimiser's own error (its options, a failed line search that could not restart).
     #[error("optimiser: {source}")]

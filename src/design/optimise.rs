@@ -1,18 +1,14 @@
 //! The sensitivities of the annual damage at the scene's design, and the bounded L-BFGS design
 //! that maximises the wellhead's life (module docs of [`crate::design`], "The optimiser").
 
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
+use std::cell::RefCell;
+use std::sync::Arc;
 use std::time::Instant;
 
-use argmin::core::observers::{Observe, ObserverMode};
-use argmin::core::{State, KV};
-
+use super::search::{minimise_box, BoxSearch, BoxStep, BoxValue};
 use super::{DesignError, DesignParameter, DesignStudy, DesignTable, Execution, Role};
 use super::{DesignPoint, FreeParameter, ScatterGradient, Want};
 use crate::fatigue::life_years;
-use crate::optimize::observers::ObservedState;
-use crate::optimize::{Method, Minimizer, OptimOptions, OptimProblem};
 
 /// The sensitivity of the annual damage to one parameter at a design.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,11 +39,16 @@ pub struct DesignIterate {
     pub life_years: f64,
     /// ∂D_y/∂θ_i of the design choices.
     pub gradient: Vec<f64>,
-    /// ‖∇_z ln D_y‖, the optimiser's gradient norm (module docs).
+    /// ‖P(u − ∇_u ln D_y) − u‖_∞, the optimiser's projected gradient norm in the log-scaled
+    /// unit box (module docs): 0 where the design is optimal to first order.
     pub gradient_norm: f64,
-    /// Cell runs (adjoint sweeps, each a forward and a reverse pass over a cell's record) so
-    /// far.
+    /// Cell runs so far: `adjoint_sweeps + forward_runs`.
     pub simulations: usize,
+    /// Adjoint sweeps so far (each a forward and a reverse pass over a cell's record).
+    pub adjoint_sweeps: usize,
+    /// Forward runs so far (a line search's trial that needs the value alone; a hot spot's
+    /// history before its adjoint sweep, [`DesignStudy::runs_per_evaluation`]).
+    pub forward_runs: usize,
 }
 
 /// A callback that receives each iterate ([`DesignOptions::on_iterate`]).
@@ -125,15 +126,21 @@ pub struct DesignOutcome {
     /// The sensitivities at the scene's own design, of every `[design]` parameter (uncertainties
     /// included).
     pub sensitivities: Vec<Sensitivity>,
-    /// Whether the gradient tolerance or the cost-change test stopped the run.
+    /// Whether the projected gradient's tolerance stopped the run.
     pub converged: bool,
     /// Why the run stopped.
     pub termination: String,
     /// The cells at the optimised design (their damages: the adjoint sweeps' values that give
     /// `damage_per_year`), in the diagram's order.
     pub cells: Vec<super::CellGradient>,
-    /// Cell runs in all (the sensitivities' included).
+    /// Cell runs in all (the sensitivities' included): `adjoint_sweeps + forward_runs`.
     pub simulations: usize,
+    /// Adjoint sweeps in all (each a forward and a reverse pass over a cell's record).
+    pub adjoint_sweeps: usize,
+    /// Forward runs in all (line-search trials that need the value alone; hot-spot histories).
+    pub forward_runs: usize,
+    /// The design fatigue factor of the objective's hot spot.
+    pub dff: f64,
     /// Wall-clock time \[s\].
     pub seconds: f64,
 }
@@ -263,205 +270,50 @@ fn scene_values(
         .collect()
 }
 
-/// The bound transform of the module docs, anchored at the start: θ_i(z) = θ0_i + (hi_i − lo_i)
-/// · (σ(z_i) − σ(z0_i)), clamped to \[lo_i, hi_i\] (the clamp only removes round-off), with
-/// σ(z0_i) = (θ0_i − lo_i)/(hi_i − lo_i), so that θ(z0) = θ0 exactly. It is the transform
-/// θ = lo + (hi − lo) σ(z) up to round-off, and its derivative is (hi − lo) σ(z)(1 − σ(z)).
+/// The log-scaled unit box of the module docs: u_i = ln(θ_i/lo_i)/ln(hi_i/lo_i), θ_i(u) =
+/// lo_i (hi_i/lo_i)^{u_i}, exact at the bounds (u = 0 gives lo, u = 1 gives hi, bit for bit) and
+/// at the start (θ(u0) = θ0 bit for bit, so that the start's evaluation is reused).
 #[derive(Clone, Debug)]
-struct Transform {
+struct LogBox {
     bounds: Vec<(f64, f64)>,
     theta0: Vec<f64>,
-    z0: Vec<f64>,
+    u0: Vec<f64>,
 }
 
-/// The logistic function σ(z) = 1/(1 + e^{−z}).
-fn sigmoid(z: f64) -> f64 {
-    1.0 / (1.0 + (-z).exp())
-}
-
-/// The nearest a start may lie to a bound in the unit interval u = (θ − lo)/(hi − lo): a start on
-/// a bound (u = 0 or 1, z = ∓∞) is moved in by this much in z's computation.
-const EDGE: f64 = 1e-6;
-
-impl Transform {
+impl LogBox {
     fn new(bounds: Vec<(f64, f64)>, theta0: Vec<f64>) -> Self {
-        let z0 = bounds
+        let u0 = bounds
             .iter()
             .zip(&theta0)
-            .map(|(&(lo, hi), &t)| {
-                let u = ((t - lo) / (hi - lo)).clamp(EDGE, 1.0 - EDGE);
-                (u / (1.0 - u)).ln()
-            })
+            .map(|(&(lo, hi), &t)| ((t / lo).ln() / (hi / lo).ln()).clamp(0.0, 1.0))
             .collect();
-        Transform { bounds, theta0, z0 }
+        LogBox { bounds, theta0, u0 }
     }
 
-    fn theta(&self, z: &[f64]) -> Vec<f64> {
-        (0..z.len())
+    fn theta(&self, u: &[f64]) -> Vec<f64> {
+        (0..u.len())
             .map(|i| {
                 let (lo, hi) = self.bounds[i];
-                // θ(z0) = θ0 exactly (the start's evaluation is reused), bit for bit.
-                if z[i].to_bits() == self.z0[i].to_bits() {
-                    return self.theta0[i];
+                if u[i].to_bits() == self.u0[i].to_bits() {
+                    self.theta0[i]
+                } else if u[i] <= 0.0 {
+                    lo
+                } else if u[i] >= 1.0 {
+                    hi
+                } else {
+                    (lo.ln() + u[i] * (hi / lo).ln()).exp().clamp(lo, hi)
                 }
-                let t = self.theta0[i] + (hi - lo) * (sigmoid(z[i]) - sigmoid(self.z0[i]));
-                t.clamp(lo, hi)
             })
             .collect()
     }
 
-    /// dθ_i/dz_i.
-    fn slope(&self, z: &[f64]) -> Vec<f64> {
-        (0..z.len())
-            .map(|i| {
-                let (lo, hi) = self.bounds[i];
-                let s = sigmoid(z[i]);
-                (hi - lo) * s * (1.0 - s)
-            })
-            .collect()
-    }
-}
-
-/// Evaluations shared by the problem and the observer: the designs evaluated with their scatter
-/// gradients, the cell runs, the first error.
-#[derive(Default)]
-struct Shared {
-    evaluated: Mutex<Vec<(Vec<f64>, ScatterGradient)>>,
-    simulations: AtomicUsize,
-    error: Mutex<Option<DesignError>>,
-}
-
-impl Shared {
-    fn lookup(&self, theta: &[f64]) -> Option<ScatterGradient> {
-        let done = self.evaluated.lock().unwrap_or_else(|e| e.into_inner());
-        done.iter()
-            .find(|(t, _)| t == theta)
-            .map(|(_, g)| g.clone())
-    }
-}
-
-/// ln D_y as a function of z (module docs), for [`Minimizer`].
-struct LogDamage<'a> {
-    study: &'a DesignStudy<'a>,
-    params: Vec<DesignParameter>,
-    transform: Transform,
-    options: DesignOptions,
-    shared: Arc<Shared>,
-}
-
-impl LogDamage<'_> {
-    fn scatter(&self, theta: &[f64]) -> Result<ScatterGradient, DesignError> {
-        if let Some(g) = self.shared.lookup(theta) {
-            return Ok(g);
-        }
-        let point = DesignPoint {
-            params: &self.params,
-            values: theta,
-        };
-        let g = self
-            .options
-            .evaluate(self.study, &point, Want::Gradient, &|| {})?;
-        self.shared
-            .simulations
-            .fetch_add(self.study.n_cells(), Ordering::Relaxed);
-        let mut done = self
-            .shared
-            .evaluated
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
-        done.push((theta.to_vec(), g.clone()));
-        Ok(g)
-    }
-}
-
-impl OptimProblem for LogDamage<'_> {
-    fn n_params(&self) -> usize {
-        self.params.len()
-    }
-
-    /// ln D_y(θ(z)) and (1/D_y) ∂D_y/∂θ_i · dθ_i/dz_i.
-    fn value_and_gradient(&self, z: &[f64]) -> crate::Result<(f64, Vec<f64>)> {
-        let theta = self.transform.theta(z);
-        let fail = |e: DesignError| {
-            let lib = match &e {
-                DesignError::Run { source, .. } => (**source).clone(),
-                _ => crate::Error::NonFiniteObjective {
-                    quantity: "design objective",
-                },
-            };
-            let mut slot = self.shared.error.lock().unwrap_or_else(|p| p.into_inner());
-            slot.get_or_insert(e);
-            lib
-        };
-        let g = self.scatter(&theta).map_err(fail)?;
-        if g.damage_per_year <= 0.0 {
-            return Err(fail(DesignError::NoDamage {
-                values: pairs(&self.params, &theta),
-            }));
-        }
-        let slope = self.transform.slope(z);
-        let d = g.damage_per_year;
-        let grad = g
-            .gradient
+    /// dθ_i/du_i = θ_i ln(hi_i/lo_i).
+    fn slope(&self, theta: &[f64]) -> Vec<f64> {
+        theta
             .iter()
-            .zip(&slope)
-            .map(|(g, s)| g / d * s)
-            .collect();
-        Ok((d.ln(), grad))
-    }
-}
-
-/// The observer that turns the solver's iterates into [`DesignIterate`]s.
-struct Recorder {
-    transform: Transform,
-    shared: Arc<Shared>,
-    dff: f64,
-    iterates: Arc<Mutex<Vec<DesignIterate>>>,
-    on_iterate: Option<IterateCallback>,
-}
-
-impl Recorder {
-    fn record(&mut self, state: &ObservedState) {
-        let Some(z) = state.get_param() else {
-            return;
-        };
-        let theta = self.transform.theta(z);
-        let Some(g) = self.shared.lookup(&theta) else {
-            return;
-        };
-        let norm = state
-            .get_gradient()
-            .map_or(f64::NAN, |g| g.iter().map(|x| x * x).sum::<f64>().sqrt());
-        let mut list = self.iterates.lock().unwrap_or_else(|e| e.into_inner());
-        let it = DesignIterate {
-            iteration: list.len(),
-            values: theta,
-            damage_per_year: g.damage_per_year,
-            life_years: life(g.damage_per_year, self.dff),
-            gradient: g.gradient,
-            gradient_norm: norm,
-            simulations: self.shared.simulations.load(Ordering::Relaxed),
-        };
-        if let Some(f) = &self.on_iterate {
-            f(&it);
-        }
-        list.push(it);
-    }
-}
-
-impl Observe<ObservedState> for Recorder {
-    fn observe_init(
-        &mut self,
-        _name: &str,
-        state: &ObservedState,
-        _kv: &KV,
-    ) -> Result<(), argmin::core::Error> {
-        self.record(state);
-        Ok(())
-    }
-    fn observe_iter(&mut self, state: &ObservedState, _kv: &KV) -> Result<(), argmin::core::Error> {
-        self.record(state);
-        Ok(())
+            .zip(&self.bounds)
+            .map(|(t, (lo, hi))| t * (hi / lo).ln())
+            .collect()
     }
 }
 
@@ -470,16 +322,31 @@ fn life(damage_per_year: f64, dff: f64) -> f64 {
     life_years(damage_per_year, dff).unwrap_or(f64::INFINITY)
 }
 
+/// The cell runs of the evaluations so far: adjoint sweeps and forward runs.
+#[derive(Clone, Copy, Debug, Default)]
+struct Runs {
+    adjoint: usize,
+    forward: usize,
+}
+
+impl Runs {
+    fn add(&mut self, study: &DesignStudy<'_>, want: Want) {
+        let (a, f) = study.runs_per_evaluation(want);
+        self.adjoint += a;
+        self.forward += f;
+    }
+}
+
 /// The design that maximises the wellhead's life over the diagram (module docs, "The
-/// optimiser"): L-BFGS on ln D_y in the bound-transformed variables, from the scene's own design,
-/// the `[design]` table's design choices free and its uncertainties at the scene's values. The
-/// first evaluation, at the scene's design, also gives the sensitivities of every `[design]`
-/// parameter ([`sensitivities`]).
+/// optimiser"): the projected L-BFGS of [`super::minimise_box`] on ln D_y in the log-scaled
+/// unit box, from the scene's own design, the `[design]` table's design choices free and its
+/// uncertainties at the scene's values. The first evaluation, at the scene's design, also gives
+/// the sensitivities of every `[design]` parameter ([`sensitivities`]).
 ///
 /// # Errors
 /// [`DesignError::NoDesign`] without a `[design]` table or a design choice in it;
-/// [`DesignStudy::evaluate`]'s at the start; [`DesignError::NoDamage`] when the scene's design
-/// does no damage; a failed cell's error or [`DesignError::Optimiser`] during the run.
+/// [`DesignStudy::evaluate`]'s at the start; [`DesignError::NoDamage`] when a design evaluated
+/// does no damage; a failed cell's error during the run.
 pub fn optimise(
     study: &DesignStudy<'_>,
     options: &DesignOptions,
@@ -494,11 +361,7 @@ pub fn optimise(
             reason: "the [design] table has no design choice (role = \"design\") to optimise",
         });
     }
-    let dff = study
-        .scene
-        .fatigue_spec()
-        .ok_or(DesignError::NoFatigueSpec)?
-        .dff;
+    let dff = study.dff()?;
     // The start: every [design] parameter's gradient from one sweep per cell.
     let all = table_parameters(study);
     let names: Vec<DesignParameter> = all.iter().map(|p| p.parameter.clone()).collect();
@@ -508,6 +371,8 @@ pub fn optimise(
         values: &values,
     };
     let g0 = options.evaluate(study, &point, Want::Gradient, &|| {})?;
+    let mut runs = Runs::default();
+    runs.add(study, Want::Gradient);
     let sens = sensitivity_table(&all, &values, &g0);
     let free: Vec<DesignParameter> = choices.iter().map(|c| c.0.clone()).collect();
     let bounds: Vec<(f64, f64)> = choices.iter().map(|c| c.1).collect();
@@ -516,98 +381,125 @@ pub fn optimise(
         .map(|p| names.iter().position(|q| q == p).unwrap_or(0))
         .collect();
     let theta0: Vec<f64> = index.iter().map(|&i| values[i]).collect();
-    if g0.damage_per_year <= 0.0 {
-        return Err(DesignError::NoDamage {
-            values: pairs(&free, &theta0),
-        });
-    }
+    let scaled = LogBox::new(bounds, theta0.clone());
+    // ln D_y and its gradient in u (module docs) from a scatter evaluation at θ(u).
+    let in_box = |theta: &[f64], g: &ScatterGradient| -> Result<BoxValue, DesignError> {
+        if g.damage_per_year <= 0.0 {
+            return Err(DesignError::NoDamage {
+                values: pairs(&free, theta),
+            });
+        }
+        let d = g.damage_per_year;
+        let gradient = g
+            .gradient
+            .iter()
+            .zip(scaled.slope(theta))
+            .map(|(g, s)| g / d * s)
+            .collect();
+        Ok(BoxValue {
+            value: d.ln(),
+            gradient,
+        })
+    };
     let start = ScatterGradient {
         damage_per_year: g0.damage_per_year,
         gradient: index.iter().map(|&i| g0.gradient[i]).collect(),
         cells: g0.cells.clone(),
     };
-    let shared = Arc::new(Shared::default());
-    shared.simulations.store(study.n_cells(), Ordering::Relaxed);
-    shared
-        .evaluated
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .push((theta0.clone(), start));
-    let transform = Transform::new(bounds.clone(), theta0);
-    let problem = LogDamage {
-        study,
-        params: free.clone(),
-        transform: transform.clone(),
-        options: options.clone(),
-        shared: Arc::clone(&shared),
+    let first = in_box(&theta0, &start)?;
+    // Every evaluation, for the iterates' records and the result's cells.
+    let evaluated: RefCell<Vec<(Vec<f64>, ScatterGradient)>> = RefCell::new(vec![(theta0, start)]);
+    let mut eval = |u: &[f64], want: Want| -> Result<BoxValue, DesignError> {
+        let theta = scaled.theta(u);
+        let point = DesignPoint {
+            params: &free,
+            values: &theta,
+        };
+        let g = options.evaluate(study, &point, want, &|| {})?;
+        runs.add(study, want);
+        let r = if want == Want::Gradient {
+            in_box(&theta, &g)?
+        } else if g.damage_per_year > 0.0 {
+            BoxValue {
+                value: g.damage_per_year.ln(),
+                gradient: Vec::new(),
+            }
+        } else {
+            return Err(DesignError::NoDamage {
+                values: pairs(&free, &theta),
+            });
+        };
+        let mut done = evaluated.borrow_mut();
+        // A gradient evaluation replaces a value's at the same design (same D_y, bit for bit).
+        done.retain(|(t, _)| *t != theta);
+        done.push((theta, g));
+        Ok(r)
     };
-    let iterates = Arc::new(Mutex::new(Vec::new()));
-    let recorder = Recorder {
-        transform: transform.clone(),
-        shared: Arc::clone(&shared),
-        dff,
-        iterates: Arc::clone(&iterates),
-        on_iterate: options.on_iterate.clone(),
-    };
-    let opts = OptimOptions {
-        method: Method::Lbfgs,
-        max_iters: table.max_iterations,
-        grad_tol: table.tolerance,
-        rel_grad_tol: 0.0,
-        first_step: 0.5,
-        polish_steps: 0,
-        ..OptimOptions::default()
-    };
-    let result = Minimizer::new(&problem, opts)
-        .add_observer(recorder, ObserverMode::Always)
-        .run(&transform.z0);
-    let taken = shared
-        .error
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .take();
-    let r = match (result, taken) {
-        (Ok(r), _) => r,
-        (Err(_), Some(e)) => return Err(e),
-        (Err(e), None) => {
-            return Err(DesignError::Optimiser {
-                source: Box::new(e),
-            })
+    let per_gradient = study.runs_per_evaluation(Want::Gradient);
+    let per_value = study.runs_per_evaluation(Want::Value);
+    let mut iterates: Vec<DesignIterate> = Vec::new();
+    let mut on_step = |s: &BoxStep| {
+        let theta = scaled.theta(&s.u);
+        // The evaluation the search accepted, with its gradient (the point's last).
+        let (d, gradient) = evaluated
+            .borrow()
+            .iter()
+            .find(|(t, g)| *t == theta && !g.gradient.is_empty())
+            .map(|(_, g)| (g.damage_per_year, g.gradient.clone()))
+            .unwrap_or((s.value.exp(), Vec::new()));
+        // Each evaluation of the study runs every cell; the start's (every [design]
+        // parameter's gradient, for the sensitivities) is the search's first.
+        let adjoint_sweeps = s.gradient_evaluations * per_gradient.0;
+        let forward_runs =
+            s.gradient_evaluations * per_gradient.1 + s.value_evaluations * per_value.1;
+        let it = DesignIterate {
+            iteration: s.iteration,
+            values: theta,
+            damage_per_year: d,
+            life_years: life(d, dff),
+            gradient,
+            gradient_norm: s.projected_gradient_norm,
+            simulations: adjoint_sweeps + forward_runs,
+            adjoint_sweeps,
+            forward_runs,
+        };
+        if let Some(f) = &options.on_iterate {
+            f(&it);
         }
+        iterates.push(it);
     };
-    let design = transform.theta(&r.theta);
-    let last = problem
-        .scatter(&design)
-        .map_err(|e| DesignError::Optimiser {
-            source: Box::new(crate::Error::NonFiniteObjective {
-                quantity: match e {
-                    DesignError::Run { .. } => "final design's damage",
-                    _ => "final design",
-                },
-            }),
-        })?;
-    let iterates = iterates.lock().unwrap_or_else(|e| e.into_inner()).clone();
-    let initial = iterates.first().cloned().unwrap_or_else(|| DesignIterate {
-        iteration: 0,
-        values: design.clone(),
-        damage_per_year: last.damage_per_year,
-        life_years: life(last.damage_per_year, dff),
-        gradient: last.gradient.clone(),
-        gradient_norm: f64::NAN,
-        simulations: study.n_cells(),
-    });
+    let settings = BoxSearch {
+        max_iterations: table.max_iterations,
+        tolerance: table.tolerance,
+        ..BoxSearch::default()
+    };
+    let u0 = scaled.u0.clone();
+    let outcome = minimise_box(&mut eval, &u0, Some(first), settings, &mut on_step)?;
+    let last = outcome.last();
+    let design = scaled.theta(&last.u);
+    let cells = evaluated
+        .borrow()
+        .iter()
+        .find(|(t, _)| *t == design)
+        .map(|(_, g)| g.cells.clone())
+        .unwrap_or_default();
+    let initial = iterates[0].clone();
+    let final_ = iterates[iterates.len() - 1].clone();
     Ok(DesignOutcome {
         parameters: choices,
         design,
-        damage_per_year: last.damage_per_year,
-        life_years: life(last.damage_per_year, dff),
+        damage_per_year: final_.damage_per_year,
+        life_years: final_.life_years,
         initial,
         iterates,
         sensitivities: sens,
-        converged: r.converged,
-        termination: r.termination.to_string(),
-        cells: last.cells,
-        simulations: shared.simulations.load(Ordering::Relaxed),
+        converged: outcome.termination.converged(),
+        termination: outcome.termination.to_string(),
+        cells,
+        simulations: runs.adjoint + runs.forward,
+        adjoint_sweeps: runs.adjoint,
+        forward_runs: runs.forward,
+        dff,
         seconds: started.elapsed().as_secs_f64(),
     })
 }

@@ -36,14 +36,20 @@ pub struct DesignReport {
     /// Why the optimiser stopped (absent without an optimisation).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub termination: Option<String>,
-    /// Cell runs (adjoint sweeps) in all.
+    /// Cell runs in all: `adjoint_sweeps + forward_runs`.
     pub simulations: usize,
+    /// Adjoint sweeps in all (each a forward and a reverse pass over a cell's record).
+    pub adjoint_sweeps: usize,
+    /// Forward runs in all (line-search trials that need the value alone).
+    pub forward_runs: usize,
     /// Wall-clock time \[s\].
     pub seconds: f64,
     /// The record counted after the spin-up in every cell \[s\].
     pub record_s: f64,
     /// The spin-up left out of every record \[s\].
     pub spin_up_s: f64,
+    /// The hot spot whose damage is the objective (`[design] hotspot`).
+    pub hot_spot: ReportHotSpot,
     /// The cells at the reported design, in the diagram's order.
     pub cells: Vec<ReportCell>,
 }
@@ -59,6 +65,49 @@ pub struct ReportPoint {
     pub life_years: Option<f64>,
 }
 
+/// The hot spot whose damage is the objective.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ReportHotSpot {
+    /// The `[[fatigue.hotspot]]`'s name; `None` (JSON `null`): the chain's base, the wellhead
+    /// moment M_w = M₀ l₁/2 (the default objective).
+    pub name: Option<String>,
+    /// Its elevation above the chain's base \[m\] (0 for the chain's base).
+    pub elevation: f64,
+    /// The joints (0-based, joint 0 the base spring) whose torques its moment interpolates,
+    /// lower and upper (the same joint when it lies on one; `[0, 0]` for the chain's base).
+    pub joints: [usize; 2],
+    /// The upper joint's weight w in M = (1 − w) M_lower + w M_upper.
+    pub weight: f64,
+    /// Its design fatigue factor (the life's L = 1/(DFF · D_y)).
+    pub dff: f64,
+}
+
+impl ReportHotSpot {
+    /// The objective's hot spot of `study` with the design fatigue factor `dff`.
+    pub fn of(study: &DesignStudy<'_>, dff: f64) -> Self {
+        match study.hot_spot().ok().flatten() {
+            Some(h) => {
+                let w =
+                    crate::hotspots::interpolation_joints(&study.scene.beam.lengths, h.elevation);
+                ReportHotSpot {
+                    name: Some(h.name.clone()),
+                    elevation: h.elevation,
+                    joints: [w.lower, w.upper],
+                    weight: w.weight,
+                    dff,
+                }
+            }
+            None => ReportHotSpot {
+                name: None,
+                elevation: 0.0,
+                joints: [0, 0],
+                weight: 0.0,
+                dff,
+            },
+        }
+    }
+}
+
 /// One iterate of the optimiser.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ReportIterate {
@@ -70,10 +119,15 @@ pub struct ReportIterate {
     pub damage_per_year: f64,
     /// The life \[years\] (`None`: infinite).
     pub life_years: Option<f64>,
-    /// ‖∇_z ln D_y‖ (`None` when the solver gave none).
+    /// The projected gradient's norm ‖P(u − ∇_u ln D_y) − u‖_∞ in the log-scaled unit box
+    /// (`None` when not finite).
     pub gradient_norm: Option<f64>,
-    /// Cell runs so far.
+    /// Cell runs so far: `adjoint_sweeps + forward_runs`.
     pub simulations: usize,
+    /// Adjoint sweeps so far.
+    pub adjoint_sweeps: usize,
+    /// Forward runs so far.
+    pub forward_runs: usize,
 }
 
 /// One cell at the reported design.
@@ -169,6 +223,7 @@ impl DesignReport {
     ) -> Self {
         let (sens, rel, roles, values) = Self::table(s);
         let life = life(g.damage_per_year, dff);
+        let runs = study.runs_per_evaluation(super::Want::Gradient);
         DesignReport {
             sensitivities: sens,
             relative_sensitivities: rel,
@@ -184,10 +239,13 @@ impl DesignReport {
             iterates: None,
             converged: None,
             termination: None,
-            simulations: study.n_cells(),
+            simulations: runs.0 + runs.1,
+            adjoint_sweeps: runs.0,
+            forward_runs: runs.1,
             seconds,
             record_s: record,
             spin_up_s: study.spin_up,
+            hot_spot: ReportHotSpot::of(study, dff),
             cells: Self::cells(study, &g.cells),
         }
     }
@@ -207,6 +265,8 @@ impl DesignReport {
                 life_years: finite(it.life_years),
                 gradient_norm: finite(it.gradient_norm),
                 simulations: it.simulations,
+                adjoint_sweeps: it.adjoint_sweeps,
+                forward_runs: it.forward_runs,
             })
             .collect();
         DesignReport {
@@ -225,9 +285,12 @@ impl DesignReport {
             converged: Some(o.converged),
             termination: Some(o.termination.clone()),
             simulations: o.simulations,
+            adjoint_sweeps: o.adjoint_sweeps,
+            forward_runs: o.forward_runs,
             seconds: o.seconds,
             record_s: record,
             spin_up_s: study.spin_up,
+            hot_spot: ReportHotSpot::of(study, o.dff),
             cells: Self::cells(study, &o.cells),
         }
     }

@@ -4,6 +4,7 @@
 #[cfg(feature = "parallel")]
 use rayon::prelude::*;
 
+use super::hotspot::hot_spot_sweep;
 use super::{DesignError, DesignParameter};
 use crate::adjoint::{ControlProblem, History, Objective, Stage};
 use crate::base::Scalar;
@@ -12,6 +13,7 @@ use crate::fatigue::{combine_scatter, CellDamage, DamageGradient, ScatterCell, W
 use crate::fatigue_study::{
     spin_up_steps, with_record, with_sea_state, ControlSettings, ControllerKind, StudyError,
 };
+use crate::hotspots::HotSpotSpec;
 use crate::optimize::any::scene_start;
 use crate::scene::Scene;
 
@@ -142,6 +144,58 @@ impl DesignStudy<'_> {
         self.cells.map_or(1, <[ScatterCell]>::len)
     }
 
+    /// The cell runs of one evaluation ([`DesignStudy::evaluate`]): (adjoint sweeps, forward
+    /// runs). [`Want::Gradient`]: one adjoint sweep per cell (a forward and a reverse pass over
+    /// its record); [`Want::Value`]: one forward run per cell.
+    ///
+    /// At a named hot spot ([`DesignStudy::hot_spot`]) an evaluation with the gradient also
+    /// runs the forward run that gives the hot spot's moment history and its damage's gradient
+    /// before the adjoint sweep (module docs of `design::hotspot`): one adjoint sweep and one
+    /// forward run per cell.
+    pub fn runs_per_evaluation(&self, want: Want) -> (usize, usize) {
+        let n = self.n_cells();
+        let at_hot_spot = matches!(self.hot_spot(), Ok(Some(_)));
+        match want {
+            Want::Gradient if at_hot_spot => (n, n),
+            Want::Gradient => (n, 0),
+            Want::Value => (0, n),
+        }
+    }
+
+    /// The `[[fatigue.hotspot]]` the objective reads (`[design] hotspot`), `None` for the
+    /// chain's base (the wellhead moment M_w = M₀ l₁/2 of the adjoint's history term, the
+    /// default).
+    ///
+    /// # Errors
+    /// [`DesignError::NoHotSpot`] when the scene has no hot spot of the name asked for.
+    pub fn hot_spot(&self) -> Result<Option<&HotSpotSpec>, DesignError> {
+        let Some(name) = self.scene.design.as_ref().and_then(|d| d.hotspot.as_ref()) else {
+            return Ok(None);
+        };
+        self.scene
+            .hotspots
+            .iter()
+            .find(|h| &h.name == name)
+            .map(Some)
+            .ok_or_else(|| DesignError::NoHotSpot { name: name.clone() })
+    }
+
+    /// The design fatigue factor of the objective's hot spot (its `[[fatigue.hotspot]]`'s, else
+    /// the `[fatigue]` table's or the `[pipe]`'s default), for the life L = 1/(DFF · D_y).
+    ///
+    /// # Errors
+    /// [`DesignError::NoFatigueSpec`]; [`DesignStudy::hot_spot`]'s.
+    pub fn dff(&self) -> Result<f64, DesignError> {
+        if let Some(h) = self.hot_spot()? {
+            return Ok(h.spec.dff);
+        }
+        Ok(self
+            .scene
+            .fatigue_spec()
+            .ok_or(DesignError::NoFatigueSpec)?
+            .dff)
+    }
+
     /// Checks the request before any run: the diagram (cells, their number, the probabilities),
     /// the record and spin-up, the section, and the parameters (each one the scene's model has,
     /// once, with finite values).
@@ -191,6 +245,7 @@ impl DesignStudy<'_> {
         if self.scene.fatigue_spec().is_none() {
             return Err(DesignError::NoFatigueSpec);
         }
+        self.hot_spot()?;
         match self.cells {
             Some([]) => return Err(StudyError::NoCells.into()),
             Some(cells) if cells.len() > crate::fatigue_study::MAX_SCATTER_CELLS => {
@@ -297,6 +352,17 @@ impl DesignStudy<'_> {
                 reason: "the scene's model has no such parameter",
             })?;
         let lib = (want == Want::Gradient).then_some(&lib[..]);
+        if let Some(h) = self.hot_spot()? {
+            let (damage, gradient) =
+                hot_spot_sweep(&scene, h, skip, lib).map_err(|e| e.into_design(cell, &h.name))?;
+            let step = scene.time.step;
+            return Ok(CellGradient {
+                probability: self.cells.map_or(1.0, |c| c[cell].probability),
+                damage,
+                duration_s: scene.time.steps as f64 * step - skip as f64 * step,
+                gradient,
+            });
+        }
         let (damage, gradient) = if scene.is_spatial() {
             cell_sweep::<3>(&scene, objective, lib)
         } else {

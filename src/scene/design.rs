@@ -16,6 +16,8 @@ pub(super) struct RawDesign {
     max_iterations: Option<i64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     tolerance: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    hotspot: Option<String>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     parameter: Vec<RawDesignParameter>,
 }
@@ -38,6 +40,7 @@ impl RawDesign {
         RawDesign {
             max_iterations: Some(t.max_iterations as i64),
             tolerance: Some(t.tolerance),
+            hotspot: t.hotspot.clone(),
             parameter: t
                 .parameters
                 .iter()
@@ -128,19 +131,21 @@ impl RawDesign {
             parameters,
             max_iterations,
             tolerance: self.tolerance.unwrap_or(DesignTable::DEFAULT_TOLERANCE),
+            hotspot: self.hotspot,
         })
     }
 }
 
 impl Scene {
-    /// Checks the `[design]` table against the scene: the tolerance is positive and finite;
+    /// Checks the `[design]` table against the scene: the tolerance is positive and finite; the
+    /// `hotspot`, when given, names a `[[fatigue.hotspot]]` of a planar scene;
     /// every parameter is one this scene's model has (`beam.base_stiffness` needs a base spring,
     /// `beam.tip_stiffness` a tip spring, `loads.tension` a tension T > 0, `soil.modulus` a
     /// `[soil]` table); bounds are finite with 0 < lower < upper, and the scene's own value lies
     /// within them (the optimiser starts there).
     ///
     /// # Errors
-    /// [`SceneErrorKind::InvalidValue`] naming `design.tolerance` or
+    /// [`SceneErrorKind::InvalidValue`] naming `design.tolerance`, `design.hotspot` or
     /// `design.parameter[i].name`, `.lower` or `.upper`.
     pub fn check_design(&self) -> Result<(), SceneError> {
         let Some(d) = &self.design else {
@@ -151,6 +156,35 @@ impl Scene {
                 "design.tolerance",
                 format!("must be positive and finite, got {}", d.tolerance),
             ));
+        }
+        if let Some(name) = &d.hotspot {
+            if !self.hotspots.iter().any(|h| &h.name == name) {
+                let names: Vec<String> = self
+                    .hotspots
+                    .iter()
+                    .map(|h| format!("{:?}", h.name))
+                    .collect();
+                return Err(SceneError::invalid(
+                    "design.hotspot",
+                    format!(
+                        "no [[fatigue.hotspot]] is named {name:?} (the scene's: {})",
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                ));
+            }
+            if self.is_spatial() {
+                return Err(SceneError::invalid(
+                    "design.hotspot",
+                    format!(
+                        "the objective at the hot spot {name:?} needs a planar scene (no load, \
+                         current, wave direction or control along x)"
+                    ),
+                ));
+            }
         }
         for (i, p) in d.parameters.iter().enumerate() {
             let key = |k: &str| format!("design.parameter[{i}].{k}");
@@ -422,9 +456,13 @@ pub struct DesignTable {
     /// The optimiser's iteration limit (`max_iterations`, default
     /// [`DesignTable::DEFAULT_MAX_ITERATIONS`]).
     pub max_iterations: usize,
-    /// Stop when ‖∇_z ln D_y‖ ≤ `tolerance` (module docs; default
-    /// [`DesignTable::DEFAULT_TOLERANCE`]).
+    /// Stop when the projected gradient's norm ‖P(u − ∇_u ln D_y) − u‖_∞ ≤ `tolerance`, u the
+    /// parameters scaled to the unit box by the logarithms of their bounds ([`crate::design`],
+    /// "The optimiser"; default [`DesignTable::DEFAULT_TOLERANCE`]).
     pub tolerance: f64,
+    /// The `[[fatigue.hotspot]]` whose damage is the objective (`hotspot`, its `name`); `None`
+    /// (the default): the chain's base, the wellhead moment of the adjoint's history term.
+    pub hotspot: Option<String>,
 }
 
 impl DesignTable {
@@ -433,8 +471,8 @@ impl DesignTable {
     pub const DEFAULT_MAX_ITERATIONS: usize = 30;
     /// The largest iteration limit.
     pub const MAX_ITERATIONS: usize = 1000;
-    /// The default gradient tolerance on ‖∇_z ln D_y‖: a unit move of z (a sizeable part of a
-    /// bound's range) changes the life by less than 0.01 %.
+    /// The default tolerance on the projected gradient's norm in the log-scaled unit box: a move
+    /// of a free parameter across its whole range changes the life by less than about 0.01 %.
     pub const DEFAULT_TOLERANCE: f64 = 1e-4;
 
     /// The design choices (role [`Role::Design`]) with their bounds.

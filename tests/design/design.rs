@@ -7,18 +7,17 @@
 //! tension, current, sea and `[fatigue]`) on 10 pendulums at h = 0.1 s (its fastest bending mode
 //! is then ω_max ≈ 2.5 rad/s, ω_max h ≈ 0.25), short records, three cells.
 
-use crate::gradient_check::{assert_close, central, Tolerance};
+use crate::design_study::{check_central_differences, check_dual_numbers};
 use chainbeam::design::{
     optimise, sensitivities, DesignOptions, DesignParameter, DesignPoint, DesignStudy, Execution,
     ScatterGradient, Want,
 };
-use chainbeam::fatigue::{ScatterCell, SeaState, WellheadDamage};
+use chainbeam::fatigue::{ScatterCell, SeaState};
 use chainbeam::fatigue_study::{run_study, ControlSettings, ControllerKind, StudyInput};
-use chainbeam::{Chain, FatigueObjective, Scene};
-use num_dual::Dual64;
+use chainbeam::Scene;
 
 /// The reduced riser (module docs) with `design` appended.
-fn scene_text(design: &str) -> String {
+pub(crate) fn scene_text(design: &str) -> String {
     format!(
         r#"
 [beam]
@@ -93,17 +92,7 @@ fn scene() -> Scene {
 
 /// Three sea states of a reduced diagram (probabilities 0.5, 0.3, 0.2).
 fn cells() -> Vec<ScatterCell> {
-    [(1.0, 6.5, 0.5), (2.0, 8.0, 0.3), (3.5, 10.0, 0.2)]
-        .into_iter()
-        .map(|(hs, tp, probability)| ScatterCell {
-            sea: SeaState {
-                hs,
-                tp,
-                direction: None,
-            },
-            probability,
-        })
-        .collect()
+    crate::design_study::cells(&[(1.0, 6.5, 0.5), (2.0, 8.0, 0.3), (3.5, 10.0, 0.2)])
 }
 
 const PARAMS: [DesignParameter; 3] = [
@@ -113,25 +102,16 @@ const PARAMS: [DesignParameter; 3] = [
 ];
 
 fn study<'a>(scene: &'a Scene, cells: &'a [ScatterCell], spin_up: f64) -> DesignStudy<'a> {
-    DesignStudy {
-        scene,
-        cells: Some(cells),
-        record: Some(40.0),
-        spin_up,
-    }
+    crate::design_study::study(scene, cells, 40.0, spin_up)
 }
 
 fn values(scene: &Scene) -> Vec<f64> {
-    PARAMS.iter().map(|p| p.value(scene).unwrap()).collect()
+    crate::design_study::values(scene, &PARAMS)
 }
 
 /// D_y (and its gradient) at `v` of [`PARAMS`].
 fn eval(st: &DesignStudy<'_>, v: &[f64], want: Want, execution: Execution) -> ScatterGradient {
-    let point = DesignPoint {
-        params: &PARAMS,
-        values: v,
-    };
-    st.evaluate(&point, want, execution, &|| {}).unwrap()
+    crate::design_study::eval(st, &PARAMS, v, want, execution)
 }
 
 /// ∂D_y/∂θ_i by the adjoint = central differences of D_y (each D_y by forward runs of every
@@ -146,81 +126,20 @@ fn design_gradient_matches_central_differences_at_two_designs() {
     let v0 = values(&scene);
     let v1 = vec![v0[0] * 1.25, v0[1] / 3.0, v0[2] * 2.0];
     for v in [v0, v1] {
-        let g = eval(&st, &v, Want::Gradient, Execution::Parallel);
-        assert!(g.damage_per_year > 0.0);
-        // The forward runs' D_y is the adjoint's bit for bit (the same forward arithmetic).
-        let plain = eval(&st, &v, Want::Value, Execution::Parallel);
-        assert_eq!(plain.damage_per_year.to_bits(), g.damage_per_year.to_bits());
-        let fd: Vec<f64> = (0..PARAMS.len())
-            .map(|i| {
-                let at = |x: f64| {
-                    let mut w = v.clone();
-                    w[i] = x;
-                    eval(&st, &w, Want::Value, Execution::Parallel).damage_per_year
-                };
-                central(&at, v[i], 1e-5 * v[i])
-            })
-            .collect();
-        assert_close(
-            &format!("dD_y/d({}) at {v:?}", PARAMS.map(|q| q.name()).join(", ")),
-            &g.gradient,
-            &fd,
-            "central differences, step 1e-5 of each parameter",
-            Tolerance::relative(1e-5),
-        );
+        check_central_differences(&st, &PARAMS, &v, &[0, 1, 2]);
     }
 }
 
 /// ∂D_s/∂θ_i of every cell by the adjoint = the dual part of D_s computed in `Dual64` with θ_i
 /// seeded (forward-mode differentiation of the whole run through the library's fatigue
-/// objective, [`FatigueObjective`], which counts the whole record: no spin-up here), to 10⁻⁹
-/// relative (both exact; they differ by round-off in different orders of operations), and D_s
-/// itself to 10⁻¹² (dual arithmetic rounds some real parts differently, by an ulp).
+/// objective, which counts the whole record: no spin-up here), to 10⁻⁹ relative, and D_s
+/// itself to 10⁻¹² (`design_study::check_dual_numbers`).
 #[test]
 fn design_gradient_matches_dual_numbers_cell_by_cell() {
     let scene = scene();
     let cells = cells();
     let st = study(&scene, &cells, 0.0);
-    let v = values(&scene);
-    let g = eval(&st, &v, Want::Gradient, Execution::Serial);
-    let point = DesignPoint {
-        params: &PARAMS,
-        values: &v,
-    };
-    for (s, cell) in g.cells.iter().enumerate() {
-        let cs = st.cell_scene(s, &point).unwrap();
-        let spec = cs.fatigue_spec().unwrap();
-        let objective = FatigueObjective {
-            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
-            effort: 0.0,
-        };
-        let steps = cs.time.steps;
-        for (i, p) in PARAMS.iter().enumerate() {
-            let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
-            chain
-                .set_parameter(p.parameter(&cs).unwrap(), Dual64::new(v[i], 1.0))
-                .unwrap();
-            let u = vec![Dual64::from(0.0); steps + 1];
-            let d = chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective)
-                .unwrap();
-            // D_s itself: the same run in another scalar type, to round-off.
-            let rel_d = (d.re - cell.damage).abs() / cell.damage;
-            assert!(
-                rel_d < 1e-12,
-                "cell {s}: D_s {} against {}",
-                d.re,
-                cell.damage
-            );
-            let rel = (cell.gradient[i] - d.eps).abs() / d.eps.abs();
-            assert!(
-                rel < 1e-9,
-                "cell {s}, {}: adjoint {:e}, Dual64 {:e} (relative {rel:e})",
-                p.name(),
-                cell.gradient[i],
-                d.eps
-            );
-        }
-    }
+    check_dual_numbers(&st, &PARAMS, &values(&scene));
 }
 
 /// The cells on rayon's pool give the damage and the gradient bit for bit as serially (each
@@ -290,10 +209,14 @@ fn damage_is_the_fatigue_studys() {
     }
 }
 
-/// The optimiser (L-BFGS on ln D_y in the bound-transformed variables) ends at a design whose
-/// life is at least the scene's, within the bounds, having reported every iterate with
+/// The optimiser (the projected L-BFGS on ln D_y in the log-scaled unit box) ends at a design
+/// whose life is at least the scene's, within the bounds, having reported every iterate with
 /// non-increasing damage from the start, and the sensitivities at the start are the gradient
-/// of an evaluation there (the same numbers bit for bit).
+/// of an evaluation there (the same numbers bit for bit). Converged, its design satisfies the
+/// first-order conditions with the bounds: each parameter's ∂D_y/∂θ vanishes to the tolerance
+/// or pushes it against the bound it lies on. Its count of cell runs is the adjoint sweeps
+/// (three cells per evaluation with the gradient) plus the forward runs (three per
+/// value-only trial).
 #[test]
 fn optimiser_improves_the_life_within_the_bounds() {
     let scene = scene();
@@ -322,6 +245,32 @@ fn optimiser_improves_the_life_within_the_bounds() {
         assert_eq!(s.damage_per_year.to_bits(), t.damage_per_year.to_bits());
     }
     assert!(o.simulations >= cells.len());
+    assert_eq!(o.simulations, o.adjoint_sweeps + o.forward_runs);
+    assert_eq!(o.adjoint_sweeps % cells.len(), 0);
+    assert_eq!(o.forward_runs % cells.len(), 0);
+    assert!(last.simulations <= o.simulations);
+    eprintln!(
+        "optimiser on the reduced scene: {} iterations, {} adjoint sweeps, {} forward runs, \
+         converged {} ({}), design {:?}",
+        o.iterates.len() - 1,
+        o.adjoint_sweeps,
+        o.forward_runs,
+        o.converged,
+        o.termination,
+        o.design
+    );
+    if o.converged {
+        for (((_, (lo, hi)), v), g) in o.parameters.iter().zip(&o.design).zip(&last.gradient) {
+            let on_lower = v == lo && *g >= 0.0;
+            let on_upper = v == hi && *g <= 0.0;
+            // |∂ ln D_y/∂u| = |θ ln(hi/lo) ∂D_y/∂θ / D_y| ≤ the tolerance 10⁻³ in the interior.
+            let scaled = (v * (hi / lo).ln() * g / last.damage_per_year).abs();
+            assert!(
+                on_lower || on_upper || scaled <= 1e-3,
+                "{v} in [{lo}, {hi}]: {scaled}"
+            );
+        }
+    }
 }
 
 /// Bad `[design]` tables are refused when the scene is read, the error naming the key.

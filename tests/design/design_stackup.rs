@@ -11,11 +11,10 @@
 //! (the tip spring of the `riser` support); 8 pendulums at h = 0.02 s (no body: the bodies' short
 //! pendulums would need the full scene's 0.004 s), records of 10 s after a 5 s spin-up.
 
-use crate::gradient_check::{assert_close, central, Tolerance};
-use chainbeam::design::{DesignParameter, DesignPoint, DesignStudy, Execution, Want};
-use chainbeam::fatigue::{ScatterCell, SeaState, WellheadDamage};
-use chainbeam::{Chain, FatigueObjective, Parameter, Scene};
-use num_dual::Dual64;
+use crate::design_study::{check_central_differences, check_dual_numbers};
+use chainbeam::design::{DesignParameter, DesignStudy};
+use chainbeam::fatigue::ScatterCell;
+use chainbeam::{Chain, Parameter, Scene};
 
 /// The reduced stack-up (module docs) with `design` appended.
 fn scene_text(design: &str) -> String {
@@ -124,26 +123,11 @@ fn params() -> Vec<DesignParameter> {
 
 /// Two sea states (probabilities 0.7, 0.3).
 fn cells() -> Vec<ScatterCell> {
-    [(1.5, 7.0, 0.7), (3.0, 9.5, 0.3)]
-        .into_iter()
-        .map(|(hs, tp, probability)| ScatterCell {
-            sea: SeaState {
-                hs,
-                tp,
-                direction: None,
-            },
-            probability,
-        })
-        .collect()
+    crate::design_study::cells(&[(1.5, 7.0, 0.7), (3.0, 9.5, 0.3)])
 }
 
 fn study<'a>(scene: &'a Scene, cells: &'a [ScatterCell], spin_up: f64) -> DesignStudy<'a> {
-    DesignStudy {
-        scene,
-        cells: Some(cells),
-        record: Some(10.0),
-        spin_up,
-    }
+    crate::design_study::study(scene, cells, 10.0, spin_up)
 }
 
 /// The names read from the `[design]` table (spaces and all), the flex joints' values the
@@ -205,82 +189,24 @@ fn flex_joint_gradient_matches_central_differences_at_two_designs() {
     let cells = cells();
     let st = study(&scene, &cells, 5.0);
     let p = params();
-    let v0: Vec<f64> = p.iter().map(|q| q.value(&scene).unwrap()).collect();
+    let v0 = crate::design_study::values(&scene, &p);
     let v1 = vec![v0[0] * 1.2, v0[1] * 4.0, v0[2] / 2.0];
-    let eval = |v: &[f64], want| {
-        let point = DesignPoint {
-            params: &p,
-            values: v,
-        };
-        st.evaluate(&point, want, Execution::Parallel, &|| {})
-            .unwrap()
-    };
     for v in [v0, v1] {
-        let g = eval(&v, Want::Gradient);
-        assert!(g.damage_per_year > 0.0);
-        let fd: Vec<f64> = (0..2)
-            .map(|i| {
-                let at = |x: f64| {
-                    let mut w = v.clone();
-                    w[i] = x;
-                    eval(&w, Want::Value).damage_per_year
-                };
-                central(&at, v[i], 1e-5 * v[i])
-            })
-            .collect();
-        assert_close(
-            &format!("dD_y/d({}, {}) at {v:?}", p[0].name(), p[1].name()),
-            &g.gradient[..2],
-            &fd,
-            "central differences, step 1e-5 of each parameter",
-            Tolerance::relative(1e-5),
-        );
+        check_central_differences(&st, &p, &v, &[0, 1]);
     }
 }
 
 /// ∂D_s/∂θ_i of every cell by the adjoint = the dual part of D_s computed in `Dual64` with θ_i
 /// seeded through `Chain::set_parameter` (forward-mode differentiation of the whole run; no
-/// spin-up, as the library's [`FatigueObjective`] counts the whole record), to 10⁻⁹ relative.
+/// spin-up, as the library's fatigue objective counts the whole record), to 10⁻⁹ relative
+/// (`design_study::check_dual_numbers`).
 #[test]
 fn flex_joint_gradient_matches_dual_numbers() {
     let scene = scene();
     let cells = cells();
     let st = study(&scene, &cells, 0.0);
     let p = params();
-    let v: Vec<f64> = p.iter().map(|q| q.value(&scene).unwrap()).collect();
-    let point = DesignPoint {
-        params: &p,
-        values: &v,
-    };
-    let g = st
-        .evaluate(&point, Want::Gradient, Execution::Serial, &|| {})
-        .unwrap();
-    for (s, cell) in g.cells.iter().enumerate() {
-        let cs = st.cell_scene(s, &point).unwrap();
-        let spec = cs.fatigue_spec().unwrap();
-        let objective = FatigueObjective {
-            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
-            effort: 0.0,
-        };
-        let steps = cs.time.steps;
-        for (i, q) in p.iter().enumerate() {
-            let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
-            chain
-                .set_parameter(q.parameter(&cs).unwrap(), Dual64::new(v[i], 1.0))
-                .unwrap();
-            let u = vec![Dual64::from(0.0); steps + 1];
-            let d = chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective)
-                .unwrap();
-            let rel = (cell.gradient[i] - d.eps).abs() / d.eps.abs();
-            assert!(
-                rel < 1e-9,
-                "cell {s}, {}: adjoint {:e}, Dual64 {:e} (relative {rel:e})",
-                q.name(),
-                cell.gradient[i],
-                d.eps
-            );
-        }
-    }
+    check_dual_numbers(&st, &p, &crate::design_study::values(&scene, &p));
 }
 
 /// A flex joint the stack-up does not have, or a scene without a stack-up, is refused when the

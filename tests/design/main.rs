@@ -7,5 +7,10 @@
 #[path = "../common/gradient_check.rs"]
 mod gradient_check;
 
+#[path = "../common/design_study.rs"]
+mod design_study;
+
 mod design;
+mod design_hotspot;
 mod design_stackup;
+mod search;

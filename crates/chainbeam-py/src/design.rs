@@ -54,6 +54,12 @@ fn design_error(e: DesignError) -> Failure {
             key: "design".into(),
             message: e.to_string(),
         },
+        e @ (DesignError::NoHotSpot { .. }
+        | DesignError::HotSpotSpatial { .. }
+        | DesignError::HotSpotFolded { .. }) => Failure::SceneKey {
+            key: "design.hotspot".into(),
+            message: e.to_string(),
+        },
         e @ DesignError::NoFatigueSpec => Failure::SceneKey {
             key: "fatigue".into(),
             message: e.to_string(),
@@ -163,6 +169,8 @@ fn python_hook(hook: Py<PyAny>, names: Vec<String>, raised: Raised) -> IterateCa
             d.set_item("life_years", finite(it.life_years))?;
             d.set_item("gradient_norm", finite(it.gradient_norm))?;
             d.set_item("simulations", it.simulations)?;
+            d.set_item("adjoint_sweeps", it.adjoint_sweeps)?;
+            d.set_item("forward_runs", it.forward_runs)?;
             hook.bind(py).call1((d,))?;
             Ok(())
         });
@@ -200,10 +208,7 @@ pub fn _design(
         let cells = scatter.as_deref().map(cells);
         let record = record.unwrap_or(PRACTICE_RECORD_S);
         let study = study(&s, cells.as_deref(), record, spin_up);
-        let dff = s
-            .fatigue_spec()
-            .ok_or_else(|| design_error(DesignError::NoFatigueSpec))?
-            .dff;
+        let dff = study.dff().map_err(design_error)?;
         let names: Vec<String> = s
             .design
             .as_ref()

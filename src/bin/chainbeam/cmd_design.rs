@@ -24,13 +24,15 @@ The design that maximises the wellhead's fatigue life over a scatter diagram: th
 the scene's [design] table (docs/scene-format.md: loads.tension, beam.base_stiffness (the lower \
 flex joint), beam.tip_stiffness (the upper one), a stack-up's named flex joints \
 stackup.flex_joint.<name>.stiffness, with bounds; soil.modulus as an uncertainty) optimised \
-by L-BFGS on ln D_y with exact adjoint gradients, from the scene's own design.
+by a projected L-BFGS on ln D_y with exact adjoint gradients, from the scene's own design.
 
 D_y = Σ_s p_s · D_s · Y/T_s is the expected damage per year at the wellhead (the rainflow damage \
 `chainbeam fatigue --scatter` reports, the same cells, records and spin-up), and its gradient \
 ∂D_y/∂θ = Σ_s p_s · ∂D_s/∂θ · Y/T_s comes from one adjoint sweep per cell (cells on all cores; the \
-result does not depend on where they ran). Life L = 1/(DFF · D_y) years. Bounds: θ = lo + (hi − lo) \
-· σ(z) with σ the logistic function, the optimiser working in z.
+result does not depend on where they ran). Life L = 1/(DFF · D_y) years. Bounds: the optimiser works in \
+u = ln(θ/lo)/ln(hi/lo) ∈ [0, 1]; a step beyond a bound lands on it and a parameter on a bound whose \
+gradient pushes outward stays there (an active set, as L-BFGS-B); it stops when the projected \
+gradient's norm ‖P(u − ∇_u ln D_y) − u‖_∞ ≤ [design] tolerance.
 
 --sensitivities: no optimisation; the sensitivities at the scene's design of every [design] \
 parameter (every design parameter the scene has, without a [design] table).
@@ -43,11 +45,14 @@ Output (JSON):
   design                  {name: optimised value} (not with --sensitivities)
   damage_per_year, life_years   at the optimised design (the scene's with --sensitivities)
   iterates                [{iteration, design, damage_per_year, life_years, gradient_norm, \
-simulations}], the start first
-  converged, termination, simulations (cell runs: adjoint sweeps), seconds
+simulations, adjoint_sweeps, forward_runs}], the start first
+  converged, termination, simulations (cell runs: adjoint_sweeps, each a forward and a reverse \
+pass, plus forward_runs, line-search trials that need the value alone), adjoint_sweeps, \
+forward_runs, seconds
   cells                   [{hs, tp, direction, probability, damage, duration_s}] at the result
 
-Progress: one line per iteration on stderr (damage per year, life, ‖∇_z ln D_y‖, the design), \
+Progress: one line per iteration on stderr (damage per year, life, the projected gradient's \
+norm, the design), \
 not with --quiet. Exit status 3 when the optimiser did not converge (the JSON is written all the \
 same). Details: docs/cli.md.";
 
@@ -134,10 +139,7 @@ pub fn run(a: &DesignArgs, progress: Progress, quiet: bool) -> Result<(), CliErr
         record: Some(record),
         spin_up: a.spin_up,
     };
-    let dff = scene
-        .fatigue_spec()
-        .ok_or_else(|| design_error(a, DesignError::NoFatigueSpec))?
-        .dff;
+    let dff = study.dff().map_err(|e| design_error(a, e))?;
     let n_cells = study.n_cells();
     let json = if a.sensitivities {
         let bar = progress.bar(n_cells as u64, format!("{n_cells} cells (adjoint sweeps)"));
@@ -162,7 +164,7 @@ pub fn run(a: &DesignArgs, progress: Progress, quiet: bool) -> Result<(), CliErr
         let on_iterate = (!quiet).then(|| {
             Arc::new(move |it: &DesignIterate| {
                 eprintln!(
-                    "iter {:>3}  damage/yr {:.6e}  life {:.6e} y  |g| {:.3e}  sims {}  {}",
+                    "iter {:>3}  damage/yr {:.6e}  life {:.6e} y  |Pg| {:.3e}  sims {}  {}",
                     it.iteration,
                     it.damage_per_year,
                     it.life_years,

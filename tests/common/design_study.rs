@@ -1,0 +1,143 @@
+//! The reduced scatter studies of the design tests (tests/design): the diagram's cells, the
+//! study of a reduced scene, its evaluation, and the two checks of the design gradient every
+//! reduced scene goes through: against central differences of D_y (the one gradient check,
+//! `gradient_check::{central, assert_close}`), and cell by cell against forward-mode dual
+//! numbers through the library's fatigue objective.
+#![allow(dead_code)]
+
+use crate::gradient_check::{assert_close, central, Tolerance};
+use chainbeam::design::{
+    DesignParameter, DesignPoint, DesignStudy, Execution, ScatterGradient, Want,
+};
+use chainbeam::fatigue::{ScatterCell, SeaState, WellheadDamage};
+use chainbeam::{Chain, FatigueObjective, Scene};
+use num_dual::Dual64;
+
+/// Cells of a reduced diagram from (H_s \[m\], T_p \[s\], probability), no direction.
+pub fn cells(list: &[(f64, f64, f64)]) -> Vec<ScatterCell> {
+    list.iter()
+        .map(|&(hs, tp, probability)| ScatterCell {
+            sea: SeaState {
+                hs,
+                tp,
+                direction: None,
+            },
+            probability,
+        })
+        .collect()
+}
+
+/// The study of `scene` over `cells`, `record` seconds counted after `spin_up`.
+pub fn study<'a>(
+    scene: &'a Scene,
+    cells: &'a [ScatterCell],
+    record: f64,
+    spin_up: f64,
+) -> DesignStudy<'a> {
+    DesignStudy {
+        scene,
+        cells: Some(cells),
+        record: Some(record),
+        spin_up,
+    }
+}
+
+/// The scene's own values of `params`.
+pub fn values(scene: &Scene, params: &[DesignParameter]) -> Vec<f64> {
+    params.iter().map(|p| p.value(scene).unwrap()).collect()
+}
+
+/// D_y (and its gradient with [`Want::Gradient`]) at the values `v` of `params`.
+pub fn eval(
+    st: &DesignStudy<'_>,
+    params: &[DesignParameter],
+    v: &[f64],
+    want: Want,
+    execution: Execution,
+) -> ScatterGradient {
+    let point = DesignPoint { params, values: v };
+    st.evaluate(&point, want, execution, &|| {}).unwrap()
+}
+
+/// ∂D_y/∂θ_i by the adjoint against central differences of D_y (each D_y by forward runs of
+/// every cell) with the step 10⁻⁵ θ_i, to 10⁻⁵ relative, for the parameters `which` (indices
+/// into `params`) at the design `v`; also D_y of the forward runs = the adjoint sweeps' bit for
+/// bit (the same forward arithmetic). The reference is the central difference: truncation
+/// O(10⁻¹⁰) relative for the step, round-off about 10⁻¹¹. Returns the evaluation at `v`.
+pub fn check_central_differences(
+    st: &DesignStudy<'_>,
+    params: &[DesignParameter],
+    v: &[f64],
+    which: &[usize],
+) -> ScatterGradient {
+    let g = eval(st, params, v, Want::Gradient, Execution::Parallel);
+    assert!(g.damage_per_year > 0.0);
+    let plain = eval(st, params, v, Want::Value, Execution::Parallel);
+    assert_eq!(plain.damage_per_year.to_bits(), g.damage_per_year.to_bits());
+    let fd: Vec<f64> = which
+        .iter()
+        .map(|&i| {
+            let at = |x: f64| {
+                let mut w = v.to_vec();
+                w[i] = x;
+                eval(st, params, &w, Want::Value, Execution::Parallel).damage_per_year
+            };
+            central(&at, v[i], 1e-5 * v[i])
+        })
+        .collect();
+    let got: Vec<f64> = which.iter().map(|&i| g.gradient[i]).collect();
+    let names: Vec<String> = which.iter().map(|&i| params[i].name()).collect();
+    assert_close(
+        &format!("dD_y/d({}) at {v:?}", names.join(", ")),
+        &got,
+        &fd,
+        "central differences, step 1e-5 of each parameter",
+        Tolerance::relative(1e-5),
+    );
+    g
+}
+
+/// ∂D_s/∂θ_i of every cell by the adjoint = the dual part of D_s computed in `Dual64` with θ_i
+/// seeded through `Chain::set_parameter` (forward-mode differentiation of the whole run through
+/// the library's fatigue objective, [`FatigueObjective`], which counts the whole record: the
+/// study's spin-up must be 0), to 10⁻⁹ relative (both exact; they differ by round-off in
+/// different orders of operations), and D_s itself to 10⁻¹² (dual arithmetic rounds some real
+/// parts differently, by an ulp).
+pub fn check_dual_numbers(st: &DesignStudy<'_>, params: &[DesignParameter], v: &[f64]) {
+    assert_eq!(st.spin_up, 0.0, "the dual check counts the whole record");
+    let g = eval(st, params, v, Want::Gradient, Execution::Serial);
+    let point = DesignPoint { params, values: v };
+    for (s, cell) in g.cells.iter().enumerate() {
+        let cs = st.cell_scene(s, &point).unwrap();
+        let spec = cs.fatigue_spec().unwrap();
+        let objective = FatigueObjective {
+            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
+            effort: 0.0,
+        };
+        let steps = cs.time.steps;
+        for (i, p) in params.iter().enumerate() {
+            let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
+            chain
+                .set_parameter(p.parameter(&cs).unwrap(), Dual64::new(v[i], 1.0))
+                .unwrap();
+            let u = vec![Dual64::from(0.0); steps + 1];
+            let d = chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective)
+                .unwrap();
+            let rel_d = (d.re - cell.damage).abs() / cell.damage;
+            assert!(
+                rel_d < 1e-12,
+                "cell {s}: D_s {} against {}",
+                d.re,
+                cell.damage
+            );
+            let rel = (cell.gradient[i] - d.eps).abs() / d.eps.abs();
+            assert!(
+                rel < 1e-9,
+                "cell {s}, {}: adjoint {:e}, Dual64 {:e} (relative {rel:e})",
+                p.name(),
+                cell.gradient[i],
+                d.eps
+            );
+        }
+    }
+}

@@ -187,17 +187,24 @@ impl<'a, D: Scalar, const DIM: usize> ConstraintOperator<'a, D, DIM> {
         let scaled = |x: &[D; DIM], j: usize| x.map(|c| c * ch.inv_lengths[j]);
         // Ω̃ₖ v = Ωₖ v / mₖ.
         let om = |k: usize, v: &[D; DIM]| omega[k].apply(v).map(|c| c * ch.inv_masses[k]);
+        // Each aⱼ, a′ⱼ and Ω̃ product is formed once and carried to the next row (the same
+        // values as forming them where they are read).
+        let (mut a, mut an) = (scaled(&q[0], 0), scaled(&qnew[0], 0));
+        // Ω̃ⱼ₋₁aⱼ, formed in row j − 1.
+        let mut prev = [D::zero(); DIM];
         for j in 0..n {
-            let (a, an) = (scaled(&q[j], j), scaled(&qnew[j], j));
-            let mut d = dot(&an, &om(j, &a));
+            let oa = om(j, &a);
+            let mut d = dot(&an, &oa);
             if j > 0 {
-                d += dot(&an, &om(j - 1, &a));
+                d += dot(&an, &prev);
             }
             tri.diag[j] = d * s;
             if j + 1 < n {
                 let (b, bn) = (scaled(&q[j + 1], j + 1), scaled(&qnew[j + 1], j + 1));
-                tri.upper[j] = -(dot(&an, &om(j, &b)) * s);
-                tri.lower[j + 1] = -(dot(&bn, &om(j, &a)) * s);
+                let ob = om(j, &b);
+                tri.upper[j] = -(dot(&an, &ob) * s);
+                tri.lower[j + 1] = -(dot(&bn, &oa) * s);
+                (a, an, prev) = (b, bn, ob);
             }
         }
         if !self.bordered() {

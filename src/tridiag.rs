@@ -66,6 +66,9 @@ struct Factors<M> {
     piv: Vec<M>,
     x2: Vec<M>,
     schur_inv: M,
+    /// Whether the factored border is the tip's (zero but in its last entry,
+    /// [`Factors::tip_border_solve`]).
+    tip_border: bool,
 }
 
 /// The f64 copy of a dual matrix's real parts, its factors and the real solution y₀.
@@ -137,6 +140,7 @@ impl<M: Scalar> Factors<M> {
             piv: z.clone(),
             x2: z,
             schur_inv: M::zero(),
+            tip_border: false,
         }
     }
 
@@ -159,21 +163,62 @@ impl<M: Scalar> Factors<M> {
                 M::zero()
             };
         }
+        self.tip_border = false;
         if a.bordered {
             let (col, row) = a.border();
             let mut x2 = std::mem::take(&mut self.x2);
-            x2.copy_from_slice(col);
-            self.sweep(a, &mut x2);
-            let mut cx2 = M::zero();
-            for i in 0..n {
-                cx2 += row[i] * x2[i];
-            }
+            let cx2 = match self.tip_border_solve(a, &mut x2) {
+                Some(cx2) => cx2,
+                None => {
+                    x2.copy_from_slice(col);
+                    self.sweep(a, &mut x2);
+                    let mut cx2 = M::zero();
+                    for i in 0..n {
+                        cx2 += row[i] * x2[i];
+                    }
+                    cx2
+                }
+            };
             self.x2 = x2;
             let schur = a.corner - cx2;
             check_pivot(n, schur)?;
             self.schur_inv = schur.recip();
         }
         Ok(())
+    }
+
+    /// x2 = T⁻¹b and cᵀx2 of a border that is zero (+0) but in its last entry (the tip
+    /// constraint's border after the assemblies of [`crate::constraints`]), in `f64`: the full
+    /// sweep's forward pass then only carries zeros, +0 · pivot (0 − (±0) = +0), so x2's last
+    /// entry is (b_{n−1} − (+0 · p_{n−2}) T_{n−1,n−2}) p_{n−1} and the back pass
+    /// x2ᵢ = +0 · pᵢ − x2ᵢ₊₁ cpᵢ; and cᵀx2 = +0 + c_{n−1} x2_{n−1} (each term before the last
+    /// is ±0, which leaves the sum at +0): the values of the full sweep and sum bit for bit,
+    /// without the forward pass's dependent chain. `None` (the caller sweeps) for any other
+    /// border, for dual numbers, or when x2 is not finite (where ±0 · x2ᵢ would be a NaN).
+    fn tip_border_solve(&mut self, a: &Entries<'_, M>, x2: &mut [M]) -> Option<M> {
+        let n = a.diag.len();
+        let (col, row) = a.border();
+        let plus_zero = |v: &[M]| v.iter().all(|x| x.re().to_bits() == 0);
+        if M::NDERIV != 0 || n == 0 || !plus_zero(&col[..n - 1]) || !plus_zero(&row[..n - 1]) {
+            return None;
+        }
+        let last = n - 1;
+        let prev = if last > 0 {
+            (M::zero() * self.piv[last - 1]) * a.sub(last)
+        } else {
+            M::zero()
+        };
+        x2[last] = (col[last] - prev) * self.piv[last];
+        let mut finite = x2[last].re().is_finite();
+        for i in (0..last).rev() {
+            x2[i] = M::zero() * self.piv[i] - x2[i + 1] * self.cp[i];
+            finite &= x2[i].re().is_finite();
+        }
+        if !finite {
+            return None;
+        }
+        self.tip_border = true;
+        Some(M::zero() + row[last] * x2[last])
     }
 
     /// Forward and back substitution of the tridiagonal part on `x` (length n).
@@ -199,9 +244,18 @@ impl<M: Scalar> Factors<M> {
         self.sweep(a, &mut rhs[..n]);
         if a.bordered {
             let (_, row) = a.border();
+            // With the tip's border (zero but in its last entry, `tip_border_solve`) and a
+            // finite real right-hand side, the terms before the last are ±0 and leave the sum
+            // at +0: the same value as the full sum.
+            let tip =
+                self.tip_border && R::NDERIV == 0 && rhs[..n].iter().all(|r| r.re().is_finite());
             let mut cx1 = R::zero();
-            for i in 0..n {
-                cx1 += rhs[i] * row[i];
+            if tip {
+                cx1 += rhs[n - 1] * row[n - 1];
+            } else {
+                for i in 0..n {
+                    cx1 += rhs[i] * row[i];
+                }
             }
             let y = (rhs[n] - cx1) * self.schur_inv;
             for i in 0..n {

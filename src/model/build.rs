@@ -58,7 +58,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             });
         let loads = Self::point_loads(scene);
         let waves = Self::wave_field(scene)?;
-        let vessel = Self::vessel_motion(scene)?;
+        let vessel = Self::vessel_motion(scene, waves.as_ref().map(|w| w.shared_sea()))?;
         let node_morison = scene
             .pipe
             .filter(|p| p.drag_model == crate::scene::DragModel::Morison);
@@ -147,7 +147,12 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// The vessel's motion of the top for `support = "vessel"` ([`VesselMotion`]; the scene is
     /// valid): the `[vessel]` table (a vessel at rest when absent) with its RAO applied to the
     /// scene's sea, realised on the scene's grid for the run.
-    fn vessel_motion(scene: &Scene) -> Result<Option<std::sync::Arc<VesselMotion>>> {
+    /// `shared` is the waves' field's sea when the chain has one (the same realisation: it is
+    /// not built twice).
+    fn vessel_motion(
+        scene: &Scene,
+        shared: Option<std::sync::Arc<crate::ocean::Sea>>,
+    ) -> Result<Option<std::sync::Arc<VesselMotion>>> {
         if scene.beam.support != Support::Vessel {
             return Ok(None);
         }
@@ -155,11 +160,17 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let t = scene.time;
         let sea = match (&scene.loads.waves, &vessel.rao) {
             (Some(w), Some(_)) => {
-                let spec = w.sea_spec(scene.wave_depth())?;
-                let err = |e| Error::from(crate::scene::sea_error(e, w.components));
-                let sea =
-                    crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step).map_err(err)?;
-                Some((std::sync::Arc::new(sea), w.unit_direction()[1]))
+                let sea = match shared {
+                    Some(sea) => sea,
+                    None => {
+                        let spec = w.sea_spec(scene.wave_depth())?;
+                        let err = |e| Error::from(crate::scene::sea_error(e, w.components));
+                        let sea = crate::ocean::Sea::new(&spec, t.step, t.steps as f64 * t.step)
+                            .map_err(err)?;
+                        std::sync::Arc::new(sea)
+                    }
+                };
+                Some((sea, w.unit_direction()[1]))
             }
             _ => None,
         };

@@ -25,8 +25,8 @@ pub use terms::{
     AxialWeight, BlockSym, ChainPointLoad, ControlForce, CoupledAt, CoupledDissipativeTerm,
     CoupledVisitor, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights,
     DualScratch, Embed, ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping,
-    NodeDrag, PointLoads, ReactionTip, ReactionTipBar, SoilSprings, Springs, TermVisitor,
-    TopTension, WaveField, WaveInertia, WaveInputs,
+    NodeDrag, PointLoads, ReactionTip, ReactionTipBar, RecordTime, SoilSprings, Springs,
+    TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};

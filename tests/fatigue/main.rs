@@ -23,6 +23,7 @@ mod fatigue_study_startup;
 mod fatigue_wellhead;
 mod hotspot_interpolation;
 mod hotspots;
+mod profile_speed;
 mod sea_domain;
 mod sea_fatigue_proptest;
 mod sea_loads;

@@ -117,9 +117,6 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
             .check_stored_trajectory()
             .map_err(|e| lib_error(&a.scene, e.into()))?;
     }
-    let eta = scene
-        .wave_elevation()
-        .map_err(|e| lib_error(&a.scene, e.into()))?;
     let controls = match &a.controls {
         Some(path) => {
             let file = controls_io::read(path)?;
@@ -129,9 +126,22 @@ pub fn run(a: &SimulateArgs, progress: Progress) -> Result<(), CliError> {
         None => None,
     };
     let spatial = scene.is_spatial() || matches!(controls, Some((_, Some(_))));
-    let names = csv_names(scene.n(), spatial, eta.is_some());
+    let names = csv_names(scene.n(), spatial, scene.loads.waves.is_some());
     let select = select_columns(&names, a.columns.as_deref())?;
     refuse_overwrite(&[("--output", &out)], &inputs)?;
+    // The elevation's record (one more realisation of the sea, O(N + steps)) only when its
+    // column is written.
+    let writes_eta = names
+        .iter()
+        .position(|n| n == "eta")
+        .is_some_and(|c| select.contains(&c));
+    let eta = if writes_eta {
+        scene
+            .wave_elevation()
+            .map_err(|e| lib_error(&a.scene, e.into()))?
+    } else {
+        None
+    };
     if let Some(k) = eta
         .as_ref()
         .and_then(|e| e.iter().position(|v| !v.is_finite()))

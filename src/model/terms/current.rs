@@ -31,7 +31,7 @@
 use std::sync::Arc;
 
 use super::drag::{morison, root_of, slope_of, DragWeights};
-use super::waves::WaveField;
+use super::waves::{RecordTime, WaveField};
 use super::{BlockSym, Ctx, DissipativeTerm, Embed, HalfKick, HalfSteps};
 use crate::base::{Parameter, Scalar};
 use crate::model::geometry::zi;
@@ -203,11 +203,35 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
     /// The current's momentum Pᵢ_d = s·Aᵢ_d + Bᵢ_d, its parameters read through [`Ctx::param`].
     #[inline]
     pub fn momentum<E: Embed<D>>(&self, i: usize, d: usize, ctx: &Ctx<E>) -> E {
+        self.momentum_located(i, d, ctx, None)
+    }
+
+    /// The water's momentum P of every pendulum at the context's time into `out`, each
+    /// component [`CurrentDrag::momentum`]'s bit for bit, with the waves' record located once
+    /// for all pendulums ([`WaveField::at`]) instead of once per pendulum and component.
+    pub fn momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        let at = self.waves.as_ref().map(|w| w.at(ctx.t));
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = std::array::from_fn(|d| self.momentum_located(i, d, ctx, at));
+        }
+    }
+
+    /// [`CurrentDrag::momentum`] with the waves' record time `at` located already (`None`:
+    /// located here, at the context's time).
+    #[inline]
+    fn momentum_located<E: Embed<D>>(
+        &self,
+        i: usize,
+        d: usize,
+        ctx: &Ctx<E>,
+        at: Option<RecordTime>,
+    ) -> E {
         let s = ctx.param(Parameter::CurrentSpeed, self.speed);
         let mut p = s * E::embed(self.per_speed[i][d]) + E::embed(self.offset[i][d]);
         if let Some(w) = &self.waves {
             if self.wave_unit[d] != 0.0 {
-                p += E::embed(self.wave_scale) * (w.momentum(i, ctx.t) * self.wave_unit[d]);
+                let at = at.unwrap_or_else(|| w.at(ctx.t));
+                p += E::embed(self.wave_scale) * (w.momentum_at(i, at) * self.wave_unit[d]);
             }
         }
         if ctx.seed == Some(Parameter::Mass) {

@@ -132,9 +132,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
     /// once per step for [`NodeDrag::implicit_half_step`] and
     /// [`NodeDrag::generalised_force_in`] instead of once per node, Newton iteration and pass.
     pub fn water_momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = std::array::from_fn(|d| self.water.momentum(k, d, ctx));
-        }
+        self.water.momenta(ctx, out);
     }
 
     /// y = A (p − P) with P given (`water`, [`NodeDrag::water_momenta`]): the same arithmetic

@@ -37,13 +37,13 @@
 //! enter the derivatives as constants, so the adjoint and dual numbers differentiate the model as
 //! interpolated, exactly.
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use super::{Ctx, Embed, ForceTerm};
 use crate::base::{Parameter, Scalar};
 use crate::error::Result;
 use crate::model::geometry::zi;
-use crate::ocean::{Complex, Sea, SeaError};
+use crate::ocean::{Complex, Profiles, Sea, SeaError};
 
 /// What a [`WaveField`] is computed from besides the sea.
 #[derive(Clone, Debug)]
@@ -82,7 +82,7 @@ pub struct WaveInputs {
 /// [`crate::scene::water_height`]: zero for a node in the soil; a cell that reaches into the
 /// soil averages the water's part over the whole cell (the soil's part moves no water).
 fn node_velocity(
-    sea: &Sea,
+    profiles: &mut Profiles<'_>,
     inputs: &WaveInputs,
     (y, next): (f64, f64),
     i: usize,
@@ -92,29 +92,89 @@ fn node_velocity(
     let above = |h: f64| crate::scene::water_height(m, h);
     if !inputs.cell_average {
         match above(y) {
-            Some(h) => sea.velocity_amplitudes(h, v),
+            Some(h) => profiles.velocity_amplitudes(h, v),
             None => v.iter_mut().for_each(|x| *x = Complex::new(0.0, 0.0)),
         }
         return;
     }
     let (lo, hi) = (y - 0.5 * inputs.lengths[i], y + 0.5 * next);
     if m == 0.0 {
-        sea.cell_velocity_amplitudes((lo, hi), v);
+        profiles.cell_velocity_amplitudes((lo, hi), v);
         return;
     }
     match above(hi) {
         Some(h1) if h1 > 0.0 => {
             let h0 = lo - m;
             if h0 >= 0.0 {
-                sea.cell_velocity_amplitudes((h0, h1), v);
+                profiles.cell_velocity_amplitudes((h0, h1), v);
             } else {
-                sea.cell_velocity_amplitudes((0.0, h1), v);
+                profiles.cell_velocity_amplitudes((0.0, h1), v);
                 let share = h1 / (hi - lo);
                 v.iter_mut().for_each(|x| *x *= share);
             }
         }
         _ => v.iter_mut().for_each(|x| *x = Complex::new(0.0, 0.0)),
     }
+}
+
+/// The complex amplitudes of every pendulum's two series (module docs), pendulum by pendulum
+/// from the tip down (the suffix sums over the nodes beyond it): `visit(i, Wᵢ's, Gᵢ's)`, N
+/// each. O(n N) and O(N) memory: the caller keeps what it needs.
+fn pendulum_amplitudes(
+    sea: &Sea,
+    inputs: &WaveInputs,
+    mut visit: impl FnMut(usize, &[Complex<f64>], &[Complex<f64>]),
+) {
+    let n = inputs.lengths.len();
+    let nc = sea.frequencies().len();
+    let zero = Complex::new(0.0, 0.0);
+    let heights: Vec<f64> = inputs
+        .lengths
+        .iter()
+        .scan(0.0, |y, l| {
+            *y += l;
+            Some(*y)
+        })
+        .collect();
+    let mut profiles = Profiles::new(sea);
+    let (mut sm, mut si, mut v) = (vec![zero; nc], vec![zero; nc], vec![zero; nc]);
+    let (mut a, mut b) = (vec![zero; nc], vec![zero; nc]);
+    let omega = sea.frequencies();
+    for i in (0..n).rev() {
+        let next = inputs.lengths.get(i + 1).copied().unwrap_or(0.0);
+        node_velocity(&mut profiles, inputs, (heights[i], next), i, &mut v);
+        let cell = match &inputs.node_inertia {
+            Some(c) => c[i],
+            None => 0.5 * (inputs.lengths[i] + next) * inputs.inertia_per_length,
+        };
+        let l = inputs.lengths[i];
+        for j in 0..nc {
+            sm[j] += v[j] * inputs.masses[i];
+            // u̇ = Re Σ i ωⱼ Vⱼ e^{iωⱼt}
+            si[j] += Complex::new(0.0, omega[j]) * v[j] * cell;
+            a[j] = sm[j] * l;
+            b[j] = si[j] * l;
+        }
+        visit(i, &a, &b);
+    }
+}
+
+/// A time located in a [`WaveField`]'s record ([`WaveField::at`]): read every pendulum's series
+/// at it without locating the time again.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordTime(At);
+
+/// Where a time falls in the record.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum At {
+    /// On record time k.
+    Row(usize),
+    /// Between record times k and k + 1 (r = 1), at the fraction given.
+    Linear(usize, f64),
+    /// Between record times j and j + 1 (r > 1), at x = (t − t_j)/(r h).
+    Hermite(usize, f64),
+    /// Beyond the record, at time t: the direct sum.
+    Beyond(f64),
 }
 
 /// The wave kinematics of a chain over a record (module docs): Wᵢ(tₖ), Gᵢ(tₖ) and the surface
@@ -135,9 +195,17 @@ pub struct WaveField {
     series: Vec<f64>,
     /// η(0, tₖ); for r > 1, pairs (η, η̇).
     elevation: Vec<f64>,
-    /// n × N amplitudes of Wᵢ and Gᵢ.
-    momentum_amp: Vec<Complex<f64>>,
-    inertia_amp: Vec<Complex<f64>>,
+    /// n × N amplitudes of Wᵢ and Gᵢ, formed when a time beyond the record is read (the
+    /// record itself is synthesised pendulum by pendulum as the amplitudes are formed, so a
+    /// run that stays within its record never holds them).
+    amplitudes: OnceLock<Amplitudes>,
+}
+
+/// The n × N complex amplitudes of every pendulum's Wᵢ and Gᵢ ([`WaveField::amplitudes`]).
+#[derive(Clone, Debug)]
+struct Amplitudes {
+    momentum: Vec<Complex<f64>>,
+    inertia: Vec<Complex<f64>>,
 }
 
 impl WaveField {
@@ -148,35 +216,8 @@ impl WaveField {
     pub fn new(sea: Arc<Sea>, inputs: WaveInputs) -> std::result::Result<Self, SeaError> {
         let n = inputs.lengths.len();
         let nc = sea.frequencies().len();
-        let zero = Complex::new(0.0, 0.0);
-        let (mut momentum_amp, mut inertia_amp) =
-            (alloc_amplitudes(n, nc)?, alloc_amplitudes(n, nc)?);
-        let heights: Vec<f64> = inputs
-            .lengths
-            .iter()
-            .scan(0.0, |y, l| {
-                *y += l;
-                Some(*y)
-            })
-            .collect();
-        let (mut sm, mut si, mut v) = (vec![zero; nc], vec![zero; nc], vec![zero; nc]);
-        let omega = sea.frequencies();
-        for i in (0..n).rev() {
-            let next = inputs.lengths.get(i + 1).copied().unwrap_or(0.0);
-            node_velocity(&sea, &inputs, (heights[i], next), i, &mut v);
-            let cell = match &inputs.node_inertia {
-                Some(c) => c[i],
-                None => 0.5 * (inputs.lengths[i] + next) * inputs.inertia_per_length,
-            };
-            let l = inputs.lengths[i];
-            for j in 0..nc {
-                sm[j] += v[j] * inputs.masses[i];
-                // u̇ = Re Σ i ωⱼ Vⱼ e^{iωⱼt}
-                si[j] += Complex::new(0.0, omega[j]) * v[j] * cell;
-                momentum_amp[i * nc + j] = sm[j] * l;
-                inertia_amp[i * nc + j] = si[j] * l;
-            }
-        }
+        // The amplitudes a read beyond the record forms are held to the record's limit here.
+        check_amplitudes(n, nc)?;
         let rows = inputs.rows;
         let every = inputs.every.max(1);
         let width = if every == 1 { 2 } else { 4 };
@@ -187,53 +228,54 @@ impl WaveField {
             every,
             series: alloc_record(rows * n * width)?,
             elevation: alloc_record(rows * width / 2)?,
-            momentum_amp,
-            inertia_amp,
+            amplitudes: OnceLock::new(),
             inputs,
             sea,
         };
         if every > 1 {
             field.fill_hermite_record();
-            return Ok(field);
+        } else {
+            field.fill_step_record()?;
         }
-        field.fill_step_record()?;
         Ok(field)
     }
 
     /// The record of r = 1 (module docs): (Wᵢ, Gᵢ) and η at every step tₖ = k h.
     fn fill_step_record(&mut self) -> std::result::Result<(), SeaError> {
-        let (n, rows, nc) = (self.n, self.rows, self.sea.frequencies().len());
-        let mut plan = self.sea.synthesis_rows(1, rows);
-        // The pendulums in blocks of BLOCK: each one's series into a pendulum-major scratch,
-        // then the block into the time-major record, BLOCK pairs (one cache line) per row
-        // instead of one scattered write per pendulum and row (the same values).
+        let (n, rows) = (self.n, self.rows);
+        let sea = self.sea.clone();
+        let mut plan = sea.synthesis_rows(1, rows);
+        // The pendulums in blocks of BLOCK (from the tip down, as their amplitudes come): each
+        // one's series into a pendulum-major scratch, then the block into the time-major
+        // record, BLOCK pairs (one cache line) per row instead of one scattered write per
+        // pendulum and row (the same values).
         const BLOCK: usize = 4;
         let mut scratch = alloc_record(rows * 2 * BLOCK.min(n))?;
-        for i0 in (0..n).step_by(BLOCK) {
+        let series = &mut self.series;
+        pendulum_amplitudes(&sea, &self.inputs, |i, a, b| {
+            // Slot j holds pendulum i0 + j of the block i0..i0 + width.
+            let i0 = i - i % BLOCK;
             let width = BLOCK.min(n - i0);
-            for j in 0..width {
-                let i = i0 + j;
-                let (a, b) = (
-                    &self.momentum_amp[i * nc..(i + 1) * nc],
-                    &self.inertia_amp[i * nc..(i + 1) * nc],
-                );
-                let out = &mut scratch[j * rows * 2..(j + 1) * rows * 2];
-                self.sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
-                    out[2 * k] = x;
-                    out[2 * k + 1] = y;
-                });
-            }
-            for k in 0..rows {
-                let row = &mut self.series[(k * n + i0) * 2..(k * n + i0 + width) * 2];
-                for (j, pair) in row.chunks_exact_mut(2).enumerate() {
-                    pair.copy_from_slice(&scratch[(j * rows + k) * 2..(j * rows + k) * 2 + 2]);
+            let j = i - i0;
+            let out = &mut scratch[j * rows * 2..(j + 1) * rows * 2];
+            sea.synthesize((a, b), rows, &mut plan, |k, x, y| {
+                out[2 * k] = x;
+                out[2 * k + 1] = y;
+            });
+            if j == 0 {
+                // The block's last pendulum (the amplitudes come from the tip down).
+                for k in 0..rows {
+                    let row = &mut series[(k * n + i0) * 2..(k * n + i0 + width) * 2];
+                    for (j, pair) in row.chunks_exact_mut(2).enumerate() {
+                        pair.copy_from_slice(&scratch[(j * rows + k) * 2..(j * rows + k) * 2 + 2]);
+                    }
                 }
             }
-        }
+        });
         drop(scratch);
         let el = &mut self.elevation;
-        self.sea.synthesize(
-            (self.sea.elevation_amplitudes(), &[]),
+        sea.synthesize(
+            (sea.elevation_amplitudes(), &[]),
             rows,
             &mut plan,
             |k, x, _| {
@@ -257,18 +299,17 @@ impl WaveField {
                 *o = Complex::new(0.0, w) * x;
             }
         };
-        for i in 0..n {
-            for (amp, offset) in [(&self.momentum_amp, 0), (&self.inertia_amp, 2)] {
-                let a = &amp[i * nc..(i + 1) * nc];
+        let table = &mut self.series;
+        pendulum_amplitudes(&sea, &self.inputs, |i, wa, ga| {
+            for (a, offset) in [(wa, 0), (ga, 2)] {
                 derivative(a, &mut rate);
-                let table = &mut self.series;
                 sea.synthesize((a, &rate), rows, &mut plan, |k, x, dx| {
                     let at = (k * n + i) * 4 + offset;
                     table[at] = x;
                     table[at + 1] = dx;
                 });
             }
-        }
+        });
         derivative(sea.elevation_amplitudes(), &mut rate);
         let el = &mut self.elevation;
         sea.synthesize(
@@ -280,6 +321,24 @@ impl WaveField {
                 el[2 * k + 1] = dx;
             },
         );
+    }
+
+    /// The n × N amplitudes of every pendulum's series, formed on first use (a read beyond the
+    /// record, [`WaveField::amplitudes`]) by the arithmetic that formed the record's.
+    fn stored_amplitudes(&self) -> &Amplitudes {
+        self.amplitudes.get_or_init(|| {
+            let nc = self.sea.frequencies().len();
+            let zero = Complex::new(0.0, 0.0);
+            let mut amp = Amplitudes {
+                momentum: vec![zero; self.n * nc],
+                inertia: vec![zero; self.n * nc],
+            };
+            pendulum_amplitudes(&self.sea, &self.inputs, |i, a, b| {
+                amp.momentum[i * nc..(i + 1) * nc].copy_from_slice(a);
+                amp.inertia[i * nc..(i + 1) * nc].copy_from_slice(b);
+            });
+            amp
+        })
     }
 
     /// The same field for new node masses (the water momentum's weights): recomputed.
@@ -302,77 +361,84 @@ impl WaveField {
         &self.sea
     }
 
+    /// The sea realised, shared (the vessel's motion reads the same realisation).
+    pub(crate) fn shared_sea(&self) -> Arc<Sea> {
+        self.sea.clone()
+    }
+
     /// The unit direction (d_x, d_z) of the waves in the transverse plane.
     pub fn direction(&self) -> [f64; 2] {
         self.inputs.direction
     }
 
-    /// The series in `table` at time t (`stride` values per grid time, the series' value at
-    /// `offset`): the grid value at a grid time, linear interpolation between grid times, the
-    /// direct sum of `amp` (pendulum `i`'s amplitudes) beyond the record.
+    /// Where time t falls in the record: the grid row, the two rows around it with the
+    /// interpolation's abscissa, or beyond the record. The same for every pendulum's series
+    /// (and η), so that a term reading all n pendulums at one time locates t once
+    /// ([`WaveField::at`], [`WaveField::momentum_at`], [`WaveField::inertia_at`]).
     #[inline]
-    fn sample(
-        &self,
-        table: &[f64],
-        (stride, offset): (usize, usize),
-        (amp, i): (&[Complex<f64>], usize),
-        t: f64,
-    ) -> f64 {
+    pub fn at(&self, t: f64) -> RecordTime {
+        let s = t / self.h;
         if self.every > 1 {
-            return self.hermite(table, (stride, offset), (amp, i), t);
+            if s >= 0.0 {
+                let j0 = s.floor();
+                let x = s - j0;
+                let j = j0 as usize;
+                if j + 1 < self.rows {
+                    return RecordTime(At::Hermite(j, x));
+                }
+                if x <= 1e-9 && j < self.rows {
+                    return RecordTime(At::Row(j));
+                }
+            }
+            return RecordTime(At::Beyond(t));
         }
         let rows = self.rows;
-        let s = t / self.h;
         if s >= 0.0 {
             let k0 = s.floor();
             let frac = s - k0;
             let k = k0 as usize;
             if frac <= 1e-9 && k < rows {
-                return table[k * stride + offset];
+                return RecordTime(At::Row(k));
             }
             if frac >= 1.0 - 1e-9 && k + 1 < rows {
-                return table[(k + 1) * stride + offset];
+                return RecordTime(At::Row(k + 1));
             }
             if k + 1 < rows {
-                return table[k * stride + offset] * (1.0 - frac)
-                    + table[(k + 1) * stride + offset] * frac;
+                return RecordTime(At::Linear(k, frac));
             }
         }
-        let nc = self.sea.frequencies().len();
-        self.sea.sum_at(&amp[i * nc..(i + 1) * nc], t)
+        RecordTime(At::Beyond(t))
     }
 
-    /// The series of a record of r > 1 at time t (the value at `offset`, its derivative at
-    /// `offset + 1`): the cubic Hermite interpolant between the record times around t (module
-    /// docs), the record's value at its last time, the direct sum beyond.
+    /// The series in `table` at the located time `at` (`stride` values per grid time, the
+    /// series' value at `offset`, its derivative at `offset + 1` for r > 1): the grid value at
+    /// a grid time, linear interpolation between grid times (r = 1), the cubic Hermite
+    /// interpolant between the record times around t (r > 1, module docs), `beyond`(t) (the
+    /// direct sum) beyond the record.
     #[inline]
-    fn hermite(
+    fn read(
         &self,
         table: &[f64],
         (stride, offset): (usize, usize),
-        (amp, i): (&[Complex<f64>], usize),
-        t: f64,
+        beyond: impl FnOnce(f64) -> f64,
+        at: RecordTime,
     ) -> f64 {
-        let s = t / self.h;
-        if s >= 0.0 {
-            let j0 = s.floor();
-            let x = s - j0;
-            let j = j0 as usize;
-            if j + 1 < self.rows {
+        match at.0 {
+            At::Row(k) => table[k * stride + offset],
+            At::Linear(k, frac) => {
+                table[k * stride + offset] * (1.0 - frac) + table[(k + 1) * stride + offset] * frac
+            }
+            At::Hermite(j, x) => {
                 let (a, b) = (j * stride + offset, (j + 1) * stride + offset);
                 let (y0, d0) = (table[a], table[a + 1] * self.h);
                 let (y1, d1) = (table[b], table[b + 1] * self.h);
                 let dy = y1 - y0;
                 let c2 = 3.0 * dy - 2.0 * d0 - d1;
                 let c3 = d0 + d1 - 2.0 * dy;
-                return y0 + x * (d0 + x * (c2 + x * c3));
+                y0 + x * (d0 + x * (c2 + x * c3))
             }
-            if x <= 1e-9 && j < self.rows {
-                return table[j * stride + offset];
-            }
+            At::Beyond(t) => beyond(t),
         }
-        let nc = self.sea.frequencies().len();
-        self.sea.sum_at(&amp[i * nc..(i + 1) * nc], t)
     }
 
     /// Values per record time and pendulum: 2 (W, G), or 4 (W, Ẇ, G, Ġ) for r > 1.
@@ -395,28 +461,50 @@ impl WaveField {
     /// momentum along the mean direction (module docs).
     #[inline]
     pub fn momentum(&self, i: usize, t: f64) -> f64 {
+        self.momentum_at(i, self.at(t))
+    }
+
+    /// [`WaveField::momentum`] at a located time ([`WaveField::at`]): the same value bit for
+    /// bit, without locating t again for every pendulum.
+    #[inline]
+    pub fn momentum_at(&self, i: usize, at: RecordTime) -> f64 {
         let w = self.width();
-        let at = (w * self.n, w * i);
-        self.sample(&self.series, at, (&self.momentum_amp, i), t)
+        let place = (w * self.n, w * i);
+        self.read(&self.series, place, |t| self.sum_beyond(i, false, t), at)
     }
 
     /// Gᵢ(t) = lᵢ Σ_{k≥i} ρ_w (1 + C_a) A_o c_k u̇_k(t) \[N m\]: the inertia load's generalised
     /// force on pendulum i along the mean direction (module docs).
     #[inline]
     pub fn inertia(&self, i: usize, t: f64) -> f64 {
+        self.inertia_at(i, self.at(t))
+    }
+
+    /// [`WaveField::inertia`] at a located time ([`WaveField::at`]): the same value bit for
+    /// bit.
+    #[inline]
+    pub fn inertia_at(&self, i: usize, at: RecordTime) -> f64 {
         let w = self.width();
-        let at = (w * self.n, w * i + w / 2);
-        self.sample(&self.series, at, (&self.inertia_amp, i), t)
+        let place = (w * self.n, w * i + w / 2);
+        self.read(&self.series, place, |t| self.sum_beyond(i, true, t), at)
+    }
+
+    /// Wᵢ (`inertia = false`) or Gᵢ (`true`) at a time t beyond the record: the direct sum of
+    /// its amplitudes ([`Sea::sum_at`], O(N)).
+    #[cold]
+    fn sum_beyond(&self, i: usize, inertia: bool, t: f64) -> f64 {
+        self.sea.sum_at(self.amplitudes(i, inertia), t)
     }
 
     /// The complex amplitudes of Wᵢ (`inertia = false`) or Gᵢ (`true`), one per component:
     /// the series is Re Σⱼ Xⱼ e^{iωⱼ t} (module docs).
     pub fn amplitudes(&self, i: usize, inertia: bool) -> &[Complex<f64>] {
         let nc = self.sea.frequencies().len();
+        let stored = self.stored_amplitudes();
         let amp = if inertia {
-            &self.inertia_amp
+            &stored.inertia
         } else {
-            &self.momentum_amp
+            &stored.momentum
         };
         &amp[i * nc..(i + 1) * nc]
     }
@@ -425,7 +513,8 @@ impl WaveField {
     pub fn elevation(&self, t: f64) -> f64 {
         let amp = self.sea.elevation_amplitudes();
         let w = self.width() / 2;
-        self.sample(&self.elevation, (w, 0), (amp, 0), t)
+        let beyond = |t| self.sea.sum_at(amp, t);
+        self.read(&self.elevation, (w, 0), beyond, self.at(t))
     }
 }
 
@@ -472,8 +561,9 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
     fn energy<E: Embed<D>>(&self, q: &[[E; DIM]], ctx: &Ctx<E>) -> E {
         let e = self.unit::<DIM>();
         let mut u = E::zero();
+        let at = self.field.at(ctx.t);
         for (j, qj) in q.iter().enumerate() {
-            let g = self.field.inertia(j, ctx.t);
+            let g = self.field.inertia_at(j, at);
             for d in 0..DIM {
                 if e[d] != 0.0 {
                     u -= qj[d] * (g * e[d]);
@@ -490,8 +580,9 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
         out: &mut [[E; DIM]],
     ) -> Result<()> {
         let e = self.unit::<DIM>();
+        let at = self.field.at(ctx.t);
         for (j, o) in out.iter_mut().enumerate() {
-            let g = self.field.inertia(j, ctx.t);
+            let g = self.field.inertia_at(j, at);
             for d in 0..DIM {
                 if e[d] != 0.0 {
                     o[d] -= E::from(g * e[d]);
@@ -510,9 +601,11 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
     }
 }
 
-/// n × N zeroed complex amplitudes, refused with [`SeaError::TooLarge`] when their memory is over
-/// [`crate::ocean::waves::MAX_RECORD_BYTES`] or cannot be reserved (never an abort).
-fn alloc_amplitudes(n: usize, nc: usize) -> std::result::Result<Vec<Complex<f64>>, SeaError> {
+/// Checks that the n × N complex amplitudes of Wᵢ and Gᵢ (formed only if a time beyond the
+/// record is read, [`WaveField::amplitudes`]) may be held: refused with [`SeaError::TooLarge`]
+/// when either one's memory is over [`crate::ocean::waves::MAX_RECORD_BYTES`] or the allocator refuses
+/// to reserve it now (never an abort at construction).
+fn check_amplitudes(n: usize, nc: usize) -> std::result::Result<(), SeaError> {
     let limit = crate::ocean::waves::MAX_RECORD_BYTES;
     let bytes = (n as u64).saturating_mul(nc as u64).saturating_mul(16);
     let refuse = || SeaError::TooLarge {
@@ -523,10 +616,10 @@ fn alloc_amplitudes(n: usize, nc: usize) -> std::result::Result<Vec<Complex<f64>
     if bytes > limit {
         return Err(refuse());
     }
-    let mut x = Vec::new();
+    let (mut x, mut y): (Vec<Complex<f64>>, Vec<Complex<f64>>) = (Vec::new(), Vec::new());
     x.try_reserve_exact(n * nc).map_err(|_| refuse())?;
-    x.resize(n * nc, Complex::new(0.0, 0.0));
-    Ok(x)
+    y.try_reserve_exact(n * nc).map_err(|_| refuse())?;
+    Ok(())
 }
 
 /// A zeroed record buffer of `size` values, refused with [`SeaError::TooLarge`] when the memory

@@ -122,8 +122,11 @@ struct WaveSurge {
     amplitude: Vec<Complex<f64>>,
     /// iωⱼ times `amplitude`: Ẋ_w's.
     rate: Vec<Complex<f64>>,
-    /// (X_w, Ẋ_w) at tₖ = k h, k = 0..rows.
+    /// (X_w, Ẋ_w) at tₖ = k h, k = first..first + rows.
     record: Vec<[f64; 2]>,
+    /// The grid index of the record's first time (0; a forecast's window starts later,
+    /// [`VesselMotion::surge_window`]).
+    first: usize,
 }
 
 impl VesselMotion {
@@ -174,6 +177,7 @@ impl VesselMotion {
                     amplitude,
                     rate,
                     record,
+                    first: 0,
                 })
             }
             _ => None,
@@ -206,6 +210,55 @@ impl VesselMotion {
         self.thrust.as_ref()
     }
 
+    /// The complex amplitudes d_z Hⱼ aⱼ e^{iφⱼ} of the wave-frequency surge X_w(t) = Re Σⱼ
+    /// Xⱼ e^{iωⱼ t} over the sea's components (`None` without waves or a RAO).
+    pub fn surge_amplitudes(&self) -> Option<&[Complex<f64>]> {
+        self.waves.as_ref().map(|w| w.amplitude.as_slice())
+    }
+
+    /// The grid step of the surge's record \[s\] (the sea's step; `None` without waves or a
+    /// RAO).
+    pub fn surge_step(&self) -> Option<f64> {
+        self.waves.as_ref().map(|w| w.sea.step())
+    }
+
+    /// A copy whose wave-frequency surge keeps only the grid times `first..first + add.len()`
+    /// of its record, each with `add` (ΔX_w, ΔẊ_w) added; other times take the direct sum of the
+    /// true amplitudes. The vessel's motion in a forecast with errors ([`crate::mpc`], "What the
+    /// plan knows"); an `add` of zeros reads the record's values bit for bit.
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `window` when the motion has no wave-frequency surge or the
+    /// window is not within its record.
+    pub fn surge_window(&self, first: usize, add: &[[f64; 2]]) -> Result<Self, SeaError> {
+        let refuse = || SeaError::Invalid {
+            quantity: "window",
+            value: first as f64,
+            expected: "grid times within the vessel's surge record",
+        };
+        let w = self.waves.as_ref().ok_or_else(refuse)?;
+        if first < w.first || first - w.first + add.len() > w.record.len() {
+            return Err(refuse());
+        }
+        let from = first - w.first;
+        let record = w.record[from..from + add.len()]
+            .iter()
+            .zip(add)
+            .map(|(r, a)| [r[0] + a[0], r[1] + a[1]])
+            .collect();
+        Ok(VesselMotion {
+            vessel: self.vessel.clone(),
+            waves: Some(WaveSurge {
+                sea: w.sea.clone(),
+                amplitude: w.amplitude.clone(),
+                rate: w.rate.clone(),
+                record,
+                first,
+            }),
+            thrust: self.thrust,
+        })
+    }
+
     /// The mean position the top settles at, Z₀ (the static equilibrium's target).
     pub fn mean(&self) -> f64 {
         self.vessel.offset
@@ -217,9 +270,11 @@ impl WaveSurge {
     fn at(&self, t: f64) -> [f64; 2] {
         let h = self.sea.step();
         let k = (t / h).round();
-        // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record.
-        if k >= 0.0 && (k as usize) < self.record.len() && (t - k * h).abs() <= 0.0 {
-            return self.record[k as usize];
+        // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record (from
+        // its first time).
+        let row = (k as usize).wrapping_sub(self.first);
+        if k >= 0.0 && row < self.record.len() && (t - k * h).abs() <= 0.0 {
+            return self.record[row];
         }
         [
             self.sea.sum_at(&self.amplitude, t),

@@ -1,6 +1,7 @@
 //! The receding-horizon controller: real-time iterations of a Gauss-Newton solver (condensed or
 //! Riccati) from the observed state, warm-started from the previous plan.
 
+use super::forecast::NoisyForecast;
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
@@ -106,6 +107,11 @@ pub struct MpcOptions {
     /// about one simulation and one adjoint sweep of the horizon, more when its line search
     /// backtracks). Default 5; the first plan takes [`MpcOptions::first_iterations`].
     pub thrust_iterations: usize,
+    /// The noisy forecast's error growth e, σ(τ) = min(e τ / T_p, 1/√2) ([`Forecast::Noisy`];
+    /// [`super::forecast`]). Default [`crate::scene::MpcSettings::DEFAULT_FORECAST_ERROR`].
+    pub forecast_error: f64,
+    /// The seed of the noisy forecast's errors; `None` (default): the model's sea's seed.
+    pub forecast_seed: Option<u64>,
 }
 
 impl Default for MpcOptions {
@@ -123,6 +129,8 @@ impl Default for MpcOptions {
             plan_step: None,
             forecast: Forecast::Perfect,
             thrust_iterations: 5,
+            forecast_error: crate::scene::MpcSettings::DEFAULT_FORECAST_ERROR,
+            forecast_seed: None,
         }
     }
 }
@@ -162,6 +170,8 @@ pub struct Mpc<const DIM: usize = 2> {
     budget_only: bool,
     /// The plan through the vessel's thrust (a thrust scene), `None` otherwise.
     thrust: Option<ThrustState>,
+    /// The noisy forecast ([`Forecast::Noisy`]), `None` otherwise.
+    noisy: Option<NoisyForecast>,
 }
 
 /// What a controller through the vessel's thrust keeps between re-plans.
@@ -245,6 +255,14 @@ impl<const DIM: usize> Mpc<DIM> {
             }
             model.loads.waves = None;
         }
+        let noisy = match options.forecast {
+            Forecast::Noisy => Some(NoisyForecast::new(
+                &model,
+                options.forecast_error,
+                options.forecast_seed,
+            )?),
+            _ => None,
+        };
         let thrust = match model.thrust() {
             Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
             Some(_) if planning.is_some() => return Err(MpcError::ThrustPlanReduced.into()),
@@ -281,6 +299,7 @@ impl<const DIM: usize> Mpc<DIM> {
             record: None,
             budget_only: false,
             thrust,
+            noisy,
         })
     }
 
@@ -345,11 +364,22 @@ impl<const DIM: usize> Mpc<DIM> {
                 kind: self.options.objective,
                 effort: self.options.effort,
             };
-            let record = self.record_chain(obs, pieces)?;
+            // A noisy forecast's window reaches a step or two past the horizon.
+            let margin = usize::from(self.noisy.is_some());
+            let record = self.record_chain(obs, pieces + margin)?;
             let two_axis = DIM == 3;
             let problem =
                 ControlProblem::in_model(&scene, map, objective, two_axis)?.with_chain(record);
             self.template = Some((pieces, problem));
+        }
+        if let Some(noisy) = self.noisy.as_mut() {
+            let record = self.record.as_ref().expect("built with the template");
+            let end = obs.t + pieces as f64 * self.interval;
+            let chain = noisy.forecast_chain(record, obs.t, (obs.t, end))?;
+            let t = self.template.take().expect("set above");
+            self.template = Some((t.0, t.1.with_chain(chain)));
+            // The kept condensed solver holds the last forecast's model: rebuilt on this one.
+            self.condensed = None;
         }
         let template = &self.template.as_ref().expect("set above").1;
         if let Some((map, start)) = self.planning.as_mut() {
@@ -567,6 +597,15 @@ impl Mpc {
             let problem = ControlProblem::new(&scene, PerStepControl { steps }, objective)?
                 .with_chain(record);
             state.template = Some((steps, problem));
+        }
+        if let Some(noisy) = self.noisy.as_mut() {
+            // A new forecast from the decision at t_k for the plan from t_{k−1}.
+            let record = self.record.as_ref().expect("built above");
+            let t0 = obs.k.saturating_sub(lead) as f64 * obs.h;
+            let end = t0 + steps as f64 * obs.h;
+            let chain = noisy.forecast_chain(record, obs.t, (t0, end))?;
+            let t = state.template.take().expect("set above");
+            state.template = Some((t.0, t.1.with_chain(chain)));
         }
         let template = &state.template.as_ref().expect("set above").1;
         if template.chain().n() != obs.state.q.len() {

@@ -7,6 +7,7 @@
 #[path = "../common/wave_riser4.rs"]
 mod wave_riser4;
 
+mod forecast_noisy;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;

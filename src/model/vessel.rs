@@ -122,11 +122,11 @@ struct WaveSurge {
     amplitude: Vec<Complex<f64>>,
     /// iωⱼ times `amplitude`: Ẋ_w's.
     rate: Vec<Complex<f64>>,
-    /// (X_w, Ẋ_w) at tₖ = k h, k = first..first + rows.
-    record: Vec<[f64; 2]>,
-    /// The grid index of the record's first time (0; a forecast's window starts later,
-    /// [`VesselMotion::surge_window`]).
-    first: usize,
+    /// (X_w, Ẋ_w) at tₖ = k h, k = 0..rows (shared by a forecast's copies).
+    record: Arc<[[f64; 2]]>,
+    /// A forecast's error (ΔX_w, ΔẊ_w) at the grid times first..first + len, added to the
+    /// motion between them by linear interpolation ([`VesselMotion::surge_window`]).
+    forecast: Option<(usize, Vec<[f64; 2]>)>,
 }
 
 impl VesselMotion {
@@ -176,8 +176,8 @@ impl VesselMotion {
                     sea,
                     amplitude,
                     rate,
-                    record,
-                    first: 0,
+                    record: record.into(),
+                    forecast: None,
                 })
             }
             _ => None,
@@ -222,38 +222,33 @@ impl VesselMotion {
         self.waves.as_ref().map(|w| w.sea.step())
     }
 
-    /// A copy whose wave-frequency surge keeps only the grid times `first..first + add.len()`
-    /// of its record, each with `add` (ΔX_w, ΔẊ_w) added; other times take the direct sum of the
-    /// true amplitudes. The vessel's motion in a forecast with errors ([`crate::mpc`], "What the
-    /// plan knows"); an `add` of zeros reads the record's values bit for bit.
+    /// A copy whose wave-frequency surge has `add` (ΔX_w, ΔẊ_w) at the grid times
+    /// `first..first + add.len()` added, linearly interpolated between them (the true motion
+    /// as before, from the record or the direct sum, plus the interpolated error; outside the
+    /// window the true motion). The vessel's motion in a forecast with errors ([`crate::mpc`],
+    /// "What the plan knows"); an `add` of zeros gives the true motion bit for bit.
     ///
     /// # Errors
-    /// [`SeaError::Invalid`] naming `window` when the motion has no wave-frequency surge or the
-    /// window is not within its record.
+    /// [`SeaError::Invalid`] naming `window` when the motion has no wave-frequency surge or
+    /// `add` has fewer than 2 times.
     pub fn surge_window(&self, first: usize, add: &[[f64; 2]]) -> Result<Self, SeaError> {
         let refuse = || SeaError::Invalid {
             quantity: "window",
             value: first as f64,
-            expected: "grid times within the vessel's surge record",
+            expected: "a vessel with a wave-frequency surge and at least 2 grid times",
         };
         let w = self.waves.as_ref().ok_or_else(refuse)?;
-        if first < w.first || first - w.first + add.len() > w.record.len() {
+        if add.len() < 2 {
             return Err(refuse());
         }
-        let from = first - w.first;
-        let record = w.record[from..from + add.len()]
-            .iter()
-            .zip(add)
-            .map(|(r, a)| [r[0] + a[0], r[1] + a[1]])
-            .collect();
         Ok(VesselMotion {
             vessel: self.vessel.clone(),
             waves: Some(WaveSurge {
                 sea: w.sea.clone(),
                 amplitude: w.amplitude.clone(),
                 rate: w.rate.clone(),
-                record,
-                first,
+                record: w.record.clone(),
+                forecast: Some((first, add.to_vec())),
             }),
             thrust: self.thrust,
         })
@@ -270,15 +265,35 @@ impl WaveSurge {
     fn at(&self, t: f64) -> [f64; 2] {
         let h = self.sea.step();
         let k = (t / h).round();
-        // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record (from
-        // its first time).
-        let row = (k as usize).wrapping_sub(self.first);
-        if k >= 0.0 && row < self.record.len() && (t - k * h).abs() <= 0.0 {
-            return self.record[row];
+        // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record.
+        let truth = if k >= 0.0 && (k as usize) < self.record.len() && (t - k * h).abs() <= 0.0 {
+            self.record[k as usize]
+        } else {
+            [
+                self.sea.sum_at(&self.amplitude, t),
+                self.sea.sum_at(&self.rate, t),
+            ]
+        };
+        let Some((first, add)) = &self.forecast else {
+            return truth;
+        };
+        let s = t / h;
+        if s < 0.0 {
+            return truth;
         }
-        [
-            self.sea.sum_at(&self.amplitude, t),
-            self.sea.sum_at(&self.rate, t),
-        ]
+        let j0 = s.floor();
+        let x = s - j0;
+        let j = (j0 as usize).wrapping_sub(*first);
+        if j < add.len() && j + 1 < add.len() {
+            let (a, b) = (add[j], add[j + 1]);
+            return [
+                truth[0] + (a[0] + x * (b[0] - a[0])),
+                truth[1] + (a[1] + x * (b[1] - a[1])),
+            ];
+        }
+        if j < add.len() && x <= 1e-9 {
+            return [truth[0] + add[j][0], truth[1] + add[j][1]];
+        }
+        truth
     }
 }

@@ -101,22 +101,22 @@ pub enum MpcError {
          waves along z)"
     )]
     ThrustSpatial,
-    /// A plan through the vessel's thrust on a model whose step is not the plant's (the plan
-    /// starts from the plant's state one step back).
-    #[error("MPC through the vessel's thrust plans at the plant's step h = {plant} s, the model's is {model} s")]
+    /// A plan through the vessel's thrust on a model whose step (or `plan_step`) is not a whole
+    /// multiple of the plant's.
+    #[error("MPC through the vessel's thrust plans at the plant's step h = {plant} s or a whole multiple of it, the model's is {model} s")]
     ThrustStep {
         /// The model's step \[s\].
         model: f64,
         /// The plant's step \[s\].
         plant: f64,
     },
-    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`],
-    /// [`crate::mpc::MpcOptions::plan_step`]) for a plan through the vessel's thrust: the thrust
-    /// re-plan starts from the plant's own state one step back, so it plans on the model scene
-    /// at the plant's resolution.
+    /// A reduced planning model with fewer pendulums
+    /// ([`crate::mpc::MpcOptions::plan_pendulums`]) for a plan through the vessel's thrust: it
+    /// plans on the model scene's own pendulums (at its step or a whole multiple of it,
+    /// `plan_step`).
     #[error(
-        "MPC through the vessel's thrust plans on the model scene itself: plan_pendulums and \
-         plan_step are not taken for it"
+        "MPC through the vessel's thrust plans on the model scene's own pendulums: \
+         plan_pendulums is not taken for it (plan_step, a whole multiple of the step, is)"
     )]
     ThrustPlanReduced,
     /// `forecast = "none"` on a scene without `[loads.waves]`: there is no sea to leave out.

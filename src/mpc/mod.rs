@@ -111,12 +111,17 @@
 //!   perfect model and the horizon to the end the closed loop reproduces the open-loop optimum
 //!   (tests/mpc/mpc_vessel.rs).
 //!
-//! A thrust plan runs on the model scene at the plant's step, in the planar model: a reduced
-//! planning model ([`MpcOptions::plan_pendulums`], `plan_step`) is refused for it
-//! ([`MpcError::ThrustPlanReduced`]), because the
-//! re-plan starts from the plant's own state one step back. The map onto a coarser stack-up
-//! with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s predicts the 300 m
-//! system's wellhead connector to 3 %, docs/mpc.md); planning the thrust on it is not built yet.
+//! A thrust plan runs on the model scene in the planar model, at the plant's step h or at a
+//! whole multiple r h of it (`plan_step`, with the model's own pendulums): such a coarser plan
+//! starts at t_k from the observed state with the thrust applied there fixed (the plant's
+//! re-taken step then moves that thrust by at most Ḟ_max h toward the new command, which the
+//! plan does not see: its approximation), its thrusters clip per plan step (Ḟ_max r h), and its
+//! effort weight is rescaled to its steps as a reduced plan's ([`planning::objective_scale`]);
+//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs). Fewer pendulums
+//! (`plan_pendulums` < n) are refused ([`MpcError::ThrustPlanReduced`]): the map onto a
+//! coarser stack-up with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s
+//! predicts the 300 m system's wellhead connector to 3 %, docs/mpc.md), a thrust plan on it is
+//! not built yet.
 //!
 //! # What the plan knows
 //! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on

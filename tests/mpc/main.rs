@@ -12,3 +12,4 @@ mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
 mod plan_prediction;
+mod thrust_plan_step;

@@ -101,27 +101,57 @@ pub enum MpcError {
          waves along z)"
     )]
     ThrustSpatial,
-    /// A plan through the vessel's thrust on a model whose step is not the plant's (the plan
-    /// starts from the plant's state one step back).
-    #[error("MPC through the vessel's thrust plans at the plant's step h = {plant} s, the model's is {model} s")]
+    /// A plan through the vessel's thrust on a model whose step (or `plan_step`) is not a whole
+    /// multiple of the plant's.
+    #[error("MPC through the vessel's thrust plans at the plant's step h = {plant} s or a whole multiple of it, the model's is {model} s")]
     ThrustStep {
         /// The model's step \[s\].
         model: f64,
         /// The plant's step \[s\].
         plant: f64,
     },
-    /// A reduced planning model ([`crate::mpc::MpcOptions::plan_pendulums`],
-    /// [`crate::mpc::MpcOptions::plan_step`]) for a plan through the vessel's thrust: the thrust
-    /// re-plan starts from the plant's own state one step back, so it plans on the model scene
-    /// at the plant's resolution.
+    /// A reduced planning model with fewer pendulums
+    /// ([`crate::mpc::MpcOptions::plan_pendulums`]) for a plan through the vessel's thrust: it
+    /// plans on the model scene's own pendulums (at its step or a whole multiple of it,
+    /// `plan_step`).
     #[error(
-        "MPC through the vessel's thrust plans on the model scene itself: plan_pendulums and \
-         plan_step are not taken for it"
+        "MPC through the vessel's thrust plans on the model scene's own pendulums: \
+         plan_pendulums is not taken for it (plan_step, a whole multiple of the step, is)"
     )]
     ThrustPlanReduced,
     /// `forecast = "none"` on a scene without `[loads.waves]`: there is no sea to leave out.
     #[error("forecast \"none\" leaves the waves out of the plan: the scene has no [loads.waves]")]
     ForecastWithoutSea,
+    /// A noisy forecast's error growth (`forecast_error`) not finite and ≥ 0.
+    #[error("forecast_error must be a finite number ≥ 0, got {value}")]
+    ForecastError {
+        /// The value given.
+        value: f64,
+    },
+    /// A noisy forecast for plan times outside the model's record of the sea (the record covers
+    /// the run and a horizon beyond it).
+    #[error("the noisy forecast of the plan over t = {start} .. {end} s is outside the model's record of the sea")]
+    ForecastWindow {
+        /// The plan's first time \[s\].
+        start: f64,
+        /// The plan's last time \[s\].
+        end: f64,
+    },
+    /// A closed loop's applied thrust beyond the vessel's limits at a step (the plant's clipping
+    /// makes it impossible; the loop asserts it at every step).
+    #[error("the applied thrust {thrust} N at step {step} (change {change} N) exceeds the vessel's limits (|F| ≤ {bound} N, change ≤ {max_change} N per step)")]
+    ThrustLimit {
+        /// The step k.
+        step: usize,
+        /// F_k \[N\].
+        thrust: f64,
+        /// |F_k − F_{k−1}| \[N\].
+        change: f64,
+        /// F_max \[N\].
+        bound: f64,
+        /// Ḟ_max h \[N\].
+        max_change: f64,
+    },
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -147,6 +177,9 @@ impl MpcError {
             MpcError::RiccatiPlanar => "solver",
             MpcError::ThrustSpatial | MpcError::ThrustStep { .. } => "model",
             MpcError::ForecastWithoutSea => "forecast",
+            MpcError::ForecastError { .. } => "forecast_error",
+            MpcError::ForecastWindow { .. } => "forecast",
+            MpcError::ThrustLimit { .. } => "model",
             MpcError::ThrustPlanReduced => "plan_pendulums",
         }
     }

@@ -296,6 +296,32 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.wave_inertia.as_ref().map(WaveInertia::field)
     }
 
+    /// Replaces what the chain knows of the sea: the waves' field every wave term reads (the
+    /// water's momentum of the drag, node by node or per pendulum, and the inertia load) and
+    /// the vessel's motion, each when given and the chain has that term. A plan's forecast with
+    /// errors ([`crate::mpc`], "What the plan knows"; [`WaveField::window`],
+    /// [`VesselMotion::surge_window`]).
+    pub fn set_forecast(
+        &mut self,
+        field: Option<std::sync::Arc<WaveField>>,
+        vessel: Option<std::sync::Arc<VesselMotion>>,
+    ) {
+        if let Some(f) = field {
+            if let Some(c) = &mut self.current {
+                c.set_waves(&f);
+            }
+            if let Some(nd) = &mut self.node_drag {
+                nd.water.set_waves(&f);
+            }
+            if let Some(w) = &mut self.wave_inertia {
+                w.field = f;
+            }
+        }
+        if let (Some(v), Some(mine)) = (vessel, &mut self.vessel) {
+            *mine = v;
+        }
+    }
+
     /// The surface elevation η(0, t) \[m\] of the scene's waves at x = z = 0 (`None` without
     /// waves).
     pub fn wave_elevation(&self, t: f64) -> Option<f64> {

@@ -122,8 +122,11 @@ struct WaveSurge {
     amplitude: Vec<Complex<f64>>,
     /// iωⱼ times `amplitude`: Ẋ_w's.
     rate: Vec<Complex<f64>>,
-    /// (X_w, Ẋ_w) at tₖ = k h, k = 0..rows.
-    record: Vec<[f64; 2]>,
+    /// (X_w, Ẋ_w) at tₖ = k h, k = 0..rows (shared by a forecast's copies).
+    record: Arc<[[f64; 2]]>,
+    /// A forecast's error (ΔX_w, ΔẊ_w) at the grid times first..first + len, added to the
+    /// motion between them by linear interpolation ([`VesselMotion::surge_window`]).
+    forecast: Option<(usize, Vec<[f64; 2]>)>,
 }
 
 impl VesselMotion {
@@ -173,7 +176,8 @@ impl VesselMotion {
                     sea,
                     amplitude,
                     rate,
-                    record,
+                    record: record.into(),
+                    forecast: None,
                 })
             }
             _ => None,
@@ -206,6 +210,50 @@ impl VesselMotion {
         self.thrust.as_ref()
     }
 
+    /// The complex amplitudes d_z Hⱼ aⱼ e^{iφⱼ} of the wave-frequency surge X_w(t) = Re Σⱼ
+    /// Xⱼ e^{iωⱼ t} over the sea's components (`None` without waves or a RAO).
+    pub fn surge_amplitudes(&self) -> Option<&[Complex<f64>]> {
+        self.waves.as_ref().map(|w| w.amplitude.as_slice())
+    }
+
+    /// The grid step of the surge's record \[s\] (the sea's step; `None` without waves or a
+    /// RAO).
+    pub fn surge_step(&self) -> Option<f64> {
+        self.waves.as_ref().map(|w| w.sea.step())
+    }
+
+    /// A copy whose wave-frequency surge has `add` (ΔX_w, ΔẊ_w) at the grid times
+    /// `first..first + add.len()` added, linearly interpolated between them (the true motion
+    /// as before, from the record or the direct sum, plus the interpolated error; outside the
+    /// window the true motion). The vessel's motion in a forecast with errors ([`crate::mpc`],
+    /// "What the plan knows"); an `add` of zeros gives the true motion bit for bit.
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `window` when the motion has no wave-frequency surge or
+    /// `add` has fewer than 2 times.
+    pub fn surge_window(&self, first: usize, add: &[[f64; 2]]) -> Result<Self, SeaError> {
+        let refuse = || SeaError::Invalid {
+            quantity: "window",
+            value: first as f64,
+            expected: "a vessel with a wave-frequency surge and at least 2 grid times",
+        };
+        let w = self.waves.as_ref().ok_or_else(refuse)?;
+        if add.len() < 2 {
+            return Err(refuse());
+        }
+        Ok(VesselMotion {
+            vessel: self.vessel.clone(),
+            waves: Some(WaveSurge {
+                sea: w.sea.clone(),
+                amplitude: w.amplitude.clone(),
+                rate: w.rate.clone(),
+                record: w.record.clone(),
+                forecast: Some((first, add.to_vec())),
+            }),
+            thrust: self.thrust,
+        })
+    }
+
     /// The mean position the top settles at, Z₀ (the static equilibrium's target).
     pub fn mean(&self) -> f64 {
         self.vessel.offset
@@ -218,12 +266,34 @@ impl WaveSurge {
         let h = self.sea.step();
         let k = (t / h).round();
         // On the grid exactly (the step's times t₀ + (k + 1) h with t₀ = 0): the record.
-        if k >= 0.0 && (k as usize) < self.record.len() && (t - k * h).abs() <= 0.0 {
-            return self.record[k as usize];
+        let truth = if k >= 0.0 && (k as usize) < self.record.len() && (t - k * h).abs() <= 0.0 {
+            self.record[k as usize]
+        } else {
+            [
+                self.sea.sum_at(&self.amplitude, t),
+                self.sea.sum_at(&self.rate, t),
+            ]
+        };
+        let Some((first, add)) = &self.forecast else {
+            return truth;
+        };
+        let s = t / h;
+        if s < 0.0 {
+            return truth;
         }
-        [
-            self.sea.sum_at(&self.amplitude, t),
-            self.sea.sum_at(&self.rate, t),
-        ]
+        let j0 = s.floor();
+        let x = s - j0;
+        let j = (j0 as usize).wrapping_sub(*first);
+        if j < add.len() && j + 1 < add.len() {
+            let (a, b) = (add[j], add[j + 1]);
+            return [
+                truth[0] + (a[0] + x * (b[0] - a[0])),
+                truth[1] + (a[1] + x * (b[1] - a[1])),
+            ];
+        }
+        if j < add.len() && x <= 1e-9 {
+            return [truth[0] + add[j][0], truth[1] + add[j][1]];
+        }
+        truth
     }
 }

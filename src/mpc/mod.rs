@@ -111,12 +111,17 @@
 //!   perfect model and the horizon to the end the closed loop reproduces the open-loop optimum
 //!   (tests/mpc/mpc_vessel.rs).
 //!
-//! A thrust plan runs on the model scene at the plant's step, in the planar model: a reduced
-//! planning model ([`MpcOptions::plan_pendulums`], `plan_step`) is refused for it
-//! ([`MpcError::ThrustPlanReduced`]), because the
-//! re-plan starts from the plant's own state one step back. The map onto a coarser stack-up
-//! with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s predicts the 300 m
-//! system's wellhead connector to 3 %, docs/mpc.md); planning the thrust on it is not built yet.
+//! A thrust plan runs on the model scene in the planar model, at the plant's step h or at a
+//! whole multiple r h of it (`plan_step`, with the model's own pendulums): such a coarser plan
+//! starts at t_k from the observed state with the thrust applied there fixed (the plant's
+//! re-taken step then moves that thrust by at most Ḟ_max h toward the new command, which the
+//! plan does not see: its approximation), its thrusters clip per plan step (Ḟ_max r h), and its
+//! effort weight is rescaled to its steps as a reduced plan's ([`planning::objective_scale`]);
+//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs). Fewer pendulums
+//! (`plan_pendulums` < n) are refused ([`MpcError::ThrustPlanReduced`]): the map onto a
+//! coarser stack-up with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s
+//! predicts the 300 m system's wellhead connector to 3 %, docs/mpc.md), a thrust plan on it is
+//! not built yet.
 //!
 //! # What the plan knows
 //! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on
@@ -127,7 +132,18 @@
 //! the sea never applies, while the calm sea predicts none of the future load and keeps the
 //! motion the waves have already caused (it is in the observed state). Without waves the
 //! vessel's wave-frequency motion is gone from the plan too, and the plan's vessel starts from
-//! the observed position and velocity. The plant always runs the true sea.
+//! the observed position and velocity. `noisy` plans on the model scene's sea with errors that
+//! grow with lead time ([`forecast`]): at every re-plan each wave component's complex amplitude
+//! aⱼ e^{iφⱼ} is forecast as aⱼ e^{iφⱼ} (1 + σ(τ) wⱼ), wⱼ a fresh pair of standard normal draws
+//! (a relative amplitude error σ ξⱼ and a phase error σ ηⱼ rad to first order), with
+//! σ(τ) = min(e τ / T_p, 1/√2) at lead time τ after the decision, e = `forecast_error`
+//! ([`MpcOptions::forecast_error`], default 0.1: 10 % and 0.1 rad one peak period ahead), the
+//! cap where the forecast's mean-square error reaches the sea's own (no better than `none`);
+//! seeded by `forecast_seed` ([`MpcOptions::forecast_seed`], default the sea's seed, a
+//! separate ChaCha20 stream), so a run is reproducible. The forecast changes the plan's wave
+//! loads and the vessel's wave-frequency surge alike (both are linear in the amplitudes); with
+//! e = 0 it is the perfect forecast bit for bit (tests/mpc/forecast_noisy.rs). The plant always
+//! runs the true sea.
 //!
 //! # Which solver re-plans ([`MpcSolver`])
 //! A 3 s horizon is 300 steps but only 30 decisions. The Riccati solver linearises every step
@@ -223,6 +239,7 @@
 //! ```
 
 mod baselines;
+pub mod forecast;
 pub mod planning;
 mod plant;
 pub mod prediction;
@@ -234,6 +251,7 @@ pub use baselines::{
     pd_closed_loop_cost, pd_closed_loop_cost_spatial, ConstantForce, NoControl, PdLaw, PdTuning,
     SpatialConstantForce, SpatialPdLaw,
 };
+pub use forecast::{forecast_sigma, NoisyForecast, SIGMA_CAP};
 pub use plant::Plant;
 pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver};
 
@@ -406,6 +424,11 @@ pub struct Summary {
     pub real_time_factor: f64,
     /// T / wall time of the whole loop (plant and controller, the first decision included).
     pub loop_real_time_factor: f64,
+    /// In a scene whose control is the vessel's thrust: max_k |F_k − F_{k−1}| / h \[N/s\], the
+    /// largest rate of the applied thrust, after the loop checked every step against the
+    /// vessel's limits (|F_k| ≤ F_max, the rate ≤ Ḟ_max); `None` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrust_rate_peak: Option<f64>,
 }
 
 /// A closed-loop run: the trajectory at every step, the decisions and the summary.
@@ -532,7 +555,10 @@ fn closed_loop<const DIM: usize>(
     }
     rec.push(&plant);
     let loop_seconds = start.elapsed().as_secs_f64();
-    let summary = summarise(controller.name(), &rec, &decisions, plant.h(), loop_seconds);
+    let mut summary = summarise(controller.name(), &rec, &decisions, plant.h(), loop_seconds);
+    if let Some(limits) = plant.thrust_limits() {
+        summary.thrust_rate_peak = Some(check_thrust_limits(&rec.control, limits, plant.h())?);
+    }
     Ok(ClosedLoopResult {
         t: rec.t,
         moment: rec.moment,
@@ -543,6 +569,35 @@ fn closed_loop<const DIM: usize>(
         decisions,
         summary,
     })
+}
+
+/// Checks the applied thrusts F_0..F_N of a run against the vessel's limits at every step,
+/// |F_k| ≤ F_max and |F_k − F_{k−1}| ≤ Ḟ_max h (F_{−1} = 0; the rate to a relative 10⁻⁹ for the
+/// round-off of F_{k−1} ± Ḟ_max h), and returns the largest rate max_k |F_k − F_{k−1}|/h
+/// \[N/s\]. The plant's clipping makes a violation impossible; the check is the headline's
+/// assertion that no run exceeded them.
+///
+/// # Errors
+/// [`MpcError::ThrustLimit`] at the first step that exceeds a limit.
+fn check_thrust_limits(thrust: &[f64], (bound, change): (f64, f64), h: f64) -> Result<f64> {
+    let mut prev = 0.0;
+    let mut peak = 0.0f64;
+    for (k, &f) in thrust.iter().enumerate() {
+        let d = (f - prev).abs();
+        if !(f.abs() <= bound && d <= change * (1.0 + 1e-9)) {
+            return Err(MpcError::ThrustLimit {
+                step: k,
+                thrust: f,
+                change: d,
+                bound,
+                max_change: change,
+            }
+            .into());
+        }
+        peak = peak.max(d);
+        prev = f;
+    }
+    Ok(peak / h)
 }
 
 /// The per-step records of a run (the x components in the spatial model).
@@ -634,5 +689,6 @@ fn summarise(
             .map(|i| i as f64 / count),
         real_time_factor: rtf(replan),
         loop_real_time_factor: rtf(loop_seconds),
+        thrust_rate_peak: None,
     }
 }

@@ -225,6 +225,12 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         }
     }
 
+    /// The vessel's thrust limits (F_max \[N\], Ḟ_max h \[N per step\]) in a thrust scene (type
+    /// docs, "The vessel under thrust"); `None` otherwise.
+    pub fn thrust_limits(&self) -> Option<(f64, f64)> {
+        self.limits
+    }
+
     /// The model.
     pub fn chain(&self) -> &Chain<D, DIM> {
         Stepper::chain(&self.stepper)

@@ -1,6 +1,7 @@
 //! The receding-horizon controller: real-time iterations of a Gauss-Newton solver (condensed or
 //! Riccati) from the observed state, warm-started from the previous plan.
 
+use super::forecast::NoisyForecast;
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
@@ -106,6 +107,11 @@ pub struct MpcOptions {
     /// about one simulation and one adjoint sweep of the horizon, more when its line search
     /// backtracks). Default 5; the first plan takes [`MpcOptions::first_iterations`].
     pub thrust_iterations: usize,
+    /// The noisy forecast's error growth e, σ(τ) = min(e τ / T_p, 1/√2) ([`Forecast::Noisy`];
+    /// [`super::forecast`]). Default [`crate::scene::MpcSettings::DEFAULT_FORECAST_ERROR`].
+    pub forecast_error: f64,
+    /// The seed of the noisy forecast's errors; `None` (default): the model's sea's seed.
+    pub forecast_seed: Option<u64>,
 }
 
 impl Default for MpcOptions {
@@ -123,6 +129,8 @@ impl Default for MpcOptions {
             plan_step: None,
             forecast: Forecast::Perfect,
             thrust_iterations: 5,
+            forecast_error: crate::scene::MpcSettings::DEFAULT_FORECAST_ERROR,
+            forecast_seed: None,
         }
     }
 }
@@ -162,6 +170,8 @@ pub struct Mpc<const DIM: usize = 2> {
     budget_only: bool,
     /// The plan through the vessel's thrust (a thrust scene), `None` otherwise.
     thrust: Option<ThrustState>,
+    /// The noisy forecast ([`Forecast::Noisy`]), `None` otherwise.
+    noisy: Option<NoisyForecast>,
 }
 
 /// What a controller through the vessel's thrust keeps between re-plans.
@@ -209,7 +219,10 @@ impl<const DIM: usize> Mpc<DIM> {
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
     /// exponent; the model's errors.
     pub fn build(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
-        let (plan_model, planning) = Self::planning_model(model, &mut options)?;
+        let (plan_model, planning) = match Self::coarse_thrust_model(model, &mut options)? {
+            Some(coarse) => (Some(coarse), None),
+            None => Self::planning_model(model, &mut options)?,
+        };
         let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
@@ -245,6 +258,14 @@ impl<const DIM: usize> Mpc<DIM> {
             }
             model.loads.waves = None;
         }
+        let noisy = match options.forecast {
+            Forecast::Noisy => Some(NoisyForecast::new(
+                &model,
+                options.forecast_error,
+                options.forecast_seed,
+            )?),
+            _ => None,
+        };
         let thrust = match model.thrust() {
             Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
             Some(_) if planning.is_some() => return Err(MpcError::ThrustPlanReduced.into()),
@@ -281,7 +302,42 @@ impl<const DIM: usize> Mpc<DIM> {
             record: None,
             budget_only: false,
             thrust,
+            noisy,
         })
+    }
+
+    /// The plan through the vessel's thrust at a coarser step ([`crate::mpc`], "MPC through the
+    /// vessel's thrust"): with `plan_step` = r h (r ≥ 1 a whole number) and the model's own
+    /// pendulums (`plan_pendulums` not given or n), the model scene at the step r h, the effort
+    /// weight rescaled to its units as a reduced planning model's
+    /// ([`super::planning::objective_scale`]); `None` for any other scene or setting (a thrust
+    /// scene with fewer pendulums is refused by [`Mpc::build`]).
+    ///
+    /// # Errors
+    /// [`MpcError::ThrustStep`] when `plan_step` is not a whole multiple of the model's step.
+    fn coarse_thrust_model(model: &Scene, options: &mut MpcOptions) -> Result<Option<Scene>> {
+        let h = model.time.step;
+        let (Some(_), Some(hp)) = (model.thrust(), options.plan_step) else {
+            return Ok(None);
+        };
+        if options.plan_pendulums.is_some_and(|n| n != model.n()) || DIM == 3 {
+            return Ok(None);
+        }
+        let r = (hp / h).round();
+        if !(hp.is_finite() && r >= 1.0) || (r * h - hp).abs() > 1e-9 * hp {
+            return Err(MpcError::ThrustStep {
+                model: hp,
+                plant: h,
+            }
+            .into());
+        }
+        let mut plan = model.clone();
+        plan.time.step = r * h;
+        plan.time.steps = (model.time.steps / r as usize).max(1);
+        options.effort *= objective_scale(options.objective, 1.0, h / plan.time.step);
+        options.plan_pendulums = None;
+        options.plan_step = None;
+        Ok(Some(plan))
     }
 
     /// The reduced planning model of `options` ([`MpcOptions::plan_pendulums`],
@@ -345,11 +401,22 @@ impl<const DIM: usize> Mpc<DIM> {
                 kind: self.options.objective,
                 effort: self.options.effort,
             };
-            let record = self.record_chain(obs, pieces)?;
+            // A noisy forecast's window reaches a step or two past the horizon.
+            let margin = usize::from(self.noisy.is_some());
+            let record = self.record_chain(obs, pieces + margin)?;
             let two_axis = DIM == 3;
             let problem =
                 ControlProblem::in_model(&scene, map, objective, two_axis)?.with_chain(record);
             self.template = Some((pieces, problem));
+        }
+        if let Some(noisy) = self.noisy.as_mut() {
+            let record = self.record.as_ref().expect("built with the template");
+            let end = obs.t + pieces as f64 * self.interval;
+            let chain = noisy.forecast_chain(record, obs.t, (obs.t, end))?;
+            let t = self.template.take().expect("set above");
+            self.template = Some((t.0, t.1.with_chain(chain)));
+            // The kept condensed solver holds the last forecast's model: rebuilt on this one.
+            self.condensed = None;
         }
         let template = &self.template.as_ref().expect("set above").1;
         if let Some((map, start)) = self.planning.as_mut() {
@@ -540,18 +607,30 @@ impl Mpc {
     /// gradient, from the previous plan shifted by one interval, within the iteration budget.
     fn replan_thrust(&mut self, obs: &Observation<'_>) -> Result<()> {
         let pieces = self.horizon_pieces(obs)?;
-        if (obs.h - self.model.time.step).abs() > 1e-12 * obs.h {
+        let hp = self.model.time.step;
+        let r = (hp / obs.h).round();
+        if !(r >= 1.0) || (r * obs.h - hp).abs() > 1e-9 * hp {
             return Err(MpcError::ThrustStep {
-                model: self.model.time.step,
+                model: hp,
                 plant: obs.h,
             }
             .into());
         }
         // From t_{k−1} with its thrust fixed (the plant re-takes the step into t_k with the
-        // command decided now), or from rest at t = 0.
-        let (lead, start) = match obs.previous_state {
-            Some(prev) if obs.k > 0 => (1, Some(prev)),
-            _ => (0, None),
+        // command decided now), or from rest at t = 0. A plan at a coarser step r h starts at
+        // t_k from the observed state with the thrust applied there fixed (the plant's re-taken
+        // step then moves that thrust by at most Ḟ_max h toward the new command: the plan's
+        // approximation, [`crate::mpc`] "MPC through the vessel's thrust").
+        let coarse = r > 1.0;
+        let (lead, start, t_start, before) = match obs.previous_state {
+            _ if coarse && obs.k > 0 => (1, Some(obs.state), obs.t, obs.control),
+            Some(prev) if obs.k > 0 => (
+                1,
+                Some(prev),
+                (obs.k - 1) as f64 * obs.h,
+                obs.previous_control,
+            ),
+            _ => (0, None, 0.0, obs.previous_control),
         };
         let steps = lead + pieces * self.model_steps;
         let record = self.record_chain(obs, pieces + 1)?;
@@ -568,6 +647,14 @@ impl Mpc {
                 .with_chain(record);
             state.template = Some((steps, problem));
         }
+        if let Some(noisy) = self.noisy.as_mut() {
+            // A new forecast from the decision at t_k for the plan from t_{k−1}.
+            let record = self.record.as_ref().expect("built above");
+            let end = t_start + steps as f64 * hp;
+            let chain = noisy.forecast_chain(record, obs.t, (t_start, end))?;
+            let t = state.template.take().expect("set above");
+            state.template = Some((t.0, t.1.with_chain(chain)));
+        }
         let template = &state.template.as_ref().expect("set above").1;
         if template.chain().n() != obs.state.q.len() {
             return Err(MpcError::ModelSize {
@@ -577,9 +664,7 @@ impl Mpc {
             .into());
         }
         let problem = match start {
-            Some(prev) => template
-                .clone()
-                .starting_from(prev.clone(), (obs.k - 1) as f64 * obs.h)?,
+            Some(prev) => template.clone().starting_from(prev.clone(), t_start)?,
             None => template.clone(),
         };
         let actuator = state.actuator;
@@ -592,7 +677,7 @@ impl Mpc {
             actuator,
             m: self.model_steps,
             lead,
-            before: obs.previous_control,
+            before,
             pieces,
             sigma: 0.0,
         };

@@ -41,6 +41,13 @@ pub enum Forecast {
     /// point loads and the mean offset kept), from the observed state, which carries the
     /// motion the waves have caused up to now.
     None,
+    /// The model scene's sea with errors that grow with lead time ([`crate::mpc`], "What the
+    /// plan knows"): at each re-plan every wave component's complex amplitude aⱼ e^{iφⱼ} is
+    /// forecast as aⱼ e^{iφⱼ} (1 + σ(τ) wⱼ), wⱼ = ξⱼ + i ηⱼ with ξⱼ, ηⱼ independent standard
+    /// normal draws (to first order a relative amplitude error σ ξⱼ and a phase error σ ηⱼ
+    /// rad), σ(τ) = min(`forecast_error` · τ / T_p, 1/√2) at lead time τ, drawn afresh per
+    /// re-plan from the seed `forecast_seed`.
+    Noisy,
 }
 
 impl Forecast {
@@ -49,6 +56,7 @@ impl Forecast {
         match self {
             Forecast::Perfect => "perfect",
             Forecast::None => "none",
+            Forecast::Noisy => "noisy",
         }
     }
 
@@ -57,6 +65,7 @@ impl Forecast {
         match name {
             "perfect" => Some(Forecast::Perfect),
             "none" => Some(Forecast::None),
+            "noisy" => Some(Forecast::Noisy),
             _ => None,
         }
     }
@@ -83,12 +92,18 @@ pub struct MpcTable {
     pub pd_training: Option<f64>,
     /// `objective`: what MPC plans on (`"power"` or `"sum"`).
     pub objective: Option<MpcPlanObjective>,
-    /// `forecast`: what MPC's plan knows of the sea ahead (`"perfect"` or `"none"`).
+    /// `forecast`: what MPC's plan knows of the sea ahead (`"perfect"`, `"none"` or
+    /// `"noisy"`).
     pub forecast: Option<Forecast>,
+    /// `forecast_error`: the growth e of the noisy forecast's error, σ(τ) = e τ / T_p (finite,
+    /// 0 ≤ e ≤ [`MpcSettings::MAX_FORECAST_ERROR`]).
+    pub forecast_error: Option<f64>,
+    /// `forecast_seed`: the seed of the noisy forecast's errors (default: the sea's seed).
+    pub forecast_seed: Option<u64>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 10] = [
+pub const MPC_KEYS: [&str; 12] = [
     "interval",
     "horizon",
     "iterations",
@@ -99,6 +114,8 @@ pub const MPC_KEYS: [&str; 10] = [
     "pd_training",
     "objective",
     "forecast",
+    "forecast_error",
+    "forecast_seed",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
@@ -127,6 +144,11 @@ pub struct MpcSettings {
     pub objective: Option<MpcPlanObjective>,
     /// What MPC's plan knows of the sea ahead (default [`Forecast::Perfect`]).
     pub forecast: Forecast,
+    /// The noisy forecast's error growth e (default [`MpcSettings::DEFAULT_FORECAST_ERROR`];
+    /// read with [`Forecast::Noisy`] only).
+    pub forecast_error: f64,
+    /// The seed of the noisy forecast's errors (default: the sea's seed, `None` here).
+    pub forecast_seed: Option<u64>,
 }
 
 impl MpcSettings {
@@ -140,6 +162,12 @@ impl MpcSettings {
     pub const DEFAULT_BOUND: f64 = 5.0;
     /// `effort`'s default.
     pub const DEFAULT_EFFORT: f64 = 0.01;
+    /// `forecast_error`'s default: σ reaches 0.1 (10 % in amplitude, 0.1 rad in phase) one
+    /// peak period ahead ([`crate::mpc`], "What the plan knows").
+    pub const DEFAULT_FORECAST_ERROR: f64 = 0.1;
+    /// The largest `forecast_error` accepted: σ then reaches its cap 1/√2 a hundredth of a peak
+    /// period ahead, a forecast without skill beyond the first steps.
+    pub const MAX_FORECAST_ERROR: f64 = 100.0;
 }
 
 impl MpcSettings {
@@ -218,6 +246,11 @@ impl MpcTable {
             pd_training: self.pd_training.or(t.pd_training),
             objective: self.objective.or(t.objective),
             forecast: self.forecast.or(t.forecast).unwrap_or_default(),
+            forecast_error: self
+                .forecast_error
+                .or(t.forecast_error)
+                .unwrap_or(MpcSettings::DEFAULT_FORECAST_ERROR),
+            forecast_seed: self.forecast_seed.or(t.forecast_seed),
         }
     }
 
@@ -234,6 +267,8 @@ impl MpcTable {
             "pd_training" => self.pd_training.is_some(),
             "objective" => self.objective.is_some(),
             "forecast" => self.forecast.is_some(),
+            "forecast_error" => self.forecast_error.is_some(),
+            "forecast_seed" => self.forecast_seed.is_some(),
             _ => false,
         }
     }
@@ -269,6 +304,10 @@ pub(super) struct RawMpc {
     objective: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     forecast: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    forecast_error: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    forecast_seed: Option<i64>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -306,6 +345,10 @@ impl RawMpc {
             pd_training: t.pd_training,
             objective: t.objective.map(|o| o.name().to_string()),
             forecast: t.forecast.map(|f| f.name().to_string()),
+            forecast_error: t.forecast_error,
+            forecast_seed: t
+                .forecast_seed
+                .map(|s| i64::try_from(s).unwrap_or(i64::MAX)),
         }
     }
 
@@ -352,7 +395,22 @@ impl RawMpc {
                 Forecast::from_name(f).ok_or_else(|| {
                     SceneError::invalid(
                         "mpc.forecast",
-                        format!("unknown forecast `{f}` (one of perfect, none)"),
+                        format!("unknown forecast `{f}` (one of perfect, none, noisy)"),
+                    )
+                })
+            })
+            .transpose()?;
+        let forecast_error = self
+            .forecast_error
+            .map(|e| check_forecast_error("mpc.forecast_error", e))
+            .transpose()?;
+        let forecast_seed = self
+            .forecast_seed
+            .map(|s| {
+                u64::try_from(s).map_err(|_| {
+                    SceneError::invalid(
+                        "mpc.forecast_seed",
+                        format!("must be a non-negative integer, got {s}"),
                     )
                 })
             })
@@ -368,6 +426,27 @@ impl RawMpc {
             pd_training: positive("pd_training", self.pd_training)?,
             objective,
             forecast,
+            forecast_error,
+            forecast_seed,
         })
+    }
+}
+
+/// `forecast_error` e checked: finite, 0 ≤ e ≤ [`MpcSettings::MAX_FORECAST_ERROR`].
+///
+/// # Errors
+/// [`SceneError`] naming `key` (the scene's `mpc.forecast_error`, a flag's or an argument's
+/// name) with the value and the range.
+pub fn check_forecast_error(key: &str, e: f64) -> Result<f64, SceneError> {
+    if e.is_finite() && (0.0..=MpcSettings::MAX_FORECAST_ERROR).contains(&e) {
+        Ok(e)
+    } else {
+        Err(SceneError::invalid(
+            key,
+            format!(
+                "must be a finite number in [0, {}] (σ(τ) = forecast_error · τ / T_p), got {e}",
+                MpcSettings::MAX_FORECAST_ERROR
+            ),
+        ))
     }
 }

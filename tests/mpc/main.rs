@@ -7,7 +7,9 @@
 #[path = "../common/wave_riser4.rs"]
 mod wave_riser4;
 
+mod forecast_noisy;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
 mod plan_prediction;
+mod thrust_plan_step;

@@ -87,9 +87,11 @@ pub struct Settings {
     plan_step: Option<f64>,
     pd_training: Option<f64>,
     mpc_objective: Option<String>,
-    /// `forecast` ("perfect" or "none"; `None`: not given).
+    /// `forecast` ("perfect", "none" or "noisy"; `None`: not given).
     forecast: Option<String>,
     spin_up: f64,
+    /// `forecast_error` (the noisy forecast's error growth e; `None`: not given).
+    forecast_error: Option<f64>,
     /// The record counted after the spin-up in a study \[s\] (`None`: 3 hours, the command
     /// line's `--record` default).
     record: Option<f64>,
@@ -135,8 +137,9 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             plan_step: item(obj, "plan_step", NUMBER)?,
             pd_training: item(obj, "pd_training", NUMBER)?,
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
-            forecast: item(obj, "forecast", "\"perfect\" or \"none\"")?,
+            forecast: item(obj, "forecast", "\"perfect\", \"none\" or \"noisy\"")?,
             spin_up,
+            forecast_error: item(obj, "forecast_error", NUMBER)?,
             record: item(obj, "record", NUMBER)?,
             seeds: item(obj, "seeds", COUNT)?,
         })
@@ -229,7 +232,9 @@ impl Settings {
             Some(name) => Some(chainbeam::scene::Forecast::from_name(name).ok_or_else(|| {
                 Failure::argument(
                     "forecast",
-                    format!("unknown forecast {name:?}; expected \"perfect\" or \"none\""),
+                    format!(
+                        "unknown forecast {name:?}; expected \"perfect\", \"none\" or \"noisy\""
+                    ),
                 )
             })?),
         };
@@ -244,6 +249,14 @@ impl Settings {
             pd_training: self.pd_training,
             objective,
             forecast,
+            forecast_error: self
+                .forecast_error
+                .map(|e| {
+                    chainbeam::scene::check_forecast_error("forecast_error", e)
+                        .map_err(|err| Failure::argument("forecast_error", err.to_string()))
+                })
+                .transpose()?,
+            forecast_seed: None,
         };
         Ok(Resolved {
             given,
@@ -279,6 +292,8 @@ impl Settings {
                 plan_pendulums: s.plan_pendulums,
                 plan_step: s.plan_step,
                 forecast: s.forecast,
+                forecast_error: s.forecast_error,
+                forecast_seed: s.forecast_seed,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,

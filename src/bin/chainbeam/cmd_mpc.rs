@@ -143,10 +143,16 @@ pub struct MpcFlags {
     #[arg(long, value_name = "S")]
     pub plan_step: Option<f64>,
     /// What MPC's plan knows of the sea ahead: `perfect` = the model scene's waves, `none` = a
-    /// calm sea beyond the observed state (the plant always runs the true sea) [default:
+    /// calm sea beyond the observed state, `noisy` = the model scene's waves with errors growing
+    /// with lead time (--forecast-error) (the plant always runs the true sea) [default:
     /// mpc.forecast, else perfect].
     #[arg(long, value_name = "KIND")]
     pub forecast: Option<ForecastArg>,
+    /// The noisy forecast's error growth e: each wave component's relative amplitude and phase
+    /// (rad) errors have the standard deviation min(e·τ/T_p, 1/√2) at lead time τ, in [0, 100]
+    /// [default: mpc.forecast_error, else 0.1].
+    #[arg(long, value_name = "E")]
+    pub forecast_error: Option<f64>,
 }
 
 /// `--forecast`.
@@ -157,9 +163,23 @@ pub enum ForecastArg {
     Perfect,
     /// no waves ahead: the plan runs on a calm sea from the observed state
     None,
+    /// the model scene's waves with errors growing with lead time (--forecast-error)
+    Noisy,
 }
 
 impl MpcFlags {
+    /// `--forecast-error` within its range ([`chainbeam::scene::check_forecast_error`]).
+    ///
+    /// # Errors
+    /// [`CliError`] naming `--forecast-error`.
+    pub fn check_forecast_error(&self) -> Result<(), CliError> {
+        if let Some(e) = self.forecast_error {
+            chainbeam::scene::check_forecast_error("--forecast-error", e)
+                .map_err(|e| CliError::msg(e.to_string()))?;
+        }
+        Ok(())
+    }
+
     /// The flags as an `[mpc]` table (`None`: not given), the values that override the scene's
     /// table ([`MpcTable::resolve`]); `pd_training` and `objective` not given.
     pub fn table(&self) -> MpcTable {
@@ -174,7 +194,9 @@ impl MpcFlags {
             forecast: self.forecast.map(|f| match f {
                 ForecastArg::Perfect => Forecast::Perfect,
                 ForecastArg::None => Forecast::None,
+                ForecastArg::Noisy => Forecast::Noisy,
             }),
+            forecast_error: self.forecast_error,
             ..MpcTable::default()
         }
     }
@@ -282,6 +304,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     if let Some(bound) = a.mpc.bound.filter(|b| b.is_finite()) {
         check_force_flag("--bound", bound)?;
     }
+    a.mpc.check_forecast_error()?;
     let out = Output::prepare(a.output.as_deref())?;
     let summary_out = Output::prepare(a.summary.as_deref())?;
     let mut inputs = Inputs::new();
@@ -313,6 +336,8 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         plan_pendulums: s.plan_pendulums,
         plan_step: s.plan_step,
         forecast: s.forecast,
+        forecast_error: s.forecast_error,
+        forecast_seed: s.forecast_seed,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);

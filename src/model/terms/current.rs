@@ -190,6 +190,14 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
         }
     }
 
+    /// Replaces the waves' field the water's momentum reads (a forecast's,
+    /// [`crate::model::Chain::set_forecast`]); nothing without waves.
+    pub(crate) fn set_waves(&mut self, field: &Arc<WaveField>) {
+        if self.waves.is_some() {
+            self.waves = Some(field.clone());
+        }
+    }
+
     /// Whether the water's momentum reads the current's speed parameter.
     pub(crate) fn reads_speed(&self) -> bool {
         self.reads_speed

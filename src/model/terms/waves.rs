@@ -188,6 +188,9 @@ pub struct WaveField {
     h: f64,
     /// Number of record times.
     rows: usize,
+    /// The grid index of the record's first time (0; a forecast's window,
+    /// [`WaveField::window`], starts later).
+    first: usize,
     /// r of [`WaveInputs::every`].
     every: usize,
     /// rows × n pairs (Wᵢ(tₖ), Gᵢ(tₖ)), time-major: the two series a step reads for a
@@ -197,8 +200,9 @@ pub struct WaveField {
     elevation: Vec<f64>,
     /// n × N amplitudes of Wᵢ and Gᵢ, formed when a time beyond the record is read (the
     /// record itself is synthesised pendulum by pendulum as the amplitudes are formed, so a
-    /// run that stays within its record never holds them).
-    amplitudes: OnceLock<Amplitudes>,
+    /// run that stays within its record never holds them); shared with the field's windows
+    /// ([`WaveField::window`]), which read beyond themselves by the same sums.
+    amplitudes: Arc<OnceLock<Amplitudes>>,
 }
 
 /// The n × N complex amplitudes of every pendulum's Wᵢ and Gᵢ ([`WaveField::amplitudes`]).
@@ -225,10 +229,11 @@ impl WaveField {
             n,
             h: sea.step() * every as f64,
             rows,
+            first: 0,
             every,
             series: alloc_record(rows * n * width)?,
             elevation: alloc_record(rows * width / 2)?,
-            amplitudes: OnceLock::new(),
+            amplitudes: Arc::new(OnceLock::new()),
             inputs,
             sea,
         };
@@ -382,8 +387,9 @@ impl WaveField {
             if s >= 0.0 {
                 let j0 = s.floor();
                 let x = s - j0;
-                let j = j0 as usize;
-                if j + 1 < self.rows {
+                // The record's row of grid time j (j itself but in a window).
+                let j = (j0 as usize).wrapping_sub(self.first);
+                if j < self.rows && j + 1 < self.rows {
                     return RecordTime(At::Hermite(j, x));
                 }
                 if x <= 1e-9 && j < self.rows {
@@ -396,14 +402,16 @@ impl WaveField {
         if s >= 0.0 {
             let k0 = s.floor();
             let frac = s - k0;
-            let k = k0 as usize;
+            // The record's row of grid time k (k itself but in a window; before a window's first
+            // time, beyond every row).
+            let k = (k0 as usize).wrapping_sub(self.first);
             if frac <= 1e-9 && k < rows {
                 return RecordTime(At::Row(k));
             }
-            if frac >= 1.0 - 1e-9 && k + 1 < rows {
+            if frac >= 1.0 - 1e-9 && k < rows && k + 1 < rows {
                 return RecordTime(At::Row(k + 1));
             }
-            if k + 1 < rows {
+            if k < rows && k + 1 < rows {
                 return RecordTime(At::Linear(k, frac));
             }
         }
@@ -449,6 +457,74 @@ impl WaveField {
         } else {
             2
         }
+    }
+
+    /// A copy of the field that keeps only the grid times `first..first + rows` of the record,
+    /// each with `add` added: `add` holds, per record time and pendulum, the values the record
+    /// keeps ([`WaveField::record_width`]: (Wᵢ, Gᵢ), or (Wᵢ, Ẇᵢ, Gᵢ, Ġᵢ) for r > 1), time-major
+    /// (`rows` × n × width). Read at a time within the window, it is the record's interpolant
+    /// of the sums, by the same arithmetic as `self` (an `add` of zeros reads `self`'s values
+    /// bit for bit); outside it, the direct sum of `self`'s amplitudes. The forecast of a plan
+    /// whose sea has errors ([`crate::mpc`], "What the plan knows"); the elevation is kept.
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `window` when the window is not within the record or `add`
+    /// has not `rows` × n × width values.
+    pub fn window(
+        &self,
+        first: usize,
+        rows: usize,
+        add: &[f64],
+    ) -> std::result::Result<Self, SeaError> {
+        let w = self.width();
+        let row = self.n * w;
+        let inside = first >= self.first
+            && first - self.first + rows <= self.rows
+            && add.len() == rows * row
+            && rows >= 2;
+        if !inside {
+            return Err(SeaError::Invalid {
+                quantity: "window",
+                value: first as f64,
+                expected: "rows within the record and rows × n × width values to add",
+            });
+        }
+        let from = (first - self.first) * row;
+        let mut series = self.series[from..from + rows * row].to_vec();
+        for (s, a) in series.iter_mut().zip(add) {
+            *s += a;
+        }
+        let ew = w / 2;
+        let e0 = (first - self.first) * ew;
+        Ok(WaveField {
+            sea: self.sea.clone(),
+            inputs: self.inputs.clone(),
+            n: self.n,
+            h: self.h,
+            rows,
+            first,
+            every: self.every,
+            series,
+            elevation: self.elevation[e0..e0 + rows * ew].to_vec(),
+            amplitudes: self.amplitudes.clone(),
+        })
+    }
+
+    /// Values the record keeps per time and pendulum: 2 (Wᵢ, Gᵢ) or, for r > 1, 4
+    /// (Wᵢ, Ẇᵢ, Gᵢ, Ġᵢ) ([`WaveField::window`]).
+    pub fn record_width(&self) -> usize {
+        self.width()
+    }
+
+    /// The record's grid index of its first time and its number of times (0 and all of them
+    /// but in a window, [`WaveField::window`]).
+    pub fn record_rows(&self) -> (usize, usize) {
+        (self.first, self.rows)
+    }
+
+    /// The number of pendulums n.
+    pub fn pendulums(&self) -> usize {
+        self.n
     }
 
     /// The record's time step r h \[s\] (`[loads.waves] record_step`; the plant's step h when

@@ -309,6 +309,7 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
     if r.bound.is_finite() {
         check_force_flag("--bound", r.bound)?;
     }
+    a.mpc.check_forecast_error()?;
     Ok(ControlSettings {
         interval: r.interval,
         mpc: MpcOptions {
@@ -319,6 +320,8 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
             plan_pendulums: r.plan_pendulums,
             plan_step: r.plan_step,
             forecast: r.forecast,
+            forecast_error: r.forecast_error,
+            forecast_seed: r.forecast_seed,
             ..MpcOptions::default()
         },
         pd_training: r.pd_training,

@@ -211,6 +211,7 @@ def fatigue(
     pd_training: float | None = None,
     mpc_objective: str | None = None,
     forecast: str | None = None,
+    observe: str | None = None,
     spin_up: float | None = None,
     progress: ProgressArg = False,
     duration: float | None = None,
@@ -220,7 +221,9 @@ def fatigue(
     """The wellhead's fatigue damage and life (``chainbeam fatigue``'s JSON as a dict; module
     docs). ``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``plan_pendulums``,
     ``plan_step``, ``pd_training``, ``mpc_objective`` (``"power"`` or ``"sum"``), ``forecast``
-    (``"perfect"`` or ``"none"``: what MPC's plan knows of the sea ahead): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    (``"perfect"`` or ``"none"``: what MPC's plan knows of the sea ahead), ``observe``
+    (``"state"`` or ``"sensors"``: what MPC's plan starts from, the plant's state or a Kalman
+    filter's estimate from the riser's sensors): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
@@ -244,6 +247,7 @@ def fatigue(
         "pd_training": _optional(pd_training, float, "pd_training"),
         "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
         "forecast": _optional(forecast, str, "forecast"),
+        "observe": _optional(observe, str, "observe"),
         "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
         "record": _optional(record, float, "record"),
         "seeds": _optional(seeds, int, "seeds"),

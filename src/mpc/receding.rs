@@ -1,6 +1,7 @@
 //! The receding-horizon controller: real-time iterations of a Gauss-Newton solver (condensed or
 //! Riccati) from the observed state, warm-started from the previous plan.
 
+use super::observer::{Observer, ObserverOptions, SensorSet};
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
@@ -9,7 +10,7 @@ use crate::error::{MpcError, Requirement, Result, ValueError};
 use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, Bounds, Method, OptimOptions};
-use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Scene};
+use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Observe, Scene};
 use crate::steppers::rattle::State;
 
 /// How far a plan looks ahead.
@@ -106,6 +107,12 @@ pub struct MpcOptions {
     /// about one simulation and one adjoint sweep of the horizon, more when its line search
     /// backtracks). Default 5; the first plan takes [`MpcOptions::first_iterations`].
     pub thrust_iterations: usize,
+    /// What the plan starts from: the plant's state, or the estimate of a Kalman filter from a
+    /// named set of sensors ([`super::observer`]). Default [`Observe::State`].
+    pub observe: Observe,
+    /// The filter's settings with [`Observe::Sensors`] (the sensors' noise, the process noise,
+    /// the seed).
+    pub observer: ObserverOptions,
 }
 
 impl Default for MpcOptions {
@@ -123,6 +130,8 @@ impl Default for MpcOptions {
             plan_step: None,
             forecast: Forecast::Perfect,
             thrust_iterations: 5,
+            observe: Observe::State,
+            observer: ObserverOptions::default(),
         }
     }
 }
@@ -162,6 +171,9 @@ pub struct Mpc<const DIM: usize = 2> {
     budget_only: bool,
     /// The plan through the vessel's thrust (a thrust scene), `None` otherwise.
     thrust: Option<ThrustState>,
+    /// The Kalman filter of [`Observe::Sensors`] (built at the first decision, which knows the
+    /// run's length).
+    observer: Option<Observer>,
 }
 
 /// What a controller through the vessel's thrust keeps between re-plans.
@@ -258,6 +270,13 @@ impl<const DIM: usize> Mpc<DIM> {
             }),
             None => None,
         };
+        if options.observe == Observe::Sensors {
+            // The sensors read the vessel under thrust (refused with the key named otherwise).
+            if DIM == 3 || thrust.is_none() {
+                return Err(MpcError::ObserveNeedsThrust.into());
+            }
+            SensorSet::of(&model)?;
+        }
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);
         model.control = Some(Control {
             node,
@@ -281,6 +300,7 @@ impl<const DIM: usize> Mpc<DIM> {
             record: None,
             budget_only: false,
             thrust,
+            observer: None,
         })
     }
 
@@ -623,6 +643,26 @@ impl Mpc {
         Ok(())
     }
 
+    /// A decision from the sensors ([`Observe::Sensors`]): the filter's update at this decision,
+    /// then the thrust plan from its estimate instead of the plant's state.
+    fn control_observed(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        let mut observer = match self.observer.take() {
+            Some(o) => o,
+            None => Observer::new(&self.model, obs.steps, self.interval, self.options.observer)?,
+        };
+        observer.observe(obs)?;
+        let planned = self.replan_thrust(&observer.observation(obs));
+        let command = self.plan.first().copied().unwrap_or(0.0);
+        observer.commanded(obs.k, command);
+        self.observer = Some(observer);
+        planned.map(|()| command)
+    }
+
+    /// The Kalman filter of [`Observe::Sensors`] (after the first decision).
+    pub fn observer(&self) -> Option<&Observer> {
+        self.observer.as_ref()
+    }
+
     /// The last re-plan's result through the vessel's thrust (`None` for a force control).
     pub fn last_thrust_result(&self) -> Option<&crate::optimize::OptimResult> {
         self.thrust.as_ref().and_then(|t| t.last.as_ref())
@@ -635,6 +675,9 @@ impl Controller for Mpc {
     }
 
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        if self.options.observe == Observe::Sensors {
+            return self.control_observed(obs);
+        }
         if self.thrust.is_some() {
             self.replan_thrust(obs)?;
         } else {

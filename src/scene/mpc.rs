@@ -62,6 +62,38 @@ impl Forecast {
     }
 }
 
+/// What MPC's plan starts from (`[mpc] observe`, [`crate::mpc`] "What the controller sees"):
+/// the plant's whole state, or an estimate of it from a named set of sensors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Observe {
+    /// The plant's state as it is (every angle and momentum, exactly).
+    #[default]
+    State,
+    /// The sensors of a drilling riser (the vessel's position and velocity, the top and bottom
+    /// flex joints' angles, the LMRP's inclination), each with its measurement noise, through a
+    /// Kalman filter on the plan's linearised model ([`crate::mpc::observer`]).
+    Sensors,
+}
+
+impl Observe {
+    /// The name in the scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Observe::State => "state",
+            Observe::Sensors => "sensors",
+        }
+    }
+
+    /// The setting of a name ([`Observe::name`]); `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "state" => Some(Observe::State),
+            "sensors" => Some(Observe::Sensors),
+            _ => None,
+        }
+    }
+}
+
 /// The `[mpc]` table (module docs): `None` for a key not given.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MpcTable {
@@ -85,10 +117,12 @@ pub struct MpcTable {
     pub objective: Option<MpcPlanObjective>,
     /// `forecast`: what MPC's plan knows of the sea ahead (`"perfect"` or `"none"`).
     pub forecast: Option<Forecast>,
+    /// `observe`: what MPC's plan starts from (`"state"` or `"sensors"`).
+    pub observe: Option<Observe>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 10] = [
+pub const MPC_KEYS: [&str; 11] = [
     "interval",
     "horizon",
     "iterations",
@@ -99,6 +133,7 @@ pub const MPC_KEYS: [&str; 10] = [
     "pd_training",
     "objective",
     "forecast",
+    "observe",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
@@ -127,6 +162,8 @@ pub struct MpcSettings {
     pub objective: Option<MpcPlanObjective>,
     /// What MPC's plan knows of the sea ahead (default [`Forecast::Perfect`]).
     pub forecast: Forecast,
+    /// What MPC's plan starts from (default [`Observe::State`]).
+    pub observe: Observe,
 }
 
 impl MpcSettings {
@@ -218,6 +255,7 @@ impl MpcTable {
             pd_training: self.pd_training.or(t.pd_training),
             objective: self.objective.or(t.objective),
             forecast: self.forecast.or(t.forecast).unwrap_or_default(),
+            observe: self.observe.or(t.observe).unwrap_or_default(),
         }
     }
 
@@ -234,6 +272,7 @@ impl MpcTable {
             "pd_training" => self.pd_training.is_some(),
             "objective" => self.objective.is_some(),
             "forecast" => self.forecast.is_some(),
+            "observe" => self.observe.is_some(),
             _ => false,
         }
     }
@@ -269,6 +308,8 @@ pub(super) struct RawMpc {
     objective: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     forecast: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    observe: Option<String>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -306,6 +347,7 @@ impl RawMpc {
             pd_training: t.pd_training,
             objective: t.objective.map(|o| o.name().to_string()),
             forecast: t.forecast.map(|f| f.name().to_string()),
+            observe: t.observe.map(|o| o.name().to_string()),
         }
     }
 
@@ -357,6 +399,18 @@ impl RawMpc {
                 })
             })
             .transpose()?;
+        let observe = self
+            .observe
+            .as_deref()
+            .map(|o| {
+                Observe::from_name(o).ok_or_else(|| {
+                    SceneError::invalid(
+                        "mpc.observe",
+                        format!("unknown observe `{o}` (one of state, sensors)"),
+                    )
+                })
+            })
+            .transpose()?;
         Ok(MpcTable {
             interval: positive("interval", self.interval)?,
             horizon: positive("horizon", self.horizon)?,
@@ -368,6 +422,7 @@ impl RawMpc {
             pd_training: positive("pd_training", self.pd_training)?,
             objective,
             forecast,
+            observe,
         })
     }
 }

@@ -10,4 +10,5 @@ mod wave_riser4;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
+mod observe;
 mod plan_prediction;

@@ -89,6 +89,8 @@ pub struct Settings {
     mpc_objective: Option<String>,
     /// `forecast` ("perfect" or "none"; `None`: not given).
     forecast: Option<String>,
+    /// `observe` ("state" or "sensors"; `None`: not given).
+    observe: Option<String>,
     spin_up: f64,
     /// The record counted after the spin-up in a study \[s\] (`None`: 3 hours, the command
     /// line's `--record` default).
@@ -136,6 +138,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             pd_training: item(obj, "pd_training", NUMBER)?,
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
             forecast: item(obj, "forecast", "\"perfect\" or \"none\"")?,
+            observe: item(obj, "observe", "\"state\" or \"sensors\"")?,
             spin_up,
             record: item(obj, "record", NUMBER)?,
             seeds: item(obj, "seeds", COUNT)?,
@@ -233,6 +236,15 @@ impl Settings {
                 )
             })?),
         };
+        let observe = match self.observe.as_deref() {
+            None => None,
+            Some(name) => Some(chainbeam::scene::Observe::from_name(name).ok_or_else(|| {
+                Failure::argument(
+                    "observe",
+                    format!("unknown observe {name:?}; expected \"state\" or \"sensors\""),
+                )
+            })?),
+        };
         let given = MpcTable {
             interval: self.interval,
             horizon: self.horizon,
@@ -244,6 +256,7 @@ impl Settings {
             pd_training: self.pd_training,
             objective,
             forecast,
+            observe,
         };
         Ok(Resolved {
             given,
@@ -279,6 +292,7 @@ impl Settings {
                 plan_pendulums: s.plan_pendulums,
                 plan_step: s.plan_step,
                 forecast: s.forecast,
+                observe: s.observe,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,

@@ -212,6 +212,7 @@ def fatigue(
     mpc_objective: str | None = None,
     forecast: str | None = None,
     forecast_error: float | None = None,
+    observe: str | None = None,
     spin_up: float | None = None,
     progress: ProgressArg = False,
     duration: float | None = None,
@@ -224,7 +225,9 @@ def fatigue(
     (``"perfect"``, ``"none"`` or ``"noisy"``: what MPC's plan knows of the sea ahead),
     ``forecast_error`` (the noisy forecast's error growth e: each wave component's relative
     amplitude and phase errors have the standard deviation min(e·τ/T_p, 1/√2) at lead time τ;
-    ``--forecast-error``): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    ``--forecast-error``), ``observe``
+    (``"state"`` or ``"sensors"``: what MPC's plan starts from, the plant's state or a Kalman
+    filter's estimate from the riser's sensors): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
@@ -249,6 +252,7 @@ def fatigue(
         "mpc_objective": _optional(mpc_objective, str, "mpc_objective"),
         "forecast": _optional(forecast, str, "forecast"),
         "forecast_error": _optional(forecast_error, float, "forecast_error"),
+        "observe": _optional(observe, str, "observe"),
         "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
         "record": _optional(record, float, "record"),
         "seeds": _optional(seeds, int, "seeds"),

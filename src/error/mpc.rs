@@ -152,6 +152,30 @@ pub enum MpcError {
         /// Ḟ_max h \[N\].
         max_change: f64,
     },
+    /// `observe = "sensors"` on a scene whose control is not the vessel's thrust (or in the
+    /// spatial model): the sensor set reads the vessel under thrust ([`crate::mpc::observer`]).
+    #[error(
+        "observe \"sensors\" reads the vessel's position and velocity, the flex joints and the \
+         LMRP of a riser held by a vessel under thrust: the scene's control is not the vessel's \
+         thrust (give [vessel] thrust keys) or it runs in the spatial model"
+    )]
+    ObserveNeedsThrust,
+    /// `observe = "sensors"` on a scene that lacks one of the sensors' places.
+    #[error(
+        "observe \"sensors\" needs {missing} (the flex joints and the LMRP carry the sensors; \
+         docs/mpc.md \"What the controller sees\")"
+    )]
+    ObserveSensors {
+        /// What the scene lacks.
+        missing: &'static str,
+    },
+    /// The steady-state Kalman filter of `observe = "sensors"` has no solution: its Riccati
+    /// equation did not converge (the sensors do not see an unstable motion of the model).
+    #[error(
+        "observe \"sensors\": the Kalman filter's Riccati equation did not converge (the \
+         sensors do not see a growing motion of the model)"
+    )]
+    ObserverNotConverged,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -180,6 +204,9 @@ impl MpcError {
             MpcError::ForecastError { .. } => "forecast_error",
             MpcError::ForecastWindow { .. } => "forecast",
             MpcError::ThrustLimit { .. } => "model",
+            MpcError::ObserveNeedsThrust
+            | MpcError::ObserveSensors { .. }
+            | MpcError::ObserverNotConverged => "observe",
             MpcError::ThrustPlanReduced => "plan_pendulums",
         }
     }

@@ -145,6 +145,17 @@
 //! e = 0 it is the perfect forecast bit for bit (tests/mpc/forecast_noisy.rs). The plant always
 //! runs the true sea.
 //!
+//! # What the controller sees
+//! [`MpcOptions::observe`] ([`Observe`], `[mpc] observe`, `--observe`): `state` plans from the
+//! plant's whole state, as every section above says; `sensors` plans from the estimate of a
+//! Kalman filter ([`observer`]) that reads only the sensors a drilling riser carries — the
+//! vessel's position and velocity, the top and bottom flex joints' angles and the LMRP's
+//! inclination, each with its measurement noise (seeded) — and predicts between readings with
+//! the plan's own model and the forecast's sea. It is built for MPC through the vessel's thrust
+//! on a `[stackup]` scene (refused elsewhere, naming `observe`): the filter's estimate at
+//! t_{k−1} is the plan's start. The other controllers are unchanged by it (the PD law measures
+//! M₀ as before).
+//!
 //! # Which solver re-plans ([`MpcSolver`])
 //! A 3 s horizon is 300 steps but only 30 decisions. The Riccati solver linearises every step
 //! (21 dual-number directions per step for n = 10, then several Riccati passes over 300
@@ -240,6 +251,7 @@
 
 mod baselines;
 pub mod forecast;
+pub mod observer;
 pub mod planning;
 mod plant;
 pub mod prediction;
@@ -247,11 +259,13 @@ mod receding;
 mod thrust;
 
 pub use crate::scene::Forecast;
+pub use crate::scene::Observe;
 pub use baselines::{
     pd_closed_loop_cost, pd_closed_loop_cost_spatial, ConstantForce, NoControl, PdLaw, PdTuning,
     SpatialConstantForce, SpatialPdLaw,
 };
 pub use forecast::{forecast_sigma, NoisyForecast, SIGMA_CAP};
+pub use observer::{Observer, ObserverOptions, SensorNoise, SensorSet};
 pub use plant::Plant;
 pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver};
 

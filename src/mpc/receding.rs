@@ -2,6 +2,7 @@
 //! Riccati) from the observed state, warm-started from the previous plan.
 
 use super::forecast::NoisyForecast;
+use super::observer::{Observer, ObserverOptions, SensorSet};
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
@@ -10,7 +11,7 @@ use crate::error::{MpcError, Requirement, Result, ValueError};
 use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, Bounds, Method, OptimOptions};
-use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Scene};
+use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Observe, Scene};
 use crate::steppers::rattle::State;
 
 /// How far a plan looks ahead.
@@ -112,6 +113,12 @@ pub struct MpcOptions {
     pub forecast_error: f64,
     /// The seed of the noisy forecast's errors; `None` (default): the model's sea's seed.
     pub forecast_seed: Option<u64>,
+    /// What the plan starts from: the plant's state, or the estimate of a Kalman filter from a
+    /// named set of sensors ([`super::observer`]). Default [`Observe::State`].
+    pub observe: Observe,
+    /// The filter's settings with [`Observe::Sensors`] (the sensors' noise, the process noise,
+    /// the seed).
+    pub observer: ObserverOptions,
 }
 
 impl Default for MpcOptions {
@@ -131,6 +138,8 @@ impl Default for MpcOptions {
             thrust_iterations: 5,
             forecast_error: crate::scene::MpcSettings::DEFAULT_FORECAST_ERROR,
             forecast_seed: None,
+            observe: Observe::State,
+            observer: ObserverOptions::default(),
         }
     }
 }
@@ -172,6 +181,9 @@ pub struct Mpc<const DIM: usize = 2> {
     thrust: Option<ThrustState>,
     /// The noisy forecast ([`Forecast::Noisy`]), `None` otherwise.
     noisy: Option<NoisyForecast>,
+    /// The Kalman filter of [`Observe::Sensors`] (built at the first decision, which knows the
+    /// run's length).
+    observer: Option<Observer>,
 }
 
 /// What a controller through the vessel's thrust keeps between re-plans.
@@ -279,6 +291,13 @@ impl<const DIM: usize> Mpc<DIM> {
             }),
             None => None,
         };
+        if options.observe == Observe::Sensors {
+            // The sensors read the vessel under thrust (refused with the key named otherwise).
+            if DIM == 3 || thrust.is_none() {
+                return Err(MpcError::ObserveNeedsThrust.into());
+            }
+            SensorSet::of(&model)?;
+        }
         let node = model.control.as_ref().map_or(model.n(), |c| c.node);
         model.control = Some(Control {
             node,
@@ -303,6 +322,7 @@ impl<const DIM: usize> Mpc<DIM> {
             budget_only: false,
             thrust,
             noisy,
+            observer: None,
         })
     }
 
@@ -708,6 +728,26 @@ impl Mpc {
         Ok(())
     }
 
+    /// A decision from the sensors ([`Observe::Sensors`]): the filter's update at this decision,
+    /// then the thrust plan from its estimate instead of the plant's state.
+    fn control_observed(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        let mut observer = match self.observer.take() {
+            Some(o) => o,
+            None => Observer::new(&self.model, obs.steps, self.interval, self.options.observer)?,
+        };
+        observer.observe(obs)?;
+        let planned = self.replan_thrust(&observer.observation(obs));
+        let command = self.plan.first().copied().unwrap_or(0.0);
+        observer.commanded(obs.k, command);
+        self.observer = Some(observer);
+        planned.map(|()| command)
+    }
+
+    /// The Kalman filter of [`Observe::Sensors`] (after the first decision).
+    pub fn observer(&self) -> Option<&Observer> {
+        self.observer.as_ref()
+    }
+
     /// The last re-plan's result through the vessel's thrust (`None` for a force control).
     pub fn last_thrust_result(&self) -> Option<&crate::optimize::OptimResult> {
         self.thrust.as_ref().and_then(|t| t.last.as_ref())
@@ -720,6 +760,9 @@ impl Controller for Mpc {
     }
 
     fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+        if self.options.observe == Observe::Sensors {
+            return self.control_observed(obs);
+        }
         if self.thrust.is_some() {
             self.replan_thrust(obs)?;
         } else {

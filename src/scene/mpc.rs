@@ -71,6 +71,38 @@ impl Forecast {
     }
 }
 
+/// What MPC's plan starts from (`[mpc] observe`, [`crate::mpc`] "What the controller sees"):
+/// the plant's whole state, or an estimate of it from a named set of sensors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Observe {
+    /// The plant's state as it is (every angle and momentum, exactly).
+    #[default]
+    State,
+    /// The sensors of a drilling riser (the vessel's position and velocity, the top and bottom
+    /// flex joints' angles, the LMRP's inclination), each with its measurement noise, through a
+    /// Kalman filter on the plan's linearised model ([`crate::mpc::observer`]).
+    Sensors,
+}
+
+impl Observe {
+    /// The name in the scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            Observe::State => "state",
+            Observe::Sensors => "sensors",
+        }
+    }
+
+    /// The setting of a name ([`Observe::name`]); `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "state" => Some(Observe::State),
+            "sensors" => Some(Observe::Sensors),
+            _ => None,
+        }
+    }
+}
+
 /// The `[mpc]` table (module docs): `None` for a key not given.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MpcTable {
@@ -100,10 +132,12 @@ pub struct MpcTable {
     pub forecast_error: Option<f64>,
     /// `forecast_seed`: the seed of the noisy forecast's errors (default: the sea's seed).
     pub forecast_seed: Option<u64>,
+    /// `observe`: what MPC's plan starts from (`"state"` or `"sensors"`).
+    pub observe: Option<Observe>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 12] = [
+pub const MPC_KEYS: [&str; 13] = [
     "interval",
     "horizon",
     "iterations",
@@ -116,6 +150,7 @@ pub const MPC_KEYS: [&str; 12] = [
     "forecast",
     "forecast_error",
     "forecast_seed",
+    "observe",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
@@ -149,6 +184,8 @@ pub struct MpcSettings {
     pub forecast_error: f64,
     /// The seed of the noisy forecast's errors (default: the sea's seed, `None` here).
     pub forecast_seed: Option<u64>,
+    /// What MPC's plan starts from (default [`Observe::State`]).
+    pub observe: Observe,
 }
 
 impl MpcSettings {
@@ -251,6 +288,7 @@ impl MpcTable {
                 .or(t.forecast_error)
                 .unwrap_or(MpcSettings::DEFAULT_FORECAST_ERROR),
             forecast_seed: self.forecast_seed.or(t.forecast_seed),
+            observe: self.observe.or(t.observe).unwrap_or_default(),
         }
     }
 
@@ -269,6 +307,7 @@ impl MpcTable {
             "forecast" => self.forecast.is_some(),
             "forecast_error" => self.forecast_error.is_some(),
             "forecast_seed" => self.forecast_seed.is_some(),
+            "observe" => self.observe.is_some(),
             _ => false,
         }
     }
@@ -308,6 +347,7 @@ pub(super) struct RawMpc {
     forecast_error: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     forecast_seed: Option<i64>,
+    observe: Option<String>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -349,6 +389,7 @@ impl RawMpc {
             forecast_seed: t
                 .forecast_seed
                 .map(|s| i64::try_from(s).unwrap_or(i64::MAX)),
+            observe: t.observe.map(|o| o.name().to_string()),
         }
     }
 
@@ -415,6 +456,18 @@ impl RawMpc {
                 })
             })
             .transpose()?;
+        let observe = self
+            .observe
+            .as_deref()
+            .map(|o| {
+                Observe::from_name(o).ok_or_else(|| {
+                    SceneError::invalid(
+                        "mpc.observe",
+                        format!("unknown observe `{o}` (one of state, sensors)"),
+                    )
+                })
+            })
+            .transpose()?;
         Ok(MpcTable {
             interval: positive("interval", self.interval)?,
             horizon: positive("horizon", self.horizon)?,
@@ -428,6 +481,7 @@ impl RawMpc {
             forecast,
             forecast_error,
             forecast_seed,
+            observe,
         })
     }
 }

@@ -11,5 +11,6 @@ mod forecast_noisy;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
+mod observe;
 mod plan_prediction;
 mod thrust_plan_step;

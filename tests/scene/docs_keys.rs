@@ -349,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 144, "number of documented keys");
+    assert_eq!(checked, 145, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -426,6 +426,7 @@ fn every_documented_key_is_read() {
         ("mpc", "pd_training", "1.0"),
         ("mpc", "objective", "\"sum\""),
         ("mpc", "forecast", "\"none\""),
+        ("mpc", "observe", "\"sensors\""),
         ("design", "max_iterations", "7"),
         ("design", "tolerance", "1e-3"),
         ("design.parameter", "name", "\"beam.tip_stiffness\""),

@@ -89,6 +89,8 @@ pub struct Settings {
     mpc_objective: Option<String>,
     /// `forecast` ("perfect", "none" or "noisy"; `None`: not given).
     forecast: Option<String>,
+    /// `observe` ("state" or "sensors"; `None`: not given).
+    observe: Option<String>,
     spin_up: f64,
     /// `forecast_error` (the noisy forecast's error growth e; `None`: not given).
     forecast_error: Option<f64>,
@@ -138,6 +140,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             pd_training: item(obj, "pd_training", NUMBER)?,
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
             forecast: item(obj, "forecast", "\"perfect\", \"none\" or \"noisy\"")?,
+            observe: item(obj, "observe", "\"state\" or \"sensors\"")?,
             spin_up,
             forecast_error: item(obj, "forecast_error", NUMBER)?,
             record: item(obj, "record", NUMBER)?,
@@ -238,6 +241,15 @@ impl Settings {
                 )
             })?),
         };
+        let observe = match self.observe.as_deref() {
+            None => None,
+            Some(name) => Some(chainbeam::scene::Observe::from_name(name).ok_or_else(|| {
+                Failure::argument(
+                    "observe",
+                    format!("unknown observe {name:?}; expected \"state\" or \"sensors\""),
+                )
+            })?),
+        };
         let given = MpcTable {
             interval: self.interval,
             horizon: self.horizon,
@@ -257,6 +269,7 @@ impl Settings {
                 })
                 .transpose()?,
             forecast_seed: None,
+            observe,
         };
         Ok(Resolved {
             given,
@@ -294,6 +307,7 @@ impl Settings {
                 forecast: s.forecast,
                 forecast_error: s.forecast_error,
                 forecast_seed: s.forecast_seed,
+                observe: s.observe,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,

@@ -14,7 +14,7 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::OptimOptions;
-use chainbeam::scene::{Forecast, MpcSettings, MpcTable, MAX_STEPS, MPC_KEYS};
+use chainbeam::scene::{Forecast, MpcSettings, MpcTable, Observe, MAX_STEPS, MPC_KEYS};
 use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -153,6 +153,23 @@ pub struct MpcFlags {
     /// [default: mpc.forecast_error, else 0.1].
     #[arg(long, value_name = "E")]
     pub forecast_error: Option<f64>,
+    /// What MPC's plan starts from: `state` = the plant's whole state, `sensors` = a Kalman
+    /// filter's estimate from the vessel's position and velocity, the top and bottom flex
+    /// joints' angles and the LMRP's inclination, each with its measurement noise (a thrust
+    /// scene with a [stackup]; docs/mpc.md "What the controller sees") [default: mpc.observe,
+    /// else state].
+    #[arg(long, value_name = "KIND")]
+    pub observe: Option<ObserveArg>,
+}
+
+/// `--observe`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ObserveArg {
+    /// the plant's whole state
+    State,
+    /// a Kalman filter's estimate from the riser's sensors
+    Sensors,
 }
 
 /// `--forecast`.
@@ -197,6 +214,10 @@ impl MpcFlags {
                 ForecastArg::Noisy => Forecast::Noisy,
             }),
             forecast_error: self.forecast_error,
+            observe: self.observe.map(|o| match o {
+                ObserveArg::State => Observe::State,
+                ObserveArg::Sensors => Observe::Sensors,
+            }),
             ..MpcTable::default()
         }
     }
@@ -225,6 +246,8 @@ struct Settings {
     effort: f64,
     rate_penalty: f64,
     model: Option<String>,
+    /// What MPC's plan started from ("state" or "sensors").
+    observe: &'static str,
 }
 
 #[derive(Serialize)]
@@ -338,6 +361,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         forecast: s.forecast,
         forecast_error: s.forecast_error,
         forecast_seed: s.forecast_seed,
+        observe: s.observe,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
@@ -624,6 +648,7 @@ fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
             effort: s.effort,
             rate_penalty: a.rate_penalty,
             model: a.model.as_ref().map(|p| p.display().to_string()),
+            observe: s.observe.name(),
         },
         real_time: mpc.worst_replan_seconds <= s.interval,
         c_sum_ratio_to_none: ratio(0),

@@ -144,6 +144,8 @@ struct SettingsJson {
     mpc_objective: &'static str,
     record: Option<f64>,
     seeds: usize,
+    /// What MPC's plan started from ("state" or "sensors").
+    observe: &'static str,
 }
 
 /// `--controller` output.
@@ -322,6 +324,7 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
             forecast: r.forecast,
             forecast_error: r.forecast_error,
             forecast_seed: r.forecast_seed,
+            observe: r.observe,
             ..MpcOptions::default()
         },
         pd_training: r.pd_training,
@@ -489,6 +492,7 @@ fn controllers_json(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError
             mpc_objective: plan_objective(settings).name(),
             record: Some(a.record.unwrap_or(PRACTICE_RECORD_S)),
             seeds: a.seeds,
+            observe: settings.observe.name(),
         },
         seeds: solved.seeds.clone(),
     })

@@ -629,7 +629,8 @@ impl Mpc {
         let pieces = self.horizon_pieces(obs)?;
         let hp = self.model.time.step;
         let r = (hp / obs.h).round();
-        if !(r >= 1.0) || (r * obs.h - hp).abs() > 1e-9 * hp {
+        // r is NaN for a non-finite step: refused as well.
+        if r.is_nan() || r < 1.0 || (r * obs.h - hp).abs() > 1e-9 * hp {
             return Err(MpcError::ThrustStep {
                 model: hp,
                 plant: obs.h,

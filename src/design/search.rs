@@ -217,6 +217,10 @@ fn scaled_descent(g: &[f64], free: &[bool]) -> Vec<f64> {
         .collect()
 }
 
+/// f(u) (and ∇f(u) when asked for [`Want::Gradient`]) at a point u of the unit box: the function
+/// [`minimise_box`] minimises.
+pub type BoxObjective<'a> = dyn FnMut(&[f64], Want) -> Result<BoxValue, DesignError> + 'a;
+
 /// Minimises f on the unit box \[0, 1\]^m from `start` (module docs), `eval` giving f(u) (and
 /// ∇f(u) when asked for [`Want::Gradient`]); `first` is f and ∇f at the start when the caller has
 /// them (else the start is evaluated), and `on_step` sees every accepted point as it is accepted.
@@ -225,7 +229,7 @@ fn scaled_descent(g: &[f64], free: &[bool]) -> Vec<f64> {
 /// `eval`'s first error; [`DesignError::BadValues`] for a start outside the box, a gradient of
 /// the wrong length, or a value or gradient that is not finite.
 pub fn minimise_box(
-    eval: &mut dyn FnMut(&[f64], Want) -> Result<BoxValue, DesignError>,
+    eval: &mut BoxObjective<'_>,
     start: &[f64],
     first: Option<BoxValue>,
     settings: BoxSearch,

@@ -8,10 +8,13 @@ use chainbeam::design::{
     DesignError, Want,
 };
 
+/// A test function: its value and gradient at u, in closed form.
+type ClosedForm = dyn Fn(&[f64]) -> (f64, Vec<f64>);
+
 /// Runs the search on `f` (value and gradient in closed form) from `start`, counting the
 /// evaluations by kind.
 fn run(
-    f: &dyn Fn(&[f64]) -> (f64, Vec<f64>),
+    f: &ClosedForm,
     start: &[f64],
     settings: BoxSearch,
 ) -> (chainbeam::design::BoxOutcome, usize, usize) {
@@ -72,6 +75,7 @@ fn monotone_objective_reaches_both_bounds_in_one_step() {
 ///    (the value alone) lands u₂ on its bound 0 and is accepted, then its gradient;
 /// 4. with u₂ active (held at 0) the one free variable's secant step lands on u₁ = 0.3 to
 ///    round-off: the projected gradient is 2·10⁻¹⁶ and the search stops converged.
+///
 /// That is 7 evaluations with the gradient (the start, 5 accepted steps, 1 rejected first trial)
 /// and 1 of the value alone: the numbers asserted. The reference optimum is the closed form.
 #[test]

@@ -349,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 145, "number of documented keys");
+    assert_eq!(checked, 148, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -427,8 +427,11 @@ fn every_documented_key_is_read() {
         ("mpc", "objective", "\"sum\""),
         ("mpc", "forecast", "\"none\""),
         ("mpc", "observe", "\"sensors\""),
+        ("mpc", "forecast_error", "0.5"),
+        ("mpc", "forecast_seed", "3"),
         ("design", "max_iterations", "7"),
         ("design", "tolerance", "1e-3"),
+        ("design", "hotspot", "\"a\""),
         ("design.parameter", "name", "\"beam.tip_stiffness\""),
         ("design.parameter", "lower", "20.0"),
         ("design.parameter", "upper", "500.0"),

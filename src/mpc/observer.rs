@@ -166,7 +166,7 @@ impl Default for ObserverOptions {
 }
 
 /// Where the sensors sit on the chain (module docs, "The sensors"): joints 0..=n as
-/// [`crate::scene::stackup::Layout::flex_joints`] numbers them, pendulums 0-based.
+/// [`crate::scene::Layout::flex_joints`] numbers them, pendulums 0-based.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SensorSet {
     /// The top flex joint (the highest).

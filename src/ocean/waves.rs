@@ -135,7 +135,7 @@ const NORMAL_EXPONENT: f64 = -700.0;
 /// to [`Sea::velocity_amplitudes`] or [`Sea::cell_velocity_amplitudes`], for a fraction of their
 /// cost: the denominator 1 − e^{−2kⱼd} of every component is computed once (not once per
 /// height and cell end), e^{−k(y+d)} is left out where it cannot change the rounded result
-/// ([`NEGLIGIBLE_KY`]), and a cell end that is bit for bit the end of the cell before it (the
+/// (k y ≥ 20: e^{−2ky} < 2⁻⁵⁶), and a cell end that is bit for bit the end of the cell before it (the
 /// cells of neighbouring nodes share their ends) reuses that end's values. A chain's wave field
 /// forms n × N amplitudes this way ([`crate::model::WaveField`]), whatever the run's length.
 #[derive(Clone, Debug)]

@@ -22,7 +22,7 @@ bad argument ``InvalidArgumentError`` with ``.key`` the argument:
 - ``controllers``: ``controllers`` (keyed by name: ``damage_per_year``, ``life_years``,
   ``cells``), ``life_extension`` (keyed by name: its life over the life without control) and
   ``settings`` (``interval``, ``horizon``, ``iterations``, ``bound``, ``effort``, ``spin_up``,
-  ``mpc_objective``, ``record``, ``seeds``: the values the run used, from the arguments or the
+  ``mpc_objective``, ``record``, ``seeds``, ``observe``: the values the run used, from the arguments or the
   scene's ``[mpc]``).
 
 A study (``scatter``, ``controllers`` or ``seeds`` > 1) runs each cell for ``spin_up`` +

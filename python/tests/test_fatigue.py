@@ -168,7 +168,8 @@ def test_mpc_table_settings_equal_cli(cli: str, tmp_path: Path) -> None:
     got = cb.fatigue(s, controllers="constant,mpc", spin_up=1.0, record=9.0)
     assert got["settings"] == {"interval": 0.5, "horizon": 1.0, "iterations": 2,
                                "bound": 2e4, "effort": 1e-3, "spin_up": 1.0,
-                               "mpc_objective": "sum", "record": 9.0, "seeds": 1}
+                               "mpc_objective": "sum", "record": 9.0, "seeds": 1,
+                               "observe": "state"}
     assert same(got, ref)
     ref = cli_json(cli, str(path), "--controller", "mpc", "--horizon", "1.5",
                    "--mpc-objective", "power", "--record", "10")
@@ -180,7 +181,8 @@ def test_mpc_table_settings_equal_cli(cli: str, tmp_path: Path) -> None:
     plain = cb.Scene.from_toml(SCENE)
     assert cb.fatigue(plain, controllers="none", record=10.0)["settings"] == {
         "interval": 0.1, "horizon": 3.0, "iterations": 1, "bound": 5.0, "effort": 0.01,
-        "spin_up": 0.0, "mpc_objective": "power", "record": 10.0, "seeds": 1}
+        "spin_up": 0.0, "mpc_objective": "power", "record": 10.0, "seeds": 1,
+        "observe": "state"}
 
 
 def test_mpc_table_refusals() -> None:

@@ -575,6 +575,7 @@ fn study_dict<'py>(
     settings.set_item("mpc_objective", r.objective().name())?;
     settings.set_item("record", r.record)?;
     settings.set_item("seeds", r.seeds)?;
+    settings.set_item("observe", s.observe.name())?;
     d.set_item("settings", settings)?;
     if let Some(seeds) = &r.seeds_run {
         d.set_item("seeds", seeds.clone())?;

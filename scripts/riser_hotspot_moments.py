@@ -23,6 +23,22 @@ import numpy as np
 def main():
     scene_path, csv_path, t0 = sys.argv[1], sys.argv[2], float(sys.argv[3])
     scene = tomllib.load(open(scene_path, "rb"))
+    header = open(csv_path).readline().strip().split(",")
+    data = np.loadtxt(csv_path, delimiter=",", skiprows=1)
+    ycol = [i for i, k in enumerate(header) if k[0] == "y" and k[1:].isdigit()]
+    zcol = [i for i, k in enumerate(header) if k[0] == "z" and k[1:].isdigit()]
+    keep = data[:, 0] >= t0
+    for spot, (lo, hi), m in hotspot_moments(scene, data[keep][:, ycol], data[keep][:, zcol]):
+        print(
+            f"{spot['name']}: elevation {spot['elevation']} m, joints at {lo:.3f}/{hi:.3f} m, "
+            f"mean {m.mean():.5e} N m, std {m.std():.5e} N m"
+        )
+
+
+def hotspot_moments(scene, node_y, node_z):
+    """Each `[[fatigue.hotspot]]` of the parsed `scene` with the elevations of the two joints
+    read and its moment series [N m], from the node positions node_y, node_z (rows: times; columns: nodes
+    1..n, the base node 0 at the origin left out, as `chainbeam simulate` writes them)."""
     st = scene["stackup"]
     segments = st.get("segment", [])
     bodies = st.get("body", [])
@@ -48,14 +64,11 @@ def main():
         y += length
         tops[name] = y
 
-    header = open(csv_path).readline().strip().split(",")
-    data = np.loadtxt(csv_path, delimiter=",", skiprows=1)
-    ycol = [i for i, k in enumerate(header) if k[0] == "y" and k[1:].isdigit()]
-    zcol = [i for i, k in enumerate(header) if k[0] == "z" and k[1:].isdigit()]
-    rows = data.shape[0]
-    ys = np.hstack([np.zeros((rows, 1)), data[:, ycol]])
-    zs = np.hstack([np.zeros((rows, 1)), data[:, zcol]])
-    lengths = np.diff(ys[0])
+    rows = node_y.shape[0]
+    ys = np.hstack([np.zeros((rows, 1)), node_y])
+    zs = np.hstack([np.zeros((rows, 1)), node_z])
+    # The pendulums' lengths (any row: they are constant).
+    lengths = np.hypot(np.diff(ys[0]), np.diff(zs[0]))
     n = len(lengths)
     s = np.concatenate([[0.0], np.cumsum(lengths)])
     mids = 0.5 * (s[:-1] + s[1:])
@@ -74,8 +87,8 @@ def main():
     ay, az = np.hstack([ones, qy]), np.hstack([zeros, qz])
     by, bz = np.hstack([qy, ones]), np.hstack([qz, zeros])
     torque = np.arctan2(ay * bz - az * by, ay * by + az * bz) * k
-    keep = data[:, 0] >= t0
     tol = 1e-9 * max(s[-1], 1.0)
+    out = []
     for spot in scene["fatigue"].get("hotspot", []):
         e = spot["elevation"]
         on = np.nonzero(abs(s - e) <= tol)[0]
@@ -86,11 +99,9 @@ def main():
             lo = int(np.searchsorted(s, e)) - 1
             hi = lo + 1
             w = (e - s[lo]) / (s[hi] - s[lo])
-        m = (1 - w) * torque[keep, lo] + w * torque[keep, hi]
-        print(
-            f"{spot['name']}: elevation {e} m, joints at {s[lo]:.3f}/{s[hi]:.3f} m, "
-            f"mean {m.mean():.5e} N m, std {m.std():.5e} N m"
-        )
+        m = (1 - w) * torque[:, lo] + w * torque[:, hi]
+        out.append((spot, (s[lo], s[hi]), m))
+    return out
 
 
 if __name__ == "__main__":

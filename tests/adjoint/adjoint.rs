@@ -117,30 +117,14 @@ fn check<O: Objective + Clone>(
         Tolerance::of_scale(1e-6, scale.max(1e-300)),
     );
     // physical parameters: forward mode
-    let nominal = |p: Parameter| match p {
-        Parameter::InteriorStiffness => 1000.0,
-        Parameter::BaseStiffness | Parameter::TipStiffness => 2000.0,
-        Parameter::Mass => 1.0,
-        Parameter::Drag => s.loads.drag,
-        Parameter::LoadForce(_) => 2.0,
-        other => panic!("no nominal value for {other:?} (not among the parameters tested here)"),
-    };
-    let u: Vec<Dual64> = prob
-        .controls(&theta)
-        .unwrap()
-        .into_iter()
-        .map(Dual64::from)
-        .collect();
-    let fwd: Vec<f64> = params
-        .iter()
-        .map(|&p| {
-            let mut ch = prob.chain_as::<Dual64>();
-            ch.set_parameter(p, Dual64::new(nominal(p), 1.0)).unwrap();
-            forward_value(&ch, s.time.step, steps, &u, &obj)
-                .unwrap()
-                .eps
-        })
-        .collect();
+    let fwd = gradient_check::forward_parameter_gradient(
+        &prob,
+        &theta,
+        &params,
+        s.loads.drag,
+        s.time.step,
+        &obj,
+    );
     gradient_check::assert_close(
         &format!("{label}: dJ/d{params:?}, adjoint"),
         &adj.parameter_gradient,

@@ -199,3 +199,47 @@ pub fn check_parameters<const DIM: usize>(
         assert_derivative(&format!("{p:?}"), adjoint[i], fwd, fd);
     }
 }
+
+/// The nominal value at which the adjoint tests seed a physical parameter (the thesis riser's
+/// springs and mass, the scene's drag, a 2 N load): forward mode reads J's derivative there.
+pub fn nominal_parameter(p: Parameter, drag: f64) -> f64 {
+    match p {
+        Parameter::InteriorStiffness => 1000.0,
+        Parameter::BaseStiffness | Parameter::TipStiffness => 2000.0,
+        Parameter::Mass => 1.0,
+        Parameter::Drag => drag,
+        Parameter::LoadForce(_) => 2.0,
+        other => panic!("no nominal value for {other:?} (not among the parameters tested here)"),
+    }
+}
+
+/// dJ/dp for each of `params` by forward-mode dual numbers, the reference of an adjoint's
+/// `parameter_gradient`: a copy of the problem's chain lifted to Dual64 with p seeded (ε = 1) at
+/// [`nominal_parameter`], run over the problem's horizon of step `h` with the controls of θ; J's
+/// ε part.
+pub fn forward_parameter_gradient<O: chainbeam::adjoint::Objective + Clone>(
+    prob: &ControlProblem<Parametrisation, O>,
+    theta: &[f64],
+    params: &[Parameter],
+    drag: f64,
+    h: f64,
+    objective: &O,
+) -> Vec<f64> {
+    let u: Vec<Dual64> = prob
+        .controls(theta)
+        .unwrap()
+        .into_iter()
+        .map(Dual64::from)
+        .collect();
+    params
+        .iter()
+        .map(|&p| {
+            let mut ch = prob.chain_as::<Dual64>();
+            ch.set_parameter(p, Dual64::new(nominal_parameter(p, drag), 1.0))
+                .unwrap();
+            forward_value(&ch, h, prob.steps(), &u, objective)
+                .unwrap()
+                .eps
+        })
+        .collect()
+}

@@ -8,7 +8,7 @@
 //! tests/adjoint/adjoint.rs; the vessel's discrete surge against the closed-form solution of the linear
 //! ODE under a constant thrust (an order-2 scheme: the error falls 4× per halved step).
 
-use crate::gradient_check::{assert_close, central, Tolerance};
+use crate::gradient_check::{assert_close, central, forward_parameter_gradient, Tolerance};
 use chainbeam::adjoint::{forward_value, BendingObjective, Objective};
 use chainbeam::catalogue;
 use chainbeam::*;
@@ -137,30 +137,7 @@ fn check<O: Objective + Clone>(
         "central differences, step 1e-4 max(|θ_j|, 1)",
         Tolerance::of_scale(1e-6, scale),
     );
-    let nominal = |p: Parameter| match p {
-        Parameter::InteriorStiffness => 1000.0,
-        Parameter::BaseStiffness | Parameter::TipStiffness => 2000.0,
-        Parameter::Mass => 1.0,
-        Parameter::Drag => s.loads.drag,
-        Parameter::LoadForce(_) => 2.0,
-        other => panic!("no nominal value for {other:?}"),
-    };
-    let u: Vec<Dual64> = prob
-        .controls(&theta)
-        .unwrap()
-        .into_iter()
-        .map(Dual64::from)
-        .collect();
-    let fwd: Vec<f64> = params
-        .iter()
-        .map(|&p| {
-            let mut ch = prob.chain_as::<Dual64>();
-            ch.set_parameter(p, Dual64::new(nominal(p), 1.0)).unwrap();
-            forward_value(&ch, s.time.step, steps, &u, &obj)
-                .unwrap()
-                .eps
-        })
-        .collect();
+    let fwd = forward_parameter_gradient(&prob, &theta, &params, s.loads.drag, s.time.step, &obj);
     assert_close(
         &format!("{label}: dJ/d{params:?}, adjoint"),
         &adj.parameter_gradient,

@@ -9,7 +9,7 @@
 //!
 //! **The vessel as the actuator** (`[vessel]` `mass`, ..., [`crate::scene::Thrust`]): the top
 //! follows Z(t) = P(t) + x_v(t), P the prescribed part above and x_v the vessel's low-frequency
-//! surge under the thrust F, (m + m_a) ẍ_v = F − c ẋ_v ([`ThrustDrive`]). x_v is a state of the
+//! surge under the thrust F, (m + m_a) ẍ_v = F − c ẋ_v − k x_v ([`ThrustDrive`]; k the station keeping). x_v is a state of the
 //! step, driven by the control: [`ThrustDrive`] integrates it with the step's own split and
 //! writes the transpose of that linear map for the adjoint.
 //!
@@ -31,18 +31,21 @@ pub struct VesselMotion {
     thrust: Option<ThrustDrive>,
 }
 
-/// The vessel's surge under the thrust, (m + m_a) ẍ_v = F − c ẋ_v, one-way coupled (the
-/// riser's top reaction is left out: docs/conventions.md "The vessel as the actuator"), stepped
-/// with RATTLE's split and its damping read at the half step (as the riser's drag is):
+/// The vessel's surge under the thrust, (m + m_a) ẍ_v = F − c ẋ_v − k x_v, one-way coupled
+/// (the riser's top reaction is left out: docs/conventions.md "The vessel as the actuator"; k
+/// the station keeping, 0 without it), stepped with RATTLE's split, the spring's force a kick
+/// at each end of the step as a potential's is, and the damping read at the half step (as the
+/// riser's drag is):
 ///
 /// ```text
-/// v_{k+½} = (v_k + h/(2M) F_k) / (1 + h c/(2M))
+/// v_{k+½} = (v_k + h/(2M) (F_k − k x_k)) / (1 + h c/(2M))
 /// x_{k+1} = x_k + h v_{k+½}
-/// v_{k+1} = v_{k+½} (1 − h c/(2M)) + h/(2M) F_{k+1}          M = m + m_a
+/// v_{k+1} = v_{k+½} (1 − h c/(2M)) + h/(2M) (F_{k+1} − k x_{k+1})          M = m + m_a
 /// ```
 ///
-/// (Störmer–Verlet when c = 0; second order and, for c > 0, the trapezoidal rule of the
-/// damping, unconditionally stable.) The step's tip constraint reads Z = P + x_v, Ż = Ṗ + v_v;
+/// (Störmer–Verlet when c = 0, stable for h √(k/M) < 2; second order and, for c > 0, the
+/// trapezoidal rule of the damping. With k = 0 every product k x is an exact zero: the map is
+/// the drive without station keeping bit for bit.) The step's tip constraint reads Z = P + x_v, Ż = Ṗ + v_v;
 /// the state keeps (Z, Ż) (the `tip_target` of the RATTLE state) and x_v = Z − P(t). The map
 /// is linear in (Z, Ż, F_k, F_{k+1}), so its transpose ([`ThrustDrive::reverse`]) is written by
 /// hand; tests/model/vessel_thrust.rs checks the adjoint built on it against Dual64 and central
@@ -53,6 +56,8 @@ pub struct ThrustDrive {
     pub inv_mass: f64,
     /// c \[N·s/m\].
     pub damping: f64,
+    /// k \[N/m\], the station keeping's stiffness.
+    pub stiffness: f64,
 }
 
 /// The cotangents of one reverse step of [`ThrustDrive`].
@@ -70,6 +75,7 @@ impl ThrustDrive {
         ThrustDrive {
             inv_mass: 1.0 / (thrust.mass + thrust.added_mass),
             damping: thrust.damping,
+            stiffness: thrust.stiffness,
         }
     }
 
@@ -89,26 +95,38 @@ impl ThrustDrive {
         h: f64,
     ) -> (D, D) {
         let (a, b) = self.factors(h);
-        let v_half = (zd - D::from(prescribed[1]) + f_k * a) * (1.0 / (1.0 + b));
-        let x_next = z - D::from(prescribed[0]) + v_half * h;
+        let x = z - D::from(prescribed[0]);
+        let v_half =
+            (zd - D::from(prescribed[1]) + (f_k - x * self.stiffness) * a) * (1.0 / (1.0 + b));
+        let x_next = x + v_half * h;
         (x_next + D::from(p_next), v_half)
     }
 
-    /// Second half: Ż_{k+1} = Ṗ_{k+1} + v_{k+½}(1 − h c/(2M)) + h/(2M) F_{k+1}.
-    pub fn second_half<D: Scalar>(&self, v_half: D, pdot_next: f64, f_k1: D, h: f64) -> D {
+    /// Second half: Ż_{k+1} = Ṗ_{k+1} + v_{k+½}(1 − h c/(2M)) + h/(2M) (F_{k+1} − k x_{k+1}),
+    /// with x_{k+1} = Z_{k+1} − P_{k+1} (`next`: (Z_{k+1}, P_{k+1}, Ṗ_{k+1})).
+    pub fn second_half<D: Scalar>(
+        &self,
+        v_half: D,
+        (z_next, p_next, pdot_next): (D, f64, f64),
+        f_k1: D,
+        h: f64,
+    ) -> D {
         let (a, b) = self.factors(h);
-        v_half * (1.0 - b) + f_k1 * a + D::from(pdot_next)
+        let x_next = z_next - D::from(p_next);
+        v_half * (1.0 - b) + (f_k1 - x_next * self.stiffness) * a + D::from(pdot_next)
     }
 
     /// The transpose of one step (Z_k, Ż_k, F_k, F_{k+1}) ↦ (Z_{k+1}, Ż_{k+1}) applied to
-    /// (Z̄_{k+1}, Ż̄_{k+1}): v̄_{k+½} = (1 − h c/(2M)) Ż̄_{k+1} + h Z̄_{k+1}, Z̄_k = Z̄_{k+1},
-    /// Ż̄_k = v̄_{k+½}/(1 + h c/(2M)), F̄_k = h/(2M) Ż̄_k, F̄_{k+1} = h/(2M) Ż̄_{k+1}.
+    /// (Z̄_{k+1}, Ż̄_{k+1}) (a = h/(2M), b = h c/(2M)): X̄ = Z̄_{k+1} − a k Ż̄_{k+1},
+    /// v̄_{k+½} = (1 − b) Ż̄_{k+1} + h X̄, Ż̄_k = v̄_{k+½}/(1 + b), Z̄_k = X̄ − a k Ż̄_k,
+    /// F̄_k = a Ż̄_k, F̄_{k+1} = a Ż̄_{k+1} (k = 0: Z̄_k = Z̄_{k+1}).
     pub fn reverse<D: Scalar>(&self, [z_bar, zd_bar]: [D; 2], h: f64) -> ThrustDriveBar<D> {
         let (a, b) = self.factors(h);
-        let v_half_bar = zd_bar * (1.0 - b) + z_bar * h;
+        let x_bar = z_bar - zd_bar * (a * self.stiffness);
+        let v_half_bar = zd_bar * (1.0 - b) + x_bar * h;
         let zd_k_bar = v_half_bar * (1.0 / (1.0 + b));
         ThrustDriveBar {
-            target: [z_bar, zd_k_bar],
+            target: [x_bar - zd_k_bar * (a * self.stiffness), zd_k_bar],
             controls: (zd_k_bar * a, zd_bar * a),
         }
     }

@@ -58,6 +58,12 @@ pub struct Vessel {
     /// [`DEFAULT_THRUST_RATE_BOUND`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thrust_rate_bound: Option<f64>,
+    /// The station-keeping stiffness k \[N/m\] of the vessel's dynamic positioning: the
+    /// position loop that holds the vessel over its mean offset, (m + m_a) ẍ_v = F − c ẋ_v −
+    /// k x_v ([`Thrust`]; default 0: no station keeping, the vessel drifts under a constant
+    /// thrust).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_stiffness: Option<f64>,
 }
 
 /// Default vessel mass m \[kg\]: a deepwater drillship's displacement, about 10⁵ t
@@ -79,10 +85,12 @@ pub const DEFAULT_THRUST_RATE_BOUND: f64 = 2.0e5;
 /// thrust F on the vessel, whose low-frequency surge x_v obeys
 ///
 /// ```text
-/// (m + m_a) ẍ_v = F − c ẋ_v,     |F| ≤ F_max,   |dF/dt| ≤ Ḟ_max,
+/// (m + m_a) ẍ_v = F − c ẋ_v − k x_v,     |F| ≤ F_max,   |dF/dt| ≤ Ḟ_max,
 /// ```
 ///
-/// and the top follows Z(t) = ρ(t)(Z₀ + d_z X_w(t)) + x_v(t).
+/// (k the station keeping of its dynamic positioning, `position_stiffness`: a constant thrust
+/// F then moves the vessel by F/k and it settles there; with k = 0 it drifts at F/c) and the top
+/// follows Z(t) = ρ(t)(Z₀ + d_z X_w(t)) + x_v(t).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Thrust {
     /// m \[kg\].
@@ -95,6 +103,8 @@ pub struct Thrust {
     pub bound: f64,
     /// Ḟ_max \[N/s\].
     pub rate_bound: f64,
+    /// k \[N/m\]: the station keeping's stiffness (0: none).
+    pub stiffness: f64,
 }
 
 fn default_ramp() -> f64 {
@@ -112,6 +122,7 @@ impl Default for Vessel {
             damping: None,
             thrust_bound: None,
             thrust_rate_bound: None,
+            position_stiffness: None,
         }
     }
 }
@@ -235,6 +246,7 @@ impl Vessel {
             self.damping,
             self.thrust_bound,
             self.thrust_rate_bound,
+            self.position_stiffness,
         ];
         keys.iter().any(Option::is_some).then(|| Thrust {
             mass: self.mass.unwrap_or(DEFAULT_VESSEL_MASS),
@@ -242,6 +254,7 @@ impl Vessel {
             damping: self.damping.unwrap_or(DEFAULT_VESSEL_DAMPING),
             bound: self.thrust_bound.unwrap_or(DEFAULT_THRUST_BOUND),
             rate_bound: self.thrust_rate_bound.unwrap_or(DEFAULT_THRUST_RATE_BOUND),
+            stiffness: self.position_stiffness.unwrap_or(0.0),
         })
     }
 
@@ -278,6 +291,7 @@ impl Vessel {
             ("vessel.damping", self.damping, false),
             ("vessel.thrust_bound", self.thrust_bound, true),
             ("vessel.thrust_rate_bound", self.thrust_rate_bound, true),
+            ("vessel.position_stiffness", self.position_stiffness, false),
         ] {
             let Some(v) = value else { continue };
             let ok = v.is_finite() && if positive { v > 0.0 } else { v >= 0.0 };
@@ -287,6 +301,7 @@ impl Vessel {
                     "vessel.damping" => "N·s/m",
                     "vessel.thrust_bound" => "N",
                     "vessel.thrust_rate_bound" => "N/s",
+                    "vessel.position_stiffness" => "N/m",
                     _ => "kg",
                 };
                 return Err(SceneError::invalid(

@@ -646,8 +646,8 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 v
             }
             // The vessel under thrust: Ż_{k+1} = Ṗ(t_{k+1}) + its surge velocity.
-            (None, Some(drive), Some([_, pdot])) => {
-                let v = drive.second_half(v_half, pdot.re(), u_k1, h);
+            (None, Some(drive), Some([p, pdot])) => {
+                let v = drive.second_half(v_half, (zeta_next, p.re(), pdot.re()), u_k1, h);
                 state.tip_target = [zeta_next, v];
                 v
             }

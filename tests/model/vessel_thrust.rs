@@ -191,6 +191,81 @@ fn thrust_gradient_without_vessel_damping() {
     );
 }
 
+/// With station keeping (`position_stiffness` k = 4 N/m: √(k/M) = 2.6 rad/s, a spring the
+/// 0.12 s horizon feels) the same check: the spring's kicks and their transpose
+/// (model::ThrustDrive::reverse) against Dual64 and central differences.
+#[test]
+fn thrust_gradient_with_station_keeping() {
+    for damping in [2.0, 0.0] {
+        let mut s = scene(10.0, 12);
+        if let Some(v) = s.vessel.as_mut() {
+            v.position_stiffness = Some(4.0);
+            v.damping = Some(damping);
+        }
+        for map in [
+            Parametrisation::PerStep(PerStepControl { steps: 12 }),
+            Parametrisation::Piecewise(PiecewiseControl {
+                steps: 12,
+                pieces: 4,
+            }),
+        ] {
+            check(
+                &format!("k = 4, c = {damping}, {map:?}"),
+                &s,
+                map,
+                (BendingObjective::summed_moment(), 0.0),
+            );
+        }
+    }
+}
+
+/// Station keeping against the closed form of the damped oscillator M ẍ = F − c ẋ − k x from
+/// rest under a constant thrust F: x(t) = F/k (1 − e^{−ζω t}(cos ω_d t + ζω/ω_d sin ω_d t)),
+/// ω = √(k/M), ζ = c/(2Mω), ω_d = ω√(1 − ζ²). Order 2 (the error at t = 1 s falls by 4 ± 10 %
+/// per halved step), and the top settles at F/k: the station keeping holds the vessel where a
+/// constant thrust puts it (after 30 s, 9 decay times 2M/c, to 1e-9 of F/k).
+#[test]
+fn station_keeping_against_the_damped_oscillator() {
+    let (mass, damping, stiffness, force) = (0.6, 2.0, 4.0, 0.5);
+    let top = |h: f64, end: f64| {
+        let mut s = catalogue::riser(5);
+        s.beam.support = Support::Vessel;
+        s.vessel = Some(Vessel {
+            mass: Some(mass),
+            added_mass: Some(0.0),
+            damping: Some(damping),
+            position_stiffness: Some(stiffness),
+            ..Vessel::default()
+        });
+        s.time.step = h;
+        s.time.steps = (end / h).round() as usize;
+        s.control = Some(Control {
+            node: s.n(),
+            kind: ControlKind::Constant,
+            values: vec![force],
+            values_x: None,
+        });
+        *simulate(&s).unwrap().tip_target().last().unwrap()
+    };
+    let w = (stiffness / mass).sqrt();
+    let zeta = damping / (2.0 * mass * w);
+    let wd = w * (1.0 - zeta * zeta).sqrt();
+    let exact =
+        force / stiffness * (1.0 - (-zeta * w).exp() * (wd.cos() + zeta * w / wd * wd.sin()));
+    let error = |h: f64| (top(h, 1.0) - exact).abs();
+    let (e1, e2, e3) = (error(0.01), error(0.005), error(0.0025));
+    println!("station-keeping surge error at t = 1 s: {e1:.3e}, {e2:.3e}, {e3:.3e}");
+    for r in [e1 / e2, e2 / e3] {
+        assert!((3.6..=4.4).contains(&r), "order-2 ratio expected, got {r}");
+    }
+    let settled = top(0.01, 30.0);
+    assert!(
+        (settled - force / stiffness).abs() <= 1e-9 * force / stiffness,
+        "settled at {settled}, F/k = {}",
+        force / stiffness
+    );
+}
+
 /// The top's surge under a constant thrust F from rest against the closed form of
 /// M ẍ = F − c ẋ: x(t) = (F/c)(t − τ(1 − e^{−t/τ})), τ = M/c. The riser's top follows the vessel
 /// (one-way coupling), so the top's z minus the prescribed offset is x_v. The scheme is of
@@ -241,6 +316,9 @@ fn bad_thrust_keys_are_refused_by_name() {
         ("vessel.thrust_bound", |v| v.thrust_bound = Some(0.0)),
         ("vessel.thrust_rate_bound", |v| {
             v.thrust_rate_bound = Some(f64::INFINITY)
+        }),
+        ("vessel.position_stiffness", |v| {
+            v.position_stiffness = Some(-1.0)
         }),
     ] {
         let mut s = scene(0.0, 12);

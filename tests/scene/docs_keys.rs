@@ -349,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 148, "number of documented keys");
+    assert_eq!(checked, 149, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -600,6 +600,7 @@ fn every_documented_key_is_read() {
         ("vessel", "damping", "4e5"),
         ("vessel", "thrust_bound", "2e6"),
         ("vessel", "thrust_rate_bound", "1e5"),
+        ("vessel", "position_stiffness", "3e5"),
         ("vessel.rao", "period", "[6.0, 10.0]"),
         ("vessel.rao", "amplitude", "[0.3, 0.9]"),
         ("vessel.rao", "phase", "[-80.0, -90.0]"),

@@ -257,7 +257,10 @@ fn control_settings(
     scene: &Scene,
     objective: Option<MpcPlanObjective>,
 ) -> Result<ControlSettings, Box<dyn std::error::Error>> {
-    let t = scene.mpc.ok_or("riser_300m.toml has an [mpc] table")?;
+    let t = scene
+        .mpc
+        .as_ref()
+        .ok_or("riser_300m.toml has an [mpc] table")?;
     let need = |key: &str| format!("riser_300m.toml: [mpc] sets {key}");
     Ok(ControlSettings {
         interval: t.interval.ok_or_else(|| need("interval"))?,

@@ -91,6 +91,17 @@
 //! `mpc`, whose closed loop records the base moment only, by replaying the loop's decisions on
 //! the same plant ([`replay_joint_moments`]: the same states, one more simulation, no re-plan).
 //!
+//! # The moment the controllers act on
+//! With [`MpcOptions::hotspot`] (`[mpc] hotspot`, `--hotspot`) every controller acts on the
+//! moment M at that `[[fatigue.hotspot]]` instead of the base moment: MPC plans on
+//! h Σ_k |M(t_k)|^m + ρ h Σ_k u_k² ([`HotSpotObjective`], through the vessel's thrust), the PD law
+//! feeds back M and its difference over the last step ([`crate::mpc::pd_closed_loop_cost_at`],
+//! gains tuned on Σ M² + ρ h Σ u² of the training window), and the constant force is the best
+//! for h Σ|M|^m + ρ h Σ u² over the training window ([`best_constant_at_hot_spot`]). Each run's
+//! damage ([`CellRun::damage`]) is then that hot spot's Miner sum (its section, SCF and S-N
+//! curve, from the same joint torques as its [`ControllerOutcome::hotspots`] entry), and the
+//! lives use its DFF: the totals equal that entry.
+//!
 //! # Work and order
 //! The (cell, seed, controller) runs are independent: with the `parallel` feature they run on rayon's
 //! pool, and the result (every number) is the same, in the same order, as sequentially.
@@ -99,6 +110,7 @@
 use rayon::prelude::*;
 use thiserror::Error;
 
+use crate::adjoint::HotSpotObjective;
 use crate::error::Requirement;
 use crate::fatigue::{
     assess, combine_scatter, life_years, CellDamage, FatigueError, FatigueSpec, MomentHistory,
@@ -679,7 +691,9 @@ pub fn run_controller(
         }
         ControllerKind::Constant => {
             let training = training_scene(scene, settings)?;
-            let mut c = if scene.thrust().is_some() {
+            let mut c = if let Some(spot) = settings.mpc.hotspot.as_ref() {
+                best_constant_at_hot_spot(&training, spot, bound, effort)?
+            } else if scene.thrust().is_some() {
                 ConstantForce::best_thrust(&training, bound, effort)?.0
             } else {
                 ConstantForce::best(&training, bound, effort)?.0
@@ -690,13 +704,94 @@ pub fn run_controller(
         ControllerKind::Pd => {
             let mut pd = pd_law(scene, settings)?;
             let gains = [pd.bias, pd.kp, pd.kd];
-            closed(&mut pd, None, Some(gains))
+            match hot_spot_objective(scene, settings)? {
+                Some(spot) => closed(&mut HotSpotPd { law: pd, spot }, None, Some(gains)),
+                None => closed(&mut pd, None, Some(gains)),
+            }
         }
         ControllerKind::Mpc => {
             let mut mpc = Mpc::new(scene, interval, settings.mpc.clone())?;
             closed(&mut mpc, None, None)
         }
     }
+}
+
+/// The moment of the hot spot the controllers act on ([`MpcOptions::hotspot`]) as
+/// [`HotSpotObjective`] on `scene` (its exponent the S-N curve's first slope, the effort
+/// `settings`'), `None` without one.
+///
+/// # Errors
+/// [`HotSpotObjective::new`]'s; the hot spot's S-N curve's.
+fn hot_spot_objective(
+    scene: &Scene,
+    settings: &ControlSettings,
+) -> crate::Result<Option<HotSpotObjective>> {
+    let Some(spot) = settings.mpc.hotspot.as_ref() else {
+        return Ok(None);
+    };
+    let exponent =
+        WellheadDamage::new(&spot.spec, crate::fatigue::MomentMeasure::Wellhead)?.exponent();
+    Ok(Some(HotSpotObjective::new(
+        scene,
+        spot.elevation,
+        exponent,
+        settings.mpc.effort,
+    )?))
+}
+
+/// The PD law on the moment M at a hot spot (module docs, "The moment the controllers act
+/// on"): u = clamp(u_b − K_p M − K_d Ṁ, ±u_max) with M read from the observed attitudes
+/// ([`HotSpotObjective::moment_of_attitudes`]) and Ṁ the difference over the last step,
+/// (M(t_k) − M(t_{k−1}))/h (0 at k = 0): the loop its gains were tuned on
+/// ([`crate::mpc::pd_closed_loop_cost_at`]).
+struct HotSpotPd {
+    law: PdLaw,
+    spot: HotSpotObjective,
+}
+
+impl Controller for HotSpotPd {
+    fn name(&self) -> String {
+        "pd".into()
+    }
+    fn control(&mut self, obs: &crate::mpc::Observation<'_>) -> crate::Result<f64> {
+        let m = self.spot.moment_of_attitudes(&obs.state.q);
+        let rate = match obs.previous_state {
+            Some(prev) => (m - self.spot.moment_of_attitudes(&prev.q)) / obs.h,
+            None => 0.0,
+        };
+        let u = self.law.bias - self.law.kp * m - self.law.kd * rate;
+        Ok(u.clamp(-self.law.bound, self.law.bound))
+    }
+}
+
+/// The best constant force (or thrust) for a hot spot's moment on `scene` (the training
+/// window): min_u h Σ_k |M(t_k)|^m + ρ h Σ_k u², |u| ≤ `bound`, M the hot spot's moment and m
+/// its S-N curve's first slope ([`HotSpotObjective`]), by [`minimize`] on the adjoint gradient
+/// from u = 0 (the structured solvers need the base moment's Gauss-Newton form).
+///
+/// # Errors
+/// The objective's ([`HotSpotObjective::new`]), the problem's and the optimiser's errors.
+pub fn best_constant_at_hot_spot(
+    scene: &Scene,
+    spot: &crate::hotspots::HotSpotSpec,
+    bound: f64,
+    effort: f64,
+) -> crate::Result<ConstantForce> {
+    let exponent =
+        WellheadDamage::new(&spot.spec, crate::fatigue::MomentMeasure::Wellhead)?.exponent();
+    let objective = HotSpotObjective::new(scene, spot.elevation, exponent, effort)?;
+    let steps = scene.time.steps;
+    let map = crate::adjoint::PiecewiseControl { steps, pieces: 1 };
+    let problem = crate::adjoint::ControlProblem::new(scene, map, objective)?;
+    let options = OptimOptions {
+        bounds: Some(Bounds::symmetric(bound)?),
+        first_step: 0.01 * bound,
+        trust_radius: 0.1 * bound,
+        max_trust_radius: bound,
+        ..OptimOptions::default()
+    };
+    let r = minimize(&problem, &[0.0], &options)?;
+    Ok(ConstantForce { u: r.theta[0] })
 }
 
 /// The per-step controls u_0..u_N a scene's `[control]` applies (none: zeros).
@@ -749,9 +844,14 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
         });
     }
     let training = training_scene(scene, settings)?;
+    let spot = hot_spot_objective(scene, settings)?;
+    let mut tuning = PdTuning::new(&training, interval, bound, effort)?;
+    if let Some(spot) = spot.clone() {
+        tuning = tuning.at_hot_spot(spot);
+    }
     let scaled = pd::ScaledPdTuning {
-        tuning: PdTuning::new(&training, interval, bound, effort)?,
-        scales: pd::PdScales::of(&training, bound)?,
+        tuning,
+        scales: pd::PdScales::of_at(&training, bound, spot.as_ref())?,
     };
     let opts = OptimOptions {
         max_iters: settings.pd_max_iters,
@@ -877,14 +977,30 @@ fn run_cell(
         (record, Some(joints))
     };
     let skip = spin_up_steps(&scene, input.settings.spin_up)?;
-    let hot_damages = match hot {
-        Some(joints) => crate::hotspots::assess_histories(&scene, hotspots, &joints, skip)
-            .map_err(run_err)?
-            .iter()
-            .map(|h| h.assessment.damage)
-            .collect(),
+    let hot_assessed = match hot {
+        Some(joints) => {
+            crate::hotspots::assess_histories(&scene, hotspots, &joints, skip).map_err(run_err)?
+        }
         None => Vec::new(),
     };
+    let hot_damages: Vec<f64> = hot_assessed.iter().map(|h| h.assessment.damage).collect();
+    let probability = input.cells.map_or(1.0, |c| c[cell].probability);
+    // With a hot spot to act on, the cell's damage is that hot spot's (module docs, "The moment
+    // the controllers act on").
+    if let Some(h) = acted_hot_spot(input).map_err(run_err)? {
+        let a = &hot_assessed[h].assessment;
+        return Ok(CellRun {
+            damage: CellDamage {
+                probability,
+                damage: a.damage,
+                duration_s: a.duration_s,
+            },
+            force: record.force,
+            gains: record.gains,
+            thrust: record.thrust,
+            hotspots: hot_damages,
+        });
+    }
     let a = assess(
         input.spec,
         MomentHistory {
@@ -894,7 +1010,6 @@ fn run_cell(
             measure: input.scene.moment_measure(),
         },
     )?;
-    let probability = input.cells.map_or(1.0, |c| c[cell].probability);
     Ok(CellRun {
         damage: CellDamage {
             probability,
@@ -1079,6 +1194,30 @@ pub fn with_record(
     Ok(out)
 }
 
+/// The index in `input.scene`'s `[[fatigue.hotspot]]` of the hot spot the controllers act on
+/// ([`MpcOptions::hotspot`]), `None` without one.
+///
+/// # Errors
+/// [`MpcError::HotSpotUnknown`] when the scene has no hot spot of that name.
+fn acted_hot_spot(input: &StudyInput<'_>) -> crate::Result<Option<usize>> {
+    let Some(spot) = input.settings.mpc.hotspot.as_ref() else {
+        return Ok(None);
+    };
+    let hotspots = &input.scene.hotspots;
+    match hotspots.iter().position(|h| h.name == spot.name) {
+        Some(h) => Ok(Some(h)),
+        None => Err(MpcError::HotSpotUnknown {
+            name: spot.name.clone(),
+            known: hotspots
+                .iter()
+                .map(|h| h.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        }
+        .into()),
+    }
+}
+
 /// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of
 /// `spec`'s S-N curve ([`WellheadDamage::exponent`]; m = 3 for the DNV curves C–W3, 4 for B1
 /// and B2).
@@ -1139,6 +1278,12 @@ fn check_study_input(input: &StudyInput<'_>) -> Result<usize, StudyError> {
         return Err(StudyError::NoControllers);
     }
     input.spec.validate()?;
+    // The hot spot to act on is one of the scene's (refused before any run otherwise).
+    acted_hot_spot(input).map_err(|e| StudyError::Run {
+        controller: ControllerKind::Mpc.name(),
+        cell: 0,
+        source: Box::new(e),
+    })?;
     let seeds = input.settings.seeds;
     if !(1..=MAX_SEEDS).contains(&seeds) {
         return Err(StudyError::Seeds {
@@ -1249,6 +1394,15 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
         });
     }
     let run_of = |s: usize, i: usize, j: usize| &results[(s * k_seeds + i) * n_ctrl + j];
+    // The DFF of the damage the cells hold: the acted-on hot spot's, else the wellhead's.
+    let dff = match acted_hot_spot(input).map_err(|e| StudyError::Run {
+        controller: "mpc",
+        cell: 0,
+        source: Box::new(e),
+    })? {
+        Some(h) => input.scene.hotspots[h].spec.dff,
+        None => input.spec.dff,
+    };
     let mut controllers = Vec::with_capacity(n_ctrl);
     for (j, &kind) in input.controllers.iter().enumerate() {
         let seed_damages: Vec<Vec<f64>> = (0..n_cells)
@@ -1272,7 +1426,7 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
         let mut seed_lives = Vec::with_capacity(k_seeds);
         for i in 0..k_seeds {
             let per_seed = combine_scatter(&cell_damages(&|s| seed_damages[s][i]))?;
-            seed_lives.push(life_years(per_seed.damage_per_year, input.spec.dff)?);
+            seed_lives.push(life_years(per_seed.damage_per_year, dff)?);
         }
         let mut hotspots = Vec::new();
         let assessed = !run_of(0, 0, j).hotspots.is_empty();
@@ -1341,7 +1495,7 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
         controllers.push(ControllerOutcome {
             kind,
             damage_per_year: combined.damage_per_year,
-            life_years: life_years(combined.damage_per_year, input.spec.dff)?,
+            life_years: life_years(combined.damage_per_year, dff)?,
             cells,
             seed_lives,
             hotspots,

@@ -167,7 +167,8 @@ pub use steppers::rattle;
 
 pub use adjoint::{
     BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, FatigueObjective,
-    Objective, Parametrisation, PerStepControl, PiecewiseControl, PowerObjective, Start, StartKick,
+    HotSpotObjective, Objective, Parametrisation, PerStepControl, PiecewiseControl, PowerObjective,
+    Start, StartKick,
 };
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};

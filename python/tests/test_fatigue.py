@@ -273,3 +273,40 @@ def test_seeds_and_hot_spots_on_executors_equal_cli(cli: str, tmp_path: Path) ->
         a, b = cell["seed_damages"]
         assert a != b and cell["damage"] == (a + b) / 2
         assert cell["damage_min"] == min(a, b) and cell["damage_max"] == max(a, b)
+
+
+# Two hot spots on the 60 m riser: a weld between joints (F1, SCF 1.3, DFF 3) and the top.
+HOTSPOTS = """
+[[fatigue.hotspot]]
+name = "weld"
+elevation = 25.0
+scf = 1.3
+curve = "F1"
+dff = 3.0
+
+[[fatigue.hotspot]]
+name = "top"
+elevation = 60.0
+"""
+
+
+def test_hotspot_equals_cli(cli: str, tmp_path: Path) -> None:
+    """`hotspot=` = `chainbeam fatigue --hotspot`, bit for bit: every controller acts on the weld's
+    moment, the totals are the weld's `hotspots` entry, and `settings.hotspot` names it; an
+    unknown name raises InvalidArgumentError naming `hotspot`."""
+    path = tmp_path / "h.toml"
+    path.write_text(SCENE + HOTSPOTS)
+    s = cb.Scene.from_file(path)
+    ref = cli_json(cli, str(path), "--controller", "constant,pd", "--hotspot", "weld",
+                   "--interval", "0.5", "--bound", "2e4", "--spin-up", "1.0", "--record", "9")
+    got = cb.fatigue(s, controllers="constant,pd", hotspot="weld", interval=0.5, bound=2e4,
+                     spin_up=1.0, record=9.0)
+    assert got["settings"]["hotspot"] == "weld"
+    for c in ("none", "constant", "pd"):
+        totals = got["controllers"][c]
+        assert totals["hotspots"][0]["name"] == "weld"
+        assert totals["life_years"] == totals["hotspots"][0]["life_years"]
+    assert same(got, ref)
+    with pytest.raises(cb.InvalidArgumentError) as a:
+        cb.fatigue(s, controllers="constant", hotspot="nope", record=9.0)
+    assert a.value.key == "hotspot"

@@ -36,6 +36,7 @@
 mod bending;
 mod control_map;
 mod fatigue;
+mod hotspot;
 mod objective;
 mod power;
 mod problem;
@@ -50,6 +51,7 @@ pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };
 pub use fatigue::FatigueObjective;
+pub use hotspot::HotSpotObjective;
 pub use objective::{
     FinalMomentResidual, GaussNewton, History, MomentStage, NodeDisplacementObjective, Objective,
     Stage,

@@ -176,6 +176,32 @@ pub enum MpcError {
          sensors do not see a growing motion of the model)"
     )]
     ObserverNotConverged,
+    /// `hotspot` names no `[[fatigue.hotspot]]` of the scene.
+    #[error("hotspot `{name}` is not a [[fatigue.hotspot]] of the scene (its hot spots: {known})")]
+    HotSpotUnknown {
+        /// The name given.
+        name: String,
+        /// The scene's hot spots' names, comma-separated (empty: none).
+        known: String,
+    },
+    /// `hotspot` in the spatial model: the moment at a hot spot is planned in the planar model
+    /// only (the spatial joint torque has two components).
+    #[error("hotspot: the controllers act on a hot spot's moment in the planar model only")]
+    HotSpotSpatial,
+    /// `hotspot` for MPC on a scene whose control is not the vessel's thrust: the structured
+    /// solvers of a force control plan on the base moment's Gauss-Newton form, which the hot
+    /// spot's moment has not.
+    #[error(
+        "hotspot: MPC plans on a hot spot's moment through the vessel's thrust only (a scene \
+         with [vessel] thrust keys); a force control plans on the base moment"
+    )]
+    HotSpotNeedsThrust,
+    /// The hot spot objective's exponent (its S-N slope) not finite and ≥ 2.
+    #[error("hotspot: the exponent of Σ|M|^p h must be finite and ≥ 2, got {exponent}")]
+    HotSpotExponent {
+        /// The exponent.
+        exponent: f64,
+    },
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -208,6 +234,10 @@ impl MpcError {
             | MpcError::ObserveSensors { .. }
             | MpcError::ObserverNotConverged => "observe",
             MpcError::ThrustPlanReduced => "plan_pendulums",
+            MpcError::HotSpotUnknown { .. }
+            | MpcError::HotSpotSpatial
+            | MpcError::HotSpotNeedsThrust
+            | MpcError::HotSpotExponent { .. } => "hotspot",
         }
     }
 }

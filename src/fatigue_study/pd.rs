@@ -20,6 +20,7 @@
 //! [`PdTuning`]'s exact dual-number gradient: ∂J/∂x_b = (u_max/B) ∂J/∂u_b,
 //! ∂J/∂x_p = K_p ∂J/∂K_p, ∂J/∂x_d = K_d ∂J/∂K_d.
 
+use crate::adjoint::HotSpotObjective;
 use crate::error::{MpcError, Requirement, Result};
 use crate::model::Chain;
 use crate::mpc::PdTuning;
@@ -55,6 +56,16 @@ impl PdScales {
     /// The statics' errors; [`crate::error::ValueError`] naming `pd_static_gain` when the control
     /// does not move the static moment (k_u zero or not finite).
     pub fn of(scene: &Scene, bound: f64) -> Result<Self> {
+        Self::of_at(scene, bound, None)
+    }
+
+    /// The scales of [`PdScales::of`] with k_u and u_s of the moment at a hot spot (`spot`,
+    /// [`HotSpotObjective::moment_of_attitudes`]) instead of the base moment (`None`: those of
+    /// [`PdScales::of`] bit for bit).
+    ///
+    /// # Errors
+    /// As [`PdScales::of`].
+    pub fn of_at(scene: &Scene, bound: f64, spot: Option<&HotSpotObjective>) -> Result<Self> {
         let mut calm = scene.clone();
         calm.loads.waves = None;
         if calm.control.is_none() {
@@ -77,7 +88,10 @@ impl PdScales {
             }
             let s = static_equilibrium_at(&held, 0.0, force)?;
             let q: Vec<[f64; 2]> = s.attitudes.iter().map(|a| [a[1], a[2]]).collect();
-            Ok(chain.base_moment(&q))
+            Ok(match spot {
+                Some(spot) => spot.moment_of_attitudes(&q),
+                None => chain.base_moment(&q),
+            })
         };
         let du = 0.1 * bound.min(1e12);
         let m0 = moment(0.0)?;

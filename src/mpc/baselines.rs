@@ -4,7 +4,7 @@
 use num_dual::DualSVec64;
 
 use super::{interval_steps, Controller, Observation, Plant, SpatialController};
-use crate::adjoint::{BendingObjective, ControlProblem, PiecewiseControl};
+use crate::adjoint::{BendingObjective, ControlProblem, HotSpotObjective, PiecewiseControl};
 use crate::base::Scalar;
 use crate::error::{Error, MpcError, Requirement, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
@@ -274,9 +274,20 @@ pub struct PdTuning {
     bound: f64,
     effort: f64,
     spatial: bool,
+    /// The hot spot whose moment the law feeds back and the tuning weighs
+    /// ([`PdTuning::at_hot_spot`]); `None`: the base moment.
+    hotspot: Option<HotSpotObjective>,
 }
 
 impl PdTuning {
+    /// The tuning problem of a PD law on the moment at a hot spot ([`pd_closed_loop_cost_at`]):
+    /// J = Σ_k [M(t_k)² + ρ h u_k²], M the moment `spot` reads (its exponent and effort are not
+    /// used); planar only.
+    pub fn at_hot_spot(mut self, spot: HotSpotObjective) -> Self {
+        self.hotspot = Some(spot);
+        self
+    }
+
     /// The tuning problem of `scene` with decisions every `interval` seconds, |u| ≤ `bound`
     /// (infinite: none) and effort weight ρ = `effort`.
     ///
@@ -297,6 +308,7 @@ impl PdTuning {
             bound,
             effort,
             spatial: false,
+            hotspot: None,
         })
     }
 
@@ -328,12 +340,13 @@ impl OptimProblem for PdTuning {
             return pd_closed_loop_cost_spatial(&self.scene, m, &g, b, e);
         }
         let g = gains::<f64, 3>(theta, |x, _| x)?;
-        pd_closed_loop_cost(
+        pd_closed_loop_cost_at(
             &self.scene,
             self.interval_steps,
             &g,
             self.bound,
             self.effort,
+            self.hotspot.as_ref(),
         )
     }
 
@@ -350,12 +363,13 @@ impl OptimProblem for PdTuning {
             return Ok((j.re, grad));
         }
         let g = gains::<DualSVec64<3>, 3>(theta, |x, i| DualSVec64::<3>::from_re(x).derivative(i))?;
-        let j = pd_closed_loop_cost(
+        let j = pd_closed_loop_cost_at(
             &self.scene,
             self.interval_steps,
             &g,
             self.bound,
             self.effort,
+            self.hotspot.as_ref(),
         )?;
         let grad = match j.eps.0 {
             Some(v) => v.iter().copied().collect(),
@@ -409,6 +423,47 @@ pub fn pd_closed_loop_cost<D: Scalar>(
     while plant.step_index() < plant.steps() {
         let rate = plant.moment_rate();
         plant.set_control(pd(gains, plant.moment(), rate, bound))?;
+        for _ in 0..interval_steps.min(plant.steps() - plant.step_index()) {
+            j += stage(&plant);
+            plant.advance()?;
+        }
+    }
+    Ok(j + stage(&plant))
+}
+
+/// J = Σ_{k=0}^{N} [M(t_k)² + ρ h u_k²] of the PD loop u_j = clamp(u_b − K_p M − K_d Ṁ) on the
+/// moment M at a hot spot (`spot`, [`HotSpotObjective::moment_of_attitudes`]), its rate the
+/// difference over the last step Ṁ(t_k) = (M(t_k) − M(t_{k−1}))/h (0 at k = 0), in any scalar;
+/// with `spot` = `None` [`pd_closed_loop_cost`] bit for bit.
+///
+/// # Errors
+/// As [`pd_closed_loop_cost`].
+pub fn pd_closed_loop_cost_at<D: Scalar>(
+    scene: &Scene,
+    interval_steps: usize,
+    gains: &[D; 3],
+    bound: f64,
+    effort: f64,
+    spot: Option<&HotSpotObjective>,
+) -> Result<D> {
+    let Some(spot) = spot else {
+        return pd_closed_loop_cost(scene, interval_steps, gains, bound, effort);
+    };
+    let mut plant = Plant::<D>::new(scene)?;
+    let (h, rho_h) = (plant.h(), effort * plant.h());
+    let moment = |p: &Plant<D>| spot.moment_of_attitudes(&p.state().q);
+    let stage = |p: &Plant<D>| {
+        let (m, u) = (moment(p), p.control());
+        m * m + u * u * rho_h
+    };
+    let mut j = D::zero();
+    while plant.step_index() < plant.steps() {
+        let m = moment(&plant);
+        let rate = match plant.previous_state() {
+            Some(prev) => (m - spot.moment_of_attitudes(&prev.q)) / h,
+            None => D::zero(),
+        };
+        plant.set_control(pd(gains, m, rate, bound))?;
         for _ in 0..interval_steps.min(plant.steps() - plant.step_index()) {
             j += stage(&plant);
             plant.advance()?;

@@ -261,13 +261,13 @@ mod thrust;
 pub use crate::scene::Forecast;
 pub use crate::scene::Observe;
 pub use baselines::{
-    pd_closed_loop_cost, pd_closed_loop_cost_spatial, ConstantForce, NoControl, PdLaw, PdTuning,
-    SpatialConstantForce, SpatialPdLaw,
+    pd_closed_loop_cost, pd_closed_loop_cost_at, pd_closed_loop_cost_spatial, ConstantForce,
+    NoControl, PdLaw, PdTuning, SpatialConstantForce, SpatialPdLaw,
 };
 pub use forecast::{forecast_sigma, NoisyForecast, SIGMA_CAP};
 pub use observer::{Observer, ObserverOptions, SensorNoise, SensorSet};
 pub use plant::Plant;
-pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver};
+pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver, PlannedThrust};
 
 use std::time::Instant;
 

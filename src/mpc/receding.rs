@@ -6,8 +6,14 @@ use super::observer::{Observer, ObserverOptions, SensorSet};
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
 use super::{interval_steps, Controller, Observation, SpatialController};
-use crate::adjoint::{BendingObjective, ControlProblem, PerStepControl, PiecewiseControl};
+use crate::adjoint::{
+    BendingObjective, ControlProblem, GaussNewton, History, HotSpotObjective, MomentStage,
+    Objective, PerStepControl, PiecewiseControl, Stage,
+};
+use crate::base::Scalar;
 use crate::error::{MpcError, Requirement, Result, ValueError};
+use crate::fatigue::{MomentMeasure, WellheadDamage};
+use crate::hotspots::HotSpotSpec;
 use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, Bounds, Method, OptimOptions};
@@ -119,6 +125,13 @@ pub struct MpcOptions {
     /// The filter's settings with [`Observe::Sensors`] (the sensors' noise, the process noise,
     /// the seed).
     pub observer: ObserverOptions,
+    /// The hot spot whose moment the plan acts on (`[mpc] hotspot`, [`crate::mpc`] "The moment
+    /// a controller acts on"): each plan minimises h Σ_k |M(t_k)|^m + ρ h Σ_k u_k²
+    /// ([`HotSpotObjective`]), M the moment at the hot spot's elevation and m its S-N curve's
+    /// first slope, instead of [`MpcOptions::objective`] on the base moment. Through the
+    /// vessel's thrust and in the planar model only ([`MpcError::HotSpotNeedsThrust`],
+    /// [`MpcError::HotSpotSpatial`]). Default `None`: the base moment.
+    pub hotspot: Option<HotSpotSpec>,
 }
 
 impl Default for MpcOptions {
@@ -140,6 +153,7 @@ impl Default for MpcOptions {
             forecast_seed: None,
             observe: Observe::State,
             observer: ObserverOptions::default(),
+            hotspot: None,
         }
     }
 }
@@ -184,6 +198,70 @@ pub struct Mpc<const DIM: usize = 2> {
     /// The Kalman filter of [`Observe::Sensors`] (built at the first decision, which knows the
     /// run's length).
     observer: Option<Observer>,
+    /// The objective at [`MpcOptions::hotspot`] on the plan's model, `None` without one.
+    hotspot: Option<HotSpotObjective>,
+}
+
+/// What a plan through the vessel's thrust minimises: the base-moment objective of
+/// [`MpcOptions::objective`] (every value and derivative [`BendingObjective`]'s, bit for bit) or
+/// the hot spot's ([`MpcOptions::hotspot`]).
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum PlanObjective {
+    /// On the base moment.
+    Base(BendingObjective),
+    /// On a hot spot's moment.
+    HotSpot(HotSpotObjective),
+}
+
+impl Objective for PlanObjective {
+    fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
+        match self {
+            PlanObjective::Base(o) => o.stage(s),
+            PlanObjective::HotSpot(o) => o.stage(s),
+        }
+    }
+    fn uses_positions(&self) -> bool {
+        match self {
+            PlanObjective::Base(o) => o.uses_positions(),
+            PlanObjective::HotSpot(o) => o.uses_positions(),
+        }
+    }
+    fn gauss_newton<D: Scalar>(&self, s: MomentStage<D>) -> Option<GaussNewton<D>> {
+        match self {
+            PlanObjective::Base(o) => o.gauss_newton(s),
+            PlanObjective::HotSpot(o) => o.gauss_newton(s),
+        }
+    }
+    fn has_history(&self) -> bool {
+        match self {
+            PlanObjective::Base(o) => o.has_history(),
+            PlanObjective::HotSpot(o) => o.has_history(),
+        }
+    }
+    fn history<D: Scalar>(&self, h: History<'_, D>) -> Result<D> {
+        match self {
+            PlanObjective::Base(o) => o.history(h),
+            PlanObjective::HotSpot(o) => o.history(h),
+        }
+    }
+    fn power_proxy(&self) -> Option<f64> {
+        match self {
+            PlanObjective::Base(o) => o.power_proxy(),
+            PlanObjective::HotSpot(o) => o.power_proxy(),
+        }
+    }
+}
+
+/// The last plan through the vessel's thrust ([`Mpc::last_thrust_plan`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlannedThrust {
+    /// The per-step thrusts u_0..u_{N_p} of the plan's horizon \[N\] (from the plan's start).
+    pub thrusts: Vec<f64>,
+    /// The plan's moment objective J_u at those thrusts, with its effort term, without the
+    /// command penalty of the plan's solver ([`crate::mpc`], "MPC through the vessel's thrust").
+    pub objective: f64,
+    /// The plan's start time \[s\].
+    pub start: f64,
 }
 
 /// What a controller through the vessel's thrust keeps between re-plans.
@@ -192,9 +270,11 @@ struct ThrustState {
     actuator: Actuator,
     /// The per-step problem of the last horizon length (in steps), cloned and started from
     /// each observation.
-    template: Option<(usize, ControlProblem<PerStepControl, BendingObjective>)>,
+    template: Option<(usize, ControlProblem<PerStepControl, PlanObjective>)>,
     /// The last re-plan's result.
     last: Option<crate::optimize::OptimResult>,
+    /// The last plan's thrusts and objective.
+    planned: Option<PlannedThrust>,
 }
 
 impl Mpc {
@@ -231,6 +311,9 @@ impl<const DIM: usize> Mpc<DIM> {
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
     /// exponent; the model's errors.
     pub fn build(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
+        // The hot spot's objective carries h in both its terms: the effort weight is the same
+        // at any planning step (not rescaled as the base moment's is, below).
+        let hotspot_effort = options.effort;
         let (plan_model, planning) = match Self::coarse_thrust_model(model, &mut options)? {
             Some(coarse) => (Some(coarse), None),
             None => Self::planning_model(model, &mut options)?,
@@ -288,8 +371,23 @@ impl<const DIM: usize> Mpc<DIM> {
                 },
                 template: None,
                 last: None,
+                planned: None,
             }),
             None => None,
+        };
+        let hotspot = match &options.hotspot {
+            None => None,
+            Some(_) if DIM == 3 => return Err(MpcError::HotSpotSpatial.into()),
+            Some(_) if thrust.is_none() => return Err(MpcError::HotSpotNeedsThrust.into()),
+            Some(spot) => {
+                let exponent = WellheadDamage::new(&spot.spec, MomentMeasure::Wellhead)?.exponent();
+                Some(HotSpotObjective::new(
+                    &model,
+                    spot.elevation,
+                    exponent,
+                    hotspot_effort,
+                )?)
+            }
         };
         if options.observe == Observe::Sensors {
             // The sensors read the vessel under thrust (refused with the key named otherwise).
@@ -323,6 +421,7 @@ impl<const DIM: usize> Mpc<DIM> {
             thrust,
             noisy,
             observer: None,
+            hotspot,
         })
     }
 
@@ -660,9 +759,12 @@ impl Mpc {
             let mut scene = self.model.clone();
             scene.time.steps = steps;
             hold_series_past_end(&mut scene);
-            let objective = BendingObjective {
-                kind: self.options.objective,
-                effort: self.options.effort,
+            let objective = match &self.hotspot {
+                Some(o) => PlanObjective::HotSpot(o.clone()),
+                None => PlanObjective::Base(BendingObjective {
+                    kind: self.options.objective,
+                    effort: self.options.effort,
+                }),
             };
             let problem = ControlProblem::new(&scene, PerStepControl { steps }, objective)?
                 .with_chain(record);
@@ -723,8 +825,15 @@ impl Mpc {
         };
         let r = minimize(&plan, &self.warm, &opts)?;
         self.plan.clone_from(&r.theta);
+        let (thrusts, _) = plan.thrusts(&r.theta);
+        let planned = PlannedThrust {
+            objective: r.objective - plan.penalty(&r.theta, &thrusts),
+            thrusts,
+            start: t_start,
+        };
         let state = self.thrust.as_mut().expect("a thrust controller");
         state.last = Some(r);
+        state.planned = Some(planned);
         self.decisions += 1;
         Ok(())
     }
@@ -747,6 +856,12 @@ impl Mpc {
     /// The Kalman filter of [`Observe::Sensors`] (after the first decision).
     pub fn observer(&self) -> Option<&Observer> {
         self.observer.as_ref()
+    }
+
+    /// The last plan through the vessel's thrust: its per-step thrusts and its moment objective
+    /// (`None` for a force control or before the first decision).
+    pub fn last_thrust_plan(&self) -> Option<&PlannedThrust> {
+        self.thrust.as_ref().and_then(|t| t.planned.as_ref())
     }
 
     /// The last re-plan's result through the vessel's thrust (`None` for a force control).

@@ -4,7 +4,7 @@
 //! gradient by a bounded L-BFGS with a fixed iteration budget ([`crate::mpc`], "MPC through the
 //! vessel's thrust").
 
-use crate::adjoint::{BendingObjective, ControlProblem, PerStepControl};
+use crate::adjoint::{BendingObjective, ControlProblem, Objective, PerStepControl};
 use crate::error::Result;
 use crate::optimize::OptimProblem;
 
@@ -58,9 +58,9 @@ impl Actuator {
 /// gradient is 0). The gradient: ∇_u J_u by the discrete adjoint, then the transpose of the
 /// actuator's map (∂u_i/∂θ_j = 1 where the command is reached, ∂u_i/∂u_{i−1} = 1 where the rate
 /// clips; exact wherever no clip switches, as the PD law's clamp), plus the penalty's terms.
-pub(crate) struct ThrustPlan<'a> {
+pub(crate) struct ThrustPlan<'a, O = BendingObjective> {
     /// The moment objective over the per-step thrusts of the horizon (its start set).
-    pub problem: &'a ControlProblem<PerStepControl, BendingObjective>,
+    pub problem: &'a ControlProblem<PerStepControl, O>,
     /// The thrusters.
     pub actuator: Actuator,
     /// Steps m of a control interval.
@@ -75,7 +75,7 @@ pub(crate) struct ThrustPlan<'a> {
     pub sigma: f64,
 }
 
-impl ThrustPlan<'_> {
+impl<O: Objective> ThrustPlan<'_, O> {
     fn steps(&self) -> usize {
         self.problem.steps()
     }
@@ -110,7 +110,8 @@ impl ThrustPlan<'_> {
         (u, reached)
     }
 
-    fn penalty(&self, theta: &[f64], u: &[f64]) -> f64 {
+    /// The command penalty σ Σ_j (θ_j − u_{e(j)})² of J (type docs).
+    pub fn penalty(&self, theta: &[f64], u: &[f64]) -> f64 {
         (0..self.pieces)
             .map(|j| (theta[j] - u[self.end_of(j)]).powi(2))
             .sum::<f64>()
@@ -118,7 +119,7 @@ impl ThrustPlan<'_> {
     }
 }
 
-impl OptimProblem for ThrustPlan<'_> {
+impl<O: Objective> OptimProblem for ThrustPlan<'_, O> {
     fn n_params(&self) -> usize {
         self.pieces
     }

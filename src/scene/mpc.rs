@@ -104,7 +104,7 @@ impl Observe {
 }
 
 /// The `[mpc]` table (module docs): `None` for a key not given.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct MpcTable {
     /// `interval` \[s\]: the control interval (> 0).
     pub interval: Option<f64>,
@@ -134,10 +134,13 @@ pub struct MpcTable {
     pub forecast_seed: Option<u64>,
     /// `observe`: what MPC's plan starts from (`"state"` or `"sensors"`).
     pub observe: Option<Observe>,
+    /// `hotspot`: the `name` of the `[[fatigue.hotspot]]` whose moment every controller acts
+    /// on (not given: the chain's base moment).
+    pub hotspot: Option<String>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 13] = [
+pub const MPC_KEYS: [&str; 14] = [
     "interval",
     "horizon",
     "iterations",
@@ -151,13 +154,14 @@ pub const MPC_KEYS: [&str; 13] = [
     "forecast_error",
     "forecast_seed",
     "observe",
+    "hotspot",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
 /// with a default hold a value; the others stay optional (`None`: off, or the command's own
 /// choice: `chainbeam fatigue` plans MPC on the fatigue proxy, `chainbeam mpc` on the model's
 /// `[objective]`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MpcSettings {
     /// The control interval \[s\] (default [`MpcSettings::DEFAULT_INTERVAL`]).
     pub interval: f64,
@@ -186,6 +190,9 @@ pub struct MpcSettings {
     pub forecast_seed: Option<u64>,
     /// What MPC's plan starts from (default [`Observe::State`]).
     pub observe: Observe,
+    /// The hot spot every controller acts on, by name (default: none, the chain's base
+    /// moment; [`MpcSettings::hotspot_spec`]).
+    pub hotspot: Option<String>,
 }
 
 impl MpcSettings {
@@ -208,6 +215,36 @@ impl MpcSettings {
 }
 
 impl MpcSettings {
+    /// The `[[fatigue.hotspot]]` of `scene` that [`MpcSettings::hotspot`] names (`None`
+    /// without one).
+    ///
+    /// # Errors
+    /// [`crate::error::MpcError::HotSpotUnknown`] for a name that is not one of `scene`'s hot
+    /// spots; [`crate::error::MpcError::HotSpotSpatial`] for a spatial scene.
+    pub fn hotspot_spec(
+        &self,
+        scene: &Scene,
+    ) -> Result<Option<crate::hotspots::HotSpotSpec>, crate::error::MpcError> {
+        let Some(name) = self.hotspot.as_deref() else {
+            return Ok(None);
+        };
+        if scene.is_spatial() {
+            return Err(crate::error::MpcError::HotSpotSpatial);
+        }
+        match scene.hotspots.iter().find(|h| h.name == name) {
+            Some(h) => Ok(Some(h.clone())),
+            None => Err(crate::error::MpcError::HotSpotUnknown {
+                name: name.to_string(),
+                known: scene
+                    .hotspots
+                    .iter()
+                    .map(|h| h.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }),
+        }
+    }
+
     /// What MPC plans on (with the effort penalty ρ·h·Σ u²): `objective` when given —
     /// `"power"`, the fatigue proxy Σ|M₀(t_k)|^m with m the first slope of the S-N curve of
     /// `scene`'s `[fatigue]` table ([`WellheadDamage::exponent`]); `"sum"`, c_sum (thesis eq.
@@ -259,7 +296,7 @@ impl MpcTable {
     /// ([`MpcSettings`]'s constants). The one precedence of `chainbeam fatigue`, `chainbeam mpc`
     /// and the Python package.
     pub fn resolve(&self, table: Option<&MpcTable>) -> MpcSettings {
-        let t = table.copied().unwrap_or_default();
+        let t = table.cloned().unwrap_or_default();
         MpcSettings {
             interval: self
                 .interval
@@ -289,6 +326,7 @@ impl MpcTable {
                 .unwrap_or(MpcSettings::DEFAULT_FORECAST_ERROR),
             forecast_seed: self.forecast_seed.or(t.forecast_seed),
             observe: self.observe.or(t.observe).unwrap_or_default(),
+            hotspot: self.hotspot.clone().or(t.hotspot),
         }
     }
 
@@ -308,6 +346,7 @@ impl MpcTable {
             "forecast_error" => self.forecast_error.is_some(),
             "forecast_seed" => self.forecast_seed.is_some(),
             "observe" => self.observe.is_some(),
+            "hotspot" => self.hotspot.is_some(),
             _ => false,
         }
     }
@@ -348,6 +387,8 @@ pub(super) struct RawMpc {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     forecast_seed: Option<i64>,
     observe: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    hotspot: Option<String>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -390,6 +431,7 @@ impl RawMpc {
                 .forecast_seed
                 .map(|s| i64::try_from(s).unwrap_or(i64::MAX)),
             observe: t.observe.map(|o| o.name().to_string()),
+            hotspot: t.hotspot.clone(),
         }
     }
 
@@ -482,6 +524,7 @@ impl RawMpc {
             forecast_error,
             forecast_seed,
             observe,
+            hotspot: self.hotspot,
         })
     }
 }

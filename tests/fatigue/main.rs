@@ -21,6 +21,7 @@ mod fatigue_scatter;
 mod fatigue_study;
 mod fatigue_study_startup;
 mod fatigue_wellhead;
+mod hotspot_control;
 mod hotspot_interpolation;
 mod hotspots;
 mod profile_speed;

@@ -4,10 +4,13 @@
 //! run with `cargo test --test mpc FILE::` (the file name without `.rs`).
 
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/gradient_check.rs"]
+mod gradient_check;
 #[path = "../common/wave_riser4.rs"]
 mod wave_riser4;
 
 mod forecast_noisy;
+mod hotspot;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;

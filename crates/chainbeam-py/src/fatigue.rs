@@ -91,6 +91,8 @@ pub struct Settings {
     forecast: Option<String>,
     /// `observe` ("state" or "sensors"; `None`: not given).
     observe: Option<String>,
+    /// `hotspot` (the name of a `[[fatigue.hotspot]]`; `None`: not given).
+    hotspot: Option<String>,
     spin_up: f64,
     /// `forecast_error` (the noisy forecast's error growth e; `None`: not given).
     forecast_error: Option<f64>,
@@ -141,6 +143,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             mpc_objective: item(obj, "mpc_objective", "\"power\" or \"sum\"")?,
             forecast: item(obj, "forecast", "\"perfect\", \"none\" or \"noisy\"")?,
             observe: item(obj, "observe", "\"state\" or \"sensors\"")?,
+            hotspot: item(obj, "hotspot", "the name of a [[fatigue.hotspot]]")?,
             spin_up,
             forecast_error: item(obj, "forecast_error", NUMBER)?,
             record: item(obj, "record", NUMBER)?,
@@ -270,11 +273,13 @@ impl Settings {
                 .transpose()?,
             forecast_seed: None,
             observe,
+            hotspot: self.hotspot.clone(),
         };
+        let settings = given.resolve(scene.mpc.as_ref());
         Ok(Resolved {
             given,
-            table: scene.mpc,
-            settings: given.resolve(scene.mpc.as_ref()),
+            table: scene.mpc.clone(),
+            settings,
             spin_up: self.spin_up,
             record: self.record.unwrap_or(PRACTICE_RECORD_S),
             seeds: self.seeds.unwrap_or(1),
@@ -308,6 +313,9 @@ impl Settings {
                 forecast_error: s.forecast_error,
                 forecast_seed: s.forecast_seed,
                 observe: s.observe,
+                hotspot: s
+                    .hotspot_spec(scene)
+                    .map_err(|e| r.fault("hotspot", e.to_string()))?,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,
@@ -576,6 +584,9 @@ fn study_dict<'py>(
     settings.set_item("record", r.record)?;
     settings.set_item("seeds", r.seeds)?;
     settings.set_item("observe", s.observe.name())?;
+    if let Some(h) = &s.hotspot {
+        settings.set_item("hotspot", h)?;
+    }
     d.set_item("settings", settings)?;
     if let Some(seeds) = &r.seeds_run {
         d.set_item("seeds", seeds.clone())?;

@@ -160,6 +160,13 @@ pub struct MpcFlags {
     /// else state].
     #[arg(long, value_name = "KIND")]
     pub observe: Option<ObserveArg>,
+    /// The `name` of the scene's `[[fatigue.hotspot]]` whose moment the controllers act on
+    /// (MPC through the vessel's thrust plans on h·Σ|M|^m there; in `fatigue` also the PD law
+    /// and the constant force, and the reported damage and life are that hot spot's;
+    /// docs/mpc.md "The moment a controller acts on") [default: mpc.hotspot, else the chain's
+    /// base moment].
+    #[arg(long, value_name = "NAME")]
+    pub hotspot: Option<String>,
 }
 
 /// `--observe`.
@@ -218,6 +225,7 @@ impl MpcFlags {
                 ObserveArg::State => Observe::State,
                 ObserveArg::Sensors => Observe::Sensors,
             }),
+            hotspot: self.hotspot.clone(),
             ..MpcTable::default()
         }
     }
@@ -248,6 +256,9 @@ struct Settings {
     model: Option<String>,
     /// What MPC's plan started from ("state" or "sensors").
     observe: &'static str,
+    /// The hot spot MPC planned on (absent: the chain's base moment).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hotspot: Option<String>,
 }
 
 #[derive(Serialize)]
@@ -294,11 +305,12 @@ struct Setup<'a> {
 impl<'a> Setup<'a> {
     fn new(a: &'a MpcArgs, scene: &Scene) -> Self {
         let flags = a.mpc.table();
+        let settings = flags.resolve(scene.mpc.as_ref());
         Setup {
             a,
             flags,
-            table: scene.mpc,
-            settings: flags.resolve(scene.mpc.as_ref()),
+            table: scene.mpc.clone(),
+            settings,
         }
     }
 
@@ -362,6 +374,9 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         forecast_error: s.forecast_error,
         forecast_seed: s.forecast_seed,
         observe: s.observe,
+        hotspot: s
+            .hotspot_spec(&scene)
+            .map_err(|e| mpc_error(&setup, &a.scene, e.into()))?,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
@@ -649,6 +664,7 @@ fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
             rate_penalty: a.rate_penalty,
             model: a.model.as_ref().map(|p| p.display().to_string()),
             observe: s.observe.name(),
+            hotspot: s.hotspot.clone(),
         },
         real_time: mpc.worst_replan_seconds <= s.interval,
         c_sum_ratio_to_none: ratio(0),

@@ -146,6 +146,10 @@ struct SettingsJson {
     seeds: usize,
     /// What MPC's plan started from ("state" or "sensors").
     observe: &'static str,
+    /// The hot spot the controllers acted on, whose damage and life the controllers' numbers
+    /// are (absent: the chain's base moment).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    hotspot: Option<String>,
 }
 
 /// `--controller` output.
@@ -307,7 +311,7 @@ fn plan_objective(r: &MpcSettings) -> MpcPlanObjective {
 }
 
 /// The closed-loop settings of the flags and the scene's `[mpc]` table.
-fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliError> {
+fn settings(a: &FatigueArgs, r: &MpcSettings, scene: &Scene) -> Result<ControlSettings, CliError> {
     if r.bound.is_finite() {
         check_force_flag("--bound", r.bound)?;
     }
@@ -325,6 +329,11 @@ fn settings(a: &FatigueArgs, r: &MpcSettings) -> Result<ControlSettings, CliErro
             forecast_error: r.forecast_error,
             forecast_seed: r.forecast_seed,
             observe: r.observe,
+            hotspot: r.hotspot_spec(scene).map_err(|e| {
+                let flags = flags(a);
+                let flag = setting_name(&flags, scene.mpc.as_ref(), "hotspot");
+                CliError::msg(format!("{}: {flag}: {e}", a.scene.display()))
+            })?,
             ..MpcOptions::default()
         },
         pd_training: r.pd_training,
@@ -418,7 +427,7 @@ pub fn solve(
         None => None,
     };
     let resolved = flags(a).resolve(scene.mpc.as_ref());
-    let settings = settings(a, &resolved)?;
+    let settings = settings(a, &resolved, scene)?;
     let n_cells = cells.as_ref().map_or(1, Vec::len);
     let bar = progress.bar(
         (n_cells * a.seeds * kinds.len()) as u64,
@@ -493,6 +502,7 @@ fn controllers_json(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError
             record: Some(a.record.unwrap_or(PRACTICE_RECORD_S)),
             seeds: a.seeds,
             observe: settings.observe.name(),
+            hotspot: settings.hotspot.clone(),
         },
         seeds: solved.seeds.clone(),
     })

@@ -266,6 +266,18 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         self.node_drag.as_ref()
     }
 
+    /// Tabulates the node drag's water momenta P(t_k + h/2) of the steps k = 0..steps of a
+    /// horizon from `t0` with step `h` (the contexts of [`Chain::dissipation_ctx`]), for a plan
+    /// that sweeps the same horizon many times ([`NodeDrag::tabulate_water`]: the same values
+    /// bit for bit); nothing without that term. Memory: steps × n × DIM reals.
+    pub(crate) fn tabulate_water(&mut self, t0: f64, h: f64, steps: usize) {
+        if let Some(mut nd) = self.node_drag.take() {
+            let n = self.n;
+            nd.tabulate_water(n, steps, |k| self.dissipation_ctx(t0 + k as f64 * h, h, k));
+            self.node_drag = Some(nd);
+        }
+    }
+
     /// The vessel's motion of the tip, if the vessel holds it.
     pub fn vessel(&self) -> Option<&VesselMotion> {
         self.vessel.as_deref()
@@ -312,6 +324,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             }
             if let Some(nd) = &mut self.node_drag {
                 nd.water.set_waves(&f);
+                nd.clear_water_table();
             }
             if let Some(w) = &mut self.wave_inertia {
                 w.field = f;

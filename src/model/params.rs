@@ -11,6 +11,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
         let n = self.n;
         let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
+        // A tabulated water momentum ([`Chain::tabulate_water`]) may read the parameter.
+        if let Some(nd) = &mut self.node_drag {
+            nd.clear_water_table();
+        }
         match p {
             Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
             Parameter::JointStiffness(j) => {

@@ -790,6 +790,14 @@ impl Mpc {
             Some(prev) => template.clone().starting_from(prev.clone(), t_start)?,
             None => template.clone(),
         };
+        // The water's momenta of the horizon's steps once for the re-plan's dozen sweeps (the
+        // same values bit for bit: Chain::tabulate_water).
+        let problem = {
+            let mut chain = problem.chain().clone();
+            let t0 = if start.is_some() { t_start } else { 0.0 };
+            chain.tabulate_water(t0, hp, steps);
+            problem.with_chain(chain)
+        };
         let actuator = state.actuator;
         self.warm_start(pieces);
         for w in &mut self.warm {

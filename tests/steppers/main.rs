@@ -15,6 +15,7 @@ mod gradient_check;
 mod columns;
 mod euler_bernoulli;
 mod integrators;
+mod stability_limit;
 mod start;
 mod stream_budget;
 mod streaming;

@@ -31,6 +31,7 @@ use super::drag::{root_of, slope_of};
 use super::{BlockSym, Ctx, Embed};
 use crate::base::{Parameter, Scalar};
 use num_dual::Dual;
+use std::sync::Arc;
 
 /// Morison's drag node by node (module docs), over the water of a [`CurrentDrag`] (whose own drag
 /// constant is not used).
@@ -42,6 +43,22 @@ pub struct NodeDrag<D, const DIM: usize> {
     pub(crate) per_cd: Vec<f64>,
     /// The water's momentum P (current and waves).
     pub(crate) water: CurrentDrag<D, DIM>,
+    /// P at the midpoints of a horizon's steps, tabulated once for many sweeps over it
+    /// ([`NodeDrag::tabulate_water`]); `None` unless asked for.
+    table: Option<Arc<WaterTable<D, DIM>>>,
+}
+
+/// The water's momenta P(t_k + h/2) of the steps k = 0..steps of one horizon, as
+/// [`NodeDrag::water_momenta`] computes them (the same values bit for bit): a receding-horizon
+/// plan sweeps the same horizon forward and backward a dozen times per re-plan, and P is a known
+/// function of time.
+#[derive(Debug)]
+struct WaterTable<D, const DIM: usize> {
+    /// The midpoint time t_k + h/2 of each row, as the step's context holds it: a row is read
+    /// only for a context at exactly that time (and no seeded parameter).
+    times: Vec<f64>,
+    /// steps × n momenta, step-major.
+    rows: Vec<[D; DIM]>,
 }
 
 impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
@@ -66,6 +83,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
             cd: D::from(cd),
             per_cd,
             water,
+            table: None,
         }
     }
 
@@ -83,6 +101,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
             cd: D::one(),
             per_cd: kappa.iter().zip(masses).map(|(k, m)| k / (m * m)).collect(),
             water,
+            table: None,
         }
     }
 
@@ -92,6 +111,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
             cd: D2::from(self.cd.re()),
             per_cd: self.per_cd.clone(),
             water: self.water.lift(),
+            table: None,
         }
     }
 
@@ -131,8 +151,45 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
     /// evaluation of one step's half steps (both read it at t_k + h/2), so the step reads it
     /// once per step for [`NodeDrag::implicit_half_step`] and
     /// [`NodeDrag::generalised_force_in`] instead of once per node, Newton iteration and pass.
+    /// With a table ([`NodeDrag::tabulate_water`]) whose row for the context's step holds this
+    /// very time, that row is copied instead.
     pub fn water_momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
+        if let Some(t) = &self.table {
+            let n = out.len();
+            if ctx.seed.is_none()
+                && t.times.get(ctx.step).map(|x| x.to_bits()) == Some(ctx.t.to_bits())
+            {
+                out.copy_from_slice(&t.rows[ctx.step * n..(ctx.step + 1) * n]);
+                return;
+            }
+        }
         self.water.momenta(ctx, out);
+    }
+
+    /// Tabulates P(t_k + h/2) for the steps k = 0..steps of a horizon whose step k has the
+    /// context `ctx_of(k)` ([`crate::Chain::dissipation_ctx`]), so that every later sweep over
+    /// it copies them ([`NodeDrag::water_momenta`]); the values are those of the direct
+    /// evaluation bit for bit (they are it). Replaces any earlier table.
+    pub(crate) fn tabulate_water(
+        &mut self,
+        n: usize,
+        steps: usize,
+        ctx_of: impl Fn(usize) -> Ctx<D>,
+    ) {
+        self.table = None;
+        let mut times = Vec::with_capacity(steps);
+        let mut rows = vec![[D::zero(); DIM]; steps * n];
+        for (k, row) in rows.chunks_exact_mut(n.max(1)).enumerate().take(steps) {
+            let ctx = ctx_of(k);
+            self.water.momenta(&ctx, row);
+            times.push(if ctx.seed.is_none() { ctx.t } else { f64::NAN });
+        }
+        self.table = Some(Arc::new(WaterTable { times, rows }));
+    }
+
+    /// Drops the table of [`NodeDrag::tabulate_water`] (the water or a parameter changed).
+    pub(crate) fn clear_water_table(&mut self) {
+        self.table = None;
     }
 
     /// y = A (p − P) with P given (`water`, [`NodeDrag::water_momenta`]): the same arithmetic
@@ -218,6 +275,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
 #[derive(Clone, Debug)]
 pub struct NodeReverseScratch<D, const DIM: usize> {
     y: Vec<[D; DIM]>,
+    water: Vec<[D; DIM]>,
     dp: Vec<[Dual<D>; DIM]>,
     dy: Vec<[Dual<D>; DIM]>,
     dq: Vec<[Dual<D>; DIM]>,
@@ -228,6 +286,7 @@ impl<D: Scalar, const DIM: usize> NodeReverseScratch<D, DIM> {
     pub fn new(n: usize) -> Self {
         NodeReverseScratch {
             y: vec![[D::zero(); DIM]; n],
+            water: vec![[D::zero(); DIM]; n],
             dp: vec![[Dual::from_re(D::zero()); DIM]; n],
             dy: vec![[Dual::from_re(D::zero()); DIM]; n],
             dq: vec![[Dual::from_re(D::zero()); DIM]; n],
@@ -246,7 +305,10 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         x: &mut [[D; DIM]],
         scratch: &mut NodeReverseScratch<D, DIM>,
     ) {
-        self.node_momenta(p, inv_lengths, ctx, &mut scratch.y);
+        // P once for all nodes (or from the horizon's table): the same values as
+        // `node_momenta`'s node by node reads, bit for bit.
+        self.water_momenta(ctx, &mut scratch.water);
+        Self::node_momenta_in(p, inv_lengths, &scratch.water, &mut scratch.y);
         prefix_scale(x, lengths);
         let ax = DIM - 2;
         for (k, (x, y)) in x.iter_mut().zip(&scratch.y).enumerate() {

@@ -84,20 +84,37 @@ impl ThrustDrive {
     pub fn first_half<D: Scalar>(
         &self,
         [z, zd]: [D; 2],
-        (prescribed, p_next): ([f64; 2], f64),
+        (prescribed, p_next): ([D; 2], D),
         f_k: D,
         h: f64,
     ) -> (D, D) {
         let (a, b) = self.factors(h);
-        let v_half = (zd - D::from(prescribed[1]) + f_k * a) * (1.0 / (1.0 + b));
-        let x_next = z - D::from(prescribed[0]) + v_half * h;
-        (x_next + D::from(p_next), v_half)
+        let v_half = (zd - prescribed[1] + f_k * a) * (1.0 / (1.0 + b));
+        let x_next = z - prescribed[0] + v_half * h;
+        (x_next + p_next, v_half)
     }
 
     /// Second half: Ż_{k+1} = Ṗ_{k+1} + v_{k+½}(1 − h c/(2M)) + h/(2M) F_{k+1}.
-    pub fn second_half<D: Scalar>(&self, v_half: D, pdot_next: f64, f_k1: D, h: f64) -> D {
+    pub fn second_half<D: Scalar>(&self, v_half: D, pdot_next: D, f_k1: D, h: f64) -> D {
         let (a, b) = self.factors(h);
-        v_half * (1.0 - b) + f_k1 * a + D::from(pdot_next)
+        v_half * (1.0 - b) + f_k1 * a + pdot_next
+    }
+
+    /// The derivative of one step's (Z_{k+1}, Ż_{k+1}) with respect to the vessel's mean
+    /// offset Z₀ at fixed (Z_k, Ż_k, F): the prescribed part P = ρ(t)(Z₀ + d_z X_w) enters
+    /// with ∂P/∂Z₀ = ρ, ∂Ṗ/∂Z₀ = ρ̇ (`ramp_k` = (ρ, ρ̇) at t_k, `ramp_next` at t_{k+1}):
+    /// ```text
+    /// ∂v_{k+½}/∂Z₀ = −ρ̇_k / (1 + h c/(2M)),
+    /// ∂Z_{k+1}/∂Z₀ = ρ_{k+1} − ρ_k + h ∂v_{k+½}/∂Z₀,
+    /// ∂Ż_{k+1}/∂Z₀ = ρ̇_{k+1} + (1 − h c/(2M)) ∂v_{k+½}/∂Z₀.
+    /// ```
+    pub fn offset_derivative(&self, ramp_k: (f64, f64), ramp_next: (f64, f64), h: f64) -> [f64; 2] {
+        let (_, b) = self.factors(h);
+        let dv = -ramp_k.1 / (1.0 + b);
+        [
+            ramp_next.0 - ramp_k.0 + h * dv,
+            ramp_next.1 + (1.0 - b) * dv,
+        ]
     }
 
     /// The transpose of one step (Z_k, Ż_k, F_k, F_{k+1}) ↦ (Z_{k+1}, Ż_{k+1}) applied to

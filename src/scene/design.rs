@@ -196,13 +196,14 @@ impl Scene {
                 continue;
             };
             for (k, v) in [("lower", lo), ("upper", hi)] {
-                if p.parameter.is_signed() && !v.is_finite() {
+                let signed = p.parameter.is_signed();
+                if signed && !v.is_finite() {
                     return Err(SceneError::invalid(
                         key(k),
                         format!("must be finite ({}), got {v}", p.parameter.unit()),
                     ));
                 }
-                if !p.parameter.is_signed() && !(v.is_finite() && v > 0.0) {
+                if !(signed || v.is_finite() && v > 0.0) {
                     return Err(SceneError::invalid(
                         key(k),
                         format!(

@@ -82,6 +82,11 @@ pub enum Parameter {
     /// (`[[stackup.flex_joint]]`), whose torque −k_{j+1} s(q_{j}·q_{j+1}) it scales. The end
     /// springs are [`Parameter::BaseStiffness`] and [`Parameter::TipStiffness`].
     JointStiffness(usize),
+    /// The vessel's mean offset Z₀ \[m\] (`[vessel] offset`, `support = "vessel"`): the top's
+    /// prescribed z is Z(t) = ρ(t)(Z₀ + d_z X_w(t)) (and the prescribed part P(t) of a vessel
+    /// under thrust, Z = P + x_v), so that ∂Z/∂Z₀ = ρ(t) and ∂Ż/∂Z₀ = ρ̇(t)
+    /// ([`crate::model::VesselMotion`]).
+    VesselOffset,
 }
 
 /// Statistics of one step.

@@ -174,3 +174,25 @@ def test_errors_name_the_key(files: tuple[Path, Path]) -> None:
     with pytest.raises(cb.SceneError) as e:
         cb.Scene.from_toml(bad)
     assert e.value.key is not None and e.value.key.startswith("design.parameter[1]")
+
+
+def test_vessel_offset_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
+    """The vessel's mean offset as a design parameter (`vessel.offset`, signed bounds) on the
+    README's riser system (examples/scenes/riser_300m_system_design.toml with the offset
+    appended to its [design] table): its name passes through `cb.design` and its sensitivity
+    equals the command line's JSON bit for bit, on one cell of 20 s after a 10 s spin-up (the
+    README's records)."""
+    text = (SCENES / "riser_300m_system_design.toml").read_text()
+    scene = tmp_path / "system.toml"
+    scene.write_text(text + '\n[[design.parameter]]\nname = "vessel.offset"\n'
+                     "lower = -10.0\nupper = 10.0\n")
+    scatter = tmp_path / "cells.csv"
+    scatter.write_text("hs,tp,probability\n1.44,7.66,1.0\n")
+    args = ["--scatter", str(scatter), "--record", "20", "--spin-up", "10"]
+    ref = cli_json(cli, str(scene), "--sensitivities", *args)
+    got = cb.design(cb.Scene.from_file(scene), str(scatter), sensitivities=True, record=20.0,
+                    spin_up=10.0)
+    assert same(without_seconds(got), without_seconds(ref))
+    assert "vessel.offset" in got["sensitivities"]
+    assert same(got["sensitivities"]["vessel.offset"], ref["sensitivities"]["vessel.offset"])
+    assert got["sensitivities"]["vessel.offset"] != 0.0

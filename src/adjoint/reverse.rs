@@ -30,6 +30,8 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     h: f64,
     params: &'a [Parameter],
     mass_param: Option<usize>,
+    /// The index of the vessel's mean offset Z₀ in the request ([`Parameter::VesselOffset`]).
+    offset_param: Option<usize>,
     /// The requested parameters some dissipative term reads (drag D, current speed, mass).
     drag_params: Vec<(usize, Parameter)>,
     tmp: Vec<[D; DIM]>,
@@ -65,6 +67,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             t0: 0.0,
             params,
             mass_param: params.iter().position(|p| *p == Parameter::Mass),
+            offset_param: params
+                .iter()
+                .position(|p| *p == Parameter::VesselOffset)
+                .filter(|_| ch.vessel().is_some()),
             drag_params: params
                 .iter()
                 .enumerate()
@@ -116,6 +122,13 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         if let Some(tip) = self.ch.reaction_tip() {
             self.tip_target(&tip, k, (u_k, u_k1), cot);
         } else if let Some(drive) = self.ch.thrust_drive() {
+            if let (Some(ip), Some(v)) = (self.offset_param, self.ch.vessel()) {
+                // Z₀ enters the drive's step through its prescribed part P(t) = ρ(t)(Z₀ + …):
+                // θ̄ += (Z̄_{k+1}, Ż̄_{k+1}) · ∂(Z_{k+1}, Ż_{k+1})/∂Z₀ at fixed (Z_k, Ż_k).
+                let ramp = |j: usize| v.vessel().ramp_factor(self.t0 + j as f64 * self.h);
+                let d = drive.offset_derivative(ramp(k), ramp(k + 1), self.h);
+                cot.thbar[ip] += cot.tip_bar[0] * d[0] + cot.tip_bar[1] * d[1];
+            }
             // The vessel under thrust (model::ThrustDrive): its linear map's transpose.
             let bar = drive.reverse(cot.tip_bar, self.h);
             cot.ubar[k] += bar.controls.0;
@@ -172,6 +185,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             if let Some(ip) = self.mass_param {
                 cot.thbar[ip] += self.rhs[n] * sk1.tip[1] * ch.inv_masses[0];
             }
+        } else if let (Some(ip), Some(v)) = (self.offset_param, ch.vessel()) {
+            // The prescribed tip's rate Ż(t_{k+1}) = ρ̇(Z₀ + …) + ρ d_z Ẋ_w on the tip row:
+            // its cotangent ŷ_n times ∂Ż/∂Z₀ = ρ̇(t_{k+1}) (the state is that of step k + 1).
+            let (_, rho_dot) = v.vessel().ramp_factor(self.t0 + (k + 1) as f64 * self.h);
+            cot.thbar[ip] += self.rhs[ch.n()] * rho_dot;
         }
         Ok(())
     }
@@ -355,6 +373,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         ops.add_transpose(sk1.q, &self.rhs, -D::one(), &mut cot.qbar);
         if ch.has_driven_tip() {
             cot.tip_bar[0] += self.rhs[ch.n()];
+        } else if let (Some(ip), Some(v)) = (self.offset_param, ch.vessel()) {
+            // The prescribed tip's Z(t_{k+1}) = ρ(Z₀ + d_z X_w) held by Newton's tip row: its
+            // cotangent ν_n times ∂Z/∂Z₀ = ρ(t_{k+1}).
+            let (rho, _) = v.vessel().ramp_factor(self.t0 + (k + 1) as f64 * self.h);
+            cot.thbar[ip] += self.rhs[ch.n()] * rho;
         }
         if let Some(ip) = self.mass_param {
             // q′ = q + h M⁻¹ p½ with M⁻¹ ∝ 1/m: ∂q′/∂m = −(q′ − q)/m.

@@ -35,7 +35,11 @@
 //! spring k₁, `beam.base_stiffness`, which is also the k₁ of the wellhead moment), the upper
 //! flex joint's (the tip spring, `beam.tip_stiffness`), and the soil's p-y modulus at the mudline
 //! (`soil.modulus`), an uncertainty by default ([`Role::Uncertainty`]): its sensitivity is
-//! reported, it is not optimised; and, in a scene with a `[stackup]`, the rotational stiffness
+//! reported, it is not optimised; the vessel's mean offset Z₀ (`vessel.offset`, with
+//! `support = "vessel"`), which the top's prescribed motion Z(t) = ρ(t)(Z₀ + d_z X_w(t)) reads
+//! (and the prescribed part of a vessel under thrust): its adjoint is that of the top's
+//! constraint, the cotangents of Z(t_k) and Ż(t_k) times ∂Z/∂Z₀ = ρ(t_k), ∂Ż/∂Z₀ = ρ̇(t_k);
+//! and, in a scene with a `[stackup]`, the rotational stiffness
 //! of each named flex joint (`stackup.flex_joint.<name>.stiffness`: the joint spring where it
 //! sits, base, tip or interior). Each maps to one [`crate::Parameter`] whose exact adjoint
 //! gradient the library has; the scene's value is the model's value (the chain is built from
@@ -57,7 +61,13 @@
 //! ∂ ln D_y/∂u_i = (1/D_y) · ∂D_y/∂θ_i · θ_i ln(hi_i/lo_i),
 //! ```
 //! so that a unit of u is a parameter's whole range whatever its unit, and a stiffness spanning
-//! decades moves by factors (every bound is positive, `[design]`). A bound is reached exactly: a
+//! decades moves by factors (every bound is positive, `[design]`). A signed parameter (the
+//! vessel's offset, whose value may be 0 or negative: [`DesignParameter::is_signed`]) is
+//! scaled affinely instead,
+//! ```text
+//! u_i = (θ_i − lo_i)/(hi_i − lo_i),   θ_i = lo_i + u_i (hi_i − lo_i),
+//! ∂ ln D_y/∂u_i = (1/D_y) · ∂D_y/∂θ_i · (hi_i − lo_i).
+//! ``` A bound is reached exactly: a
 //! step that would leave the box lands on the bound, and a variable on a bound whose gradient
 //! pushes outward is held there (active) while the others move. The first step is the steepest
 //! descent scaled so that its longest component spans its variable's whole range (a damage

@@ -271,23 +271,39 @@ fn scene_values(
 }
 
 /// The log-scaled unit box of the module docs: u_i = ln(θ_i/lo_i)/ln(hi_i/lo_i), θ_i(u) =
-/// lo_i (hi_i/lo_i)^{u_i}, exact at the bounds (u = 0 gives lo, u = 1 gives hi, bit for bit) and
-/// at the start (θ(u0) = θ0 bit for bit, so that the start's evaluation is reused).
+/// lo_i (hi_i/lo_i)^{u_i}; for a signed parameter ([`DesignParameter::is_signed`], the vessel's
+/// offset, which may be 0 or negative) the affine u_i = (θ_i − lo_i)/(hi_i − lo_i), θ_i(u) =
+/// lo_i + u_i (hi_i − lo_i). Exact at the bounds (u = 0 gives lo, u = 1 gives hi, bit for bit)
+/// and at the start (θ(u0) = θ0 bit for bit, so that the start's evaluation is reused).
 #[derive(Clone, Debug)]
 struct LogBox {
     bounds: Vec<(f64, f64)>,
+    /// Whether each parameter is scaled affinely (signed) rather than by logarithms.
+    signed: Vec<bool>,
     theta0: Vec<f64>,
     u0: Vec<f64>,
 }
 
 impl LogBox {
-    fn new(bounds: Vec<(f64, f64)>, theta0: Vec<f64>) -> Self {
+    fn new(bounds: Vec<(f64, f64)>, signed: Vec<bool>, theta0: Vec<f64>) -> Self {
         let u0 = bounds
             .iter()
             .zip(&theta0)
-            .map(|(&(lo, hi), &t)| ((t / lo).ln() / (hi / lo).ln()).clamp(0.0, 1.0))
+            .zip(&signed)
+            .map(|((&(lo, hi), &t), &affine)| {
+                if affine {
+                    ((t - lo) / (hi - lo)).clamp(0.0, 1.0)
+                } else {
+                    ((t / lo).ln() / (hi / lo).ln()).clamp(0.0, 1.0)
+                }
+            })
             .collect();
-        LogBox { bounds, theta0, u0 }
+        LogBox {
+            bounds,
+            signed,
+            theta0,
+            u0,
+        }
     }
 
     fn theta(&self, u: &[f64]) -> Vec<f64> {
@@ -300,6 +316,8 @@ impl LogBox {
                     lo
                 } else if u[i] >= 1.0 {
                     hi
+                } else if self.signed[i] {
+                    (lo + u[i] * (hi - lo)).clamp(lo, hi)
                 } else {
                     (lo.ln() + u[i] * (hi / lo).ln()).exp().clamp(lo, hi)
                 }
@@ -307,12 +325,21 @@ impl LogBox {
             .collect()
     }
 
-    /// dθ_i/du_i = θ_i ln(hi_i/lo_i).
+    /// dθ_i/du_i = θ_i ln(hi_i/lo_i) (hi_i − lo_i for a signed parameter).
     fn slope(&self, theta: &[f64]) -> Vec<f64> {
         theta
             .iter()
             .zip(&self.bounds)
-            .map(|(t, (lo, hi))| t * (hi / lo).ln())
+            .zip(&self.signed)
+            .map(
+                |((t, (lo, hi)), &affine)| {
+                    if affine {
+                        hi - lo
+                    } else {
+                        t * (hi / lo).ln()
+                    }
+                },
+            )
             .collect()
     }
 }
@@ -381,7 +408,8 @@ pub fn optimise(
         .map(|p| names.iter().position(|q| q == p).unwrap_or(0))
         .collect();
     let theta0: Vec<f64> = index.iter().map(|&i| values[i]).collect();
-    let scaled = LogBox::new(bounds, theta0.clone());
+    let signed: Vec<bool> = free.iter().map(DesignParameter::is_signed).collect();
+    let scaled = LogBox::new(bounds, signed, theta0.clone());
     // ln D_y and its gradient in u (module docs) from a scatter evaluation at θ(u).
     let in_box = |theta: &[f64], g: &ScatterGradient| -> Result<BoxValue, DesignError> {
         if g.damage_per_year <= 0.0 {

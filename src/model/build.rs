@@ -133,6 +133,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             wave_inertia: waves.map(WaveInertia::new),
             joint_damping,
             node_drag,
+            vessel_offset: D::from(vessel.as_ref().map_or(0.0, |v| v.vessel().offset)),
             vessel,
             soil: scene
                 .soil
@@ -320,6 +321,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
             node_drag: self.node_drag.as_ref().map(|t| t.lift()),
             vessel: self.vessel.clone(),
+            vessel_offset: D2::from(self.vessel_offset.re()),
             soil: self.soil.as_ref().map(|t| t.lift()),
         }
     }

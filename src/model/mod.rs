@@ -70,6 +70,10 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) node_drag: Option<NodeDrag<D, DIM>>,
     /// The vessel's motion of the tip ([`TipCondition::Prescribed`]).
     pub(crate) vessel: Option<std::sync::Arc<VesselMotion>>,
+    /// The vessel's mean offset Z₀ in the chain's scalar ([`Parameter::VesselOffset`]; its real
+    /// part is the `vessel`'s own offset, 0 without a vessel): [`Chain::prescribed_tip`] adds
+    /// (Z₀ − Z₀,vessel) ρ(t) to the vessel's Z(t), zero but for a seeded derivative.
+    pub(crate) vessel_offset: D,
     /// Lateral p-y springs on the nodes below the mudline (`[soil]`).
     pub(crate) soil: Option<SoilSprings<D>>,
 }
@@ -198,7 +202,14 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// other tips.
     #[inline]
     pub fn prescribed_tip(&self, t: f64) -> Option<[D; 2]> {
-        self.vessel.as_ref().map(|v| v.at(t).map(D::from))
+        self.vessel.as_ref().map(|v| {
+            let [z, zd] = v.at(t);
+            // Z(t) = ρ(t)(Z₀ + d_z X_w): the offset's own part (Z₀ − Z₀,vessel)(ρ, ρ̇) is zero
+            // in value and carries Z₀'s derivative when it is seeded.
+            let (rho, rho_dot) = v.vessel().ramp_factor(t);
+            let dz = self.vessel_offset - D::from(v.vessel().offset);
+            [D::from(z) + dz * rho, D::from(zd) + dz * rho_dot]
+        })
     }
 
     /// The vessel's thrust drive when the control is the thrust on the vessel (`[vessel]` thrust

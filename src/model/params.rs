@@ -102,6 +102,15 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     _ => return Err(missing(p, "the scene has no current with a speed")),
                 }
             }
+            Parameter::VesselOffset => {
+                if self.vessel.is_none() {
+                    return Err(missing(
+                        p,
+                        "the top is not held by a vessel (support = \"vessel\")",
+                    ));
+                }
+                self.vessel_offset = value;
+            }
             Parameter::SoilModulus => match &mut self.soil {
                 Some(s) => s.modulus = value,
                 None => return Err(missing(p, "the scene has no node in the soil")),
@@ -163,6 +172,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 .as_ref()
                 .is_some_and(|t| t.node_weights.is_empty()),
             Parameter::SoilModulus => self.soil.is_some(),
+            Parameter::VesselOffset => self.vessel.is_some(),
             Parameter::LoadForce(_)
             | Parameter::LoadForceX(_)
             | Parameter::LoadAmplitude { .. }

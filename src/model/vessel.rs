@@ -90,16 +90,15 @@ impl ThrustDrive {
     pub fn first_half<D: Scalar>(
         &self,
         [z, zd]: [D; 2],
-        (prescribed, p_next): ([f64; 2], f64),
+        (prescribed, p_next): ([D; 2], D),
         f_k: D,
         h: f64,
     ) -> (D, D) {
         let (a, b) = self.factors(h);
-        let x = z - D::from(prescribed[0]);
-        let v_half =
-            (zd - D::from(prescribed[1]) + (f_k - x * self.stiffness) * a) * (1.0 / (1.0 + b));
+        let x = z - prescribed[0];
+        let v_half = (zd - prescribed[1] + (f_k - x * self.stiffness) * a) * (1.0 / (1.0 + b));
         let x_next = x + v_half * h;
-        (x_next + D::from(p_next), v_half)
+        (x_next + p_next, v_half)
     }
 
     /// Second half: Ż_{k+1} = Ṗ_{k+1} + v_{k+½}(1 − h c/(2M)) + h/(2M) (F_{k+1} − k x_{k+1}),
@@ -107,13 +106,33 @@ impl ThrustDrive {
     pub fn second_half<D: Scalar>(
         &self,
         v_half: D,
-        (z_next, p_next, pdot_next): (D, f64, f64),
+        (z_next, p_next, pdot_next): (D, D, D),
         f_k1: D,
         h: f64,
     ) -> D {
         let (a, b) = self.factors(h);
-        let x_next = z_next - D::from(p_next);
-        v_half * (1.0 - b) + (f_k1 - x_next * self.stiffness) * a + D::from(pdot_next)
+        let x_next = z_next - p_next;
+        v_half * (1.0 - b) + (f_k1 - x_next * self.stiffness) * a + pdot_next
+    }
+
+    /// The derivative of one step's (Z_{k+1}, Ż_{k+1}) with respect to the vessel's mean
+    /// offset Z₀ at fixed (Z_k, Ż_k, F): the prescribed part P = ρ(t)(Z₀ + d_z X_w) enters
+    /// with ∂P/∂Z₀ = ρ, ∂Ṗ/∂Z₀ = ρ̇ (`ramp_k` = (ρ, ρ̇) at t_k, `ramp_next` at t_{k+1}), and
+    /// x = Z − P with ∂x_k/∂Z₀ = −ρ_k (a = h/(2M), b = h c/(2M), k the station keeping):
+    /// ```text
+    /// ∂v_{k+½}/∂Z₀ = (−ρ̇_k + a k ρ_k) / (1 + b),
+    /// ∂Z_{k+1}/∂Z₀ = ρ_{k+1} − ρ_k + h ∂v_{k+½}/∂Z₀,
+    /// ∂Ż_{k+1}/∂Z₀ = ρ̇_{k+1} + (1 − b) ∂v_{k+½}/∂Z₀ − a k (∂Z_{k+1}/∂Z₀ − ρ_{k+1}).
+    /// ```
+    pub fn offset_derivative(&self, ramp_k: (f64, f64), ramp_next: (f64, f64), h: f64) -> [f64; 2] {
+        let (a, b) = self.factors(h);
+        let k = self.stiffness;
+        let dv = (-ramp_k.1 + a * k * ramp_k.0) / (1.0 + b);
+        let dz = ramp_next.0 - ramp_k.0 + h * dv;
+        [
+            dz,
+            ramp_next.1 + (1.0 - b) * dv - a * k * (dz - ramp_next.0),
+        ]
     }
 
     /// The transpose of one step (Z_k, Ż_k, F_k, F_{k+1}) ↦ (Z_{k+1}, Ż_{k+1}) applied to

@@ -5,7 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::{Scene, SceneError, SceneErrorKind};
+use super::{Scene, SceneError, SceneErrorKind, Support};
 use crate::base::Parameter;
 
 /// The file's `[design]` table.
@@ -141,8 +141,9 @@ impl Scene {
     /// `hotspot`, when given, names a `[[fatigue.hotspot]]` of a planar scene;
     /// every parameter is one this scene's model has (`beam.base_stiffness` needs a base spring,
     /// `beam.tip_stiffness` a tip spring, `loads.tension` a tension T > 0, `soil.modulus` a
-    /// `[soil]` table); bounds are finite with 0 < lower < upper, and the scene's own value lies
-    /// within them (the optimiser starts there).
+    /// `[soil]` table, `vessel.offset` `support = "vessel"` with a positive `vessel.ramp`);
+    /// bounds are finite with 0 < lower < upper (lower < upper for the signed `vessel.offset`),
+    /// and the scene's own value lies within them (the optimiser starts there).
     ///
     /// # Errors
     /// [`SceneErrorKind::InvalidValue`] naming `design.tolerance`, `design.hotspot` or
@@ -195,7 +196,14 @@ impl Scene {
                 continue;
             };
             for (k, v) in [("lower", lo), ("upper", hi)] {
-                if !(v.is_finite() && v > 0.0) {
+                let signed = p.parameter.is_signed();
+                if signed && !v.is_finite() {
+                    return Err(SceneError::invalid(
+                        key(k),
+                        format!("must be finite ({}), got {v}", p.parameter.unit()),
+                    ));
+                }
+                if !(signed || v.is_finite() && v > 0.0) {
                     return Err(SceneError::invalid(
                         key(k),
                         format!(
@@ -250,6 +258,12 @@ pub enum DesignParameter {
     /// ([`Parameter::BaseStiffness`]), the tip spring ([`Parameter::TipStiffness`]) or an
     /// interior one ([`Parameter::JointStiffness`]).
     FlexJoint(String),
+    /// The vessel's mean offset Z₀ \[m\] (`vessel.offset`, `support = "vessel"`;
+    /// [`Parameter::VesselOffset`]): the top's prescribed Z(t) = ρ(t)(Z₀ + d_z X_w(t)). A signed
+    /// parameter (Z₀ may be 0 or negative): its bounds may be any finite lower < upper, and
+    /// the optimiser scales it affinely, u = (Z₀ − lower)/(upper − lower)
+    /// ([`DesignParameter::is_signed`]).
+    VesselOffset,
 }
 
 /// The prefix and suffix of a flex joint's design parameter name.
@@ -259,15 +273,17 @@ const FLEX_SUFFIX: &str = ".stiffness";
 impl DesignParameter {
     /// Every design parameter but the stack-up's flex joints (which a scene names), in the
     /// order of the module docs.
-    pub const ALL: [DesignParameter; 4] = [
+    pub const ALL: [DesignParameter; 5] = [
         DesignParameter::Tension,
         DesignParameter::BaseStiffness,
         DesignParameter::TipStiffness,
         DesignParameter::SoilModulus,
+        DesignParameter::VesselOffset,
     ];
 
     /// The scene key that names it (`loads.tension`, `beam.base_stiffness`,
-    /// `beam.tip_stiffness`, `soil.modulus`, `stackup.flex_joint.<name>.stiffness`): its name
+    /// `beam.tip_stiffness`, `soil.modulus`, `vessel.offset`,
+    /// `stackup.flex_joint.<name>.stiffness`): its name
     /// in `[design]` and in the JSON.
     pub fn name(&self) -> String {
         match self {
@@ -275,6 +291,7 @@ impl DesignParameter {
             DesignParameter::BaseStiffness => "beam.base_stiffness".into(),
             DesignParameter::TipStiffness => "beam.tip_stiffness".into(),
             DesignParameter::SoilModulus => "soil.modulus".into(),
+            DesignParameter::VesselOffset => "vessel.offset".into(),
             DesignParameter::FlexJoint(name) => format!("{FLEX_PREFIX}{name}{FLEX_SUFFIX}"),
         }
     }
@@ -309,7 +326,16 @@ impl DesignParameter {
             | DesignParameter::TipStiffness
             | DesignParameter::FlexJoint(_) => "N·m/rad",
             DesignParameter::SoilModulus => "N/m²",
+            DesignParameter::VesselOffset => "m",
         }
+    }
+
+    /// Whether the parameter is signed (its value may be 0 or negative: the vessel's offset),
+    /// scaled affinely to the optimiser's unit box, u = (θ − lower)/(upper − lower), where the
+    /// others (positive) are scaled by the logarithms of their bounds ([`crate::design`], "The
+    /// optimiser").
+    pub fn is_signed(&self) -> bool {
+        matches!(self, DesignParameter::VesselOffset)
     }
 
     /// The library's parameter of the scene's model, whose adjoint gradient this is (`None`:
@@ -320,6 +346,7 @@ impl DesignParameter {
             DesignParameter::BaseStiffness => Parameter::BaseStiffness,
             DesignParameter::TipStiffness => Parameter::TipStiffness,
             DesignParameter::SoilModulus => Parameter::SoilModulus,
+            DesignParameter::VesselOffset => Parameter::VesselOffset,
             DesignParameter::FlexJoint(_) => {
                 let j = self.flex_joint(scene)?.1;
                 match j {
@@ -369,6 +396,20 @@ impl DesignParameter {
                 .soil
                 .map(|s| s.modulus)
                 .ok_or("the scene has no [soil] table"),
+            DesignParameter::VesselOffset if scene.beam.support != Support::Vessel => {
+                Err("the top is not held by a vessel (beam.support = \"vessel\")")
+            }
+            DesignParameter::VesselOffset => {
+                let v = scene.vessel.clone().unwrap_or_default();
+                if v.ramp > 0.0 {
+                    Ok(v.offset)
+                } else {
+                    Err(
+                        "vessel.ramp = 0: a run starts from rest with the top at 0, so an offset \
+                         needs a positive ramp to grow in over",
+                    )
+                }
+            }
             DesignParameter::FlexJoint(_) => match self.flex_joint(scene) {
                 Some((i, _)) => Ok(scene
                     .stackup
@@ -403,6 +444,9 @@ impl DesignParameter {
                 if let Some(s) = scene.soil.as_mut() {
                     s.modulus = value;
                 }
+            }
+            DesignParameter::VesselOffset => {
+                scene.vessel.get_or_insert_with(Default::default).offset = value;
             }
             DesignParameter::FlexJoint(_) => {}
         }

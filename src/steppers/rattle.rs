@@ -458,13 +458,16 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         if let Some(tip) = self.chain.reaction_tip() {
             return tip.first_half(state.tip_target, u_k, self.h);
         }
-        let next = self.chain.vessel().map(|v| v.at(self.time(k + 1)));
+        let next = self.chain.prescribed_tip(self.time(k + 1));
         match (self.chain.thrust_drive(), next) {
             (Some(drive), Some([z1, _])) => {
-                let now = self.chain.vessel().map_or([0.0; 2], |v| v.at(self.time(k)));
+                let now = self
+                    .chain
+                    .prescribed_tip(self.time(k))
+                    .unwrap_or([D::zero(); 2]);
                 drive.first_half(state.tip_target, (now, z1), u_k, self.h)
             }
-            (None, Some([z, _])) => (D::from(z), D::zero()),
+            (None, Some([z, _])) => (z, D::zero()),
             _ => (D::zero(), D::zero()),
         }
     }
@@ -647,7 +650,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             // The vessel under thrust: Ż_{k+1} = Ṗ(t_{k+1}) + its surge velocity.
             (None, Some(drive), Some([p, pdot])) => {
-                let v = drive.second_half(v_half, (zeta_next, p.re(), pdot.re()), u_k1, h);
+                let v = drive.second_half(v_half, (zeta_next, p, pdot), u_k1, h);
                 state.tip_target = [zeta_next, v];
                 v
             }

@@ -13,4 +13,5 @@ mod design_study;
 mod design;
 mod design_hotspot;
 mod design_stackup;
+mod design_vessel;
 mod search;

@@ -155,6 +155,7 @@ fn nominal(s: &Scene, p: Parameter) -> f64 {
         Parameter::SoilModulus => s.soil.as_ref().unwrap().modulus,
         // k_j of interior joint j is the scene's beam.stiffness[j − 1] (model::build).
         Parameter::JointStiffness(j) => s.beam.stiffness[j - 1],
+        Parameter::VesselOffset => s.vessel.as_ref().map_or(0.0, |v| v.offset),
     }
 }
 

@@ -151,8 +151,8 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
     /// evaluation of one step's half steps (both read it at t_k + h/2), so the step reads it
     /// once per step for [`NodeDrag::implicit_half_step`] and
     /// [`NodeDrag::generalised_force_in`] instead of once per node, Newton iteration and pass.
-    /// With a table ([`NodeDrag::tabulate_water`]) whose row for the context's step holds this
-    /// very time, that row is copied instead.
+    /// With a table (`NodeDrag::tabulate_water`, filled once per MPC re-plan) whose row for
+    /// the context's step holds this very time, that row is copied instead.
     pub fn water_momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
         if let Some(t) = &self.table {
             let n = out.len();

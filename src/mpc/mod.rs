@@ -251,6 +251,7 @@
 
 mod baselines;
 pub mod forecast;
+mod hotspot_setting;
 pub mod observer;
 pub mod planning;
 mod plant;

@@ -215,36 +215,6 @@ impl MpcSettings {
 }
 
 impl MpcSettings {
-    /// The `[[fatigue.hotspot]]` of `scene` that [`MpcSettings::hotspot`] names (`None`
-    /// without one).
-    ///
-    /// # Errors
-    /// [`crate::error::MpcError::HotSpotUnknown`] for a name that is not one of `scene`'s hot
-    /// spots; [`crate::error::MpcError::HotSpotSpatial`] for a spatial scene.
-    pub fn hotspot_spec(
-        &self,
-        scene: &Scene,
-    ) -> Result<Option<crate::hotspots::HotSpotSpec>, crate::error::MpcError> {
-        let Some(name) = self.hotspot.as_deref() else {
-            return Ok(None);
-        };
-        if scene.is_spatial() {
-            return Err(crate::error::MpcError::HotSpotSpatial);
-        }
-        match scene.hotspots.iter().find(|h| h.name == name) {
-            Some(h) => Ok(Some(h.clone())),
-            None => Err(crate::error::MpcError::HotSpotUnknown {
-                name: name.to_string(),
-                known: scene
-                    .hotspots
-                    .iter()
-                    .map(|h| h.name.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }),
-        }
-    }
-
     /// What MPC plans on (with the effort penalty ρ·h·Σ u²): `objective` when given —
     /// `"power"`, the fatigue proxy Σ|M₀(t_k)|^m with m the first slope of the S-N curve of
     /// `scene`'s `[fatigue]` table ([`WellheadDamage::exponent`]); `"sum"`, c_sum (thesis eq.

@@ -276,7 +276,7 @@ def test_seeds_and_hot_spots_on_executors_equal_cli(cli: str, tmp_path: Path) ->
 
 
 # Two hot spots on the 60 m riser: a weld between joints (F1, SCF 1.3, DFF 3) and the top.
-HOTSPOTS = """
+HOTSPOTS_ACTED_ON = """
 [[fatigue.hotspot]]
 name = "weld"
 elevation = 25.0
@@ -295,7 +295,7 @@ def test_hotspot_equals_cli(cli: str, tmp_path: Path) -> None:
     moment, the totals are the weld's `hotspots` entry, and `settings.hotspot` names it; an
     unknown name raises InvalidArgumentError naming `hotspot`."""
     path = tmp_path / "h.toml"
-    path.write_text(SCENE + HOTSPOTS)
+    path.write_text(SCENE + HOTSPOTS_ACTED_ON)
     s = cb.Scene.from_file(path)
     ref = cli_json(cli, str(path), "--controller", "constant,pd", "--hotspot", "weld",
                    "--interval", "0.5", "--bound", "2e4", "--spin-up", "1.0", "--record", "9")

@@ -459,6 +459,25 @@ pub fn assess_histories(
     Ok(out)
 }
 
+/// β_p = asin q_{p,z}, pendulum p's angle from the vertical read from the node displacements
+/// z₁..zₙ (q_{p,z} = (z_p − z_{p−1})/l_p, z₀ = 0 at the base), 0 for p outside 0..n (the
+/// supports' vertical), planar, every pendulum pointing upward: the joint angle
+/// θ_j = β_j − β_{j−1} is then [`joint_moment`]'s atan2 angle exactly. The stage costs of the
+/// hot-spot objectives read it (`adjoint::HotSpotObjective`, the design's hot spot).
+pub fn pendulum_inclination<D: crate::base::Scalar>(
+    lengths: &[f64],
+    p: Option<usize>,
+    z: &[D],
+) -> D {
+    match p {
+        Some(p) if p < lengths.len() => {
+            let below = if p == 0 { D::zero() } else { z[p - 1] };
+            ((z[p] - below) / lengths[p]).asin()
+        }
+        _ => D::zero(),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -29,7 +29,7 @@ use std::sync::Arc;
 use super::objective::{Objective, Stage};
 use crate::base::Scalar;
 use crate::error::{MpcError, Result};
-use crate::hotspots::interpolation_joints;
+use crate::hotspots::{interpolation_joints, pendulum_inclination};
 use crate::model::Chain;
 use crate::scene::Scene;
 
@@ -93,13 +93,7 @@ impl HotSpotObjective {
 
     /// β_p = asin q_{p,z} of pendulum p (0 outside 0..n, the supports' vertical).
     fn beta<D: Scalar>(&self, p: Option<usize>, z: &[D]) -> D {
-        match p {
-            Some(p) if p < self.lengths.len() => {
-                let below = if p == 0 { D::zero() } else { z[p - 1] };
-                ((z[p] - below) / self.lengths[p]).asin()
-            }
-            _ => D::zero(),
-        }
+        pendulum_inclination(&self.lengths, p, z)
     }
 
     /// The hot spot's moment M = Σ c_i (β_i − β_{i−1}) from the node displacements z₁..zₙ

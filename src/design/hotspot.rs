@@ -39,7 +39,9 @@ use crate::adjoint::{ControlProblem, Objective, Stage};
 use crate::base::Scalar;
 use crate::fatigue::{DamageGradient, MomentMeasure, WellheadDamage};
 use crate::fatigue_study::StudyError;
-use crate::hotspots::{interpolation_joints, joint_moment, HotSpotSpec, JointInterpolation};
+use crate::hotspots::{
+    interpolation_joints, joint_moment, pendulum_inclination, HotSpotSpec, JointInterpolation,
+};
 use crate::optimize::any::scene_start;
 use crate::scene::Scene;
 use crate::simulate::{simulate_streaming, StepObserver, StepView, StreamControls, StreamError};
@@ -60,13 +62,7 @@ struct LinearisedHotSpot {
 impl LinearisedHotSpot {
     /// β_p = asin q_{p,z} of pendulum p (0 for p outside 0..n, the supports' vertical).
     fn beta<D: Scalar>(&self, p: Option<usize>, z: &[D]) -> D {
-        match p {
-            Some(p) if p < self.lengths.len() => {
-                let below = if p == 0 { D::zero() } else { z[p - 1] };
-                ((z[p] - below) / self.lengths[p]).asin()
-            }
-            _ => D::zero(),
-        }
+        pendulum_inclination(&self.lengths, p, z)
     }
 
     /// θ_i = β_i − β_{i−1} of joint i (0-based: joint i links pendulums i − 1 and i).

@@ -105,8 +105,8 @@ use crate::fatigue::{
     ScatterCell, SeaState, WellheadDamage,
 };
 use crate::mpc::{
-    interval_steps, run_closed_loop, ConstantForce, Controller, Mpc, MpcError, MpcOptions, PdLaw,
-    PdTuning,
+    interval_steps, run_closed_loop, ConstantForce, Controller, Force2, Mpc, MpcError, MpcOptions,
+    PdLaw, PdTuning,
 };
 use crate::optimize::{minimize, Bounds, OptimOptions};
 use crate::scene::{ObjectiveKind, Scene, Support};
@@ -638,6 +638,12 @@ pub fn run_controller(
     let (interval, effort) = (settings.interval, settings.mpc.effort);
     let bound = control_bound(scene, settings);
     let thrust_scene = scene.thrust().is_some();
+    // The study's controllers and records are planar (M₀ and a force in the plane).
+    if kind.is_feedback() {
+        if let Some(key) = scene.spatial_key() {
+            return Err(crate::Error::NeedsSpatialModel { key });
+        }
+    }
     let closed = |c: &mut dyn Controller, force, gains| {
         let r = run_closed_loop(scene, interval, c)?;
         Ok(ControlledRecord {
@@ -684,12 +690,12 @@ pub fn run_controller(
             } else {
                 ConstantForce::best(&training, bound, effort)?.0
             };
-            let force = c.u;
+            let force = c.u.z;
             closed(&mut c, Some(force), None)
         }
         ControllerKind::Pd => {
             let mut pd = pd_law(scene, settings)?;
-            let gains = [pd.bias, pd.kp, pd.kd];
+            let gains = [pd.bias.z, pd.kp, pd.kd];
             closed(&mut pd, None, Some(gains))
         }
         ControllerKind::Mpc => {
@@ -742,10 +748,11 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
     let bound = control_bound(scene, settings);
     if let Some([bias, kp, kd]) = settings.pd_gains {
         return Ok(PdLaw {
-            bias,
+            bias: Force2::z(bias),
             kp,
             kd,
             bound,
+            spatial: false,
         });
     }
     let training = training_scene(scene, settings)?;
@@ -762,10 +769,11 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
     let r = minimize(&scaled, &pd::PD_START, &opts)?;
     let [bias, kp, kd] = scaled.scales.gains(&r.theta);
     Ok(PdLaw {
-        bias,
+        bias: Force2::z(bias),
         kp,
         kd,
         bound,
+        spatial: false,
     })
 }
 

@@ -4,6 +4,8 @@
 //! run with `cargo test --test mpc FILE::` (the file name without `.rs`).
 
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
+#[path = "../common/vessel_riser.rs"]
+mod vessel_riser;
 #[path = "../common/wave_riser4.rs"]
 mod wave_riser4;
 
@@ -12,5 +14,6 @@ mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
 mod observe;
+mod one_loop;
 mod plan_prediction;
 mod thrust_plan_step;

@@ -56,25 +56,7 @@ fn bench_replan(c: &mut Criterion) {
         plant.advance().expect("step");
     }
     plant.update_state_before_kick().expect("projection");
-    let moment_rate = plant.moment_rate();
-    let obs = Observation {
-        k: plant.step_index(),
-        t: plant.time(),
-        h: plant.h(),
-        steps: plant.steps(),
-        interval: INTERVAL,
-        state: plant.state(),
-        state_before_kick: plant.state_before_kick(),
-        moment: plant.moment(),
-        moment_rate,
-        tip: plant.tip(),
-        control: 0.0,
-        moment_x: 0.0,
-        moment_rate_x: 0.0,
-        control_x: 0.0,
-        previous_state: plant.previous_state(),
-        previous_control: plant.previous_control(),
-    };
+    let obs = Observation::of_plant(&mut plant, INTERVAL);
     for (solver, name) in SOLVERS {
         for horizon in [1.0, 2.0, 3.0, 4.0] {
             let mut mpc = Mpc::new(&s, INTERVAL, options(horizon, solver)).expect("mpc");

@@ -59,8 +59,8 @@
 use chainbeam::ocp::{self, Curvature, OcpOptions};
 use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 use chainbeam::{
-    catalogue, simulate_with_controls, BendingObjective, ControlProblem, Parametrisation,
-    PerStepControl, PiecewiseControl, Result, Scene,
+    catalogue, simulate, BendingObjective, ControlProblem, Parametrisation, PerStepControl,
+    PiecewiseControl, Result, Scene, SimulateInput,
 };
 use std::time::Instant;
 
@@ -89,7 +89,7 @@ enum RunError {
 }
 
 fn moments(scene: &Scene, u: &[f64]) -> Result<(f64, f64)> {
-    let t = simulate_with_controls(scene, u)?;
+    let t = simulate(SimulateInput::new(scene).controls(u))?;
     let sum: f64 = t.moment().iter().map(|m| m * m).sum();
     let max = t.moment().iter().fold(0.0f64, |a, m| a.max(m.abs()));
     Ok((sum, max))

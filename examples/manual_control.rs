@@ -14,7 +14,7 @@
 //!
 //! `cargo run --release --example manual_control`
 
-use chainbeam::{catalogue, simulate_with_controls, Result, Scene};
+use chainbeam::{catalogue, simulate, Result, Scene, SimulateInput};
 use std::time::Instant;
 
 const THESIS: [f64; 10] = [
@@ -23,7 +23,7 @@ const THESIS: [f64; 10] = [
 
 fn mean_abs_moment(scene: &Scene, u: f64) -> Result<f64> {
     let n = scene.time.steps;
-    let traj = simulate_with_controls(scene, &vec![u; n + 1])?;
+    let traj = simulate(SimulateInput::new(scene).controls(&vec![u; n + 1]))?;
     Ok(traj.moment().iter().map(|m| m.abs()).sum::<f64>() / n as f64)
 }
 
@@ -108,7 +108,7 @@ fn run() -> Result<()> {
         "largest |u - u_thesis| = {worst:.4} N (the thesis searched by hand on a 0.01 N grid)"
     );
     let s5 = catalogue::riser_dissipative(5);
-    let traj = simulate_with_controls(&s5, &vec![-1.5; s5.time.steps + 1])?;
+    let traj = simulate(SimulateInput::new(&s5).controls(&vec![-1.5; s5.time.steps + 1]))?;
     let n = s5.time.steps;
     let tail: Vec<f64> = (n / 2..=n).map(|k| traj.positions(k)[9][2]).collect();
     let mean_tip = tail.iter().sum::<f64>() / tail.len() as f64;

@@ -66,8 +66,8 @@ fn main() -> chainbeam::Result<()> {
         first_step: 0.01,
         ..OptimOptions::default()
     };
-    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
-    let gains = (pd.bias, pd.kp, pd.kd);
+    let (mut pd, _) = PdLaw::tune(&tuning, &[0.0; 3], &opts)?;
+    let gains = (pd.bias.z, pd.kp, pd.kd);
     let pd = run_closed_loop(&scene, INTERVAL, &mut pd)?.summary;
     let mut perfect = Mpc::new(&scene, INTERVAL, options.clone())?;
     let perfect = run_closed_loop(&scene, INTERVAL, &mut perfect)?.summary;

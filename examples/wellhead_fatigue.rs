@@ -385,12 +385,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if kind == ControllerKind::Pd {
             // One design for every cell, tuned on the scene's own sea (module docs).
             let pd = pd_law(&scene, &settings)?;
-            settings.pd_gains = Some([pd.bias, pd.kp, pd.kd]);
+            settings.pd_gains = Some([pd.bias.z, pd.kp, pd.kd]);
             pd_gains = settings.pd_gains;
             println!(
                 "pd gains (tuned on the first {:?} s of the scene's sea): u_b = {:.4e} N, K_p = \
                  {:.4e} N/(N·m), K_d = {:.4e} N·s/(N·m)",
-                settings.pd_training, pd.bias, pd.kp, pd.kd
+                settings.pd_training, pd.bias.z, pd.kp, pd.kd
             );
         }
         let input = StudyInput {

@@ -375,7 +375,7 @@ pub fn mpc_riser() -> Scene {
 /// at node 5 coming from another direction, 60° from +z toward +x (F(t) = (2 N sin(2π t/8 s) +
 /// 0.5 N sin(2π t/5.3 s + 1)) (sin 60°, cos 60°), ramped in over 8 s), h = 0.01 s, N = 3000
 /// (t ∈ [0, 30] s); a 2-axis control at node 10 (the platform; a spatial closed loop,
-/// [`crate::mpc::run_closed_loop_spatial`], decides (u_x, u_z)
+/// [`crate::mpc::run_closed_loop`] in the spatial model, decides (u_x, u_z)
 /// every interval), objective c_sum = Σ |M₀(t_k)|². Spatial: the loads have x components.
 pub fn spatial_mpc_riser() -> Scene {
     let sea = mpc_sea();

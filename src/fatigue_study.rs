@@ -117,8 +117,8 @@ use crate::fatigue::{
     ScatterCell, SeaState, WellheadDamage,
 };
 use crate::mpc::{
-    interval_steps, run_closed_loop, ConstantForce, Controller, Mpc, MpcError, MpcOptions, PdLaw,
-    PdTuning,
+    interval_steps, run_closed_loop, ConstantForce, Controller, Force2, Mpc, MpcError, MpcOptions,
+    PdLaw, PdTuning,
 };
 use crate::optimize::{minimize, Bounds, OptimOptions};
 use crate::scene::{ObjectiveKind, Scene, Support};
@@ -650,6 +650,12 @@ pub fn run_controller(
     let (interval, effort) = (settings.interval, settings.mpc.effort);
     let bound = control_bound(scene, settings);
     let thrust_scene = scene.thrust().is_some();
+    // The study's controllers and records are planar (M₀ and a force in the plane).
+    if kind.is_feedback() {
+        if let Some(key) = scene.spatial_key() {
+            return Err(crate::Error::NeedsSpatialModel { key });
+        }
+    }
     let closed = |c: &mut dyn Controller, force, gains| {
         let r = run_closed_loop(scene, interval, c)?;
         Ok(ControlledRecord {
@@ -698,12 +704,12 @@ pub fn run_controller(
             } else {
                 ConstantForce::best(&training, bound, effort)?.0
             };
-            let force = c.u;
+            let force = c.u.z;
             closed(&mut c, Some(force), None)
         }
         ControllerKind::Pd => {
             let mut pd = pd_law(scene, settings)?;
-            let gains = [pd.bias, pd.kp, pd.kd];
+            let gains = [pd.bias.z, pd.kp, pd.kd];
             match hot_spot_objective(scene, settings)? {
                 Some(spot) => closed(&mut HotSpotPd { law: pd, spot }, None, Some(gains)),
                 None => closed(&mut pd, None, Some(gains)),
@@ -753,14 +759,15 @@ impl Controller for HotSpotPd {
     fn name(&self) -> String {
         "pd".into()
     }
-    fn control(&mut self, obs: &crate::mpc::Observation<'_>) -> crate::Result<f64> {
+    fn control(&mut self, obs: &crate::mpc::Observation<'_>) -> crate::Result<Force2> {
+        let obs = obs.in_model::<2>()?;
         let m = self.spot.moment_of_attitudes(&obs.state.q);
         let rate = match obs.previous_state {
             Some(prev) => (m - self.spot.moment_of_attitudes(&prev.q)) / obs.h,
             None => 0.0,
         };
-        let u = self.law.bias - self.law.kp * m - self.law.kd * rate;
-        Ok(u.clamp(-self.law.bound, self.law.bound))
+        let u = self.law.bias.z - self.law.kp * m - self.law.kd * rate;
+        Ok(Force2::z(u.clamp(-self.law.bound, self.law.bound)))
     }
 }
 
@@ -791,7 +798,10 @@ pub fn best_constant_at_hot_spot(
         ..OptimOptions::default()
     };
     let r = minimize(&problem, &[0.0], &options)?;
-    Ok(ConstantForce { u: r.theta[0] })
+    Ok(ConstantForce {
+        u: Force2::z(r.theta[0]),
+        spatial: false,
+    })
 }
 
 /// The per-step controls u_0..u_N a scene's `[control]` applies (none: zeros).
@@ -837,10 +847,11 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
     let bound = control_bound(scene, settings);
     if let Some([bias, kp, kd]) = settings.pd_gains {
         return Ok(PdLaw {
-            bias,
+            bias: Force2::z(bias),
             kp,
             kd,
             bound,
+            spatial: false,
         });
     }
     let training = training_scene(scene, settings)?;
@@ -862,10 +873,11 @@ pub fn pd_law(scene: &Scene, settings: &ControlSettings) -> crate::Result<PdLaw>
     let r = minimize(&scaled, &pd::PD_START, &opts)?;
     let [bias, kp, kd] = scaled.scales.gains(&r.theta);
     Ok(PdLaw {
-        bias,
+        bias: Force2::z(bias),
         kp,
         kd,
         bound,
+        spatial: false,
     })
 }
 

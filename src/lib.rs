@@ -23,6 +23,10 @@
 //! assert!(drift < 1e-3); // RATTLE is symplectic: no energy drift
 //! # Ok::<(), chainbeam::Error>(())
 //! ```
+//! The same front door takes given per-step controls instead of the scene's own:
+//! `simulate(SimulateInput::new(&scene).controls(&u))`, or 2-axis ones (the spatial model)
+//! `simulate(SimulateInput::new(&scene).controls_xz(&ux, &uz))`; the result reads the same in
+//! either model ([`SceneTrajectory`]).
 //!
 //! ## Loads in any transverse direction, waves and load histories
 //! A load with an x component makes the scene spatial and `simulate` runs the spatial model; a
@@ -117,7 +121,9 @@
 //!   Riccati recursion and box constraints on the forces.
 //! - [`mpc`]: closed-loop control: a plant stepped with the applied control, receding-horizon
 //!   control on the [`ocp`] solver (real-time iterations, warm starts, plant/model mismatch),
-//!   and the baselines (no control, best constant force, tuned PD law on M₀).
+//!   and the baselines (no control, best constant force, tuned PD law on M₀); one
+//!   [`mpc::run_closed_loop`] for both models, every [`mpc::Controller`] deciding a 2-axis
+//!   [`mpc::Force2`] (u_x = 0 in a planar scene).
 //! - [`statics`]: static equilibrium, solved directly (planar and spatial scenes).
 //! - [`fatigue`]: wellhead fatigue: hot-spot stress from M₀, rainflow counting (ASTM E1049-85),
 //!   DNV-RP-C203 S-N curves, Miner's rule, annual damage and life, scatter diagrams, and the
@@ -184,8 +190,7 @@ pub use simulate::{
 };
 pub use simulate::{
     piecewise_constant_controls, scene_controls, scene_controls_x, simulate, simulate_chain,
-    simulate_with_controls, simulate_with_controls_xz, SceneTrajectory, Trajectory,
-    TrajectoryColumns,
+    SceneTrajectory, SimulateInput, Trajectory, TrajectoryColumns,
 };
 
 /// The README's code runs as a doctest.

@@ -204,11 +204,15 @@ fn try_with_capacity<T>(len: usize, too_large: &Error) -> Result<Vec<T>> {
 
 /// The trajectory of a scene in the model it needs: planar (`DIM = 2`) when every load lies in
 /// the yz-plane, spatial (`DIM = 3`) when some load has an x component ([`Scene::is_spatial`]).
-/// What does not depend on the model (time grid, energy, M₀, controls, node positions as
-/// (x, y, z)) is read through the methods; [`SceneTrajectory::as_planar`] and
-/// [`SceneTrajectory::as_spatial`] give the attitudes and momenta.
+/// Everything is read through the methods, in either model (time grid, energy, M₀ and M₀ₓ,
+/// the controls, node positions as (x, y, z)); [`SceneTrajectory::as_planar`] and
+/// [`SceneTrajectory::as_spatial`] give the model's own [`Trajectory`] (attitudes and momenta).
 #[derive(Clone, Debug)]
-pub enum SceneTrajectory {
+pub struct SceneTrajectory(Model);
+
+/// The trajectory inside a [`SceneTrajectory`], in the model's dimension.
+#[derive(Clone, Debug)]
+enum Model {
     /// The planar model's trajectory (qᵢ ∈ S¹ in the yz-plane; x = 0).
     Planar(Trajectory<f64, 2>),
     /// The spatial model's trajectory (qᵢ ∈ S²).
@@ -218,17 +222,31 @@ pub enum SceneTrajectory {
 /// Calls `$body` on the trajectory inside a [`SceneTrajectory`], whatever its dimension.
 macro_rules! either {
     ($s:expr, $t:ident => $body:expr) => {
-        match $s {
-            SceneTrajectory::Planar($t) => $body,
-            SceneTrajectory::Spatial($t) => $body,
+        match &$s.0 {
+            Model::Planar($t) => $body,
+            Model::Spatial($t) => $body,
         }
     };
+}
+
+impl From<Trajectory<f64, 2>> for SceneTrajectory {
+    /// A planar model's trajectory.
+    fn from(t: Trajectory<f64, 2>) -> Self {
+        SceneTrajectory(Model::Planar(t))
+    }
+}
+
+impl From<Trajectory<f64, 3>> for SceneTrajectory {
+    /// A spatial model's trajectory.
+    fn from(t: Trajectory<f64, 3>) -> Self {
+        SceneTrajectory(Model::Spatial(t))
+    }
 }
 
 impl SceneTrajectory {
     /// Whether the spatial model ran.
     pub fn is_spatial(&self) -> bool {
-        matches!(self, SceneTrajectory::Spatial(_))
+        matches!(self.0, Model::Spatial(_))
     }
     /// The dimension of the model: 2 (planar) or 3 (spatial).
     pub fn dim(&self) -> usize {
@@ -298,16 +316,16 @@ impl SceneTrajectory {
     }
     /// The planar trajectory, if the planar model ran.
     pub fn as_planar(&self) -> Option<&Trajectory<f64, 2>> {
-        match self {
-            SceneTrajectory::Planar(t) => Some(t),
-            SceneTrajectory::Spatial(_) => None,
+        match &self.0 {
+            Model::Planar(t) => Some(t),
+            Model::Spatial(_) => None,
         }
     }
     /// The spatial trajectory, if the spatial model ran.
     pub fn as_spatial(&self) -> Option<&Trajectory<f64, 3>> {
-        match self {
-            SceneTrajectory::Spatial(t) => Some(t),
-            SceneTrajectory::Planar(_) => None,
+        match &self.0 {
+            Model::Spatial(t) => Some(t),
+            Model::Planar(_) => None,
         }
     }
     /// The planar trajectory, for code written for the planar model.
@@ -315,84 +333,205 @@ impl SceneTrajectory {
     /// # Errors
     /// [`Error::NeedsSpatialModel`] if the scene was spatial.
     pub fn into_planar(self) -> Result<Trajectory<f64, 2>> {
-        match self {
-            SceneTrajectory::Planar(t) => Ok(t),
-            SceneTrajectory::Spatial(_) => Err(Error::NeedsSpatialModel {
+        match self.0 {
+            Model::Planar(t) => Ok(t),
+            Model::Spatial(_) => Err(Error::NeedsSpatialModel {
                 key: "loads.point".to_string(),
             }),
         }
     }
 }
 
-/// Simulates a scene in `f64` with its own controls, in the model it needs: the planar one when
-/// all loads lie in the yz-plane and the control (if any) acts along z (every thesis scene), the
-/// spatial one otherwise ([`Scene::is_spatial`]; docs/scene-format.md "model no more than a
-/// scene needs").
+/// What [`simulate()`] runs: a scene, with its own `[control]` or with given per-step controls
+/// ([`StreamControls`]: u_z only, or 2-axis (u_x, u_z)). A `&Scene` is the scene with its own
+/// controls, so `simulate(&scene)` reads as before.
+#[derive(Clone, Copy, Debug)]
+pub struct SimulateInput<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The controls it runs with.
+    pub controls: StreamControls<'a>,
+}
+
+impl<'a> SimulateInput<'a> {
+    /// `scene` with its own `[control]` (none: zero).
+    pub fn new(scene: &'a Scene) -> Self {
+        SimulateInput {
+            scene,
+            controls: StreamControls::Scene,
+        }
+    }
+
+    /// The run with the per-step controls u_0..u_N (N + 1 values) at the scene's control node
+    /// (default: the tip), in the model the scene needs.
+    pub fn controls(self, controls: &'a [f64]) -> Self {
+        SimulateInput {
+            controls: StreamControls::Given(controls),
+            ..self
+        }
+    }
+
+    /// The run with per-step 2-axis controls (u_{x,k}, u_{z,k}), N + 1 values each, at the
+    /// scene's control node (default: the tip), in the spatial model.
+    pub fn controls_xz(self, x: &'a [f64], z: &'a [f64]) -> Self {
+        SimulateInput {
+            controls: StreamControls::GivenXz { x, z },
+            ..self
+        }
+    }
+}
+
+impl<'a> From<&'a Scene> for SimulateInput<'a> {
+    fn from(scene: &'a Scene) -> Self {
+        SimulateInput::new(scene)
+    }
+}
+
+/// Simulates a scene in `f64` from the straight beam at rest, in the model it needs: the
+/// planar one when all loads lie in the yz-plane and the control (if any) acts along z (every
+/// thesis scene), the spatial one otherwise ([`Scene::is_spatial`]; docs/scene-format.md
+/// "model no more than a scene needs") or for 2-axis controls. `input` is a `&Scene` (its own
+/// controls) or a [`SimulateInput`] with given controls:
+/// ```
+/// use chainbeam::{catalogue, simulate, SimulateInput};
+/// let scene = catalogue::riser(5); // the thesis's riser, its load at node 5, control at the tip
+/// let free = simulate(&scene)?;
+/// let u = vec![-1.5; scene.time.steps + 1];
+/// let pushed = simulate(SimulateInput::new(&scene).controls(&u))?;
+/// let (m0, m1) = (free.moment()[scene.time.steps], pushed.moment()[scene.time.steps]);
+/// assert!(m0 != m1 && !pushed.is_spatial());
+/// let ux = vec![0.5; scene.time.steps + 1]; // a 2-axis control runs the spatial model
+/// let turned = simulate(SimulateInput::new(&scene).controls_xz(&ux, &u))?;
+/// assert!(turned.is_spatial() && turned.moment_x()[scene.time.steps] != 0.0);
+/// # Ok::<(), chainbeam::Error>(())
+/// ```
+/// The run is the stream of [`simulate_streaming`] with a recorder observing it: every number is
+/// the streamed run's, stored.
 ///
 /// # Errors
 /// [`Scene::check_stored_trajectory`]'s (the trajectory over [`MAX_TRAJECTORY_BYTES`], naming
-/// `time.steps`) before anything of size N is allocated; then as [`simulate_chain`].
-pub fn simulate(scene: &Scene) -> Result<SceneTrajectory> {
+/// `time.steps`) before anything of size N is allocated; [`Error::WrongLength`] or
+/// [`Error::NotFinite`] naming `controls` for given controls of the wrong length or not finite;
+/// [`Error::TrajectoryTooLarge`] if the allocator refuses the trajectory; the step's errors.
+pub fn simulate<'a>(input: impl Into<SimulateInput<'a>>) -> Result<SceneTrajectory> {
+    let SimulateInput { scene, controls } = input.into();
     scene.check_stored_trajectory()?;
-    let ux = scene_controls_x(scene);
-    simulate_with_controls_at(scene, (&scene_controls(scene), &ux), false)
-}
-
-/// Simulates a scene with explicit per-step controls u_0..u_N (`controls.len()` = N + 1) at the
-/// scene's control node (default: the tip), in the model it needs (see [`simulate()`]).
-///
-/// # Errors
-/// As [`simulate()`].
-pub fn simulate_with_controls(scene: &Scene, controls: &[f64]) -> Result<SceneTrajectory> {
-    scene.check_stored_trajectory()?;
-    simulate_with_controls_at(scene, (controls, &[]), true)
-}
-
-/// Simulates a scene with explicit per-step 2-axis controls (u_{x,k}, u_k), k = 0..=N
-/// (`controls_x` and `controls` of length N + 1 each), at the scene's control node (default: the
-/// tip), in the spatial model.
-///
-/// # Errors
-/// As [`simulate()`]; [`Error::WrongLength`] if `controls_x` is not N + 1 long.
-pub fn simulate_with_controls_xz(
-    scene: &Scene,
-    controls_x: &[f64],
-    controls: &[f64],
-) -> Result<SceneTrajectory> {
-    scene.check_stored_trajectory()?;
-    check_controls(controls_x, scene.time.steps)?;
-    let mut chain = Chain::<f64, 3>::from_scene(scene)?;
-    if chain.control_node().is_none() {
-        chain.set_control_node(Some(scene.n()))?;
-    }
-    chain.set_control_x(controls_x)?;
-    let t = simulate_chain(chain, scene.time.step, scene.time.steps, controls)?;
-    Ok(SceneTrajectory::Spatial(t))
-}
-
-fn simulate_with_controls_at(
-    scene: &Scene,
-    (controls, controls_x): (&[f64], &[f64]),
-    tip_default: bool,
-) -> Result<SceneTrajectory> {
-    fn run<const DIM: usize>(
+    fn stored<const DIM: usize>(
         scene: &Scene,
-        (controls, controls_x): (&[f64], &[f64]),
-        tip_default: bool,
+        controls: StreamControls<'_>,
     ) -> Result<Trajectory<f64, DIM>> {
-        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
-        if tip_default && chain.control_node().is_none() {
-            chain.set_control_node(Some(scene.n()))?;
+        let mut recorder = Recorder::<DIM> {
+            h: scene.time.step,
+            steps: scene.time.steps,
+            trajectory: None,
+        };
+        match simulate_streaming(scene, controls, &mut recorder) {
+            Ok(_) => {}
+            Err(StreamError::Simulation(e) | StreamError::Observer(e)) => return Err(e),
         }
-        chain.set_control_x(controls_x)?;
-        simulate_chain(chain, scene.time.step, scene.time.steps, controls)
+        recorder.trajectory.ok_or_else(|| model_mismatch(DIM))
     }
-    let u = (controls, controls_x);
-    Ok(if scene.is_spatial() {
-        SceneTrajectory::Spatial(run::<3>(scene, u, tip_default)?)
-    } else {
-        SceneTrajectory::Planar(run::<2>(scene, u, tip_default)?)
-    })
+    // The model simulate_streaming runs: the spatial one for 2-axis controls or a spatial scene.
+    Ok(
+        if matches!(controls, StreamControls::GivenXz { .. }) || scene.is_spatial() {
+            SceneTrajectory(Model::Spatial(stored::<3>(scene, controls)?))
+        } else {
+            SceneTrajectory(Model::Planar(stored::<2>(scene, controls)?))
+        },
+    )
+}
+
+/// The error of a recorder whose model is not the stream's (not met: both follow the scene).
+fn model_mismatch(dim: usize) -> Error {
+    Error::WrongLength {
+        name: "dimension",
+        expected: dim,
+        got: 5 - dim,
+    }
+}
+
+/// Stores the states of a streamed run into a [`Trajectory`] of the model's dimension, reserved
+/// fallibly at the first state (when the chain's size is known) for all N + 1.
+struct Recorder<const DIM: usize> {
+    h: f64,
+    steps: usize,
+    trajectory: Option<Trajectory<f64, DIM>>,
+}
+
+impl<const DIM: usize> Recorder<DIM> {
+    /// The empty trajectory of `chain` with room for the run.
+    fn reserve(&self, chain: &Chain<f64, DIM>) -> Result<Trajectory<f64, DIM>> {
+        let (n, nc, steps) = (chain.n(), chain.n_constraints(), self.steps);
+        let bytes = trajectory_bytes::<f64, DIM>(n, nc, steps);
+        let e = &Error::TrajectoryTooLarge {
+            n,
+            steps,
+            bytes,
+            max_steps: max_trajectory_steps::<f64, DIM>(n, nc),
+            refused: bytes <= MAX_TRAJECTORY_BYTES,
+        };
+        if bytes > MAX_TRAJECTORY_BYTES {
+            return Err(e.clone());
+        }
+        let (states, multipliers) = ((steps + 1) * n, (steps + 1) * nc);
+        let spatial = if DIM == 3 { steps + 1 } else { 0 };
+        Ok(Trajectory {
+            n,
+            n_constraints: nc,
+            h: self.h,
+            steps,
+            q: try_with_capacity(states, e)?,
+            p: try_with_capacity(states, e)?,
+            lambda: try_with_capacity(multipliers, e)?,
+            mu: try_with_capacity(multipliers, e)?,
+            energy: try_with_capacity(steps + 1, e)?,
+            moment: try_with_capacity(steps + 1, e)?,
+            controls: try_with_capacity(steps + 1, e)?,
+            moment_x: try_with_capacity(spatial, e)?,
+            controls_x: try_with_capacity(if chain.has_control_x() { spatial } else { 0 }, e)?,
+            tip_target: try_with_capacity(steps + 1, e)?,
+            stats: try_with_capacity(steps, e)?,
+            lengths: chain.lengths().to_vec(),
+        })
+    }
+}
+
+impl<const DIM: usize> StepObserver for Recorder<DIM> {
+    type Error = Error;
+
+    fn observe<const D: usize>(&mut self, step: &mut StepView<'_, D>) -> Result<()> {
+        let chain: &dyn std::any::Any = step.chain();
+        if let (0, Some(chain)) = (step.k(), chain.downcast_ref::<Chain<f64, DIM>>()) {
+            self.trajectory = Some(self.reserve(chain)?);
+        }
+        let t = self
+            .trajectory
+            .as_mut()
+            .map(|t| t as &mut dyn std::any::Any);
+        let Some(t) = t.and_then(|t| t.downcast_mut::<Trajectory<f64, D>>()) else {
+            return Err(model_mismatch(DIM));
+        };
+        t.q.extend_from_slice(step.q());
+        t.p.extend_from_slice(step.p());
+        t.lambda.extend_from_slice(step.lambda());
+        t.mu.extend_from_slice(step.mu());
+        let e = step.energy();
+        t.energy.push(e);
+        let [mx, mz] = step.moment_vector();
+        t.moment.push(mz);
+        t.controls.push(step.control());
+        if D == 3 {
+            t.moment_x.push(mx);
+        }
+        if step.chain().has_control_x() {
+            t.controls_x.push(step.control_x());
+        }
+        t.tip_target.push(step.tip_target());
+        if let Some(s) = step.stats() {
+            t.stats.push(s);
+        }
+        Ok(())
+    }
 }
 
 /// Simulates `chain` from the straight beam at rest for `steps` steps of size `h` with controls

@@ -40,8 +40,8 @@ use super::thesis;
 use chainbeam::adjoint::FinalMomentResidual as FinalMoment;
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::{
-    catalogue, simulate_with_controls, BendingObjective, Chain, ControlProblem, Parametrisation,
-    PerStepControl, Result, Scene,
+    catalogue, simulate, BendingObjective, Chain, ControlProblem, Parametrisation, PerStepControl,
+    Result, Scene, SimulateInput,
 };
 use std::time::Instant;
 
@@ -118,7 +118,7 @@ fn fold_note(angle: f64) -> String {
 
 /// Largest joint angle (degrees) over the trajectory driven by per-step controls `u`.
 fn max_joint_angle_deg(scene: &Scene, u: &[f64]) -> Result<f64> {
-    let traj = simulate_with_controls(scene, u)?.into_planar()?;
+    let traj = simulate(SimulateInput::new(scene).controls(u))?.into_planar()?;
     let chain = Chain::<f64, 2>::from_scene(scene)?;
     Ok((0..=traj.steps())
         .map(|k| chain.max_joint_angle(traj.q(k)))

@@ -51,7 +51,7 @@ fn fig_horizon(ctx: &Ctx) -> Res<Made> {
         first_step: 0.01,
         ..OptimOptions::default()
     };
-    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
+    let (mut pd, _) = PdLaw::tune(&tuning, &[0.0; 3], &opts)?;
     let pd = run_closed_loop(&scene, INTERVAL, &mut pd)?.summary.c_sum;
     let horizons: &[f64] = if ctx.quick {
         &[1.0, 3.0]
@@ -142,7 +142,7 @@ fn fig_mpc(ctx: &Ctx) -> Res<Made> {
         first_step: 0.01,
         ..OptimOptions::default()
     };
-    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
+    let (mut pd, _) = PdLaw::tune(&tuning, &[0.0; 3], &opts)?;
     let pd = run_closed_loop(&scene, INTERVAL, &mut pd)?;
     let perfect = run_closed_loop(
         &scene,

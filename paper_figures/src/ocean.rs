@@ -13,8 +13,8 @@ use crate::{Ctx, Entry, Made};
 use chainbeam::optimize::{minimize, Method, OptimOptions};
 use chainbeam::scene::Current;
 use chainbeam::{
-    catalogue, simulate, simulate_with_controls_xz, BendingObjective, ControlProblem, Harmonic,
-    Parametrisation, PiecewiseControl, PointLoad, Scene, SceneTrajectory,
+    catalogue, simulate, BendingObjective, ControlProblem, Harmonic, Parametrisation,
+    PiecewiseControl, PointLoad, Scene, SceneTrajectory, SimulateInput,
 };
 
 pub fn entries() -> Vec<Entry> {
@@ -152,7 +152,7 @@ fn riser_current_wave_control(ctx: &Ctx) -> Res<Made> {
     let r = minimize(&problem, &vec![0.0; 2 * pieces], &opts)?;
     let (ux, uz) = (problem.controls_x(&r.theta)?, problem.controls(&r.theta)?);
     let free = simulate(&scene)?;
-    let ctrl = simulate_with_controls_xz(&scene, &ux, &uz)?;
+    let ctrl = simulate(SimulateInput::new(&scene).controls_xz(&ux, &uz))?;
     let j0 = problem.value(&vec![0.0; 2 * pieces])?;
     let snaps: Vec<usize> = (1..=4).map(|i| i * steps / 4).collect();
     let mut panels = Vec::new();

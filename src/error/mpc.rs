@@ -41,6 +41,16 @@ pub enum MpcError {
         /// The loop's interval \[s\].
         run: f64,
     },
+    /// The controller plans in one model (planar or spatial) and the loop observes the plant in
+    /// the other (a planar [`crate::mpc::Mpc`] on a spatial scene: build it on a spatial model
+    /// scene, and the loop runs the spatial plant).
+    #[error("the controller plans in the {controller} model, the plant runs in the {plant} model")]
+    ControllerModel {
+        /// The controller's model ("planar" or "spatial").
+        controller: &'static str,
+        /// The plant's model ("planar" or "spatial").
+        plant: &'static str,
+    },
     /// A fixed horizon that is not a positive whole number of control intervals.
     #[error(
         "must be a positive whole number of control intervals of {interval} s, got {horizon} s"
@@ -218,7 +228,7 @@ impl MpcError {
             | MpcError::RunNotWhole { .. }
             | MpcError::IntervalMismatch { .. } => "interval",
             MpcError::HorizonNotWhole { .. } => "horizon",
-            MpcError::ModelSize { .. } => "model",
+            MpcError::ModelSize { .. } | MpcError::ControllerModel { .. } => "model",
             MpcError::PlanWithoutPipe | MpcError::PlanPendulums { .. } | MpcError::PlanSupport => {
                 "plan_pendulums"
             }

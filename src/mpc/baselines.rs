@@ -3,7 +3,7 @@
 
 use num_dual::DualSVec64;
 
-use super::{interval_steps, Controller, Observation, Plant, SpatialController};
+use super::{interval_steps, Controller, Force2, Observation, Plant};
 use crate::adjoint::{BendingObjective, ControlProblem, HotSpotObjective, PiecewiseControl};
 use crate::base::Scalar;
 use crate::error::{Error, MpcError, Requirement, Result};
@@ -19,90 +19,68 @@ impl Controller for NoControl {
     fn name(&self) -> String {
         "none".into()
     }
-    fn control(&mut self, _: &Observation<'_>) -> Result<f64> {
-        Ok(0.0)
+    fn control(&mut self, _: &Observation<'_>) -> Result<Force2> {
+        Ok(Force2::default())
     }
 }
 
-impl SpatialController for NoControl {
-    fn name(&self) -> String {
-        "none".into()
-    }
-    fn control(&mut self, _: &Observation<'_, 3>) -> Result<[f64; 2]> {
-        Ok([0.0; 2])
-    }
-}
-
-/// One 2-axis force (u_x, u_z) for the whole run, in the spatial model.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpatialConstantForce {
-    /// (u_x, u_z) (N).
-    pub u: [f64; 2],
-}
-
-impl SpatialConstantForce {
-    /// The best constant 2-axis force on `scene` in the spatial model:
-    /// min_u Σ_k |M₀(t_k)|² + ρ h (N + 1) |u|² subject to |u_x|, |u_z| ≤ `bound`, by the
-    /// condensed solver on the one-piece problem (θ = (u_x, u_z); an offline optimum over the
-    /// whole run, with the plant's own model and loads).
-    ///
-    /// # Errors
-    /// The problem's and the solver's errors.
-    pub fn best(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OcpResult)> {
-        let steps = scene.time.steps;
-        let map = PiecewiseControl { steps, pieces: 1 };
-        let objective = BendingObjective::summed_moment().with_effort(effort);
-        let problem = ControlProblem::spatial(scene, map, objective, true)?;
-        let opts = OcpOptions::default().with_bound(bound);
-        let r = ocp::Condensed::new(&problem, &opts)?.solve(&[0.0; 2])?;
-        Ok((
-            SpatialConstantForce {
-                u: [r.theta[0], r.theta[1]],
-            },
-            r,
-        ))
-    }
-}
-
-impl SpatialController for SpatialConstantForce {
-    fn name(&self) -> String {
-        "constant".into()
-    }
-    fn control(&mut self, _: &Observation<'_, 3>) -> Result<[f64; 2]> {
-        Ok(self.u)
-    }
-}
-
-/// One force u for the whole run.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One force (u_x, u_z) for the whole run (u_x = 0 in a planar scene).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ConstantForce {
     /// The force (N).
-    pub u: f64,
+    pub u: Force2,
+    /// Whether it was found in the spatial model ([`Controller::spatial`]: the loop then runs
+    /// the plant in it).
+    pub spatial: bool,
 }
 
 impl ConstantForce {
-    /// The best constant force on `scene`: min_u c_sum + ρ h Σ u² = Σ_k M₀(t_k)² + ρ h (N + 1) u²
-    /// subject to |u| ≤ `bound`, by the condensed Gauss-Newton solver on the one-piece problem
-    /// (an offline optimum over the whole run, with the plant's own model and loads). One
-    /// piece is one sensitivity direction through the run, about two simulations per
-    /// iteration; the Riccati solver, which linearises every step in 2n + 1 directions, took
-    /// minutes per 600 s cell of the n = 80 riser (the choice of [`super::MpcSolver::Auto`]
-    /// for one piece).
+    /// The best constant force on `scene`, in the scene's model (spatial when
+    /// [`Scene::spatial_key`] names a key): min_u c_sum + ρ h Σ |u|² =
+    /// Σ_k |M₀(t_k)|² + ρ h (N + 1) |u|² subject to |u_x|, |u_z| ≤ `bound`, by the condensed
+    /// Gauss-Newton solver on the one-piece problem (θ = u_z in the planar model, (u_x, u_z) in
+    /// the spatial one; an offline optimum over the whole run, with the plant's own model and
+    /// loads). One piece is one sensitivity direction through the run, about two simulations
+    /// per iteration; the Riccati solver, which linearises every step in 2n + 1 directions,
+    /// took minutes per 600 s cell of the n = 80 riser (the choice of
+    /// [`super::MpcSolver::Auto`] for one piece).
     ///
     /// # Errors
     /// The problem's and the solver's errors.
     pub fn best(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OcpResult)> {
+        if scene.spatial_key().is_some() {
+            return ConstantForce::best_spatial(scene, bound, effort);
+        }
         let steps = scene.time.steps;
         let map = PiecewiseControl { steps, pieces: 1 };
         let objective = BendingObjective::summed_moment().with_effort(effort);
         let problem = ControlProblem::new(scene, map, objective)?;
         let options = OcpOptions::default().with_bound(bound);
         let r = ocp::Condensed::new(&problem, &options)?.solve(&[0.0])?;
-        Ok((ConstantForce { u: r.theta[0] }, r))
+        let u = Force2::z(r.theta[0]);
+        Ok((ConstantForce { u, spatial: false }, r))
     }
-}
 
-impl ConstantForce {
+    /// [`ConstantForce::best`] in the spatial model whatever the scene: for a loop whose plant
+    /// runs in the spatial model because its controller plans there (a planar plant scene
+    /// with a spatial model scene), θ = (u_x, u_z).
+    ///
+    /// # Errors
+    /// The problem's and the solver's errors.
+    pub fn best_spatial(scene: &Scene, bound: f64, effort: f64) -> Result<(Self, OcpResult)> {
+        let steps = scene.time.steps;
+        let map = PiecewiseControl { steps, pieces: 1 };
+        let objective = BendingObjective::summed_moment().with_effort(effort);
+        let problem = ControlProblem::spatial(scene, map, objective, true)?;
+        let opts = OcpOptions::default().with_bound(bound);
+        let r = ocp::Condensed::new(&problem, &opts)?.solve(&[0.0; 2])?;
+        let u = Force2 {
+            x: r.theta[0],
+            z: r.theta[1],
+        };
+        Ok((ConstantForce { u, spatial: true }, r))
+    }
+
     /// The best constant thrust of a scene whose control is the thrust on the vessel
     /// ([`crate::scene::Thrust`]): the same problem, min_F Σ_k M₀(t_k)² + ρ h (N + 1) F²,
     /// |F| ≤ `bound`, by [`minimize`] on the adjoint gradient (the structured solvers do not take
@@ -124,7 +102,8 @@ impl ConstantForce {
             ..OptimOptions::default()
         };
         let r = minimize(&problem, &[0.0], &options)?;
-        Ok((ConstantForce { u: r.theta[0] }, r))
+        let u = Force2::z(r.theta[0]);
+        Ok((ConstantForce { u, spatial: false }, r))
     }
 }
 
@@ -132,29 +111,37 @@ impl Controller for ConstantForce {
     fn name(&self) -> String {
         "constant".into()
     }
-    fn control(&mut self, _: &Observation<'_>) -> Result<f64> {
+    fn control(&mut self, _: &Observation<'_>) -> Result<Force2> {
         Ok(self.u)
+    }
+    fn spatial(&self) -> bool {
+        self.spatial
     }
 }
 
 /// A PD law on the measured base moment, sampled at the control interval:
-/// u = clamp(u_b − K_p M₀ − K_d Ṁ₀, −u_max, u_max).
+/// u_z = clamp(u_{b,z} − K_p M₀_z − K_d Ṁ₀_z, −u_max, u_max), and in the spatial model the same
+/// law on the x axis with its own bias and the common gains (the model is the same in every
+/// transverse direction): u_x = clamp(u_{b,x} − K_p M₀ₓ − K_d Ṁ₀ₓ); u_x = 0 in a planar plant.
 ///
 /// Why the base moment and not the tip displacement: M₀ is the quantity to keep small, and a
 /// wellhead moment is what riser monitoring measures; a law on the tip displacement regulates the
 /// platform's position, which the wave moves together with the whole beam, and only indirectly
 /// the moment at the seabed. The bias u_b is the feedforward a control engineer adds against a
 /// steady load (a current): without it a PD law leaves a steady moment.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PdLaw {
-    /// u_b (N).
-    pub bias: f64,
+    /// (u_{b,x}, u_{b,z}) (N; u_{b,x} unused by a planar plant).
+    pub bias: Force2,
     /// K_p (N per Nm).
     pub kp: f64,
     /// K_d (N s per Nm).
     pub kd: f64,
-    /// u_max (N; infinite: no limit).
+    /// u_max (N; infinite: no limit), on each component.
     pub bound: f64,
+    /// Whether it was tuned in the spatial model ([`Controller::spatial`]: the loop then runs
+    /// the plant in it).
+    pub spatial: bool,
 }
 
 /// The law at one sample, in any scalar (the clamp passes no derivative on the bound).
@@ -170,24 +157,55 @@ fn pd<D: Scalar>(gains: &[D; 3], moment: D, rate: D, bound: f64) -> D {
 }
 
 impl PdLaw {
-    /// The gains (u_b, K_p, K_d) minimising the closed-loop J = c_sum + ρ h Σ u_k² of `scene`
-    /// ([`pd_closed_loop_cost`]) from `start`, by [`minimize`] with `options`.
+    /// The gains minimising the closed-loop J = Σ |M₀|² + ρ h Σ |u_k|² of `tuning`'s scene
+    /// ([`pd_closed_loop_cost`], [`pd_closed_loop_cost_spatial`]) from `start`, by [`minimize`]
+    /// with `options`: θ = (u_b, K_p, K_d) in the planar model, (u_{b,x}, u_{b,z}, K_p, K_d) in
+    /// the spatial one ([`PdTuning`]).
     ///
     /// # Errors
-    /// The closed loop's and the optimiser's errors.
+    /// [`Error::WrongLength`] naming `gains` for a `start` of another length than the model's;
+    /// the closed loop's and the optimiser's errors.
     pub fn tune(
         tuning: &PdTuning,
-        start: [f64; 3],
+        start: &[f64],
         options: &OptimOptions,
     ) -> Result<(PdLaw, OptimResult)> {
-        let r = minimize(tuning, &start, options)?;
+        let expected = tuning.n_params();
+        if start.len() != expected {
+            return Err(Error::WrongLength {
+                name: "gains",
+                expected,
+                got: start.len(),
+            });
+        }
+        let r = minimize(tuning, start, options)?;
+        let (bias, gains) = if tuning.spatial {
+            let bias = Force2 {
+                x: r.theta[0],
+                z: r.theta[1],
+            };
+            (bias, &r.theta[2..])
+        } else {
+            (Force2::z(r.theta[0]), &r.theta[1..])
+        };
         let law = PdLaw {
-            bias: r.theta[0],
-            kp: r.theta[1],
-            kd: r.theta[2],
+            bias,
+            kp: gains[0],
+            kd: gains[1],
             bound: tuning.bound,
+            spatial: tuning.spatial,
         };
         Ok((law, r))
+    }
+
+    /// The gains as the tuning's θ: (u_b, K_p, K_d), or (u_{b,x}, u_{b,z}, K_p, K_d) for a
+    /// law tuned in the spatial model.
+    pub fn gains(&self) -> Vec<f64> {
+        if self.spatial {
+            vec![self.bias.x, self.bias.z, self.kp, self.kd]
+        } else {
+            vec![self.bias.z, self.kp, self.kd]
+        }
     }
 }
 
@@ -195,78 +213,26 @@ impl Controller for PdLaw {
     fn name(&self) -> String {
         "pd".into()
     }
-    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
-        let gains = [self.bias, self.kp, self.kd];
-        Ok(pd(&gains, obs.moment, obs.moment_rate, self.bound))
-    }
-}
-
-/// A PD law on the measured moment vector in the spatial model, one law per transverse axis
-/// with common gains (the model is the same in every transverse direction) and a bias each:
-/// u_x = clamp(u_{b,x} − K_p M₀ₓ − K_d Ṁ₀ₓ), u_z = clamp(u_{b,z} − K_p M₀_z − K_d Ṁ₀_z), each
-/// component within ±u_max (the box of [`crate::mpc::Mpc`]'s plans).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpatialPdLaw {
-    /// (u_{b,x}, u_{b,z}) (N).
-    pub bias: [f64; 2],
-    /// K_p (N per Nm).
-    pub kp: f64,
-    /// K_d (N s per Nm).
-    pub kd: f64,
-    /// u_max (N; infinite: no limit).
-    pub bound: f64,
-}
-
-impl SpatialPdLaw {
-    /// The gains (u_{b,x}, u_{b,z}, K_p, K_d) minimising the closed-loop
-    /// J = Σ |M₀|² + ρ h Σ |u_k|² of a spatial tuning problem ([`PdTuning::spatial`]) from
-    /// `start`, by [`minimize`] with `options`.
-    ///
-    /// # Errors
-    /// [`Error::WrongLength`] naming `gains` for a planar tuning problem; the closed loop's and
-    /// the optimiser's errors.
-    pub fn tune(
-        tuning: &PdTuning,
-        start: [f64; 4],
-        options: &OptimOptions,
-    ) -> Result<(SpatialPdLaw, OptimResult)> {
-        let r = minimize(tuning, &start, options)?;
-        if r.theta.len() != 4 {
-            return Err(Error::WrongLength {
-                name: "gains",
-                expected: 4,
-                got: r.theta.len(),
-            });
-        }
-        let law = SpatialPdLaw {
-            bias: [r.theta[0], r.theta[1]],
-            kp: r.theta[2],
-            kd: r.theta[3],
-            bound: tuning.bound,
-        };
-        Ok((law, r))
-    }
-}
-
-impl SpatialController for SpatialPdLaw {
-    fn name(&self) -> String {
-        "pd".into()
-    }
-    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
+    fn control(&mut self, obs: &Observation<'_>) -> Result<Force2> {
         let (kp, kd, b) = (self.kp, self.kd, self.bound);
-        Ok([
-            pd(&[self.bias[0], kp, kd], obs.moment_x, obs.moment_rate_x, b),
-            pd(&[self.bias[1], kp, kd], obs.moment, obs.moment_rate, b),
-        ])
+        let z = pd(&[self.bias.z, kp, kd], obs.moment, obs.moment_rate, b);
+        if !obs.spatial() {
+            return Ok(Force2::z(z));
+        }
+        let x = pd(&[self.bias.x, kp, kd], obs.moment_x, obs.moment_rate_x, b);
+        Ok(Force2 { x, z })
+    }
+    fn spatial(&self) -> bool {
+        self.spatial
     }
 }
 
 /// The closed-loop cost of a PD law's gains θ = (u_b, K_p, K_d) on a scene, as an
 /// [`OptimProblem`]: J(θ) = Σ_{k=0}^{N} [M₀(t_k)² + ρ h u_k²] of the loop of [`super::run_closed_loop`]
 /// with [`PdLaw`] (the same plant, sampling and hold), its gradient by forward-mode dual numbers
-/// (`DualSVec64<3>`) through the RATTLE steps of the loop; or, built by [`PdTuning::spatial`],
-/// of the gains θ = (u_{b,x}, u_{b,z}, K_p, K_d) of a [`SpatialPdLaw`] in the spatial model
-/// (J = Σ |M₀|² + ρ h Σ |u|², `DualSVec64<4>`).
+/// (`DualSVec64<3>`) through the RATTLE steps of the loop; or, on a spatial scene (or built by
+/// [`PdTuning::spatial`]), of the gains θ = (u_{b,x}, u_{b,z}, K_p, K_d) of a [`PdLaw`] in the
+/// spatial model (J = Σ |M₀|² + ρ h Σ |u|², `DualSVec64<4>`).
 #[derive(Clone, Debug)]
 pub struct PdTuning {
     scene: Scene,
@@ -289,7 +255,8 @@ impl PdTuning {
     }
 
     /// The tuning problem of `scene` with decisions every `interval` seconds, |u| ≤ `bound`
-    /// (infinite: none) and effort weight ρ = `effort`.
+    /// (infinite: none) and effort weight ρ = `effort`, in the scene's model (the spatial one,
+    /// four gains, when [`Scene::spatial_key`] names a key).
     ///
     /// # Errors
     /// [`MpcError::IntervalNotMultiple`]; [`ValueError::OutOfRange`](crate::error::ValueError::OutOfRange) naming `bound` (not positive)
@@ -307,13 +274,14 @@ impl PdTuning {
             interval_steps: m,
             bound,
             effort,
-            spatial: false,
+            spatial: scene.spatial_key().is_some(),
             hotspot: None,
         })
     }
 
-    /// The tuning problem of a [`SpatialPdLaw`] on `scene` in the spatial model (four gains,
-    /// [`pd_closed_loop_cost_spatial`]).
+    /// The tuning problem of [`PdTuning::new`] in the spatial model whatever the scene (four
+    /// gains, [`pd_closed_loop_cost_spatial`]): for a loop whose plant runs in the spatial model
+    /// because its controller plans there.
     ///
     /// # Errors
     /// As [`PdTuning::new`].
@@ -472,7 +440,7 @@ pub fn pd_closed_loop_cost_at<D: Scalar>(
     Ok(j + stage(&plant))
 }
 
-/// J = Σ_{k=0}^{N} [|M₀(t_k)|² + ρ h |u_k|²] of the spatial PD loop of [`SpatialPdLaw`] with the
+/// J = Σ_{k=0}^{N} [|M₀(t_k)|² + ρ h |u_k|²] of the spatial PD loop of [`PdLaw`] with the
 /// gains (u_{b,x}, u_{b,z}, K_p, K_d) sampled every `interval_steps` steps on `scene`'s spatial
 /// plant, in any scalar (as [`pd_closed_loop_cost`]).
 ///

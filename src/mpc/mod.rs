@@ -6,7 +6,7 @@
 //! The plant ([`Plant`]) is a scene simulated by RATTLE from the straight beam at rest. Time is
 //! cut into control intervals of m steps (interval = m h); at the start t_{jm} of interval j the
 //! controller observes the plant ([`Observation`]: the state (q, p), M₀, Ṁ₀, the tip) and
-//! returns one force u_j, which the plant holds over the interval:
+//! returns one force u_j ([`Force2`]; its z component in a planar scene), which the plant holds over the interval:
 //! u_k = u_j for k = jm .. jm + m − 1 (zero-order hold; u_N repeats the last one). The applied
 //! controls are a [`PiecewiseControl`](crate::PiecewiseControl) with one piece per interval, and
 //! the plant's trajectory is exactly the open-loop RATTLE trajectory of them ([`Plant`] on the
@@ -50,7 +50,7 @@
 //! ```
 //! with p̂_k, the momentum of the step into t_k taken with zero control in its second
 //! half-kick, independent of u_k. The plant exposes (q_k, p̂_k)
-//! ([`Observation::state_before_kick`]) and [`Mpc`] plans from it with the kick pending
+//! ([`ModelObservation::state_before_kick`]) and [`Mpc`] plans from it with the kick pending
 //! ([`ControlProblem::starting_before_kick`](crate::ControlProblem::starting_before_kick)): the
 //! plan's first force supplies the half-kick by the equation above, so it acts on both sides
 //! of t_k exactly as the plant then applies it, and a re-plan is exactly the tail of the run
@@ -62,13 +62,16 @@
 //!
 //! # The spatial model
 //! The plant, the observation and the loop are written once over the dimension
-//! ([`Plant<D, DIM>`](Plant), [`Observation<DIM>`](Observation)): a scene whose loads or current
-//! have an x component runs [`run_closed_loop_spatial`] with a [`SpatialController`], which
-//! decides a 2-axis force (u_x, u_z) per interval (the plant holds both); the baselines are
-//! [`NoControl`], [`SpatialConstantForce`] (the best constant (u_x, u_z), by the condensed solver
-//! in the spatial model, [`crate::ocp`] "The spatial model") and [`SpatialPdLaw`] (a PD law per
-//! axis with common gains, tuned by [`PdTuning::spatial`]). The summary then judges by
-//! |M₀|² = M₀ₓ² + M₀_z² and |u|. A planar scene runs the planar code as before, bit for bit.
+//! ([`Plant<D, DIM>`](Plant); [`Observation::in_model`] gives the states in the model's own
+//! dimension), and one [`run_closed_loop`] runs either: a scene whose loads, current or control
+//! have an x component (or a controller that plans in the spatial model,
+//! [`Controller::spatial`]) runs the spatial plant, and every [`Controller`] decides a 2-axis
+//! force [`Force2`] (u_x, u_z) per interval, u_x = 0 in a planar scene. The baselines are one
+//! type each: [`NoControl`], [`ConstantForce`] (the best constant (u_x, u_z), by the condensed
+//! solver in the scene's model, [`crate::ocp`] "The spatial model") and [`PdLaw`] (a PD law per
+//! axis with common gains, tuned by [`PdTuning`] in the scene's model). The summary of a
+//! spatial run judges by |M₀|² = M₀ₓ² + M₀_z² and |u|. A planar scene runs the planar code as
+//! before, bit for bit.
 //! The receding-horizon controller is written once over the dimension too ([`Mpc<DIM>`](Mpc)):
 //! [`Mpc::spatial`] plans a 2-axis force on the vector moment, min Σ |M₀|² + ρ h Σ |u|² over
 //! θ = (θ_x; θ_z), each component within the box, with the condensed or the Riccati solver in
@@ -106,7 +109,7 @@
 //! - **The start**: the plant re-takes the step into t_k with the thrust F_k the new command
 //!   gives, and that thrust enters both the vessel's velocity and the riser's momentum at t_k.
 //!   The plan therefore starts one step back, from the plant's state at t_{k−1}
-//!   ([`Observation::previous_state`]) with its thrust F_{k−1} fixed, and its first step is the
+//!   ([`ModelObservation::previous_state`]) with its thrust F_{k−1} fixed, and its first step is the
 //!   plant's re-taken step: a re-plan is exactly the tail of the run it continues, and with a
 //!   perfect model and the horizon to the end the closed loop reproduces the open-loop optimum
 //!   (tests/mpc/mpc_vessel.rs).
@@ -263,13 +266,14 @@ pub use crate::scene::Forecast;
 pub use crate::scene::Observe;
 pub use baselines::{
     pd_closed_loop_cost, pd_closed_loop_cost_at, pd_closed_loop_cost_spatial, ConstantForce,
-    NoControl, PdLaw, PdTuning, SpatialConstantForce, SpatialPdLaw,
+    NoControl, PdLaw, PdTuning,
 };
 pub use forecast::{forecast_sigma, NoisyForecast, SIGMA_CAP};
 pub use observer::{Observer, ObserverOptions, SensorNoise, SensorSet};
 pub use plant::Plant;
 pub use receding::{Horizon, Mpc, MpcOptions, MpcSolver, PlannedThrust};
 
+use std::any::Any;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -279,10 +283,29 @@ use crate::error::Result;
 use crate::scene::Scene;
 use crate::steppers::rattle::State;
 
-/// What a controller sees at the start t_k of a control interval, in the planar (`DIM = 2`) or
-/// the spatial (`DIM = 3`) model.
-#[derive(Clone, Copy, Debug)]
-pub struct Observation<'a, const DIM: usize = 2> {
+/// A force at the control node in the two transverse axes (N): `z` in the plane of a planar
+/// scene, `x` out of it (0 in a planar scene, whose plant refuses u_x ≠ 0 with
+/// [`crate::Error::NeedsSpatialModel`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Force2 {
+    /// u_x (N).
+    pub x: f64,
+    /// u_z (N).
+    pub z: f64,
+}
+
+impl Force2 {
+    /// (0, u_z): a force in the plane, the only force of a planar scene.
+    pub const fn z(z: f64) -> Self {
+        Force2 { x: 0.0, z }
+    }
+}
+
+/// What a controller sees at the start t_k of a control interval, in either model: the
+/// scalars below (the x components 0 in the planar model), and the plant's states in the
+/// model's own dimension through [`Observation::in_model`].
+#[derive(Clone, Copy)]
+pub struct Observation<'a> {
     /// The step index k.
     pub k: usize,
     /// t_k = k h.
@@ -293,14 +316,6 @@ pub struct Observation<'a, const DIM: usize = 2> {
     pub steps: usize,
     /// The control interval (s).
     pub interval: f64,
-    /// The state (q_k, p_k), p_k with the held control u_{k−1} in the second half-kick of the
-    /// step into t_k ([`Plant`]).
-    pub state: &'a State<f64, DIM>,
-    /// (q_k, p̂_k): the state before the control's half-kick at t_k, p̂_k the momentum of the
-    /// step into t_k taken with zero control in its second half-kick, which the force decided
-    /// now completes ([`Plant::state_before_kick`]); `None` at k = 0 (the beam at rest, no step
-    /// into t₀) and for a reaction-force tip.
-    pub state_before_kick: Option<&'a State<f64, DIM>>,
     /// M₀(t_k) (Nm; its z component M₀_z in the spatial model).
     pub moment: f64,
     /// Ṁ₀(t_k) (Nm/s).
@@ -315,83 +330,177 @@ pub struct Observation<'a, const DIM: usize = 2> {
     pub moment_rate_x: f64,
     /// The x component of the control held so far (N; 0 in the planar model).
     pub control_x: f64,
-    /// The state at t_{k−1}, from which the plant re-takes the step into t_k with the control
-    /// decided now ([`Plant::previous_state`]); `None` at k = 0.
-    pub previous_state: Option<&'a State<f64, DIM>>,
     /// The control applied at t_{k−1} (N; 0 at k = 0): the thrust of the step into t_k's first
     /// half in a scene whose control is the thrust on the vessel.
     pub previous_control: f64,
+    /// The plant's states, their dimension erased (read back by [`Observation::in_model`]).
+    states: Erased<'a>,
 }
 
-/// A feedback law: one force per control interval from what it observes.
+/// The states of an [`Observation`] behind `Any`, with the model's dimension.
+#[derive(Clone, Copy)]
+struct Erased<'a> {
+    dim: usize,
+    state: &'a dyn Any,
+    state_before_kick: Option<&'a dyn Any>,
+    previous_state: Option<&'a dyn Any>,
+}
+
+impl<'a> Erased<'a> {
+    fn of<const DIM: usize>(
+        state: &'a State<f64, DIM>,
+        state_before_kick: Option<&'a State<f64, DIM>>,
+        previous_state: Option<&'a State<f64, DIM>>,
+    ) -> Self {
+        Erased {
+            dim: DIM,
+            state,
+            state_before_kick: state_before_kick.map(|s| s as &dyn Any),
+            previous_state: previous_state.map(|s| s as &dyn Any),
+        }
+    }
+}
+
+impl std::fmt::Debug for Observation<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Observation")
+            .field("k", &self.k)
+            .field("t", &self.t)
+            .field("spatial", &self.spatial())
+            .field("moment", &self.moment)
+            .field("moment_x", &self.moment_x)
+            .field("control", &self.control)
+            .field("control_x", &self.control_x)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> Observation<'a> {
+    /// What the loop observes of `plant` at its present step, decisions every `interval`
+    /// seconds (call [`Plant::update_state_before_kick`] first for the state before the
+    /// control's half-kick).
+    pub fn of_plant<const DIM: usize>(plant: &'a mut Plant<f64, DIM>, interval: f64) -> Self {
+        let moment_rate = plant.moment_rate();
+        let [moment_x, _] = plant.moment_vector();
+        let [moment_rate_x, _] = plant.moment_vector_rate();
+        let plant: &'a Plant<f64, DIM> = plant;
+        Observation {
+            k: plant.step_index(),
+            t: plant.time(),
+            h: plant.h(),
+            steps: plant.steps(),
+            interval,
+            moment: plant.moment(),
+            moment_rate,
+            tip: plant.tip(),
+            control: plant.control(),
+            moment_x,
+            moment_rate_x,
+            control_x: plant.control_x(),
+            previous_control: plant.previous_control(),
+            states: Erased::of(
+                plant.state(),
+                plant.state_before_kick(),
+                plant.previous_state(),
+            ),
+        }
+    }
+
+    /// Whether the plant runs in the spatial model (qᵢ ∈ S², its states `State<f64, 3>`).
+    pub fn spatial(&self) -> bool {
+        self.states.dim == 3
+    }
+
+    /// The observation with the plant's states in the model of dimension `DIM` (2: planar,
+    /// 3: spatial), for a controller that plans in that model.
+    ///
+    /// # Errors
+    /// [`MpcError::ControllerModel`] when the plant runs in the other model.
+    pub fn in_model<const DIM: usize>(&self) -> Result<ModelObservation<'a, DIM>> {
+        let cast = |s: &'a dyn Any| s.downcast_ref::<State<f64, DIM>>();
+        let e = self.states;
+        let name = |spatial: bool| if spatial { "spatial" } else { "planar" };
+        let state = cast(e.state).ok_or(MpcError::ControllerModel {
+            controller: name(DIM == 3),
+            plant: name(self.spatial()),
+        })?;
+        Ok(ModelObservation {
+            observation: *self,
+            state,
+            state_before_kick: e.state_before_kick.and_then(cast),
+            previous_state: e.previous_state.and_then(cast),
+        })
+    }
+}
+
+/// An [`Observation`] with the plant's states in the model of dimension `DIM`
+/// ([`Observation::in_model`]); it reads as the observation itself (`Deref`).
+#[derive(Clone, Copy, Debug)]
+pub struct ModelObservation<'a, const DIM: usize> {
+    /// The observation's scalars.
+    pub observation: Observation<'a>,
+    /// The state (q_k, p_k), p_k with the held control u_{k−1} in the second half-kick of the
+    /// step into t_k ([`Plant`]).
+    pub state: &'a State<f64, DIM>,
+    /// (q_k, p̂_k): the state before the control's half-kick at t_k, p̂_k the momentum of the
+    /// step into t_k taken with zero control in its second half-kick, which the force decided
+    /// now completes ([`Plant::state_before_kick`]); `None` at k = 0 (the beam at rest, no step
+    /// into t₀) and for a reaction-force tip.
+    pub state_before_kick: Option<&'a State<f64, DIM>>,
+    /// The state at t_{k−1}, from which the plant re-takes the step into t_k with the control
+    /// decided now ([`Plant::previous_state`]); `None` at k = 0.
+    pub previous_state: Option<&'a State<f64, DIM>>,
+}
+
+impl<'a, const DIM: usize> ModelObservation<'a, DIM> {
+    /// The observation `observation`'s scalars with the states replaced (a filter's estimate
+    /// in place of the plant's).
+    pub(crate) fn with_states(
+        mut observation: Observation<'a>,
+        state: &'a State<f64, DIM>,
+        state_before_kick: Option<&'a State<f64, DIM>>,
+        previous_state: Option<&'a State<f64, DIM>>,
+    ) -> Self {
+        observation.states = Erased::of(state, state_before_kick, previous_state);
+        ModelObservation {
+            observation,
+            state,
+            state_before_kick,
+            previous_state,
+        }
+    }
+}
+
+impl<'a, const DIM: usize> std::ops::Deref for ModelObservation<'a, DIM> {
+    type Target = Observation<'a>;
+    fn deref(&self) -> &Observation<'a> {
+        &self.observation
+    }
+}
+
+/// A feedback law: one force per control interval from what it observes, in either model (a
+/// planar scene's plant holds u_z with u_x = 0, a spatial scene's both).
 pub trait Controller {
     /// A short name for tables, lower-case as the command line's controller names ("none",
     /// "constant", "pd", "mpc").
     fn name(&self) -> String;
 
-    /// The force for the interval starting at `obs.t`.
+    /// The force (u_x, u_z) for the interval starting at `obs.t` (u_x = 0 when the plant is
+    /// planar, `obs.spatial()` false).
     ///
     /// # Errors
     /// The controller's failure (a failed solve, settings that do not fit the plant).
-    fn control(&mut self, obs: &Observation<'_>) -> Result<f64>;
+    fn control(&mut self, obs: &Observation<'_>) -> Result<Force2>;
 
     /// Iterations of the optimiser at the last decision (None: no optimiser).
     fn last_iterations(&self) -> Option<usize> {
         None
     }
-}
 
-/// A feedback law in the spatial model: one 2-axis force (u_x, u_z) per control interval from
-/// what it observes ([`run_closed_loop_spatial`]).
-pub trait SpatialController {
-    /// A short name for tables, lower-case as the command line's controller names ("none",
-    /// "constant", "pd", "mpc").
-    fn name(&self) -> String;
-
-    /// The force (u_x, u_z) for the interval starting at `obs.t`.
-    ///
-    /// # Errors
-    /// The controller's failure (a failed solve, settings that do not fit the plant).
-    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]>;
-
-    /// Iterations of the optimiser at the last decision (None: no optimiser).
-    fn last_iterations(&self) -> Option<usize> {
-        None
-    }
-}
-
-/// The loop's view of a controller of either model: (u_x, u_z) from an observation.
-trait Decide<const DIM: usize> {
-    fn name(&self) -> String;
-    fn decide(&mut self, obs: &Observation<'_, DIM>) -> Result<[f64; 2]>;
-    fn iterations(&self) -> Option<usize>;
-}
-
-struct Planar<'c>(&'c mut dyn Controller);
-
-impl Decide<2> for Planar<'_> {
-    fn name(&self) -> String {
-        self.0.name()
-    }
-    fn decide(&mut self, obs: &Observation<'_, 2>) -> Result<[f64; 2]> {
-        Ok([0.0, self.0.control(obs)?])
-    }
-    fn iterations(&self) -> Option<usize> {
-        self.0.last_iterations()
-    }
-}
-
-struct Spatial<'c>(&'c mut dyn SpatialController);
-
-impl Decide<3> for Spatial<'_> {
-    fn name(&self) -> String {
-        self.0.name()
-    }
-    fn decide(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
-        self.0.control(obs)
-    }
-    fn iterations(&self) -> Option<usize> {
-        self.0.last_iterations()
+    /// Whether the controller plans in the spatial model: [`run_closed_loop`] then runs the
+    /// plant in it even for a planar scene (false: the scene decides).
+    fn spatial(&self) -> bool {
+        false
     }
 }
 
@@ -481,40 +590,34 @@ pub fn interval_steps(interval: f64, h: f64) -> Result<usize> {
     Ok(m as usize)
 }
 
-/// Runs `controller` against the plant of `scene` (planar, from rest at t = 0) with one
-/// decision every `interval` seconds, to t_N (module docs).
+/// Runs `controller` against the plant of `scene` (from rest at t = 0) with one decision every
+/// `interval` seconds, to t_N (module docs). The plant runs in the spatial model when the scene
+/// has a load, a current or a control with an x component ([`Scene::spatial_key`]) or the
+/// controller plans in it ([`Controller::spatial`]): the plant then holds (u_x, u_z) over each
+/// interval and the summary judges by |M₀|² = M₀ₓ² + M₀_z² and |u|² = u_x² + u_z²; otherwise
+/// in the planar model, holding u_z (u_x must be 0).
 ///
 /// # Errors
 /// [`MpcError::IntervalNotMultiple`] when the interval is not a multiple of h,
 /// [`MpcError::RunNotWhole`] when it does not divide the run T = N h; the controller's and the
-/// plant's errors (a failed step, a failed solve) end the run.
+/// plant's errors (a failed step, a failed solve, u_x ≠ 0 in the planar model) end the run.
 pub fn run_closed_loop(
     scene: &Scene,
     interval: f64,
     controller: &mut dyn Controller,
 ) -> Result<ClosedLoopResult> {
-    closed_loop::<2>(scene, interval, &mut Planar(controller))
-}
-
-/// [`run_closed_loop`] in the spatial model (any scene, loads and current in any transverse
-/// direction) with a 2-axis controller: the plant holds (u_x, u_z) over each interval, and the
-/// summary judges by |M₀|² = M₀ₓ² + M₀_z² and |u|² = u_x² + u_z².
-///
-/// # Errors
-/// As [`run_closed_loop`].
-pub fn run_closed_loop_spatial(
-    scene: &Scene,
-    interval: f64,
-    controller: &mut dyn SpatialController,
-) -> Result<ClosedLoopResult> {
-    closed_loop::<3>(scene, interval, &mut Spatial(controller))
+    if scene.spatial_key().is_some() || controller.spatial() {
+        closed_loop::<3>(scene, interval, controller)
+    } else {
+        closed_loop::<2>(scene, interval, controller)
+    }
 }
 
 /// The loop of both models: observe, decide, hold, record.
 fn closed_loop<const DIM: usize>(
     scene: &Scene,
     interval: f64,
-    controller: &mut dyn Decide<DIM>,
+    controller: &mut dyn Controller,
 ) -> Result<ClosedLoopResult> {
     let start = Instant::now();
     let mut plant = Plant::<f64, DIM>::new(scene)?;
@@ -532,37 +635,17 @@ fn closed_loop<const DIM: usize>(
     for _ in 0..steps / m {
         crate::cancel::check()?;
         plant.update_state_before_kick()?;
-        let moment_rate = plant.moment_rate();
-        let [moment_x, _] = plant.moment_vector();
-        let [moment_rate_x, _] = plant.moment_vector_rate();
-        let obs = Observation {
-            k: plant.step_index(),
-            t: plant.time(),
-            h: plant.h(),
-            steps,
-            interval,
-            state: plant.state(),
-            state_before_kick: plant.state_before_kick(),
-            moment: plant.moment(),
-            moment_rate,
-            tip: plant.tip(),
-            control: plant.control(),
-            moment_x,
-            moment_rate_x,
-            control_x: plant.control_x(),
-            previous_state: plant.previous_state(),
-            previous_control: plant.previous_control(),
-        };
+        let obs = Observation::of_plant(&mut plant, interval);
         let clock = Instant::now();
-        let u = controller.decide(&obs)?;
+        let u = controller.control(&obs)?;
         let seconds = clock.elapsed().as_secs_f64();
         decisions.push(Decision {
             t: obs.t,
-            control: u[1],
+            control: u.z,
             seconds,
-            iterations: controller.iterations(),
+            iterations: controller.last_iterations(),
         });
-        plant.set_controls(u)?;
+        plant.set_controls([u.x, u.z])?;
         for _ in 0..m {
             rec.push(&plant);
             plant.advance()?;

@@ -88,7 +88,7 @@ use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 
 use super::thrust::Actuator;
-use super::{interval_steps, Observation};
+use super::{interval_steps, ModelObservation};
 use crate::base::Scalar;
 use crate::error::{MpcError, Result};
 use crate::model::Chain;
@@ -462,9 +462,8 @@ impl Observer {
         self.innovation
     }
 
-    /// Adds (δφ, δω) to the estimate (a prior that is wrong by that much; for tests of the
-    /// filter's convergence).
-    pub fn offset_estimate(&mut self, dphi: &[f64], domega: &[f64]) {
+    /// The estimate's minimal coordinates (φ, ω) into `phi` and `omega` (`qdot` the scratch).
+    fn estimate_to_minimal(&mut self) {
         let chain = Stepper::chain(&self.stepper);
         minimal(
             chain,
@@ -473,6 +472,12 @@ impl Observer {
             &mut self.omega,
             &mut self.qdot,
         );
+    }
+
+    /// Adds (δφ, δω) to the estimate (a prior that is wrong by that much; for tests of the
+    /// filter's convergence).
+    pub fn offset_estimate(&mut self, dphi: &[f64], domega: &[f64]) {
+        self.estimate_to_minimal();
         for (p, d) in self.phi.iter_mut().zip(dphi) {
             *p += d;
         }
@@ -480,7 +485,7 @@ impl Observer {
             *w += d;
         }
         rebuild(
-            chain,
+            Stepper::chain(&self.stepper),
             &self.phi,
             &self.omega,
             &mut self.estimate,
@@ -523,7 +528,7 @@ impl Observer {
     ///
     /// # Errors
     /// The model's step errors.
-    pub fn observe(&mut self, obs: &Observation<'_>) -> Result<()> {
+    pub fn observe(&mut self, obs: &ModelObservation<'_, 2>) -> Result<()> {
         let Some(truth) = obs.previous_state.filter(|_| obs.k > 0) else {
             return Ok(());
         };
@@ -558,14 +563,7 @@ impl Observer {
                 y[s] += self.sigma[s] * self.normal();
             }
         }
-        let chain = Stepper::chain(&self.stepper);
-        minimal(
-            chain,
-            &self.estimate,
-            &mut self.phi,
-            &mut self.omega,
-            &mut self.qdot,
-        );
+        self.estimate_to_minimal();
         let predicted = self.sensors.read(&self.phi, self.estimate.tip_target);
         let nu: [f64; SENSORS] = std::array::from_fn(|s| y[s] - predicted[s]);
         let n = self.phi.len();
@@ -610,27 +608,18 @@ impl Observer {
     /// What the plan sees at the decision `obs`: the estimate as the state at t_{k−1} (and as
     /// `state`, of which a thrust plan reads only the size), the moments and the tip of the
     /// estimate, the thrusts applied (the thrusters' own readings) and the loop's timing.
-    pub fn observation<'a>(&'a self, obs: &Observation<'_>) -> Observation<'a> {
+    pub fn observation<'a>(&'a self, obs: &ModelObservation<'a, 2>) -> ModelObservation<'a, 2> {
         let chain = Stepper::chain(&self.stepper);
         let started = obs.k > 0;
-        Observation {
-            k: obs.k,
-            t: obs.t,
-            h: obs.h,
-            steps: obs.steps,
-            interval: obs.interval,
-            state: &self.estimate,
-            state_before_kick: None,
-            moment: chain.base_moment(&self.estimate.q),
-            moment_rate: if started { self.moment_rate } else { 0.0 },
-            tip: chain.tip_z(&self.estimate.q),
-            control: obs.control,
-            moment_x: 0.0,
-            moment_rate_x: 0.0,
-            control_x: 0.0,
-            previous_state: started.then_some(&self.estimate),
-            previous_control: obs.previous_control,
-        }
+        let mut seen = obs.observation;
+        seen.moment = chain.base_moment(&self.estimate.q);
+        seen.moment_rate = if started { self.moment_rate } else { 0.0 };
+        seen.tip = chain.tip_z(&self.estimate.q);
+        seen.moment_x = 0.0;
+        seen.moment_rate_x = 0.0;
+        seen.control_x = 0.0;
+        let previous = started.then_some(&self.estimate);
+        ModelObservation::with_states(seen, &self.estimate, None, previous)
     }
 }
 

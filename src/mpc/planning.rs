@@ -61,7 +61,7 @@
 //! constraints Q_J·Q̇_J = 0 exactly. With n_p = n and h_p = h the map is the identity up to
 //! round-off, and the planner is the full-model one.
 
-use super::Observation;
+use super::ModelObservation;
 use crate::error::{MpcError, Requirement, Result};
 use crate::hotspots::joint_elevations;
 use crate::model::{Chain, TipCondition};
@@ -359,7 +359,7 @@ impl<const DIM: usize> StateMap<DIM> {
 /// See [`StateMap::map`].
 pub(super) fn map_observation<const DIM: usize>(
     map: &mut StateMap<DIM>,
-    obs: &Observation<'_, DIM>,
+    obs: &ModelObservation<'_, DIM>,
     out: &mut State<f64, DIM>,
 ) -> Result<bool> {
     match obs.state_before_kick {

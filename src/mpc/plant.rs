@@ -20,7 +20,7 @@ use crate::steppers::Stepper;
 /// takes the step into t_k with the held control u_{k+1} = u_k−1, the controller observes that
 /// state, and [`Plant::set_control`] re-takes that last step with the decided u_k. The trajectory
 /// is therefore exactly the open-loop RATTLE trajectory of the applied per-step controls
-/// u_0..u_N (what [`crate::simulate_with_controls`] computes).
+/// u_0..u_N (what [`crate::simulate()`] computes with them, [`crate::SimulateInput::controls`]).
 ///
 /// # The state before the control's half-kick
 /// Which p_k a controller sees at t_k depends on a control it has not decided yet. After the

@@ -5,7 +5,7 @@ use super::forecast::NoisyForecast;
 use super::observer::{Observer, ObserverOptions, SensorSet};
 use super::planning::{map_observation, objective_scale, planning_scene, StateMap};
 use super::thrust::{Actuator, ThrustPlan};
-use super::{interval_steps, Controller, Observation, SpatialController};
+use super::{interval_steps, Controller, Force2, ModelObservation, Observation};
 use crate::adjoint::{
     BendingObjective, ControlProblem, GaussNewton, History, HotSpotObjective, MomentStage,
     Objective, PerStepControl, PiecewiseControl, Stage,
@@ -159,8 +159,8 @@ impl Default for MpcOptions {
 }
 
 /// A receding-horizon controller on a model scene (module docs of [`crate::mpc`]), in the planar
-/// (`DIM = 2`, [`Mpc::new`], a [`Controller`]) or the spatial model (`DIM = 3`, [`Mpc::spatial`],
-/// a [`SpatialController`] planning a 2-axis force (u_x, u_z) per interval on the vector moment:
+/// (`DIM = 2`, [`Mpc::new`]) or the spatial model (`DIM = 3`, [`Mpc::spatial`], planning a
+/// 2-axis force (u_x, u_z) per interval on the vector moment:
 /// θ = (θ_x; θ_z), min Σ |M₀|² + ρ h Σ |u|², each component within the box).
 #[derive(Clone, Debug)]
 pub struct Mpc<const DIM: usize = 2> {
@@ -506,7 +506,7 @@ impl<const DIM: usize> Mpc<DIM> {
     fn problem(
         &mut self,
         pieces: usize,
-        obs: &Observation<'_, DIM>,
+        obs: &ModelObservation<'_, DIM>,
     ) -> Result<ControlProblem<PiecewiseControl, BendingObjective, DIM>> {
         if self.template.as_ref().map(|t| t.0) != Some(pieces) {
             let mut scene = self.model.clone();
@@ -568,7 +568,7 @@ impl<const DIM: usize> Mpc<DIM> {
     /// riser_300m.toml: 97 % of a re-plan's time in that sum).
     fn record_chain(
         &mut self,
-        obs: &Observation<'_, DIM>,
+        obs: &ModelObservation<'_, DIM>,
         pieces: usize,
     ) -> Result<Chain<f64, DIM>> {
         if let Some(chain) = &self.record {
@@ -605,7 +605,7 @@ impl<const DIM: usize> Mpc<DIM> {
     }
 
     /// The pieces of the horizon at `obs`.
-    fn horizon_pieces(&self, obs: &Observation<'_, DIM>) -> Result<usize> {
+    fn horizon_pieces(&self, obs: &ModelObservation<'_, DIM>) -> Result<usize> {
         if (obs.interval - self.interval).abs() > 1e-12 * self.interval {
             return Err(MpcError::IntervalMismatch {
                 controller: self.interval,
@@ -641,7 +641,7 @@ impl<const DIM: usize> Mpc<DIM> {
     }
 
     /// A re-plan from `obs` (the real-time iteration of the module docs): the new plan θ.
-    fn replan(&mut self, obs: &Observation<'_, DIM>) -> Result<()> {
+    fn replan(&mut self, obs: &ModelObservation<'_, DIM>) -> Result<()> {
         let pieces = self.horizon_pieces(obs)?;
         let problem = self.problem(pieces, obs)?;
         self.warm_start(pieces);
@@ -724,7 +724,7 @@ impl Mpc {
     /// A re-plan through the vessel's thrust ([`crate::mpc`], "MPC through the vessel's
     /// thrust"): the commands of the horizon by the bounded L-BFGS on the exact adjoint
     /// gradient, from the previous plan shifted by one interval, within the iteration budget.
-    fn replan_thrust(&mut self, obs: &Observation<'_>) -> Result<()> {
+    fn replan_thrust(&mut self, obs: &ModelObservation<'_, 2>) -> Result<()> {
         let pieces = self.horizon_pieces(obs)?;
         let hp = self.model.time.step;
         let r = (hp / obs.h).round();
@@ -848,7 +848,7 @@ impl Mpc {
 
     /// A decision from the sensors ([`Observe::Sensors`]): the filter's update at this decision,
     /// then the thrust plan from its estimate instead of the plant's state.
-    fn control_observed(&mut self, obs: &Observation<'_>) -> Result<f64> {
+    fn control_observed(&mut self, obs: &ModelObservation<'_, 2>) -> Result<f64> {
         let mut observer = match self.observer.take() {
             Some(o) => o,
             None => Observer::new(&self.model, obs.steps, self.interval, self.options.observer)?,
@@ -883,16 +883,17 @@ impl Controller for Mpc {
         "mpc".into()
     }
 
-    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
+    fn control(&mut self, obs: &Observation<'_>) -> Result<Force2> {
+        let obs = obs.in_model::<2>()?;
         if self.options.observe == Observe::Sensors {
-            return self.control_observed(obs);
+            return self.control_observed(&obs).map(Force2::z);
         }
         if self.thrust.is_some() {
-            self.replan_thrust(obs)?;
+            self.replan_thrust(&obs)?;
         } else {
-            self.replan(obs)?;
+            self.replan(&obs)?;
         }
-        Ok(self.plan[0])
+        Ok(Force2::z(self.plan[0]))
     }
 
     fn last_iterations(&self) -> Option<usize> {
@@ -903,20 +904,27 @@ impl Controller for Mpc {
     }
 }
 
-impl SpatialController for Mpc<3> {
+impl Controller for Mpc<3> {
     fn name(&self) -> String {
         "mpc".into()
     }
 
     /// The first interval's (u_x, u_z) of the new plan θ = (θ_x; θ_z).
-    fn control(&mut self, obs: &Observation<'_, 3>) -> Result<[f64; 2]> {
-        self.replan(obs)?;
+    fn control(&mut self, obs: &Observation<'_>) -> Result<Force2> {
+        self.replan(&obs.in_model::<3>()?)?;
         let m = self.plan.len() / 2;
-        Ok([self.plan[0], self.plan[m]])
+        Ok(Force2 {
+            x: self.plan[0],
+            z: self.plan[m],
+        })
     }
 
     fn last_iterations(&self) -> Option<usize> {
         self.last.as_ref().map(|r| r.iterations)
+    }
+
+    fn spatial(&self) -> bool {
+        true
     }
 }
 

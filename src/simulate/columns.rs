@@ -8,7 +8,7 @@
 //! place in the buffer of the attitudes q (n·DIM values per step, grown to n·3: by a third in
 //! the planar model, not at all in the spatial one) after p, λ and μ have been returned.
 
-use super::{SceneTrajectory, Trajectory};
+use super::{Model, SceneTrajectory, Trajectory};
 use crate::error::{Error, Result};
 use crate::simulate::{max_trajectory_steps, trajectory_bytes};
 
@@ -46,9 +46,9 @@ impl SceneTrajectory {
     /// (the controls are finite: the simulation refuses others); [`Error::TrajectoryTooLarge`]
     /// if the allocator refuses the third that the positions need over q in the planar model.
     pub fn into_columns(self) -> Result<TrajectoryColumns> {
-        match self {
-            SceneTrajectory::Planar(t) => t.into_columns(),
-            SceneTrajectory::Spatial(t) => t.into_columns(),
+        match self.0 {
+            Model::Planar(t) => t.into_columns(),
+            Model::Spatial(t) => t.into_columns(),
         }
     }
 }

@@ -23,10 +23,10 @@ pub enum StreamControls<'a> {
     /// what [`simulate()`](super::simulate) applies.
     Scene,
     /// Per-step controls u_0..u_N (N + 1 values) at the scene's control node (default: the
-    /// tip), as [`simulate_with_controls`](super::simulate_with_controls).
+    /// tip), in the model the scene needs ([`SimulateInput::controls`](super::SimulateInput::controls)).
     Given(&'a [f64]),
-    /// Per-step 2-axis controls (u_{x,k}, u_k), N + 1 values each, in the spatial model, as
-    /// [`simulate_with_controls_xz`](super::simulate_with_controls_xz).
+    /// Per-step 2-axis controls (u_{x,k}, u_k), N + 1 values each, in the spatial model
+    /// ([`SimulateInput::controls_xz`](super::SimulateInput::controls_xz)).
     GivenXz {
         /// u_{x,0..N}.
         x: &'a [f64],
@@ -169,6 +169,11 @@ impl<const DIM: usize> StepView<'_, DIM> {
     /// x = 0 in the planar model).
     pub fn positions(&self, out: &mut [[f64; 3]]) {
         node_positions(&self.state.q, self.lengths, out);
+    }
+    /// The tip's target at t_k: ζ_k of the reaction-force variant, the vessel's Z(t_k) of a tip
+    /// the vessel holds, zero otherwise ([`Trajectory::tip_target`](super::Trajectory::tip_target)).
+    pub fn tip_target(&self) -> f64 {
+        self.state.tip_target[0]
     }
     /// The model.
     pub fn chain(&self) -> &Chain<f64, DIM> {

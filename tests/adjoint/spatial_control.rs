@@ -268,8 +268,10 @@ fn squared_norm_of_the_moment_reduces_to_the_planar_square() {
     let j = p.value(&[-0.5]).unwrap();
     assert!((j - direct).abs() <= 1e-12 * direct, "{j} vs {direct}");
     // The same scene in the spatial model: x stays exactly 0, so M₀ₓ = 0.
-    let spatial =
-        simulate_with_controls_xz(&scene, &vec![0.0; steps + 1], &vec![-0.5; steps + 1]).unwrap();
+    let spatial = simulate(
+        SimulateInput::new(&scene).controls_xz(&vec![0.0; steps + 1], &vec![-0.5; steps + 1]),
+    )
+    .unwrap();
     assert!(spatial.moment_x().iter().all(|m| *m == 0.0));
     for (a, b) in spatial.moment().iter().zip(traj.moment()) {
         assert!((a - b).abs() <= 1e-12 * b.abs().max(1e-300), "{a} vs {b}");
@@ -284,7 +286,8 @@ fn rotating_load_and_control_rotates_the_moment() {
     let steps = 60;
     let uz: Vec<f64> = (0..=steps).map(|k| -1.0 - 0.02 * k as f64).collect();
     let base = riser(steps, 0.0).build().unwrap();
-    let reference = simulate_with_controls_xz(&base, &vec![0.0; steps + 1], &uz).unwrap();
+    let reference =
+        simulate(SimulateInput::new(&base).controls_xz(&vec![0.0; steps + 1], &uz)).unwrap();
     let m0 = reference.moment();
     let scale = m0.iter().fold(0.0f64, |a, m| a.max(m.abs()));
     for alpha in [FRAC_PI_4, 1.0, 2.5, -2.0] {
@@ -292,7 +295,7 @@ fn rotating_load_and_control_rotates_the_moment() {
         let (s, c) = alpha.sin_cos();
         let ux: Vec<f64> = uz.iter().map(|u| u * s).collect();
         let uzr: Vec<f64> = uz.iter().map(|u| u * c).collect();
-        let t = simulate_with_controls_xz(&scene, &ux, &uzr).unwrap();
+        let t = simulate(SimulateInput::new(&scene).controls_xz(&ux, &uzr)).unwrap();
         let mag = t.moment_magnitude();
         for k in 0..=steps {
             let (mx, mz) = (t.moment_x()[k], t.moment()[k]);

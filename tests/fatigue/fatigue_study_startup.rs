@@ -194,19 +194,19 @@ fn tuned_pd_gains_stay_positive_and_improve() {
     let (gp, gd) = (law.kp / scales.kp, law.kd / scales.kd);
     println!(
         "loop gains {gp:.4e}, {gd:.4e}; bias {:.4e} (static {:.4e})",
-        law.bias, scales.static_bias
+        law.bias.z, scales.static_bias
     );
     let limit = PD_BOX.exp() * (1.0 + 1e-12);
     assert!(
         gp > 0.0 && gp <= limit && gd > 0.0 && gd <= limit,
         "{gp} {gd}"
     );
-    assert!((law.bias - scales.static_bias).abs() <= bound * (1.0 + 1e-12));
+    assert!((law.bias.z - scales.static_bias).abs() <= bound * (1.0 + 1e-12));
     let tuning = PdTuning::new(&scene, 0.1, bound, settings.mpc.effort).unwrap();
     let start = scales.gains(&PD_START);
     let (j0, j1) = (
         tuning.value(&start).unwrap(),
-        tuning.value(&[law.bias, law.kp, law.kd]).unwrap(),
+        tuning.value(&[law.bias.z, law.kp, law.kd]).unwrap(),
     );
     println!("closed-loop J: start {j0:.6e}, tuned {j1:.6e}");
     assert!(j1 < j0, "{j1} vs {j0}");
@@ -259,6 +259,6 @@ fn the_training_window_cuts_whole_intervals() {
     let record = run_controller(&scene, ControllerKind::Constant, &settings).unwrap();
     let cut = training_scene(&scene, &settings).unwrap();
     let (best, _) = ConstantForce::best(&cut, 5.0, settings.mpc.effort).unwrap();
-    assert_eq!(record.force, Some(best.u));
+    assert_eq!(record.force, Some(best.u.z));
     assert_eq!(record.moment.len(), 401);
 }

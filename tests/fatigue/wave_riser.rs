@@ -49,7 +49,7 @@ fn scene(psi: f64, steps: usize, control: &str) -> Scene {
 fn rotated_difference(psi: f64) -> (f64, f64) {
     let steps = 240;
     let planar = simulate(&scene(0.0, steps, "")).unwrap();
-    assert!(matches!(planar, SceneTrajectory::Planar(_)));
+    assert!(!planar.is_spatial());
     let turned = simulate(&scene(psi, steps, "")).unwrap();
     let [s, c] = chainbeam::scene::direction_of_angle(psi);
     rotation::rotated_gap(&planar, &turned, [s, c], steps)

@@ -418,7 +418,7 @@ fn reaction_force_variant() {
     s.beam.reaction_force = true;
     s.time.steps = 400;
     let u = piecewise_constant_controls(0.01, 400, &[(0.0, 1.0, 1.0), (1.0, 2.0, -1.0)]);
-    let traj = simulate_with_controls(&s, &u).unwrap();
+    let traj = chainbeam::simulate(SimulateInput::new(&s).controls(&u)).unwrap();
     let zeta: Vec<f64> = traj.tip_target().to_vec();
     println!(
         "tip at t = 1: {:.6}, t = 2: {:.6}, t = 4: {:.6}",

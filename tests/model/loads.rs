@@ -148,9 +148,9 @@ fn rotated_loads_rotate_the_trajectory() {
         let alpha = deg.to_radians();
         let scene = loads_turned_by(riser(steps), alpha).build().unwrap();
         assert!(scene.is_spatial());
-        let spatial = match simulate(&scene).unwrap() {
-            SceneTrajectory::Spatial(t) => t,
-            SceneTrajectory::Planar(_) => panic!("{deg}°: the spatial model must run"),
+        let traj = simulate(&scene).unwrap();
+        let Some(spatial) = traj.as_spatial() else {
+            panic!("{deg}°: the spatial model must run")
         };
         let (s, c) = alpha.sin_cos();
         let turned = |k: usize| {

@@ -370,10 +370,10 @@ fn closed_loop_thrust_respects_its_bound_and_rate_at_every_step() {
         v.thrust_rate_bound = Some(rate);
     }
     let mut pd = mpc::PdLaw {
-        bias: 0.0,
         kp: 50.0,
         kd: 5.0,
         bound: 2.0, // the law's own clamp, above the thrusters' bound
+        ..mpc::PdLaw::default()
     };
     let r = mpc::run_closed_loop(&s, 0.05, &mut pd).unwrap();
     let h = s.time.step;
@@ -424,10 +424,10 @@ fn constant_thrust_lowers_the_moment_and_spatial_mpc_refuses_typed() {
     let none = problem.value(&[0.0]).unwrap();
     println!(
         "best constant thrust {} N: J {} vs {none} without",
-        c.u, r.objective
+        c.u.z, r.objective
     );
     assert!(r.objective < none, "J {} vs {none}", r.objective);
-    assert!(c.u.abs() <= 3.0);
+    assert!(c.u.z.abs() <= 3.0);
     // MPC plans through the thrust in the planar model (tests/mpc/mpc_vessel.rs); the spatial
     // model's is refused, typed.
     let e = mpc::Mpc::spatial(&s, 0.05, mpc::MpcOptions::default()).map(|_| ());
@@ -459,10 +459,10 @@ fn fatigue_controllers_report_the_thrust_they_applied() {
     let [rms, peak] = pd.thrust.expect("a thrust scene reports its thrust");
     // The same loop by hand: the PD law clamps at the thrust bound (control_bound).
     let mut law = mpc::PdLaw {
-        bias: 0.0,
         kp: 50.0,
         kd: 5.0,
         bound,
+        ..mpc::PdLaw::default()
     };
     let r = mpc::run_closed_loop(&s, 0.05, &mut law).unwrap();
     let [rms_ref, peak_ref] = thrust_stats(&r.control);

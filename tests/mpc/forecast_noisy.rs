@@ -17,27 +17,11 @@ use chainbeam::*;
 /// thrust is the control (tests/mpc/mpc_vessel.rs's `riser_in_waves`), with a surge RAO of
 /// 0.1 m/m at 4 s rising to 1 m/m at 30 s (phase −90°), and `extra` added to `[loads.waves]`.
 fn riser_in_waves(steps: usize, extra: &str) -> Scene {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/scenes/riser_300m.toml"
-    );
-    let text = std::fs::read_to_string(path).unwrap();
-    let text = text.split("\n[mpc]\n").next().unwrap().to_string()
-        + "\n[fatigue]\nouter_diameter = 0.5334\nwall_thickness = 0.022225\ncurve = \"F1\"\n";
-    let text = text
-        .replace("pendulums = 80", "pendulums = 15")
-        .replace("support = \"riser\"", "support = \"vessel\"")
-        .replace("step = 0.0125", "step = 0.05")
-        .replace("steps = 48000 ", &format!("steps = {steps} "))
-        .replace("drag = 4.0020e-7 ", "drag = 7.504e-8 ")
-        .replace(
-            "lumping = \"cell\" ",
-            &format!("lumping = \"cell\"\n{extra}\n#"),
-        )
-        + "\n[vessel]\noffset = 3.0\nramp = 5.0\nmass = 5e7\nadded_mass = 5e6\ndamping = 1e5\n\
-           thrust_bound = 2e6\nthrust_rate_bound = 2e5\n\
-           [vessel.rao]\nperiod = [4.0, 30.0]\namplitude = [0.1, 1.0]\nphase = [-90.0, -90.0]\n";
-    Scene::from_toml_str(&text).unwrap()
+    crate::vessel_riser::riser_in_waves_with(
+        steps,
+        extra,
+        "[vessel.rao]\nperiod = [4.0, 30.0]\namplitude = [0.1, 1.0]\nphase = [-90.0, -90.0]\n",
+    )
 }
 
 fn closed_loop(

@@ -6,6 +6,8 @@
 // Shared helpers, declared once for the whole crate (the files `use crate::NAME`).
 #[path = "../common/gradient_check.rs"]
 mod gradient_check;
+#[path = "../common/vessel_riser.rs"]
+mod vessel_riser;
 #[path = "../common/wave_riser4.rs"]
 mod wave_riser4;
 
@@ -15,5 +17,6 @@ mod mpc;
 mod mpc_planning;
 mod mpc_vessel;
 mod observe;
+mod one_loop;
 mod plan_prediction;
 mod thrust_plan_step;

@@ -7,14 +7,14 @@ use crate::wave_riser4;
 
 use chainbeam::error::{Requirement, ValueError};
 use chainbeam::mpc::{
-    pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon,
-    Mpc, MpcError, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
+    pd_closed_loop_cost, run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Force2,
+    Horizon, Mpc, MpcError, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, Plant,
 };
 use chainbeam::ocp::{self, OcpError, OcpOptions};
 use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::{
-    simulate_with_controls, BendingObjective, ControlMap, ControlProblem, Error, PiecewiseControl,
-    Rattle, Scene,
+    simulate, BendingObjective, ControlMap, ControlProblem, Error, PiecewiseControl, Rattle, Scene,
+    SimulateInput,
 };
 
 const INTERVAL: f64 = 0.1;
@@ -46,9 +46,9 @@ impl Controller for Script {
     fn name(&self) -> String {
         "script".into()
     }
-    fn control(&mut self, _: &Observation<'_>) -> chainbeam::Result<f64> {
+    fn control(&mut self, _: &Observation<'_>) -> chainbeam::Result<Force2> {
         self.1 += 1;
-        Ok(self.0[self.1 - 1])
+        Ok(Force2::z(self.0[self.1 - 1]))
     }
 }
 
@@ -65,7 +65,7 @@ fn plant_reproduces_the_open_loop_simulation() {
         pieces: 10,
     };
     map.controls(&pieces, &mut u);
-    let open = simulate_with_controls(&s, &u).unwrap();
+    let open = simulate(SimulateInput::new(&s).controls(&u)).unwrap();
     assert_eq!(r.control, u);
     assert_eq!(r.moment.len(), 101);
     for k in 0..=100 {
@@ -267,7 +267,7 @@ fn bounds_on_u_hold_in_closed_loop() {
         bounds_hold(&run_closed_loop(&s, INTERVAL, &mut mpc).unwrap(), bound);
     }
     let (best, _) = ConstantForce::best(&s, bound, EFFORT).unwrap();
-    assert!(best.u.abs() <= bound);
+    assert!(best.u.z.abs() <= bound && best.u.x == 0.0);
 }
 
 fn bounds_hold(r: &ClosedLoopResult, bound: f64) {
@@ -356,7 +356,7 @@ fn baselines_improve_on_no_control() {
         first_step: 0.01,
         ..OptimOptions::default()
     };
-    let (mut pd, r) = PdLaw::tune(&tuning, [0.0; 3], &opts).unwrap();
+    let (mut pd, r) = PdLaw::tune(&tuning, &[0.0; 3], &opts).unwrap();
     let closed = run_closed_loop(&s, INTERVAL, &mut pd).unwrap().summary;
     // The tuned objective is the closed-loop c_sum of the same loop (ρ = 0).
     assert!((closed.c_sum - r.objective).abs() <= 1e-12 * r.objective);

@@ -14,6 +14,8 @@ use chainbeam::mpc::{self, Forecast, Horizon, Mpc, MpcOptions};
 use chainbeam::optimize::{minimize, Bounds, Method, OptimOptions};
 use chainbeam::*;
 
+use crate::vessel_riser::riser_in_waves;
+
 /// The thesis riser (n = 10, l = 1 m, m = 1 kg, h = 0.01 s, the point load at node 5, D = 10)
 /// held by a vessel of the thesis's scale (m + m_a = 0.6 kg, c = 2 N·s/m: a thrust of 1 N moves
 /// the top by centimetres in a second), the thrust as the control (the scene of
@@ -149,27 +151,6 @@ fn mpc_thrust_respects_bound_and_rate_at_every_step() {
     // c_sum 18594 against 8358 without thrust with a 0.5 s horizon and 5 iterations per
     // re-plan); the loop's quality through the vessel is the headline's question, not this
     // test's.
-}
-
-/// The thesis riser in waves: riser_300m.toml's pipe and sea at n = 15, h = 0.05 s, held by a
-/// drillship-sized vessel (5·10⁷ kg, 10 % added mass, c = 10⁵ N·s/m) whose thrust is the control.
-fn riser_in_waves(steps: usize) -> Scene {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/scenes/riser_300m.toml"
-    );
-    let text = std::fs::read_to_string(path).unwrap();
-    let text = text.split("\n[mpc]\n").next().unwrap().to_string()
-        + "\n[fatigue]\nouter_diameter = 0.5334\nwall_thickness = 0.022225\ncurve = \"F1\"\n";
-    let text = text
-        .replace("pendulums = 80", "pendulums = 15")
-        .replace("support = \"riser\"", "support = \"vessel\"")
-        .replace("step = 0.0125", "step = 0.05")
-        .replace("steps = 48000 ", &format!("steps = {steps} "))
-        .replace("drag = 4.0020e-7 ", "drag = 7.504e-8 ")
-        + "\n[vessel]\noffset = 3.0\nramp = 5.0\nmass = 5e7\nadded_mass = 5e6\ndamping = 1e5\n\
-           thrust_bound = 2e6\nthrust_rate_bound = 2e5\n";
-    Scene::from_toml_str(&text).unwrap()
 }
 
 /// `forecast`: "perfect" is the controller as before (its default, bit for bit); "none" plans on

@@ -8,7 +8,7 @@
 
 use chainbeam::mpc::planning::planning_scene;
 use chainbeam::mpc::{
-    run_closed_loop, Controller, Horizon, Mpc, MpcError, MpcOptions, Observation, Observe,
+    run_closed_loop, Controller, Force2, Horizon, Mpc, MpcError, MpcOptions, Observation, Observe,
     Observer, ObserverOptions,
 };
 use chainbeam::*;
@@ -68,8 +68,9 @@ impl Controller for Watch {
         "watch".into()
     }
 
-    fn control(&mut self, obs: &Observation<'_>) -> Result<f64> {
-        self.observer.observe(obs)?;
+    fn control(&mut self, obs: &Observation<'_>) -> Result<Force2> {
+        let obs = obs.in_model::<2>()?;
+        self.observer.observe(&obs)?;
         if let Some(truth) = obs.previous_state.filter(|_| obs.k > 0) {
             let mut e = vec![0.0; 2 * truth.q.len()];
             self.observer.deviation(truth, &mut e);
@@ -82,7 +83,7 @@ impl Controller for Watch {
                 .push(truth.q.iter().map(|q| q[1].atan2(q[0])).collect());
         }
         self.observer.commanded(obs.k, self.command);
-        Ok(self.command)
+        Ok(Force2::z(self.command))
     }
 }
 

@@ -9,26 +9,7 @@
 use chainbeam::mpc::{self, Horizon, Mpc, MpcOptions};
 use chainbeam::*;
 
-/// riser_300m.toml's pipe and sea at n = 15, h = 0.05 s, held by a drillship-sized vessel
-/// whose thrust is the control (tests/mpc/mpc_vessel.rs's `riser_in_waves`).
-fn riser_in_waves(steps: usize) -> Scene {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/scenes/riser_300m.toml"
-    );
-    let text = std::fs::read_to_string(path).unwrap();
-    let text = text.split("\n[mpc]\n").next().unwrap().to_string()
-        + "\n[fatigue]\nouter_diameter = 0.5334\nwall_thickness = 0.022225\ncurve = \"F1\"\n";
-    let text = text
-        .replace("pendulums = 80", "pendulums = 15")
-        .replace("support = \"riser\"", "support = \"vessel\"")
-        .replace("step = 0.0125", "step = 0.05")
-        .replace("steps = 48000 ", &format!("steps = {steps} "))
-        .replace("drag = 4.0020e-7 ", "drag = 7.504e-8 ")
-        + "\n[vessel]\noffset = 3.0\nramp = 5.0\nmass = 5e7\nadded_mass = 5e6\ndamping = 1e5\n\
-           thrust_bound = 2e6\nthrust_rate_bound = 2e5\n";
-    Scene::from_toml_str(&text).unwrap()
-}
+use crate::vessel_riser::riser_in_waves;
 
 fn run(s: &Scene, plan_step: Option<f64>) -> mpc::ClosedLoopResult {
     let options = MpcOptions {

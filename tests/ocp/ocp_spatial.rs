@@ -333,7 +333,7 @@ fn auto_picks_riccati_for_long_spatial_horizons() {
 /// not rotation-invariant).
 #[test]
 fn turned_closed_loop_is_the_planar_one_turned() {
-    use chainbeam::mpc::{run_closed_loop, run_closed_loop_spatial, Mpc, MpcOptions, MpcSolver};
+    use chainbeam::mpc::{run_closed_loop, Mpc, MpcOptions, MpcSolver};
     let sea = |psi: f64| {
         let (s, c) = psi.to_radians().sin_cos();
         let wave = Harmonic {
@@ -373,7 +373,7 @@ fn turned_closed_loop_is_the_planar_one_turned() {
         let r0 = run_closed_loop(&sea(0.0), 0.1, &mut planar).unwrap();
         let (s, c) = 45f64.to_radians().sin_cos();
         let mut spatial = Mpc::spatial(&sea(45.0), 0.1, options()).unwrap();
-        let r = run_closed_loop_spatial(&sea(45.0), 0.1, &mut spatial).unwrap();
+        let r = run_closed_loop(&sea(45.0), 0.1, &mut spatial).unwrap();
         let (j0, j) = (r0.summary.c_sum, r.summary.c_sum);
         let umax = r0.summary.max_abs_control;
         assert!(umax > 0.5, "{solver:?}: the controller acts");

@@ -1251,8 +1251,8 @@ fn piecewise_scene_files() {
 #[test]
 fn piecewise_scenes_simulate_and_differentiate() {
     use chainbeam::{
-        scene_controls, simulate, simulate_with_controls, BendingObjective, ControlProblem,
-        Parametrisation, PerStepControl,
+        scene_controls, simulate, BendingObjective, ControlProblem, Parametrisation,
+        PerStepControl, SimulateInput,
     };
     let steps = 10;
     let theta = [-20.0, -35.0, -30.0];
@@ -1268,7 +1268,7 @@ fn piecewise_scenes_simulate_and_differentiate() {
     pw.validate().unwrap();
     let u = scene_controls(&pw);
     let a = simulate(&pw).unwrap();
-    let b = simulate_with_controls(&scene, &u).unwrap();
+    let b = simulate(SimulateInput::new(&scene).controls(&u)).unwrap();
     assert_eq!(a.moment(), b.moment());
     assert_eq!(a.controls(), u);
 

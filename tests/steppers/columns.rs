@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use chainbeam::{simulate, simulate_with_controls, Error, Scene, SceneTrajectory};
+use chainbeam::{simulate, Error, Scene, SceneTrajectory, SimulateInput};
 
 fn scene(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -61,7 +61,7 @@ fn planar_columns_equal_the_accessors() {
 fn planar_columns_with_controls_equal_the_accessors() {
     let s = scene("riser_5.toml");
     let u: Vec<f64> = (0..=s.time.steps).map(|k| -0.2 * k as f64).collect();
-    assert_columns_match(simulate_with_controls(&s, &u).unwrap());
+    assert_columns_match(simulate(SimulateInput::new(&s).controls(&u)).unwrap());
 }
 
 #[test]
@@ -85,12 +85,12 @@ fn spatial_columns_equal_the_accessors() {
 /// with the first step that holds one, as the command line's check does.
 #[test]
 fn a_non_finite_value_names_the_first_step() {
-    let SceneTrajectory::Planar(mut t) = simulate(&scene("riser_5.toml")).unwrap() else {
+    let Ok(mut t) = simulate(&scene("riser_5.toml")).unwrap().into_planar() else {
         panic!("riser_5 is planar");
     };
     t.energy[7] = f64::INFINITY;
     t.moment[3] = f64::NAN;
-    match SceneTrajectory::Planar(t).into_columns() {
+    match SceneTrajectory::from(t).into_columns() {
         Err(Error::NonFinite { step, .. }) => assert_eq!(step, 3),
         other => panic!("expected NonFinite at step 3, got {other:?}"),
     }

@@ -2,7 +2,7 @@
 //! stored, not when a scene is read: a scene whose trajectory is over the budget is valid, a
 //! streamed run of it (the library's `simulate_streaming`, `chainbeam simulate --columns`)
 //! starts and writes its rows, and every run that stores one or writes it whole (`simulate`,
-//! `simulate_with_controls`, the adjoint and the optimisers through `ControlProblem`,
+//! `simulate` with given controls, the adjoint and the optimisers through `ControlProblem`,
 //! `chainbeam gradient`, `chainbeam simulate` without `--columns`) is refused at once with the
 //! message the scene check gave before:
 //! typed (`Error::Scene` with the key `time.steps`), the bytes needed, the limit and the largest N
@@ -81,8 +81,8 @@ fn a_scene_over_the_trajectory_budget_streams_and_is_refused_where_it_is_stored(
     assert_budget_error(&simulate(&scene).unwrap_err(), "simulate");
     let u = vec![0.0; N + 1];
     assert_budget_error(
-        &simulate_with_controls(&scene, &u).unwrap_err(),
-        "simulate_with_controls",
+        &simulate(SimulateInput::new(&scene).controls(&u)).unwrap_err(),
+        "simulate with given controls",
     );
     assert_budget_error(
         &ControlProblem::from_scene(&scene).unwrap_err(),

@@ -288,7 +288,7 @@ fn adjoint_and_hessian_at_large_deflection() {
     let theta = [3.0, -2.0, 4.0, -1.0];
 
     // The trajectory the derivatives are taken along visits every branch.
-    let traj = simulate_with_controls(&scene, &prob.controls(&theta).unwrap())
+    let traj = simulate(SimulateInput::new(&scene).controls(&prob.controls(&theta).unwrap()))
         .unwrap()
         .into_planar()
         .unwrap();

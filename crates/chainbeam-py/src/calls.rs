@@ -7,9 +7,8 @@ use pyo3::types::PyDict;
 
 use chainbeam::optimize::{scene_start, AnyProblem, OptimProblem};
 use chainbeam::{
-    simulate as lib_simulate, simulate_with_controls, simulate_with_controls_xz, BendingObjective,
-    ControlKind, ControlMap, ObjectiveKind, Parameter, Parametrisation, PerStepControl,
-    PiecewiseControl, SceneTrajectory,
+    simulate as lib_simulate, BendingObjective, ControlKind, ControlMap, ObjectiveKind, Parameter,
+    Parametrisation, PerStepControl, PiecewiseControl, SceneTrajectory, SimulateInput,
 };
 
 use crate::errors::{check, Failure};
@@ -116,8 +115,10 @@ fn run_simulation(
                 u
             };
             match &c.x {
-                None => simulate_with_controls(scene, &expand(&c.z))?,
-                Some(x) => simulate_with_controls_xz(scene, &expand(x), &expand(&c.z))?,
+                None => lib_simulate(SimulateInput::new(scene).controls(&expand(&c.z)))?,
+                Some(x) => {
+                    lib_simulate(SimulateInput::new(scene).controls_xz(&expand(x), &expand(&c.z)))?
+                }
             }
         }
     })

@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use chainbeam::mpc::{
-    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Horizon, Mpc, MpcOptions,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Force2, Horizon, Mpc, MpcOptions,
     MpcSolver, NoControl, Observation, PdLaw, PdTuning, Summary,
 };
 use chainbeam::multistart::{multistart, StartDesign};
@@ -287,7 +287,7 @@ impl<C: Controller + ?Sized> Controller for Counted<'_, C> {
         self.inner.name()
     }
 
-    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<f64> {
+    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<Force2> {
         let u = self.inner.control(obs);
         self.ticker.tick();
         u
@@ -295,6 +295,10 @@ impl<C: Controller + ?Sized> Controller for Counted<'_, C> {
 
     fn last_iterations(&self) -> Option<usize> {
         self.inner.last_iterations()
+    }
+
+    fn spatial(&self) -> bool {
+        self.inner.spatial()
     }
 }
 
@@ -356,8 +360,8 @@ fn run_mpc(
         first_step: 0.01,
         ..OptimOptions::default()
     };
-    let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts)?;
-    let gains = [pd.bias, pd.kp, pd.kd];
+    let (mut pd, _) = PdLaw::tune(&tuning, &[0.0; 3], &opts)?;
+    let gains = [pd.bias.z, pd.kp, pd.kd];
     let pd = counted_loop(scene, s.interval, &mut pd, ticker)?;
     Ok((closed, Some(([none, constant, pd], gains))))
 }

@@ -8,12 +8,11 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use chainbeam::mpc::{
-    run_closed_loop, run_closed_loop_spatial, ClosedLoopResult, ConstantForce, Controller, Horizon,
-    Mpc, MpcOptions, MpcSolver, NoControl, Observation, PdLaw, PdTuning, SpatialConstantForce,
-    SpatialController, SpatialPdLaw, Summary,
+    run_closed_loop, ClosedLoopResult, ConstantForce, Controller, Force2, Horizon, Mpc, MpcOptions,
+    MpcSolver, NoControl, Observation, PdLaw, PdTuning, Summary,
 };
 use chainbeam::ocp::OcpOptions;
-use chainbeam::optimize::OptimOptions;
+use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::scene::{Forecast, MpcSettings, MpcTable, Observe, MAX_STEPS, MPC_KEYS};
 use chainbeam::{ObjectiveKind, Scene};
 
@@ -388,11 +387,9 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         model_file,
     };
     let closed = if spatial {
-        let mpc = Mpc::spatial(&model, s.interval, options);
-        loop_of.run(mpc, &progress, |s, i, c| run_closed_loop_spatial(s, i, c))?
+        loop_of.run(Mpc::spatial(&model, s.interval, options), &progress)?
     } else {
-        let mpc = Mpc::new(&model, s.interval, options);
-        loop_of.run(mpc, &progress, |s, i, c| run_closed_loop(s, i, c))?
+        loop_of.run(Mpc::new(&model, s.interval, options), &progress)?
     };
     let baselines = match a.baselines {
         false => None,
@@ -428,18 +425,14 @@ struct Loop<'a> {
 }
 
 impl Loop<'_> {
-    /// Runs the controller `mpc` (as built, or its error: the model's) in closed loop by `run`
-    /// (the planar or the spatial loop), blaming a failure on the model's file when the
-    /// controller failed and on the plant's otherwise.
-    fn run<C, F>(
+    /// Runs the controller `mpc` (as built, or its error: the model's) in closed loop (in the
+    /// planar or the spatial model, as the scene and the controller ask), blaming a failure on
+    /// the model's file when the controller failed and on the plant's otherwise.
+    fn run<C: Controller>(
         &self,
         mpc: chainbeam::Result<C>,
         progress: &Progress,
-        run: F,
-    ) -> Result<ClosedLoopResult, CliError>
-    where
-        F: FnOnce(&Scene, f64, &mut Blamed<'_, C>) -> chainbeam::Result<ClosedLoopResult>,
-    {
+    ) -> Result<ClosedLoopResult, CliError> {
         let (a, s) = (self.setup.a, &self.setup.settings);
         let mut mpc = mpc.map_err(|e| mpc_error(self.setup, self.model_file, e))?;
         let seconds = self.scene.time.steps as f64 * self.scene.time.step;
@@ -458,7 +451,7 @@ impl Loop<'_> {
             failed: false,
             bar: &bar,
         };
-        let closed = run(self.scene, s.interval, &mut blamed);
+        let closed = run_closed_loop(self.scene, s.interval, &mut blamed);
         bar.finish_and_clear();
         // The controller's failures are the model's (its scene, its step); the others the
         // plant's.
@@ -479,29 +472,12 @@ struct Blamed<'a, C> {
     bar: &'a indicatif::ProgressBar,
 }
 
-impl SpatialController for Blamed<'_, Mpc<3>> {
-    fn name(&self) -> String {
-        SpatialController::name(self.inner)
-    }
-
-    fn control(&mut self, obs: &Observation<'_, 3>) -> chainbeam::Result<[f64; 2]> {
-        let u = SpatialController::control(self.inner, obs);
-        self.failed = u.is_err();
-        self.bar.inc(1);
-        u
-    }
-
-    fn last_iterations(&self) -> Option<usize> {
-        SpatialController::last_iterations(self.inner)
-    }
-}
-
-impl Controller for Blamed<'_, Mpc> {
+impl<C: Controller> Controller for Blamed<'_, C> {
     fn name(&self) -> String {
         self.inner.name()
     }
 
-    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<f64> {
+    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<Force2> {
         let u = self.inner.control(obs);
         self.failed = u.is_err();
         self.bar.inc(1);
@@ -510,6 +486,10 @@ impl Controller for Blamed<'_, Mpc> {
 
     fn last_iterations(&self) -> Option<usize> {
         self.inner.last_iterations()
+    }
+
+    fn spatial(&self) -> bool {
+        self.inner.spatial()
     }
 }
 
@@ -577,9 +557,9 @@ fn pd_tuning_options() -> OptimOptions {
 }
 
 /// The baselines (no control, the best constant force, a PD law tuned over the closed-loop
-/// c_sum), each run checked finite; with `spatial` in the spatial model: the best constant 2-axis
-/// force and a PD law per axis with common gains ([`SpatialPdLaw`], tuned over the closed-loop
-/// Σ |M₀|²).
+/// c_sum), each run checked finite; with `spatial` in the spatial model (also for a planar plant
+/// scene whose `--model` is spatial): the best constant 2-axis force and a PD law per axis with
+/// common gains ([`PdLaw`], tuned over the closed-loop Σ |M₀|²).
 fn run_baselines(
     s: &Setup<'_>,
     scene: &Scene,
@@ -593,36 +573,59 @@ fn run_baselines(
         effort,
         ..
     } = s.settings;
-    let planar = |c: &mut dyn Controller| run_closed_loop(scene, interval, c).map_err(err);
-    let spatial_loop =
-        |c: &mut dyn SpatialController| run_closed_loop_spatial(scene, interval, c).map_err(err);
+    // A planar plant scene whose `--model` is spatial runs every baseline in the spatial model.
+    let run = |c: &mut dyn Controller| {
+        let mut c = InModel { inner: c, spatial };
+        run_closed_loop(scene, interval, &mut c).map_err(err)
+    };
     let opts = pd_tuning_options();
     let spinner = progress.spinner("baselines: no control, best constant force, tuned PD law");
-    let (runs, gains) = if spatial {
-        let (mut constant, _) = SpatialConstantForce::best(scene, bound, effort).map_err(err)?;
-        let tuning = PdTuning::spatial(scene, interval, bound, effort).map_err(err)?;
-        let (mut pd, _) = SpatialPdLaw::tune(&tuning, [0.0; 4], &opts).map_err(err)?;
-        let gains = vec![pd.bias[0], pd.bias[1], pd.kp, pd.kd];
-        let none = spatial_loop(&mut NoControl)?;
-        let runs = [none, spatial_loop(&mut constant)?, spatial_loop(&mut pd)?];
-        (runs, gains)
+    let (mut constant, _) = if spatial {
+        ConstantForce::best_spatial(scene, bound, effort)
     } else {
-        let (mut constant, _) = ConstantForce::best(scene, bound, effort).map_err(err)?;
-        let tuning = PdTuning::new(scene, interval, bound, effort).map_err(err)?;
-        let (mut pd, _) = PdLaw::tune(&tuning, [0.0; 3], &opts).map_err(err)?;
-        let gains = vec![pd.bias, pd.kp, pd.kd];
-        let runs = [
-            planar(&mut NoControl)?,
-            planar(&mut constant)?,
-            planar(&mut pd)?,
-        ];
-        (runs, gains)
-    };
+        ConstantForce::best(scene, bound, effort)
+    }
+    .map_err(err)?;
+    let tuning = if spatial {
+        PdTuning::spatial(scene, interval, bound, effort)
+    } else {
+        PdTuning::new(scene, interval, bound, effort)
+    }
+    .map_err(err)?;
+    let start = vec![0.0; tuning.n_params()];
+    let (mut pd, _) = PdLaw::tune(&tuning, &start, &opts).map_err(err)?;
+    let gains = pd.gains();
+    let runs = [run(&mut NoControl)?, run(&mut constant)?, run(&mut pd)?];
     spinner.finish_and_clear();
     for r in &runs {
         check_run(&s.a.scene, r)?;
     }
     Ok(Baselines { runs, gains })
+}
+
+/// A controller run in the spatial model when `spatial` is set, whatever its own model
+/// ([`Controller::spatial`]).
+struct InModel<'c> {
+    inner: &'c mut dyn Controller,
+    spatial: bool,
+}
+
+impl Controller for InModel<'_> {
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+
+    fn control(&mut self, obs: &Observation<'_>) -> chainbeam::Result<Force2> {
+        self.inner.control(obs)
+    }
+
+    fn last_iterations(&self) -> Option<usize> {
+        self.inner.last_iterations()
+    }
+
+    fn spatial(&self) -> bool {
+        self.spatial || self.inner.spatial()
+    }
 }
 
 /// The rainflow damage of the closed loop's moment (`chainbeam fatigue`'s assessment of it) when

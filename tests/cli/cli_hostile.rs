@@ -314,7 +314,8 @@ fn devices_as_inputs_fail_at_once_in_bounded_memory() {
             assert_eq!(u.stderr.lines().count(), 1, "{shown}: {}", u.stderr);
             assert!(u.stderr.contains(dev), "{shown}: {}", u.stderr);
             assert!(u.cpu_seconds < 1.0, "{shown}: {} s of CPU", u.cpu_seconds);
-            assert!(u.wall_seconds < 10.0, "{shown}: {} s", u.wall_seconds);
+            // A hang guard, not a speed test: generous, since the machine may be loaded.
+            assert!(u.wall_seconds < 120.0, "{shown}: {} s", u.wall_seconds);
             assert!(u.max_rss_kib < limit_kib, "{shown}: {} KiB", u.max_rss_kib);
         }
     }

@@ -88,7 +88,6 @@ fn table_3_2_constant_summed_lbfgs() {
         // whose round-off exceeds its last changes, then one polish HVP; see optimize's docs).
         assert!(r.iterations <= 30 && r.gradient_evals <= 200 && r.hvp_evals <= 5);
         assert_eq!(r.controls, vec![r.theta[0]; 11]);
-        assert!(r.seconds < 1.0);
     }
 }
 
@@ -663,7 +662,6 @@ fn failed_trial_points_are_survived_and_reported() {
         } else {
             assert_eq!(r.restarts, 0);
         }
-        assert!(r.seconds < 1.5);
     }
 }
 

@@ -77,7 +77,8 @@ fn a_scene_over_the_trajectory_budget_streams_and_is_refused_where_it_is_stored(
     assert_eq!(scene.time.steps, N);
     let e = scene.check_stored_trajectory().unwrap_err();
     assert_budget_error(&Error::Scene(e), "check_stored_trajectory");
-    // The runs that store it refuse it, before anything of size N is stored.
+    // The runs that store it refuse it, before anything of size N is stored (the time bound
+    // below is a hang guard, generous for a loaded machine, not a speed test).
     assert_budget_error(&simulate(&scene).unwrap_err(), "simulate");
     let u = vec![0.0; N + 1];
     assert_budget_error(
@@ -89,7 +90,7 @@ fn a_scene_over_the_trajectory_budget_streams_and_is_refused_where_it_is_stored(
         "ControlProblem (adjoint, optimisers)",
     );
     assert!(
-        t0.elapsed().as_secs_f64() < 5.0,
+        t0.elapsed().as_secs_f64() < 60.0,
         "refused at once: {:?}",
         t0.elapsed()
     );

@@ -13,7 +13,7 @@
 //! riser_300m.toml's pipe, its drag switched to Morison's), waves and current on.
 
 use chainbeam::{Chain, Rattle, Scene, State};
-use num_dual::{Dual64, DualNum};
+use num_dual::Dual64;
 
 fn run_both(scene: &Scene, steps: usize) {
     let chain = Chain::<f64, 2>::from_scene(scene).unwrap();
@@ -29,9 +29,9 @@ fn run_both(scene: &Scene, steps: usize) {
     let zero = Dual64::from(0.0);
     let bits = |x: &[[f64; 2]]| -> Vec<u64> { x.iter().flatten().map(|v| v.to_bits()).collect() };
     let re_bits =
-        |x: &[[Dual64; 2]]| -> Vec<u64> { x.iter().flatten().map(|v| v.re().to_bits()).collect() };
+        |x: &[[Dual64; 2]]| -> Vec<u64> { x.iter().flatten().map(|v| v.re.to_bits()).collect() };
     let scalar = |x: &[f64]| -> Vec<u64> { x.iter().map(|v| v.to_bits()).collect() };
-    let re_scalar = |x: &[Dual64]| -> Vec<u64> { x.iter().map(|v| v.re().to_bits()).collect() };
+    let re_scalar = |x: &[Dual64]| -> Vec<u64> { x.iter().map(|v| v.re.to_bits()).collect() };
     let mut iterations = 0;
     for k in 0..steps {
         let a = plain.step(&mut s, k, 0.0, 0.0).unwrap();

@@ -35,6 +35,7 @@
 //! ```
 
 pub(crate) mod coupled;
+mod fused;
 pub mod rattle;
 pub mod rk4;
 pub mod shake;

@@ -60,10 +60,12 @@
 pub use crate::base::StepStats;
 
 use super::coupled::CoupledHalf;
+use super::fused::{self, FusedScratch, Projected, Projection};
 use super::{refuse_reaction_tip, singular, Stepper};
 use crate::base::Scalar;
 use crate::error::{Error, Result};
 use crate::model::geometry::derivative_updates;
+use crate::model::terms::{IterateInputs, IterateOutputs};
 use crate::model::{e2, BlockSym, Chain, Ctx, HalfKick, HalfSteps};
 use crate::tridiag::BorderedTridiag;
 
@@ -180,6 +182,9 @@ struct Workspace<D, const DIM: usize> {
     /// The water's momentum P(t_k + h/2) of a model with Morison's drag node by node, read
     /// once per step ([`crate::model::NodeDrag::water_momenta`]); empty without that term.
     water: Vec<[D; DIM]>,
+    /// The fused passes of the `f64` step with that term (`steppers::fused`,
+    /// [`crate::model::NodeDrag::half_step_iterate`]); `None` for other models and scalars.
+    fused: Option<FusedScratch<D>>,
 }
 
 /// RATTLE for a [`Chain`], with its workspace. `step` does not allocate.
@@ -228,6 +233,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             } else {
                 Vec::new()
             },
+            fused: (chain.node_drag().is_some()
+                && !chain.has_coupled_dissipation()
+                && D::NDERIV == 0)
+                .then(|| FusedScratch::new(n, nc)),
         };
         Ok(Rattle {
             chain,
@@ -511,8 +520,68 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         if let Some(nd) = ch.node_drag() {
             nd.water_momenta(&dctx, &mut ws.water);
         }
+        // Σ lᵢ, the tip row's scale in the residual's max-norm (as the residual sums it).
+        let total_length: f64 = ch.lengths().iter().map(|l| l.re()).sum();
         loop {
             // c = a − h/2 Ĝ(q_k)ᵀ λ;  p_{k+½} = c or the drag root;  q' = q_k + h M⁻¹ p_{k+½}
+            let fused = ws.fused.as_mut().filter(|_| updates == 0 && !COUPLED);
+            if let (Some(nd), Some(scratch)) = (ch.node_drag(), fused) {
+                // The same values by the fused passes (NodeDrag::half_step_iterate).
+                let inputs = IterateInputs {
+                    q: &state.q,
+                    a: &ws.a,
+                    lam: &ws.lam,
+                    water: &ws.water,
+                    lengths: ch.lengths(),
+                    inv_lengths: ch.inverse_lengths(),
+                    inv_masses: &ch.inv_masses,
+                    bordered: ops.bordered(),
+                    tip_target: zeta_next,
+                    total_length,
+                    h,
+                };
+                let mut outputs = IterateOutputs {
+                    c: &mut ws.half.c,
+                    phalf: &mut ws.half.phalf,
+                    omega: &mut ws.half.w,
+                    minv_p: &mut ws.tmp,
+                    qnew: &mut ws.qnew,
+                    residual: &mut ws.rhs,
+                };
+                let rmax = nd.half_step_iterate(&dctx, &inputs, &mut outputs);
+                if !rmax.is_finite() {
+                    return Err(Error::NonFinite {
+                        step: k,
+                        quantity: "the positions q_{k+1} of the Newton iterate",
+                    });
+                }
+                // (f64: no derivative-only updates.)
+                if rmax <= self.options.tolerance {
+                    let nc = ws.lam.len();
+                    state.multipliers_mut(nc).lambda.copy_from_slice(&ws.lam);
+                    ws.mu0_ready = false;
+                    std::mem::swap(&mut state.q, &mut ws.qnew);
+                    return Ok(StepStats {
+                        iterations,
+                        residual: rmax,
+                    });
+                }
+                if iterations >= self.options.max_iterations {
+                    return Err(self.not_converged(k, rmax, iterations));
+                }
+                let (q, qn, w) = (&state.q, &ws.qnew, &ws.half.w);
+                let solved = fused::newton_nodes_solve(ch, (q, qn), w, h, scratch, &mut ws.rhs)
+                    .map_err(|zp| singular(k, zp))?;
+                if !solved {
+                    ops.assemble_newton_nodes((q, qn), w, h, &mut ws.tri);
+                    ws.tri.solve(&mut ws.rhs).map_err(|zp| singular(k, zp))?;
+                }
+                for (l, r) in ws.lam.iter_mut().zip(ws.rhs.iter()) {
+                    *l -= *r;
+                }
+                iterations += 1;
+                continue;
+            }
             match ws.coupled.as_mut().filter(|_| COUPLED) {
                 None => half_step_momentum(
                     ch,
@@ -622,7 +691,12 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             s: hh,
         };
         ch.dissipative_half_kick(kick, &dctx, &mut ws.a);
-        if let Some(nd) = ch.node_drag() {
+        if let (Some(nd), Some(_)) = (ch.node_drag(), ws.fused.as_ref().filter(|_| !COUPLED)) {
+            // The same values in one pass (NodeDrag::kick_in).
+            let ls = (ch.lengths(), ch.inverse_lengths());
+            let water = (&dctx, ws.water.as_slice());
+            nd.kick_in(&ws.half.phalf, ls, water, hh, &mut ws.a);
+        } else if let Some(nd) = ch.node_drag() {
             // + h/2 Q(p½), Q = A⁻¹ F(A(p½ − P)) (model::NodeDrag); tmp and qnew are scratch here.
             let ls = (ch.lengths(), ch.inverse_lengths());
             let water = (&dctx, ws.water.as_slice());
@@ -661,6 +735,31 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             (None, _, None) => D::zero(),
         };
+        if let Some(scratch) = ws.fused.as_mut().filter(|_| !COUPLED) {
+            // The same values by the fused passes (steppers::fused).
+            let nc = ws.rhs.len();
+            state.multipliers_mut(nc);
+            let State {
+                q, p, multipliers, ..
+            } = state;
+            if let Some(m) = multipliers.as_mut() {
+                let x = Projection {
+                    q,
+                    b: &ws.a,
+                    v_tip: v_next,
+                    hh,
+                };
+                let mut o = Projected {
+                    tmp: &mut ws.tmp,
+                    rhs: &mut ws.rhs,
+                    p,
+                    mu: &mut m.mu,
+                };
+                if fused::project(ch, &x, scratch, &mut o).map_err(|zp| singular(k, zp))? {
+                    return Ok(());
+                }
+            }
+        }
         projection_solve(
             ch,
             &state.q,

@@ -14,6 +14,7 @@ mod gradient_check;
 
 mod columns;
 mod euler_bernoulli;
+mod fused_node_step;
 mod integrators;
 mod stability_limit;
 mod start;

@@ -218,9 +218,29 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
     /// component [`CurrentDrag::momentum`]'s bit for bit, with the waves' record located once
     /// for all pendulums ([`WaveField::at`]) instead of once per pendulum and component.
     pub fn momenta(&self, ctx: &Ctx<D>, out: &mut [[D; DIM]]) {
-        let at = self.waves.as_ref().map(|w| w.at(ctx.t));
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = std::array::from_fn(|d| self.momentum_located(i, d, ctx, at));
+        if ctx.seed == Some(Parameter::Mass) {
+            let at = self.waves.as_ref().map(|w| w.at(ctx.t));
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = std::array::from_fn(|d| self.momentum_located(i, d, ctx, at));
+            }
+            return;
+        }
+        // momentum_located's arithmetic, with the waves' series read for every pendulum at
+        // once (WaveField::read_all): s·Aᵢ_d + Bᵢ_d, then + m-scale · (Wᵢ e_d).
+        let s = ctx.param(Parameter::CurrentSpeed, self.speed);
+        for (o, (a, b)) in out.iter_mut().zip(self.per_speed.iter().zip(&self.offset)) {
+            *o = std::array::from_fn(|d| s * a[d] + b[d]);
+        }
+        if let Some(w) = &self.waves {
+            let at = w.at(ctx.t);
+            let (unit, scale) = (self.wave_unit, self.wave_scale);
+            w.read_all(false, at, |i, v| {
+                for d in 0..DIM {
+                    if unit[d] != 0.0 {
+                        out[i][d] += scale * (v * unit[d]);
+                    }
+                }
+            });
         }
     }
 

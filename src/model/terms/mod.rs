@@ -63,6 +63,7 @@ pub use dissipation::{
 pub use drag::{Drag, DragWeights};
 pub use gravity::Gravity;
 pub use joint_damping::JointDamping;
+pub(crate) use node_drag::{IterateInputs, IterateOutputs};
 pub use node_drag::{NodeDrag, NodeReverseScratch};
 pub use point_load::{ChainPointLoad, HarmonicForce, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};

@@ -30,6 +30,7 @@ use super::current::CurrentDrag;
 use super::drag::{root_of, slope_of};
 use super::{BlockSym, Ctx, Embed};
 use crate::base::{Parameter, Scalar};
+use crate::model::geometry::dot;
 use num_dual::Dual;
 use std::sync::Arc;
 
@@ -220,6 +221,35 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         suffix_scale(out, lengths);
     }
 
+    /// a += s Q(p) with Q = A⁻¹ F(A(p − P)) and P given (`water`): RATTLE's second half kick
+    /// of this drag in one reverse pass, y = A(p − P) ([`NodeDrag::node_momenta_in`]), the node
+    /// forces ([`NodeDrag::node_forces`]) and their suffix sums (`suffix_scale`) carried from
+    /// the tip down; each value is [`NodeDrag::generalised_force_in`]'s, and the kick's
+    /// aᵢ + Qᵢ s, bit for bit.
+    pub(crate) fn kick_in(
+        &self,
+        p: &[[D; DIM]],
+        (lengths, inv_lengths): (&[D], &[D]),
+        (ctx, water): (&Ctx<D>, &[[D; DIM]]),
+        s: f64,
+        a: &mut [[D; DIM]],
+    ) {
+        let n = p.len();
+        let mut next = [D::zero(); DIM];
+        let mut sum = [D::zero(); DIM];
+        for k in (0..n).rev() {
+            let il = inv_lengths[k];
+            let cur: [D; DIM] = std::array::from_fn(|d| (p[k][d] - water[k][d]) * il);
+            let y: [D; DIM] = std::array::from_fn(|d| cur[d] - next[d]);
+            next = cur;
+            let f = transverse_morison(self.node_constant(k, ctx), &y);
+            for d in 0..DIM {
+                sum[d] += f[d];
+                a[k][d] += sum[d] * lengths[k] * s;
+            }
+        }
+    }
+
     /// The node forces F(y) (transverse Morison, no axial part) into `f`.
     pub fn node_forces<E: Embed<D>>(&self, y: &[[E; DIM]], ctx: &Ctx<E>, f: &mut [[E; DIM]]) {
         for (k, (f, y)) in f.iter_mut().zip(y).enumerate() {
@@ -241,6 +271,106 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         suffix_scale(out, lengths);
     }
 
+    /// The root of node k's implicit half step (the transverse drag's root of
+    /// y − (h/2) F(y) = b, the axial component passed through) and Ωₖ = ∂yₖ/∂bₖ (axial 1):
+    /// the per-node arithmetic of [`NodeDrag::implicit_half_step`], written once for it and for
+    /// [`NodeDrag::half_step_iterate`].
+    #[inline(always)]
+    fn node_root(
+        &self,
+        k: usize,
+        b: &[D; DIM],
+        h: f64,
+        ctx: &Ctx<D>,
+    ) -> ([D; DIM], BlockSym<D, DIM>) {
+        let ax = DIM - 2;
+        let (mut r, mut om) = root_of(self.node_constant(k, ctx), b, h);
+        r[ax] = b[ax];
+        om.diag[ax] = D::one();
+        (r, om)
+    }
+
+    /// One Newton iterate of RATTLE's first half step with this drag, in two passes over the
+    /// chain instead of the ten of its parts (the plant's hot loop, `steppers::rattle`): from
+    /// λ, c = a − (h/2) Ĝ(q)ᵀλ, the half step p_{k+½} of [`NodeDrag::implicit_half_step`]
+    /// (b = A(c − P), a root per node, p = A⁻¹y + P) with Ω, M⁻¹p_{k+½} and
+    /// q′ = q + h M⁻¹p_{k+½}, and the constraint residual ĝ(q′) − (0, …, 0, ζ) with its
+    /// max-norm (the tip row scaled by the beam's length), which it returns. Every value is
+    /// formed by the arithmetic of the separate passes (`ConstraintOperator::add_transpose`,
+    /// `implicit_half_step`, `Chain::apply_inverse_mass`, `ConstraintOperator::residual`), in
+    /// the same order, so the outputs are theirs bit for bit; the reverse pass carries
+    /// (c − P)/l, the roots' suffix sum and p/l of the node above, the forward pass M⁻¹'s
+    /// running difference and the tip's Σ lᵢ q′ᵢ,z.
+    pub(crate) fn half_step_iterate(
+        &self,
+        ctx: &Ctx<D>,
+        x: &IterateInputs<'_, D, DIM>,
+        o: &mut IterateOutputs<'_, D, DIM>,
+    ) -> f64 {
+        let n = x.q.len();
+        let z = DIM - 1;
+        let h = x.h;
+        let scale = D::from(-0.5 * h);
+        let lam_tip = if x.bordered { x.lam[n] } else { D::zero() };
+        // (c − P)/l of node k + 1, the roots' suffix sum, p/l of pendulum k + 1.
+        let mut next = [D::zero(); DIM];
+        let mut sum = [D::zero(); DIM];
+        let mut next_p = [D::zero(); DIM];
+        for k in (0..n).rev() {
+            let (q, w, l, il) = (&x.q[k], &x.water[k], x.lengths[k], x.inv_lengths[k]);
+            let mut c = x.a[k];
+            for d in 0..DIM {
+                c[d] += x.lam[k] * q[d] * scale;
+            }
+            if x.bordered {
+                c[z] += lam_tip * l * scale;
+            }
+            o.c[k] = c;
+            let cur: [D; DIM] = std::array::from_fn(|d| (c[d] - w[d]) * il);
+            let b: [D; DIM] = std::array::from_fn(|d| cur[d] - next[d]);
+            next = cur;
+            let (r, om) = self.node_root(k, &b, h, ctx);
+            o.omega[k] = om;
+            let mut p = [D::zero(); DIM];
+            for d in 0..DIM {
+                sum[d] += r[d];
+                p[d] = sum[d] * l;
+            }
+            for d in 0..DIM {
+                p[d] += w[d];
+            }
+            o.phalf[k] = p;
+            // M⁻¹'s first pass: uₖ = (pₖ/lₖ − pₖ₊₁/lₖ₊₁)/mₖ.
+            let mut pl = p;
+            for v in pl.iter_mut() {
+                *v *= il;
+            }
+            o.minv_p[k] = std::array::from_fn(|d| (pl[d] - next_p[d]) * x.inv_masses[k]);
+            next_p = pl;
+        }
+        let mut prev = [D::zero(); DIM];
+        let mut rmax: f64 = 0.0;
+        let mut tip = D::zero();
+        for k in 0..n {
+            let u = o.minv_p[k];
+            let v: [D; DIM] = std::array::from_fn(|d| (u[d] - prev[d]) * x.inv_lengths[k]);
+            prev = u;
+            o.minv_p[k] = v;
+            let qn: [D; DIM] = std::array::from_fn(|d| x.q[k][d] + v[d] * h);
+            o.qnew[k] = qn;
+            let r = (dot(&qn, &qn) - 1.0) * 0.5;
+            rmax = rmax.max(r.re().abs());
+            o.residual[k] = r;
+            tip += x.lengths[k] * qn[z];
+        }
+        if x.bordered {
+            let r = tip - x.tip_target;
+            rmax = rmax.max(r.re().abs() / x.total_length);
+            o.residual[n] = r;
+        }
+        rmax
+    }
+
     /// The implicit half step p − (h/2) Q(p) = c: b = A(c − P), yₖ the drag's root of
     /// y − (h/2) F(y) = b at each node, p = A⁻¹ y + P; `omega` gets Ωₖ = ∂yₖ/∂bₖ (axial 1).
     /// `water` is P at the context's time ([`NodeDrag::water_momenta`]).
@@ -253,14 +383,9 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         omega: &mut [BlockSym<D, DIM>],
     ) {
         Self::node_momenta_in(c, inv_lengths, water, p);
-        let ax = DIM - 2;
         for (k, (y, w)) in p.iter_mut().zip(omega.iter_mut()).enumerate() {
             let b = *y;
-            let (r, mut om) = root_of(self.node_constant(k, ctx), &b, h);
-            *y = r;
-            y[ax] = b[ax];
-            om.diag[ax] = D::one();
-            *w = om;
+            (*y, *w) = self.node_root(k, &b, h, ctx);
         }
         suffix_scale(p, lengths);
         for (pk, w) in p.iter_mut().zip(water) {
@@ -269,6 +394,51 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
             }
         }
     }
+}
+
+/// What one fused Newton iterate of the half step reads ([`NodeDrag::half_step_iterate`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct IterateInputs<'a, D, const DIM: usize> {
+    /// q_k.
+    pub q: &'a [[D; DIM]],
+    /// a = p_k − (h/2) U_q(q_k).
+    pub a: &'a [[D; DIM]],
+    /// The Newton iterate λ (n, + 1 with the tip row).
+    pub lam: &'a [D],
+    /// The water's momentum P(t_k + h/2) ([`NodeDrag::water_momenta`]).
+    pub water: &'a [[D; DIM]],
+    /// lᵢ.
+    pub lengths: &'a [D],
+    /// 1/lᵢ.
+    pub inv_lengths: &'a [D],
+    /// 1/mᵢ.
+    pub inv_masses: &'a [D],
+    /// Whether the tip row is present.
+    pub bordered: bool,
+    /// The tip row's target ζ_{k+1}.
+    pub tip_target: D,
+    /// Σ lᵢ (real parts, summed as `ConstraintOperator::residual` sums them), the tip row's
+    /// scale in the max-norm.
+    pub total_length: f64,
+    /// The step h.
+    pub h: f64,
+}
+
+/// What one fused Newton iterate writes ([`NodeDrag::half_step_iterate`]).
+#[derive(Debug)]
+pub(crate) struct IterateOutputs<'a, D, const DIM: usize> {
+    /// c = a − (h/2) Ĝ(q_k)ᵀλ.
+    pub c: &'a mut [[D; DIM]],
+    /// p_{k+½}.
+    pub phalf: &'a mut [[D; DIM]],
+    /// The nodes' root slopes Ωₖ (W = A⁻¹ΩA).
+    pub omega: &'a mut [BlockSym<D, DIM>],
+    /// M⁻¹ p_{k+½}.
+    pub minv_p: &'a mut [[D; DIM]],
+    /// q′ = q_k + h M⁻¹ p_{k+½}.
+    pub qnew: &'a mut [[D; DIM]],
+    /// ĝ(q′) − (0, …, 0, ζ).
+    pub residual: &'a mut [D],
 }
 
 /// Scratch of the reverse products of a [`NodeDrag`] (allocated once per sweep).

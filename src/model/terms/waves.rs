@@ -549,6 +549,51 @@ impl WaveField {
         self.read(&self.series, place, |t| self.sum_beyond(i, false, t), at)
     }
 
+    /// Every pendulum's Wᵢ (`inertia = false`, [`WaveField::momentum_at`]) or Gᵢ (`true`,
+    /// [`WaveField::inertia_at`]) at a located time, given to `each`(i, value) for i = 0..n:
+    /// the same values bit for bit (the same interpolant's arithmetic), with the located time
+    /// matched once for all pendulums instead of once per pendulum (a step reads every
+    /// pendulum's two series once each).
+    #[inline]
+    pub fn read_all(&self, inertia: bool, at: RecordTime, mut each: impl FnMut(usize, f64)) {
+        let w = self.width();
+        let stride = w * self.n;
+        let first = if inertia { w / 2 } else { 0 };
+        let table = &self.series;
+        match at.0 {
+            At::Row(k) => {
+                let row = &table[k * stride..(k + 1) * stride];
+                for i in 0..self.n {
+                    each(i, row[w * i + first]);
+                }
+            }
+            At::Linear(k, frac) => {
+                let (r0, r1) = table[k * stride..(k + 2) * stride].split_at(stride);
+                for i in 0..self.n {
+                    let o = w * i + first;
+                    each(i, r0[o] * (1.0 - frac) + r1[o] * frac);
+                }
+            }
+            At::Hermite(j, x) => {
+                let (r0, r1) = table[j * stride..(j + 2) * stride].split_at(stride);
+                for i in 0..self.n {
+                    let o = w * i + first;
+                    let (y0, d0) = (r0[o], r0[o + 1] * self.h);
+                    let (y1, d1) = (r1[o], r1[o + 1] * self.h);
+                    let dy = y1 - y0;
+                    let c2 = 3.0 * dy - 2.0 * d0 - d1;
+                    let c3 = d0 + d1 - 2.0 * dy;
+                    each(i, y0 + x * (d0 + x * (c2 + x * c3)));
+                }
+            }
+            At::Beyond(t) => {
+                for i in 0..self.n {
+                    each(i, self.sum_beyond(i, inertia, t));
+                }
+            }
+        }
+    }
+
     /// Gᵢ(t) = lᵢ Σ_{k≥i} ρ_w (1 + C_a) A_o c_k u̇_k(t) \[N m\]: the inertia load's generalised
     /// force on pendulum i along the mean direction (module docs).
     #[inline]
@@ -657,14 +702,14 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
     ) -> Result<()> {
         let e = self.unit::<DIM>();
         let at = self.field.at(ctx.t);
-        for (j, o) in out.iter_mut().enumerate() {
-            let g = self.field.inertia_at(j, at);
+        // Every Gⱼ at the located time (WaveField::read_all: inertia_at's values).
+        self.field.read_all(true, at, |j, g| {
             for d in 0..DIM {
                 if e[d] != 0.0 {
-                    o[d] -= E::from(g * e[d]);
+                    out[j][d] -= E::from(g * e[d]);
                 }
             }
-        }
+        });
         Ok(())
     }
 

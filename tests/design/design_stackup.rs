@@ -170,7 +170,7 @@ fn flex_joints_are_named_parameters_of_the_chain() {
     assert_eq!(scene.beam.stiffness[j[0] - 1], 2.865e6);
     // Setting it sets the stack-up's value and the chain's spring.
     let mut s = scene.clone();
-    p[1].set(&mut s, 5.0e6);
+    p[1].set(&mut s, 5.0e6).unwrap();
     assert_eq!(s.beam.stiffness[j[0] - 1], 5.0e6);
     assert_eq!(p[1].value(&s), Ok(5.0e6));
 }

@@ -175,7 +175,7 @@ fn vessel_offset_is_a_signed_named_parameter() {
     assert_eq!(p.value(&scene), Ok(3.0));
     assert_eq!(p.parameter(&scene), Some(Parameter::VesselOffset));
     let mut s = scene.clone();
-    p.set(&mut s, -2.5);
+    p.set(&mut s, -2.5).unwrap();
     assert_eq!(s.vessel.as_ref().unwrap().offset, -2.5);
     assert_eq!(p.value(&s), Ok(-2.5));
     // The table written back reads as itself.

@@ -202,9 +202,8 @@ fn layout_tangents_match_central_differences_of_the_layout() {
 /// of every cell, step 10⁻⁵ θ) to 10⁻⁵ relative of the largest relative sensitivity
 /// (`design_study::check_central_differences`), at the scene's design (D_b = 1.1938 m,
 /// T = 1.5 MN) and at a second one (D_b = 0.9 m, T = 1.8 MN). The reference is the central
-/// difference (truncation O(10⁻¹⁰) relative). The forward-mode run's real part is D_s of the
-/// adjoint sweep to 10⁻¹² (the same simulation in dual arithmetic), and the gradient does not
-/// depend on the executor (serial = parallel bit for bit).
+/// difference (truncation O(10⁻¹⁰) relative). The gradient does not depend on the executor
+/// (serial = parallel bit for bit).
 #[test]
 fn buoyancy_gradient_matches_central_differences_at_two_designs() {
     let scene = scene();
@@ -250,4 +249,99 @@ fn buoyancy_gradient_is_refused_at_a_hot_spot() {
         matches!(&err, DesignError::NoGradient { name, .. } if name == NAME),
         "{err}"
     );
+}
+
+/// The study's ∂D_s/∂D_b of every cell = the derivative part of the cell's run in `Dual64`
+/// taken here through the library's public pieces alone (the layout's tangents
+/// `Stackup::buoyancy_tangents`, `Chain::set_node_quantities`, `adjoint::forward_value` with
+/// the fatigue objective, which counts the whole record: spin-up 0), to 10⁻¹² relative; and
+/// that run's real part = D_s of the study's adjoint sweep in f64 to 10⁻¹² (seeding the node
+/// quantities leaves the real arithmetic as built; dual arithmetic rounds some real parts
+/// differently, by an ulp). With the tension's adjoint gradient beside it, against its own
+/// `Dual64` run (`Chain::set_parameter`) to 10⁻⁹.
+#[test]
+fn forward_mode_runs_are_the_f64_runs_in_their_real_parts() {
+    use chainbeam::fatigue::WellheadDamage;
+    use chainbeam::model::{NodeQuantities, WaveTangent};
+    use chainbeam::{Chain, FatigueObjective, Parameter};
+    use num_dual::Dual64;
+    let scene = scene();
+    let cells = cells();
+    let st = study(&scene, &cells, 10.0, 0.0);
+    let p = vec![buoyancy(), DesignParameter::Tension];
+    let v = vec![1.05, 1.6e6];
+    let g = eval(&st, &p, &v, Want::Gradient, Execution::Serial);
+    let point = DesignPoint {
+        params: &p,
+        values: &v,
+    };
+    for (s, cell) in g.cells.iter().enumerate() {
+        let cs = st.cell_scene(s, &point).unwrap();
+        let spec = cs.fatigue_spec().unwrap();
+        let objective = FatigueObjective {
+            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
+            effort: 0.0,
+        };
+        let steps = cs.time.steps;
+        let u = vec![Dual64::from(0.0); steps + 1];
+        let stack = cs.stackup.as_ref().unwrap();
+        let t = stack.buoyancy_tangents(
+            p[0].segment(&cs).unwrap(),
+            &cs.beam.lengths,
+            cs.water.density,
+            cs.mudline(),
+        );
+        let dual = |re: &[f64], eps: &[f64]| -> Vec<Dual64> {
+            re.iter()
+                .zip(eps)
+                .map(|(&r, &e)| Dual64::new(r, e))
+                .collect()
+        };
+        let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
+        chain
+            .set_node_quantities(NodeQuantities {
+                masses: dual(&cs.beam.masses, &t.masses),
+                weights: dual(&stack.layout.node_weights, &t.weights),
+                drag: dual(&stack.layout.node_drag, &t.drag),
+                waves: Some(WaveTangent {
+                    masses: t.masses.clone(),
+                    inertia: t.inertia.clone(),
+                    seed: Dual64::new(0.0, 1.0),
+                }),
+            })
+            .unwrap();
+        let d =
+            chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective).unwrap();
+        let rel = (d.re - cell.damage).abs() / cell.damage;
+        assert!(
+            rel < 1e-12,
+            "cell {s}: D_s {} against {}",
+            d.re,
+            cell.damage
+        );
+        let rel = (cell.gradient[0] - d.eps).abs() / d.eps.abs();
+        assert!(
+            rel < 1e-12,
+            "cell {s}: study {:e}, here {:e}",
+            cell.gradient[0],
+            d.eps
+        );
+        let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
+        chain
+            .set_parameter(Parameter::Tension, Dual64::new(v[1], 1.0))
+            .unwrap();
+        let d =
+            chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective).unwrap();
+        let rel = (cell.gradient[1] - d.eps).abs() / d.eps.abs();
+        assert!(
+            rel < 1e-9,
+            "cell {s}: tension adjoint {:e}, Dual64 {:e}",
+            cell.gradient[1],
+            d.eps
+        );
+        eprintln!(
+            "cell {s}: D_s = {:e}, dD_s/dD_b = {:e}, dD_s/dT = {:e}",
+            cell.damage, cell.gradient[0], cell.gradient[1]
+        );
+    }
 }

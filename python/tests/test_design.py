@@ -196,3 +196,26 @@ def test_vessel_offset_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
     assert "vessel.offset" in got["sensitivities"]
     assert same(got["sensitivities"]["vessel.offset"], ref["sensitivities"]["vessel.offset"])
     assert got["sensitivities"]["vessel.offset"] != 0.0
+
+
+def test_buoyancy_diameter_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
+    """The buoyancy modules' outer diameter of a named segment as a design parameter
+    (`stackup.segment.riser_buoyant_1.buoyancy_diameter`, its gradient in forward mode) on the
+    README's riser system (examples/scenes/riser_300m_system_design.toml with the parameter
+    appended to its [design] table): its name passes through `cb.design` and its sensitivity
+    equals the command line's JSON bit for bit, on one cell of 20 s after a 10 s spin-up."""
+    name = "stackup.segment.riser_buoyant_1.buoyancy_diameter"
+    text = (SCENES / "riser_300m_system_design.toml").read_text()
+    scene = tmp_path / "system.toml"
+    scene.write_text(text + f'\n[[design.parameter]]\nname = "{name}"\n'
+                     "lower = 0.6\nupper = 1.5\n")
+    scatter = tmp_path / "cells.csv"
+    scatter.write_text("hs,tp,probability\n1.44,7.66,1.0\n")
+    args = ["--scatter", str(scatter), "--record", "20", "--spin-up", "10"]
+    ref = cli_json(cli, str(scene), "--sensitivities", *args)
+    got = cb.design(cb.Scene.from_file(scene), str(scatter), sensitivities=True, record=20.0,
+                    spin_up=10.0)
+    assert same(without_seconds(got), without_seconds(ref))
+    assert name in got["sensitivities"]
+    assert same(got["sensitivities"][name], ref["sensitivities"][name])
+    assert got["sensitivities"][name] != 0.0

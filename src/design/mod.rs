@@ -45,6 +45,23 @@
 //! gradient the library has; the scene's value is the model's value (the chain is built from
 //! the scene with the parameter set).
 //!
+//! The buoyancy modules' outer diameter D_b of a named stack-up segment
+//! (`stackup.segment.<name>.buoyancy_diameter`, [`DesignParameter::BuoyancyDiameter`]) moves
+//! every node of the segment: its mass with added mass, its submerged weight (the effective
+//! tension), its Morison drag coefficient and its waves' inertia coefficient (the last three and
+//! the added mass through D_h = D_b unless the segment gives `hydrodynamic_diameter`). No
+//! library parameter carries these, and the adjoint has no terms for node-by-node masses yet:
+//! its gradient is taken in **forward mode**, not by the adjoint. Each cell runs once more in
+//! `Dual64` with every node quantity q_k seeded as q_k + ε ∂q_k/∂D_b, the derivatives exact
+//! ([`crate::scene::Stackup::buoyancy_tangents`]: the layout is linear in the segment's
+//! per-length quantities, which are polynomials in D_b), the waves' series W and G (linear in
+//! the nodes' masses and inertia coefficients) with their derivative parts
+//! ([`crate::Chain::set_node_quantities`]): ∂D_s/∂D_b is the run's derivative part, exact to
+//! round-off, at the cost of one forward run in dual numbers per cell and per such parameter.
+//! It needs the node-by-node Morison drag, a scene without a control and the chain's base as
+//! the objective; elsewhere a gradient is refused ([`DesignError::NoGradient`]) and the values
+//! alone are evaluated.
+//!
 //! # Cells and executors
 //! The cells are independent: [`DesignStudy::evaluate`] runs them serially or on rayon's pool
 //! ([`Execution`]), and [`DesignStudy::run_cell`] runs one (the Python package sends these to a
@@ -124,6 +141,20 @@ pub enum DesignError {
         /// The parameter's name.
         name: String,
         /// Why.
+        reason: &'static str,
+    },
+    /// A gradient was asked for with respect to a segment's buoyancy diameter in a study its
+    /// forward-mode gradient does not cover ([`DesignParameter::has_adjoint`]): its values
+    /// D_y alone can be evaluated there.
+    #[error(
+        "{name}: its design gradient (forward mode, node by node) is not available {reason}; \
+         its damage can be evaluated at given values, not optimised nor tabulated in \
+         --sensitivities"
+    )]
+    NoGradient {
+        /// The parameter's name.
+        name: String,
+        /// Where it is not available.
         reason: &'static str,
     },
     /// A design vector of the wrong length or with a value that is not finite.

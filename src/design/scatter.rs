@@ -14,8 +14,10 @@ use crate::fatigue_study::{
     spin_up_steps, with_record, with_sea_state, ControlSettings, ControllerKind, StudyError,
 };
 use crate::hotspots::HotSpotSpec;
+use crate::model::{Chain, NodeQuantities, WaveTangent};
 use crate::optimize::any::scene_start;
 use crate::scene::Scene;
+use num_dual::Dual64;
 
 /// Where the cells of [`DesignStudy::evaluate`] run. The result is the same bit for bit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -152,12 +154,22 @@ impl DesignStudy<'_> {
     /// runs the forward run that gives the hot spot's moment history and its damage's gradient
     /// before the adjoint sweep (module docs of `design::hotspot`): one adjoint sweep and one
     /// forward run per cell.
+    ///
+    /// Each segment's buoyancy diameter of the scene's `[design]` table
+    /// ([`DesignParameter::has_adjoint`]) adds a forward run per cell to an evaluation with
+    /// the gradient: the cell's run in dual numbers that gives its derivative.
     pub fn runs_per_evaluation(&self, want: Want) -> (usize, usize) {
         let n = self.n_cells();
         let at_hot_spot = matches!(self.hot_spot(), Ok(Some(_)));
+        let forward_mode = self.scene.design.as_ref().map_or(0, |d| {
+            d.parameters
+                .iter()
+                .filter(|p| !p.parameter.has_adjoint())
+                .count()
+        });
         match want {
             Want::Gradient if at_hot_spot => (n, n),
-            Want::Gradient => (n, 0),
+            Want::Gradient => (n, n * forward_mode),
             Want::Value => (0, n),
         }
     }
@@ -216,21 +228,25 @@ impl DesignStudy<'_> {
                     name: p.name(),
                     reason,
                 })?;
-            let q = p
-                .parameter(self.scene)
-                .ok_or_else(|| DesignError::NotInModel {
-                    name: p.name(),
-                    reason: "the scene's model has no such parameter",
-                })?;
-            if lib.contains(&q) {
-                return Err(DesignError::BadValues {
-                    reason: format!(
-                        "{} is the same spring as another parameter of the design",
-                        p.name()
-                    ),
-                });
+            // A parameter without a library parameter (a segment's buoyancy diameter) is
+            // differentiated in forward mode, not by the adjoint sweep.
+            if p.has_adjoint() {
+                let q = p
+                    .parameter(self.scene)
+                    .ok_or_else(|| DesignError::NotInModel {
+                        name: p.name(),
+                        reason: "the scene's model has no such parameter",
+                    })?;
+                if lib.contains(&q) {
+                    return Err(DesignError::BadValues {
+                        reason: format!(
+                            "{} is the same spring as another parameter of the design",
+                            p.name()
+                        ),
+                    });
+                }
+                lib.push(q);
             }
-            lib.push(q);
             if !v.is_finite() {
                 return Err(DesignError::BadValues {
                     reason: format!("{} = {v} is not finite", p.name()),
@@ -294,7 +310,10 @@ impl DesignStudy<'_> {
         // difference's, may leave).
         scene.design = None;
         for (p, &v) in point.params.iter().zip(point.values) {
-            p.set(&mut scene, v);
+            p.set(&mut scene, v).map_err(|e| DesignError::Run {
+                cell,
+                source: Box::new(e.into()),
+            })?;
         }
         let scene = match self.cells {
             Some(cells) => with_sea_state(&scene, &cells[cell].sea, cell)?,
@@ -331,27 +350,39 @@ impl DesignStudy<'_> {
             source: Box::new(source),
         };
         crate::cancel::check().map_err(run_err)?;
+        if want == Want::Gradient {
+            self.refuse_no_gradient(point)?;
+        }
         let scene = self.cell_scene(cell, point)?;
         let skip = spin_up_steps(&scene, self.spin_up)?;
         let spec = scene.fatigue_spec().ok_or(DesignError::NoFatigueSpec)?;
         let damage =
             WellheadDamage::new(&spec, scene.moment_measure()).map_err(StudyError::from)?;
         let objective = CountedDamage { damage, skip };
-        let lib = point
-            .params
-            .iter()
-            .map(|p| p.parameter(&scene))
-            .collect::<Option<Vec<crate::Parameter>>>()
-            .ok_or_else(|| DesignError::NotInModel {
-                name: point
+        // The library's parameters, for a gradient only (a value needs none: a segment's
+        // buoyancy diameter, which has none, is evaluated through the cell's scene and
+        // differentiated in forward mode below).
+        let lib = match want {
+            Want::Gradient => Some(
+                point
                     .params
                     .iter()
-                    .find(|p| p.parameter(&scene).is_none())
-                    .map(DesignParameter::name)
-                    .unwrap_or_default(),
-                reason: "the scene's model has no such parameter",
-            })?;
-        let lib = (want == Want::Gradient).then_some(&lib[..]);
+                    .filter(|p| p.has_adjoint())
+                    .map(|p| p.parameter(&scene))
+                    .collect::<Option<Vec<crate::Parameter>>>()
+                    .ok_or_else(|| DesignError::NotInModel {
+                        name: point
+                            .params
+                            .iter()
+                            .find(|p| p.parameter(&scene).is_none())
+                            .map(DesignParameter::name)
+                            .unwrap_or_default(),
+                        reason: "the scene's model has no such parameter",
+                    })?,
+            ),
+            Want::Value => None,
+        };
+        let lib = lib.as_deref();
         if let Some(h) = self.hot_spot()? {
             let (damage, gradient) =
                 hot_spot_sweep(&scene, h, skip, lib).map_err(|e| e.into_design(cell, &h.name))?;
@@ -363,12 +394,35 @@ impl DesignStudy<'_> {
                 gradient,
             });
         }
-        let (damage, gradient) = if scene.is_spatial() {
+        let (damage, adjoint) = if scene.is_spatial() {
             cell_sweep::<3>(&scene, objective, lib)
         } else {
             cell_sweep::<2>(&scene, objective, lib)
         }
         .map_err(run_err)?;
+        // The gradient in the design's order: the adjoint's values, and each buoyancy
+        // diameter's by its forward-mode run.
+        let mut gradient = Vec::with_capacity(if lib.is_some() { point.params.len() } else { 0 });
+        if lib.is_some() {
+            let mut from_adjoint = adjoint.into_iter();
+            for p in point.params {
+                if p.has_adjoint() {
+                    gradient.push(from_adjoint.next().unwrap_or(f64::NAN));
+                    continue;
+                }
+                let segment = p.segment(&scene).ok_or_else(|| DesignError::NotInModel {
+                    name: p.name(),
+                    reason: "the scene has no [[stackup.segment]] of that name",
+                })?;
+                let (_, d) = if scene.is_spatial() {
+                    buoyancy_derivative::<3>(&scene, segment, &objective)
+                } else {
+                    buoyancy_derivative::<2>(&scene, segment, &objective)
+                }
+                .map_err(run_err)?;
+                gradient.push(d);
+            }
+        }
         let h = scene.time.step;
         Ok(CellGradient {
             probability: self.cells.map_or(1.0, |c| c[cell].probability),
@@ -434,6 +488,9 @@ impl DesignStudy<'_> {
         on_cell: &(dyn Fn() + Sync),
     ) -> Result<ScatterGradient, DesignError> {
         self.check(point)?;
+        if want == Want::Gradient {
+            self.refuse_no_gradient(point)?;
+        }
         let job = |s: usize| {
             let r = self.run_cell(s, point, want);
             on_cell();
@@ -448,4 +505,83 @@ impl DesignStudy<'_> {
         let cells = results.into_iter().collect::<Result<Vec<_>, _>>()?;
         Self::combine(cells)
     }
+}
+
+impl DesignStudy<'_> {
+    /// [`DesignError::NoGradient`] for the first parameter of `point` differentiated in forward
+    /// mode (a segment's buoyancy diameter, [`DesignParameter::has_adjoint`]) in a study the
+    /// forward-mode run does not cover: the objective at a `[design] hotspot` (its linearised
+    /// rainflow seed is the adjoint's), a scene with a control (the run is taken with u = 0),
+    /// the momentum drag (its constant comes from the masses in real arithmetic).
+    fn refuse_no_gradient(&self, point: &DesignPoint<'_>) -> Result<(), DesignError> {
+        let Some(p) = point.params.iter().find(|p| !p.has_adjoint()) else {
+            return Ok(());
+        };
+        let reason = if self
+            .scene
+            .design
+            .as_ref()
+            .is_some_and(|d| d.hotspot.is_some())
+        {
+            Some("for the objective at a [design] hotspot")
+        } else if self.scene.control.is_some() {
+            Some("in a scene with a [control]")
+        } else if self
+            .scene
+            .stackup
+            .as_ref()
+            .is_some_and(|st| st.drag_model != crate::scene::DragModel::Morison)
+        {
+            Some("with the momentum drag (stackup.drag_model = \"morison\" needed)")
+        } else {
+            None
+        };
+        match reason {
+            Some(reason) => Err(DesignError::NoGradient {
+                name: p.name(),
+                reason,
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// ∂D_s/∂D_b of a cell's scene with respect to the buoyancy diameter of the stack-up's segment
+/// `segment` (a design's [`DesignParameter::BuoyancyDiameter`]), in forward mode: the chain in
+/// `Dual64` with every node quantity the buoyancy moves seeded with its exact derivative
+/// ([`crate::scene::Stackup::buoyancy_tangents`]: mass with added mass, submerged weight,
+/// Morison drag coefficient and the waves' inertia coefficient; [`Chain::set_node_quantities`]),
+/// run once over the record with the objective `objective` (u = 0: the scene has no control).
+/// Returns (D_s, ∂D_s/∂D_b), D_s the dual run's real part.
+fn buoyancy_derivative<const DIM: usize>(
+    scene: &Scene,
+    segment: usize,
+    objective: &CountedDamage,
+) -> crate::Result<(f64, f64)> {
+    let Some(st) = scene.stackup.as_ref() else {
+        return Ok((0.0, 0.0));
+    };
+    let lengths = &scene.beam.lengths;
+    let t = st.buoyancy_tangents(segment, lengths, scene.water.density, scene.mudline());
+    let dual = |re: &[f64], eps: &[f64]| -> Vec<Dual64> {
+        re.iter()
+            .zip(eps)
+            .map(|(&r, &e)| Dual64::new(r, e))
+            .collect()
+    };
+    let mut chain = Chain::<Dual64, DIM>::from_scene(scene)?;
+    chain.set_node_quantities(NodeQuantities {
+        masses: dual(&scene.beam.masses, &t.masses),
+        weights: dual(&st.layout.node_weights, &t.weights),
+        drag: dual(&st.layout.node_drag, &t.drag),
+        waves: Some(WaveTangent {
+            masses: t.masses.clone(),
+            inertia: t.inertia.clone(),
+            seed: Dual64::new(0.0, 1.0),
+        }),
+    })?;
+    let steps = scene.time.steps;
+    let u = vec![Dual64::from(0.0); steps + 1];
+    let d = crate::adjoint::forward_value(&chain, scene.time.step, steps, &u, objective)?;
+    Ok((d.re, d.eps))
 }

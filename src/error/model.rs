@@ -41,6 +41,14 @@ pub enum ModelError {
         /// The term, e.g. `node-by-node Morison drag`.
         term: &'static str,
     },
+    /// Per-node quantities ([`Chain::set_node_quantities`](crate::model::Chain::set_node_quantities))
+    /// the chain cannot take: of the wrong length, or for a term whose constants need them
+    /// otherwise (the momentum drag's, computed from the masses once).
+    #[error("invalid argument `node quantities`: {reason}")]
+    NodeQuantities {
+        /// Why.
+        reason: &'static str,
+    },
     /// A fold limit outside (0°, 180°) ([`Chain::set_fold_limit_deg`](crate::model::Chain::set_fold_limit_deg)).
     #[error("invalid argument `fold limit`: must be in (0, 180) degrees, got {deg}")]
     FoldLimitOutOfRange {

@@ -131,6 +131,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 CurrentDrag::new(c, waves.clone(), d, w, (&lengths, &masses), mudline)
             }),
             wave_inertia: waves.map(WaveInertia::new),
+            wave_inertia_tangent: None,
             joint_damping,
             node_drag,
             vessel_offset: D::from(vessel.as_ref().map_or(0.0, |v| v.vessel().offset)),
@@ -318,6 +319,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             drag: self.drag.as_ref().map(|t| t.lift()),
             current: self.current.as_ref().map(|t| t.lift()),
             wave_inertia: self.wave_inertia.clone(),
+            // A derivative part: the real parts' model has none.
+            wave_inertia_tangent: None,
             joint_damping: self.joint_damping.as_ref().map(|t| t.lift()),
             node_drag: self.node_drag.as_ref().map(|t| t.lift()),
             vessel: self.vessel.clone(),

@@ -15,6 +15,7 @@
 mod build;
 pub mod geometry;
 mod mass;
+mod nodes;
 mod params;
 pub mod terms;
 mod vessel;
@@ -26,12 +27,13 @@ pub use terms::{
     CoupledVisitor, Ctx, CurrentDrag, DissipationVisitor, DissipativeTerm, Drag, DragWeights,
     DualScratch, Embed, ForceTerm, Gravity, HalfKick, HalfSteps, HarmonicForce, JointDamping,
     NodeDrag, PointLoads, ReactionTip, ReactionTipBar, RecordTime, SoilSprings, Springs,
-    TermVisitor, TopTension, WaveField, WaveInertia, WaveInputs,
+    TermVisitor, TopTension, WaveField, WaveInertia, WaveInertiaTangent, WaveInputs,
 };
 
 pub use crate::base::{Parameter, Scalar, TipCondition};
 pub use crate::error::ModelError;
 use crate::error::{Error, Result};
+pub use nodes::{NodeQuantities, WaveTangent};
 pub use vessel::{ThrustDrive, ThrustDriveBar, VesselMotion};
 
 /// The chain of pendulums: its mass distribution, its constraints, and one value of each force
@@ -63,6 +65,9 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) current: Option<CurrentDrag<D, DIM>>,
     /// The waves' inertia load (`[loads.waves]`).
     pub(crate) wave_inertia: Option<WaveInertia>,
+    /// The derivative part of the waves' inertia load under a seeded parameter that moves the
+    /// nodes' inertia coefficients ([`Chain::set_node_quantities`]); `None` as built.
+    pub(crate) wave_inertia_tangent: Option<WaveInertiaTangent<D>>,
     /// Structural damping at the joints (`[beam] joint_damping`), a coupled dissipative term.
     pub(crate) joint_damping: Option<JointDamping<D>>,
     /// Morison's drag node by node (`[pipe] drag_model = "morison"`), in place of `drag` and
@@ -172,6 +177,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             v.visit(t)?;
         }
         if let Some(t) = &self.wave_inertia {
+            v.visit(t)?;
+        }
+        if let Some(t) = &self.wave_inertia_tangent {
             v.visit(t)?;
         }
         if let Some(t) = &self.soil {

@@ -141,9 +141,12 @@ impl Scene {
     /// `hotspot`, when given, names a `[[fatigue.hotspot]]` of a planar scene;
     /// every parameter is one this scene's model has (`beam.base_stiffness` needs a base spring,
     /// `beam.tip_stiffness` a tip spring, `loads.tension` a tension T > 0, `soil.modulus` a
-    /// `[soil]` table, `vessel.offset` `support = "vessel"` with a positive `vessel.ramp`);
-    /// bounds are finite with 0 < lower < upper (lower < upper for the signed `vessel.offset`),
-    /// and the scene's own value lies within them (the optimiser starts there).
+    /// `[soil]` table, `vessel.offset` `support = "vessel"` with a positive `vessel.ramp`,
+    /// `stackup.segment.<name>.buoyancy_diameter` a segment of that name with buoyancy modules);
+    /// bounds are finite with 0 < lower < upper (lower < upper for the signed `vessel.offset`;
+    /// a buoyancy diameter's lower bound at least the segment's pipe outer diameter and its
+    /// upper one within the stack-up's diameters' range), and the scene's own value lies
+    /// within them (the optimiser starts there).
     ///
     /// # Errors
     /// [`SceneErrorKind::InvalidValue`] naming `design.tolerance`, `design.hotspot` or
@@ -219,6 +222,27 @@ impl Scene {
                     format!("must be above lower = {lo}, got {hi}"),
                 ));
             }
+            if let Some(floor) = p.parameter.floor(self) {
+                if lo < floor {
+                    return Err(SceneError::invalid(
+                        key("lower"),
+                        format!(
+                            "must be at least the segment's pipe outer diameter {floor} m \
+                             (buoyancy modules are no thinner than the pipe), got {lo}"
+                        ),
+                    ));
+                }
+                let range = super::stackup_range_of("buoyancy_diameter");
+                if let Some(r) = range.filter(|r| hi > r.max) {
+                    return Err(SceneError::invalid(
+                        key("upper"),
+                        format!(
+                            "must be at most {} {} (the stack-up's diameters), got {hi}",
+                            r.max, r.unit
+                        ),
+                    ));
+                }
+            }
             if !(lo..=hi).contains(&value) {
                 let k = if value < lo { "lower" } else { "upper" };
                 return Err(SceneError::invalid(
@@ -264,11 +288,29 @@ pub enum DesignParameter {
     /// the optimiser scales it affinely, u = (Z₀ − lower)/(upper − lower)
     /// ([`DesignParameter::is_signed`]).
     VesselOffset,
+    /// The outer diameter D_b \[m\] of the buoyancy modules of the stack-up's segment of this
+    /// name (`[[stackup.segment]]` `name`, a segment with `buoyancy_diameter` and
+    /// `buoyancy_density`), named `stackup.segment.<name>.buoyancy_diameter` (e.g.
+    /// `stackup.segment.riser_buoyant.buoyancy_diameter`). It sets the segment's
+    /// `buoyancy_diameter` and the chain is laid out again ([`Scene::relayout_stackup`]): the
+    /// foam's mass per length ρ_f π (D_b² − D_o²)/4, the displaced area π D_b²/4 (the submerged
+    /// weight per length, hence the nodes' weights and the effective tension), and, unless the
+    /// segment gives `hydrodynamic_diameter` explicitly, the Morison diameter D_h = D_b (the
+    /// added mass C_a ρ_w π D_h²/4 per length, the drag ½ ρ_w C_d D_h and the waves' inertia
+    /// ρ_w (1 + C_a) π D_h²/4). No library [`Parameter`] carries these per-node quantities:
+    /// its gradient is taken in forward mode, a `Dual64` run of each cell with every node
+    /// quantity seeded with its exact derivative ([`crate::scene::Stackup::buoyancy_tangents`],
+    /// [`crate::Chain::set_node_quantities`]), not by the adjoint
+    /// ([`DesignParameter::has_adjoint`]).
+    BuoyancyDiameter(String),
 }
 
 /// The prefix and suffix of a flex joint's design parameter name.
 const FLEX_PREFIX: &str = "stackup.flex_joint.";
 const FLEX_SUFFIX: &str = ".stiffness";
+/// The prefix and suffix of a segment's buoyancy diameter's design parameter name.
+const SEGMENT_PREFIX: &str = "stackup.segment.";
+const BUOYANCY_SUFFIX: &str = ".buoyancy_diameter";
 
 impl DesignParameter {
     /// Every design parameter but the stack-up's flex joints (which a scene names), in the
@@ -283,8 +325,8 @@ impl DesignParameter {
 
     /// The scene key that names it (`loads.tension`, `beam.base_stiffness`,
     /// `beam.tip_stiffness`, `soil.modulus`, `vessel.offset`,
-    /// `stackup.flex_joint.<name>.stiffness`): its name
-    /// in `[design]` and in the JSON.
+    /// `stackup.flex_joint.<name>.stiffness`, `stackup.segment.<name>.buoyancy_diameter`): its
+    /// name in `[design]` and in the JSON.
     pub fn name(&self) -> String {
         match self {
             DesignParameter::Tension => "loads.tension".into(),
@@ -293,17 +335,27 @@ impl DesignParameter {
             DesignParameter::SoilModulus => "soil.modulus".into(),
             DesignParameter::VesselOffset => "vessel.offset".into(),
             DesignParameter::FlexJoint(name) => format!("{FLEX_PREFIX}{name}{FLEX_SUFFIX}"),
+            DesignParameter::BuoyancyDiameter(name) => {
+                format!("{SEGMENT_PREFIX}{name}{BUOYANCY_SUFFIX}")
+            }
         }
     }
 
-    /// The parameter of that name (a flex joint's whatever its name: the scene it is used with
-    /// must have it, [`DesignParameter::value`]).
+    /// The parameter of that name (a flex joint's or a segment's whatever its name: the scene it
+    /// is used with must have it, [`DesignParameter::value`]).
     pub fn from_name(name: &str) -> Option<Self> {
         if let Some(joint) = name
             .strip_prefix(FLEX_PREFIX)
             .and_then(|r| r.strip_suffix(FLEX_SUFFIX))
         {
             return (!joint.is_empty()).then(|| DesignParameter::FlexJoint(joint.to_string()));
+        }
+        if let Some(segment) = name
+            .strip_prefix(SEGMENT_PREFIX)
+            .and_then(|r| r.strip_suffix(BUOYANCY_SUFFIX))
+        {
+            return (!segment.is_empty())
+                .then(|| DesignParameter::BuoyancyDiameter(segment.to_string()));
         }
         Self::ALL.into_iter().find(|p| p.name() == name)
     }
@@ -313,7 +365,10 @@ impl DesignParameter {
         Self::ALL
             .iter()
             .map(|p| format!("\"{}\"", p.name()))
-            .chain([format!("\"{FLEX_PREFIX}<name>{FLEX_SUFFIX}\"")])
+            .chain([
+                format!("\"{FLEX_PREFIX}<name>{FLEX_SUFFIX}\""),
+                format!("\"{SEGMENT_PREFIX}<name>{BUOYANCY_SUFFIX}\""),
+            ])
             .collect::<Vec<_>>()
             .join(", ")
     }
@@ -326,7 +381,7 @@ impl DesignParameter {
             | DesignParameter::TipStiffness
             | DesignParameter::FlexJoint(_) => "N·m/rad",
             DesignParameter::SoilModulus => "N/m²",
-            DesignParameter::VesselOffset => "m",
+            DesignParameter::VesselOffset | DesignParameter::BuoyancyDiameter(_) => "m",
         }
     }
 
@@ -338,10 +393,20 @@ impl DesignParameter {
         matches!(self, DesignParameter::VesselOffset)
     }
 
+    /// Whether its design gradient comes from the adjoint sweep (a library [`Parameter`]):
+    /// every parameter but a segment's buoyancy diameter
+    /// ([`DesignParameter::BuoyancyDiameter`]), whose gradient a forward-mode `Dual64` run of
+    /// each cell gives ([`crate::design`], "The parameters").
+    pub fn has_adjoint(&self) -> bool {
+        !matches!(self, DesignParameter::BuoyancyDiameter(_))
+    }
+
     /// The library's parameter of the scene's model, whose adjoint gradient this is (`None`:
-    /// the scene has no flex joint of that name).
+    /// the scene has no flex joint of that name, or the parameter has no library parameter, a
+    /// segment's buoyancy diameter: [`DesignParameter::has_adjoint`]).
     pub fn parameter(&self, scene: &Scene) -> Option<Parameter> {
         Some(match self {
+            DesignParameter::BuoyancyDiameter(_) => return None,
             DesignParameter::Tension => Parameter::Tension,
             DesignParameter::BaseStiffness => Parameter::BaseStiffness,
             DesignParameter::TipStiffness => Parameter::TipStiffness,
@@ -366,6 +431,28 @@ impl DesignParameter {
         let st = scene.stackup.as_ref()?;
         let i = st.flex_joints.iter().position(|f| &f.name == name)?;
         Some((i, *st.layout.flex_joints.get(i)?))
+    }
+
+    /// The index in `[[stackup.segment]]` of a buoyancy diameter's segment (`None`: another
+    /// parameter, or no segment of that name).
+    pub fn segment(&self, scene: &Scene) -> Option<usize> {
+        let DesignParameter::BuoyancyDiameter(name) = self else {
+            return None;
+        };
+        let st = scene.stackup.as_ref()?;
+        st.segments.iter().position(|s| &s.name == name)
+    }
+
+    /// The smallest value the parameter may take on the scene (its lower bound's floor): a
+    /// segment's pipe outer diameter D_o for its buoyancy modules' diameter (modules thinner
+    /// than the pipe are no modules); `None` for the others (positive, or any finite value for
+    /// the signed ones).
+    pub fn floor(&self, scene: &Scene) -> Option<f64> {
+        let i = self.segment(scene)?;
+        scene
+            .stackup
+            .as_ref()
+            .map(|st| st.segments[i].outer_diameter)
     }
 
     /// The role it has when `[design]` does not say: the soil modulus is an uncertainty, the
@@ -417,13 +504,39 @@ impl DesignParameter {
                     .map_or(f64::NAN, |st| st.flex_joints[i].stiffness)),
                 None => Err("the scene has no [[stackup.flex_joint]] of that name"),
             },
+            DesignParameter::BuoyancyDiameter(_) => {
+                let segment = self
+                    .segment(scene)
+                    .and_then(|i| scene.stackup.as_ref().map(|st| &st.segments[i]))
+                    .ok_or("the scene has no [[stackup.segment]] of that name")?;
+                match (segment.buoyancy_diameter, segment.buoyancy_density) {
+                    (Some(d), Some(_)) => Ok(d),
+                    _ => Err(
+                        "the segment has no buoyancy modules (buoyancy_diameter and \
+                         buoyancy_density): there is no module diameter to change",
+                    ),
+                }
+            }
         }
     }
 
     /// Sets the parameter's value on the scene (the scene's model then has it: the chain is
     /// built from these fields; a flex joint's both in `[[stackup.flex_joint]]` and in the
-    /// beam's spring at its joint). The value is not checked here ([`Scene::validate`] does).
-    pub fn set(&self, scene: &mut Scene, value: f64) {
+    /// beam's spring at its joint; a segment's buoyancy diameter in the segment, the chain then
+    /// laid out again, [`Scene::relayout_stackup`]). The value is not checked here
+    /// ([`Scene::validate`] does) but for a buoyancy diameter, which the stack-up checks.
+    ///
+    /// # Errors
+    /// A buoyancy diameter the stack-up refuses (smaller than the pipe's outer diameter, out of
+    /// the diameters' range: [`SceneErrorKind::InvalidValue`] naming
+    /// `stackup.segment[i].buoyancy_diameter`).
+    pub fn set(&self, scene: &mut Scene, value: f64) -> Result<(), SceneError> {
+        if let Some(i) = self.segment(scene) {
+            if let Some(st) = scene.stackup.as_mut() {
+                st.segments[i].buoyancy_diameter = Some(value);
+            }
+            return scene.relayout_stackup();
+        }
         if let Some((i, j)) = self.flex_joint(scene) {
             if let Some(st) = scene.stackup.as_mut() {
                 st.flex_joints[i].stiffness = value;
@@ -434,7 +547,7 @@ impl DesignParameter {
                 j if j == n => scene.beam.tip_stiffness = value,
                 j => scene.beam.stiffness[j - 1] = value,
             }
-            return;
+            return Ok(());
         }
         match self {
             DesignParameter::Tension => scene.loads.tension = value,
@@ -448,8 +561,9 @@ impl DesignParameter {
             DesignParameter::VesselOffset => {
                 scene.vessel.get_or_insert_with(Default::default).offset = value;
             }
-            DesignParameter::FlexJoint(_) => {}
+            DesignParameter::FlexJoint(_) | DesignParameter::BuoyancyDiameter(_) => {}
         }
+        Ok(())
     }
 }
 

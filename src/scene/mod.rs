@@ -56,7 +56,9 @@ pub use pipe::{
 };
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use soil::{water_height, Soil, SoilLumping};
-pub use stackup::{Body, FlexJoint, Foot, Layout, Segment, Stackup, STANDARD_GRAVITY};
+pub use stackup::{
+    Body, FlexJoint, Foot, Layout, NodeTangents, Segment, Stackup, STANDARD_GRAVITY,
+};
 pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
 pub use validate::{
     ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,

@@ -13,6 +13,41 @@ use chainbeam::fatigue::{ScatterCell, SeaState, WellheadDamage};
 use chainbeam::{Chain, FatigueObjective, Scene};
 use num_dual::Dual64;
 
+/// The 21-inch riser's section (outer diameter, wall thickness) \[m\]: the `[fatigue]` section
+/// of the reduced riser (tests/design/design.rs) and of the reduced riser system
+/// (tests/design/design_vessel.rs), that of examples/scenes/riser_300m.toml.
+pub const RISER_SECTION: (f64, f64) = (0.5334, 0.022225);
+
+/// The text of a reduced scene of the design tests: `specific` (its beam, loads, sea, time and
+/// stack-up), then the keys every one of them shares, the 300 m of sea water
+/// (1025 kg/m³) of examples/scenes/riser_300m.toml, its uniform 0.5 m/s current and a
+/// `[fatigue]` section of outer diameter and wall thickness `section` \[m\] (SCF 1.2, DNV's F1
+/// curve in sea water with cathodic protection, DFF 10), then `design` (the `[design]` table,
+/// hot spots).
+pub fn scene_text(specific: &str, section: (f64, f64), design: &str) -> String {
+    let (outer_diameter, wall_thickness) = section;
+    format!(
+        r#"{specific}
+[water]
+depth = 300.0
+density = 1025.0
+
+[loads.current]
+profile = "uniform"
+speed = 0.5
+
+[fatigue]
+outer_diameter = {outer_diameter:?}
+wall_thickness = {wall_thickness:?}
+scf = 1.2
+curve = "F1"
+environment = "seawater-cp"
+dff = 10.0
+{design}
+"#
+    )
+}
+
 /// Cells of a reduced diagram from (H_s \[m\], T_p \[s\], probability), no direction.
 pub fn cells(list: &[(f64, f64, f64)]) -> Vec<ScatterCell> {
     list.iter()

@@ -18,7 +18,7 @@ use chainbeam::Scene;
 
 /// The reduced riser (module docs) with `design` appended.
 pub(crate) fn scene_text(design: &str) -> String {
-    format!(
+    crate::design_study::scene_text(
         r#"
 [beam]
 pendulums = 10
@@ -32,18 +32,10 @@ contents_density = 1437.912
 drag_coefficient = 1.0
 added_mass_coefficient = 1.0
 
-[water]
-depth = 300.0
-density = 1025.0
-
 [loads]
 drag = 3.0e-6
 tension = 1.228e6
 axial_weight = 3149.1
-
-[loads.current]
-profile = "uniform"
-speed = 0.5
 
 [loads.waves]
 spectrum = "jonswap"
@@ -58,15 +50,9 @@ lumping = "cell"
 step = 0.1
 steps = 600
 
-[fatigue]
-outer_diameter = 0.5334
-wall_thickness = 0.022225
-scf = 1.2
-curve = "F1"
-environment = "seawater-cp"
-dff = 10.0
-{design}
-"#
+"#,
+        crate::design_study::RISER_SECTION,
+        design,
     )
 }
 

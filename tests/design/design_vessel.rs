@@ -24,8 +24,9 @@ use chainbeam::{Parameter, Scene};
 /// The reduced riser system (module docs) with `vessel` in its `[vessel]` table and `design`
 /// appended.
 pub(crate) fn scene_text(vessel: &str, design: &str) -> String {
-    format!(
-        r#"
+    crate::design_study::scene_text(
+        &format!(
+            r#"
 [beam]
 pendulums = 8
 support = "vessel"
@@ -40,16 +41,8 @@ period = [4.0, 8.0, 12.0, 16.0, 20.0, 30.0]
 amplitude = [0.004, 0.076, 0.012, 0.496, 0.798, 0.987]
 phase = [-270.0, -90.0, -270.0, -90.0, -90.0, -90.0]
 
-[water]
-depth = 300.0
-density = 1025.0
-
 [loads]
 tension = 1.5e6
-
-[loads.current]
-profile = "uniform"
-speed = 0.5
 
 [loads.waves]
 spectrum = "jonswap"
@@ -64,13 +57,6 @@ lumping = "cell"
 step = 0.02
 steps = 750
 
-[fatigue]
-outer_diameter = 0.5334
-wall_thickness = 0.022225
-scf = 1.2
-curve = "F1"
-environment = "seawater-cp"
-dff = 10.0
 
 [stackup]
 foot = "clamped"
@@ -107,8 +93,10 @@ stiffness = 2.865e6
 name = "upper flex joint"
 above = "riser_bare"
 stiffness = 1.146e6
-{design}
 "#
+        ),
+        crate::design_study::RISER_SECTION,
+        design,
     )
 }
 
@@ -175,7 +163,7 @@ fn vessel_offset_is_a_signed_named_parameter() {
     assert_eq!(p.value(&scene), Ok(3.0));
     assert_eq!(p.parameter(&scene), Some(Parameter::VesselOffset));
     let mut s = scene.clone();
-    p.set(&mut s, -2.5);
+    p.set(&mut s, -2.5).unwrap();
     assert_eq!(s.vessel.as_ref().unwrap().offset, -2.5);
     assert_eq!(p.value(&s), Ok(-2.5));
     // The table written back reads as itself.

@@ -11,6 +11,7 @@ mod gradient_check;
 mod design_study;
 
 mod design;
+mod design_buoyancy;
 mod design_hotspot;
 mod design_stackup;
 mod design_vessel;

@@ -50,6 +50,7 @@ fn design_error(e: DesignError) -> Failure {
         }
         e @ (DesignError::NoDesign { .. }
         | DesignError::NotInModel { .. }
+        | DesignError::NoGradient { .. }
         | DesignError::NoDamage { .. }) => Failure::SceneKey {
             key: "design".into(),
             message: e.to_string(),

@@ -70,6 +70,10 @@ pub struct CurrentDrag<D, const DIM: usize> {
     wave_unit: [f64; DIM],
     /// m₁ / re(m₁): the derivative of the waves' share under a dual mass.
     wave_scale: D,
+    /// The derivative part of the waves' share under a seeded parameter that moves the nodes'
+    /// masses one by one ([`CurrentDrag::set_node_masses`]): the field of the masses'
+    /// derivatives (its momentum series ∂Wᵢ/∂θ) and the seed; `None` as built.
+    wave_tangent: Option<(Arc<WaveField>, D)>,
 }
 
 impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
@@ -124,9 +128,28 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             waves,
             wave_unit,
             wave_scale: D::one(),
+            wave_tangent: None,
         };
         term.suffix_sums(lengths, masses);
         term
+    }
+
+    /// Takes node-by-node masses in the chain's scalar (a stack-up's, seeded with their
+    /// derivatives with respect to a parameter, [`crate::Chain::set_node_quantities`]): the
+    /// current's parts Aᵢ, Bᵢ by the suffix sums with these masses, and the waves' share
+    /// Wᵢ + seed · ∂Wᵢ/∂θ with `wave_tangent` = (the field of the masses' derivatives
+    /// [`WaveField::with_node_coefficients`], seed); the waves' own field keeps the masses' real
+    /// parts (equal to those it was built with).
+    pub(crate) fn set_node_masses(
+        &mut self,
+        lengths: &[D],
+        masses: &[D],
+        wave_tangent: Option<(Arc<WaveField>, D)>,
+    ) {
+        self.suffix_sums(lengths, masses);
+        self.mass = masses[0];
+        self.wave_scale = D::one();
+        self.wave_tangent = wave_tangent.filter(|_| self.waves.is_some());
     }
 
     /// Recomputes A and B for new lengths and masses (O(n): suffix sums), and the waves' share
@@ -187,6 +210,7 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             waves: self.waves.clone(),
             wave_unit: self.wave_unit,
             wave_scale: D2::from(self.wave_scale.re()),
+            wave_tangent: None,
         }
     }
 
@@ -260,6 +284,9 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
             if self.wave_unit[d] != 0.0 {
                 let at = at.unwrap_or_else(|| w.at(ctx.t));
                 p += E::embed(self.wave_scale) * (w.momentum_at(i, at) * self.wave_unit[d]);
+                if let Some((t, seed)) = &self.wave_tangent {
+                    p += E::embed(*seed) * (t.momentum_at(i, at) * self.wave_unit[d]);
+                }
             }
         }
         if ctx.seed == Some(Parameter::Mass) {

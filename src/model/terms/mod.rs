@@ -69,7 +69,7 @@ pub use point_load::{ChainPointLoad, HarmonicForce, PointLoads};
 pub use reaction_tip::{ReactionTip, ReactionTipBar};
 pub use soil::SoilSprings;
 pub use spring::Springs;
-pub use waves::{RecordTime, WaveField, WaveInertia, WaveInputs};
+pub use waves::{RecordTime, WaveField, WaveInertia, WaveInertiaTangent, WaveInputs};
 
 use crate::base::{Parameter, Scalar};
 use crate::error::Result;

@@ -42,6 +42,10 @@ pub struct NodeDrag<D, const DIM: usize> {
     pub(crate) cd: D,
     /// Dₖ/C_d = ½ ρ_w D_o cₖ / mₖ² per node.
     pub(crate) per_cd: Vec<f64>,
+    /// Dₖ/C_d in the chain's scalar, when the nodes' drag coefficients and masses carry a
+    /// parameter's derivative ([`NodeDrag::set_node_coefficients`]); read in place of
+    /// `per_cd` (whose values are its real parts). `None` as built.
+    per_cd_nodes: Option<Vec<D>>,
     /// The water's momentum P (current and waves).
     pub(crate) water: CurrentDrag<D, DIM>,
     /// P at the midpoints of a horizon's steps, tabulated once for many sweeps over it
@@ -83,6 +87,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         NodeDrag {
             cd: D::from(cd),
             per_cd,
+            per_cd_nodes: None,
             water,
             table: None,
         }
@@ -101,9 +106,25 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         NodeDrag {
             cd: D::one(),
             per_cd: kappa.iter().zip(masses).map(|(k, m)| k / (m * m)).collect(),
+            per_cd_nodes: None,
             water,
             table: None,
         }
+    }
+
+    /// Takes the nodes' drag coefficients κₖ and masses mₖ in the chain's scalar (a
+    /// stack-up's, seeded with their derivatives with respect to a parameter,
+    /// [`crate::Chain::set_node_quantities`]): Dₖ/C_d = κₖ/mₖ², as
+    /// [`NodeDrag::from_node_coefficients`] forms it (the same real parts bit for bit).
+    pub(crate) fn set_node_coefficients(&mut self, kappa: &[D], masses: &[D]) {
+        let nodes: Vec<D> = kappa
+            .iter()
+            .zip(masses)
+            .map(|(&k, &m)| k / (m * m))
+            .collect();
+        self.per_cd = nodes.iter().map(|x| x.re()).collect();
+        self.per_cd_nodes = Some(nodes);
+        self.table = None;
     }
 
     /// The same term over another scalar (real parts).
@@ -111,6 +132,7 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
         NodeDrag {
             cd: D2::from(self.cd.re()),
             per_cd: self.per_cd.clone(),
+            per_cd_nodes: None,
             water: self.water.lift(),
             table: None,
         }
@@ -125,7 +147,11 @@ impl<D: Scalar, const DIM: usize> NodeDrag<D, DIM> {
     /// Dₖ = C_d ⋅ ½ ρ_w D_o cₖ / mₖ².
     #[inline]
     fn node_constant<E: Embed<D>>(&self, k: usize, ctx: &Ctx<E>) -> E {
-        ctx.param(Parameter::DragCoefficient, self.cd) * self.per_cd[k]
+        let cd = ctx.param(Parameter::DragCoefficient, self.cd);
+        match &self.per_cd_nodes {
+            Some(nodes) => cd * E::embed(nodes[k]),
+            None => cd * self.per_cd[k],
+        }
     }
 
     /// y = A (p − P) (module docs) into `y`.

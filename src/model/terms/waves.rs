@@ -356,6 +356,27 @@ impl WaveField {
         WaveField::new(self.sea.clone(), inputs)
     }
 
+    /// The same sea on the same chain with the nodes' masses and inertia coefficients replaced
+    /// (`node_inertia` in place of the pipe's or the stack-up's): the water's momentum series
+    /// Wᵢ = lᵢ Σ_{k≥i} m_k u_k and the inertia series Gᵢ = lᵢ Σ_{k≥i} c_k u̇_k are linear in the
+    /// masses and in the coefficients, so that with their derivatives ∂m_k/∂θ, ∂c_k/∂θ with
+    /// respect to a parameter θ this field's series are ∂Wᵢ/∂θ and ∂Gᵢ/∂θ exactly
+    /// ([`WaveInertiaTangent`], [`crate::Chain::set_node_quantities`]).
+    ///
+    /// # Errors
+    /// [`SeaError::TooLarge`] when the record's memory is refused.
+    pub fn with_node_coefficients(
+        &self,
+        masses: &[f64],
+        node_inertia: &[f64],
+    ) -> std::result::Result<Self, SeaError> {
+        let mut inputs = self.inputs.clone();
+        inputs.masses = masses.to_vec();
+        inputs.inertia_per_length = 0.0;
+        inputs.node_inertia = Some(node_inertia.to_vec());
+        WaveField::new(self.sea.clone(), inputs)
+    }
+
     /// The node masses the water momentum was computed with.
     pub fn masses(&self) -> &[f64] {
         &self.inputs.masses
@@ -710,6 +731,84 @@ impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
                 }
             }
         });
+        Ok(())
+    }
+
+    fn depends_on_configuration(&self) -> bool {
+        false
+    }
+
+    fn has_parameter(&self, _p: Parameter) -> bool {
+        false
+    }
+}
+
+/// The derivative part of the waves' inertia load under a seeded parameter that moves the nodes'
+/// inertia coefficients c_k (a segment's buoyancy diameter,
+/// [`crate::Chain::set_node_quantities`]): the force of [`WaveInertia`] with Gⱼ replaced by
+/// `seed` · ∂Gⱼ/∂θ, ∂Gⱼ/∂θ the inertia series of `field`
+/// ([`WaveField::with_node_coefficients`] with the coefficients' derivatives), so that
+/// [`WaveInertia`] and this term together load pendulum j with (Gⱼ + seed ∂Gⱼ/∂θ) e: the
+/// dual number's derivative part with `seed` = ε. Zero in real arithmetic (the seed's real
+/// part is 0).
+#[derive(Clone, Debug)]
+pub struct WaveInertiaTangent<D> {
+    pub(crate) field: Arc<WaveField>,
+    pub(crate) seed: D,
+}
+
+impl<D> WaveInertiaTangent<D> {
+    /// The direction e in the model's components, as [`WaveInertia`]'s.
+    #[inline]
+    fn unit<const DIM: usize>(&self) -> [f64; DIM] {
+        let [dx, dz] = self.field.direction();
+        let mut e = [0.0; DIM];
+        e[zi::<DIM>()] = dz;
+        if DIM == 3 {
+            e[0] = dx;
+        }
+        e
+    }
+}
+
+impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertiaTangent<D> {
+    fn name(&self) -> &'static str {
+        "wave inertia (tangent)"
+    }
+
+    fn energy<E: Embed<D>>(&self, q: &[[E; DIM]], ctx: &Ctx<E>) -> E {
+        let e = self.unit::<DIM>();
+        let mut u = E::zero();
+        let at = self.field.at(ctx.t);
+        let seed = E::embed(self.seed);
+        for (j, qj) in q.iter().enumerate() {
+            let g = self.field.inertia_at(j, at);
+            for d in 0..DIM {
+                if e[d] != 0.0 {
+                    u -= qj[d] * (seed * (g * e[d]));
+                }
+            }
+        }
+        u
+    }
+
+    fn force<E: Embed<D>>(
+        &self,
+        _q: &[[E; DIM]],
+        ctx: &Ctx<E>,
+        out: &mut [[E; DIM]],
+    ) -> Result<()> {
+        let e = self.unit::<DIM>();
+        let at = self.field.at(ctx.t);
+        let seed = E::embed(self.seed);
+        for (j, o) in out.iter_mut().enumerate() {
+            let g = self.field.inertia_at(j, at);
+            for d in 0..DIM {
+                if e[d] != 0.0 {
+                    o[d] -= seed * (g * e[d]);
+                }
+            }
+        }
         Ok(())
     }
 

@@ -204,7 +204,7 @@ fn the_history_term_sees_only_the_fluctuation() {
         };
         let (v, grad) = eval(&moment);
         let scale = grad.iter().fold(0.0f64, |a, g| a.max(g.abs()));
-        for j in 0..moment.len() {
+        for (j, &gj) in grad.iter().enumerate() {
             let md: Vec<Dual64> = moment
                 .iter()
                 .enumerate()
@@ -222,9 +222,8 @@ fn the_history_term_sees_only_the_fluctuation() {
                 .unwrap();
             assert!((vd.re - v).abs() <= 1e-15 * v, "m = {m}: value");
             assert!(
-                (vd.eps - grad[j]).abs() <= 1e-12 * scale,
-                "m = {m}, j = {j}: {} vs Dual64 {}",
-                grad[j],
+                (vd.eps - gj).abs() <= 1e-12 * scale,
+                "m = {m}, j = {j}: {gj} vs Dual64 {}",
                 vd.eps
             );
         }

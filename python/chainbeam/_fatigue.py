@@ -214,6 +214,7 @@ def fatigue(
     forecast_error: float | None = None,
     observe: str | None = None,
     hotspot: str | None = None,
+    moment_about: str | None = None,
     spin_up: float | None = None,
     progress: ProgressArg = False,
     duration: float | None = None,
@@ -230,7 +231,9 @@ def fatigue(
     (``"state"`` or ``"sensors"``: what MPC's plan starts from, the plant's state or a Kalman
     filter's estimate from the riser's sensors), ``hotspot`` (the ``name`` of a
     ``[[fatigue.hotspot]]``: every controller acts on its moment and the controllers' damages and
-    lives are its, docs/cli.md "The moment the controllers act on"): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    lives are its, docs/cli.md "The moment the controllers act on"), ``moment_about``
+    (``"zero"`` or ``"mean"``: MPC plans on the hot spot's moment about zero, h·Σ|M|^m, or about
+    the plan's own mean, h·Σ|M − M̄|^m; ``"mean"`` needs ``hotspot``): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);
@@ -257,6 +260,7 @@ def fatigue(
         "forecast_error": _optional(forecast_error, float, "forecast_error"),
         "observe": _optional(observe, str, "observe"),
         "hotspot": _optional(hotspot, str, "hotspot"),
+        "moment_about": _optional(moment_about, str, "moment_about"),
         "spin_up": 0.0 if spin_up is None else _optional(spin_up, float, "spin_up"),
         "record": _optional(record, float, "record"),
         "seeds": _optional(seeds, int, "seeds"),

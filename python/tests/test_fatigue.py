@@ -310,3 +310,27 @@ def test_hotspot_equals_cli(cli: str, tmp_path: Path) -> None:
     with pytest.raises(cb.InvalidArgumentError) as a:
         cb.fatigue(s, controllers="constant", hotspot="nope", record=9.0)
     assert a.value.key == "hotspot"
+
+
+def test_moment_about_is_read_and_checked(tmp_path: Path) -> None:
+    """`moment_about=` (`--moment-about`): an unknown name raises InvalidArgumentError naming
+    `moment_about`, as does "mean" without a hot spot (MPC plans about the mean at a hot spot
+    only); "zero" with a hot spot is the run without the argument, bit for bit, and
+    `settings.moment_about` is absent for it (the JSON as before)."""
+    path = tmp_path / "h.toml"
+    path.write_text(SCENE + HOTSPOTS_ACTED_ON)
+    s = cb.Scene.from_file(path)
+    for bad in ("median", "Mean"):
+        with pytest.raises(cb.InvalidArgumentError) as a:
+            cb.fatigue(s, controllers="constant", hotspot="weld", moment_about=bad, record=9.0,
+                       spin_up=1.0)
+        assert a.value.key == "moment_about"
+    with pytest.raises(cb.InvalidArgumentError) as a:
+        cb.fatigue(s, controllers="constant", moment_about="mean", record=9.0, spin_up=1.0)
+    assert a.value.key == "moment_about"
+    kw = dict(controllers="constant", hotspot="weld", interval=0.5, bound=2e4, spin_up=1.0,
+              record=9.0)
+    zero = cb.fatigue(s, moment_about="zero", **kw)
+    plain = cb.fatigue(s, **kw)
+    assert "moment_about" not in zero["settings"]
+    assert same(zero, plain)

@@ -23,15 +23,31 @@
 //! [`Objective::uses_positions`]): dℓ_k/dz_i is non-zero only for the nodes that end the two or
 //! three pendulums around the hot spot. |M|^p is differentiable for p > 1 and taken as 0 (with
 //! vanishing derivatives) below M² = the smallest normal f64, as [`super::PowerObjective`]'s.
+//!
+//! # About the plan's mean (`[mpc] moment_about = "mean"`)
+//! With [`MomentAbout::Mean`] ([`HotSpotObjective::about`]) the moment term is measured from the
+//! horizon's own mean instead of zero, over the N + 1 stages k = 0..N the sum runs over:
+//! ```text
+//! J = h Σ_{k=0}^{N} |M_k − M̄|^p + ρ h Σ_k |u_k|²,    M̄ = (1/(N+1)) Σ_{k=0}^{N} M_k,
+//! ∂J/∂M_j = h p φ(e_j) − (h/(N+1)) Σ_{k=0}^{N} p φ(e_k),    e = M − M̄,  φ(e) = |e|^{p−1} sgn e
+//! ```
+//! (the second term is M̄'s own dependence on M_j: the plan may move the mean freely, which S-N
+//! damage, counting ranges only, does not see). No sum of stage costs is this J: the moment term
+//! is the objective's history term ([`Objective::history`] on the signal M_k,
+//! [`Objective::history_signal`]); the stage cost keeps the effort ρ h |u_k|² alone, and the
+//! adjoint carries ∂J/∂M_j into z through M_j's own dual-number partials. One type with an
+//! `about` field rather than a second type: the moment, its joints and its exponent are the
+//! same, only the point the moment is measured from differs. [`MomentAbout::Zero`] (the
+//! default) is the objective above bit for bit.
 
 use std::sync::Arc;
 
-use super::objective::{Objective, Stage};
+use super::objective::{History, Objective, Stage};
 use crate::base::Scalar;
 use crate::error::{MpcError, Result};
 use crate::hotspots::{interpolation_joints, pendulum_inclination};
 use crate::model::Chain;
-use crate::scene::Scene;
+use crate::scene::{MomentAbout, Scene};
 
 /// h Σ_{k=0}^{N} |M(t_k)|^p + ρ h Σ_{k=0}^{N} |u_k|², M the moment at a hot spot (module docs):
 /// the objective MPC plans on, and the constant thrust is chosen on, with `[mpc] hotspot`.
@@ -46,6 +62,9 @@ pub struct HotSpotObjective {
     pub exponent: f64,
     /// ρ ≥ 0 of the effort penalty ρ h Σ |u_k|².
     pub effort: f64,
+    /// What M is measured from: zero (default) or the horizon's mean (module docs, "About the
+    /// plan's mean").
+    pub about: MomentAbout,
 }
 
 /// Below this M² the stage's |M|^p and its derivatives are taken as 0 ([`super::PowerObjective`]'s
@@ -88,7 +107,43 @@ impl HotSpotObjective {
             terms,
             exponent,
             effort,
+            about: MomentAbout::Zero,
         })
+    }
+
+    /// The objective with its moment measured from `about` (module docs).
+    #[must_use]
+    pub fn with_about(mut self, about: MomentAbout) -> Self {
+        self.about = about;
+        self
+    }
+
+    /// |x|^p from x² (0 below [`TINY`]: the stage's guard).
+    #[allow(clippy::float_cmp)]
+    fn power_of_square<D: Scalar>(&self, x2: D) -> D {
+        if self.exponent == 2.0 {
+            x2
+        } else if x2.re() < TINY {
+            x2 * 0.0
+        } else {
+            x2.sqrt().powf(self.exponent)
+        }
+    }
+
+    /// p φ(e) = p |e|^{p−1} sgn e = p e |e|^{p−2} (0 below [`TINY`] for p > 2).
+    #[allow(clippy::float_cmp)]
+    fn power_slope<D: Scalar>(&self, e: D) -> D {
+        let p = self.exponent;
+        if p == 2.0 {
+            e * 2.0
+        } else {
+            let e2 = e * e;
+            if e2.re() < TINY {
+                e * 0.0
+            } else {
+                e * e2.sqrt().powf(p - 2.0) * p
+            }
+        }
     }
 
     /// β_p = asin q_{p,z} of pendulum p (0 outside 0..n, the supports' vertical).
@@ -132,6 +187,11 @@ impl Objective for HotSpotObjective {
     /// |M(t_k)|^p h + ρ h |u_k|² (for p = 2, M² h).
     #[allow(clippy::float_cmp)]
     fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
+        let u2 = s.control * s.control + s.control_x * s.control_x;
+        if self.about == MomentAbout::Mean {
+            // The moment term is the history's (module docs).
+            return u2 * (self.effort * s.h);
+        }
         let m = self.moment(s.z);
         let m2 = m * m;
         let mp = if self.exponent == 2.0 {
@@ -141,10 +201,45 @@ impl Objective for HotSpotObjective {
         } else {
             m2.sqrt().powf(self.exponent)
         };
-        let u2 = s.control * s.control + s.control_x * s.control_x;
         mp * s.h + u2 * (self.effort * s.h)
     }
     fn uses_positions(&self) -> bool {
         true
+    }
+    fn has_history(&self) -> bool {
+        self.about == MomentAbout::Mean
+    }
+    /// The hot spot's moment M_k (about the mean only).
+    fn history_signal<D: Scalar>(&self, s: Stage<'_, D>) -> Option<D> {
+        (self.about == MomentAbout::Mean).then(|| self.moment(s.z))
+    }
+    /// h Σ_k |M_k − M̄|^p and ∂/∂M_j = h p φ(e_j) − (h/(N+1)) Σ_k p φ(e_k) (module docs), h
+    /// the stage's step (`h.moment` holds M_0..M_N).
+    fn history<D: Scalar>(&self, h: History<'_, D>) -> crate::error::Result<D> {
+        let n = h.moment.len();
+        if n == 0 {
+            return Ok(D::zero());
+        }
+        let step = h.h;
+        let count = n as f64;
+        let mut mean = D::zero();
+        for &m in h.moment {
+            mean += m;
+        }
+        let mean = mean / count;
+        let mut value = D::zero();
+        let mut slope_sum = D::zero();
+        for (g, &m) in h.grad.iter_mut().zip(h.moment) {
+            let e = m - mean;
+            value += self.power_of_square(e * e);
+            let slope = self.power_slope(e);
+            slope_sum += slope;
+            *g = slope * step;
+        }
+        let shift = slope_sum * (step / count);
+        for g in h.grad.iter_mut() {
+            *g -= shift;
+        }
+        Ok(value * step)
     }
 }

@@ -68,6 +68,18 @@ pub trait Objective: Clone + Send + Sync + 'static {
         let _ = h;
         Ok(D::zero())
     }
+    /// The quantity s_k whose history [`Objective::history`] sees, when it is not the base
+    /// moment: `None` (default) for M₀(t_k) (and M₀ₓ(t_k)), as every history term before;
+    /// `Some(s_k)`, a function of the stage's inputs (a hot spot's moment from the node
+    /// displacements z: [`super::HotSpotObjective`] about its mean). Then `h.moment` holds
+    /// s_0..s_N (`h.moment_x` empty), and the adjoint takes ∂H/∂s_k through s_k's own partial
+    /// derivatives: the reverse sweep differentiates ℓ_k + g_k s_k with g_k = ∂H/∂s_k held
+    /// fixed, whose derivatives are ∂ℓ_k/∂x + (∂H/∂s_k) ∂s_k/∂x exactly (the chain rule).
+    /// Read only when [`Objective::has_history`].
+    fn history_signal<D: Scalar>(&self, s: Stage<'_, D>) -> Option<D> {
+        let _ = s;
+        None
+    }
     /// The exponent p of the power objective Σ|M₀|^p that stands in for this objective in the
     /// structured solvers when it has no Gauss-Newton form (the rainflow damage: the S-N curve's
     /// slope m), for their refusal to suggest ([`crate::error::OcpError::NeedsPowerProxy`]).
@@ -86,6 +98,8 @@ pub struct History<'a, D> {
     pub grad: &'a mut [D],
     /// ∂H/∂M₀ₓ(t_k) (same length as `moment_x`, zeroed on entry).
     pub grad_x: &'a mut [D],
+    /// The step h \[s\] of the horizon (the stages' [`Stage::h`]).
+    pub h: f64,
 }
 
 /// The history term's buffers in the adjoint's sweeps: M₀ and M₀ₓ as the forward sweep produces
@@ -95,6 +109,8 @@ pub(crate) struct HistoryBuf<D> {
     moment_x: Vec<D>,
     grad: Vec<D>,
     grad_x: Vec<D>,
+    /// Whether `moment` holds the objective's [`Objective::history_signal`] (not M₀).
+    signal: bool,
 }
 
 impl<D> Default for HistoryBuf<D> {
@@ -104,6 +120,7 @@ impl<D> Default for HistoryBuf<D> {
             moment_x: Vec::new(),
             grad: Vec::new(),
             grad_x: Vec::new(),
+            signal: false,
         }
     }
 }
@@ -192,16 +209,10 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         u: D,
     ) -> D {
         let [mx, m] = ch.base_moment_vector(q);
-        if self.obj.has_history() {
-            self.history.moment.push(m);
-            if DIM == 3 {
-                self.history.moment_x.push(mx);
-            }
-        }
         if self.obj.uses_positions() {
             positions_z(ch, q, &mut self.zpos);
         }
-        self.obj.stage(Stage {
+        let stage = Stage {
             k,
             steps: self.steps,
             h: self.h,
@@ -210,7 +221,19 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             control: u,
             control_x: ch.control_x(k),
             z: &self.zpos,
-        })
+        };
+        if self.obj.has_history() {
+            if let Some(s) = self.obj.history_signal(stage) {
+                self.history.signal = true;
+                self.history.moment.push(s);
+            } else {
+                self.history.moment.push(m);
+                if DIM == 3 {
+                    self.history.moment_x.push(mx);
+                }
+            }
+        }
+        self.obj.stage(stage)
     }
 
     /// The history term H of the moments [`StageEval::value`] recorded (0 without one), with its
@@ -229,6 +252,7 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             moment_x: &b.moment_x,
             grad: &mut b.grad,
             grad_x: &mut b.grad_x,
+            h: self.h,
         })
     }
 
@@ -257,19 +281,27 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
         }
         let zslice: &[Dual<D>] = if uses_z { &self.zbuf } else { &[] };
         // ∂ℓ/∂(M₀_z, M₀ₓ, u, u_x), one dual evaluation each (M₀ₓ and u_x only where they exist).
+        // A history of the objective's own signal s_k: ∂H/∂s_k joins through s_k's partials.
+        let signal = if self.history.signal {
+            self.history.grad.get(k).copied()
+        } else {
+            None
+        };
         let mut d = [D::zero(); 4];
         for (i, di) in d.iter_mut().enumerate() {
             if (i == 1 && DIM == 2) || (i == 3 && !two_axis) {
                 continue;
             }
-            *di = self.stage_dual(k, point, Some(i), zslice).eps;
+            *di = self.stage_dual(k, point, Some(i), zslice, signal).eps;
         }
         // The history term's ∂H/∂M₀(t_k) (and ∂H/∂M₀ₓ(t_k)) joins ∂ℓ_k/∂M₀.
-        if let Some(g) = self.history.grad.get(k) {
-            d[0] += *g;
-        }
-        if let Some(g) = self.history.grad_x.get(k) {
-            d[1] += *g;
+        if signal.is_none() {
+            if let Some(g) = self.history.grad.get(k) {
+                d[0] += *g;
+            }
+            if let Some(g) = self.history.grad_x.get(k) {
+                d[1] += *g;
+            }
         }
         cot.qbar[0][zi_] += d[0] * scale;
         cot.ubar[k] += d[2];
@@ -291,7 +323,7 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             for i in (0..ch.n()).rev() {
                 let zi_re = self.zbuf[i].re;
                 self.zbuf[i] = Dual::new(zi_re, D::one());
-                let g = self.stage_dual(k, point, None, &self.zbuf).eps;
+                let g = self.stage_dual(k, point, None, &self.zbuf, signal).eps;
                 self.zbuf[i] = Dual::from_re(zi_re);
                 acc += g;
                 cot.qbar[i][zi_] += acc * ch.lengths[i];
@@ -300,8 +332,15 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
     }
 
     /// ℓ_k in `Dual<D>` at (M₀_z, M₀ₓ, u, u_x) = `point`, with the input `seed` (an index into
-    /// `point`) seeded.
-    fn stage_dual(&self, k: usize, point: [D; 4], seed: Option<usize>, z: &[Dual<D>]) -> Dual<D> {
+    /// `point`) seeded; with `signal` = Some(g_k), ℓ_k + g_k s_k ([`Objective::history_signal`]).
+    fn stage_dual(
+        &self,
+        k: usize,
+        point: [D; 4],
+        seed: Option<usize>,
+        z: &[Dual<D>],
+        signal: Option<D>,
+    ) -> Dual<D> {
         let v = |i: usize| {
             if seed == Some(i) {
                 Dual::new(point[i], D::one())
@@ -309,7 +348,7 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
                 Dual::from_re(point[i])
             }
         };
-        self.obj.stage(Stage {
+        let stage = Stage {
             k,
             steps: self.steps,
             h: self.h,
@@ -318,7 +357,12 @@ impl<O: Objective, D: Scalar> StageEval<'_, O, D> {
             control: v(2),
             control_x: v(3),
             z,
-        })
+        };
+        let l = self.obj.stage(stage);
+        match signal.and_then(|g| self.obj.history_signal(stage).map(|s| (g, s))) {
+            Some((g, s)) => l + s * Dual::from_re(g),
+            None => l,
+        }
     }
 }
 

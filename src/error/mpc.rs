@@ -212,6 +212,14 @@ pub enum MpcError {
         /// The exponent.
         exponent: f64,
     },
+    /// `moment_about = "mean"` without `hotspot`: the moment about its plan's mean is an
+    /// objective on a hot spot's moment only (the chain's base moment objective measures from
+    /// zero).
+    #[error(
+        "moment_about \"mean\": MPC plans on a moment's fluctuation about its mean at a hot spot \
+         only; name one with hotspot (the chain's base moment is planned about zero)"
+    )]
+    MomentAboutNeedsHotSpot,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)
     /// outside its range.
     #[error(transparent)]
@@ -248,6 +256,7 @@ impl MpcError {
             | MpcError::HotSpotSpatial
             | MpcError::HotSpotNeedsThrust
             | MpcError::HotSpotExponent { .. } => "hotspot",
+            MpcError::MomentAboutNeedsHotSpot => "moment_about",
         }
     }
 }

@@ -3,7 +3,7 @@
 //! reading a scene does not depend on the controllers' errors.
 
 use crate::error::MpcError;
-use crate::scene::{HotSpotSpec, MpcSettings, Scene};
+use crate::scene::{HotSpotSpec, MomentAbout, MpcSettings, Scene};
 
 impl MpcSettings {
     /// The `[[fatigue.hotspot]]` of `scene` that [`MpcSettings::hotspot`](crate::scene::MpcSettings::hotspot) names (`None`
@@ -11,9 +11,13 @@ impl MpcSettings {
     ///
     /// # Errors
     /// [`MpcError::HotSpotUnknown`] for a name that is not one of `scene`'s hot
-    /// spots; [`MpcError::HotSpotSpatial`] for a spatial scene.
+    /// spots; [`MpcError::HotSpotSpatial`] for a spatial scene;
+    /// [`MpcError::MomentAboutNeedsHotSpot`] for [`MomentAbout::Mean`] without a hot spot.
     pub fn hotspot_spec(&self, scene: &Scene) -> Result<Option<HotSpotSpec>, MpcError> {
         let Some(name) = self.hotspot.as_deref() else {
+            if self.moment_about == MomentAbout::Mean {
+                return Err(MpcError::MomentAboutNeedsHotSpot);
+            }
             return Ok(None);
         };
         if scene.is_spatial() {

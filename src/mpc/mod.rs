@@ -263,6 +263,7 @@ mod receding;
 mod thrust;
 
 pub use crate::scene::Forecast;
+pub use crate::scene::MomentAbout;
 pub use crate::scene::Observe;
 pub use baselines::{
     pd_closed_loop_cost, pd_closed_loop_cost_at, pd_closed_loop_cost_spatial, ConstantForce,

@@ -17,7 +17,7 @@ use crate::hotspots::HotSpotSpec;
 use crate::model::Chain;
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, Bounds, Method, OptimOptions};
-use crate::scene::{Control, ControlKind, Forecast, ObjectiveKind, Observe, Scene};
+use crate::scene::{Control, ControlKind, Forecast, MomentAbout, ObjectiveKind, Observe, Scene};
 use crate::steppers::rattle::State;
 
 /// How far a plan looks ahead.
@@ -132,6 +132,11 @@ pub struct MpcOptions {
     /// vessel's thrust and in the planar model only ([`MpcError::HotSpotNeedsThrust`],
     /// [`MpcError::HotSpotSpatial`]). Default `None`: the base moment.
     pub hotspot: Option<HotSpotSpec>,
+    /// What the hot spot's moment is measured from in each plan (`[mpc] moment_about`): zero
+    /// (default), or the plan's own mean over its horizon ([`HotSpotObjective`], "About the
+    /// plan's mean"). [`MomentAbout::Mean`] needs [`MpcOptions::hotspot`]
+    /// ([`MpcError::MomentAboutNeedsHotSpot`]).
+    pub moment_about: MomentAbout,
 }
 
 impl Default for MpcOptions {
@@ -154,6 +159,7 @@ impl Default for MpcOptions {
             observe: Observe::State,
             observer: ObserverOptions::default(),
             hotspot: None,
+            moment_about: MomentAbout::Zero,
         }
     }
 }
@@ -242,6 +248,12 @@ impl Objective for PlanObjective {
         match self {
             PlanObjective::Base(o) => o.history(h),
             PlanObjective::HotSpot(o) => o.history(h),
+        }
+    }
+    fn history_signal<D: Scalar>(&self, s: Stage<'_, D>) -> Option<D> {
+        match self {
+            PlanObjective::Base(o) => o.history_signal(s),
+            PlanObjective::HotSpot(o) => o.history_signal(s),
         }
     }
     fn power_proxy(&self) -> Option<f64> {
@@ -376,17 +388,18 @@ impl<const DIM: usize> Mpc<DIM> {
             None => None,
         };
         let hotspot = match &options.hotspot {
+            None if options.moment_about == MomentAbout::Mean => {
+                return Err(MpcError::MomentAboutNeedsHotSpot.into())
+            }
             None => None,
             Some(_) if DIM == 3 => return Err(MpcError::HotSpotSpatial.into()),
             Some(_) if thrust.is_none() => return Err(MpcError::HotSpotNeedsThrust.into()),
             Some(spot) => {
                 let exponent = WellheadDamage::new(&spot.spec, MomentMeasure::Wellhead)?.exponent();
-                Some(HotSpotObjective::new(
-                    &model,
-                    spot.elevation,
-                    exponent,
-                    hotspot_effort,
-                )?)
+                Some(
+                    HotSpotObjective::new(&model, spot.elevation, exponent, hotspot_effort)?
+                        .with_about(options.moment_about),
+                )
             }
         };
         if options.observe == Observe::Sensors {

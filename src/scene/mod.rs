@@ -49,7 +49,8 @@ pub use design::{DesignParameter, DesignTable, FreeParameter, Role};
 pub use error::{SceneError, SceneErrorKind};
 pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
 pub use mpc::{
-    check_forecast_error, Forecast, MpcPlanObjective, MpcSettings, MpcTable, Observe, MPC_KEYS,
+    check_forecast_error, Forecast, MomentAbout, MpcPlanObjective, MpcSettings, MpcTable, Observe,
+    MPC_KEYS,
 };
 pub use pipe::{
     drag_weights, DragModel, Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS,

@@ -71,6 +71,39 @@ impl Forecast {
     }
 }
 
+/// What the hot spot's moment is measured from in the objective MPC plans on (`[mpc]
+/// moment_about`, [`crate::mpc`] "The moment a controller acts on"): zero, J = h Σ_k |M_k|^m,
+/// or the plan's own mean, J = h Σ_k |M_k − M̄|^m with M̄ = (1/(N+1)) Σ_{k=0}^{N} M_k over the
+/// plan's horizon ([`crate::adjoint::HotSpotObjective`]). S-N damage counts ranges only, which
+/// the mean does not change.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MomentAbout {
+    /// `"zero"`: |M_k|^m, the moment about zero (every number as without the key).
+    #[default]
+    Zero,
+    /// `"mean"`: |M_k − M̄|^m, the moment's fluctuation about the plan's own mean.
+    Mean,
+}
+
+impl MomentAbout {
+    /// The name in the scene file and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            MomentAbout::Zero => "zero",
+            MomentAbout::Mean => "mean",
+        }
+    }
+
+    /// The setting of a name ([`MomentAbout::name`]); `None` for another name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "zero" => Some(MomentAbout::Zero),
+            "mean" => Some(MomentAbout::Mean),
+            _ => None,
+        }
+    }
+}
+
 /// What MPC's plan starts from (`[mpc] observe`, [`crate::mpc`] "What the controller sees"):
 /// the plant's whole state, or an estimate of it from a named set of sensors.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -137,10 +170,13 @@ pub struct MpcTable {
     /// `hotspot`: the `name` of the `[[fatigue.hotspot]]` whose moment every controller acts
     /// on (not given: the chain's base moment).
     pub hotspot: Option<String>,
+    /// `moment_about`: what the hot spot's moment is measured from in MPC's plan (`"zero"` or
+    /// `"mean"`; needs `hotspot`).
+    pub moment_about: Option<MomentAbout>,
 }
 
 /// The table's keys, in the order of docs/scene-format.md (section `[mpc]`).
-pub const MPC_KEYS: [&str; 14] = [
+pub const MPC_KEYS: [&str; 15] = [
     "interval",
     "horizon",
     "iterations",
@@ -155,6 +191,7 @@ pub const MPC_KEYS: [&str; 14] = [
     "forecast_seed",
     "observe",
     "hotspot",
+    "moment_about",
 ];
 
 /// The closed-loop settings of a run after the precedence of [`MpcTable::resolve`]: the keys
@@ -193,6 +230,9 @@ pub struct MpcSettings {
     /// The hot spot every controller acts on, by name (default: none, the chain's base
     /// moment; [`MpcSettings::hotspot_spec`]).
     pub hotspot: Option<String>,
+    /// What the hot spot's moment is measured from in MPC's plan (default
+    /// [`MomentAbout::Zero`]; [`MomentAbout::Mean`] needs [`MpcSettings::hotspot`]).
+    pub moment_about: MomentAbout,
 }
 
 impl MpcSettings {
@@ -297,6 +337,7 @@ impl MpcTable {
             forecast_seed: self.forecast_seed.or(t.forecast_seed),
             observe: self.observe.or(t.observe).unwrap_or_default(),
             hotspot: self.hotspot.clone().or(t.hotspot),
+            moment_about: self.moment_about.or(t.moment_about).unwrap_or_default(),
         }
     }
 
@@ -317,6 +358,7 @@ impl MpcTable {
             "forecast_seed" => self.forecast_seed.is_some(),
             "observe" => self.observe.is_some(),
             "hotspot" => self.hotspot.is_some(),
+            "moment_about" => self.moment_about.is_some(),
             _ => false,
         }
     }
@@ -359,6 +401,8 @@ pub(super) struct RawMpc {
     observe: Option<String>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     hotspot: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    moment_about: Option<String>,
 }
 
 /// A positive finite number (`mpc.KEY`).
@@ -402,6 +446,7 @@ impl RawMpc {
                 .map(|s| i64::try_from(s).unwrap_or(i64::MAX)),
             observe: t.observe.map(|o| o.name().to_string()),
             hotspot: t.hotspot.clone(),
+            moment_about: t.moment_about.map(|m| m.name().to_string()),
         }
     }
 
@@ -480,6 +525,18 @@ impl RawMpc {
                 })
             })
             .transpose()?;
+        let moment_about = self
+            .moment_about
+            .as_deref()
+            .map(|m| {
+                MomentAbout::from_name(m).ok_or_else(|| {
+                    SceneError::invalid(
+                        "mpc.moment_about",
+                        format!("unknown moment_about `{m}` (one of zero, mean)"),
+                    )
+                })
+            })
+            .transpose()?;
         Ok(MpcTable {
             interval: positive("interval", self.interval)?,
             horizon: positive("horizon", self.horizon)?,
@@ -495,6 +552,7 @@ impl RawMpc {
             forecast_seed,
             observe,
             hotspot: self.hotspot,
+            moment_about,
         })
     }
 }

@@ -13,6 +13,7 @@ mod wave_riser4;
 
 mod forecast_noisy;
 mod hotspot;
+mod moment_about;
 mod mpc;
 mod mpc_planning;
 mod mpc_vessel;

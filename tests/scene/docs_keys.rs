@@ -349,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 150, "number of documented keys");
+    assert_eq!(checked, 151, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -428,6 +428,7 @@ fn every_documented_key_is_read() {
         ("mpc", "forecast", "\"none\""),
         ("mpc", "observe", "\"sensors\""),
         ("mpc", "hotspot", "\"b\""),
+        ("mpc", "moment_about", "\"mean\""),
         ("mpc", "forecast_error", "0.5"),
         ("mpc", "forecast_seed", "3"),
         ("design", "max_iterations", "7"),

@@ -93,6 +93,8 @@ pub struct Settings {
     observe: Option<String>,
     /// `hotspot` (the name of a `[[fatigue.hotspot]]`; `None`: not given).
     hotspot: Option<String>,
+    /// `moment_about` ("zero" or "mean"; `None`: not given).
+    moment_about: Option<String>,
     spin_up: f64,
     /// `forecast_error` (the noisy forecast's error growth e; `None`: not given).
     forecast_error: Option<f64>,
@@ -144,6 +146,7 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Settings {
             forecast: item(obj, "forecast", "\"perfect\", \"none\" or \"noisy\"")?,
             observe: item(obj, "observe", "\"state\" or \"sensors\"")?,
             hotspot: item(obj, "hotspot", "the name of a [[fatigue.hotspot]]")?,
+            moment_about: item(obj, "moment_about", "\"zero\" or \"mean\"")?,
             spin_up,
             forecast_error: item(obj, "forecast_error", NUMBER)?,
             record: item(obj, "record", NUMBER)?,
@@ -253,6 +256,17 @@ impl Settings {
                 )
             })?),
         };
+        let moment_about = match self.moment_about.as_deref() {
+            None => None,
+            Some(name) => Some(chainbeam::scene::MomentAbout::from_name(name).ok_or_else(
+                || {
+                    Failure::argument(
+                        "moment_about",
+                        format!("unknown moment_about {name:?}; expected \"zero\" or \"mean\""),
+                    )
+                },
+            )?),
+        };
         let given = MpcTable {
             interval: self.interval,
             horizon: self.horizon,
@@ -274,6 +288,7 @@ impl Settings {
             forecast_seed: None,
             observe,
             hotspot: self.hotspot.clone(),
+            moment_about,
         };
         let settings = given.resolve(scene.mpc.as_ref());
         Ok(Resolved {
@@ -315,7 +330,8 @@ impl Settings {
                 observe: s.observe,
                 hotspot: s
                     .hotspot_spec(scene)
-                    .map_err(|e| r.fault("hotspot", e.to_string()))?,
+                    .map_err(|e| r.fault(e.argument(), e.to_string()))?,
+                moment_about: s.moment_about,
                 ..MpcOptions::default()
             },
             pd_training: s.pd_training,
@@ -586,6 +602,9 @@ fn study_dict<'py>(
     settings.set_item("observe", s.observe.name())?;
     if let Some(h) = &s.hotspot {
         settings.set_item("hotspot", h)?;
+    }
+    if s.moment_about != chainbeam::scene::MomentAbout::Zero {
+        settings.set_item("moment_about", s.moment_about.name())?;
     }
     d.set_item("settings", settings)?;
     if let Some(seeds) = &r.seeds_run {

@@ -13,7 +13,9 @@ use chainbeam::mpc::{
 };
 use chainbeam::ocp::OcpOptions;
 use chainbeam::optimize::{OptimOptions, OptimProblem};
-use chainbeam::scene::{Forecast, MpcSettings, MpcTable, Observe, MAX_STEPS, MPC_KEYS};
+use chainbeam::scene::{
+    Forecast, MomentAbout, MpcSettings, MpcTable, Observe, MAX_STEPS, MPC_KEYS,
+};
 use chainbeam::{ObjectiveKind, Scene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
@@ -166,6 +168,22 @@ pub struct MpcFlags {
     /// base moment].
     #[arg(long, value_name = "NAME")]
     pub hotspot: Option<String>,
+    /// What the hot spot's moment is measured from in MPC's plan: `zero` = h·Σ|M|^m, `mean` =
+    /// h·Σ|M − M̄|^m with M̄ the plan's own mean over its horizon (S-N damage counts ranges,
+    /// which the mean does not change; needs --hotspot; docs/mpc.md "The moment a controller
+    /// acts on") [default: mpc.moment_about, else zero].
+    #[arg(long, value_name = "KIND")]
+    pub moment_about: Option<MomentAboutArg>,
+}
+
+/// `--moment-about`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MomentAboutArg {
+    /// the moment about zero, h·Σ|M|^m
+    Zero,
+    /// the moment about the plan's own mean, h·Σ|M − M̄|^m
+    Mean,
 }
 
 /// `--observe`.
@@ -225,6 +243,10 @@ impl MpcFlags {
                 ObserveArg::Sensors => Observe::Sensors,
             }),
             hotspot: self.hotspot.clone(),
+            moment_about: self.moment_about.map(|m| match m {
+                MomentAboutArg::Zero => MomentAbout::Zero,
+                MomentAboutArg::Mean => MomentAbout::Mean,
+            }),
             ..MpcTable::default()
         }
     }
@@ -258,6 +280,9 @@ struct Settings {
     /// The hot spot MPC planned on (absent: the chain's base moment).
     #[serde(skip_serializing_if = "Option::is_none")]
     hotspot: Option<String>,
+    /// What the hot spot's moment was measured from ("mean"; absent: "zero", as before).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    moment_about: Option<&'static str>,
 }
 
 #[derive(Serialize)]
@@ -333,6 +358,11 @@ pub fn setting_name(flags: &MpcTable, table: Option<&MpcTable>, key: &str) -> St
     }
 }
 
+/// `settings.moment_about` in the JSON: "mean", absent for "zero" (the JSON as before).
+pub fn moment_about_json(m: MomentAbout) -> Option<&'static str> {
+    (m != MomentAbout::Zero).then(|| m.name())
+}
+
 /// Runs `mpc`.
 pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
     if let Some(bound) = a.mpc.bound.filter(|b| b.is_finite()) {
@@ -376,6 +406,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
         hotspot: s
             .hotspot_spec(&scene)
             .map_err(|e| mpc_error(&setup, &a.scene, e.into()))?,
+        moment_about: s.moment_about,
         ..MpcOptions::default()
     };
     let model_file = a.model.as_deref().unwrap_or(&a.scene);
@@ -668,6 +699,7 @@ fn report(setup: &Setup<'_>, mpc: Summary, b: Option<&Baselines>) -> Report {
             model: a.model.as_ref().map(|p| p.display().to_string()),
             observe: s.observe.name(),
             hotspot: s.hotspot.clone(),
+            moment_about: moment_about_json(s.moment_about),
         },
         real_time: mpc.worst_replan_seconds <= s.interval,
         c_sum_ratio_to_none: ratio(0),

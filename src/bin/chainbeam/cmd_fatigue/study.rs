@@ -150,6 +150,9 @@ struct SettingsJson {
     /// are (absent: the chain's base moment).
     #[serde(skip_serializing_if = "Option::is_none")]
     hotspot: Option<String>,
+    /// What MPC measured the hot spot's moment from ("mean"; absent: "zero", as before).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    moment_about: Option<&'static str>,
 }
 
 /// `--controller` output.
@@ -331,9 +334,10 @@ fn settings(a: &FatigueArgs, r: &MpcSettings, scene: &Scene) -> Result<ControlSe
             observe: r.observe,
             hotspot: r.hotspot_spec(scene).map_err(|e| {
                 let flags = flags(a);
-                let flag = setting_name(&flags, scene.mpc.as_ref(), "hotspot");
+                let flag = setting_name(&flags, scene.mpc.as_ref(), e.argument());
                 CliError::msg(format!("{}: {flag}: {e}", a.scene.display()))
             })?,
+            moment_about: r.moment_about,
             ..MpcOptions::default()
         },
         pd_training: r.pd_training,
@@ -503,6 +507,7 @@ fn controllers_json(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError
             seeds: a.seeds,
             observe: settings.observe.name(),
             hotspot: settings.hotspot.clone(),
+            moment_about: crate::cmd_mpc::moment_about_json(settings.moment_about),
         },
         seeds: solved.seeds.clone(),
     })

@@ -265,6 +265,17 @@ impl<D: Scalar, const DIM: usize> CurrentDrag<D, DIM> {
                     }
                 }
             });
+            // A design parameter's seeded share (momentum_located's last term), same order.
+            if let Some((t, seed)) = &self.wave_tangent {
+                let seed = *seed;
+                t.read_all(false, at, |i, v| {
+                    for d in 0..DIM {
+                        if unit[d] != 0.0 {
+                            out[i][d] += seed * (v * unit[d]);
+                        }
+                    }
+                });
+            }
         }
     }
 

@@ -685,14 +685,21 @@ impl WaveInertia {
     /// The direction e in the model's components (x only in the spatial model).
     #[inline]
     fn unit<const DIM: usize>(&self) -> [f64; DIM] {
-        let [dx, dz] = self.field.direction();
-        let mut e = [0.0; DIM];
-        e[zi::<DIM>()] = dz;
-        if DIM == 3 {
-            e[0] = dx;
-        }
-        e
+        direction_in::<DIM>(&self.field)
     }
+}
+
+/// A wave field's horizontal direction (d_x, d_z) as a unit vector e in the model's
+/// components: e_z = d_z, and e_x = d_x in the spatial model only (the planar model has no x).
+#[inline]
+fn direction_in<const DIM: usize>(field: &WaveField) -> [f64; DIM] {
+    let [dx, dz] = field.direction();
+    let mut e = [0.0; DIM];
+    e[zi::<DIM>()] = dz;
+    if DIM == 3 {
+        e[0] = dx;
+    }
+    e
 }
 
 impl<D: Scalar, const DIM: usize> ForceTerm<D, DIM> for WaveInertia {
@@ -761,13 +768,7 @@ impl<D> WaveInertiaTangent<D> {
     /// The direction e in the model's components, as [`WaveInertia`]'s.
     #[inline]
     fn unit<const DIM: usize>(&self) -> [f64; DIM] {
-        let [dx, dz] = self.field.direction();
-        let mut e = [0.0; DIM];
-        e[zi::<DIM>()] = dz;
-        if DIM == 3 {
-            e[0] = dx;
-        }
-        e
+        direction_in::<DIM>(&self.field)
     }
 }
 

@@ -1,6 +1,7 @@
 //! [`SceneBuilder`]: scenes in code, with the file format's defaults and validation.
 
-use super::validate::{check_size, check_spring, end_springs, support_name};
+use super::limits::check_size;
+use super::validate::{check_spring, end_springs, support_name};
 use super::values::NumOrArray;
 use super::{
     Beam, Control, ControlKind, Current, Loads, ObjectiveKind, PointLoad, Scene, SceneError,

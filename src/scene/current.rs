@@ -3,7 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::validate::{check_finite, check_positive, CURRENT_SPEED_RANGE};
+use super::ranges::CURRENT_SPEED_RANGE;
+use super::validate::{check_finite, check_positive};
 use super::{SceneError, SceneErrorKind};
 
 /// Largest exponent α of a power-law profile.

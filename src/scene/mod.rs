@@ -21,13 +21,16 @@ mod current;
 mod design;
 mod error;
 mod fatigue;
+mod limits;
 mod mpc;
 mod objective;
 mod pipe;
+mod ranges;
 mod raw;
 pub(crate) mod series;
 mod soil;
 mod stackup;
+mod toml_errors;
 mod validate;
 mod values;
 mod vessel;
@@ -48,6 +51,10 @@ pub use current::{
 pub use design::{DesignParameter, DesignTable, FreeParameter, Role};
 pub use error::{SceneError, SceneErrorKind};
 pub use fatigue::{HotSpotSpec, MAX_HOTSPOT_NAME};
+pub use limits::{
+    max_trajectory_steps, trajectory_bytes, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER,
+    MAX_TRAJECTORY_BYTES,
+};
 pub use mpc::{
     check_forecast_error, Forecast, MomentAbout, MpcPlanObjective, MpcSettings, MpcTable, Observe,
     MPC_KEYS,
@@ -55,17 +62,15 @@ pub use mpc::{
 pub use pipe::{
     drag_weights, DragModel, Pipe, Water, SEA_WATER_DENSITY, STEEL_DENSITY, STEEL_YOUNGS_MODULUS,
 };
+pub use ranges::{
+    stackup_range_of, ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE,
+    GRAVITY_RANGE, JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, PERIOD_RANGE,
+    SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE, SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
+};
 pub use series::{LoadSeries, MAX_SERIES_BYTES};
 pub use soil::{water_height, Soil, SoilLumping};
 pub use stackup::{
     Body, FlexJoint, Foot, Layout, NodeTangents, Segment, Stackup, STANDARD_GRAVITY,
-};
-pub use validate::{max_trajectory_steps, stackup_range_of, trajectory_bytes};
-pub use validate::{
-    ValueRange, AXIAL_WEIGHT_RANGE, CURRENT_SPEED_RANGE, DRAG_RANGE, FORCE_RANGE, GRAVITY_RANGE,
-    JOINT_DAMPING_RANGE, LENGTH_RANGE, MASS_RANGE, MAX_PENDULUMS, MAX_STEPS, MAX_STEP_NUMBER,
-    MAX_TRAJECTORY_BYTES, PERIOD_RANGE, SOIL_GRADIENT_RANGE, SOIL_MODULUS_RANGE,
-    SOIL_MUDLINE_RANGE, STEP_RANGE, STIFFNESS_RANGE,
 };
 pub use vessel::{
     Rao, Thrust, Vessel, DEFAULT_THRUST_BOUND, DEFAULT_THRUST_RATE_BOUND,

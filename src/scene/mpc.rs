@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::validate::FORCE_RANGE;
+use super::ranges::FORCE_RANGE;
 use super::{ObjectiveKind, Scene, SceneError};
 use crate::fatigue::WellheadDamage;
 

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use crate::input::{read_text_file, ReadErrorKind, MAX_INPUT_BYTES};
 
-use super::validate::FORCE_RANGE;
+use super::ranges::FORCE_RANGE;
 use super::{SceneError, SceneErrorKind};
 
 /// Largest series file read (1 GiB, the limit [`MAX_INPUT_BYTES`] of every input file), so that

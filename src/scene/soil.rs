@@ -11,7 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::error::SceneError;
-use super::validate::{check_range, soil_ranges};
+use super::ranges::{check_range, soil_ranges};
 
 /// The soil below the mudline (`[soil]`): a linear p-y modulus E_s(d) = `modulus` + `gradient`·d
 /// \[N/m per m of pile, i.e. N/m²\] at the depth d \[m\] below the mudline, acting laterally on

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 use super::error::{SceneError, SceneErrorKind};
-use super::validate::{check_range, stackup_ranges, StackupRange};
+use super::ranges::{check_range, stackup_ranges, StackupRange};
 use super::{Beam, DragModel, Support};
 
 /// Standard gravity g \[m/s²\] of the stack-up's weights (ISO 80000-3).

@@ -272,6 +272,46 @@ fn on_grid(name: &'static str, t: f64, step: f64) -> Result<usize, PredictionErr
     }
 }
 
+/// The setup's values: a positive horizon, forcing interval, amplitude and rate, a non-negative
+/// elevation, at least one start and each non-negative; all finite.
+fn check_setup(setup: &PredictionSetup) -> Result<(), PredictionError> {
+    check(
+        "horizon",
+        setup.horizon,
+        setup.horizon > 0.0,
+        "positive and finite [s]",
+    )?;
+    let f = setup.forcing;
+    check(
+        "interval",
+        f.interval,
+        f.interval > 0.0,
+        "positive and finite [s]",
+    )?;
+    check(
+        "amplitude",
+        f.amplitude,
+        f.amplitude > 0.0,
+        "positive and finite [N]",
+    )?;
+    if let Some(rate) = f.rate {
+        check("rate", rate, rate > 0.0, "positive and finite [N/s]")?;
+    }
+    check(
+        "elevation",
+        setup.elevation,
+        setup.elevation >= 0.0,
+        "non-negative and finite [m]",
+    )?;
+    if setup.starts.is_empty() {
+        return Err(PredictionError::NoStarts);
+    }
+    for &t in &setup.starts {
+        check("starts", t, t >= 0.0, "non-negative and finite [s]")?;
+    }
+    Ok(())
+}
+
 impl PlantRuns {
     /// Runs the plant `scene` forced and unforced to max t₀ + T (module docs); `setup.plan` is
     /// not used here.
@@ -281,40 +321,7 @@ impl PlantRuns {
     /// grid, runs beyond [`MAX_PREDICTION_STEPS`]; the chain's and the steps' errors (a spatial
     /// scene: the planar chain's refusal).
     pub fn new(scene: &Scene, setup: &PredictionSetup) -> Result<Self, PredictionError> {
-        check(
-            "horizon",
-            setup.horizon,
-            setup.horizon > 0.0,
-            "positive and finite [s]",
-        )?;
-        let f = setup.forcing;
-        check(
-            "interval",
-            f.interval,
-            f.interval > 0.0,
-            "positive and finite [s]",
-        )?;
-        check(
-            "amplitude",
-            f.amplitude,
-            f.amplitude > 0.0,
-            "positive and finite [N]",
-        )?;
-        if let Some(rate) = f.rate {
-            check("rate", rate, rate > 0.0, "positive and finite [N/s]")?;
-        }
-        check(
-            "elevation",
-            setup.elevation,
-            setup.elevation >= 0.0,
-            "non-negative and finite [m]",
-        )?;
-        if setup.starts.is_empty() {
-            return Err(PredictionError::NoStarts);
-        }
-        for &t in &setup.starts {
-            check("starts", t, t >= 0.0, "non-negative and finite [s]")?;
-        }
+        check_setup(setup)?;
         let h = scene.time.step;
         let horizon_steps = on_grid("horizon", setup.horizon, h)?;
         if horizon_steps == 0 {
@@ -339,7 +346,7 @@ impl PlantRuns {
         let n_steps = needed as usize;
         let mut plant = scene.clone();
         plant.time.steps = n_steps;
-        let forced = forcing(scene, &f, n_steps);
+        let forced = forcing(scene, &setup.forcing, n_steps);
         let zero = vec![0.0; n_steps + 1];
         let plant_joint = nearest_joint(&plant.beam.lengths, setup.elevation);
         let runs = [

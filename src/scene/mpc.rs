@@ -475,29 +475,22 @@ impl RawMpc {
             )),
             e => Ok(e),
         }?;
-        let objective = match self.objective.as_deref() {
-            None => None,
-            Some("power") => Some(MpcPlanObjective::Power),
-            Some("sum") => Some(MpcPlanObjective::Sum),
-            Some(other) => {
-                return Err(SceneError::invalid(
-                    "mpc.objective",
-                    format!("unknown objective `{other}` (one of power, sum)"),
-                ))
-            }
-        };
-        let forecast = self
-            .forecast
-            .as_deref()
-            .map(|f| {
-                Forecast::from_name(f).ok_or_else(|| {
-                    SceneError::invalid(
-                        "mpc.forecast",
-                        format!("unknown forecast `{f}` (one of perfect, none, noisy)"),
-                    )
-                })
-            })
-            .transpose()?;
+        let objective = one_of(
+            "objective",
+            self.objective.as_deref(),
+            |o| match o {
+                "power" => Some(MpcPlanObjective::Power),
+                "sum" => Some(MpcPlanObjective::Sum),
+                _ => None,
+            },
+            "power, sum",
+        )?;
+        let forecast = one_of(
+            "forecast",
+            self.forecast.as_deref(),
+            Forecast::from_name,
+            "perfect, none, noisy",
+        )?;
         let forecast_error = self
             .forecast_error
             .map(|e| check_forecast_error("mpc.forecast_error", e))
@@ -513,30 +506,18 @@ impl RawMpc {
                 })
             })
             .transpose()?;
-        let observe = self
-            .observe
-            .as_deref()
-            .map(|o| {
-                Observe::from_name(o).ok_or_else(|| {
-                    SceneError::invalid(
-                        "mpc.observe",
-                        format!("unknown observe `{o}` (one of state, sensors)"),
-                    )
-                })
-            })
-            .transpose()?;
-        let moment_about = self
-            .moment_about
-            .as_deref()
-            .map(|m| {
-                MomentAbout::from_name(m).ok_or_else(|| {
-                    SceneError::invalid(
-                        "mpc.moment_about",
-                        format!("unknown moment_about `{m}` (one of zero, mean)"),
-                    )
-                })
-            })
-            .transpose()?;
+        let observe = one_of(
+            "observe",
+            self.observe.as_deref(),
+            Observe::from_name,
+            "state, sensors",
+        )?;
+        let moment_about = one_of(
+            "moment_about",
+            self.moment_about.as_deref(),
+            MomentAbout::from_name,
+            "zero, mean",
+        )?;
         Ok(MpcTable {
             interval: positive("interval", self.interval)?,
             horizon: positive("horizon", self.horizon)?,
@@ -555,6 +536,25 @@ impl RawMpc {
             moment_about,
         })
     }
+}
+
+/// A named choice of `[mpc]`: absent, or one of `choices` (parsed by `parse`); any other name is
+/// refused naming the key `mpc.<key>` and the choices.
+fn one_of<T>(
+    key: &str,
+    name: Option<&str>,
+    parse: impl Fn(&str) -> Option<T>,
+    choices: &str,
+) -> Result<Option<T>, SceneError> {
+    name.map(|v| {
+        parse(v).ok_or_else(|| {
+            SceneError::invalid(
+                format!("mpc.{key}"),
+                format!("unknown {key} `{v}` (one of {choices})"),
+            )
+        })
+    })
+    .transpose()
 }
 
 /// `forecast_error` e checked: finite, 0 ≤ e ≤ [`MpcSettings::MAX_FORECAST_ERROR`].

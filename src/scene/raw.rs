@@ -274,6 +274,30 @@ struct RawControl {
 }
 
 impl RawControl {
+    /// The `[control]` table of a chain of `n` pendulums over `steps` steps. One number: every
+    /// value equal (N + 1 for per-step, 1 piece for piecewise); absent: zeros. The node defaults
+    /// to the tip n.
+    fn into_control(self, n: usize, steps: usize) -> Result<Control, SceneError> {
+        let count = match self.kind {
+            ControlKind::PerStep => steps + 1,
+            ControlKind::Constant | ControlKind::Piecewise => 1,
+        };
+        let (values, values_x) = match self.values {
+            Some(RawValues::Many(v)) => RawControl::split_values(v)?,
+            Some(RawValues::One(u)) => (vec![u; count], None),
+            None => (vec![0.0; count], None),
+        };
+        Ok(Control {
+            node: match self.node {
+                Some(node) => node_index("control.node", node, n)?,
+                None => n,
+            },
+            kind: self.kind,
+            values,
+            values_x,
+        })
+    }
+
     /// The values as (z components, x components of a 2-axis control): every value a number
     /// (1-axis) or every value a pair [u_x, u_z] (2-axis).
     fn split_values(values: Vec<NumOrArray>) -> Result<(Vec<f64>, Option<Vec<f64>>), SceneError> {
@@ -418,31 +442,7 @@ impl RawScene {
         for (i, p) in raw_loads.point.into_iter().enumerate() {
             points.push(p.into_load(i, n, dir)?);
         }
-        let control = match self.control {
-            None => None,
-            Some(c) => {
-                // One number: every value equal (N + 1 for per-step, 1 piece for piecewise);
-                // absent: zeros. `steps` passed the size check above.
-                let count = match c.kind {
-                    ControlKind::PerStep => steps + 1,
-                    ControlKind::Constant | ControlKind::Piecewise => 1,
-                };
-                let (values, values_x) = match c.values {
-                    Some(RawValues::Many(v)) => RawControl::split_values(v)?,
-                    Some(RawValues::One(u)) => (vec![u; count], None),
-                    None => (vec![0.0; count], None),
-                };
-                Some(Control {
-                    node: match c.node {
-                        Some(node) => node_index("control.node", node, n)?,
-                        None => n,
-                    },
-                    kind: c.kind,
-                    values,
-                    values_x,
-                })
-            }
-        };
+        let control = self.control.map(|c| c.into_control(n, steps)).transpose()?;
         let mut current = raw_loads
             .current
             .map(RawCurrent::into_current)

@@ -19,6 +19,40 @@ impl Scene {
     pub fn validate(&self) -> Result<(), SceneError> {
         let n = self.n();
         check_size(n, self.time.steps)?;
+        self.check_beam()?;
+        self.check_vessel()?;
+        check_finite("loads.gravity", self.loads.gravity)?;
+        check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
+        self.check_pipe_water_soil_stackup()?;
+        if let Some(objective) = &self.objective {
+            objective.check()?;
+        }
+        self.check_design()?;
+        self.check_loads()?;
+        check_positive("time.step", self.time.step)?;
+        check_range("time.step", self.time.step, &STEP_RANGE)?;
+        if let Some(w) = &self.loads.waves {
+            w.check(self)?;
+        }
+        let t_end = self.time.steps as f64 * self.time.step;
+        for (i, p) in self.loads.points.iter().enumerate() {
+            check_series_coverage(i, p, t_end)?;
+        }
+        if let Some(c) = &self.control {
+            self.check_control(c)?;
+        }
+        if let Some(f) = &self.fatigue {
+            f.validate().map_err(super::fatigue::scene_error)?;
+        }
+        self.check_hotspots()?;
+        self.check_step_numbers()
+    }
+
+    /// The `[beam]` table: one mass per pendulum and one stiffness per inner joint, lengths and
+    /// masses positive and in range, springs and joint damping valid, the reaction-force variant
+    /// only on a beam held at both ends.
+    fn check_beam(&self) -> Result<(), SceneError> {
+        let n = self.n();
         let b = &self.beam;
         if b.masses.len() != n {
             return Err(SceneError::count("beam.mass", n, b.masses.len()));
@@ -52,55 +86,24 @@ impl Scene {
                 ),
             ));
         }
-        self.check_vessel()?;
-        check_finite("loads.gravity", self.loads.gravity)?;
-        check_range("loads.gravity", self.loads.gravity, &GRAVITY_RANGE)?;
+        Ok(())
+    }
+
+    /// The `[pipe]`, `[water]`, `[soil]` and `[stackup]` tables, in that order; Morison's node
+    /// drag ([`Self::check_node_drag`]) in a pipe or a stack-up; a stack-up's layout one entry
+    /// per pendulum.
+    fn check_pipe_water_soil_stackup(&self) -> Result<(), SceneError> {
+        let n = self.n();
         if let Some(pipe) = &self.pipe {
             pipe.check()?;
-            if pipe.drag_model == super::DragModel::Morison && !self.beam.joint_damping.is_empty() {
-                return Err(SceneError::invalid(
-                    "beam.joint_damping",
-                    "the joint damping and `pipe.drag_model = \"morison\"` are not combined yet \
-                     (each couples the pendulums' half step in its own way)"
-                        .to_string(),
-                ));
-            }
-            if pipe.drag_model == super::DragModel::Morison && self.loads.drag != 0.0 {
-                return Err(SceneError::invalid(
-                    "loads.drag",
-                    format!(
-                        "is the momentum drag's constant D, which `pipe.drag_model = \"morison\"` \
-                         does not use (its drag is ½ ρ_w C_d D_o per length from `[pipe]`): \
-                         leave it out, got {}",
-                        self.loads.drag
-                    ),
-                ));
-            }
+            self.check_node_drag("pipe", pipe.drag_model)?;
         }
         self.water.check()?;
         if let Some(soil) = &self.soil {
-            soil.check(b.lengths.iter().sum())?;
+            soil.check(self.beam.lengths.iter().sum())?;
         }
         if let Some(st) = &self.stackup {
-            if st.drag_model == super::DragModel::Morison && !self.beam.joint_damping.is_empty() {
-                return Err(SceneError::invalid(
-                    "beam.joint_damping",
-                    "the joint damping and `stackup.drag_model = \"morison\"` are not combined \
-                     yet (each couples the pendulums' half step in its own way)"
-                        .to_string(),
-                ));
-            }
-            if st.drag_model == super::DragModel::Morison && self.loads.drag != 0.0 {
-                return Err(SceneError::invalid(
-                    "loads.drag",
-                    format!(
-                        "is the momentum drag's constant D, which `stackup.drag_model = \
-                         \"morison\"` does not use (each node's drag comes from its segments \
-                         and bodies): leave it 0, got {}",
-                        self.loads.drag
-                    ),
-                ));
-            }
+            self.check_node_drag("stackup", st.drag_model)?;
             let l = &st.layout;
             let lens = [
                 l.node_weights.len(),
@@ -119,10 +122,46 @@ impl Scene {
                 ));
             }
         }
-        if let Some(objective) = &self.objective {
-            objective.check()?;
+        Ok(())
+    }
+
+    /// Morison's node drag (`<table>.drag_model = "morison"`, `table` = `pipe` or `stackup`) is
+    /// not combined with the joint damping (each couples the pendulums' half step in its own way)
+    /// and does not use the momentum drag's constant D (`loads.drag` must stay 0).
+    fn check_node_drag(&self, table: &str, model: super::DragModel) -> Result<(), SceneError> {
+        if model != super::DragModel::Morison {
+            return Ok(());
         }
-        self.check_design()?;
+        if !self.beam.joint_damping.is_empty() {
+            return Err(SceneError::invalid(
+                "beam.joint_damping",
+                format!(
+                    "the joint damping and `{table}.drag_model = \"morison\"` are not combined \
+                     yet (each couples the pendulums' half step in its own way)"
+                ),
+            ));
+        }
+        if self.loads.drag != 0.0 {
+            let (whence, advice) = if table == "pipe" {
+                ("its drag is ½ ρ_w C_d D_o per length from `[pipe]`", "out")
+            } else {
+                ("each node's drag comes from its segments and bodies", "0")
+            };
+            return Err(SceneError::invalid(
+                "loads.drag",
+                format!(
+                    "is the momentum drag's constant D, which `{table}.drag_model = \"morison\"` \
+                     does not use ({whence}): leave it {advice}, got {}",
+                    self.loads.drag
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The `[loads]` table's tension, axial weight, momentum drag, point loads and current.
+    fn check_loads(&self) -> Result<(), SceneError> {
+        let n = self.n();
         check_finite("loads.tension", self.loads.tension)?;
         check_range("loads.tension", self.loads.tension, &FORCE_RANGE)?;
         check_finite("loads.axial_weight", self.loads.axial_weight)?;
@@ -147,23 +186,7 @@ impl Scene {
                     .is_some_and(|st| st.drag_model == super::DragModel::Morison);
             c.check(if node_drag { 1.0 } else { self.loads.drag })?;
         }
-        check_positive("time.step", self.time.step)?;
-        check_range("time.step", self.time.step, &STEP_RANGE)?;
-        if let Some(w) = &self.loads.waves {
-            w.check(self)?;
-        }
-        let t_end = self.time.steps as f64 * self.time.step;
-        for (i, p) in self.loads.points.iter().enumerate() {
-            check_series_coverage(i, p, t_end)?;
-        }
-        if let Some(c) = &self.control {
-            self.check_control(c)?;
-        }
-        if let Some(f) = &self.fatigue {
-            f.validate().map_err(super::fatigue::scene_error)?;
-        }
-        self.check_hotspots()?;
-        self.check_step_numbers()
+        Ok(())
     }
 
     /// The `[control]` table: the node (the tip with the reaction-force variant), the number of

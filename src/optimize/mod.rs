@@ -9,7 +9,10 @@
 //! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 //!
 //! // Thesis Table 3.2, load at node 7: constant control, c_sum (eq. 3.3.4).
-//! let problem = ControlProblem::builder(//! &catalogue::riser(7)).map(//! Parametrisation::Constant).objective(//! BendingObjective::summed_moment()).build_in::<2>()?;
+//! let problem = ControlProblem::builder(&catalogue::riser(7))
+//!     .map(Parametrisation::Constant)
+//!     .objective(BendingObjective::summed_moment())
+//!     .build()?;
 //! let r = minimize(&problem, &[0.0], &OptimOptions::default())?;
 //! assert!(r.converged, "{}", r.termination);
 //! assert!(matches!(r.termination, Termination::RelativeGradientTolerance { .. }));
@@ -493,7 +496,10 @@ pub struct OptimResult {
 /// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 /// use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 ///
-/// let problem = ControlProblem::builder(/// &catalogue::riser(5)).map(/// Parametrisation::Constant).objective(/// BendingObjective::summed_moment()).build_in::<2>()?;
+/// let problem = ControlProblem::builder(&catalogue::riser(5))
+///     .map(Parametrisation::Constant)
+///     .objective(BendingObjective::summed_moment())
+///     .build()?;
 /// let history = History::default();
 /// let lbfgs = OptimOptions { method: Method::Lbfgs, ..OptimOptions::default() };
 /// let r = Minimizer::new(&problem, lbfgs)

@@ -29,7 +29,11 @@ fn problem(scene: &Scene) -> ControlProblem {
     let map = Parametrisation::PerStep(PerStepControl {
         steps: scene.time.steps,
     });
-    ControlProblem::new(scene, map, BendingObjective::summed_moment()).expect("valid scene")
+    ControlProblem::builder(scene)
+        .map(map)
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .expect("valid scene")
 }
 
 fn theta(steps: usize) -> Vec<f64> {

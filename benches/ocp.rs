@@ -48,12 +48,11 @@ fn long_horizon(steps: usize) -> Scene {
 }
 
 fn problem(steps: usize) -> ControlProblem {
-    ControlProblem::new(
-        &long_horizon(steps),
-        Parametrisation::PerStep(PerStepControl { steps }),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .expect("valid scene")
+    ControlProblem::builder(&long_horizon(steps))
+        .map(Parametrisation::PerStep(PerStepControl { steps }))
+        .objective(BendingObjective::summed_moment().with_effort(0.01))
+        .build_in::<2>()
+        .expect("valid scene")
 }
 
 fn long_level() -> u32 {
@@ -157,12 +156,11 @@ fn bench_solve(c: &mut Criterion) {
 fn table_3_4_rows() -> Vec<(usize, ControlProblem, f64)> {
     (1..=10)
         .map(|node| {
-            let p = ControlProblem::new(
-                &catalogue::riser(node),
-                Parametrisation::PerStep(PerStepControl { steps: 10 }),
-                BendingObjective::summed_moment(),
-            )
-            .expect("valid scene");
+            let p = ControlProblem::builder(&catalogue::riser(node))
+                .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+                .objective(BendingObjective::summed_moment())
+                .build_in::<2>()
+                .expect("valid scene");
             let bound = thesis::TABLE_3_4[node - 1]
                 .0
                 .iter()

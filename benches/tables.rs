@@ -21,12 +21,11 @@ fn bench_tables(c: &mut Criterion) {
     g.sample_size(20);
     for node in [5usize, 9] {
         let scene = catalogue::riser(node);
-        let p32 = ControlProblem::new(
-            &scene,
-            Parametrisation::Constant,
-            BendingObjective::summed_moment(),
-        )
-        .expect("valid scene");
+        let p32 = ControlProblem::builder(&scene)
+            .map(Parametrisation::Constant)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
+            .expect("valid scene");
         g.bench_with_input(BenchmarkId::new("3.2_row", node), &node, |b, _| {
             b.iter(|| {
                 black_box(minimize(&p32, black_box(&[0.0]), &OptimOptions::default()).unwrap())
@@ -35,7 +34,10 @@ fn bench_tables(c: &mut Criterion) {
         // Table 3.4's bound: the largest |u_k| the thesis used (node 5: 374.15 N, node 9: 43.34 N).
         let bound = if node == 5 { 374.15217067 } else { 43.33886443 };
         let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
-        let p34 = ControlProblem::new(&scene, map, BendingObjective::summed_moment())
+        let p34 = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
             .expect("valid scene");
         let opts = OptimOptions {
             bound: Some(bound),

@@ -53,7 +53,11 @@ fn problem(scene: &Scene, effort: f64) -> ControlProblem {
     if effort > 0.0 {
         o = o.with_effort(effort);
     }
-    ControlProblem::new(scene, map, o).unwrap()
+    ControlProblem::builder(scene)
+        .map(map)
+        .objective(o)
+        .build_in::<2>()
+        .unwrap()
 }
 
 fn theta(steps: usize) -> Vec<f64> {

@@ -90,7 +90,10 @@ fn run_case<O: Objective + Clone>(
     box_half_width: f64,
     bound: Option<f64>,
 ) -> Result<()> {
-    let problem = ControlProblem::new(&catalogue::riser(node), map, obj)?;
+    let problem = ControlProblem::builder(&catalogue::riser(node))
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()?;
     let design = StartDesign::RandomBox {
         lo: -box_half_width,
         hi: box_half_width,

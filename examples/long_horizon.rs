@@ -312,7 +312,10 @@ fn run() -> Result<(), RunError> {
     let objective = BendingObjective::summed_moment().with_effort(rho);
 
     // Best constant control (1 parameter) as the baseline.
-    let constant = ControlProblem::new(&scene, Parametrisation::Constant, objective)?;
+    let constant = ControlProblem::builder(&scene)
+        .map(Parametrisation::Constant)
+        .objective(objective)
+        .build_in::<2>()?;
     let c = solve_with(
         "lbfgs",
         &constant,
@@ -328,7 +331,10 @@ fn run() -> Result<(), RunError> {
     } else {
         Parametrisation::Piecewise(PiecewiseControl { steps, pieces })
     };
-    let problem = ControlProblem::new(&scene, map, objective)?;
+    let problem = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(objective)
+        .build_in::<2>()?;
     let theta0 = vec![0.0; problem.n_params()];
     let label = |method: &str| {
         if pieces == 0 {

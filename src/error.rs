@@ -215,7 +215,7 @@ pub enum Error {
         "`{key}` has an x component, so the scene needs the spatial model (qᵢ ∈ S², \
          Chain<_, 3>), but this operation uses the planar model: MPC and the Riccati solver are \
          planar for now (simulation, statics, and gradients and optimisation through \
-         `ControlProblem::spatial` or the command line's gradient, optimize and explore, run \
+         `ControlProblem::builder` or the command line's gradient, optimize and explore, run \
          spatial scenes)"
     )]
     NeedsSpatialModel {

@@ -789,7 +789,10 @@ pub fn best_constant_at_hot_spot(
     let objective = HotSpotObjective::new(scene, spot.elevation, exponent, effort)?;
     let steps = scene.time.steps;
     let map = crate::adjoint::PiecewiseControl { steps, pieces: 1 };
-    let problem = crate::adjoint::ControlProblem::new(scene, map, objective)?;
+    let problem = crate::adjoint::ControlProblem::builder(scene)
+        .map(map)
+        .objective(objective)
+        .build_in::<2>()?;
     let options = OptimOptions {
         bounds: Some(Bounds::symmetric(bound)?),
         first_step: 0.01 * bound,

@@ -56,7 +56,10 @@
 //! use chainbeam::{catalogue, simulate_chain, BendingObjective, Chain, ControlProblem, Parametrisation};
 //! use num_dual::Dual64;
 //! let scene = catalogue::riser(5); // the thesis's optimal-control scene (Table 3.1, system 5)
-//! let problem = ControlProblem::new(&scene, Parametrisation::Constant, BendingObjective::final_moment())?;
+//! let problem = ControlProblem::builder(&scene) // the planar model: the scene has no x component
+//!     .map(Parametrisation::Constant)
+//!     .objective(BendingObjective::final_moment())
+//!     .build()?;
 //! let (c, g) = problem.value_and_gradient(&[-33.4])?;
 //!
 //! // Forward mode: seed u with a derivative of 1 and run the f64 code path in Dual64.
@@ -78,7 +81,10 @@
 //! use chainbeam::optimize::{minimize, OptimOptions};
 //! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 //! let scene = catalogue::riser(5);
-//! let problem = ControlProblem::new(&scene, Parametrisation::Constant, BendingObjective::summed_moment())?;
+//! let problem = ControlProblem::builder(&scene)
+//!     .map(Parametrisation::Constant)
+//!     .objective(BendingObjective::summed_moment())
+//!     .build()?;
 //! let best = minimize(&problem, &[0.0], &OptimOptions::default())?;
 //! assert!((best.objective - 2.0774).abs() <= 5e-5, "c_sum = {}", best.objective);
 //! assert!(best.gradient_norm <= 1e-6 * best.initial_gradient_norm);
@@ -172,9 +178,9 @@ pub mod tridiag;
 pub use steppers::rattle;
 
 pub use adjoint::{
-    BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem, FatigueObjective,
-    HotSpotObjective, Objective, Parametrisation, PerStepControl, PiecewiseControl, PowerObjective,
-    Start, StartKick,
+    AnyProblem, BendingObjective, Checkpointing, ConstantControl, ControlMap, ControlProblem,
+    FatigueObjective, HotSpotObjective, Objective, Parametrisation, PerStepControl,
+    PiecewiseControl, PowerObjective, Start, StartKick,
 };
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};

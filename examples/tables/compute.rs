@@ -128,7 +128,10 @@ fn max_joint_angle_deg(scene: &Scene, u: &[f64]) -> Result<f64> {
 
 /// Newton (one parameter) or Gauss-Newton with minimum-norm steps (several) on r(θ) = M₀(t_N).
 fn solve_residual(scene: &Scene, map: Parametrisation) -> Result<(Vec<f64>, usize)> {
-    let residual = ControlProblem::new(scene, map, FinalMoment)?;
+    let residual = ControlProblem::builder(scene)
+        .map(map)
+        .objective(FinalMoment)
+        .build_in::<2>()?;
     let mut theta = vec![0.0; residual.n_params()];
     let mut best: Option<(f64, Vec<f64>)> = None;
     let mut iters = 0;
@@ -163,11 +166,10 @@ pub fn table_3_1() -> Result<Vec<Row>> {
             let t0 = Instant::now();
             let (theta, iterations) = solve_residual(&scene, Parametrisation::Constant)?;
             let seconds = t0.elapsed().as_secs_f64();
-            let c = ControlProblem::new(
-                &scene,
-                Parametrisation::Constant,
-                BendingObjective::final_moment(),
-            )?;
+            let c = ControlProblem::builder(&scene)
+                .map(Parametrisation::Constant)
+                .objective(BendingObjective::final_moment())
+                .build_in::<2>()?;
             let (objective, g) = c.value_and_gradient(&theta)?;
             let (tu, tc) = thesis::TABLE_3_1[node - 1];
             let rel = (theta[0] - tu).abs() / tu.abs();
@@ -218,11 +220,7 @@ pub fn table_3_2() -> Result<Vec<Row>> {
     (1..=10)
         .map(|node| {
             let scene = catalogue::riser(node);
-            let p = ControlProblem::new(
-                &scene,
-                Parametrisation::Constant,
-                BendingObjective::summed_moment(),
-            )?;
+            let p = ControlProblem::builder(&scene).map(Parametrisation::Constant).objective(BendingObjective::summed_moment()).build_in::<2>()?;
             let (tu, tc) = thesis::TABLE_3_2[node - 1];
             let t0 = Instant::now();
             let r = minimize(&p, &[0.0], &lbfgs_options(None))?;
@@ -283,7 +281,10 @@ pub fn table_3_3() -> Result<Vec<Row>> {
             let t0 = Instant::now();
             let (theta, iterations) = solve_residual(&scene, map)?;
             let seconds = t0.elapsed().as_secs_f64();
-            let c = ControlProblem::new(&scene, map, BendingObjective::final_moment())?;
+            let c = ControlProblem::builder(&scene)
+                .map(map)
+                .objective(BendingObjective::final_moment())
+                .build_in::<2>()?;
             let (objective, g) = c.value_and_gradient(&theta)?;
             let (tu, tc) = thesis::TABLE_3_3[node - 1];
             let (replay, replay_g) = c.value_and_gradient(&tu)?;
@@ -329,7 +330,10 @@ pub fn table_3_4_with(method: Method) -> Result<Vec<Row>> {
         .map(|node| {
             let scene = catalogue::riser(node);
             let map = per_step(&scene);
-            let p = ControlProblem::new(&scene, map, BendingObjective::summed_moment())?;
+            let p = ControlProblem::builder(&scene)
+                .map(map)
+                .objective(BendingObjective::summed_moment())
+                .build_in::<2>()?;
             let (tu, tc) = thesis::TABLE_3_4[node - 1];
             let bound = tu.iter().fold(0.0f64, |a, b| a.max(b.abs()));
             let t0 = Instant::now();

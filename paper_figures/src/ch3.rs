@@ -483,8 +483,8 @@ fn fig_3_11(ctx: &Ctx) -> Res<Made> {
     fin.objective = Some(ObjectiveKind::Final);
     let mut sum = catalogue::riser(5);
     sum.objective = Some(ObjectiveKind::Sum);
-    let pf = ControlProblem::from_scene(&fin)?;
-    let ps = ControlProblem::from_scene(&sum)?;
+    let pf = ControlProblem::builder(&fin).build_in::<2>()?;
+    let ps = ControlProblem::builder(&sum).build_in::<2>()?;
     let cf = |u: f64| pf.value(&[u]).unwrap_or(f64::INFINITY);
     let cs = |u: f64| ps.value(&[u]).unwrap_or(f64::INFINITY);
     let u_f = golden(cf, -600.0, 600.0, 120);

@@ -142,7 +142,11 @@ fn riser_current_wave_control(ctx: &Ctx) -> Res<Made> {
     let scene = current_wave_scene(steps, pieces)?;
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces });
     let obj = BendingObjective::summed_moment().with_effort(1e-3);
-    let problem = ControlProblem::spatial(&scene, map, obj, true)?;
+    let problem = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()?;
     // L-BFGS, as the note says (the library's default is `Method::Auto`)
     let opts = OptimOptions {
         method: Method::Lbfgs,

@@ -80,11 +80,10 @@ fn scene() -> Scene {
 }
 
 fn constant_problem(obj: BendingObjective) -> Res<ControlProblem> {
-    Ok(ControlProblem::new(
-        &scene(),
-        Parametrisation::Constant,
-        obj,
-    )?)
+    Ok(ControlProblem::builder(&scene())
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .build_in::<2>()?)
 }
 
 fn per_step_problem(obj: BendingObjective) -> Res<ControlProblem> {
@@ -92,7 +91,10 @@ fn per_step_problem(obj: BendingObjective) -> Res<ControlProblem> {
     let map = Parametrisation::PerStep(PerStepControl {
         steps: s.time.steps,
     });
-    Ok(ControlProblem::new(&s, map, obj)?)
+    Ok(ControlProblem::builder(&s)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()?)
 }
 
 /// Subscript digits.

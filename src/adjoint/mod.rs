@@ -34,6 +34,7 @@
 //! the forward arithmetic, so the gradient is bit-for-bit the same for every K.
 
 mod bending;
+mod builder;
 mod control_map;
 mod fatigue;
 mod hotspot;
@@ -47,6 +48,7 @@ pub(crate) use reverse::{Cotangents, ReverseSweep};
 pub(crate) use tape::StateView;
 
 pub use bending::BendingObjective;
+pub use builder::{AnyProblem, ProblemBuilder};
 pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,
 };

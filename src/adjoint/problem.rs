@@ -3,12 +3,12 @@
 
 use super::{
     adjoint_gradient_from, forward_value_from, AdjointResult, BendingObjective, Checkpointing,
-    ControlMap, Objective, Parametrisation, PerStepControl, PiecewiseControl, Start, StartKick,
+    ControlMap, Objective, Parametrisation, Start, StartKick,
 };
 use crate::base::{Parameter, Scalar};
 use crate::error::{Error, Result};
 use crate::model::Chain;
-use crate::scene::{ControlKind, ObjectiveKind, Scene};
+use crate::scene::Scene;
 use crate::steppers::rattle::State;
 use num_dual::Dual64;
 
@@ -16,11 +16,14 @@ use num_dual::Dual64;
 /// trajectory, with exact gradients by the discrete adjoint and Hessian-vector products by
 /// forward-over-adjoint.
 ///
-/// `DIM = 2` (the default) is the planar model of [`ControlProblem::new`] and
-/// [`ControlProblem::from_scene`]; `DIM = 3` the spatial model of [`ControlProblem::spatial`] and
-/// [`ControlProblem::spatial_from_scene`], whose control may be 2-axis. A 2-axis control
-/// u_k = (u_{x,k}, u_{z,k}) has θ = (θ_x; θ_z): the map's m parameters of the x components first,
-/// then the m of the z components (2m in all, docs/conventions.md "Two-axis controls").
+/// Built one way, [`ControlProblem::builder`]: the scene chooses the model
+/// ([`ProblemBuilder::build`](super::ProblemBuilder::build) gives an
+/// [`AnyProblem`](super::AnyProblem), planar or spatial), or code written over one model asks
+/// for it ([`ProblemBuilder::build_in`](super::ProblemBuilder::build_in)). `DIM = 2` (the
+/// default) is the planar model, `DIM = 3` the spatial one, whose control may be 2-axis. A
+/// 2-axis control u_k = (u_{x,k}, u_{z,k}) has θ = (θ_x; θ_z): the map's m parameters of the x
+/// components first, then the m of the z components (2m in all, docs/conventions.md "Two-axis
+/// controls").
 #[derive(Clone, Debug)]
 pub struct ControlProblem<P = Parametrisation, O = BendingObjective, const DIM: usize = 2> {
     chain: Chain<f64, DIM>,
@@ -31,71 +34,6 @@ pub struct ControlProblem<P = Parametrisation, O = BendingObjective, const DIM: 
     checkpointing: Checkpointing,
     two_axis: bool,
     start: Option<Start<f64, DIM>>,
-}
-
-/// The parametrisation a scene's `[control]` asks for (default: constant).
-fn scene_map(scene: &Scene) -> Parametrisation {
-    match scene.control.as_ref().map(|c| c.kind) {
-        Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
-            steps: scene.time.steps,
-        }),
-        Some(ControlKind::Piecewise) => Parametrisation::Piecewise(PiecewiseControl {
-            steps: scene.time.steps,
-            pieces: scene.control.as_ref().map_or(1, |c| c.values.len()),
-        }),
-        _ => Parametrisation::Constant,
-    }
-}
-
-/// The objective a scene's `[objective]` asks for (default: final), without effort penalty.
-fn scene_objective(scene: &Scene) -> BendingObjective {
-    BendingObjective {
-        kind: scene.objective.unwrap_or(ObjectiveKind::Final),
-        effort: 0.0,
-    }
-}
-
-/// The model of a control problem: the scene's, with the control at its node (default: the tip).
-fn control_chain<const DIM: usize>(scene: &Scene) -> Result<Chain<f64, DIM>> {
-    let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
-    if chain.control_node().is_none() {
-        chain.set_control_node(Some(scene.n()))?;
-    }
-    Ok(chain)
-}
-
-impl ControlProblem<Parametrisation, BendingObjective> {
-    /// The problem a scene file describes: its `[control]` (node and kind; default: constant at
-    /// the tip) and `[objective]` (default: final), without effort penalty.
-    pub fn from_scene(scene: &Scene) -> Result<Self> {
-        ControlProblem::new(scene, scene_map(scene), scene_objective(scene))
-    }
-}
-
-impl ControlProblem<Parametrisation, BendingObjective, 3> {
-    /// The problem a scene file describes, in the spatial model (any scene; a 2-axis
-    /// `[control]` gives a 2-axis problem): as [`ControlProblem::from_scene`].
-    pub fn spatial_from_scene(scene: &Scene) -> Result<Self> {
-        let two_axis = scene.has_two_axis_control();
-        ControlProblem::spatial(scene, scene_map(scene), scene_objective(scene), two_axis)
-    }
-}
-
-impl<P: ControlMap, O: Objective> ControlProblem<P, O> {
-    /// A problem with the given parametrisation and objective; the control acts at the scene's
-    /// control node (default: the tip n).
-    pub fn new(scene: &Scene, map: P, objective: O) -> Result<Self> {
-        Self::in_model(scene, map, objective, false)
-    }
-}
-
-impl<P: ControlMap, O: Objective> ControlProblem<P, O, 3> {
-    /// A problem in the spatial model with the given parametrisation and objective, the control
-    /// at the scene's control node (default: the tip n): along z (`two_axis = false`, θ as in the
-    /// planar problem) or 2-axis (θ = (θ_x; θ_z), 2m parameters for a map of m).
-    pub fn spatial(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
-        Self::in_model(scene, map, objective, two_axis)
-    }
 }
 
 impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
@@ -109,38 +47,34 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         self
     }
 
-    /// A problem in the model `DIM` chooses: [`ControlProblem::new`] (`DIM = 2`) or
-    /// [`ControlProblem::spatial`] (`DIM = 3`, `two_axis` as there), for code written once over
-    /// the dimension (the receding horizon of [`crate::mpc`]).
+    /// The problem of [`ProblemBuilder::build_in`](super::ProblemBuilder::build_in): the
+    /// scene's chain in the model `DIM`, the control at the scene's control node (default: the
+    /// tip n).
     ///
     /// # Errors
-    /// As those; [`Error::NeedsSpatialModel`] naming `control.values` for a 2-axis control in
-    /// the planar model; [`Scene::check_stored_trajectory`]'s (naming `time.steps`) for a scene
-    /// whose trajectory is over the stored-trajectory budget (the optimisers keep per-step
-    /// quantities of that order).
-    pub fn in_model(scene: &Scene, map: P, objective: O, two_axis: bool) -> Result<Self> {
+    /// [`Scene::check_stored_trajectory`]'s; the model's.
+    pub(super) fn assemble(
+        scene: &Scene,
+        map: P,
+        objective: O,
+        two_axis: bool,
+        checkpointing: Checkpointing,
+    ) -> Result<Self> {
         scene.check_stored_trajectory()?;
-        if two_axis && DIM == 2 {
-            return Err(Error::NeedsSpatialModel {
-                key: "control.values".to_string(),
-            });
+        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+        if chain.control_node().is_none() {
+            chain.set_control_node(Some(scene.n()))?;
         }
         Ok(ControlProblem {
-            chain: control_chain(scene)?,
+            chain,
             h: scene.time.step,
             steps: scene.time.steps,
             map,
             objective,
-            checkpointing: Checkpointing::default(),
+            checkpointing,
             two_axis,
             start: None,
         })
-    }
-
-    /// Sets the checkpointing strategy (default [`Checkpointing::Auto`]).
-    pub fn with_checkpointing(mut self, c: Checkpointing) -> Self {
-        self.checkpointing = c;
-        self
     }
 
     /// The same problem on a horizon that starts from `state` at time `t0` (instead of the

@@ -203,7 +203,11 @@ pub(super) fn hot_spot_sweep(
         terms: [(w.lower, ca), (w.upper, cb)],
     };
     let (map, theta0) = scene_start(scene).map_err(HotSpotError::Run)?;
-    let problem = ControlProblem::<_, _, 2>::in_model(scene, map, objective, false)
+    let problem = ControlProblem::builder(scene)
+        .map(map)
+        .objective(objective)
+        .two_axis(false)
+        .build_in::<2>()
         .map_err(HotSpotError::Run)?;
     let r = problem
         .adjoint(&theta0, params)

@@ -132,7 +132,11 @@ fn cell_sweep<const DIM: usize>(
 ) -> crate::Result<(f64, Vec<f64>)> {
     let (map, theta0) = scene_start(scene)?;
     let two_axis = scene.has_two_axis_control();
-    let problem = ControlProblem::<_, _, DIM>::in_model(scene, map, objective, two_axis)?;
+    let problem = ControlProblem::builder(scene)
+        .map(map)
+        .objective(objective)
+        .two_axis(two_axis)
+        .build_in::<DIM>()?;
     let Some(params) = params else {
         return Ok((problem.value(&theta0)?, Vec::new()));
     };

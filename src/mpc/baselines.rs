@@ -54,7 +54,10 @@ impl ConstantForce {
         let steps = scene.time.steps;
         let map = PiecewiseControl { steps, pieces: 1 };
         let objective = BendingObjective::summed_moment().with_effort(effort);
-        let problem = ControlProblem::new(scene, map, objective)?;
+        let problem = ControlProblem::builder(scene)
+            .map(map)
+            .objective(objective)
+            .build_in::<2>()?;
         let options = OcpOptions::default().with_bound(bound);
         let r = ocp::Condensed::new(&problem, &options)?.solve(&[0.0])?;
         let u = Force2::z(r.theta[0]);
@@ -71,7 +74,11 @@ impl ConstantForce {
         let steps = scene.time.steps;
         let map = PiecewiseControl { steps, pieces: 1 };
         let objective = BendingObjective::summed_moment().with_effort(effort);
-        let problem = ControlProblem::spatial(scene, map, objective, true)?;
+        let problem = ControlProblem::builder(scene)
+            .map(map)
+            .objective(objective)
+            .two_axis(true)
+            .build_in::<3>()?;
         let opts = OcpOptions::default().with_bound(bound);
         let r = ocp::Condensed::new(&problem, &opts)?.solve(&[0.0; 2])?;
         let u = Force2 {
@@ -93,7 +100,10 @@ impl ConstantForce {
         let steps = scene.time.steps;
         let map = PiecewiseControl { steps, pieces: 1 };
         let objective = BendingObjective::summed_moment().with_effort(effort);
-        let problem = ControlProblem::new(scene, map, objective)?;
+        let problem = ControlProblem::builder(scene)
+            .map(map)
+            .objective(objective)
+            .build_in::<2>()?;
         let options = OptimOptions {
             bounds: Some(crate::optimize::Bounds::symmetric(bound)?),
             first_step: 0.01 * bound,

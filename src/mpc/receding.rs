@@ -537,8 +537,12 @@ impl<const DIM: usize> Mpc<DIM> {
             let margin = usize::from(self.noisy.is_some());
             let record = self.record_chain(obs, pieces + margin)?;
             let two_axis = DIM == 3;
-            let problem =
-                ControlProblem::in_model(&scene, map, objective, two_axis)?.with_chain(record);
+            let problem = ControlProblem::builder(&scene)
+                .map(map)
+                .objective(objective)
+                .two_axis(two_axis)
+                .build_in()?
+                .with_chain(record);
             self.template = Some((pieces, problem));
         }
         if let Some(noisy) = self.noisy.as_mut() {
@@ -779,7 +783,10 @@ impl Mpc {
                     effort: self.options.effort,
                 }),
             };
-            let problem = ControlProblem::new(&scene, PerStepControl { steps }, objective)?
+            let problem = ControlProblem::builder(&scene)
+                .map(PerStepControl { steps })
+                .objective(objective)
+                .build_in::<2>()?
                 .with_chain(record);
             state.template = Some((steps, problem));
         }

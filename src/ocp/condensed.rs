@@ -685,12 +685,11 @@ mod tests {
     /// round-off, and keeps A symmetric (Powell-symmetric-Broyden, Dennis & Moré 1977).
     #[test]
     fn secant_update_satisfies_the_secant_equation() {
-        let p = ControlProblem::new(
-            &catalogue::riser(3),
-            Parametrisation::PerStep(PerStepControl { steps: 10 }),
-            BendingObjective::summed_moment(),
-        )
-        .unwrap();
+        let p = ControlProblem::builder(&catalogue::riser(3))
+            .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
+            .unwrap();
         let mut c = Condensed::new(&p, &OcpOptions::default()).unwrap();
         let t1: Vec<f64> = (0..11).map(|k| (0.7 * k as f64).sin()).collect();
         let t2: Vec<f64> = t1.iter().map(|x| 1.3 * x + 0.2).collect();

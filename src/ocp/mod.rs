@@ -135,7 +135,7 @@
 //! # The spatial model
 //! [`Condensed`] is written once over the dimension (`Condensed<DIM>`; the stage map
 //! `stage::Stepper<D, DIM>`, the trajectories and rollouts with it): in the spatial model
-//! (`DIM = 3`, [`ControlProblem::spatial`]) the decisions are those of a control along z or of a
+//! (`DIM = 3`, [`ProblemBuilder::build_in`](crate::adjoint::ProblemBuilder::build_in)) the decisions are those of a control along z or of a
 //! 2-axis control u_k = (u_{x,k}, u_{z,k}) (θ = (θ_x; θ_z), the stage map's half-kick
 //! p_k = p̂_k − (h/2) P(q_k)(u_k b + u_{x,k} b_x)), the sensitivities are those of both moment
 //! components (M₀_z, M₀ₓ), and the objective's Gauss-Newton residual is the vector
@@ -169,7 +169,7 @@
 //! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, PerStepControl};
 //! let scene = catalogue::riser(5); // thesis Table 3.4 scene, N = 10
 //! let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
-//! let problem = ControlProblem::new(&scene, map, BendingObjective::summed_moment().with_effort(0.01))?;
+//! let problem = ControlProblem::builder(&scene).map(map).objective(BendingObjective::summed_moment().with_effort(0.01)).build_in::<2>()?;
 //! let r = solve(&problem, &[0.0; 11], &OcpOptions::default().with_bound(100.0))?;
 //! assert!(r.converged);
 //! assert!(r.projected_gradient_norm <= 1e-8 * r.initial_gradient_norm);

@@ -341,7 +341,11 @@ mod tests {
         }
         let map = Parametrisation::PerStep(PerStepControl { steps });
         let objective = BendingObjective::summed_moment().with_effort(0.01);
-        let problem = ControlProblem::new(&scene, map, objective).unwrap();
+        let problem = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(objective)
+            .build_in::<2>()
+            .unwrap();
         let opts = OcpOptions::default().with_bound(0.5);
         let mut s = Solver::new(&problem, &opts).unwrap();
         s.set_point(&vec![0.0; steps + 1]).unwrap();

@@ -271,7 +271,11 @@ mod tests {
         let map = Parametrisation::PerStep(PerStepControl {
             steps: scene.time.steps,
         });
-        ControlProblem::new(scene, map, BendingObjective::summed_moment()).unwrap()
+        ControlProblem::builder(scene)
+            .map(map)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
+            .unwrap()
     }
 
     /// [`choose_method`] follows its documented rule: Table 3.4's 11 per-step parameters on the
@@ -285,12 +289,11 @@ mod tests {
         assert_eq!(choose_method(&table, &opts).method, Method::Condensed);
         let long = per_step(&catalogue::long_horizon());
         assert_eq!(choose_method(&long, &opts).method, Method::Riccati);
-        let constant = ControlProblem::new(
-            &catalogue::riser(5),
-            Parametrisation::Constant,
-            BendingObjective::summed_moment(),
-        )
-        .unwrap();
+        let constant = ControlProblem::builder(&catalogue::riser(5))
+            .map(Parametrisation::Constant)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
+            .unwrap();
         assert_eq!(choose_method(&constant, &opts).method, Method::Condensed);
         let given = OptimOptions {
             method: Method::TrustRegion,

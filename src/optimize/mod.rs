@@ -9,11 +9,10 @@
 //! use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 //!
 //! // Thesis Table 3.2, load at node 7: constant control, c_sum (eq. 3.3.4).
-//! let problem = ControlProblem::new(
-//!     &catalogue::riser(7),
-//!     Parametrisation::Constant,
-//!     BendingObjective::summed_moment(),
-//! )?;
+//! let problem = ControlProblem::builder(&catalogue::riser(7))
+//!     .map(Parametrisation::Constant)
+//!     .objective(BendingObjective::summed_moment())
+//!     .build()?;
 //! let r = minimize(&problem, &[0.0], &OptimOptions::default())?;
 //! assert!(r.converged, "{}", r.termination);
 //! assert!(matches!(r.termination, Termination::RelativeGradientTolerance { .. }));
@@ -173,7 +172,7 @@ pub use argmin::core::observers::{Observe, ObserverMode};
 use argmin::core::KV;
 
 pub use adapter::{ArgminAdapter, EvalCounts, HessianOperator};
-pub use any::{scene_start, AnyProblem, SpatialProblem, Values, RICCATI_PLANAR};
+pub use any::{scene_start, Values, RICCATI_PLANAR};
 pub use bounds::{Bounds, ACTIVE_BOUND_TOL};
 pub use choice::{choose_method, condensed_max_params, Fallback, MethodChoice};
 pub use observers::{History, ObservedState, Record};
@@ -497,11 +496,10 @@ pub struct OptimResult {
 /// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 /// use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 ///
-/// let problem = ControlProblem::new(
-///     &catalogue::riser(5),
-///     Parametrisation::Constant,
-///     BendingObjective::summed_moment(),
-/// )?;
+/// let problem = ControlProblem::builder(&catalogue::riser(5))
+///     .map(Parametrisation::Constant)
+///     .objective(BendingObjective::summed_moment())
+///     .build()?;
 /// let history = History::default();
 /// let lbfgs = OptimOptions { method: Method::Lbfgs, ..OptimOptions::default() };
 /// let r = Minimizer::new(&problem, lbfgs)

@@ -163,11 +163,10 @@ pub struct Record {
 /// use chainbeam::optimize::{History, Method, Minimizer, ObserverMode, OptimOptions};
 /// use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation};
 ///
-/// let problem = ControlProblem::new(
-///     &catalogue::riser(10),
-///     Parametrisation::Constant,
-///     BendingObjective::final_moment(),
-/// )?;
+/// let problem = ControlProblem::builder(&catalogue::riser(10))
+///     .map(Parametrisation::Constant)
+///     .objective(BendingObjective::final_moment())
+///     .build()?;
 /// let history = History::default();
 /// let lbfgs = OptimOptions { method: Method::Lbfgs, ..OptimOptions::default() };
 /// let r = Minimizer::new(&problem, lbfgs)

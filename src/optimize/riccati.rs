@@ -433,7 +433,11 @@ mod tests {
     fn table_problem() -> ControlProblem {
         let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
         let objective = BendingObjective::summed_moment().with_effort(0.01);
-        ControlProblem::new(&catalogue::riser(5), map, objective).unwrap()
+        ControlProblem::builder(&catalogue::riser(5))
+            .map(map)
+            .objective(objective)
+            .build_in::<2>()
+            .unwrap()
     }
 
     fn opts(method: Method) -> OptimOptions {

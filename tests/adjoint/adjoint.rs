@@ -72,7 +72,11 @@ fn check<O: Objective + Clone>(
     if s.loads.drag > 0.0 {
         params.push(Parameter::Drag);
     }
-    let prob = ControlProblem::new(&s, map, obj.clone()).unwrap();
+    let prob = ControlProblem::builder(&s)
+        .map(map)
+        .objective(obj.clone())
+        .build_in::<2>()
+        .unwrap();
     let adj = prob.adjoint(&theta, &params).unwrap();
     let mut g = vec![0.0; map.n_params()];
     map.transpose(&adj.control_gradient, &mut g);
@@ -208,9 +212,12 @@ fn checkpointing_is_bit_for_bit() {
     let s = scene(Support::Riser, 5, 10.0, 97);
     let map = Parametrisation::PerStep(PerStepControl { steps: 97 });
     let theta = start(&map, 97);
-    let base = ControlProblem::new(&s, map, BendingObjective::summed_moment())
-        .unwrap()
-        .with_checkpointing(Checkpointing::StoreAll);
+    let base = ControlProblem::builder(&s)
+        .map(map)
+        .objective(BendingObjective::summed_moment())
+        .checkpointing(Checkpointing::StoreAll)
+        .build_in::<2>()
+        .unwrap();
     let reference = base.adjoint(&theta, &[Parameter::Drag]).unwrap();
     for c in [
         Checkpointing::Sqrt,
@@ -219,9 +226,12 @@ fn checkpointing_is_bit_for_bit() {
         Checkpointing::Every(97),
         Checkpointing::Auto,
     ] {
-        let r = base
-            .clone()
-            .with_checkpointing(c)
+        let r = ControlProblem::builder(&s)
+            .map(map)
+            .objective(BendingObjective::summed_moment())
+            .checkpointing(c)
+            .build_in::<2>()
+            .unwrap()
             .adjoint(&theta, &[Parameter::Drag])
             .unwrap();
         assert!(r.value.to_bits() == reference.value.to_bits());
@@ -255,9 +265,11 @@ fn hessian_vector_products() {
             values_x: None,
         });
         let map = Parametrisation::PerStep(PerStepControl { steps: 15 });
-        let prob =
-            ControlProblem::new(&s2, map, BendingObjective::summed_moment().with_effort(0.1))
-                .unwrap();
+        let prob = ControlProblem::builder(&s2)
+            .map(map)
+            .objective(BendingObjective::summed_moment().with_effort(0.1))
+            .build_in::<2>()
+            .unwrap();
         let theta = start(&map, 15);
         let v: Vec<f64> = (0..16).map(|j| ((j * 7 % 5) as f64 - 2.0) * 0.3).collect();
         let w: Vec<f64> = (0..16).map(|j| ((j * 3 % 7) as f64 - 3.0) * 0.2).collect();
@@ -296,9 +308,12 @@ fn long_horizon_gradient_with_checkpointing() {
     let steps = 100_000;
     let s = scene(Support::Riser, 5, 10.0, steps);
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 5 });
-    let prob = ControlProblem::new(&s, map, BendingObjective::summed_moment())
-        .unwrap()
-        .with_checkpointing(Checkpointing::Sqrt);
+    let prob = ControlProblem::builder(&s)
+        .map(map)
+        .objective(BendingObjective::summed_moment())
+        .checkpointing(Checkpointing::Sqrt)
+        .build_in::<2>()
+        .unwrap();
     let theta = vec![-1.5, -1.4, -1.6, -1.5, -1.45];
     let r = prob.adjoint(&theta, &[]).unwrap();
     let mut g = vec![0.0; 5];
@@ -331,12 +346,11 @@ fn long_horizon_gradient_with_checkpointing() {
 #[test]
 fn bad_arguments_are_errors() {
     let s = scene(Support::Riser, 5, 0.0, 10);
-    let prob = ControlProblem::new(
-        &s,
-        Parametrisation::Constant,
-        BendingObjective::final_moment(),
-    )
-    .unwrap();
+    let prob = ControlProblem::builder(&s)
+        .map(Parametrisation::Constant)
+        .objective(BendingObjective::final_moment())
+        .build_in::<2>()
+        .unwrap();
     assert!(matches!(
         prob.gradient(&[1.0, 2.0]),
         Err(Error::WrongLength {

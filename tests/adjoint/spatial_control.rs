@@ -81,7 +81,12 @@ fn two_axis_adjoint_equals_dual_numbers_and_differences() {
     let scene = riser(steps, 0.6).drag(10.0).build().unwrap();
     let obj = BendingObjective::summed_moment().with_effort(0.01);
     for map in maps(steps) {
-        let p = ControlProblem::spatial(&scene, map, obj, true).unwrap();
+        let p = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj)
+            .two_axis(true)
+            .build_in::<3>()
+            .unwrap();
         assert_eq!(p.n_params(), 2 * map.n_params());
         let theta = theta_of(p.n_params());
         let (j, g) = p.value_and_gradient(&theta).unwrap();
@@ -116,7 +121,12 @@ fn two_axis_hessian_vector_product_equals_differences_of_gradients() {
     let steps = 20;
     let scene = riser(steps, 0.6).build().unwrap();
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 3 });
-    let p = ControlProblem::spatial(&scene, map, BendingObjective::summed_moment(), true).unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(BendingObjective::summed_moment())
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let theta = theta_of(6);
     let v: Vec<f64> = (0..6).map(|i| 1.0 - 0.3 * i as f64).collect();
     let hv = p.hessian_vec(&theta, &v).unwrap();
@@ -207,8 +217,17 @@ fn two_axis_with_zero_x_equals_the_planar_problem() {
     assert!(!scene.is_spatial());
     let obj = BendingObjective::summed_moment().with_effort(0.01);
     for map in maps(steps) {
-        let planar = ControlProblem::new(&scene, map, obj).unwrap();
-        let spatial = ControlProblem::spatial(&scene, map, obj, true).unwrap();
+        let planar = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj)
+            .build_in::<2>()
+            .unwrap();
+        let spatial = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj)
+            .two_axis(true)
+            .build_in::<3>()
+            .unwrap();
         let m = map.n_params();
         let theta_z = theta_of(m);
         let mut theta = vec![0.0; m];
@@ -258,12 +277,11 @@ fn squared_norm_of_the_moment_reduces_to_the_planar_square() {
         let cost = BendingObjective::summed_moment().stage(stage);
         assert_eq!(cost.to_bits(), (mz * mz).to_bits());
     }
-    let p = ControlProblem::new(
-        &scene,
-        Parametrisation::Constant,
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(Parametrisation::Constant)
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let direct: f64 = traj.moment().iter().map(|m| m * m).sum();
     let j = p.value(&[-0.5]).unwrap();
     assert!((j - direct).abs() <= 1e-12 * direct, "{j} vs {direct}");
@@ -324,7 +342,11 @@ fn oblique_optimum_points_along_the_load() {
     let steps = 100;
     let obj = BendingObjective::summed_moment().with_effort(0.01);
     let planar_scene = riser(steps, 0.0).build().unwrap();
-    let planar = ControlProblem::new(&planar_scene, Parametrisation::Constant, obj).unwrap();
+    let planar = ControlProblem::builder(&planar_scene)
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let opts = OptimOptions::default();
     let r2 = minimize(&planar, &[0.0], &opts).unwrap();
     assert!(r2.converged, "{}", r2.termination);
@@ -332,7 +354,12 @@ fn oblique_optimum_points_along_the_load() {
     assert!(u_star < 0.0, "the control opposes the load: {u_star}");
 
     let scene = riser(steps, FRAC_PI_4).build().unwrap();
-    let spatial = ControlProblem::spatial(&scene, Parametrisation::Constant, obj, true).unwrap();
+    let spatial = ControlProblem::builder(&scene)
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let rotated = [u_star * FRAC_PI_4.sin(), u_star * FRAC_PI_4.cos()];
     let (j_rot, g_rot) = spatial.value_and_gradient(&rotated).unwrap();
     assert!(
@@ -381,7 +408,7 @@ fn two_axis_scene_file_round_trips_and_simulates() {
     assert_eq!(t.controls_x()[0], -1.0);
     assert_eq!(t.controls_x()[20], 0.5);
     assert_eq!(t.controls()[0], -1.5);
-    let p = ControlProblem::spatial_from_scene(&scene).unwrap();
+    let p = ControlProblem::builder(&scene).build_in::<3>().unwrap();
     assert!(p.is_two_axis());
     assert_eq!(
         p.controls_x(&[-1.0, 0.5, -1.5, -0.5]).unwrap(),
@@ -431,7 +458,7 @@ fn bad_two_axis_input_is_a_typed_error() {
         Err(Error::NotFinite { name, index }) => assert_eq!((name, index), ("control_x", 1)),
         other => panic!("expected NotFinite, got {other:?}"),
     }
-    let p = ControlProblem::spatial_from_scene(&scene).unwrap();
+    let p = ControlProblem::builder(&scene).build_in::<3>().unwrap();
     match p.value(&[1.0]) {
         Err(Error::WrongLength {
             name,

@@ -308,7 +308,7 @@ fn gradient_json_has_spec_keys_and_library_values() {
         assert!(v.get(key).is_some(), "missing `{key}` in {v}");
     }
     let scene = Scene::from_file(&path).unwrap();
-    let problem = ControlProblem::from_scene(&scene).unwrap();
+    let problem = ControlProblem::builder(&scene).build_in::<2>().unwrap();
     let (c, g) = problem.value_and_gradient(&[-1.0]).unwrap();
     assert_eq!(v["objective"].as_f64().unwrap().to_bits(), c.to_bits());
     assert_eq!(numbers(&v, "gradient"), g);

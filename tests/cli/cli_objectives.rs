@@ -43,12 +43,11 @@ fn command_line_takes_the_power_objective() {
     let g = run(&["gradient"]);
     assert_eq!(g["objective_kind"], "power");
     assert_eq!(g["objective_exponent"], 4.0);
-    let lib = ControlProblem::new(
-        &catalogue::riser(5),
-        Parametrisation::PerStep(PerStepControl { steps: 10 }),
-        PowerObjective::new(4.0).unwrap(),
-    )
-    .unwrap();
+    let lib = ControlProblem::builder(&catalogue::riser(5))
+        .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+        .objective(PowerObjective::new(4.0).unwrap())
+        .build_in::<2>()
+        .unwrap();
     let j = lib.value(&[0.0; 11]).unwrap();
     assert_eq!(g["objective"].as_f64().unwrap().to_bits(), j.to_bits());
     let bound = max_abs(&thesis::TABLE_3_4[4].0).to_string();

@@ -26,7 +26,11 @@ fn opts(method: Method, bound: Option<f64>) -> OptimOptions {
 fn minimize_dispatches_to_the_riccati_solver() {
     let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let p = ControlProblem::new(&catalogue::riser(5), map, obj).unwrap();
+    let p = ControlProblem::builder(&catalogue::riser(5))
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     for (bound, method) in [None, Some(3.0)]
         .into_iter()
         .flat_map(|b| [(b, Method::Riccati), (b, Method::Condensed)])
@@ -52,7 +56,11 @@ fn minimize_dispatches_to_the_riccati_solver() {
         }
     }
     // A constant control is one piece: handled.
-    let c = ControlProblem::new(&catalogue::riser(5), Parametrisation::Constant, obj).unwrap();
+    let c = ControlProblem::builder(&catalogue::riser(5))
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let tr = minimize(&c, &[0.0], &opts(Method::TrustRegion, None)).unwrap();
     for method in [Method::Riccati, Method::Condensed] {
         let r = minimize(&c, &[0.0], &opts(method, None)).unwrap();
@@ -63,12 +71,11 @@ fn minimize_dispatches_to_the_riccati_solver() {
 /// A locked tip is outside the solver's model: a typed error naming the tip, no panic.
 #[test]
 fn unsupported_problems_are_refused() {
-    let p = ControlProblem::new(
-        &catalogue::fixed_fixed(),
-        Parametrisation::Constant,
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&catalogue::fixed_fixed())
+        .map(Parametrisation::Constant)
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     for method in [Method::Riccati, Method::Condensed] {
         let e = minimize(&p, &[0.0], &opts(method, None)).unwrap_err();
         assert!(e.to_string().contains("tip"), "{e}");

@@ -5,8 +5,8 @@
 //! Riccati solver runs them too (two controls per stage); malformed 2-axis controls files are
 //! refused with one clear line.
 //!
-//! References: the library's `ControlProblem::spatial_from_scene` / `ControlProblem::spatial`
-//! (gradients to 1e-12 relative) and the planar `ControlProblem::from_scene` (bit for bit);
+//! References: the library's `ControlProblem::builder` in the spatial model
+//! (gradients to 1e-12 relative) and the planar `ControlProblem::builder` (bit for bit);
 //! the simulation path (`simulate`'s moments, an evaluation independent of the adjoint's forward
 //! sweep) for the optimiser's objective; the piecewise layout of docs/scene-format.md
 //! (`chainbeam::simulate::piece_index`) for the forces `simulate` applies; the rotational
@@ -86,7 +86,7 @@ fn asymmetric_oblique(dir: &Dir) -> PathBuf {
 }
 
 /// `gradient` on spatial scenes reports the spatial model and the library's spatial problem's
-/// objective and gradient (reference: `ControlProblem::spatial_from_scene`, 1e-12 relative), with
+/// objective and gradient (reference: `ControlProblem::builder`, spatial, 1e-12 relative), with
 /// a 2-axis control's θ = (θ_x; θ_z) written as pairs [x, z] per value.
 #[test]
 fn gradient_of_spatial_scenes_is_the_librarys() {
@@ -99,7 +99,7 @@ fn gradient_of_spatial_scenes_is_the_librarys() {
         scene("turning_current.toml"),
     ] {
         let sc = Scene::from_file(&path).unwrap();
-        let problem = ControlProblem::spatial_from_scene(&sc).unwrap();
+        let problem = ControlProblem::builder(&sc).build_in::<3>().unwrap();
         let theta: Vec<f64> = match &sc.control {
             Some(c) => c
                 .values_x
@@ -127,7 +127,7 @@ fn gradient_of_spatial_scenes_is_the_librarys() {
 }
 
 /// `--effort` and `--pieces` on a 2-axis scene: the library's spatial 2-axis problem with the
-/// effort ρ and P pieces (reference: `ControlProblem::spatial`, 1e-12 relative), at the start
+/// effort ρ and P pieces (reference: `ControlProblem::builder`, spatial, 1e-12 relative), at the start
 /// `--pieces` documents: the scene's forces averaged over each piece, per component. From 10
 /// pieces of 100 steps to 5 pieces, piece j covers old pieces 2j and 2j + 1 (100 forces each),
 /// and the last also u_N (docs/scene-format.md), so its mean is (100 a + 101 b) / 201.
@@ -159,7 +159,12 @@ fn effort_and_pieces_on_a_two_axis_scene() {
         kind: ObjectiveKind::Sum,
         effort: 0.25,
     };
-    let problem = ControlProblem::spatial(&sc, map, objective, true).unwrap();
+    let problem = ControlProblem::builder(&sc)
+        .map(map)
+        .objective(objective)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let (c, g) = problem.value_and_gradient(&theta).unwrap();
 
     let o = run(&["gradient", s(&path), "--pieces", "5", "--effort", "0.25"]);
@@ -177,7 +182,7 @@ fn effort_and_pieces_on_a_two_axis_scene() {
 }
 
 /// Planar scenes keep the planar model: `model` is "planar" and the objective and gradient are
-/// those of the planar `ControlProblem::from_scene`, bit for bit (the JSON's shortest decimals
+/// those of the planar `ControlProblem::builder`, bit for bit (the JSON's shortest decimals
 /// read back to the same doubles). A planar current (sheared_current) and a per-step control
 /// (long_horizon) included.
 #[test]
@@ -186,7 +191,7 @@ fn planar_scenes_keep_the_planar_model() {
         let path = scene(name);
         let sc = Scene::from_file(&path).unwrap();
         assert!(sc.spatial_key().is_none(), "{name} is planar");
-        let problem = ControlProblem::from_scene(&sc).unwrap();
+        let problem = ControlProblem::builder(&sc).build_in::<2>().unwrap();
         let theta = sc.control.as_ref().map_or(vec![0.0], |c| c.values.clone());
         let (c, g) = problem.value_and_gradient(&theta).unwrap();
         let o = run(&["gradient", s(&path)]);
@@ -290,7 +295,7 @@ fn optimize_converges_and_two_axis_controls_round_trip() {
 }
 
 /// A pairs file on a planar scene asks for a 2-axis control: `gradient` runs the spatial model
-/// (reference: `ControlProblem::spatial` with a 2-axis constant control) and `simulate` applies
+/// (reference: `ControlProblem::builder`, spatial, with a 2-axis constant control) and `simulate` applies
 /// u_x (the tip leaves the yz-plane, toward −x for u_x > 0, the sign of a load).
 #[test]
 fn a_pairs_file_on_a_planar_scene_runs_the_spatial_model() {
@@ -306,7 +311,12 @@ fn a_pairs_file_on_a_planar_scene_runs_the_spatial_model() {
         kind: sc.objective.unwrap(),
         effort: 0.0,
     };
-    let p = ControlProblem::spatial(&sc, Parametrisation::Constant, obj, true).unwrap();
+    let p = ControlProblem::builder(&sc)
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let (c, g) = p.value_and_gradient(&[1.5, -2.0]).unwrap();
     assert!(rel(v["objective"].as_f64().unwrap(), c) <= 1e-12);
     assert_close(&theta_of_pairs(&v, "gradient"), &g, 1e-12, "gradient");

@@ -7,12 +7,11 @@ use chainbeam::{catalogue, BendingObjective, ControlProblem, Parametrisation, Pe
 /// N = 10 steps, c_sum without effort; and the bound the `tables` example gives it, the
 /// largest |u_k| of the thesis's printed row (examples/tables/thesis.rs).
 pub fn row(node: usize) -> (ControlProblem, f64) {
-    let p = ControlProblem::new(
-        &catalogue::riser(node),
-        Parametrisation::PerStep(PerStepControl { steps: 10 }),
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&catalogue::riser(node))
+        .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let bound = super::thesis::TABLE_3_4[node - 1]
         .0
         .iter()

@@ -61,7 +61,7 @@ fn pairing(problem: &ControlProblem, theta: &[f64]) -> Vec<(usize, usize, u64)> 
 fn value_is_the_fatigue_damage_of_the_same_trajectory() {
     let values = [-1.0, 0.5, -2.0, 1.5];
     let scene = scene(&values);
-    let problem = ControlProblem::from_scene(&scene).unwrap();
+    let problem = ControlProblem::builder(&scene).build_in::<2>().unwrap();
     let j = problem.value(&values).unwrap();
     let traj = simulate(&scene).unwrap();
     let a = assess(
@@ -87,7 +87,9 @@ fn value_is_the_fatigue_damage_of_the_same_trajectory() {
 #[test]
 fn gradient_matches_central_differences_and_duals() {
     let mut rng = ChaCha8Rng::seed_from_u64(31);
-    let problem = ControlProblem::from_scene(&scene(&[0.0; PIECES])).unwrap();
+    let problem = ControlProblem::builder(&scene(&[0.0; PIECES]))
+        .build_in::<2>()
+        .unwrap();
     let eps = 1e-6;
     for _ in 0..3 {
         let theta: Vec<f64> = (0..PIECES)
@@ -142,7 +144,9 @@ fn gradient_matches_central_differences_and_duals() {
 /// central differences of the adjoint gradient.
 #[test]
 fn hessian_vector_product_matches_differences_of_the_gradient() {
-    let problem = ControlProblem::from_scene(&scene(&[0.0; PIECES])).unwrap();
+    let problem = ControlProblem::builder(&scene(&[0.0; PIECES]))
+        .build_in::<2>()
+        .unwrap();
     let theta = [-1.0, 0.5, -2.0, 1.5];
     let v = [0.3, -0.2, 0.5, 0.1];
     let hv = problem.hessian_vec(&theta, &v).unwrap();

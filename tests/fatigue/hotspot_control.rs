@@ -125,8 +125,11 @@ fn the_totals_are_the_hot_spots() {
     )
     .unwrap();
     let steps = training.time.steps;
-    let problem =
-        ControlProblem::new(&training, PiecewiseControl { steps, pieces: 1 }, objective).unwrap();
+    let problem = ControlProblem::builder(&training)
+        .map(PiecewiseControl { steps, pieces: 1 })
+        .objective(objective)
+        .build_in::<2>()
+        .unwrap();
     let (j_hot, j_base) = (
         problem.value(&[u_hot]).unwrap(),
         problem.value(&[u_base]).unwrap(),

@@ -335,7 +335,7 @@ fn load_parameters() -> Vec<(Parameter, f64)> {
 #[test]
 fn load_parameter_gradients_planar() {
     let scene = gradient_scene([0.0, 1.0], [0.0, 1.1]);
-    let problem = ControlProblem::from_scene(&scene).unwrap();
+    let problem = ControlProblem::builder(&scene).build_in::<2>().unwrap();
     let mut params = load_parameters();
     params.push((Parameter::LoadForce(1), 1.1));
     let theta = [-0.4];
@@ -371,7 +371,7 @@ fn load_parameter_gradients_spatial() {
     let scene = gradient_scene([0.6, 0.8], [0.7, 1.1]);
     assert!(scene.is_spatial());
     assert!(matches!(
-        ControlProblem::from_scene(&scene),
+        ControlProblem::builder(&scene).build_in::<2>(),
         Err(Error::NeedsSpatialModel { .. })
     ));
     let mut params = load_parameters();

@@ -619,7 +619,11 @@ fn node_morison_adjoint_equals_forward_mode_and_finite_differences() {
     });
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 6 });
     let obj = BendingObjective::summed_moment();
-    let prob = ControlProblem::new(&scene, map, obj).unwrap();
+    let prob = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let theta: Vec<f64> = (0..6).map(|j| 2e4 * ((j as f64) * 1.3).sin()).collect();
     let params = [
         Parameter::DragCoefficient,

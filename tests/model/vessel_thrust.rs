@@ -82,7 +82,11 @@ fn check<O: Objective + Clone>(
     if s.loads.drag > 0.0 {
         params.push(Parameter::Drag);
     }
-    let prob = ControlProblem::new(&s, map, obj.clone()).unwrap();
+    let prob = ControlProblem::builder(&s)
+        .map(map)
+        .objective(obj.clone())
+        .build_in::<2>()
+        .unwrap();
     let adj = prob.adjoint(&theta, &params).unwrap();
     let mut g = vec![0.0; map.n_params()];
     map.transpose(&adj.control_gradient, &mut g);
@@ -412,15 +416,14 @@ fn closed_loop_thrust_respects_its_bound_and_rate_at_every_step() {
 fn constant_thrust_lowers_the_moment_and_spatial_mpc_refuses_typed() {
     let s = scene(10.0, 100);
     let (c, r) = mpc::ConstantForce::best_thrust(&s, 3.0, 0.0).unwrap();
-    let problem = ControlProblem::new(
-        &s,
-        PiecewiseControl {
+    let problem = ControlProblem::builder(&s)
+        .map(PiecewiseControl {
             steps: 100,
             pieces: 1,
-        },
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+        })
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let none = problem.value(&[0.0]).unwrap();
     println!(
         "best constant thrust {} N: J {} vs {none} without",

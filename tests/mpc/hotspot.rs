@@ -71,8 +71,11 @@ fn gradient_through_the_thrust_is_exact() {
     assert_eq!(m, 3.0, "F1's first slope");
     let objective = HotSpotObjective::new(&s, spot.elevation, m, 0.01).unwrap();
     let steps = s.time.steps;
-    let problem =
-        ControlProblem::new(&s, PiecewiseControl { steps, pieces: 4 }, objective).unwrap();
+    let problem = ControlProblem::builder(&s)
+        .map(PiecewiseControl { steps, pieces: 4 })
+        .objective(objective)
+        .build_in::<2>()
+        .unwrap();
     let theta = [1.0e6, -0.5e6, 1.5e6, 0.5e6];
     let (j, adjoint) = problem.value_and_gradient(&theta).unwrap();
     println!("J = {j:.6e}");

@@ -111,8 +111,11 @@ fn gradient_about_the_mean_is_exact() {
         .unwrap()
         .with_about(MomentAbout::Mean);
     let steps = s.time.steps;
-    let problem =
-        ControlProblem::new(&s, PiecewiseControl { steps, pieces: 4 }, objective).unwrap();
+    let problem = ControlProblem::builder(&s)
+        .map(PiecewiseControl { steps, pieces: 4 })
+        .objective(objective)
+        .build_in::<2>()
+        .unwrap();
     let theta = [1.0e6, -0.5e6, 1.5e6, 0.5e6];
     let (j, adjoint) = problem.value_and_gradient(&theta).unwrap();
     let u = problem.controls(&theta).unwrap();
@@ -293,7 +296,10 @@ fn zero_is_the_objective_as_before() {
     let steps = s.time.steps;
     let theta = [1.0e6, -0.5e6];
     let run = |o: HotSpotObjective| {
-        ControlProblem::new(&s, PiecewiseControl { steps, pieces: 2 }, o)
+        ControlProblem::builder(&s)
+            .map(PiecewiseControl { steps, pieces: 2 })
+            .objective(o)
+            .build_in::<2>()
             .unwrap()
             .value_and_gradient(&theta)
             .unwrap()

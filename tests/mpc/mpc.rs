@@ -85,7 +85,11 @@ fn full_horizon_gap(s: &Scene, solver: MpcSolver) -> (f64, f64) {
     let pieces = (steps as f64 * s.time.step / INTERVAL).round() as usize;
     let map = PiecewiseControl { steps, pieces };
     let obj = BendingObjective::summed_moment().with_effort(EFFORT);
-    let problem = ControlProblem::new(s, map, obj).unwrap();
+    let problem = ControlProblem::builder(s)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let ocp_opts = OcpOptions {
         rel_grad_tol: TOL,
         ..OcpOptions::default()
@@ -306,14 +310,21 @@ fn a_warm_start_whose_box_caps_the_projected_gradient_is_not_taken_as_a_plan() {
         pieces: 5,
     };
     let objective = BendingObjective::summed_moment().with_effort(EFFORT);
-    let g = ControlProblem::new(&first, map, objective)
+    let g = ControlProblem::builder(&first)
+        .map(map)
+        .objective(objective)
+        .build_in::<2>()
         .unwrap()
         .gradient(&[0.0; 5])
         .unwrap();
     assert!(g[0].abs() > 0.0);
     let opts = OcpOptions::default().with_bound(bound);
     let direct = ocp::solve(
-        &ControlProblem::new(&first, map, objective).unwrap(),
+        &ControlProblem::builder(&first)
+            .map(map)
+            .objective(objective)
+            .build_in::<2>()
+            .unwrap(),
         &[0.0; 5],
         &opts,
     )

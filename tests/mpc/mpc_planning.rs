@@ -207,7 +207,11 @@ fn the_best_constant_force_by_the_condensed_solver_is_the_riccati_solvers() {
         pieces: 1,
     };
     let objective = BendingObjective::summed_moment().with_effort(1e-4);
-    let problem = ControlProblem::new(&scene, map, objective).unwrap();
+    let problem = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(objective)
+        .build_in::<2>()
+        .unwrap();
     let riccati = ocp::solve(&problem, &[0.0], &OcpOptions::default().with_bound(2e5)).unwrap();
     assert!(r.converged && riccati.converged);
     assert!(c.u.z.abs() > 1.0, "a current to cancel: u = {}", c.u.z);

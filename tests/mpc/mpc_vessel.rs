@@ -57,12 +57,11 @@ fn perfect_model_to_the_end_reaches_the_open_loop_optimum() {
     let s = scene(steps, bound, 1e6);
     let effort = 0.01;
     let pieces = 10;
-    let problem = ControlProblem::new(
-        &s,
-        PiecewiseControl { steps, pieces },
-        BendingObjective::summed_moment().with_effort(effort),
-    )
-    .unwrap();
+    let problem = ControlProblem::builder(&s)
+        .map(PiecewiseControl { steps, pieces })
+        .objective(BendingObjective::summed_moment().with_effort(effort))
+        .build_in::<2>()
+        .unwrap();
     let opts = OptimOptions {
         method: Method::Lbfgs,
         bounds: Some(Bounds::symmetric(bound).unwrap()),

@@ -46,17 +46,29 @@ fn problems() -> Vec<(
     vec![
         (
             "mpc_riser, 12 pieces of 10 steps, c_sum + effort".into(),
-            ControlProblem::new(&mpc_scene(120), piecewise(120, 12), sum).unwrap(),
+            ControlProblem::builder(&mpc_scene(120))
+                .map(piecewise(120, 12))
+                .objective(sum)
+                .build_in::<2>()
+                .unwrap(),
             0.0,
         ),
         (
             "mpc_riser, 12 pieces, rate penalty 0.05".into(),
-            ControlProblem::new(&mpc_scene(120), piecewise(120, 12), sum).unwrap(),
+            ControlProblem::builder(&mpc_scene(120))
+                .map(piecewise(120, 12))
+                .objective(sum)
+                .build_in::<2>()
+                .unwrap(),
             0.05,
         ),
         (
             "thesis riser, per-step N = 10, c".into(),
-            ControlProblem::new(&catalogue::riser(5), per_step(10), fin).unwrap(),
+            ControlProblem::builder(&catalogue::riser(5))
+                .map(per_step(10))
+                .objective(fin)
+                .build_in::<2>()
+                .unwrap(),
             0.0,
         ),
     ]
@@ -117,12 +129,11 @@ fn optimum_equals_riccati_solvers() {
         steps: 120,
         pieces: 12,
     });
-    let p = ControlProblem::new(
-        &scene,
-        map,
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(BendingObjective::summed_moment().with_effort(0.01))
+        .build_in::<2>()
+        .unwrap();
     for bound in [5.0, 0.5] {
         let opts = OcpOptions::default().with_bound(bound);
         let zero = vec![0.0; p.n_params()];
@@ -163,14 +174,13 @@ fn moving_start_gradient_equals_adjoint() {
         steps: 100,
         pieces: 10,
     });
-    let p = ControlProblem::new(
-        &tail,
-        map,
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap()
-    .starting_before_kick(hat, plant.time())
-    .unwrap();
+    let p = ControlProblem::builder(&tail)
+        .map(map)
+        .objective(BendingObjective::summed_moment().with_effort(0.01))
+        .build_in::<2>()
+        .unwrap()
+        .starting_before_kick(hat, plant.time())
+        .unwrap();
     let theta = wiggle(10, 1.0);
     let mut c = Condensed::new(&p, &OcpOptions::default()).unwrap();
     c.set_point(&theta).unwrap();
@@ -227,7 +237,11 @@ fn restart_equals_a_fresh_solver() {
         pieces: 5,
     });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let at_rest = ControlProblem::new(&mpc_scene(50), map, obj).unwrap();
+    let at_rest = ControlProblem::builder(&mpc_scene(50))
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let moving = at_rest
         .clone()
         .starting_before_kick(hat, plant.time())
@@ -244,15 +258,14 @@ fn restart_equals_a_fresh_solver() {
         .unwrap();
     assert_eq!(a.theta, b.theta);
     assert_eq!(a.objective, b.objective);
-    let other = ControlProblem::new(
-        &mpc_scene(60),
-        Parametrisation::Piecewise(PiecewiseControl {
+    let other = ControlProblem::builder(&mpc_scene(60))
+        .map(Parametrisation::Piecewise(PiecewiseControl {
             steps: 60,
             pieces: 5,
-        }),
-        obj,
-    )
-    .unwrap();
+        }))
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     match reused.restart(&other) {
         Err(chainbeam::Error::Ocp(OcpError::RestartMismatch { expected, got })) => {
             assert_eq!((expected.steps, got.steps), (50, 60));
@@ -307,12 +320,11 @@ fn a_long_per_step_horizon_is_refused_not_allocated() {
     if let Some(c) = scene.control.as_mut() {
         c.values = vec![0.0; steps + 1];
     }
-    let p = ControlProblem::new(
-        &scene,
-        Parametrisation::PerStep(PerStepControl { steps }),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(Parametrisation::PerStep(PerStepControl { steps }))
+        .objective(BendingObjective::summed_moment().with_effort(0.01))
+        .build_in::<2>()
+        .unwrap();
     match Condensed::new(&p, &OcpOptions::default()) {
         Err(e @ chainbeam::Error::Ocp(OcpError::CondensedTooLarge { steps: 40_000, .. })) => {
             assert_eq!(e.argument(), Some("method"));

@@ -61,7 +61,11 @@ fn riser(drag: f64, steps: usize) -> Scene {
 /// Row `node` of Table 3.4 (per-step, N = 10, no effort) with objective `obj`, and the bound the
 /// `tables` example gives it: the largest |u_k| of the thesis's printed row.
 fn table_3_4_row<O: Objective>(node: usize, obj: O) -> (ControlProblem<Parametrisation, O>, f64) {
-    let p = ControlProblem::new(&catalogue::riser(node), per_step(10), obj).unwrap();
+    let p = ControlProblem::builder(&catalogue::riser(node))
+        .map(per_step(10))
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let bound = max_abs(&thesis::TABLE_3_4[node - 1].0);
     (p, bound)
 }
@@ -76,8 +80,16 @@ fn power_two_is_c_sum_bit_for_bit() {
     let v = wiggle(16, 0.7);
     let sum = BendingObjective::summed_moment().with_effort(0.1);
     let p2 = power(2.0).with_effort(0.1);
-    let a = ControlProblem::new(&s, per_step(15), sum).unwrap();
-    let b = ControlProblem::new(&s, per_step(15), p2).unwrap();
+    let a = ControlProblem::builder(&s)
+        .map(per_step(15))
+        .objective(sum)
+        .build_in::<2>()
+        .unwrap();
+    let b = ControlProblem::builder(&s)
+        .map(per_step(15))
+        .objective(p2)
+        .build_in::<2>()
+        .unwrap();
     assert_eq!(
         a.value(&theta).unwrap().to_bits(),
         b.value(&theta).unwrap().to_bits()
@@ -92,8 +104,18 @@ fn power_two_is_c_sum_bit_for_bit() {
     );
     // The spatial model with a 2-axis control: |M₀|² = M₀ₓ² + M₀².
     let th2 = wiggle(32, 1.1);
-    let a3 = ControlProblem::spatial(&s, per_step(15), sum, true).unwrap();
-    let b3 = ControlProblem::spatial(&s, per_step(15), p2, true).unwrap();
+    let a3 = ControlProblem::builder(&s)
+        .map(per_step(15))
+        .objective(sum)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
+    let b3 = ControlProblem::builder(&s)
+        .map(per_step(15))
+        .objective(p2)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let (ja, ga) = a3.value_and_gradient(&th2).unwrap();
     let (jb, gb) = b3.value_and_gradient(&th2).unwrap();
     assert_eq!(ja.to_bits(), jb.to_bits());
@@ -170,7 +192,11 @@ fn power_gradient_equals_dual64_and_central_differences() {
         for (drag, map) in [(0.0, per_step(20)), (10.0, per_step(20)), (10.0, pw)] {
             let s = riser(drag, 20);
             let obj = power(p).with_effort(0.05);
-            let prob = ControlProblem::new(&s, map, obj).unwrap();
+            let prob = ControlProblem::builder(&s)
+                .map(map)
+                .objective(obj)
+                .build_in::<2>()
+                .unwrap();
             let theta = wiggle(map.n_params(), 1.5);
             let g = prob.gradient(&theta).unwrap();
             let scale = max_abs(&g);
@@ -209,7 +235,12 @@ fn power_gradient_equals_dual64_and_central_differences() {
     let mut s = riser(10.0, 12);
     s.loads.points[0].direction = [40f64.to_radians().sin(), 40f64.to_radians().cos()];
     let obj = power(3.0).with_effort(0.05);
-    let prob = ControlProblem::spatial(&s, per_step(12), obj, true).unwrap();
+    let prob = ControlProblem::builder(&s)
+        .map(per_step(12))
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let theta = wiggle(26, 1.2);
     let g = prob.gradient(&theta).unwrap();
     let scale = max_abs(&g);
@@ -234,7 +265,11 @@ fn power_gradient_equals_dual64_and_central_differences() {
 fn power_hessian_vector_products() {
     for p in [3.0, 4.0] {
         let s = riser(10.0, 15);
-        let prob = ControlProblem::new(&s, per_step(15), power(p).with_effort(0.1)).unwrap();
+        let prob = ControlProblem::builder(&s)
+            .map(per_step(15))
+            .objective(power(p).with_effort(0.1))
+            .build_in::<2>()
+            .unwrap();
         let theta = wiggle(16, 1.5);
         let (v, w) = (
             wiggle(16, 0.3),
@@ -274,7 +309,11 @@ fn power_hessian_vector_products() {
 fn structured_solvers_derivatives_of_the_power_objective() {
     for p in [3.0, 4.0] {
         let s = riser(10.0, 20);
-        let prob = ControlProblem::new(&s, per_step(20), power(p).with_effort(0.01)).unwrap();
+        let prob = ControlProblem::builder(&s)
+            .map(per_step(20))
+            .objective(power(p).with_effort(0.01))
+            .build_in::<2>()
+            .unwrap();
         let theta = wiggle(21, 1.5);
         let g = prob.gradient(&theta).unwrap();
         let mut solver = Solver::new(&prob, &OcpOptions::default()).unwrap();
@@ -418,7 +457,11 @@ fn mpc_plans_on_the_power_objective() {
         pieces: 10,
     };
     let obj = power(4.0).with_effort(EFFORT);
-    let problem = ControlProblem::new(&s, map, obj).unwrap();
+    let problem = ControlProblem::builder(&s)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let ocp_opts = OcpOptions {
         rel_grad_tol: TOL,
         ..OcpOptions::default()

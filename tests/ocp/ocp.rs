@@ -17,12 +17,11 @@ fn per_step(steps: usize) -> Parametrisation {
 
 /// The per-step control problem of `scene` over `steps` steps: c_sum + ρ·h·Σ u_k², ρ = 0.01.
 fn per_step_problem(scene: &Scene, steps: usize) -> ControlProblem {
-    ControlProblem::new(
-        scene,
-        per_step(steps),
-        BendingObjective::summed_moment().with_effort(0.01),
-    )
-    .unwrap()
+    ControlProblem::builder(scene)
+        .map(per_step(steps))
+        .objective(BendingObjective::summed_moment().with_effort(0.01))
+        .build_in::<2>()
+        .unwrap()
 }
 
 /// The trust region's minimum of `p` from `theta0` within |u| ≤ `bound` (the reference of the
@@ -101,7 +100,11 @@ fn costate_gradient_equals_discrete_adjoint() {
         ),
     ];
     for (scene, map, obj) in cases {
-        let p = ControlProblem::new(&scene, map, obj).unwrap();
+        let p = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj)
+            .build_in::<2>()
+            .unwrap();
         let theta = wiggle(p.n_params(), 3.0);
         let g_adj = p.gradient(&theta).unwrap();
         let mut s = Solver::new(&p, &OcpOptions::default()).unwrap();
@@ -217,7 +220,11 @@ fn gauss_newton_step_equals_dense_solve() {
         ),
     ];
     for (map, rate) in cases {
-        let p = ControlProblem::new(&scene, map, obj).unwrap();
+        let p = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj)
+            .build_in::<2>()
+            .unwrap();
         let opts = OcpOptions {
             rate_penalty: rate,
             ..OcpOptions::default()
@@ -247,7 +254,11 @@ fn costates_by_reverse_steps_equal_jacobian_costates() {
     let steps = 40;
     let scene = long_horizon(steps);
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let p = ControlProblem::new(&scene, per_step(steps), obj).unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(per_step(steps))
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let mut s = Solver::new(&p, &OcpOptions::default()).unwrap();
     s.set_point(&wiggle(p.n_params(), 1.5)).unwrap();
     let g_jac = s.gradient().unwrap();
@@ -268,7 +279,11 @@ fn newton_step_equals_dense_exact_hessian_solve() {
     let steps = 30;
     let scene = long_horizon(steps);
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let p = ControlProblem::new(&scene, per_step(steps), obj).unwrap();
+    let p = ControlProblem::builder(&scene)
+        .map(per_step(steps))
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let theta = wiggle(p.n_params(), 1.5);
     let m = theta.len();
     let mut h = faer::Mat::<f64>::zeros(m, m);
@@ -448,7 +463,11 @@ fn non_convergence_and_bad_input_are_reported() {
     ));
     let locked = catalogue::by_name("fixed_fixed").unwrap();
     let n = locked.time.steps;
-    let pl = ControlProblem::new(&locked, per_step(n), BendingObjective::summed_moment()).unwrap();
+    let pl = ControlProblem::builder(&locked)
+        .map(per_step(n))
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     assert!(matches!(
         Solver::new(&pl, &OcpOptions::default()),
         Err(Error::Ocp(OcpError::UnsupportedTip {

@@ -105,14 +105,23 @@ fn turned_scene_has_the_planar_optimum_turned() {
         },
     ];
     for obj in objectives {
-        let planar = ControlProblem::new(&scene(0.0, false), map(), obj).unwrap();
+        let planar = ControlProblem::builder(&scene(0.0, false))
+            .map(map())
+            .objective(obj)
+            .build_in::<2>()
+            .unwrap();
         let r0 = Condensed::new(&planar, &options())
             .unwrap()
             .solve(&[0.0; PIECES])
             .unwrap();
         assert!(r0.converged, "planar: {:?}", r0.termination);
         for psi in [45.0f64, 120.0] {
-            let p = ControlProblem::spatial(&scene(psi, true), map(), obj, true).unwrap();
+            let p = ControlProblem::builder(&scene(psi, true))
+                .map(map())
+                .objective(obj)
+                .two_axis(true)
+                .build_in::<3>()
+                .unwrap();
             let r = Condensed::new(&p, &options())
                 .unwrap()
                 .solve(&[0.0; 2 * PIECES])
@@ -143,7 +152,12 @@ fn condensed_gradient_equals_the_adjoint_in_space() {
     ];
     for obj in objectives {
         for m in maps {
-            let p = ControlProblem::spatial(&scene(60.0, true), m, obj, true).unwrap();
+            let p = ControlProblem::builder(&scene(60.0, true))
+                .map(m)
+                .objective(obj)
+                .two_axis(true)
+                .build_in::<3>()
+                .unwrap();
             let theta: Vec<f64> = (0..p.n_params())
                 .map(|i| 1.5 * ((i as f64) * 0.7 + 0.3).sin())
                 .collect();
@@ -168,13 +182,12 @@ fn condensed_gradient_equals_the_adjoint_in_space() {
 /// the spatial model with one control per decision, and its gradient is the adjoint's.
 #[test]
 fn one_axis_control_in_a_spatial_scene() {
-    let p = ControlProblem::spatial(
-        &scene(30.0, false),
-        map(),
-        BendingObjective::summed_moment(),
-        false,
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&scene(30.0, false))
+        .map(map())
+        .objective(BendingObjective::summed_moment())
+        .two_axis(false)
+        .build_in::<3>()
+        .unwrap();
     let theta: Vec<f64> = (0..PIECES).map(|i| (i as f64 * 0.4).cos()).collect();
     let mut c = Condensed::new(&p, &OcpOptions::default()).unwrap();
     let j = c.set_point(&theta).unwrap();
@@ -220,11 +233,20 @@ fn done(r: &ocp::OcpResult) -> bool {
 fn riccati_turned_scene_has_the_planar_riccati_optimum_turned() {
     for (m, obj) in riccati_cases() {
         let np = m.n_params();
-        let planar = ControlProblem::new(&scene(0.0, false), m, obj).unwrap();
+        let planar = ControlProblem::builder(&scene(0.0, false))
+            .map(m)
+            .objective(obj)
+            .build_in::<2>()
+            .unwrap();
         let r0 = ocp::solve(&planar, &vec![0.0; np], &options()).unwrap();
         assert!(r0.converged, "planar {m:?}: {:?}", r0.termination);
         for psi in [45.0f64, 120.0] {
-            let p = ControlProblem::spatial(&scene(psi, true), m, obj, true).unwrap();
+            let p = ControlProblem::builder(&scene(psi, true))
+                .map(m)
+                .objective(obj)
+                .two_axis(true)
+                .build_in::<3>()
+                .unwrap();
             let r = ocp::solve(&p, &vec![0.0; 2 * np], &options()).unwrap();
             assert!(done(&r), "ψ = {psi} {m:?}: {:?}", r.termination);
             assert_turned(&r0, &r, psi, &format!("{m:?}"));
@@ -240,7 +262,12 @@ fn riccati_turned_scene_has_the_planar_riccati_optimum_turned() {
 fn riccati_equals_condensed_in_space() {
     for (m, obj) in riccati_cases() {
         for bound in [None, Some(0.3)] {
-            let p = ControlProblem::spatial(&scene(60.0, true), m, obj, true).unwrap();
+            let p = ControlProblem::builder(&scene(60.0, true))
+                .map(m)
+                .objective(obj)
+                .two_axis(true)
+                .build_in::<3>()
+                .unwrap();
             let opts = match bound {
                 Some(b) => options().with_bound(b),
                 None => options(),
@@ -282,7 +309,12 @@ fn riccati_gradient_equals_the_adjoint_in_space() {
         (map(), false, 30.0),
     ];
     for (m, two_axis, psi) in cases {
-        let p = ControlProblem::spatial(&scene(psi, two_axis), m, obj, two_axis).unwrap();
+        let p = ControlProblem::builder(&scene(psi, two_axis))
+            .map(m)
+            .objective(obj)
+            .two_axis(two_axis)
+            .build_in::<3>()
+            .unwrap();
         let theta: Vec<f64> = (0..p.n_params())
             .map(|i| 1.5 * ((i as f64) * 0.7 + 0.3).sin())
             .collect();
@@ -309,8 +341,18 @@ fn riccati_gradient_equals_the_adjoint_in_space() {
 fn auto_picks_riccati_for_long_spatial_horizons() {
     let obj = BendingObjective::summed_moment().with_effort(0.01);
     let opts = OptimOptions::default();
-    let long = ControlProblem::spatial(&scene(60.0, true), per_step(), obj, true).unwrap();
-    let short = ControlProblem::spatial(&scene(60.0, true), map(), obj, true).unwrap();
+    let long = ControlProblem::builder(&scene(60.0, true))
+        .map(per_step())
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
+    let short = ControlProblem::builder(&scene(60.0, true))
+        .map(map())
+        .objective(obj)
+        .two_axis(true)
+        .build_in::<3>()
+        .unwrap();
     let c = choose_method(&long, &opts);
     assert_eq!(c.method, Method::Riccati, "{c}");
     assert!(c.reason.contains("spatial"), "{c}");

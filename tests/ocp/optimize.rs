@@ -21,18 +21,21 @@ fn riser(node: usize) -> Scene {
 }
 
 fn constant(node: usize, obj: BendingObjective) -> ControlProblem {
-    ControlProblem::new(&riser(node), Parametrisation::Constant, obj).unwrap()
+    ControlProblem::builder(&riser(node))
+        .map(Parametrisation::Constant)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap()
 }
 
 /// Per-step controls u_0..u_10 with c_sum + ρ h Σ u_k², ρ = 10⁻³: the effort term makes the
 /// problem well-posed (u_10 reaches no configuration, thesis §3.3.1, so without it u_10 is free).
 fn per_step_effort(node: usize) -> ControlProblem {
-    ControlProblem::new(
-        &riser(node),
-        Parametrisation::PerStep(PerStepControl { steps: 10 }),
-        BendingObjective::summed_moment().with_effort(1e-3),
-    )
-    .unwrap()
+    ControlProblem::builder(&riser(node))
+        .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+        .objective(BendingObjective::summed_moment().with_effort(1e-3))
+        .build_in::<2>()
+        .unwrap()
 }
 
 fn dist(a: &[f64], b: &[f64]) -> f64 {
@@ -625,12 +628,11 @@ fn landscapes() {
 /// or a NaN. (Reference: J at the start, and the SPEC's description of this regime.)
 #[test]
 fn failed_trial_points_are_survived_and_reported() {
-    let p = ControlProblem::new(
-        &riser(5),
-        Parametrisation::PerStep(PerStepControl { steps: 10 }),
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let p = ControlProblem::builder(&riser(5))
+        .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let theta0 = [0.0; 11];
     let j0 = p.value(&theta0).unwrap();
     for method in [Method::Lbfgs, Method::TrustRegion] {
@@ -674,14 +676,17 @@ fn inert_components_are_exactly_u_n() {
     let scene = chainbeam::catalogue::riser(5);
     let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
     let theta: Vec<f64> = (0..11).map(|k| -1.0 + 0.1 * k as f64).collect();
-    let plain = ControlProblem::new(&scene, map, BendingObjective::summed_moment()).unwrap();
+    let plain = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     assert_eq!(inert_components(&plain, &theta).unwrap(), vec![10]);
-    let effort = ControlProblem::new(
-        &scene,
-        map,
-        BendingObjective::summed_moment().with_effort(1e-3),
-    )
-    .unwrap();
+    let effort = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(BendingObjective::summed_moment().with_effort(1e-3))
+        .build_in::<2>()
+        .unwrap();
     assert!(inert_components(&effort, &theta).unwrap().is_empty());
 }
 
@@ -997,7 +1002,11 @@ fn controls_without_effect_are_refused() {
             BendingObjective::final_moment(),
             BendingObjective::summed_moment(),
         ] {
-            let p = ControlProblem::new(&scene, map, obj).unwrap();
+            let p = ControlProblem::builder(&scene)
+                .map(map)
+                .objective(obj)
+                .build_in::<2>()
+                .unwrap();
             let theta0 = vec![0.0; p.n_params()];
             for method in [Method::Lbfgs, Method::TrustRegion] {
                 let opts = OptimOptions {
@@ -1029,7 +1038,11 @@ fn controls_without_effect_are_refused() {
         }
     }
     // The check itself: all parameters listed on the fixed-fixed beam; none on the riser.
-    let locked = ControlProblem::new(&scene, per_step, BendingObjective::summed_moment()).unwrap();
+    let locked = ControlProblem::builder(&scene)
+        .map(per_step)
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let theta = vec![0.0; 21];
     let (j, g) = locked.value_and_gradient(&theta).unwrap();
     let check = ineffective_params(&locked, &theta, j, &g).unwrap();
@@ -1057,12 +1070,11 @@ fn controls_beyond_the_resolved_range_are_refused() {
         }) => assert_eq!((index, value, l), (0, -1.1 * limit, limit)),
         other => panic!("expected ControlOutOfRange, got {other:?}"),
     }
-    let unbounded = ControlProblem::new(
-        &riser(5),
-        Parametrisation::PerStep(PerStepControl { steps: 10 }),
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let unbounded = ControlProblem::builder(&riser(5))
+        .map(Parametrisation::PerStep(PerStepControl { steps: 10 }))
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let r = minimize(&unbounded, &[0.0; 11], &OptimOptions::default()).unwrap();
     let umax = r.controls.iter().fold(0.0f64, |a, u| a.max(u.abs()));
     println!("unbounded per-step: max |u| = {umax:.1} N of {limit:.1} N");

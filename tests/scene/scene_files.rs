@@ -1135,7 +1135,7 @@ fn valid_scenes_at_the_range_limits_do_not_overflow() {
         match simulate(&scene) {
             Ok(t) => {
                 assert!(t.energy().iter().chain(t.moment()).all(|x| x.is_finite()));
-                let p = ControlProblem::from_scene(&scene).unwrap();
+                let p = ControlProblem::builder(&scene).build_in::<2>().unwrap();
                 let (c, g) = p.value_and_gradient(&[-0.5 * f]).unwrap();
                 assert!(c.is_finite() && g[0].is_finite(), "{scene:?}");
                 simulated += 1;
@@ -1273,15 +1273,14 @@ fn piecewise_scenes_simulate_and_differentiate() {
     assert_eq!(a.moment(), b.moment());
     assert_eq!(a.controls(), u);
 
-    let problem = ControlProblem::from_scene(&pw).unwrap();
+    let problem = ControlProblem::builder(&pw).build_in::<2>().unwrap();
     assert_eq!(problem.n_params(), 3);
     let (c, g) = problem.value_and_gradient(&theta).unwrap();
-    let per_step = ControlProblem::new(
-        &pw,
-        Parametrisation::PerStep(PerStepControl { steps }),
-        BendingObjective::summed_moment(),
-    )
-    .unwrap();
+    let per_step = ControlProblem::builder(&pw)
+        .map(Parametrisation::PerStep(PerStepControl { steps }))
+        .objective(BendingObjective::summed_moment())
+        .build_in::<2>()
+        .unwrap();
     let (c_ps, g_ps) = per_step.value_and_gradient(&u).unwrap();
     assert_eq!(c.to_bits(), c_ps.to_bits());
     let mut summed = [0.0; 3];

@@ -454,7 +454,8 @@ fn check_valid(file: &SceneFile) -> Result<(), TestCaseError> {
                 .control
                 .as_ref()
                 .map_or(vec![0.0], |c| c.values.clone());
-            let problem = ControlProblem::from_scene(&scene)
+            let problem = ControlProblem::builder(&scene)
+                .build_in::<2>()
                 .map_err(|e| TestCaseError::fail(format!("{e}\n{text}")))?;
             match problem.value_and_gradient(&theta) {
                 Ok((c, g)) => {

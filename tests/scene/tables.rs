@@ -99,7 +99,11 @@ fn table_3_4_every_row() {
     let scene = catalogue::riser(1);
     let map = Parametrisation::PerStep(PerStepControl { steps: 10 });
     let limit = resolved_control_limit(
-        &ControlProblem::new(&scene, map, BendingObjective::summed_moment()).unwrap(),
+        &ControlProblem::builder(&scene)
+            .map(map)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()
+            .unwrap(),
     );
     for (i, r) in rows.iter().enumerate() {
         let bound = r.bound.unwrap();

@@ -51,7 +51,11 @@ fn problem_of(scene: &Scene) -> ControlProblem {
         steps: scene.time.steps,
     });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    ControlProblem::new(scene, map, obj).unwrap()
+    ControlProblem::builder(scene)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap()
 }
 
 fn problem(steps: usize) -> ControlProblem {
@@ -300,7 +304,10 @@ fn pending_tail() -> (ControlProblem, Vec<f64>) {
         pieces: 5,
     });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let tail = ControlProblem::new(&tail_scene, map, obj)
+    let tail = ControlProblem::builder(&tail_scene)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
         .unwrap()
         .starting_before_kick(hat, m as f64 * long.time_step())
         .unwrap();
@@ -439,7 +446,12 @@ fn two_axis_pending_kick_tail_equals_tail_of_longer_run() {
     let spatial = |steps: usize| {
         let map = Parametrisation::PerStep(PerStepControl { steps });
         let obj = BendingObjective::summed_moment().with_effort(0.01);
-        ControlProblem::spatial(&riser(steps), map, obj, true).unwrap()
+        ControlProblem::builder(&riser(steps))
+            .map(map)
+            .objective(obj)
+            .two_axis(true)
+            .build_in::<3>()
+            .unwrap()
     };
     let long = spatial(steps);
     let n1 = steps + 1;

@@ -86,7 +86,7 @@ fn a_scene_over_the_trajectory_budget_streams_and_is_refused_where_it_is_stored(
         "simulate with given controls",
     );
     assert_budget_error(
-        &ControlProblem::from_scene(&scene).unwrap_err(),
+        &ControlProblem::builder(&scene).build_in::<2>().unwrap_err(),
         "ControlProblem (adjoint, optimisers)",
     );
     assert!(

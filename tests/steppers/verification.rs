@@ -284,7 +284,11 @@ fn adjoint_and_hessian_at_large_deflection() {
     let h = scene.time.step;
     let map = Parametrisation::Piecewise(PiecewiseControl { steps, pieces: 4 });
     let obj = BendingObjective::summed_moment().with_effort(0.01);
-    let prob = ControlProblem::new(&scene, map, obj).unwrap();
+    let prob = ControlProblem::builder(&scene)
+        .map(map)
+        .objective(obj)
+        .build_in::<2>()
+        .unwrap();
     let theta = [3.0, -2.0, 4.0, -1.0];
 
     // The trajectory the derivatives are taken along visits every branch.
@@ -1276,9 +1280,12 @@ fn adjoint_sweeps_per_gradient() {
         (Checkpointing::Sqrt, steps / k + 2 + k - 1),
         (Checkpointing::Every(10), steps / 10 + 2 + 9),
     ] {
-        let prob = ControlProblem::new(&scene, map, obj.clone())
-            .unwrap()
-            .with_checkpointing(c);
+        let prob = ControlProblem::builder(&scene)
+            .map(map)
+            .objective(obj.clone())
+            .checkpointing(c)
+            .build_in::<2>()
+            .unwrap();
         let count = |f: &dyn Fn()| {
             calls.store(0, Ordering::Relaxed);
             f();

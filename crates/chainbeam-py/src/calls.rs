@@ -5,10 +5,12 @@ use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use chainbeam::optimize::{scene_start, AnyProblem, OptimProblem};
+use chainbeam::adjoint::AnyProblem;
+use chainbeam::optimize::scene_start;
 use chainbeam::{
-    simulate as lib_simulate, BendingObjective, ControlKind, ControlMap, ObjectiveKind, Parameter,
-    Parametrisation, PerStepControl, PiecewiseControl, SceneTrajectory, SimulateInput,
+    simulate as lib_simulate, BendingObjective, ControlKind, ControlMap, ControlProblem,
+    ObjectiveKind, Parameter, Parametrisation, PerStepControl, PiecewiseControl, SceneTrajectory,
+    SimulateInput,
 };
 
 use crate::errors::{check, Failure};
@@ -214,7 +216,14 @@ pub fn build_problem(
         kind: scene.objective.unwrap_or(ObjectiveKind::Final),
         effort,
     };
-    Ok((AnyProblem::new(scene, map, objective, two_axis)?, theta0))
+    Ok((
+        ControlProblem::builder(scene)
+            .map(map)
+            .objective(objective)
+            .two_axis(two_axis)
+            .build()?,
+        theta0,
+    ))
 }
 
 /// Objective and adjoint gradient; see `chainbeam.gradient`. Returns (objective, gradient θ-
@@ -298,10 +307,7 @@ fn parameter_gradient(
     theta: &[f64],
     params: &[Parameter],
 ) -> chainbeam::Result<Vec<f64>> {
-    match problem {
-        AnyProblem::Planar(p) => p.parameter_gradient(theta, params),
-        AnyProblem::Spatial(p) => p.parameter_gradient(theta, params),
-    }
+    problem.parameter_gradient(theta, params)
 }
 
 /// J and its gradient with respect to the controls (θ) and/or physical parameters by their

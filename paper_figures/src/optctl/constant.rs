@@ -132,11 +132,10 @@ struct ThesisLocal {
 impl ThesisLocal {
     fn measure(p: &ControlProblem) -> Res<Self> {
         let c_true = p.value(&[THESIS_LOCAL.0])?;
-        let p_sum = ControlProblem::new(
-            &scene(),
-            Parametrisation::Constant,
-            BendingObjective::summed_moment(),
-        )?;
+        let p_sum = ControlProblem::builder(&scene())
+            .map(Parametrisation::Constant)
+            .objective(BendingObjective::summed_moment())
+            .build_in::<2>()?;
         Ok(ThesisLocal {
             c_true,
             sum_local: p_sum.value(&[THESIS_LOCAL.0])?,

@@ -528,11 +528,10 @@ impl Sensitivity {
     fn measure(s: &Starts, best: &[f64]) -> Res<Self> {
         let (n, steps) = (s.n, s.pf.steps());
         let moment_at = |j: usize| {
-            ControlProblem::new(
-                &scene(),
-                Parametrisation::PerStep(PerStepControl { steps }),
-                MomentAt(j),
-            )
+            ControlProblem::builder(&scene())
+                .map(Parametrisation::PerStep(PerStepControl { steps }))
+                .objective(MomentAt(j))
+                .build_in::<2>()
         };
         let u_eq = vec![-2.0; n];
         let mut values = vec![0.0; n * (steps + 1)];

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use chainbeam::optimize::OptimProblem;
 use chainbeam::Scene;
 
 use crate::controls_io::ControlsFile;

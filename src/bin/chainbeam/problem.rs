@@ -8,7 +8,8 @@ use clap::Args;
 use serde::Serialize;
 
 use chainbeam::{
-    BendingObjective, ControlMap, ObjectiveKind, Parametrisation, PiecewiseControl, Scene,
+    BendingObjective, ControlMap, ControlProblem, ObjectiveKind, Parametrisation, PiecewiseControl,
+    Scene,
 };
 
 use crate::controls_io::ControlsFile;
@@ -30,7 +31,8 @@ pub struct ProblemArgs {
 
 /// The problem in the model the scene needs and the JSON layout of θ live in the library (shared
 /// with the Python bindings).
-pub use chainbeam::optimize::{AnyProblem, Values};
+pub use chainbeam::adjoint::AnyProblem;
+pub use chainbeam::optimize::Values;
 
 /// The control problem of a scene and the parameters θ₀ to evaluate it at (or start from).
 pub struct SceneProblem {
@@ -200,8 +202,12 @@ pub fn build(
         kind: scene.objective.unwrap_or(ObjectiveKind::Final),
         effort,
     };
-    let problem =
-        AnyProblem::new(scene, map, objective, two_axis).map_err(|e| lib_error(path, e))?;
+    let problem = ControlProblem::builder(scene)
+        .map(map)
+        .objective(objective)
+        .two_axis(two_axis)
+        .build()
+        .map_err(|e| lib_error(path, e))?;
     let control_node = scene.control.as_ref().map_or(scene.n(), |c| c.node);
     Ok(SceneProblem {
         problem,

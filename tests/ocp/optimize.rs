@@ -781,8 +781,8 @@ fn history_observer_equals_rerunning_the_solver() {
 /// Observer modes are argmin's (Every(k) sees iterations 0, k, 2k, … of the run's numbering), an
 /// observer's error stops the run with `Termination::Observer` (not converged), and
 /// `observe_final` sees the result with argmin's termination status. With L-BFGS, asked for: the
-/// observers watch argmin's iterations, which the structured solvers `Method::Auto` may choose
-/// (condensed, Riccati) do not run.
+/// iterations numbered here are argmin's (the structured solvers' observers are checked by the
+/// library's own test, `observers_see_every_iteration_of_the_structured_solvers`).
 #[test]
 fn observer_modes_errors_and_final() {
     use chainbeam::optimize::{Observe, ObservedState};

@@ -142,6 +142,7 @@
 //!
 #![doc = include_str!("../docs/conventions.md")]
 #![warn(missing_docs)]
+#![warn(unreachable_pub)]
 #![deny(clippy::float_cmp)]
 // Numerical kernels index several arrays with one loop variable; iterator zips of four or five
 // slices would hide the formulas they implement.

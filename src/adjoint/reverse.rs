@@ -58,7 +58,7 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
 
 impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     /// Scratch for a sweep over `ch` with step `h`, differentiating also for `params`.
-    pub fn new(ch: &'a Chain<D, DIM>, h: f64, params: &'a [Parameter]) -> Self {
+    pub(crate) fn new(ch: &'a Chain<D, DIM>, h: f64, params: &'a [Parameter]) -> Self {
         let n = ch.n();
         let v = vec![[D::zero(); DIM]; n];
         ReverseSweep {
@@ -106,7 +106,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
 
     /// One reverse step k + 1 → k: reads the states at k and k + 1 (and the half-step record of
     /// step k), updates the cotangents in place.
-    pub fn step(
+    pub(crate) fn step(
         &mut self,
         k: usize,
         (sk, sk1): (&StateView<'_, D, DIM>, &StateView<'_, D, DIM>),
@@ -142,7 +142,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
     /// (its q, p and y = (h/2)·`s.mu`): with p̄ in `cot.pbar`, adds the projection's share to
     /// `cot.qbar` and returns c̄ = p̄ − M⁻¹Ĝᵀŷ, A ŷ = Ĝ p̄. The step's final projection; the
     /// Riccati solver's stage map applies it to the control's half-kick ([`crate::ocp`]).
-    pub fn projection_reverse(
+    pub(crate) fn projection_reverse(
         &mut self,
         k: usize,
         s: &StateView<'_, D, DIM>,

@@ -96,7 +96,7 @@ pub(crate) struct StateView<'a, D, const DIM: usize> {
 impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     /// Room for `capacity` states of n pendulums with nc multipliers; `records_half_step` when
     /// the model has drag.
-    pub fn new(n: usize, nc: usize, capacity: usize, records_half_step: bool) -> Self {
+    pub(super) fn new(n: usize, nc: usize, capacity: usize, records_half_step: bool) -> Self {
         let half = if records_half_step { capacity * n } else { 0 };
         StateStore {
             n,
@@ -114,7 +114,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     }
 
     /// Bytes of one stored state.
-    pub fn state_bytes(n: usize, nc: usize, records_half_step: bool) -> usize {
+    pub(super) fn state_bytes(n: usize, nc: usize, records_half_step: bool) -> usize {
         let blocks = if records_half_step { 3 } else { 2 };
         let w = if records_half_step {
             n * std::mem::size_of::<BlockSym<D, DIM>>()
@@ -126,7 +126,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
 
     /// Appends a state and the half-step record (p_{k−½}, W) of the step that produced it (any
     /// slices at k = 0, where there is none; ignored unless the store records half steps).
-    pub fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[BlockSym<D, DIM>])) {
+    pub(super) fn push(&mut self, s: &State<D, DIM>, half: (&[[D; DIM]], &[BlockSym<D, DIM>])) {
         self.q.extend_from_slice(&s.q);
         self.p.extend_from_slice(&s.p);
         match &s.multipliers {
@@ -155,7 +155,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     }
 
     /// Forgets every state (keeps the memory).
-    pub fn clear(&mut self) {
+    pub(super) fn clear(&mut self) {
         self.q.clear();
         self.p.clear();
         self.lambda.clear();
@@ -167,17 +167,17 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     }
 
     /// Number of stored states.
-    pub fn len(&self) -> usize {
+    pub(super) fn len(&self) -> usize {
         self.tip.len()
     }
 
     /// Number of states the memory holds.
-    pub fn capacity(&self) -> usize {
+    pub(super) fn capacity(&self) -> usize {
         self.tip.capacity()
     }
 
     /// The i-th stored state.
-    pub fn view(&self, i: usize) -> StateView<'_, D, DIM> {
+    pub(super) fn view(&self, i: usize) -> StateView<'_, D, DIM> {
         let (n, nc) = (self.n, self.nc);
         let r = if self.records_half_step {
             i * n..(i + 1) * n
@@ -196,7 +196,7 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     }
 
     /// Loads the i-th stored state into `s` (to recompute a segment from it).
-    pub fn load(&self, i: usize, s: &mut State<D, DIM>) {
+    pub(super) fn load(&self, i: usize, s: &mut State<D, DIM>) {
         let v = self.view(i);
         s.q.copy_from_slice(v.q);
         s.p.copy_from_slice(v.p);

@@ -219,7 +219,7 @@ fn scaled_descent(g: &[f64], free: &[bool]) -> Vec<f64> {
 
 /// f(u) (and ∇f(u) when asked for [`Want::Gradient`]) at a point u of the unit box: the function
 /// [`minimise_box`] minimises.
-pub type BoxObjective<'a> = dyn FnMut(&[f64], Want) -> Result<BoxValue, DesignError> + 'a;
+pub(super) type BoxObjective<'a> = dyn FnMut(&[f64], Want) -> Result<BoxValue, DesignError> + 'a;
 
 /// Minimises f on the unit box \[0, 1\]^m from `start` (module docs), `eval` giving f(u) (and
 /// ∇f(u) when asked for [`Want::Gradient`]); `first` is f and ∇f at the start when the caller has

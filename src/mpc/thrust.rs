@@ -25,7 +25,7 @@ pub(crate) struct Actuator {
 impl Actuator {
     /// (F_i, whether F_i reached the clipped command c) from F_{i−1} and the command; ties go
     /// to the command, as in the plant.
-    pub fn step(&self, prev: f64, command: f64) -> (f64, bool) {
+    pub(super) fn step(&self, prev: f64, command: f64) -> (f64, bool) {
         let c = command.clamp(-self.bound, self.bound);
         let d = c - prev;
         if d > self.change {
@@ -96,7 +96,7 @@ impl<O: Objective> ThrustPlan<'_, O> {
 
     /// The per-step thrusts u_0..u_{N_p} of the commands θ and, per step, whether its command
     /// was reached (type docs).
-    pub fn thrusts(&self, theta: &[f64]) -> (Vec<f64>, Vec<bool>) {
+    pub(super) fn thrusts(&self, theta: &[f64]) -> (Vec<f64>, Vec<bool>) {
         let n = self.steps();
         let mut u = vec![self.before; n + 1];
         let mut reached = vec![false; n + 1];
@@ -111,7 +111,7 @@ impl<O: Objective> ThrustPlan<'_, O> {
     }
 
     /// The command penalty σ Σ_j (θ_j − u_{e(j)})² of J (type docs).
-    pub fn penalty(&self, theta: &[f64], u: &[f64]) -> f64 {
+    pub(super) fn penalty(&self, theta: &[f64], u: &[f64]) -> f64 {
         (0..self.pieces)
             .map(|j| (theta[j] - u[self.end_of(j)]).powi(2))
             .sum::<f64>()

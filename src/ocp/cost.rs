@@ -78,7 +78,7 @@ impl StageCost {
     /// stage ([`OcpError::NeedsPowerProxy`] when it is a history term with a power proxy: the
     /// rainflow damage), [`OcpError::InvalidGaussNewtonForm`] for a negative or non-finite weight or
     /// effort; `solver` names the solver.
-    pub fn new<O: Objective>(
+    pub(crate) fn new<O: Objective>(
         objective: &O,
         steps: usize,
         h: f64,
@@ -125,20 +125,20 @@ impl StageCost {
 
     /// The weight w_k of the residual.
     #[inline]
-    pub fn weight(&self, k: usize) -> f64 {
+    pub(crate) fn weight(&self, k: usize) -> f64 {
         self.weights[k]
     }
 
     /// The effort coefficient e_k of u_k².
     #[inline]
-    pub fn effort(&self, k: usize) -> f64 {
+    pub(crate) fn effort(&self, k: usize) -> f64 {
         self.efforts[k]
     }
 
     /// r_k and its derivatives at the moment `m` (0 where the form is missing: not after
     /// [`StageCost::new`], which checked every stage).
     #[inline]
-    pub fn residual(&self, k: usize, m: f64) -> ResidualAt {
+    pub(crate) fn residual(&self, k: usize, m: f64) -> ResidualAt {
         let s = MomentStage {
             k,
             steps: self.steps,
@@ -169,7 +169,7 @@ impl StageCost {
     /// planar residual where M₀ₓ = 0 (r_k is odd in M₀ for every objective the solvers take,
     /// [`StageCost::check_isotropic`]). Below |M₀|² = 10⁻³⁰⁸ (the straight beam of t₀):
     /// R = r_k′(0) M₀, ∂R/∂M₀ = r_k′(0) I, the limit.
-    pub fn residual_vector(&self, k: usize, m: [f64; 2]) -> ResidualVector {
+    pub(crate) fn residual_vector(&self, k: usize, m: [f64; 2]) -> ResidualVector {
         let mag = m[0].hypot(m[1]);
         let at = self.residual(k, mag);
         if mag * mag < f64::MIN_POSITIVE {
@@ -193,7 +193,7 @@ impl StageCost {
     /// ℓ_k of the spatial model for the vector residual `r`, the control `u` = (u_z, u_x) and
     /// the previous control `w`: ½ w_k |r|² + e_k |u|² + (σ/h)|u − w|² (k ≥ 1).
     #[inline]
-    pub fn value_axes(&self, k: usize, r: [f64; 2], u: [f64; 2], w: [f64; 2]) -> f64 {
+    pub(crate) fn value_axes(&self, k: usize, r: [f64; 2], u: [f64; 2], w: [f64; 2]) -> f64 {
         let sq = |a: [f64; 2]| a[0] * a[0] + a[1] * a[1];
         let mut l = 0.5 * self.weights[k] * sq(r) + self.efforts[k] * sq(u);
         if k > 0 && self.rate > 0.0 {
@@ -209,7 +209,11 @@ impl StageCost {
     ///
     /// # Errors
     /// [`OcpError::AnisotropicObjective`] naming `solver`.
-    pub fn check_isotropic<O: Objective>(&self, objective: &O, solver: &'static str) -> Result<()> {
+    pub(crate) fn check_isotropic<O: Objective>(
+        &self,
+        objective: &O,
+        solver: &'static str,
+    ) -> Result<()> {
         for &a in &ISOTROPY_PROBES {
             if objective.uses_positions() {
                 return Err(OcpError::AnisotropicObjective {
@@ -251,7 +255,7 @@ impl StageCost {
 
     /// ℓ_k for the residual `r`, control `u` and previous control `w`.
     #[inline]
-    pub fn value(&self, k: usize, r: f64, u: f64, w: f64) -> f64 {
+    pub(crate) fn value(&self, k: usize, r: f64, u: f64, w: f64) -> f64 {
         let mut l = 0.5 * self.weights[k] * r * r + self.efforts[k] * u * u;
         if k > 0 && self.rate > 0.0 {
             l += self.rate * (u - w) * (u - w);

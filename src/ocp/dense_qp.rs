@@ -37,7 +37,7 @@ pub(crate) struct BoxQp {
 }
 
 impl BoxQp {
-    pub fn new(np: usize) -> Self {
+    pub(super) fn new(np: usize) -> Self {
         BoxQp {
             delta: vec![0.0; np],
             fixed: vec![0; np],
@@ -60,7 +60,7 @@ impl BoxQp {
 
     /// Solves the QP with the box lo − θ ≤ δ ≤ hi − θ; returns the model change (gᵀδ, ½δᵀHδ)
     /// without λ, or `None` when H + λI is not positive definite on a free set.
-    pub fn solve(&mut self, qp: &DenseQp<'_>) -> Option<ModelChange> {
+    pub(super) fn solve(&mut self, qp: &DenseQp<'_>) -> Option<ModelChange> {
         let DenseQp {
             h,
             g,

@@ -162,7 +162,7 @@ pub(crate) struct ModelChange {
 impl ModelChange {
     /// ΔJ(α).
     #[inline]
-    pub fn at(&self, alpha: f64) -> f64 {
+    pub(super) fn at(&self, alpha: f64) -> f64 {
         alpha * self.d1 + alpha * alpha * self.d2
     }
 }
@@ -277,7 +277,7 @@ impl RoundoffWatch {
     /// Records an accepted step (`roundoff`: taken below J's resolution) at projected gradient
     /// `pg`; true when more than [`MAX_ROUNDOFF_STEPS`] such steps in a row have not lowered
     /// the projected gradient by 10 %.
-    pub fn stalled(&mut self, roundoff: bool, pg: f64) -> bool {
+    pub(super) fn stalled(&mut self, roundoff: bool, pg: f64) -> bool {
         if !roundoff {
             self.steps = 0;
             return false;
@@ -310,7 +310,7 @@ pub(crate) struct Progress {
 
 impl Progress {
     /// The state at the start, J(θ₀) = `j0`.
-    pub fn new(j0: f64) -> Self {
+    pub(super) fn new(j0: f64) -> Self {
         Progress {
             j0,
             mu: 0.0,
@@ -324,7 +324,7 @@ impl Progress {
 
     /// Whether a real-time budget is spent (no final gradient wanted:
     /// [`OcpOptions::final_gradient`]); tested before the next linearisation.
-    pub fn budget_spent(&self, opts: &OcpOptions) -> bool {
+    pub(super) fn budget_spent(&self, opts: &OcpOptions) -> bool {
         self.iterations > 0 && self.iterations >= opts.max_iters && !opts.final_gradient
     }
 
@@ -332,7 +332,7 @@ impl Progress {
     /// the first call): [`OcpTermination::Converged`] at max(grad_tol, rel_grad_tol ‖g₀‖),
     /// [`OcpTermination::MaxIterations`] at the limit. Returns the tolerance as well, and
     /// ‖g₀‖.
-    pub fn stop_test(
+    pub(super) fn stop_test(
         &mut self,
         opts: &OcpOptions,
         pg: f64,

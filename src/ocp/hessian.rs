@@ -47,7 +47,7 @@ pub(crate) struct VjpBuffers<D> {
 }
 
 impl<D: Scalar> VjpBuffers<D> {
-    pub fn new(n: usize) -> Self {
+    pub(super) fn new(n: usize) -> Self {
         let v = vec![[D::zero(); 2]; n];
         VjpBuffers {
             q0: v.clone(),
@@ -69,7 +69,7 @@ pub(crate) struct Reverse<'a, D> {
 
 impl<'a, D: Scalar> Reverse<'a, D> {
     /// For stages of `model` over a horizon of `steps` steps.
-    pub fn new(chain: &'a Chain<D, 2>, model: &StageModel, steps: usize) -> Self {
+    pub(super) fn new(chain: &'a Chain<D, 2>, model: &StageModel, steps: usize) -> Self {
         let n = model.n;
         let zero = vec![[D::zero(); 2]; n];
         let mut sweep = ReverseSweep::new(chain, model.h, &[]);
@@ -119,7 +119,7 @@ pub(crate) struct VjpWorkspace<D> {
 
 impl<D: Scalar> VjpWorkspace<D> {
     /// For the stages of `model`.
-    pub fn new(model: &StageModel) -> Result<Self> {
+    pub(super) fn new(model: &StageModel) -> Result<Self> {
         Ok(VjpWorkspace {
             stepper: Stepper::new(model)?,
             bufs: VjpBuffers::new(model.n),
@@ -139,7 +139,7 @@ pub(crate) struct HessianWorkspace<const DIM: usize = 2> {
 
 impl<const DIM: usize> HessianWorkspace<DIM> {
     /// For the stages of `model`.
-    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
+    pub(super) fn new(model: &StageModel<DIM>) -> Result<Self> {
         Ok(HessianWorkspace {
             jac: JacobianWorkspace::new(model)?,
             hb: VjpBuffers::new(if DIM == 2 { model.n } else { 0 }),
@@ -290,7 +290,7 @@ impl HessianWorkspace {
     /// `out.jac`, as [`JacobianWorkspace::jacobians`]: the forward dual step is the same), for
     /// the costate ν = ν_{k+1} (module docs). The point and the Newton start are those of
     /// `jacobians`.
-    pub fn second_order(
+    pub(super) fn second_order(
         &mut self,
         at: StageAt<'_>,
         nu: &[f64],

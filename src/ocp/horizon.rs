@@ -48,7 +48,7 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     /// constant), then the solver's own limits on (N, number of decisions) by `admit` before
     /// anything of the horizon's size is allocated; `solver` names the solver in the
     /// objective's error.
-    pub fn new<P: ControlMap, O: Objective>(
+    pub(super) fn new<P: ControlMap, O: Objective>(
         problem: &ControlProblem<P, O, DIM>,
         options: &OcpOptions,
         solver: &'static str,
@@ -94,13 +94,13 @@ impl<const DIM: usize> ControlHorizon<DIM> {
 
     /// Decisions per axis m.
     #[inline]
-    pub fn pieces(&self) -> usize {
+    pub(super) fn pieces(&self) -> usize {
         self.n_params / self.axes
     }
 
     /// The θ index of stage k's control along `axis` (0: z, 1: x of a 2-axis control).
     #[inline]
-    pub fn theta_index(&self, k: usize, axis: usize) -> usize {
+    pub(super) fn theta_index(&self, k: usize, axis: usize) -> usize {
         let j = self.piece[k];
         match (self.axes, axis) {
             (2, 0) => self.pieces() + j,
@@ -111,7 +111,7 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     /// The stage and control axis (0: z, 1: x of a 2-axis control) of θ_i: the decision
     /// k m + axis of the Riccati solver (m = `axes`).
     #[inline]
-    pub fn decision(&self, i: usize) -> (usize, usize) {
+    pub(super) fn decision(&self, i: usize) -> (usize, usize) {
         let m = self.pieces();
         if self.axes == 2 && i < m {
             (self.theta_stage[i], 1)
@@ -122,7 +122,7 @@ impl<const DIM: usize> ControlHorizon<DIM> {
 
     /// Simulates θ (projected onto the box) into the trial (`into_trial`) or the nominal and
     /// returns J.
-    pub fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {
+    pub(super) fn simulate(&mut self, theta: &[f64], into_trial: bool) -> Result<f64> {
         let (lo, hi) = (self.opts.lower, self.opts.upper);
         for k in 0..=self.steps {
             let u = theta[self.theta_index(k, 0)].clamp(lo, hi);
@@ -159,7 +159,7 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     /// # Errors
     /// [`Error::WrongLength`] or [`Error::NotFinite`] (`theta`) for a wrong length or a
     /// non-finite entry; the simulation's errors.
-    pub fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
+    pub(super) fn set_point(&mut self, theta: &[f64]) -> Result<f64> {
         check_theta(theta, self.n_params)?;
         self.simulate(theta, false)
     }
@@ -167,7 +167,13 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     /// The closed-loop rollout u_k = clamp(ū_k + α k_k + K_k δz_k) about the nominal (gains
     /// `gain`, n_z per stage, and feedforward `ff`) into the trial; `false` if the simulation
     /// failed.
-    pub fn closed_loop_trial(&mut self, gain: &[f64], ff: &[f64], alpha: f64, nz: usize) -> bool {
+    pub(super) fn closed_loop_trial(
+        &mut self,
+        gain: &[f64],
+        ff: &[f64],
+        alpha: f64,
+        nz: usize,
+    ) -> bool {
         let fb = Feedback {
             nominal: &self.nominal,
             gain,
@@ -189,13 +195,13 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     }
 
     /// The trial becomes the nominal.
-    pub fn take_trial(&mut self) {
+    pub(super) fn take_trial(&mut self) {
         std::mem::swap(&mut self.nominal, &mut self.trial);
     }
 
     /// θ_i of the nominal.
     #[inline]
-    pub fn theta_at(&self, i: usize) -> f64 {
+    pub(super) fn theta_at(&self, i: usize) -> f64 {
         let m = self.pieces();
         if self.axes == 2 && i < m {
             self.nominal.ux[self.theta_stage[i]]
@@ -205,12 +211,12 @@ impl<const DIM: usize> ControlHorizon<DIM> {
     }
 
     /// θ of the nominal.
-    pub fn theta(&self) -> Vec<f64> {
+    pub(super) fn theta(&self) -> Vec<f64> {
         (0..self.n_params).map(|i| self.theta_at(i)).collect()
     }
 
     /// Moves the rollouts to another start (state, t₀, pending kick).
-    pub fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
+    pub(super) fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
         self.model.start = start.cloned();
         self.sim.stepper.set_start(start);
     }

@@ -73,7 +73,7 @@ pub(crate) struct InteriorPoint {
 
 impl InteriorPoint {
     /// For `decisions` controls (m per stage of the horizon).
-    pub fn new(decisions: usize) -> Self {
+    pub(super) fn new(decisions: usize) -> Self {
         InteriorPoint {
             zl: vec![0.0; decisions],
             zh: vec![0.0; decisions],
@@ -87,7 +87,7 @@ impl InteriorPoint {
 
     /// Centred multipliers: every finite bound's complementarity s·z = τ₀, i.e.
     /// z = τ₀/max(s, κ) (0 for an infinite bound).
-    pub fn centre(&mut self, c: &Controls<'_>, tau0: f64, kappa: f64) {
+    pub(super) fn centre(&mut self, c: &Controls<'_>, tau0: f64, kappa: f64) {
         let (lo, hi) = (c.lower, c.upper);
         for k in 0..self.zl.len() {
             let u = c.v(k);
@@ -105,7 +105,7 @@ impl InteriorPoint {
     }
 
     /// The complementarity gap Σ (v − lo) z + (hi − v) z′ over the free stages.
-    pub fn complementarity(&self, c: &Controls<'_>) -> f64 {
+    pub(super) fn complementarity(&self, c: &Controls<'_>) -> f64 {
         let (lo, hi) = (c.lower, c.upper);
         let mut gap = 0.0;
         for k in 0..self.zl.len() {
@@ -123,7 +123,7 @@ impl InteriorPoint {
     }
 
     /// The barrier terms of the next Riccati pass: Q_uu += z/s + z′/s′, l_u += −τ/s + τ/s′.
-    pub fn barrier_terms(&mut self, c: &Controls<'_>, tau: f64) {
+    pub(super) fn barrier_terms(&mut self, c: &Controls<'_>, tau: f64) {
         let (lo, hi) = (c.lower, c.upper);
         for k in 0..self.zl.len() {
             let (mut qs, mut ls) = (0.0, 0.0);
@@ -147,7 +147,12 @@ impl InteriorPoint {
 
     /// The multipliers' steps along the direction `dir` (in `dzl`, `dzh`) and the primal and
     /// dual step lengths that keep 0.5 % of the distance to the boundary.
-    pub fn fraction_to_boundary(&mut self, c: &Controls<'_>, dir: &[f64], tau: f64) -> StepLengths {
+    pub(super) fn fraction_to_boundary(
+        &mut self,
+        c: &Controls<'_>,
+        dir: &[f64],
+        tau: f64,
+    ) -> StepLengths {
         let (lo, hi) = (c.lower, c.upper);
         let (mut ap, mut ad) = (1.0f64, 1.0f64);
         for k in 0..self.zl.len() {
@@ -186,7 +191,7 @@ impl InteriorPoint {
     }
 
     /// z += α_d Δz, z′ += α_d Δz′ (the free stages of `c`).
-    pub fn step_multipliers(&mut self, c: &Controls<'_>, ad: f64) {
+    pub(super) fn step_multipliers(&mut self, c: &Controls<'_>, ad: f64) {
         let (lo, hi) = (c.lower, c.upper);
         for k in 0..self.zl.len() {
             if c.free(k) {
@@ -203,7 +208,7 @@ impl InteriorPoint {
     /// The bound a control the interior point left within 10⁻⁶ of the box width (`width`) of
     /// it goes onto, when its multiplier exceeds the slack (then bounds are met with equality,
     /// not approached): stage k at the point `c`.
-    pub fn snap(&self, c: &Controls<'_>, k: usize, width: f64) -> Option<f64> {
+    pub(super) fn snap(&self, c: &Controls<'_>, k: usize, width: f64) -> Option<f64> {
         let (lo, hi) = (c.lower, c.upper);
         let v = c.v(k);
         if lo.is_finite() && v - lo <= 1e-6 * width && self.zl[k] > v - lo {

@@ -60,7 +60,7 @@ pub(crate) struct QpIterate {
 impl QpIterate {
     /// The point δ = 0 of a horizon of `steps` stages with `nz` state coordinates and `m`
     /// controls per stage.
-    pub fn new(steps: usize, nz: usize, m: usize) -> Self {
+    pub(super) fn new(steps: usize, nz: usize, m: usize) -> Self {
         let nd = (steps + 1) * m;
         QpIterate {
             nz,
@@ -79,20 +79,20 @@ impl QpIterate {
     }
 
     /// δ = 0: the nominal.
-    pub fn at_nominal(&mut self) {
+    pub(super) fn at_nominal(&mut self) {
         self.dv.fill(0.0);
         self.dz.fill(0.0);
     }
 
     /// The rollout's point becomes the current one.
-    pub fn take_trial(&mut self) {
+    pub(super) fn take_trial(&mut self) {
         std::mem::swap(&mut self.dv, &mut self.dv_t);
         std::mem::swap(&mut self.dz, &mut self.dz_t);
     }
 
     /// The feedforward of the closed-loop rollouts: k_i = δv_i − K_i δz_k, so that
     /// u_i = ū_i + α k_i + K_i δz_k reproduces the QP's step at α = 1.
-    pub fn store_feedforward(&mut self, gain: &[f64]) {
+    pub(super) fn store_feedforward(&mut self, gain: &[f64]) {
         let (nz, m) = (self.nz, self.m);
         for i in 0..self.ff.len() {
             let g = &gain[i * nz..(i + 1) * nz];
@@ -105,7 +105,7 @@ impl QpIterate {
     /// costate sweep: a control within ε of a bound whose gradient pushes it outward moves to
     /// that bound and is fixed there (no feedback); every other control is free in the Newton
     /// step.
-    pub fn set_active<const DIM: usize>(
+    pub(super) fn set_active<const DIM: usize>(
         &mut self,
         hz: &ControlHorizon<DIM>,
         grad: &[f64],
@@ -139,7 +139,7 @@ impl QpIterate {
     /// second-order terms of the exact model), or 0 for [`RolloutMode::Direction`] (its caller gets
     /// the value from the Newton step; with the exact model the value would read every H_k
     /// once more). Needs every stage Jacobian in memory.
-    pub fn linearised<const DIM: usize>(
+    pub(super) fn linearised<const DIM: usize>(
         &mut self,
         lm: &LinearModel<'_, DIM>,
         alpha: f64,

@@ -51,7 +51,7 @@ impl<const DIM: usize> JacobianStore<DIM> {
     /// The store of a horizon of `steps` stages of `model` (n_ξ tangent coordinates `nxi`,
     /// `ncu` controls per stage): `options.threads` workspaces (0: the thread pool's), as many
     /// stages as `options.jacobian_memory` holds.
-    pub fn new(model: &StageModel<DIM>, options: &OcpOptions, steps: usize) -> Result<Self> {
+    pub(super) fn new(model: &StageModel<DIM>, options: &OcpOptions, steps: usize) -> Result<Self> {
         let (nxi, ncu) = (model.nx(), model.controls());
         let threads = if options.threads == 0 {
             available_threads()
@@ -77,23 +77,23 @@ impl<const DIM: usize> JacobianStore<DIM> {
     }
 
     /// Bytes of one stage's A_k and B_k with one control.
-    pub fn stage_bytes(nxi: usize) -> usize {
+    pub(super) fn stage_bytes(nxi: usize) -> usize {
         8 * (nxi * nxi + nxi)
     }
 
     /// Whether every stage of a horizon of `steps` fits in the store.
-    pub fn holds_all(&self, steps: usize) -> bool {
+    pub(super) fn holds_all(&self, steps: usize) -> bool {
         self.block >= steps
     }
 
     /// The nominal moved: nothing in the store is valid.
-    pub fn invalidate(&mut self) {
+    pub(super) fn invalidate(&mut self) {
         self.range = None;
     }
 
     /// The Jacobians of the stages `stages` at the nominal `nom` into the store (slot i holds
     /// stage `stages.start + i`), in parallel; nothing when they are there already.
-    pub fn fill(
+    pub(super) fn fill(
         &mut self,
         model: &StageModel<DIM>,
         nom: &Traj<DIM>,
@@ -153,7 +153,7 @@ impl<const DIM: usize> JacobianStore<DIM> {
 
     /// The workspaces and the store of stages 0..`steps` (every stage in memory), for a pass
     /// that writes them all; [`JacobianStore::filled_whole`] marks them valid afterwards.
-    pub fn whole(&mut self, steps: usize) -> WholeStore<'_, DIM> {
+    pub(super) fn whole(&mut self, steps: usize) -> WholeStore<'_, DIM> {
         let nxi = self.nxi;
         WholeStore {
             ws: &mut self.ws,
@@ -164,14 +164,14 @@ impl<const DIM: usize> JacobianStore<DIM> {
 
     /// Stages 0..`steps` hold the Jacobians at the nominal (after a pass over
     /// [`JacobianStore::whole`]).
-    pub fn filled_whole(&mut self, steps: usize) {
+    pub(super) fn filled_whole(&mut self, steps: usize) {
         self.range = Some(0..steps);
         self.passes += 1;
     }
 
     /// A_k and B_k in store slot `slot`.
     #[inline]
-    pub fn stage(&self, slot: usize) -> StageJacobians<'_> {
+    pub(super) fn stage(&self, slot: usize) -> StageJacobians<'_> {
         let (nxi, per_b) = (self.nxi, self.nxi * self.ncu);
         StageJacobians {
             a: &self.a[slot * nxi * nxi..(slot + 1) * nxi * nxi],
@@ -182,7 +182,7 @@ impl<const DIM: usize> JacobianStore<DIM> {
     /// Prefetches A_k (in store slot `slot`) and, when given, H_k of stage `k` from the
     /// second-order store `h` ((2n + 1)² per stage).
     #[inline]
-    pub fn prefetch(&self, slot: usize, h: Option<&[f64]>, k: usize) {
+    pub(super) fn prefetch(&self, slot: usize, h: Option<&[f64]>, k: usize) {
         let nxi = self.nxi;
         let per = nxi * nxi;
         riccati::prefetch(&self.a[slot * per..(slot + 1) * per]);

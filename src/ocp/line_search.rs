@@ -52,7 +52,7 @@ pub(crate) struct Traj<const DIM: usize = 2> {
 
 impl<const DIM: usize> Traj<DIM> {
     /// Storage for N = `steps` stages of n pendulums, with x components for a 2-axis control.
-    pub fn new(n: usize, steps: usize, two_axis: bool) -> Self {
+    pub(crate) fn new(n: usize, steps: usize, two_axis: bool) -> Self {
         let m = steps + 1;
         let spatial = if DIM == 3 { m } else { 0 };
         Traj {
@@ -74,35 +74,35 @@ impl<const DIM: usize> Traj<DIM> {
         }
     }
     #[inline]
-    pub fn q(&self, k: usize) -> &[[f64; DIM]] {
+    pub(crate) fn q(&self, k: usize) -> &[[f64; DIM]] {
         &self.q[k * self.n..(k + 1) * self.n]
     }
     #[inline]
-    pub fn p(&self, k: usize) -> &[[f64; DIM]] {
+    pub(crate) fn p(&self, k: usize) -> &[[f64; DIM]] {
         &self.p[k * self.n..(k + 1) * self.n]
     }
     #[inline]
-    pub fn omega(&self, k: usize) -> &[f64] {
+    pub(crate) fn omega(&self, k: usize) -> &[f64] {
         let w = self.n * (DIM - 1);
         &self.omega[k * w..(k + 1) * w]
     }
     #[inline]
-    pub fn mu(&self, k: usize) -> &[f64] {
+    pub(crate) fn mu(&self, k: usize) -> &[f64] {
         &self.mu[k * self.n..(k + 1) * self.n]
     }
     #[inline]
-    pub fn lambda(&self, k: usize) -> &[f64] {
+    pub(crate) fn lambda(&self, k: usize) -> &[f64] {
         &self.lambda[k * self.n..(k + 1) * self.n]
     }
     /// u_{x,k} (0 for a control along z).
     #[inline]
-    pub fn ux(&self, k: usize) -> f64 {
+    pub(crate) fn ux(&self, k: usize) -> f64 {
         self.ux.get(k).copied().unwrap_or(0.0)
     }
 
     /// Component `axis` of u_k: 0 the z component u_k, 1 the x component u_{x,k}.
     #[inline]
-    pub fn control(&self, k: usize, axis: usize) -> f64 {
+    pub(crate) fn control(&self, k: usize, axis: usize) -> f64 {
         if axis == 0 {
             self.u[k]
         } else {
@@ -115,7 +115,7 @@ impl<const DIM: usize> Traj<DIM> {
     /// R_k = (R_z, R_x) and ∂R/∂M₀ (`residual_vec`) times ∂(M₀_z, M₀ₓ)/∂φ_{1,a} =
     /// s ((e_a)_z, (e_a)_x) in the basis e_a(q₁) of the stage map's chart ([`tangent_basis`]).
     #[inline]
-    pub fn residual_model(&self, k: usize, scale: f64) -> ([f64; 2], [[f64; 2]; 2]) {
+    pub(crate) fn residual_model(&self, k: usize, scale: f64) -> ([f64; 2], [[f64; 2]; 2]) {
         let q = &self.q[k * self.n];
         if DIM == 2 {
             let dm = scale * q[0];
@@ -138,12 +138,12 @@ impl<const DIM: usize> Traj<DIM> {
 impl Traj {
     /// ∂M₀/∂φ₁ at t_k: M₀ = s·q₁,z, ∂q₁/∂φ₁ = t₁, so ∂M₀/∂φ₁ = s·t₁,z = s·q₁,y.
     #[inline]
-    pub fn dmoment(&self, k: usize, scale: f64) -> f64 {
+    pub(crate) fn dmoment(&self, k: usize, scale: f64) -> f64 {
         scale * tangent(&self.q[k * self.n])[1]
     }
     /// ∂r_k/∂φ₁ = r_k′(M₀) ∂M₀/∂φ₁ at t_k.
     #[inline]
-    pub fn dresidual(&self, k: usize, scale: f64) -> f64 {
+    pub(crate) fn dresidual(&self, k: usize, scale: f64) -> f64 {
         self.dresidual_dm[k] * self.dmoment(k, scale)
     }
 }
@@ -183,7 +183,7 @@ pub(crate) struct Simulator<const DIM: usize = 2> {
 
 impl<const DIM: usize> Simulator<DIM> {
     /// For the stages of `model`.
-    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
+    pub(crate) fn new(model: &StageModel<DIM>) -> Result<Self> {
         Ok(Simulator {
             stepper: Stepper::new(model)?,
             scratch: vec![[0.0; DIM]; model.n],
@@ -194,7 +194,7 @@ impl<const DIM: usize> Simulator<DIM> {
 impl<const DIM: usize> Simulator<DIM> {
     /// Rolls out the stage maps of `shooting` from the initial state, writing `out` and its
     /// cost: [`rollout`].
-    pub fn rollout(
+    pub(crate) fn rollout(
         &mut self,
         shooting: &Shooting<'_, DIM>,
         fb: Option<&Feedback<'_, DIM>>,

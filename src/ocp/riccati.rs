@@ -257,7 +257,7 @@ pub(crate) struct Riccati {
 }
 
 impl Riccati {
-    pub fn new(shape: RiccatiShape, steps: usize) -> Self {
+    pub(crate) fn new(shape: RiccatiShape, steps: usize) -> Self {
         let RiccatiShape {
             nxi,
             aug,
@@ -295,7 +295,7 @@ impl Riccati {
     }
 
     /// Starts a backward pass (after the last stage: s′ = 0, S′ = 0, ν′ = 0).
-    pub fn begin(&mut self) {
+    pub(crate) fn begin(&mut self) {
         self.s_next.fill(0.0);
         self.sv_next.fill(0.0);
         self.nu_next.fill(0.0);
@@ -340,7 +340,7 @@ impl Riccati {
     /// The costate sweep alone for stage k (called for k = N, …, 0 after [`Riccati::begin`]):
     /// ν_k = l_x + Ãᵀν_{k+1} and the gradient g_k = l_u + B̃ᵀν_{k+1} into `grad` (O(n_z²) per
     /// stage, no Riccati matrices).
-    pub fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
+    pub(crate) fn costate(&mut self, inp: &StageInput<'_>, cost: &StageCost) {
         let (nxi, k, m) = (self.nxi, inp.k, self.ncu);
         let wi = nxi;
         let w = cost.weight(k);
@@ -388,7 +388,7 @@ impl Riccati {
     /// Processes stage k (called for k = N, N − 1, …, 0) with the absolute regularisation `mu`.
     /// Returns `false` if the stage's box-QP is unbounded below (its step is then 0; raise
     /// `mu`). The costate and the gradient are computed either way.
-    pub fn stage(&mut self, inp: &StageInput<'_>, cost: &StageCost, mu: f64) -> bool {
+    pub(crate) fn stage(&mut self, inp: &StageInput<'_>, cost: &StageCost, mu: f64) -> bool {
         let local = self.stage_costs(inp, cost);
         let q = match inp.jac {
             Some(jac) => self.propagate(inp, jac, local),

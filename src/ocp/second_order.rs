@@ -55,7 +55,7 @@ impl SecondOrderModel {
     /// augmented state w_k = u_{k−1}. The exact model's reverse steps are planar: in the
     /// spatial model (`DIM = 3`, found by a checked downcast of `model`) it is not possible
     /// and the solver runs Gauss-Newton throughout.
-    pub fn new<const DIM: usize>(
+    pub(super) fn new<const DIM: usize>(
         model: &StageModel<DIM>,
         options: &OcpOptions,
         steps: usize,
@@ -89,13 +89,13 @@ impl SecondOrderModel {
 
     /// The start of a run: the exact model from the first iteration with
     /// [`Curvature::Exact`].
-    pub fn begin(&mut self, curvature: Curvature) {
+    pub(super) fn begin(&mut self, curvature: Curvature) {
         self.on = curvature == Curvature::Exact && self.possible;
     }
 
     /// [`Curvature::Auto`]: the exact model from the first step the Gauss-Newton model did not
     /// predict well (`good`: taken in full with actual ≥ ½ predicted decrease) on.
-    pub fn switch(&mut self, curvature: Curvature, good: bool) {
+    pub(super) fn switch(&mut self, curvature: Curvature, good: bool) {
         if curvature == Curvature::Auto && !good && self.possible {
             self.on = true;
         }
@@ -103,7 +103,7 @@ impl SecondOrderModel {
 
     /// The terms as the backward pass and the linearised rollouts read them, at the model
     /// point `dz` (δz per stage; empty for the value alone).
-    pub fn view<'a>(&'a self, dz: &'a [f64], steps: usize, nz: usize) -> SecondOrder<'a> {
+    pub(super) fn view<'a>(&'a self, dz: &'a [f64], steps: usize, nz: usize) -> SecondOrder<'a> {
         SecondOrder {
             on: self.exact,
             steps,
@@ -129,7 +129,7 @@ impl SecondOrderModel {
     /// from the stored x̂_k, then the adjoint's reverse step), O(N) sequential, about two
     /// simulations. For the exact model (no augmented state), whose H_k pass then computes
     /// A_k and B_k as well.
-    pub fn costates(&mut self, hz: &ControlHorizon, grad: &mut [f64]) -> Result<()> {
+    pub(super) fn costates(&mut self, hz: &ControlHorizon, grad: &mut [f64]) -> Result<()> {
         let (steps, nxi) = (hz.steps, hz.model.nx());
         self.storage(steps, nxi);
         let Some(planar) = self.planar.as_mut() else {
@@ -178,7 +178,7 @@ impl SecondOrderModel {
     /// `store`), in one parallel pass of forward and reverse dual steps (`hessian`), and the
     /// cost's curvature beyond Gauss-Newton (−2c_k M₀(t_k)² for c and c_sum); needs the costates of
     /// [`SecondOrderModel::costates`].
-    pub fn compute(&mut self, hz: &ControlHorizon, store: &mut JacobianStore) -> Result<()> {
+    pub(super) fn compute(&mut self, hz: &ControlHorizon, store: &mut JacobianStore) -> Result<()> {
         let (steps, nxi) = (hz.steps, hz.model.nx());
         let nd = nxi + 1;
         let per = nd * nd;
@@ -279,14 +279,14 @@ fn h_row(h: &[f64], (nz, j): (usize, usize), dz: &[f64], dv: f64) -> f64 {
 
 impl<'a> SecondOrder<'a> {
     /// H_k of every stage ((2n + 1)² each).
-    pub fn h(&self) -> &'a [f64] {
+    pub(super) fn h(&self) -> &'a [f64] {
         self.h
     }
 
     /// ½ δᵀH_kδ + ½ curv_k δφ₁² at the model point δ = (δz_k, δv_k): stage k's second-order
     /// terms in the model's value.
     #[inline]
-    pub fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
+    pub(super) fn value(&self, k: usize, dz: &[f64], dv: f64) -> f64 {
         let (nz, nd) = (self.nz, self.nz + 1);
         let mut v = 0.5 * self.curv[k] * dz[0] * dz[0];
         if k < self.steps {
@@ -298,7 +298,7 @@ impl<'a> SecondOrder<'a> {
     }
 
     /// Attaches stage k's terms to its input (nothing for Gauss-Newton).
-    pub fn attach(&self, inp: &mut StageInput<'a>) {
+    pub(super) fn attach(&self, inp: &mut StageInput<'a>) {
         if !self.on {
             return;
         }

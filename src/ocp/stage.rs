@@ -194,7 +194,7 @@ pub(crate) struct StageModel<const DIM: usize = 2> {
 
 impl<const DIM: usize> StageModel<DIM> {
     /// Checks the scene's model (free tip, a control node) and precomputes M̄ and b.
-    pub fn new(chain: &Chain<f64, DIM>, h: f64) -> Result<Self> {
+    pub(crate) fn new(chain: &Chain<f64, DIM>, h: f64) -> Result<Self> {
         chain.check_adjoint()?;
         if chain.tip_condition() != TipCondition::Free {
             return Err(OcpError::UnsupportedTip {
@@ -251,7 +251,7 @@ impl<const DIM: usize> StageModel<DIM> {
 
     /// The model of a 2-axis control (`two_axis`, spatial model only) over N = `steps` stages:
     /// b_x beside b (nothing changes for a control along z).
-    pub fn with_axes(mut self, two_axis: bool, steps: usize) -> Self {
+    pub(crate) fn with_axes(mut self, two_axis: bool, steps: usize) -> Self {
         self.steps = steps;
         if two_axis && DIM == 3 {
             self.control_x = self
@@ -268,23 +268,23 @@ impl<const DIM: usize> StageModel<DIM> {
     }
 
     /// Whether the control is 2-axis: (u_x, u_z) per stage.
-    pub fn two_axis(&self) -> bool {
+    pub(crate) fn two_axis(&self) -> bool {
         !self.control_x.is_empty()
     }
 
     /// The model of a horizon starting from `start` ([`crate::ControlProblem::starting_from`]).
-    pub fn with_start(mut self, start: Option<&Start<f64, DIM>>) -> Self {
+    pub(crate) fn with_start(mut self, start: Option<&Start<f64, DIM>>) -> Self {
         self.start = start.cloned();
         self
     }
 
     /// Tangent dimension 2n(DIM − 1): 2n planar, 4n spatial.
-    pub fn nx(&self) -> usize {
+    pub(crate) fn nx(&self) -> usize {
         2 * self.n * (DIM - 1)
     }
 
     /// Controls per stage: 1 (along z) or 2 ((u_z, u_x), a 2-axis control).
-    pub fn controls(&self) -> usize {
+    pub(crate) fn controls(&self) -> usize {
         if self.two_axis() {
             2
         } else {
@@ -294,12 +294,12 @@ impl<const DIM: usize> StageModel<DIM> {
 
     /// Directions of a stage's Jacobians: the tangent coordinates and the controls
     /// (2n + 1 planar, [`ndir`]).
-    pub fn ndir(&self) -> usize {
+    pub(crate) fn ndir(&self) -> usize {
         self.nx() + self.controls()
     }
 
     /// out = M v (v = velocities, out = momenta), O(n): (M̄x)ᵢ = lᵢ Σ_{k≥i} m_k Σ_{j≤k} l_j x_j.
-    pub fn apply_mass<D: Scalar>(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
+    pub(crate) fn apply_mass<D: Scalar>(&self, v: &[[D; DIM]], out: &mut [[D; DIM]]) {
         let (l, m) = (self.chain.lengths(), self.chain.masses());
         let mut c = [D::zero(); DIM];
         for j in 0..self.n {
@@ -319,7 +319,7 @@ impl<const DIM: usize> StageModel<DIM> {
 
     /// Angular rates ω_{i,a} = e_a(qᵢ)·(M⁻¹p)ᵢ ([`tangent_basis`]; planar: ωᵢ = tᵢ·(M⁻¹p)ᵢ),
     /// DIM − 1 per pendulum; `scratch` has length n.
-    pub fn rates(
+    pub(crate) fn rates(
         &self,
         q: &[[f64; DIM]],
         p: &[[f64; DIM]],
@@ -339,7 +339,7 @@ impl<const DIM: usize> StageModel<DIM> {
     /// The base moment (M₀_z, M₀ₓ) of q, z first: planar (M₀ [`Chain::base_moment`], 0), spatial
     /// [`Chain::base_moment_vector`] (the adjoint's objective reads the same).
     #[inline]
-    pub fn moment(&self, q: &[[f64; DIM]]) -> [f64; 2] {
+    pub(crate) fn moment(&self, q: &[[f64; DIM]]) -> [f64; 2] {
         if DIM == 2 {
             return [self.chain.base_moment(q), 0.0];
         }
@@ -360,11 +360,11 @@ pub(crate) struct Projector<D, const DIM: usize = 2> {
 
 impl<D: Scalar, const DIM: usize> Projector<D, DIM> {
     /// The multipliers y_b of the last [`Projector::apply`]: P(q) b = b − Ĝ(q)ᵀ y_b.
-    pub fn y(&self) -> &[D] {
+    pub(crate) fn y(&self) -> &[D] {
         &self.rhs
     }
 
-    pub fn new(n: usize) -> Self {
+    pub(crate) fn new(n: usize) -> Self {
         Projector {
             lifted: vec![[D::zero(); DIM]; n],
             tmp: vec![[D::zero(); DIM]; n],
@@ -374,7 +374,7 @@ impl<D: Scalar, const DIM: usize> Projector<D, DIM> {
     }
 
     /// out = P(q) b.
-    pub fn apply(
+    pub(crate) fn apply(
         &mut self,
         ch: &Chain<D, DIM>,
         q: &[[D; DIM]],
@@ -442,7 +442,7 @@ pub(crate) struct Stepper<D, const DIM: usize = 2> {
 }
 
 impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
-    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
+    pub(crate) fn new(model: &StageModel<DIM>) -> Result<Self> {
         let t0 = model.start.as_ref().map_or(0.0, |s| s.t0);
         let mut chain = model.chain.lift::<D>();
         if model.two_axis() {
@@ -468,7 +468,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
 
     /// Moves the stepper to another horizon start of the same model (the receding horizon of
     /// [`crate::mpc`]): its start time, initial state and pending kick.
-    pub fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
+    pub(crate) fn set_start(&mut self, start: Option<&Start<f64, DIM>>) {
         self.rattle.set_start_time(start.map_or(0.0, |s| s.t0));
         self.initial = start.map(|s| s.state.lift());
         self.pending = start.is_some_and(|s| s.kick == StartKick::Pending);
@@ -478,7 +478,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
     /// second half-kick's control of the stage map); nothing for a control along z. Call it
     /// before [`Stepper::reset`] (k = 0) and [`Stepper::advance`].
     #[inline]
-    pub fn set_control_x(&mut self, k: usize, ux: D) {
+    pub(crate) fn set_control_x(&mut self, k: usize, ux: D) {
         if self.bx.is_empty() {
             return;
         }
@@ -492,7 +492,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
     /// Resets `state` to the initial state (the start's S₀, or straight at rest) and computes
     /// its consistent multiplier for the control u₀ when it has none (the Newton predictor of
     /// step 0).
-    pub fn reset(&mut self, u0: D) -> Result<()> {
+    pub(crate) fn reset(&mut self, u0: D) -> Result<()> {
         let st = &mut self.state;
         if let Some(init) = &self.initial {
             st.clone_from(init);
@@ -510,7 +510,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
 
     /// x̂_k → x̂_{k+1} = F_k(x̂_k, u_k) (with the half-kick p_k = p̂_k − (h/2) u_k P(q_k) b at
     /// k ≥ 1, and at k = 0 from a start with a pending kick).
-    pub fn advance(&mut self, k: usize, u: D) -> Result<()> {
+    pub(crate) fn advance(&mut self, k: usize, u: D) -> Result<()> {
         self.kick(k, u)?;
         self.rattle.prepare_force(&self.state, k, u)?;
         self.rattle.step(&mut self.state, k, u, D::zero())?;
@@ -520,7 +520,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
     /// The stage's half-kick p_k = p̂_k − (h/2) P(q_k)(u_k b + u_{x,k} b_x) where the stage has
     /// one (k ≥ 1, or a start with a pending kick); returns whether it did ([`Projector::y`]
     /// then holds y_b of the z component).
-    pub fn kick(&mut self, k: usize, u: D) -> Result<bool> {
+    pub(crate) fn kick(&mut self, k: usize, u: D) -> Result<bool> {
         if !(k > 0 || self.pending) {
             return Ok(false);
         }
@@ -550,7 +550,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
     }
 
     /// b = ∂U_q/∂u (block j: l_j e₃ below the control node).
-    pub fn control_direction(&self) -> &[[f64; DIM]] {
+    pub(crate) fn control_direction(&self) -> &[[f64; DIM]] {
         &self.b
     }
 }
@@ -568,7 +568,7 @@ pub(crate) struct JacobianWorkspace<const DIM: usize = 2> {
 }
 
 impl<const DIM: usize> JacobianWorkspace<DIM> {
-    pub fn new(model: &StageModel<DIM>) -> Result<Self> {
+    pub(crate) fn new(model: &StageModel<DIM>) -> Result<Self> {
         let n = model.n;
         Ok(JacobianWorkspace {
             stepper: Stepper::new(model)?,
@@ -701,7 +701,11 @@ impl<const DIM: usize> JacobianWorkspace<DIM> {
     /// converged λ of the nominal step the real parts are converged at once (bit for bit the
     /// nominal's) and the Newton loop does only its derivative-only update: the implicit
     /// function theorem, one bordered-tridiagonal solve with 8 right-hand sides per chunk.
-    pub fn jacobians(&mut self, at: StageAt<'_, DIM>, mut out: JacobiansMut<'_>) -> Result<()> {
+    pub(crate) fn jacobians(
+        &mut self,
+        at: StageAt<'_, DIM>,
+        mut out: JacobiansMut<'_>,
+    ) -> Result<()> {
         for cols in chunks(at.model.ndir()) {
             let [u, ux] = self.seed(&at, cols.clone());
             self.stepper.set_control_x(at.k, ux);
@@ -720,7 +724,7 @@ pub(crate) mod fixture {
     /// Stage k of the long-horizon scene (drag) after k steps of a varying control: the
     /// point, its rates, the Newton predictor μ the step starts from, the step's converged λ
     /// and the control.
-    pub struct Point {
+    pub(crate) struct Point {
         pub q: Vec<[f64; 2]>,
         pub p: Vec<[f64; 2]>,
         pub omega: Vec<f64>,
@@ -729,7 +733,7 @@ pub(crate) mod fixture {
         pub u: f64,
     }
 
-    pub fn point(model: &StageModel, k: usize) -> Point {
+    pub(crate) fn point(model: &StageModel, k: usize) -> Point {
         let u = |k: usize| 3.0 * (0.3 * k as f64).sin() + 1.0;
         let mut st = Stepper::<f64>::new(model).unwrap();
         st.reset(u(0)).unwrap();

@@ -1,5 +1,5 @@
 //! The optimisers' view of a control problem in the model its scene needs
-//! ([`AnyProblem`](crate::adjoint::AnyProblem), built by
+//! ([`AnyProblem`], built by
 //! [`ProblemBuilder::build`](crate::adjoint::ProblemBuilder::build)), and the parameters θ₀ a
 //! scene's `[control]` gives ([`scene_start`]). The command line and the Python bindings build
 //! their problems through the same builder, so both evaluate the same code on the same floats.

@@ -173,6 +173,10 @@ fn the_stiffest_mode_is_the_conductors_bending_below_the_mudline() {
     let a = step_jacobian(&chain, h, k_eq, &phi);
     let (_, omega_file) = spectrum(&a, h);
     let (lambda, x) = stiffest_mode(&a);
+    // The inverse iteration converged: ‖A x − λ x‖ small against ‖x‖ = 1.
+    let ax = a.map(|v| Complex::new(v, 0.0)) * &x;
+    let residual = (ax - x.map(|v| v * lambda)).norm();
+    assert!(residual < 1e-8, "eigenvector residual {residual:e}");
     // Elevation of each pendulum's lower and upper node above the conductor's foot.
     let mut bottom = 0.0;
     let mut ranges = Vec::new();

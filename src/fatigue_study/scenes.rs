@@ -1,0 +1,159 @@
+//! The scenes a study derives from the user's: one per sea state of the scatter diagram, per
+//! seed of the sea and per record length, and the spin-up and the fatigue proxy objective.
+
+use super::*;
+
+/// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when
+/// given) replaced, every other key (the seed among them) kept (module docs, "Sea states and
+/// seeds").
+///
+/// # Errors
+/// [`StudyError::SeaState`] when the scene has no `[loads.waves]` to set, or the values are
+/// invalid for it (naming the key).
+pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scene, StudyError> {
+    let mut out = scene.clone();
+    let Some(waves) = out.loads.waves.as_mut() else {
+        return Err(StudyError::SeaState {
+            cell,
+            reason: "the scene has no [loads.waves] table whose hs and tp a scatter cell could \
+                     set (docs/scene-format.md)"
+                .to_string(),
+        });
+    };
+    waves.hs = sea.hs;
+    waves.tp = sea.tp;
+    if let Some(direction) = sea.direction {
+        waves.direction = direction;
+    }
+    out.validate().map_err(|e| StudyError::SeaState {
+        cell,
+        reason: format!(
+            "H_s = {} m, T_p = {} s{}: {e}",
+            sea.hs,
+            sea.tp,
+            sea.direction
+                .map_or_else(String::new, |d| format!(", direction {d}°"))
+        ),
+    })?;
+    Ok(out)
+}
+
+/// The scene's own sea state (`[loads.waves]` hs, tp, direction), if it has one.
+pub fn scene_sea_state(scene: &Scene) -> Option<SeaState> {
+    scene.loads.waves.map(|w| SeaState {
+        hs: w.hs,
+        tp: w.tp,
+        direction: Some(w.direction),
+    })
+}
+
+/// The seeds a study of `seeds` seeds per cell draws, s, s + 1, …, s + K − 1 (s the scene's
+/// `[loads.waves]` seed), as reports list them: `None` with one seed or without a sea.
+pub fn seeds_run(scene: &Scene, seeds: usize) -> Option<Vec<u64>> {
+    let w = scene.loads.waves.as_ref().filter(|_| seeds > 1)?;
+    Some(
+        (0..seeds as u64)
+            .map(|i| w.seed.saturating_add(i))
+            .collect(),
+    )
+}
+
+/// The scene with seed number `index` of a cell (module docs, "Records"): `[loads.waves]`
+/// `seed` + `index`; the scene itself for index 0.
+///
+/// # Errors
+/// [`StudyError::Seeds`] for index > 0 on a scene without `[loads.waves]`, or a seed past
+/// the largest the scene file can hold (2⁶³ − 1).
+pub fn with_seed(scene: &Scene, index: usize) -> Result<Scene, StudyError> {
+    if index == 0 {
+        return Ok(scene.clone());
+    }
+    let mut out = scene.clone();
+    let err = |reason: &str| StudyError::Seeds {
+        seeds: index + 1,
+        reason: reason.to_string(),
+    };
+    let waves = out.loads.waves.as_mut().ok_or_else(|| {
+        err("more than one seed needs a sea to draw ([loads.waves]); this scene has none")
+    })?;
+    waves.seed = waves
+        .seed
+        .checked_add(index as u64)
+        .filter(|&s| s <= i64::MAX as u64)
+        .ok_or_else(|| err("the seeds would pass 2^63 − 1"))?;
+    Ok(out)
+}
+
+/// The scene run for `spin_up` + `record` seconds (module docs, "Records"): N = ⌈spin_up/h⌉ +
+/// ⌈record/h⌉ steps, rounded up to whole control intervals for a closed-loop controller (so the
+/// counted record is at least `record`; its exact duration is the cell's `duration_s`).
+///
+/// # Errors
+/// [`StudyError::Record`] for a record that is not positive and finite, or a run the scene
+/// refuses (too many steps, a load series that does not cover it: the message names the key);
+/// [`StudyError::SpinUp`] for an invalid spin-up.
+pub fn with_record(
+    scene: &Scene,
+    settings: &ControlSettings,
+    kind: ControllerKind,
+    record: f64,
+) -> Result<Scene, StudyError> {
+    let err = |reason: String| StudyError::Record { record, reason };
+    if !(record.is_finite() && record > 0.0) {
+        return Err(err("must be positive and finite".into()));
+    }
+    let h = scene.time.step;
+    let spin_up = settings.spin_up;
+    if !(spin_up.is_finite() && spin_up >= 0.0) {
+        return Err(StudyError::SpinUp {
+            spin_up,
+            duration_s: spin_up + record,
+        });
+    }
+    let steps_of = |t: f64| (t / h * (1.0 - 1e-12)).ceil();
+    let mut steps = steps_of(spin_up) + steps_of(record).max(1.0);
+    // An interval that is not a multiple of h is the run's own error (naming the interval).
+    if let (true, Ok(m)) = (kind.is_feedback(), interval_steps(settings.interval, h)) {
+        let m = m as f64;
+        steps = (steps / m).ceil() * m;
+    }
+    if steps > crate::scene::MAX_STEPS as f64 {
+        return Err(err(format!(
+            "{steps} steps of h = {h} s, more than {} (time.steps' limit)",
+            crate::scene::MAX_STEPS
+        )));
+    }
+    let mut out = scene.clone();
+    out.time.steps = steps as usize;
+    out.validate().map_err(|e| err(e.to_string()))?;
+    Ok(out)
+}
+
+/// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of
+/// `spec`'s S-N curve ([`WellheadDamage::exponent`]; m = 3 for the DNV curves C–W3, 4 for B1
+/// and B2).
+///
+/// # Errors
+/// The spec's [`FatigueError`].
+pub fn fatigue_proxy(spec: &FatigueSpec, scene: &Scene) -> Result<ObjectiveKind, StudyError> {
+    let exponent = WellheadDamage::new(spec, scene.moment_measure())?.exponent();
+    Ok(ObjectiveKind::Power { exponent })
+}
+
+/// The steps of the spin-up window: ⌈spin_up/h⌉ (module docs, "The start of a record").
+///
+/// # Errors
+/// [`StudyError::SpinUp`] for a window that is not finite and ≥ 0, or that leaves fewer than
+/// two samples of the record.
+pub fn spin_up_steps(scene: &Scene, spin_up: f64) -> Result<usize, StudyError> {
+    let h = scene.time.step;
+    let duration_s = h * scene.time.steps as f64;
+    let steps = (spin_up / h * (1.0 - 1e-12)).ceil();
+    if !(spin_up.is_finite() && spin_up >= 0.0) || steps >= scene.time.steps as f64 {
+        return Err(StudyError::SpinUp {
+            spin_up,
+            duration_s,
+        });
+    }
+    Ok(steps as usize)
+}

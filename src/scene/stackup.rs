@@ -18,6 +18,12 @@ use super::error::{SceneError, SceneErrorKind};
 use super::ranges::{check_range, stackup_ranges, StackupRange};
 use super::{Beam, DragModel, Support};
 
+mod buoyancy;
+mod pieces;
+
+pub use buoyancy::NodeTangents;
+use pieces::{allocate, nearest, split, Piece};
+
 /// Standard gravity g \[m/s²\] of the stack-up's weights (ISO 80000-3).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
@@ -200,25 +206,6 @@ pub struct Layout {
     /// n the tip spring, 1..n − 1 the spring between pendulums j and j + 1 (the beam's
     /// `stiffness[j − 1]`).
     pub flex_joints: Vec<usize>,
-}
-
-/// One uniform stretch of the chain between two forced pendulum ends.
-#[derive(Clone, Debug)]
-struct Piece {
-    part: usize,
-    /// The segment's `refinement` (1 for a body).
-    refinement: f64,
-    length: f64,
-    /// Mass per length with added mass \[kg/m\] (a body: its total over its height).
-    mu: f64,
-    /// Submerged weight per length \[N/m\].
-    w: f64,
-    /// ½ ρ_w C_d D_h \[kg/m²\].
-    drag: f64,
-    /// ρ_w (1 + C_a) π D_h²/4 \[kg/m\].
-    inertia: f64,
-    ei: f64,
-    body: bool,
 }
 
 impl Segment {
@@ -712,211 +699,6 @@ fn duplicate(key: String, name: &str) -> SceneError {
         key,
         format!("the name `{name}` is given twice in the stack-up"),
     )
-}
-
-/// The index of the height in `heights` nearest `at`.
-fn nearest(heights: &[f64], at: f64) -> usize {
-    let mut best = 0;
-    for (j, h) in heights.iter().enumerate() {
-        if (h - at).abs() < (heights[best] - at).abs() {
-            best = j;
-        }
-    }
-    best
-}
-
-/// The parts cut at `cuts` (sorted heights) into pieces; a cut inside a body is refused.
-fn split(parts: &[Piece], cuts: &[f64]) -> Result<Vec<Piece>, SceneError> {
-    let mut pieces = Vec::new();
-    let mut y0 = 0.0;
-    let total: f64 = parts.iter().map(|p| p.length).sum();
-    let tol = 1e-9 * total.max(1.0);
-    for p in parts {
-        let y1 = y0 + p.length;
-        let inside: Vec<f64> = cuts
-            .iter()
-            .copied()
-            .filter(|&c| c > y0 + tol && c < y1 - tol)
-            .collect();
-        if p.body && !inside.is_empty() {
-            return Err(SceneError::invalid(
-                "stackup.flex_joint",
-                format!(
-                    "a flex joint or the mudline at {} m lies inside a rigid body ({y0} to {y1} m)",
-                    inside[0]
-                ),
-            ));
-        }
-        let mut from = y0;
-        for c in inside.into_iter().chain(std::iter::once(y1)) {
-            pieces.push(Piece {
-                length: c - from,
-                ..p.clone()
-            });
-            from = c;
-        }
-        y0 = y1;
-    }
-    Ok(pieces)
-}
-
-/// Pendulums per piece: one per body; the rest of n shared by the pipe pieces in proportion to
-/// their length times their segment's `refinement` (at least one each, largest remainders).
-fn allocate(n: usize, pieces: &[Piece]) -> Result<Vec<usize>, SceneError> {
-    let bodies = pieces.iter().filter(|p| p.body).count();
-    let pipes = pieces.len() - bodies;
-    if n < pieces.len() {
-        return Err(SceneError::invalid(
-            "beam.pendulums",
-            format!(
-                "the stack-up has {} pieces between its forced pendulum ends (segments and \
-                 bodies, cut at the flex joints and the mudline): at least {} pendulums, got {n}",
-                pieces.len(),
-                pieces.len()
-            ),
-        ));
-    }
-    let free = n - bodies;
-    // The weighted length r·L (r = 1: L exactly, so the shares are those of the plain lengths
-    // bit for bit).
-    let weighted = |p: &Piece| p.length * p.refinement;
-    let pipe_length: f64 = pieces.iter().filter(|p| !p.body).map(weighted).sum();
-    let mut counts = vec![1usize; pieces.len()];
-    let mut spare = free - pipes;
-    // Ideal shares beyond the first pendulum each, then the largest remainders.
-    let mut rema: Vec<(f64, usize)> = Vec::new();
-    for (i, p) in pieces.iter().enumerate() {
-        if p.body {
-            continue;
-        }
-        let ideal = free as f64 * weighted(p) / pipe_length;
-        let extra = ((ideal - 1.0).max(0.0).floor() as usize).min(spare);
-        counts[i] += extra;
-        spare -= extra;
-        rema.push((ideal - counts[i] as f64, i));
-    }
-    rema.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    for &(_, i) in rema.iter().cycle().take(spare) {
-        counts[i] += 1;
-    }
-    Ok(counts)
-}
-
-/// The derivatives of a stack-up's per-node quantities with respect to one segment's buoyancy
-/// diameter D_b ([`Stackup::buoyancy_tangents`]), node by node as [`Layout`] and the beam's
-/// masses hold them.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct NodeTangents {
-    /// ∂mᵢ/∂D_b \[kg/m\]: the node's mass with added mass.
-    pub masses: Vec<f64>,
-    /// ∂wᵢ/∂D_b \[N/m\]: the node's submerged weight ([`Layout::node_weights`]).
-    pub weights: Vec<f64>,
-    /// ∂κᵢ/∂D_b \[kg/m²\]: the node's Morison drag coefficient ([`Layout::node_drag`]).
-    pub drag: Vec<f64>,
-    /// ∂cᵢ/∂D_b \[kg/m\]: the node's wave inertia coefficient ([`Layout::node_inertia`]).
-    pub inertia: Vec<f64>,
-}
-
-impl Stackup {
-    /// The derivatives with respect to the buoyancy diameter D_b of segment `segment` (an
-    /// index into `segments`, a segment with buoyancy modules) of every node's mass, weight,
-    /// drag and inertia coefficient, on the chain of `lengths` this stack-up was laid out on
-    /// ([`Stackup::beam`]; its [`Layout::parts`]). Per length of the segment, with the foam's
-    /// density ρ_f, the water's ρ_w, g, C_a, C_d and D_h = D_b unless the segment gives
-    /// `hydrodynamic_diameter` (then ∂D_h/∂D_b = 0):
-    /// ```text
-    /// ∂μ/∂D_b = ρ_f π D_b/2 + C_a ρ_w π D_h/2 · ∂D_h/∂D_b        (foam, added mass)
-    /// ∂w/∂D_b = g (ρ_f − ρ_w) π D_b/2                             (foam less displaced water)
-    /// ∂κ/∂D_b = ½ ρ_w C_d ∂D_h/∂D_b,   ∂c/∂D_b = ρ_w (1 + C_a) π D_h/2 · ∂D_h/∂D_b
-    /// ```
-    /// spread to the nodes as the layout spreads the quantities themselves (half of each
-    /// pendulum of the segment to each of its end nodes, drag and inertia over the wet
-    /// pendulums): every node quantity is linear in the per-length ones and the pendulums do
-    /// not move with D_b, so these are the exact derivatives of the layout. D_b ≥ D_o: at
-    /// D_b = D_o, the displaced area's kink, the derivative from above.
-    pub fn buoyancy_tangents(
-        &self,
-        segment: usize,
-        lengths: &[f64],
-        water_density: f64,
-        mudline: f64,
-    ) -> NodeTangents {
-        let n = lengths.len();
-        let mut t = NodeTangents {
-            masses: vec![0.0; n],
-            weights: vec![0.0; n],
-            drag: vec![0.0; n],
-            inertia: vec![0.0; n],
-        };
-        let Some(s) = self.segments.get(segment) else {
-            return t;
-        };
-        let (Some(b), Some(rho_f)) = (s.buoyancy_diameter, s.buoyancy_density) else {
-            return t;
-        };
-        let rho_w = water_density;
-        let dh = s.hydrodynamic();
-        let ddh = if s.hydrodynamic_diameter.is_some() {
-            0.0
-        } else {
-            1.0
-        };
-        let dmu = rho_f * PI * b / 2.0 + s.added_mass_coefficient * rho_w * PI * dh / 2.0 * ddh;
-        let dw = STANDARD_GRAVITY * (rho_f - rho_w) * PI * b / 2.0;
-        let ddrag = 0.5 * rho_w * s.drag_coefficient * ddh;
-        let dinertia = rho_w * (1.0 + s.added_mass_coefficient) * PI * dh / 2.0 * ddh;
-        let mut y = 0.0;
-        for (j, &l) in lengths.iter().enumerate() {
-            let wet = y + 0.5 * l > mudline;
-            y += l;
-            if self.layout.parts.get(j) != Some(&s.name) {
-                continue;
-            }
-            for node in [j.checked_sub(1), Some(j)].into_iter().flatten() {
-                t.masses[node] += 0.5 * dmu * l;
-                t.weights[node] += 0.5 * dw * l;
-                if wet {
-                    t.drag[node] += 0.5 * ddrag * l;
-                    t.inertia[node] += 0.5 * dinertia * l;
-                }
-            }
-        }
-        t
-    }
-}
-
-impl super::Scene {
-    /// Lays the stack-up out on the chain again after a segment's buoyancy changed (a design's
-    /// `stackup.segment.<name>.buoyancy_diameter`, [`super::DesignParameter::BuoyancyDiameter`]):
-    /// [`Stackup::beam`] for the scene's pendulum count, support, water density and mudline,
-    /// whose masses (with added mass) replace the beam's and whose layout (the nodes' weights,
-    /// drag and inertia coefficients) the stack-up keeps; with the momentum drag
-    /// (`drag_model = "momentum"`) `loads.drag` is its constant again
-    /// ([`Stackup::drag_constants`]), as when the scene was read. The lengths and springs are
-    /// the beam's own: the buoyancy moves neither a pendulum's end nor a section's E I (the
-    /// pendulums are shared in proportion to length × refinement).
-    ///
-    /// # Errors
-    /// [`Stackup::beam`]'s, naming the `stackup.*` key (a buoyancy diameter below the pipe's
-    /// outer diameter or out of range). The scene is left as it was on an error but for the
-    /// stack-up's segment.
-    pub fn relayout_stackup(&mut self) -> Result<(), SceneError> {
-        let mudline = self.mudline();
-        let (n, support, density) = (
-            self.beam.lengths.len(),
-            self.beam.support,
-            self.water.density,
-        );
-        let Some(st) = self.stackup.as_mut() else {
-            return Ok(());
-        };
-        let beam = st.beam(n, support, density, mudline)?;
-        if st.drag_model == super::DragModel::Momentum {
-            self.loads.drag = st.drag_constants(&beam.lengths, &beam.masses, mudline).0;
-        }
-        self.beam.masses = beam.masses;
-        Ok(())
-    }
 }
 
 impl super::pipe::BeamKeys {

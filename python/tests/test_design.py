@@ -200,7 +200,7 @@ def test_vessel_offset_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
 
 def test_buoyancy_diameter_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
     """The buoyancy modules' outer diameter of a named segment as a design parameter
-    (`stackup.segment.riser_buoyant_1.buoyancy_diameter`, its gradient in forward mode) on the
+    (`stackup.segment.riser_buoyant_1.buoyancy_diameter`, its gradient by the adjoint) on the
     README's riser system (examples/scenes/riser_300m_system_design.toml with the parameter
     appended to its [design] table): its name passes through `cb.design` and its sensitivity
     equals the command line's JSON bit for bit, on one cell of 20 s after a 10 s spin-up."""

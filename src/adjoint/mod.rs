@@ -28,6 +28,24 @@
 //! constant times one simulation, whatever the number of controls. Controls and parameters collect −h/2 c̄ · ∂U_q/∂θ and
 //! −h/2 b̄ · ∂U_q/∂θ per step, plus the mass-matrix and drag terms.
 //!
+//! # Per-node quantities
+//! Parameters that move the chain's per-node quantities (a stack-up segment's buoyancy diameter
+//! D_b: the masses mᵢ with added mass, the submerged weights, the Morison drag coefficients and
+//! the waves' inertia coefficients of the segment's nodes) enter the same sweep
+//! ([`adjoint_gradient_with_nodes`], [`NodeTangent`]): their partials of the step are
+//! hand-written where the step reads M⁻¹ and taken by one `Dual64` evaluation of the terms
+//! with the node quantities seeded where it reads the terms,
+//! ```text
+//! Newton:      θ̄ += h q̄′ᵀ (∂M⁻¹/∂θ) p½                       (q̄′ after Ĝ(q′)ᵀν, as for the mass)
+//! projection:  θ̄ −= (Ĝᵀŷ)ᵀ (∂M⁻¹/∂θ) p′                      (Ĝ(q′) M⁻¹p′ = r)
+//! terms:       θ̄ −= h/2 (c̄·∂U_q(q_k)/∂θ + b̄·∂U_q(q′)/∂θ),   θ̄ += h/2 (c̄ + b̄)·∂Q(p½)/∂θ
+//! aᵀ (∂M⁻¹/∂θ) b = −Σᵢ (∂mᵢ/∂θ / mᵢ²) αᵢ·βᵢ,   αᵢ = aᵢ/lᵢ − aᵢ₊₁/lᵢ₊₁ (β from b)
+//! ```
+//! ([`crate::Chain::inverse_mass_tangent`]), with ∂mᵢ/∂θ and the seeded chain from the
+//! layout's exact derivatives. Every parameter costs per step two `Dual64` evaluations of the
+//! conservative terms, two of Morison's drag (O(n), no Newton solve) and two O(n) sums, inside
+//! the one forward and one reverse pass that give all the parameters.
+//!
 //! # Checkpointing
 //! The forward pass keeps every K-th state; the reverse pass recomputes each segment forward into
 //! a buffer of K states (memory O(n (N/K + K)), K ≈ √N by default). Recomputation repeats exactly
@@ -38,6 +56,7 @@ mod builder;
 mod control_map;
 mod fatigue;
 mod hotspot;
+mod node_tangent;
 mod objective;
 mod power;
 mod problem;
@@ -54,6 +73,7 @@ pub use control_map::{
 };
 pub use fatigue::FatigueObjective;
 pub use hotspot::HotSpotObjective;
+pub use node_tangent::{NodeTangent, SeededNodes};
 pub use objective::{
     FinalMomentResidual, GaussNewton, History, MomentStage, NodeDisplacementObjective, Objective,
     Stage,
@@ -392,8 +412,43 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
     checkpointing: Checkpointing,
     start: Option<&Start<D, DIM>>,
 ) -> Result<AdjointResult<D>> {
+    let horizon = (h, steps);
+    adjoint_gradient_with_nodes(
+        chain,
+        horizon,
+        (u, objective),
+        params,
+        Vec::new(),
+        checkpointing,
+        start,
+    )
+    .map(|(r, _)| r)
+}
+
+/// [`adjoint_gradient_from`] with parameters the chain's per-node quantities carry too
+/// (`nodes`, module docs "Per-node quantities"; a segment's buoyancy diameter through
+/// [`SeededNodes`]): the same one forward and one reverse sweep, returning the adjoint result
+/// and ∂J/∂θ for each of `nodes` in their order.
+///
+/// # Errors
+/// [`adjoint_gradient_from`]'s, and [`crate::model::ModelError::NodeQuantities`] with `nodes` on a
+/// chain whose sweep has no node-by-node partials for them (joint damping, a driven tip, a
+/// dissipative term other than Morison's drag node by node).
+pub fn adjoint_gradient_with_nodes<'a, D: Scalar, O: Objective, const DIM: usize>(
+    chain: &'a Chain<D, DIM>,
+    (h, steps): (f64, usize),
+    (u, objective): (&[D], &O),
+    params: &'a [Parameter],
+    nodes: Vec<Box<dyn NodeTangent<D, DIM> + 'a>>,
+    checkpointing: Checkpointing,
+    start: Option<&Start<D, DIM>>,
+) -> Result<(AdjointResult<D>, Vec<D>)> {
     check_controls(u, steps)?;
     check_parameters(chain, params)?;
+    if !nodes.is_empty() {
+        node_tangent::check_chain(chain)?;
+    }
+    let n_nodes = nodes.len();
     let (n, nc) = (chain.n(), chain.n_constraints());
     let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.records_half_step());
     let kk = checkpointing.interval(steps, state_size);
@@ -426,12 +481,12 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         tip_bar: [D::zero(); 2],
         ubar: vec![D::zero(); steps + 1],
         uxbar: vec![D::zero(); if chain.has_control_x() { steps + 1 } else { 0 }],
-        thbar: vec![D::zero(); params.len()],
+        thbar: vec![D::zero(); params.len() + n_nodes],
     };
     let n_segments = checkpoints.len() - 1;
     let last = checkpoints.view(n_segments).q;
     stage.accumulate(chain, (steps, last, u[steps]), &mut cot, k1_param);
-    let mut sweep = ReverseSweep::new(chain, h, params);
+    let mut sweep = ReverseSweep::new(chain, h, params).with_node_tangents(params.len(), nodes);
     sweep.t0 = start.map_or(0.0, |s| s.t0);
     let half = chain.records_half_step();
     let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
@@ -454,13 +509,16 @@ pub fn adjoint_gradient_from<D: Scalar, O: Objective, const DIM: usize>(
         let pbar = std::mem::take(&mut cot.pbar);
         kick.reverse(&pbar, &mut cot);
     }
-    Ok(AdjointResult {
+    let mut parameter_gradient = cot.thbar;
+    let node_gradient = parameter_gradient.split_off(params.len());
+    let result = AdjointResult {
         value,
         control_gradient: cot.ubar,
         control_gradient_x: cot.uxbar,
-        parameter_gradient: cot.thbar,
+        parameter_gradient,
         state_bytes: (checkpoints.capacity() + buffer.capacity()) * state_size,
-    })
+    };
+    Ok((result, node_gradient))
 }
 
 /// J = Σ_k ℓ_k by one forward simulation without storage, generic over the scalar (with dual

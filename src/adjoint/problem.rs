@@ -281,6 +281,31 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         adjoint_gradient_from(&chain, (h, n), &u, obj, params, c, s)
     }
 
+    /// [`ControlProblem::adjoint`] with parameters the chain's per-node quantities carry too
+    /// (`nodes`, [`super::adjoint_gradient_with_nodes`]): the adjoint result and ∂J/∂θ for each
+    /// of `nodes`, from the same sweep. The seeded chains of [`super::SeededNodes`] must be this
+    /// problem's chain in their real parts.
+    ///
+    /// # Errors
+    /// [`ControlProblem::adjoint`]'s and [`super::adjoint_gradient_with_nodes`]'s.
+    pub fn adjoint_with_nodes(
+        &self,
+        theta: &[f64],
+        params: &[Parameter],
+        nodes: Vec<Box<dyn super::NodeTangent<f64, DIM> + '_>>,
+    ) -> Result<(AdjointResult<f64>, Vec<f64>)> {
+        let u = self.controls(theta)?;
+        let ux = self.expand_x(self.split(theta).0);
+        let (h, n, obj, c) = (self.h, self.steps, &self.objective, self.checkpointing);
+        let s = self.start.as_ref();
+        let run = super::adjoint_gradient_with_nodes;
+        if ux.is_empty() {
+            return run(&self.chain, (h, n), (&u, obj), params, nodes, c, s);
+        }
+        let chain = self.chain_with_x(&ux)?;
+        run(&chain, (h, n), (&u, obj), params, nodes, c, s)
+    }
+
     /// ∂J/∂θ_phys for physical parameters (stiffnesses, mass, drag, load magnitudes).
     pub fn parameter_gradient(&self, theta: &[f64], params: &[Parameter]) -> Result<Vec<f64>> {
         Ok(self.adjoint(theta, params)?.parameter_gradient)

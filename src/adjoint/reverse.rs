@@ -2,6 +2,7 @@
 //! recorded RATTLE step, built from the model's operators (the terms' derived products and the
 //! constraint operator). See the module docs of [`crate::adjoint`] for the equations.
 
+use super::node_tangent::NodeTangent;
 use super::tape::StateView;
 use crate::base::{Parameter, Scalar};
 use crate::error::Result;
@@ -52,6 +53,10 @@ pub(crate) struct ReverseSweep<'a, D, const DIM: usize> {
     /// it reads (C_d, the current's speed).
     node: Option<NodeReverseScratch<D, DIM>>,
     node_params: Vec<(usize, Parameter)>,
+    /// Parameters the per-node quantities carry (a segment's buoyancy diameter): their index
+    /// in the cotangent θ̄ (after the library's parameters) and their tangents
+    /// ([`super::node_tangent`]).
+    nodes: Vec<(usize, Box<dyn NodeTangent<D, DIM> + 'a>)>,
     /// Start time t₀ of the horizon (step k at t₀ + k h).
     pub t0: f64,
 }
@@ -91,6 +96,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 .filter(|(_, p)| ch.node_drag().is_some_and(|d| d.has_parameter(**p)))
                 .map(|(i, p)| (i, *p))
                 .collect(),
+            nodes: Vec::new(),
             vhalf: v.clone(),
             tmp: v.clone(),
             tmp2: v.clone(),
@@ -102,6 +108,21 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             tri: BorderedTridiag::new(n, ch.has_tip_constraint()),
             scratch: DualScratch::new(n),
         }
+    }
+
+    /// Adds parameters the per-node quantities carry, the i-th at index `first + i` of the
+    /// cotangent θ̄ ([`super::node_tangent`]).
+    pub fn with_node_tangents(
+        mut self,
+        first: usize,
+        tangents: Vec<Box<dyn NodeTangent<D, DIM> + 'a>>,
+    ) -> Self {
+        self.nodes = tangents
+            .into_iter()
+            .enumerate()
+            .map(|(i, t)| (first + i, t))
+            .collect();
+        self
     }
 
     /// One reverse step k + 1 → k: reads the states at k and k + 1 (and the half-step record of
@@ -179,6 +200,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 cot.qbar[i][d] -= y * self.bbar[i][d] + self.rhs[i] * self.tmp2[i][d];
             }
         }
+        // Per-node masses: Ĝ(q′) M⁻¹p′ = r with p′ = c − Ĝᵀy gives
+        // θ̄ += −(Ĝᵀŷ)ᵀ (∂M⁻¹/∂θ) p′ (`tmp` holds Ĝᵀŷ).
+        for (ip, t) in &self.nodes {
+            cot.thbar[*ip] -= ch.inverse_mass_tangent(&self.tmp, sk1.p, t.mass_tangents());
+        }
         if ch.has_driven_tip() {
             let n = ch.n();
             cot.tip_bar[1] += self.rhs[n];
@@ -228,6 +254,12 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         }
         if ch.node_drag().is_some() {
             self.node_second_half(sk1, ctx1.step - 1, cot);
+            // Per-node quantities in Q(p½): θ̄ += h/2 b̄·∂Q/∂θ.
+            let k = ctx1.step - 1;
+            let dctx = ch.dissipation_ctx(self.t0 + k as f64 * self.h, self.h, k);
+            for (ip, t) in &mut self.nodes {
+                cot.thbar[*ip] += t.drag_contraction(sk1.phalf, &self.bbar, &dctx) * hh;
+            }
         }
         self.force_terms(sk1.q, ctx1, Half::Second, cot)
     }
@@ -332,6 +364,9 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         for (tb, p) in cot.thbar.iter_mut().zip(self.params) {
             *tb -= ch.force_parameter_contraction(q, w, ctx, *p, s)? * hh;
         }
+        for (ip, t) in &mut self.nodes {
+            cot.thbar[*ip] -= t.force_contraction(q, w, ctx)? * hh;
+        }
         Ok(())
     }
 
@@ -389,6 +424,11 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             }
             cot.thbar[ip] -= s * ch.inv_masses[0];
         }
+        // Per-node masses: q′ = q + h M⁻¹p½ gives θ̄ += h q̄′ᵀ (∂M⁻¹/∂θ) p½.
+        for (ip, t) in &self.nodes {
+            let g = ch.inverse_mass_tangent(&cot.qbar, sk1.phalf, t.mass_tangents());
+            cot.thbar[*ip] += g * h;
+        }
         self.s_through_w(&cot.qbar, w, sk1.w);
         self.cbar.copy_from_slice(&self.tmp);
         if ch.has_dissipation() {
@@ -412,6 +452,10 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
                 let g =
                     nd.parameter_contraction(sk1.phalf, ls, (&dctx, param), &self.cbar, scratch);
                 cot.thbar[ip] += g * hh;
+            }
+            // Per-node quantities in Q(p½): θ̄ += h/2 c̄·∂Q/∂θ.
+            for (ip, t) in &mut self.nodes {
+                cot.thbar[*ip] += t.drag_contraction(sk1.phalf, &self.cbar, &dctx) * hh;
             }
         }
         Ok(())

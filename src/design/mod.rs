@@ -50,17 +50,26 @@
 //! every node of the segment: its mass with added mass, its submerged weight (the effective
 //! tension), its Morison drag coefficient and its waves' inertia coefficient (the last three and
 //! the added mass through D_h = D_b unless the segment gives `hydrodynamic_diameter`). No
-//! library parameter carries these, and the adjoint has no terms for node-by-node masses yet:
-//! its gradient is taken in **forward mode**, not by the adjoint. Each cell runs once more in
-//! `Dual64` with every node quantity q_k seeded as q_k + ε ∂q_k/∂D_b, the derivatives exact
-//! ([`crate::scene::Stackup::buoyancy_tangents`]: the layout is linear in the segment's
-//! per-length quantities, which are polynomials in D_b), the waves' series W and G (linear in
-//! the nodes' masses and inertia coefficients) with their derivative parts
-//! ([`crate::Chain::set_node_quantities`]): ∂D_s/∂D_b is the run's derivative part, exact to
-//! round-off, at the cost of one forward run in dual numbers per cell and per such parameter.
-//! It needs the node-by-node Morison drag, a scene without a control and the chain's base as
-//! the objective; elsewhere a gradient is refused ([`DesignError::NoGradient`]) and the values
-//! alone are evaluated.
+//! library parameter carries these: its gradient comes from the cell's one adjoint sweep,
+//! the same as the other parameters', through the node tangents of the chain
+//! ([`crate::adjoint::adjoint_gradient_with_nodes`], module docs of [`crate::adjoint`]
+//! "Per-node quantities"). The reverse step adds the per-node masses' hand-written partials of
+//! RATTLE's drift and projection (θ̄ += h q̄′ᵀ(∂M⁻¹/∂D_b)p½ − (Ĝᵀŷ)ᵀ(∂M⁻¹/∂D_b)p′) and the
+//! terms' contractions w·∂F/∂D_b at the recorded state, each one evaluation of the terms on
+//! the chain in `Dual64` with every node quantity x_k seeded as x_k + ε ∂x_k/∂D_b, the
+//! derivatives exact ([`crate::scene::Stackup::buoyancy_tangents`]: the layout is linear in
+//! the segment's per-length quantities, which are polynomials in D_b), the waves' series W
+//! and G (linear in the nodes' masses and inertia coefficients) with their derivative parts
+//! ([`crate::Chain::set_node_quantities`]). ∂D_s/∂D_b is exact to round-off (it equals the
+//! derivative part of the cell's run in `Dual64` with the same seeds, forward mode, to
+//! 10⁻¹²: tests/design/design_buoyancy.rs). Counting the runs: one adjoint sweep per cell
+//! for all the parameters, where the forward mode took one more run in dual numbers per cell
+//! and per buoyancy parameter; each buoyancy parameter adds per step two `Dual64`
+//! evaluations of the conservative terms and two of Morison's drag (O(n), no Newton solve)
+//! to the sweep. It needs the node-by-node Morison drag, a scene without a control, no joint
+//! damping and the chain's base as the objective; elsewhere a gradient is refused
+//! ([`DesignError::NoGradient`], or the sweep's [`crate::model::ModelError::NodeQuantities`] for
+//! joint damping) and the values alone are evaluated.
 //!
 //! # Cells and executors
 //! The cells are independent: [`DesignStudy::evaluate`] runs them serially or on rayon's pool
@@ -143,11 +152,11 @@ pub enum DesignError {
         /// Why.
         reason: &'static str,
     },
-    /// A gradient was asked for with respect to a segment's buoyancy diameter in a study its
-    /// forward-mode gradient does not cover ([`DesignParameter::has_adjoint`]): its values
-    /// D_y alone can be evaluated there.
+    /// A gradient was asked for with respect to a segment's buoyancy diameter in a study whose
+    /// adjoint sweep has no node tangents for it ([`DesignParameter::is_node_quantity`]): its
+    /// values D_y alone can be evaluated there.
     #[error(
-        "{name}: its design gradient (forward mode, node by node) is not available {reason}; \
+        "{name}: its design gradient (adjoint, node by node) is not available {reason}; \
          its damage can be evaluated at given values, not optimised nor tabulated in \
          --sensitivities"
     )]

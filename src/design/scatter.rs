@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::hotspot::hot_spot_sweep;
 use super::{DesignError, DesignParameter};
-use crate::adjoint::{ControlProblem, History, Objective, Stage};
+use crate::adjoint::{ControlProblem, History, NodeTangent, Objective, SeededNodes, Stage};
 use crate::base::Scalar;
 use crate::fatigue::SECONDS_PER_YEAR;
 use crate::fatigue::{combine_scatter, CellDamage, DamageGradient, ScatterCell, WellheadDamage};
@@ -124,12 +124,15 @@ impl Objective for CountedDamage {
 }
 
 /// D and ∂D/∂θ (or D alone, by a forward run, when `params` is `None`) on `scene` in the model
-/// `DIM`.
+/// `DIM`: the library's parameters `params` and the buoyancy diameters of the stack-up's
+/// segments `segments` from the same adjoint sweep (their node tangents, [`seeded_nodes`]).
+/// Returns (D, ∂D/∂params, ∂D/∂D_b per segment).
 fn cell_sweep<const DIM: usize>(
     scene: &Scene,
     objective: CountedDamage,
     params: Option<&[crate::Parameter]>,
-) -> crate::Result<(f64, Vec<f64>)> {
+    segments: &[usize],
+) -> crate::Result<(f64, Vec<f64>, Vec<f64>)> {
     let (map, theta0) = scene_start(scene)?;
     let two_axis = scene.has_two_axis_control();
     let problem = ControlProblem::builder(scene)
@@ -138,10 +141,18 @@ fn cell_sweep<const DIM: usize>(
         .two_axis(two_axis)
         .build_in::<DIM>()?;
     let Some(params) = params else {
-        return Ok((problem.value(&theta0)?, Vec::new()));
+        return Ok((problem.value(&theta0)?, Vec::new(), Vec::new()));
     };
-    let r = problem.adjoint(&theta0, params)?;
-    Ok((r.value, r.parameter_gradient))
+    if segments.is_empty() {
+        let r = problem.adjoint(&theta0, params)?;
+        return Ok((r.value, r.parameter_gradient, Vec::new()));
+    }
+    let mut nodes: Vec<Box<dyn NodeTangent<f64, DIM>>> = Vec::with_capacity(segments.len());
+    for &segment in segments {
+        nodes.push(Box::new(seeded_nodes::<DIM>(scene, segment)?));
+    }
+    let (r, buoyancy) = problem.adjoint_with_nodes(&theta0, params, nodes)?;
+    Ok((r.value, r.parameter_gradient, buoyancy))
 }
 
 impl DesignStudy<'_> {
@@ -159,21 +170,15 @@ impl DesignStudy<'_> {
     /// before the adjoint sweep (module docs of `design::hotspot`): one adjoint sweep and one
     /// forward run per cell.
     ///
-    /// Each segment's buoyancy diameter of the scene's `[design]` table
-    /// ([`DesignParameter::has_adjoint`]) adds a forward run per cell to an evaluation with
-    /// the gradient: the cell's run in dual numbers that gives its derivative.
+    /// A segment's buoyancy diameter ([`DesignParameter::is_node_quantity`]) adds no run: its
+    /// derivative comes from the same adjoint sweep (per step, a few O(n) evaluations of the
+    /// terms in `Dual64`, module docs of [`crate::adjoint`] "Per-node quantities").
     pub fn runs_per_evaluation(&self, want: Want) -> (usize, usize) {
         let n = self.n_cells();
         let at_hot_spot = matches!(self.hot_spot(), Ok(Some(_)));
-        let forward_mode = self.scene.design.as_ref().map_or(0, |d| {
-            d.parameters
-                .iter()
-                .filter(|p| !p.parameter.has_adjoint())
-                .count()
-        });
         match want {
             Want::Gradient if at_hot_spot => (n, n),
-            Want::Gradient => (n, n * forward_mode),
+            Want::Gradient => (n, 0),
             Want::Value => (0, n),
         }
     }
@@ -233,8 +238,8 @@ impl DesignStudy<'_> {
                     reason,
                 })?;
             // A parameter without a library parameter (a segment's buoyancy diameter) is
-            // differentiated in forward mode, not by the adjoint sweep.
-            if p.has_adjoint() {
+            // differentiated through the adjoint sweep's node tangents.
+            if !p.is_node_quantity() {
                 let q = p
                     .parameter(self.scene)
                     .ok_or_else(|| DesignError::NotInModel {
@@ -365,13 +370,13 @@ impl DesignStudy<'_> {
         let objective = CountedDamage { damage, skip };
         // The library's parameters, for a gradient only (a value needs none: a segment's
         // buoyancy diameter, which has none, is evaluated through the cell's scene and
-        // differentiated in forward mode below).
+        // differentiated by the same adjoint sweep through its node tangents).
         let lib = match want {
             Want::Gradient => Some(
                 point
                     .params
                     .iter()
-                    .filter(|p| p.has_adjoint())
+                    .filter(|p| !p.is_node_quantity())
                     .map(|p| p.parameter(&scene))
                     .collect::<Option<Vec<crate::Parameter>>>()
                     .ok_or_else(|| DesignError::NotInModel {
@@ -398,33 +403,35 @@ impl DesignStudy<'_> {
                 gradient,
             });
         }
-        let (damage, adjoint) = if scene.is_spatial() {
-            cell_sweep::<3>(&scene, objective, lib)
+        // The buoyancy diameters' segments, for a gradient only.
+        let mut segments = Vec::new();
+        if lib.is_some() {
+            for p in point.params.iter().filter(|p| p.is_node_quantity()) {
+                segments.push(p.segment(&scene).ok_or_else(|| DesignError::NotInModel {
+                    name: p.name(),
+                    reason: "the scene has no [[stackup.segment]] of that name",
+                })?);
+            }
+        }
+        let (damage, adjoint, buoyancy) = if scene.is_spatial() {
+            cell_sweep::<3>(&scene, objective, lib, &segments)
         } else {
-            cell_sweep::<2>(&scene, objective, lib)
+            cell_sweep::<2>(&scene, objective, lib, &segments)
         }
         .map_err(run_err)?;
-        // The gradient in the design's order: the adjoint's values, and each buoyancy
-        // diameter's by its forward-mode run.
+        // The gradient in the design's order: the library's parameters' and the buoyancy
+        // diameters', both from the one adjoint sweep.
         let mut gradient = Vec::with_capacity(if lib.is_some() { point.params.len() } else { 0 });
         if lib.is_some() {
             let mut from_adjoint = adjoint.into_iter();
+            let mut from_nodes = buoyancy.into_iter();
             for p in point.params {
-                if p.has_adjoint() {
-                    gradient.push(from_adjoint.next().unwrap_or(f64::NAN));
-                    continue;
-                }
-                let segment = p.segment(&scene).ok_or_else(|| DesignError::NotInModel {
-                    name: p.name(),
-                    reason: "the scene has no [[stackup.segment]] of that name",
-                })?;
-                let (_, d) = if scene.is_spatial() {
-                    buoyancy_derivative::<3>(&scene, segment, &objective)
+                let g = if p.is_node_quantity() {
+                    from_nodes.next()
                 } else {
-                    buoyancy_derivative::<2>(&scene, segment, &objective)
-                }
-                .map_err(run_err)?;
-                gradient.push(d);
+                    from_adjoint.next()
+                };
+                gradient.push(g.unwrap_or(f64::NAN));
             }
         }
         let h = scene.time.step;
@@ -512,13 +519,14 @@ impl DesignStudy<'_> {
 }
 
 impl DesignStudy<'_> {
-    /// [`DesignError::NoGradient`] for the first parameter of `point` differentiated in forward
-    /// mode (a segment's buoyancy diameter, [`DesignParameter::has_adjoint`]) in a study the
-    /// forward-mode run does not cover: the objective at a `[design] hotspot` (its linearised
-    /// rainflow seed is the adjoint's), a scene with a control (the run is taken with u = 0),
-    /// the momentum drag (its constant comes from the masses in real arithmetic).
+    /// [`DesignError::NoGradient`] for the first parameter of `point` that moves the chain's
+    /// per-node quantities (a segment's buoyancy diameter, [`DesignParameter::is_node_quantity`])
+    /// in a study whose adjoint sweep has no node tangents for it: the objective at a
+    /// `[design] hotspot` (its sweep is not wired to them), a scene with a `[control]` (a driven
+    /// tip's mass has no node-by-node partials), the momentum drag (its constant comes from the
+    /// masses in real arithmetic), joint damping (its M⁻¹ has no node-by-node partials).
     fn refuse_no_gradient(&self, point: &DesignPoint<'_>) -> Result<(), DesignError> {
-        let Some(p) = point.params.iter().find(|p| !p.has_adjoint()) else {
+        let Some(p) = point.params.iter().find(|p| p.is_node_quantity()) else {
             return Ok(());
         };
         let reason = if self
@@ -550,20 +558,21 @@ impl DesignStudy<'_> {
     }
 }
 
-/// ∂D_s/∂D_b of a cell's scene with respect to the buoyancy diameter of the stack-up's segment
-/// `segment` (a design's [`DesignParameter::BuoyancyDiameter`]), in forward mode: the chain in
-/// `Dual64` with every node quantity the buoyancy moves seeded with its exact derivative
-/// ([`crate::scene::Stackup::buoyancy_tangents`]: mass with added mass, submerged weight,
-/// Morison drag coefficient and the waves' inertia coefficient; [`Chain::set_node_quantities`]),
-/// run once over the record with the objective `objective` (u = 0: the scene has no control).
-/// Returns (D_s, ∂D_s/∂D_b), D_s the dual run's real part.
-fn buoyancy_derivative<const DIM: usize>(
+/// The node tangents of a cell's scene with respect to the buoyancy diameter of the stack-up's
+/// segment `segment` (a design's [`DesignParameter::BuoyancyDiameter`]) for its adjoint sweep:
+/// the chain in `Dual64` with every node quantity the buoyancy moves seeded with its exact
+/// derivative ([`crate::scene::Stackup::buoyancy_tangents`]: mass with added mass, submerged
+/// weight, Morison drag coefficient and the waves' inertia coefficient;
+/// [`Chain::set_node_quantities`]) and ∂mᵢ/∂D_b ([`SeededNodes`]).
+fn seeded_nodes<const DIM: usize>(
     scene: &Scene,
     segment: usize,
-    objective: &CountedDamage,
-) -> crate::Result<(f64, f64)> {
+) -> crate::Result<SeededNodes<DIM>> {
     let Some(st) = scene.stackup.as_ref() else {
-        return Ok((0.0, 0.0));
+        return Err(crate::model::ModelError::NodeQuantities {
+            reason: "a buoyancy diameter needs the scene's [stackup]",
+        }
+        .into());
     };
     let lengths = &scene.beam.lengths;
     let t = st.buoyancy_tangents(segment, lengths, scene.water.density, scene.mudline());
@@ -584,8 +593,5 @@ fn buoyancy_derivative<const DIM: usize>(
             seed: Dual64::new(0.0, 1.0),
         }),
     })?;
-    let steps = scene.time.steps;
-    let u = vec![Dual64::from(0.0); steps + 1];
-    let d = crate::adjoint::forward_value(&chain, scene.time.step, steps, &u, objective)?;
-    Ok((d.re, d.eps))
+    SeededNodes::new(chain, t.masses)
 }

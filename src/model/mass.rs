@@ -73,3 +73,35 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         (d, off)
     }
 }
+
+impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
+    /// aᵀ (∂M⁻¹/∂θ) b for node masses moving as ∂mᵢ/∂θ = `dm[i]` (a stack-up's per-node
+    /// masses under a parameter such as a segment's buoyancy diameter), in O(n). From
+    /// M̄⁻¹ = diag(1/l) Δ diag(1/m) Δᵀ diag(1/l) ([`Chain::apply_inverse_mass`]):
+    /// ```text
+    /// aᵀ (∂M⁻¹/∂θ) b = −Σᵢ (∂mᵢ/∂θ / mᵢ²) · α_i·β_i,
+    /// α_i = a_i/l_i − a_{i+1}/l_{i+1}  (a_{n+1} = 0),  β likewise from b.
+    /// ```
+    /// With every ∂mᵢ/∂θ = 1 and equal masses m it is −aᵀM⁻¹b/m, the uniform mass's share.
+    pub fn inverse_mass_tangent(&self, a: &[[D; DIM]], b: &[[D; DIM]], dm: &[f64]) -> D {
+        let n = self.n;
+        let mut sum = D::zero();
+        let (mut next_a, mut next_b) = ([D::zero(); DIM], [D::zero(); DIM]);
+        for i in (0..n).rev() {
+            let il = self.inv_lengths[i];
+            let ca: [D; DIM] = std::array::from_fn(|d| a[i][d] * il);
+            let cb: [D; DIM] = std::array::from_fn(|d| b[i][d] * il);
+            if dm[i] != 0.0 {
+                let mut ab = D::zero();
+                for d in 0..DIM {
+                    ab += (ca[d] - next_a[d]) * (cb[d] - next_b[d]);
+                }
+                let im = self.inv_masses[i];
+                sum -= ab * im * im * dm[i];
+            }
+            next_a = ca;
+            next_b = cb;
+        }
+        sum
+    }
+}

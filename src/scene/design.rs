@@ -297,11 +297,11 @@ pub enum DesignParameter {
     /// weight per length, hence the nodes' weights and the effective tension), and, unless the
     /// segment gives `hydrodynamic_diameter` explicitly, the Morison diameter D_h = D_b (the
     /// added mass C_a ρ_w π D_h²/4 per length, the drag ½ ρ_w C_d D_h and the waves' inertia
-    /// ρ_w (1 + C_a) π D_h²/4). No library [`Parameter`] carries these per-node quantities:
-    /// its gradient is taken in forward mode, a `Dual64` run of each cell with every node
-    /// quantity seeded with its exact derivative ([`crate::scene::Stackup::buoyancy_tangents`],
-    /// [`crate::Chain::set_node_quantities`]), not by the adjoint
-    /// ([`DesignParameter::has_adjoint`]).
+    /// ρ_w (1 + C_a) π D_h²/4). No library [`Parameter`] carries these per-node quantities
+    /// ([`DesignParameter::is_node_quantity`]): its gradient comes from the same adjoint sweep
+    /// as the others', through the node tangents of the chain
+    /// ([`crate::adjoint::adjoint_gradient_with_nodes`]; the node quantities' exact
+    /// derivatives [`crate::scene::Stackup::buoyancy_tangents`]).
     BuoyancyDiameter(String),
 }
 
@@ -393,17 +393,17 @@ impl DesignParameter {
         matches!(self, DesignParameter::VesselOffset)
     }
 
-    /// Whether its design gradient comes from the adjoint sweep (a library [`Parameter`]):
-    /// every parameter but a segment's buoyancy diameter
-    /// ([`DesignParameter::BuoyancyDiameter`]), whose gradient a forward-mode `Dual64` run of
-    /// each cell gives ([`crate::design`], "The parameters").
-    pub fn has_adjoint(&self) -> bool {
-        !matches!(self, DesignParameter::BuoyancyDiameter(_))
+    /// Whether it moves the chain's per-node quantities rather than a library [`Parameter`]:
+    /// a segment's buoyancy diameter ([`DesignParameter::BuoyancyDiameter`]), whose adjoint
+    /// gradient the sweep takes through the node tangents
+    /// ([`crate::adjoint::adjoint_gradient_with_nodes`], [`crate::design`] "The parameters").
+    pub fn is_node_quantity(&self) -> bool {
+        matches!(self, DesignParameter::BuoyancyDiameter(_))
     }
 
     /// The library's parameter of the scene's model, whose adjoint gradient this is (`None`:
     /// the scene has no flex joint of that name, or the parameter has no library parameter, a
-    /// segment's buoyancy diameter: [`DesignParameter::has_adjoint`]).
+    /// segment's buoyancy diameter: [`DesignParameter::is_node_quantity`]).
     pub fn parameter(&self, scene: &Scene) -> Option<Parameter> {
         Some(match self {
             DesignParameter::BuoyancyDiameter(_) => return None,

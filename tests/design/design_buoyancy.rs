@@ -3,7 +3,8 @@
 //! refusals (no such segment, a segment without modules, a lower bound below the pipe's outer
 //! diameter), the chain laid out again when it is set, the exact derivatives of the layout's
 //! per-node quantities against central differences of the layout, and the design gradient
-//! (forward mode: every cell run in `Dual64` with the node quantities seeded) against central
+//! (the cell's adjoint sweep through the chain's node tangents) against the forward mode
+//! (every cell run in `Dual64` with the node quantities seeded) and against central
 //! differences of the scatter-diagram damage at two designs.
 //!
 //! The reduced riser system of tests/design/design_vessel.rs: its 91.44 m of riser with
@@ -40,7 +41,7 @@ fn cells() -> Vec<ScatterCell> {
     crate::design_study::cells(&[(1.5, 7.0, 0.7), (3.0, 9.5, 0.3)])
 }
 
-/// The name reads from `[design]` (unit m, positive, no library parameter: forward mode), its
+/// The name reads from `[design]` (unit m, positive, no library parameter: a node quantity), its
 /// value is the segment's 1.1938 m, and setting it lays the chain out again: thinner modules
 /// (1.0 m) make the buoyant segment's nodes lighter and heavier in water (less foam, less
 /// displaced water: foam 416.48 kg/m³ is lighter than the water), the bare segment's nodes
@@ -55,7 +56,7 @@ fn buoyancy_diameter_is_a_named_parameter_that_relays_the_chain() {
     assert_eq!(DesignParameter::from_name(NAME), Some(p.clone()));
     assert_eq!(p.unit(), "m");
     assert!(!p.is_signed());
-    assert!(!p.has_adjoint());
+    assert!(p.is_node_quantity());
     assert_eq!(p.parameter(&scene), None);
     assert_eq!(p.value(&scene), Ok(1.1938));
     let mut s = scene.clone();
@@ -198,7 +199,8 @@ fn layout_tangents_match_central_differences_of_the_layout() {
     }
 }
 
-/// ∂D_y/∂D_b (forward mode) and ∂D_y/∂T (adjoint) = central differences of D_y (forward runs
+/// ∂D_y/∂D_b and ∂D_y/∂T (both from the one adjoint sweep per cell) = central differences of
+/// D_y (forward runs
 /// of every cell, step 10⁻⁵ θ) to 10⁻⁵ relative of the largest relative sensitivity
 /// (`design_study::check_central_differences`), at the scene's design (D_b = 1.1938 m,
 /// T = 1.5 MN) and at a second one (D_b = 0.9 m, T = 1.8 MN). The reference is the central
@@ -225,8 +227,9 @@ fn buoyancy_gradient_matches_central_differences_at_two_designs() {
     }
 }
 
-/// The forward-mode gradient is refused, naming the parameter, where it does not run: the
-/// objective at a `[design] hotspot`; the values alone are evaluated there.
+/// The buoyancy diameter's gradient is refused, naming the parameter, where the sweep has no
+/// node tangents for it: the objective at a `[design] hotspot`; the values alone are
+/// evaluated there.
 #[test]
 fn buoyancy_gradient_is_refused_at_a_hot_spot() {
     let text = scene_text("", &design(NAME, "0.6", "1.5")).replace(
@@ -251,16 +254,19 @@ fn buoyancy_gradient_is_refused_at_a_hot_spot() {
     );
 }
 
-/// The study's ∂D_s/∂D_b of every cell = the derivative part of the cell's run in `Dual64`
-/// taken here through the library's public pieces alone (the layout's tangents
-/// `Stackup::buoyancy_tangents`, `Chain::set_node_quantities`, `adjoint::forward_value` with
-/// the fatigue objective, which counts the whole record: spin-up 0), to 10⁻¹² relative; and
-/// that run's real part = D_s of the study's adjoint sweep in f64 to 10⁻¹² (seeding the node
-/// quantities leaves the real arithmetic as built; dual arithmetic rounds some real parts
-/// differently, by an ulp). With the tension's adjoint gradient beside it, against its own
-/// `Dual64` run (`Chain::set_parameter`) to 10⁻⁹.
+/// The study's ∂D_s/∂D_b of every cell (its adjoint sweep through the node tangents) = the
+/// derivative part of the cell's run in `Dual64` (forward mode, the reference: exact to
+/// round-off by another route, no reverse pass) taken here through the library's public pieces
+/// alone (the layout's tangents `Stackup::buoyancy_tangents`, `Chain::set_node_quantities`,
+/// `adjoint::forward_value` with the fatigue objective, which counts the whole record:
+/// spin-up 0), to 10⁻¹² relative; and that run's real part = D_s of the study's adjoint sweep
+/// in f64 to 10⁻¹² (seeding the node quantities leaves the real arithmetic as built; dual
+/// arithmetic rounds some real parts differently, by an ulp). With the tension's adjoint
+/// gradient beside it, against its own `Dual64` run (`Chain::set_parameter`) to 10⁻⁹. And the
+/// count of runs: an evaluation with the gradient is one adjoint sweep per cell, no extra run
+/// for the buoyancy parameter.
 #[test]
-fn forward_mode_runs_are_the_f64_runs_in_their_real_parts() {
+fn adjoint_buoyancy_gradient_equals_the_forward_mode() {
     use chainbeam::fatigue::WellheadDamage;
     use chainbeam::model::{NodeQuantities, WaveTangent};
     use chainbeam::{Chain, FatigueObjective, Parameter};
@@ -271,6 +277,7 @@ fn forward_mode_runs_are_the_f64_runs_in_their_real_parts() {
     let p = vec![buoyancy(), DesignParameter::Tension];
     let v = vec![1.05, 1.6e6];
     let g = eval(&st, &p, &v, Want::Gradient, Execution::Serial);
+    assert_eq!(st.runs_per_evaluation(Want::Gradient), (cells.len(), 0));
     let point = DesignPoint {
         params: &p,
         values: &v,
@@ -320,9 +327,13 @@ fn forward_mode_runs_are_the_f64_runs_in_their_real_parts() {
             cell.damage
         );
         let rel = (cell.gradient[0] - d.eps).abs() / d.eps.abs();
+        eprintln!(
+            "cell {s}: dD_s/dD_b adjoint {:e}, forward mode {:e}, relative {rel:e}",
+            cell.gradient[0], d.eps
+        );
         assert!(
             rel < 1e-12,
-            "cell {s}: study {:e}, here {:e}",
+            "cell {s}: adjoint {:e}, forward mode {:e}",
             cell.gradient[0],
             d.eps
         );

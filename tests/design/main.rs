@@ -13,6 +13,7 @@ mod design_study;
 mod design;
 mod design_buoyancy;
 mod design_hotspot;
+mod design_node_adjoint;
 mod design_stackup;
 mod design_vessel;
 mod search;

@@ -112,7 +112,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
 
     /// Adds parameters the per-node quantities carry, the i-th at index `first + i` of the
     /// cotangent θ̄ ([`super::node_tangent`]).
-    pub fn with_node_tangents(
+    pub(crate) fn with_node_tangents(
         mut self,
         first: usize,
         tangents: Vec<Box<dyn NodeTangent<D, DIM> + 'a>>,

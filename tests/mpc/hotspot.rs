@@ -80,37 +80,7 @@ fn gradient_through_the_thrust_is_exact() {
     let (j, adjoint) = problem.value_and_gradient(&theta).unwrap();
     println!("J = {j:.6e}");
     assert!(j.is_finite() && j > 0.0);
-    let u = problem.controls(&theta).unwrap();
-    let (h, chain) = (problem.time_step(), problem.chain().lift::<Dual64>());
-    let (mut forward, mut central) = (Vec::new(), Vec::new());
-    for (i, &g) in adjoint.iter().enumerate() {
-        let mut e = [0.0; 4];
-        e[i] = 1.0;
-        let dir = problem.controls(&e).unwrap();
-        let ud: Vec<Dual64> = u
-            .iter()
-            .zip(&dir)
-            .map(|(&x, &d)| Dual64::new(x, d))
-            .collect();
-        let fwd = forward_value(&chain, h, steps, &ud, problem.objective())
-            .unwrap()
-            .eps;
-        let at = |x: f64| {
-            let mut t = theta;
-            t[i] = x;
-            problem.value(&t).unwrap()
-        };
-        let fd = five_point(&at, theta[i], 1e3);
-        println!(
-            "dJ/dtheta_{i} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} \
-             (of the component)",
-            (g - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 0.0, "theta_{i} acts");
-        forward.push(fwd);
-        central.push(fd);
-    }
+    let (forward, central) = dual_and_central(&problem, steps, theta, &adjoint);
     let scale = forward.iter().fold(0.0f64, |a, g| a.max(g.abs()));
     let source = "forward-mode Dual64";
     assert_close(
@@ -303,4 +273,47 @@ fn a_study_reports_the_hot_spots_damage() {
         assert_eq!(c.life_years.to_bits(), entry.life_years.to_bits());
         assert_eq!(c.damage_per_year.to_bits(), entry.damage_per_year.to_bits());
     }
+}
+
+/// The references of a thrust problem's gradient at θ (four pieces): per component, the
+/// forward-mode Dual64 run of the whole horizon seeded along that piece's controls, and the
+/// five-point central difference of J (step 10³ N); each printed against the adjoint's.
+pub(crate) fn dual_and_central(
+    problem: &ControlProblem<PiecewiseControl, HotSpotObjective, 2>,
+    steps: usize,
+    theta: [f64; 4],
+    adjoint: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    let u = problem.controls(&theta).unwrap();
+    let (h, chain) = (problem.time_step(), problem.chain().lift::<Dual64>());
+    let (mut forward, mut central) = (Vec::new(), Vec::new());
+    for (i, &g) in adjoint.iter().enumerate() {
+        let mut e = [0.0; 4];
+        e[i] = 1.0;
+        let dir = problem.controls(&e).unwrap();
+        let ud: Vec<Dual64> = u
+            .iter()
+            .zip(&dir)
+            .map(|(&x, &d)| Dual64::new(x, d))
+            .collect();
+        let fwd = forward_value(&chain, h, steps, &ud, problem.objective())
+            .unwrap()
+            .eps;
+        let at = |x: f64| {
+            let mut t = theta;
+            t[i] = x;
+            problem.value(&t).unwrap()
+        };
+        let fd = five_point(&at, theta[i], 1e3);
+        println!(
+            "dJ/dtheta_{i} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} \
+             (of the component)",
+            (g - fwd).abs() / fwd.abs(),
+            (fd - fwd).abs() / fwd.abs()
+        );
+        assert!(fwd.abs() > 0.0, "theta_{i} acts");
+        forward.push(fwd);
+        central.push(fd);
+    }
+    (forward, central)
 }

@@ -11,8 +11,8 @@
 //! [`hotspots::interpolation_joints`]); for the history term alone, its invariance under a
 //! constant shift of M (the definition: M − M̄ does not change), hence Σ_j ∂J/∂M_j = 0.
 
-use crate::gradient_check::{assert_close, five_point, Tolerance};
-use chainbeam::adjoint::{forward_value, History, HotSpotObjective, Objective};
+use crate::gradient_check::{assert_close, Tolerance};
+use chainbeam::adjoint::{History, HotSpotObjective, Objective};
 use chainbeam::fatigue::{MomentMeasure, WellheadDamage};
 use chainbeam::hotspots::{self, HotSpotSpec};
 use chainbeam::mpc::planning::planning_scene;
@@ -124,36 +124,7 @@ fn gradient_about_the_mean_is_exact() {
     assert!(((j - want) / want).abs() < 1e-9, "J {j} vs {want}");
     // The case this objective is for: a mean that is not small against the fluctuation.
     assert!(mean.abs() > 0.1 * std, "mean {mean} std {std}");
-    let (h, chain) = (problem.time_step(), problem.chain().lift::<Dual64>());
-    let (mut forward, mut central) = (Vec::new(), Vec::new());
-    for (i, &g) in adjoint.iter().enumerate() {
-        let mut e = [0.0; 4];
-        e[i] = 1.0;
-        let dir = problem.controls(&e).unwrap();
-        let ud: Vec<Dual64> = u
-            .iter()
-            .zip(&dir)
-            .map(|(&x, &d)| Dual64::new(x, d))
-            .collect();
-        let fwd = forward_value(&chain, h, steps, &ud, problem.objective())
-            .unwrap()
-            .eps;
-        let at = |x: f64| {
-            let mut t = theta;
-            t[i] = x;
-            problem.value(&t).unwrap()
-        };
-        let fd = five_point(&at, theta[i], 1e3);
-        println!(
-            "dJ/dtheta_{i} = {fwd:.12e}: |adjoint − forward| {:.1e}, |FD − forward| {:.1e} \
-             (of the component)",
-            (g - fwd).abs() / fwd.abs(),
-            (fd - fwd).abs() / fwd.abs()
-        );
-        assert!(fwd.abs() > 0.0, "theta_{i} acts");
-        forward.push(fwd);
-        central.push(fd);
-    }
+    let (forward, central) = super::hotspot::dual_and_central(&problem, steps, theta, &adjoint);
     let scale = forward.iter().fold(0.0f64, |a, g| a.max(g.abs()));
     let source = "forward-mode Dual64";
     assert_close(

@@ -176,39 +176,15 @@ def test_errors_name_the_key(files: tuple[Path, Path]) -> None:
     assert e.value.key is not None and e.value.key.startswith("design.parameter[1]")
 
 
-def test_vessel_offset_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
-    """The vessel's mean offset as a design parameter (`vessel.offset`, signed bounds) on the
-    README's riser system (examples/scenes/riser_300m_system_design.toml with the offset
-    appended to its [design] table): its name passes through `cb.design` and its sensitivity
-    equals the command line's JSON bit for bit, on one cell of 20 s after a 10 s spin-up (the
-    README's records)."""
+def added_parameter_matches_cli(cli: str, tmp_path: Path, table: str, name: str) -> None:
+    """The README's riser system (examples/scenes/riser_300m_system_design.toml) with `table`
+    (one more `[[design.parameter]]`) appended: the parameter `name` passes through `cb.design`
+    and its sensitivity equals the command line's JSON bit for bit (as does the whole JSON but
+    its timings), and is not zero, on one cell of 20 s after a 10 s spin-up (the README's
+    records)."""
     text = (SCENES / "riser_300m_system_design.toml").read_text()
     scene = tmp_path / "system.toml"
-    scene.write_text(text + '\n[[design.parameter]]\nname = "vessel.offset"\n'
-                     "lower = -10.0\nupper = 10.0\n")
-    scatter = tmp_path / "cells.csv"
-    scatter.write_text("hs,tp,probability\n1.44,7.66,1.0\n")
-    args = ["--scatter", str(scatter), "--record", "20", "--spin-up", "10"]
-    ref = cli_json(cli, str(scene), "--sensitivities", *args)
-    got = cb.design(cb.Scene.from_file(scene), str(scatter), sensitivities=True, record=20.0,
-                    spin_up=10.0)
-    assert same(without_seconds(got), without_seconds(ref))
-    assert "vessel.offset" in got["sensitivities"]
-    assert same(got["sensitivities"]["vessel.offset"], ref["sensitivities"]["vessel.offset"])
-    assert got["sensitivities"]["vessel.offset"] != 0.0
-
-
-def test_buoyancy_diameter_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
-    """The buoyancy modules' outer diameter of a named segment as a design parameter
-    (`stackup.segment.riser_buoyant_1.buoyancy_diameter`, its gradient by the adjoint) on the
-    README's riser system (examples/scenes/riser_300m_system_design.toml with the parameter
-    appended to its [design] table): its name passes through `cb.design` and its sensitivity
-    equals the command line's JSON bit for bit, on one cell of 20 s after a 10 s spin-up."""
-    name = "stackup.segment.riser_buoyant_1.buoyancy_diameter"
-    text = (SCENES / "riser_300m_system_design.toml").read_text()
-    scene = tmp_path / "system.toml"
-    scene.write_text(text + f'\n[[design.parameter]]\nname = "{name}"\n'
-                     "lower = 0.6\nupper = 1.5\n")
+    scene.write_text(text + table)
     scatter = tmp_path / "cells.csv"
     scatter.write_text("hs,tp,probability\n1.44,7.66,1.0\n")
     args = ["--scatter", str(scatter), "--record", "20", "--spin-up", "10"]
@@ -219,3 +195,22 @@ def test_buoyancy_diameter_sensitivity_equals_cli(cli: str, tmp_path: Path) -> N
     assert name in got["sensitivities"]
     assert same(got["sensitivities"][name], ref["sensitivities"][name])
     assert got["sensitivities"][name] != 0.0
+
+
+def test_vessel_offset_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
+    """The vessel's mean offset as a design parameter (`vessel.offset`, signed bounds):
+    see `added_parameter_matches_cli`."""
+    added_parameter_matches_cli(
+        cli, tmp_path,
+        '\n[[design.parameter]]\nname = "vessel.offset"\nlower = -10.0\nupper = 10.0\n',
+        "vessel.offset")
+
+
+def test_buoyancy_diameter_sensitivity_equals_cli(cli: str, tmp_path: Path) -> None:
+    """The buoyancy modules' outer diameter of a named segment as a design parameter
+    (`stackup.segment.riser_buoyant_1.buoyancy_diameter`, its gradient by the adjoint):
+    see `added_parameter_matches_cli`."""
+    name = "stackup.segment.riser_buoyant_1.buoyancy_diameter"
+    added_parameter_matches_cli(
+        cli, tmp_path, f'\n[[design.parameter]]\nname = "{name}"\nlower = 0.6\nupper = 1.5\n',
+        name)

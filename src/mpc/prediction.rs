@@ -312,6 +312,27 @@ fn check_setup(setup: &PredictionSetup) -> Result<(), PredictionError> {
     Ok(())
 }
 
+/// [error², reference²] of the total moment, the forced response and the unforced moment over
+/// one horizon: the plan's forced and unforced moments `plan` = [M_f, M_u] at its steps i
+/// against the plant's `plant` at its steps k = `start` + i r (r plant steps per plan step):
+/// Σ (M_f − P_f)², Σ P_f², Σ ((M_f − M_u) − (P_f − P_u))², Σ (P_f − P_u)², Σ (M_u − P_u)², Σ P_u².
+fn squared_errors(plan: [&[f64]; 2], plant: [&[f64]; 2], start: usize, r: usize) -> [f64; 6] {
+    let [mf, mu] = plan;
+    let [run_f, run_u] = plant;
+    let mut e = [0.0; 6];
+    for i in 0..mf.len() {
+        let k = start + i * r;
+        let (pf, pu) = (run_f[k], run_u[k]);
+        e[0] += (mf[i] - pf).powi(2);
+        e[1] += pf * pf;
+        e[2] += ((mf[i] - mu[i]) - (pf - pu)).powi(2);
+        e[3] += (pf - pu).powi(2);
+        e[4] += (mu[i] - pu).powi(2);
+        e[5] += pu * pu;
+    }
+    e
+}
+
 impl PlantRuns {
     /// Runs the plant `scene` forced and unforced to max t₀ + T (module docs); `setup.plan` is
     /// not used here.
@@ -419,18 +440,8 @@ impl PlantRuns {
             roller.roll(&mut map, &run_f.states[s], k0, &plan_u_forced, &mut mf)?;
             plan_seconds += clock.elapsed().as_secs_f64();
             roller.roll(&mut map, &run_u.states[s], k0, &plan_u_zero, &mut mu)?;
-            // [error², reference²] of the total, the response and the unforced moment.
-            let mut e = [0.0; 6];
-            for i in 0..=kh {
-                let k = self.start_steps[s] + i * r;
-                let (pf, pu) = (run_f.moment[k], run_u.moment[k]);
-                e[0] += (mf[i] - pf).powi(2);
-                e[1] += pf * pf;
-                e[2] += ((mf[i] - mu[i]) - (pf - pu)).powi(2);
-                e[3] += (pf - pu).powi(2);
-                e[4] += (mu[i] - pu).powi(2);
-                e[5] += pu * pu;
-            }
+            let plant = [&run_f.moment[..], &run_u.moment[..]];
+            let e = squared_errors([&mf, &mu], plant, self.start_steps[s], r);
             let time = setup.starts[s];
             let ratio = |err: f64, reference: f64, what| {
                 if reference > 0.0 {

@@ -140,6 +140,23 @@ pub fn check_central_differences(
     g
 }
 
+/// Cell `s`'s scene at `point` and the library's fatigue objective on it (its section and moment
+/// measure, no effort term), which counts the whole record: the reference a forward-mode run
+/// differentiates.
+pub fn cell_objective(
+    st: &DesignStudy<'_>,
+    s: usize,
+    point: &DesignPoint<'_>,
+) -> (Scene, FatigueObjective) {
+    let cs = st.cell_scene(s, point).unwrap();
+    let spec = cs.fatigue_spec().unwrap();
+    let objective = FatigueObjective {
+        damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
+        effort: 0.0,
+    };
+    (cs, objective)
+}
+
 /// ∂D_s/∂θ_i of every cell by the adjoint = the dual part of D_s computed in `Dual64` with θ_i
 /// seeded through `Chain::set_parameter` (forward-mode differentiation of the whole run through
 /// the library's fatigue objective, [`FatigueObjective`], which counts the whole record: the
@@ -151,12 +168,7 @@ pub fn check_dual_numbers(st: &DesignStudy<'_>, params: &[DesignParameter], v: &
     let g = eval(st, params, v, Want::Gradient, Execution::Serial);
     let point = DesignPoint { params, values: v };
     for (s, cell) in g.cells.iter().enumerate() {
-        let cs = st.cell_scene(s, &point).unwrap();
-        let spec = cs.fatigue_spec().unwrap();
-        let objective = FatigueObjective {
-            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
-            effort: 0.0,
-        };
+        let (cs, objective) = cell_objective(st, s, &point);
         let steps = cs.time.steps;
         for (i, p) in params.iter().enumerate() {
             let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();

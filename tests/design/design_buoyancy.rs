@@ -267,9 +267,8 @@ fn buoyancy_gradient_is_refused_at_a_hot_spot() {
 /// for the buoyancy parameter.
 #[test]
 fn adjoint_buoyancy_gradient_equals_the_forward_mode() {
-    use chainbeam::fatigue::WellheadDamage;
     use chainbeam::model::{NodeQuantities, WaveTangent};
-    use chainbeam::{Chain, FatigueObjective, Parameter};
+    use chainbeam::{Chain, Parameter};
     use num_dual::Dual64;
     let scene = scene();
     let cells = cells();
@@ -283,12 +282,7 @@ fn adjoint_buoyancy_gradient_equals_the_forward_mode() {
         values: &v,
     };
     for (s, cell) in g.cells.iter().enumerate() {
-        let cs = st.cell_scene(s, &point).unwrap();
-        let spec = cs.fatigue_spec().unwrap();
-        let objective = FatigueObjective {
-            damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
-            effort: 0.0,
-        };
+        let (cs, objective) = crate::design_study::cell_objective(&st, s, &point);
         let steps = cs.time.steps;
         let u = vec![Dual64::from(0.0); steps + 1];
         let stack = cs.stackup.as_ref().unwrap();

@@ -358,34 +358,29 @@ fn run_cell(
     let probability = input.cells.map_or(1.0, |c| c[cell].probability);
     // With a hot spot to act on, the cell's damage is that hot spot's (module docs, "The moment
     // the controllers act on").
-    if let Some(h) = acted_hot_spot(input).map_err(run_err)? {
-        let a = &hot_assessed[h].assessment;
-        return Ok(CellRun {
-            damage: CellDamage {
-                probability,
-                damage: a.damage,
-                duration_s: a.duration_s,
-            },
-            force: record.force,
-            gains: record.gains,
-            thrust: record.thrust,
-            hotspots: hot_damages,
-        });
-    }
-    let a = assess(
-        input.spec,
-        MomentHistory {
-            duration_s: record.duration_s - skip as f64 * input.scene.time.step,
-            moment: &record.moment[skip..],
-            moment_x: record.moment_x.as_deref().map(|m| &m[skip..]),
-            measure: input.scene.moment_measure(),
-        },
-    )?;
+    let (damage, duration_s) = match acted_hot_spot(input).map_err(run_err)? {
+        Some(h) => {
+            let a = &hot_assessed[h].assessment;
+            (a.damage, a.duration_s)
+        }
+        None => {
+            let a = assess(
+                input.spec,
+                MomentHistory {
+                    duration_s: record.duration_s - skip as f64 * input.scene.time.step,
+                    moment: &record.moment[skip..],
+                    moment_x: record.moment_x.as_deref().map(|m| &m[skip..]),
+                    measure: input.scene.moment_measure(),
+                },
+            )?;
+            (a.damage, a.duration_s)
+        }
+    };
     Ok(CellRun {
         damage: CellDamage {
             probability,
-            damage: a.damage,
-            duration_s: a.duration_s,
+            damage,
+            duration_s,
         },
         force: record.force,
         gains: record.gains,

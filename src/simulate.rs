@@ -202,6 +202,54 @@ fn try_with_capacity<T>(len: usize, too_large: &Error) -> Result<Vec<T>> {
     Ok(v)
 }
 
+/// The size of a trajectory to reserve: n pendulums, n_c constraints, step h, N steps, and
+/// whether it records the x components of the controls (the spatial model's M₀ₓ is recorded
+/// whenever DIM = 3).
+#[derive(Clone, Copy, Debug)]
+struct Shape {
+    n: usize,
+    n_constraints: usize,
+    h: f64,
+    steps: usize,
+    controls_x: bool,
+}
+
+impl<D, const DIM: usize> Trajectory<D, DIM> {
+    /// The empty trajectory of `shape` with room for the whole run, allocated fallibly: each
+    /// series (N + 1 values per time, n or n_c per node, N step statistics) reserved exactly,
+    /// `too_large` when the allocator refuses.
+    fn reserve(shape: Shape, lengths: Vec<f64>, too_large: &Error) -> Result<Self> {
+        let Shape {
+            n,
+            n_constraints: nc,
+            h,
+            steps,
+            controls_x,
+        } = shape;
+        let e = too_large;
+        let (states, multipliers) = ((steps + 1) * n, (steps + 1) * nc);
+        let spatial = if DIM == 3 { steps + 1 } else { 0 };
+        Ok(Trajectory {
+            n,
+            n_constraints: nc,
+            h,
+            steps,
+            q: try_with_capacity(states, e)?,
+            p: try_with_capacity(states, e)?,
+            lambda: try_with_capacity(multipliers, e)?,
+            mu: try_with_capacity(multipliers, e)?,
+            energy: try_with_capacity(steps + 1, e)?,
+            moment: try_with_capacity(steps + 1, e)?,
+            controls: try_with_capacity(steps + 1, e)?,
+            moment_x: try_with_capacity(spatial, e)?,
+            controls_x: try_with_capacity(if controls_x { spatial } else { 0 }, e)?,
+            tip_target: try_with_capacity(steps + 1, e)?,
+            stats: try_with_capacity(steps, e)?,
+            lengths,
+        })
+    }
+}
+
 /// The trajectory of a scene in the model it needs: planar (`DIM = 2`) when every load lies in
 /// the yz-plane, spatial (`DIM = 3`) when some load has an x component ([`Scene::is_spatial`]).
 /// Everything is read through the methods, in either model (time grid, energy, M₀ and M₀ₓ,
@@ -473,26 +521,14 @@ impl<const DIM: usize> Recorder<DIM> {
         if bytes > MAX_TRAJECTORY_BYTES {
             return Err(e.clone());
         }
-        let (states, multipliers) = ((steps + 1) * n, (steps + 1) * nc);
-        let spatial = if DIM == 3 { steps + 1 } else { 0 };
-        Ok(Trajectory {
+        let shape = Shape {
             n,
             n_constraints: nc,
             h: self.h,
             steps,
-            q: try_with_capacity(states, e)?,
-            p: try_with_capacity(states, e)?,
-            lambda: try_with_capacity(multipliers, e)?,
-            mu: try_with_capacity(multipliers, e)?,
-            energy: try_with_capacity(steps + 1, e)?,
-            moment: try_with_capacity(steps + 1, e)?,
-            controls: try_with_capacity(steps + 1, e)?,
-            moment_x: try_with_capacity(spatial, e)?,
-            controls_x: try_with_capacity(if chain.has_control_x() { spatial } else { 0 }, e)?,
-            tip_target: try_with_capacity(steps + 1, e)?,
-            stats: try_with_capacity(steps, e)?,
-            lengths: chain.lengths().to_vec(),
-        })
+            controls_x: chain.has_control_x(),
+        };
+        Trajectory::reserve(shape, chain.lengths().to_vec(), e)
     }
 }
 
@@ -566,25 +602,15 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
         return Err(too_large(false));
     }
     let e = &too_large(true);
-    let (states, multipliers) = ((steps + 1) * n, (steps + 1) * nc);
-    let mut traj = Trajectory {
+    let shape = Shape {
         n,
         n_constraints: nc,
         h,
         steps,
-        q: try_with_capacity(states, e)?,
-        p: try_with_capacity(states, e)?,
-        lambda: try_with_capacity(multipliers, e)?,
-        mu: try_with_capacity(multipliers, e)?,
-        energy: try_with_capacity(steps + 1, e)?,
-        moment: try_with_capacity(steps + 1, e)?,
-        controls: try_with_capacity(steps + 1, e)?,
-        moment_x: try_with_capacity(if DIM == 3 { steps + 1 } else { 0 }, e)?,
-        controls_x: try_with_capacity(if DIM == 3 { steps + 1 } else { 0 }, e)?,
-        tip_target: try_with_capacity(steps + 1, e)?,
-        stats: try_with_capacity(steps, e)?,
-        lengths: chain.lengths().iter().map(|l| l.re()).collect(),
+        controls_x: DIM == 3,
     };
+    let lengths = chain.lengths().iter().map(|l| l.re()).collect();
+    let mut traj = Trajectory::reserve(shape, lengths, e)?;
     traj.controls.extend_from_slice(controls);
     if chain.has_control_x() {
         traj.controls_x

@@ -25,8 +25,8 @@ pub use dispersion::wavenumber;
 pub use rustfft::num_complex::Complex;
 pub use spectrum::{Spectrum, SpectrumKind};
 pub use waves::{
-    above_surface, cell_profile, depth_profile, Profiles, Sea, SeaSpec, Synthesis, WaveRecord,
-    MAX_RECORD_BYTES, SURFACE_TOLERANCE,
+    above_surface, cell_profile, depth_profile, Profiles, Sea, SeaPlan, SeaSpec, Synthesis,
+    WaveRecord, MAX_RECORD_BYTES, SURFACE_TOLERANCE,
 };
 
 use thiserror::Error;

@@ -93,6 +93,17 @@ pub struct Sea {
     direction: [f64; 2],
 }
 
+/// The size of a sea's realisation ([`Sea::plan`]), as [`Sea::new`] chooses it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SeaPlan {
+    /// The FFT length M = T_r/h.
+    pub fft_len: usize,
+    /// The frequency spacing Δω = 2π/T_r \[rad/s\].
+    pub frequency_step: f64,
+    /// The number of components N (ωⱼ = j Δω, j = 1..N).
+    pub components: usize,
+}
+
 fn invalid(quantity: &'static str, value: f64, expected: &'static str) -> SeaError {
     SeaError::Invalid {
         quantity,
@@ -113,16 +124,53 @@ fn phases(seed: u64, count: usize) -> Vec<f64> {
 }
 
 impl Sea {
-    /// Realises `spec` for a record of `duration` seconds at step `h`: the repeat period T_r is
-    /// the smallest whole number of steps not shorter than 2πN/ω_c for a given N = `components`
-    /// (ω_c = [`Spectrum::cutoff`]), or than max([`MIN_REPEAT_PERIOD`], `duration`) by default,
-    /// with then N = ⌊ω_c/Δω⌋. With h dividing 3 h (0.01, 0.05, 0.1 s, …) and a record of at
-    /// most 3 h, T_r = 3 h exactly and the sea does not depend on h.
+    /// The size of the realisation [`Sea::new`] would make of `spec` for a record of `duration`
+    /// seconds at step `h`, checked without realising it (no phase drawn, nothing stored): the
+    /// repeat period T_r = M h and N, as [`Sea::new`] chooses them, and a scan of the N
+    /// components that the amplitudes aⱼ = √(2 S(ωⱼ) Δω) and the wavenumbers kⱼ are finite.
+    /// A scene's validation calls this; the model realises the sea once.
     ///
     /// # Errors
-    /// [`SeaError::Invalid`] naming `depth`, `gravity`, `direction`, `components`, `step` or
-    /// `duration`; [`SeaError::TooLarge`] when T_r/h exceeds [`MAX_FFT_LEN`].
-    pub fn new(spec: &SeaSpec, h: f64, duration: f64) -> Result<Self, SeaError> {
+    /// Exactly those of [`Sea::new`], in the same order.
+    pub fn plan(spec: &SeaSpec, h: f64, duration: f64) -> Result<SeaPlan, SeaError> {
+        let plan = Self::sizes(spec, h, duration)?;
+        let (dw, count) = (plan.frequency_step, plan.components);
+        let omega = |j: usize| j as f64 * dw;
+        if (1..=count).any(|j| !Self::amplitude(spec, omega(j), dw).is_finite()) {
+            return Err(Self::infinite_amplitude(spec));
+        }
+        if (1..=count).any(|j| !wavenumber(omega(j), spec.depth, spec.gravity).is_finite()) {
+            return Err(Self::infinite_wavenumber(spec));
+        }
+        Ok(plan)
+    }
+
+    /// The component's amplitude aⱼ = √(2 S(ωⱼ) Δω) \[m\].
+    fn amplitude(spec: &SeaSpec, w: f64, dw: f64) -> f64 {
+        (2.0 * spec.spectrum.density(w) * dw).sqrt()
+    }
+
+    /// Outside the domain of the f64 sea: a height so large that S(ω) overflows (named, never a
+    /// NaN in the loads later).
+    fn infinite_amplitude(spec: &SeaSpec) -> SeaError {
+        invalid(
+            "hs",
+            spec.spectrum.hs,
+            "small enough that the amplitudes √(2 S(ωⱼ) Δω) are finite [m]",
+        )
+    }
+
+    /// Outside the domain of the f64 sea: a depth so small that the wavenumbers overflow.
+    fn infinite_wavenumber(spec: &SeaSpec) -> SeaError {
+        invalid(
+            "depth",
+            spec.depth,
+            "large enough that the wavenumbers are finite [m]",
+        )
+    }
+
+    /// The scalar checks and the sizes of [`Sea::plan`] and [`Sea::new`] (module docs).
+    fn sizes(spec: &SeaSpec, h: f64, duration: f64) -> Result<SeaPlan, SeaError> {
         let ok = |x: f64, c: bool| x.is_finite() && c;
         if !ok(spec.depth, spec.depth > 0.0) {
             return Err(invalid("depth", spec.depth, "positive and finite [m]"));
@@ -181,6 +229,30 @@ impl Sea {
                 (derived as usize).max(1)
             }
         };
+        Ok(SeaPlan {
+            fft_len,
+            frequency_step: dw,
+            components: count,
+        })
+    }
+
+    /// Realises `spec` for a record of `duration` seconds at step `h`: the repeat period T_r is
+    /// the smallest whole number of steps not shorter than 2πN/ω_c for a given N = `components`
+    /// (ω_c = [`Spectrum::cutoff`]), or than max([`MIN_REPEAT_PERIOD`], `duration`) by default,
+    /// with then N = ⌊ω_c/Δω⌋. With h dividing 3 h (0.01, 0.05, 0.1 s, …) and a record of at
+    /// most 3 h, T_r = 3 h exactly and the sea does not depend on h. [`Sea::plan`] checks the
+    /// same without realising it.
+    ///
+    /// # Errors
+    /// [`SeaError::Invalid`] naming `depth`, `gravity`, `direction`, `components`, `step`,
+    /// `duration` or (not finite amplitudes) `hs`; [`SeaError::TooLarge`] when T_r/h exceeds
+    /// [`MAX_FFT_LEN`].
+    pub fn new(spec: &SeaSpec, h: f64, duration: f64) -> Result<Self, SeaError> {
+        let SeaPlan {
+            fft_len,
+            frequency_step: dw,
+            components: count,
+        } = Self::sizes(spec, h, duration)?;
         let omega: Vec<f64> = (1..=count).map(|j| j as f64 * dw).collect();
         let k: Vec<f64> = omega
             .iter()
@@ -188,23 +260,13 @@ impl Sea {
             .collect();
         let amplitude: Vec<f64> = omega
             .iter()
-            .map(|&w| (2.0 * spec.spectrum.density(w) * dw).sqrt())
+            .map(|&w| Self::amplitude(spec, w, dw))
             .collect();
-        // Outside the domain of the f64 sea: a height so large that S(ω) overflows, a depth so
-        // small that the wavenumbers do (each named, never a NaN in the loads later).
         if amplitude.iter().any(|a| !a.is_finite()) {
-            return Err(invalid(
-                "hs",
-                spec.spectrum.hs,
-                "small enough that the amplitudes √(2 S(ωⱼ) Δω) are finite [m]",
-            ));
+            return Err(Self::infinite_amplitude(spec));
         }
         if k.iter().any(|k: &f64| !k.is_finite()) {
-            return Err(invalid(
-                "depth",
-                spec.depth,
-                "large enough that the wavenumbers are finite [m]",
-            ));
+            return Err(Self::infinite_wavenumber(spec));
         }
         let phase = phases(spec.seed, count);
         let phasor = amplitude

@@ -177,7 +177,8 @@ impl Waves {
         }
         let spec = self.sea_spec(scene.wave_depth())?;
         let t = scene.time;
-        let sea = Sea::new(&spec, t.step, t.steps as f64 * t.step)
+        // The realisation's size, checked without realising it (the model realises it once).
+        let plan = Sea::plan(&spec, t.step, t.steps as f64 * t.step)
             .map_err(|e| sea_error(e, self.components))?;
         let every = self.record_stride(t.step)?;
         // The record: two series per pendulum and the elevation, steps + 1 rows; with a record
@@ -205,7 +206,7 @@ impl Waves {
             ));
         }
         // The model's amplitudes: two complex values per pendulum and component.
-        let nc = sea.frequencies().len() as u64;
+        let nc = plan.components as u64;
         let amp_bytes = (scene.n() as u64).saturating_mul(nc).saturating_mul(32);
         if amp_bytes > crate::ocean::waves::MAX_RECORD_BYTES {
             let key = if self.components.is_some() {
@@ -224,7 +225,6 @@ impl Waves {
                 ),
             ));
         }
-        drop(sea);
         Ok(())
     }
 }

@@ -225,3 +225,48 @@ fn the_zoom_transform_equals_the_full_fft() {
     assert!(!sea.synthesis_rows(1, 200_000).is_zoom());
     assert!(!sea.synthesis_rows(4, 51).is_zoom());
 }
+
+/// A scene's validation sizes the sea with [`Sea::plan`] and does not realise it; the model
+/// realises it once with [`Sea::new`]. Both must agree: the same (M, Δω, N) wherever `new`
+/// succeeds (read back from the realisation: M = T_r/h, Δω, the number of frequencies), and
+/// the same error wherever it refuses — a given and a derived component count, an amplitude
+/// that overflows (H_s = 1e160: S ∝ H_s² is not finite), wavenumbers that overflow,
+/// an FFT over its limit, a non-finite step.
+#[test]
+fn the_plan_sizes_and_refuses_as_the_realisation_does() {
+    let spec = |hs: f64, tp: f64, depth: f64, components: Option<usize>| {
+        let mut s = SeaSpec::new(Spectrum::jonswap(hs, tp, 3.3).unwrap(), depth, 3);
+        s.components = components;
+        s
+    };
+    // g = 5e-324: the deep-water wavenumbers ω²/g overflow.
+    let mut tiny_gravity = spec(4.0, 10.0, 300.0, Some(50));
+    tiny_gravity.gravity = 5e-324;
+    let cases = [
+        (spec(4.0, 10.0, 300.0, None), 0.05, 600.0),
+        (spec(4.0, 10.0, 300.0, None), 0.1, 10_800.0),
+        (spec(2.0, 6.0, 50.0, Some(200)), 0.02, 60.0),
+        (spec(1e160, 10.0, 300.0, Some(50)), 0.1, 60.0),
+        (tiny_gravity, 0.1, 60.0),
+        (spec(4.0, 10.0, 300.0, None), 1e-9, 600.0),
+        (spec(4.0, 10.0, 300.0, None), f64::NAN, 600.0),
+        (spec(4.0, 1e-6, 300.0, None), 0.05, 600.0),
+    ];
+    let mut refused = 0;
+    for (i, (s, h, duration)) in cases.iter().enumerate() {
+        match (Sea::plan(s, *h, *duration), Sea::new(s, *h, *duration)) {
+            (Ok(plan), Ok(sea)) => {
+                assert_eq!(plan.fft_len as f64 * h, sea.repeat_period(), "case {i}");
+                assert_eq!(plan.frequency_step, sea.frequency_step(), "case {i}");
+                assert_eq!(plan.components, sea.frequencies().len(), "case {i}");
+            }
+            (Err(a), Err(b)) => {
+                assert_eq!(format!("{a:?}"), format!("{b:?}"), "case {i}");
+                refused += 1;
+            }
+            (a, b) => panic!("case {i}: plan {a:?}, realisation {:?}", b.map(|_| ())),
+        }
+    }
+    // The cases above are chosen so that five of the eight are refusals.
+    assert_eq!(refused, 5, "refusals");
+}

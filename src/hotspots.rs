@@ -49,7 +49,7 @@
 use crate::error::{Error, Result};
 use crate::fatigue::{assess, Assessment, FatigueError, MomentHistory, MomentMeasure};
 use crate::model::Chain;
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneInput};
 use crate::simulate::{simulate_streaming, StepObserver, StepView, StreamControls, StreamError};
 
 pub use crate::scene::HotSpotSpec;
@@ -287,7 +287,12 @@ pub fn push_joint_moments<const DIM: usize>(
 /// # Errors
 /// As [`crate::simulate()`]; [`Error::TrajectoryTooLarge`] if the allocator refuses the values;
 /// [`Error::Fatigue`] naming `joint` for an index above n.
-pub fn joint_moment_history(scene: &Scene, joints: &[usize]) -> Result<JointMoments> {
+pub fn joint_moment_history<S: SceneInput + ?Sized>(
+    scene: &S,
+    joints: &[usize],
+) -> Result<JointMoments> {
+    let checked = scene.checked()?;
+    let scene = checked.scene();
     let n = scene.n();
     if let Some(&bad) = joints.iter().find(|&&i| i > n) {
         return Err(FatigueError::InvalidSpec {
@@ -322,7 +327,7 @@ pub fn joint_moment_history(scene: &Scene, joints: &[usize]) -> Result<JointMome
         moment_x: reserve(if spatial { joints.len() } else { 0 })?,
         base: reserve(per)?,
     };
-    match simulate_streaming(scene, StreamControls::Scene, &mut sink) {
+    match simulate_streaming(&checked, StreamControls::Scene, &mut sink) {
         Ok(_) => {}
         Err(StreamError::Simulation(e)) => return Err(e),
         Err(StreamError::Observer(never)) => match never {},

@@ -188,7 +188,7 @@ pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Multipliers, Rattle, RattleOptions, State, StepStats};
 pub use scene::{
     Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
-    SceneBuilder, SceneError, SceneErrorKind, Support, TimeGrid,
+    SceneBuilder, SceneError, SceneErrorKind, SceneInput, Support, TimeGrid, ValidScene,
 };
 pub use scene::{Current, CurrentProfile, Rao, Vessel};
 pub use simulate::{

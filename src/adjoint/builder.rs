@@ -22,7 +22,7 @@ use super::{
 };
 use crate::base::Parameter;
 use crate::error::{Error, Result};
-use crate::scene::{ControlKind, ObjectiveKind, Scene};
+use crate::scene::{Checked, ControlKind, ObjectiveKind, Scene, SceneInput, Validate};
 
 /// The parts of a [`ControlProblem`] before it is built ([`ControlProblem::builder`]): the
 /// scene, the parametrisation θ ↦ u_k (`P`), the objective (`O`), whether the control is 2-axis
@@ -31,6 +31,8 @@ use crate::scene::{ControlKind, ObjectiveKind, Scene};
 #[derive(Clone, Debug)]
 pub struct ProblemBuilder<'s, P = Parametrisation, O = BendingObjective> {
     scene: &'s Scene,
+    /// The proof of the scene's validation when it came as a [`crate::ValidScene`].
+    valid: Option<Checked<'s>>,
     map: P,
     objective: O,
     two_axis: bool,
@@ -38,7 +40,7 @@ pub struct ProblemBuilder<'s, P = Parametrisation, O = BendingObjective> {
 }
 
 /// The parametrisation a scene's `[control]` asks for (default: constant).
-fn scene_map(scene: &Scene) -> Parametrisation {
+pub(crate) fn scene_map(scene: &Scene) -> Parametrisation {
     match scene.control.as_ref().map(|c| c.kind) {
         Some(ControlKind::PerStep) => Parametrisation::PerStep(PerStepControl {
             steps: scene.time.steps,
@@ -64,10 +66,14 @@ impl ControlProblem {
     /// parametrisation of its `[control]` (kind and number of values; without one, one constant
     /// force), its `[objective]` (default: the final moment) without effort penalty, a 2-axis
     /// control when `[control]` gives x components, the control at the scene's control node
-    /// (default: the tip n), checkpointing [`Checkpointing::Auto`].
-    pub fn builder(scene: &Scene) -> ProblemBuilder<'_> {
+    /// (default: the tip n), checkpointing [`Checkpointing::Auto`]. A [`Scene`] is validated
+    /// when the problem is built, a [`crate::ValidScene`] was when it was made
+    /// ([`SceneInput`]).
+    pub fn builder<S: SceneInput + ?Sized>(scene: &S) -> ProblemBuilder<'_> {
+        let (valid, scene) = (scene.known_valid(), scene.scene());
         ProblemBuilder {
             scene,
+            valid,
             map: scene_map(scene),
             objective: scene_objective(scene),
             two_axis: scene.has_two_axis_control(),
@@ -81,6 +87,7 @@ impl<'s, P: ControlMap, O: Objective> ProblemBuilder<'s, P, O> {
     pub fn map<Q: ControlMap>(self, map: Q) -> ProblemBuilder<'s, Q, O> {
         ProblemBuilder {
             scene: self.scene,
+            valid: self.valid,
             map,
             objective: self.objective,
             two_axis: self.two_axis,
@@ -92,6 +99,7 @@ impl<'s, P: ControlMap, O: Objective> ProblemBuilder<'s, P, O> {
     pub fn objective<R: Objective>(self, objective: R) -> ProblemBuilder<'s, P, R> {
         ProblemBuilder {
             scene: self.scene,
+            valid: self.valid,
             map: self.map,
             objective,
             two_axis: self.two_axis,
@@ -143,8 +151,12 @@ impl<'s, P: ControlMap, O: Objective> ProblemBuilder<'s, P, O> {
                 key: "control.values".to_string(),
             });
         }
+        let scene = match self.valid {
+            Some(checked) => checked,
+            None => self.scene.checked()?,
+        };
         ControlProblem::assemble(
-            self.scene,
+            scene,
             self.map,
             self.objective,
             self.two_axis,

@@ -67,6 +67,7 @@ pub(crate) use reverse::{Cotangents, ReverseSweep};
 pub(crate) use tape::StateView;
 
 pub use bending::BendingObjective;
+pub(crate) use builder::scene_map;
 pub use builder::{AnyProblem, ProblemBuilder};
 pub use control_map::{
     ConstantControl, ControlMap, Parametrisation, PerStepControl, PiecewiseControl,

@@ -8,7 +8,7 @@ use super::{
 use crate::base::{Parameter, Scalar};
 use crate::error::{Error, Result};
 use crate::model::Chain;
-use crate::scene::Scene;
+use crate::scene::Checked;
 use crate::steppers::rattle::State;
 use num_dual::Dual64;
 
@@ -54,14 +54,15 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
     /// # Errors
     /// [`Scene::check_stored_trajectory`]'s; the model's.
     pub(super) fn assemble(
-        scene: &Scene,
+        checked: Checked<'_>,
         map: P,
         objective: O,
         two_axis: bool,
         checkpointing: Checkpointing,
     ) -> Result<Self> {
+        let scene = checked.scene();
         scene.check_stored_trajectory()?;
-        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+        let mut chain = Chain::<f64, DIM>::from_checked(checked)?;
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }

@@ -16,7 +16,7 @@ use crate::fatigue_study::{
 use crate::hotspots::HotSpotSpec;
 use crate::model::{Chain, NodeQuantities, WaveTangent};
 use crate::optimize::any::scene_start;
-use crate::scene::Scene;
+use crate::scene::{Scene, ValidScene};
 use num_dual::Dual64;
 
 /// Where the cells of [`DesignStudy::evaluate`] run. The result is the same bit for bit.
@@ -313,7 +313,11 @@ impl DesignStudy<'_> {
     ///
     /// # Errors
     /// The study's (the sea state or the record the scene refuses, naming the key).
-    pub fn cell_scene(&self, cell: usize, point: &DesignPoint<'_>) -> Result<Scene, DesignError> {
+    pub fn cell_scene(
+        &self,
+        cell: usize,
+        point: &DesignPoint<'_>,
+    ) -> Result<ValidScene, DesignError> {
         let mut scene = self.scene.clone();
         // The run needs no `[design]` (whose bounds a design being evaluated, e.g. a finite
         // difference's, may leave).
@@ -326,13 +330,10 @@ impl DesignStudy<'_> {
         }
         let scene = match self.cells {
             Some(cells) => with_sea_state(&scene, &cells[cell].sea, cell)?,
-            None => {
-                scene.validate().map_err(|e| DesignError::Run {
-                    cell,
-                    source: Box::new(e.into()),
-                })?;
-                scene
-            }
+            None => scene.into_valid().map_err(|e| DesignError::Run {
+                cell,
+                source: Box::new(e.into()),
+            })?,
         };
         Ok(match self.record {
             Some(record) => with_record(&scene, &self.settings(), ControllerKind::Scene, record)?,

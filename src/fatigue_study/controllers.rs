@@ -3,6 +3,7 @@
 //! scene (the PD law, the best constant at the hot spot, the control bound, the training scene).
 
 use super::*;
+use crate::scene::SceneInput;
 
 /// The scene's support as the scene file writes it.
 fn support_name(s: Support) -> &'static str {
@@ -38,11 +39,13 @@ pub fn check_control_can_act(scene: &Scene, kind: ControllerKind) -> Result<(), 
 /// # Errors
 /// The library's errors of the run (a planar-only controller on a spatial scene:
 /// [`crate::Error::NeedsSpatialModel`]; a failed step or solve; an interval that does not fit).
-pub fn run_controller(
-    scene: &Scene,
+pub fn run_controller<S: SceneInput + ?Sized>(
+    scene: &S,
     kind: ControllerKind,
     settings: &ControlSettings,
 ) -> crate::Result<ControlledRecord> {
+    let valid = scene.checked()?;
+    let scene = valid.scene();
     let (interval, effort) = (settings.interval, settings.mpc.effort);
     let bound = control_bound(scene, settings);
     let thrust_scene = scene.thrust().is_some();
@@ -66,20 +69,19 @@ pub fn run_controller(
     };
     match kind {
         ControllerKind::Scene | ControllerKind::None => {
-            let mut free;
+            let free;
             let run = if kind == ControllerKind::None {
-                free = scene.clone();
-                free.control = None;
-                &free
+                free = valid.without_control();
+                free.proof()
             } else {
-                scene
+                valid
             };
-            let history = moment_history(run)?;
+            let history = moment_history(&run)?;
             // The thrust of `scene` is its `[control]` per step (none: zero).
             let thrust = match (thrust_scene, kind) {
                 (false, _) => None,
                 (true, ControllerKind::None) => Some([0.0; 2]),
-                (true, _) => Some(thrust_stats(&scene_controls(run)?)),
+                (true, _) => Some(thrust_stats(&scene_controls(&run)?)),
             };
             Ok(ControlledRecord {
                 thrust,

@@ -121,7 +121,7 @@ use crate::mpc::{
     PdLaw, PdTuning,
 };
 use crate::optimize::{minimize, Bounds, OptimOptions};
-use crate::scene::{ObjectiveKind, Scene, Support};
+use crate::scene::{ObjectiveKind, Scene, Support, ValidScene};
 use crate::simulate::moment_history;
 
 mod controllers;
@@ -321,11 +321,13 @@ fn run_cell(
     if kind == ControllerKind::Mpc && settings.mpc_fatigue_proxy {
         settings.mpc.objective = fatigue_proxy(input.spec, input.scene)?;
     }
+    // Each edit that can break the scene is validated once, where its error names it (the
+    // seed cannot); the runs take the validated scene without validating it again.
+    let seeded = with_seed(input.scene, seed)?;
     let scene = match input.cells {
-        Some(cells) => with_sea_state(input.scene, &cells[cell].sea, cell)?,
-        None => input.scene.clone(),
+        Some(cells) => with_sea_state(&seeded, &cells[cell].sea, cell)?,
+        None => seeded.into_valid().map_err(|e| run_err(e.into()))?,
     };
-    let scene = with_seed(&scene, seed)?;
     let scene = match settings.record {
         Some(record) => with_record(&scene, &settings, kind, record)?,
         None => scene,
@@ -393,14 +395,13 @@ fn run_cell(
 /// the hot spots' joint torques from the same streamed run
 /// ([`crate::hotspots::joint_moment_history`]).
 fn run_open_loop_joints(
-    scene: &Scene,
+    scene: &ValidScene,
     kind: ControllerKind,
     hotspots: &[crate::hotspots::HotSpotSpec],
 ) -> crate::Result<(ControlledRecord, crate::hotspots::JointMoments)> {
-    let mut free;
+    let free;
     let run = if kind == ControllerKind::None {
-        free = scene.clone();
-        free.control = None;
+        free = scene.without_control();
         &free
     } else {
         scene

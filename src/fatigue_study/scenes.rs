@@ -10,7 +10,11 @@ use super::*;
 /// # Errors
 /// [`StudyError::SeaState`] when the scene has no `[loads.waves]` to set, or the values are
 /// invalid for it (naming the key).
-pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scene, StudyError> {
+pub fn with_sea_state(
+    scene: &Scene,
+    sea: &SeaState,
+    cell: usize,
+) -> Result<ValidScene, StudyError> {
     let mut out = scene.clone();
     let Some(waves) = out.loads.waves.as_mut() else {
         return Err(StudyError::SeaState {
@@ -25,7 +29,7 @@ pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scen
     if let Some(direction) = sea.direction {
         waves.direction = direction;
     }
-    out.validate().map_err(|e| StudyError::SeaState {
+    out.into_valid().map_err(|e| StudyError::SeaState {
         cell,
         reason: format!(
             "H_s = {} m, T_p = {} s{}: {e}",
@@ -34,8 +38,7 @@ pub fn with_sea_state(scene: &Scene, sea: &SeaState, cell: usize) -> Result<Scen
             sea.direction
                 .map_or_else(String::new, |d| format!(", direction {d}°"))
         ),
-    })?;
-    Ok(out)
+    })
 }
 
 /// The scene's own sea state (`[loads.waves]` hs, tp, direction), if it has one.
@@ -97,7 +100,7 @@ pub fn with_record(
     settings: &ControlSettings,
     kind: ControllerKind,
     record: f64,
-) -> Result<Scene, StudyError> {
+) -> Result<ValidScene, StudyError> {
     let err = |reason: String| StudyError::Record { record, reason };
     if !(record.is_finite() && record > 0.0) {
         return Err(err("must be positive and finite".into()));
@@ -125,8 +128,7 @@ pub fn with_record(
     }
     let mut out = scene.clone();
     out.time.steps = steps as usize;
-    out.validate().map_err(|e| err(e.to_string()))?;
-    Ok(out)
+    out.into_valid().map_err(|e| err(e.to_string()))
 }
 
 /// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of

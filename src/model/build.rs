@@ -8,17 +8,23 @@ use super::{
 };
 use crate::base::{Scalar, TipCondition};
 use crate::error::{Error, ModelError, Result};
-use crate::scene::{Scene, Support};
+use crate::scene::{Checked, Scene, SceneInput, Support};
 
 impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
-    /// Builds the model of a scene (validating it first). The control node is taken from the
-    /// scene's `[control]` (default: none, so no control term is computed).
+    /// Builds the model of a scene: a [`Scene`] is validated first, a
+    /// [`ValidScene`](crate::ValidScene) was when it was made ([`SceneInput`]). The control node
+    /// is taken from the scene's `[control]` (default: none, so no control term is computed).
     ///
     /// # Errors
     /// The scene's validation errors; [`Error::NeedsSpatialModel`] for the planar model
     /// (`DIM = 2`) of a scene with out-of-plane loads ([`Scene::is_spatial`]).
-    pub fn from_scene(scene: &Scene) -> Result<Self> {
-        scene.validate()?;
+    pub fn from_scene<S: SceneInput + ?Sized>(scene: &S) -> Result<Self> {
+        Self::from_checked(scene.checked()?)
+    }
+
+    /// [`Chain::from_scene`] of a scene validated already.
+    pub(crate) fn from_checked(scene: Checked<'_>) -> Result<Self> {
+        let scene = scene.scene();
         if DIM == 2 {
             if let Some(key) = scene.spatial_key() {
                 return Err(Error::NeedsSpatialModel { key });

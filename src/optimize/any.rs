@@ -6,10 +6,10 @@
 
 use serde::Serialize;
 
-use crate::adjoint::{AnyProblem, ControlMap, ControlProblem, Objective, Parametrisation};
+use crate::adjoint::{AnyProblem, ControlMap, Objective, Parametrisation};
 use crate::error::Result;
 use crate::ocp::{IterationObserver, OcpOptions, OcpResult};
-use crate::scene::{Scene, SceneError, SceneErrorKind};
+use crate::scene::{SceneError, SceneErrorKind, SceneInput};
 
 use super::{HessianVec, OptimProblem, ProblemShape};
 
@@ -101,11 +101,14 @@ pub const RICCATI_PLANAR: &str = crate::error::PLANAR_ONLY;
 /// without a `[control]`); for a 2-axis control θ₀ = (θ_x; θ_z), the x components first.
 ///
 /// # Errors
-/// [`Error::Scene`](crate::Error::Scene) (`control.values`, a [`SceneError`] naming the key) when the number of
-/// values does not fit the kind (a validated scene always fits); the errors of
-/// [`ProblemBuilder::build`](crate::adjoint::ProblemBuilder::build).
-pub fn scene_start(scene: &Scene) -> Result<(Parametrisation, Vec<f64>)> {
-    let map = *ControlProblem::builder(scene).build()?.map();
+/// [`Error::Scene`](crate::Error::Scene): a [`Scene`](crate::Scene)'s validation errors, or
+/// `control.values` (a [`SceneError`] naming the key) when the number of values does not fit
+/// the kind (a validated scene always fits). No model is built: the parametrisation is the
+/// one [`ControlProblem::builder`](crate::adjoint::ControlProblem::builder) takes from the
+/// scene.
+pub fn scene_start<S: SceneInput + ?Sized>(scene: &S) -> Result<(Parametrisation, Vec<f64>)> {
+    let scene = scene.checked()?;
+    let map = crate::adjoint::scene_map(&scene);
     let (values, values_x) = match &scene.control {
         Some(c) => (c.values.clone(), c.values_x.clone()),
         None => (vec![0.0], None),

@@ -31,6 +31,7 @@ pub(crate) mod series;
 mod soil;
 mod stackup;
 mod toml_errors;
+mod valid;
 mod validate;
 mod values;
 mod vessel;
@@ -72,6 +73,8 @@ pub use soil::{water_height, Soil, SoilLumping};
 pub use stackup::{
     Body, FlexJoint, Foot, Layout, NodeTangents, Segment, Stackup, STANDARD_GRAVITY,
 };
+pub(crate) use valid::{sealed::Validate, Checked};
+pub use valid::{SceneInput, ValidScene};
 pub use vessel::{
     Rao, Thrust, Vessel, DEFAULT_THRUST_BOUND, DEFAULT_THRUST_RATE_BOUND,
     DEFAULT_VESSEL_ADDED_MASS, DEFAULT_VESSEL_DAMPING, DEFAULT_VESSEL_MASS, DEFAULT_VESSEL_RAMP,

@@ -13,7 +13,7 @@ use super::{check_controls, node_positions, piece_index};
 use crate::base::StepStats;
 use crate::error::{Error, Result};
 use crate::model::Chain;
-use crate::scene::{ControlKind, Scene};
+use crate::scene::{Checked, ControlKind, Scene, SceneInput};
 use crate::steppers::rattle::{Rattle, State};
 
 /// The controls a streamed run applies.
@@ -248,17 +248,28 @@ pub struct StreamSummary {
 /// variants (controls of the wrong length or not finite, a failed step) except
 /// [`Error::TrajectoryTooLarge`], which a streamed run cannot meet;
 /// [`StreamError::Observer`] with the observer's error. Either stops the run.
-pub fn simulate_streaming<O: StepObserver>(
-    scene: &Scene,
+pub fn simulate_streaming<S: SceneInput + ?Sized, O: StepObserver>(
+    scene: &S,
+    controls: StreamControls<'_>,
+    observer: &mut O,
+) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
+    let scene = scene.checked().map_err(Error::from)?;
+    simulate_streaming_checked(scene, controls, observer)
+}
+
+/// [`simulate_streaming`] of a scene validated already.
+pub(crate) fn simulate_streaming_checked<O: StepObserver>(
+    scene: Checked<'_>,
     controls: StreamControls<'_>,
     observer: &mut O,
 ) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
     fn run<const DIM: usize, O: StepObserver>(
-        scene: &Scene,
+        checked: Checked<'_>,
         controls: StreamControls<'_>,
         observer: &mut O,
     ) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
-        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+        let mut chain = Chain::<f64, DIM>::from_checked(checked)?;
+        let scene = checked.scene();
         let u = match controls {
             StreamControls::Scene => {
                 if let Some(c) = &scene.control {
@@ -405,7 +416,8 @@ impl StepObserver for MomentSink {
 /// # Errors
 /// As [`simulate()`](super::simulate); [`Error::TrajectoryTooLarge`] if the allocator refuses
 /// the N + 1 values.
-pub fn moment_history(scene: &Scene) -> Result<MomentSeries> {
+pub fn moment_history<S: SceneInput + ?Sized>(scene: &S) -> Result<MomentSeries> {
+    let scene = scene.checked()?;
     let steps = scene.time.steps;
     let spatial = scene.is_spatial();
     let values = (steps + 1) * if spatial { 2 } else { 1 };
@@ -428,7 +440,7 @@ pub fn moment_history(scene: &Scene) -> Result<MomentSeries> {
             .try_reserve_exact(steps + 1)
             .map_err(|_| too_large())?;
     }
-    match simulate_streaming(scene, StreamControls::Scene, &mut sink) {
+    match simulate_streaming_checked(scene, StreamControls::Scene, &mut sink) {
         Ok(_) => {}
         Err(StreamError::Simulation(e)) => return Err(e),
         Err(StreamError::Observer(never)) => match never {},

@@ -154,7 +154,7 @@ pub fn cell_objective(
         damage: WellheadDamage::new(&spec, cs.moment_measure()).unwrap(),
         effort: 0.0,
     };
-    (cs, objective)
+    (cs.into_inner(), objective)
 }
 
 /// ∂D_s/∂θ_i of every cell by the adjoint = the dual part of D_s computed in `Dual64` with θ_i

@@ -12,7 +12,7 @@ use chainbeam::hotspots::{
     HotSpotSpec, JointMoments,
 };
 use chainbeam::scene::read_text_file;
-use chainbeam::{moment_history, Scene};
+use chainbeam::{moment_history, Scene, ValidScene};
 
 mod study;
 
@@ -277,7 +277,7 @@ fn hotspots_json(
 /// same run (when the scene has `[[fatigue.hotspot]]` and no `--series`).
 fn solve(
     a: &FatigueArgs,
-    scene: &Scene,
+    scene: &ValidScene,
     spec: &FatigueSpec,
     progress: &Progress,
 ) -> Result<(Assessment, Option<Vec<HotSpotAssessment>>), CliError> {
@@ -322,7 +322,7 @@ fn solve(
 /// The simulated base moment and the hot spots' joint torques, from one streamed run.
 fn simulated_joints(
     path: &Path,
-    scene: &Scene,
+    scene: &ValidScene,
     progress: &Progress,
 ) -> Result<(History, JointMoments), CliError> {
     let spinner = progress.spinner(format!(
@@ -377,7 +377,7 @@ fn fatigue_spec(path: &Path, scene: &Scene) -> Result<FatigueSpec, CliError> {
     })
 }
 
-fn simulated(path: &Path, scene: &Scene, progress: &Progress) -> Result<History, CliError> {
+fn simulated(path: &Path, scene: &ValidScene, progress: &Progress) -> Result<History, CliError> {
     let spinner = progress.spinner(format!(
         "simulating {} steps of a {}-pendulum beam",
         scene.time.steps,

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use serde::Serialize;
 
-use chainbeam::Scene;
+use chainbeam::ValidScene;
 
 use crate::controls_io::ControlsFile;
 use crate::output::{refuse_overwrite, Inputs, Output};
@@ -71,7 +71,7 @@ struct GradientReport {
 /// What `gradient` reads: the output it will write, the scene and the `--controls` file.
 struct GradientInputs {
     out: Output,
-    scene: Scene,
+    scene: ValidScene,
     controls: Option<ControlsFile>,
 }
 

@@ -44,7 +44,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use chainbeam::Scene;
+use chainbeam::{Scene, ValidScene};
 use progress::Progress;
 
 /// The process's exit statuses (documented in `--help` and `docs/cli.md`).
@@ -197,9 +197,11 @@ pub fn lib_error(scene_file: &Path, e: chainbeam::Error) -> CliError {
     }
 }
 
-/// Reads and validates a scene file; the error names the file, the key and the reason.
-pub fn load_scene(path: &Path) -> Result<Scene, CliError> {
-    Scene::from_file(path).map_err(|e| CliError::msg(e.to_string()))
+/// Reads and validates a scene file, once: the runs built from the [`ValidScene`] do not
+/// validate it again (a command that edits it validates the edit). The error names the file,
+/// the key and the reason.
+pub fn load_scene(path: &Path) -> Result<ValidScene, CliError> {
+    ValidScene::from_file(path).map_err(|e| CliError::msg(e.to_string()))
 }
 
 /// The time-series files a scene read from `path` loads (inputs the output must not overwrite).

@@ -261,7 +261,7 @@ impl Inputs {
 
     /// Reads and validates the scene file `path` ([`crate::load_scene`]) and records it and the
     /// time-series files its loads read as inputs.
-    pub fn load_scene(&mut self, path: &Path) -> Result<chainbeam::Scene, CliError> {
+    pub fn load_scene(&mut self, path: &Path) -> Result<chainbeam::ValidScene, CliError> {
         let scene = crate::load_scene(path)?;
         self.scene(path, &scene);
         Ok(scene)

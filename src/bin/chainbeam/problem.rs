@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use chainbeam::{
     BendingObjective, ControlMap, ControlProblem, ObjectiveKind, Parametrisation, PiecewiseControl,
-    Scene,
+    ValidScene,
 };
 
 use crate::controls_io::ControlsFile;
@@ -134,7 +134,7 @@ pub fn check_effort(effort: Option<f64>) -> Result<f64, CliError> {
 /// The scene's own parametrisation and θ₀ (θ₀ = (θ_x; θ_z) for a 2-axis control).
 fn scene_parametrisation(
     path: &Path,
-    scene: &Scene,
+    scene: &ValidScene,
 ) -> Result<(Parametrisation, Vec<f64>), CliError> {
     chainbeam::optimize::scene_start(scene).map_err(|e| lib_error(path, e))
 }
@@ -181,7 +181,7 @@ fn pieces_theta(
 /// parametrisation and values of a `--controls` file, in the model they need.
 pub fn build(
     path: &Path,
-    scene: &Scene,
+    scene: &ValidScene,
     args: Option<&ProblemArgs>,
     controls: Option<&ControlsFile>,
 ) -> Result<SceneProblem, CliError> {

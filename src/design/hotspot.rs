@@ -16,7 +16,11 @@
 //! every dD/dθ_i: J is a sum of stage costs ℓ_k = g_k M(t_k), its seed at t_k the blend
 //! (1 − w) g_k k_a ∂θ_a/∂q + w g_k k_b ∂θ_b/∂q of the two joints' seeds. A parameter that is
 //! one of the two joints' springs also enters M directly: ∂M(t_k)/∂k_a = (1 − w) θ_a(t_k)
-//! (and w θ_b(t_k) for k_b), added to the adjoint's.
+//! (and w θ_b(t_k) for k_b), added to the adjoint's. A segment's buoyancy diameter D_b (a
+//! per-node quantity) enters the chain alone, not M (the springs and lengths do not move with
+//! it): dD/dD_b = Σ_k g_k dM(t_k)/dD_b is the same sweep's node-tangent share
+//! ([`crate::adjoint::adjoint_gradient_with_nodes`], module docs of [`crate::adjoint`]
+//! "Per-node quantities"), with no further run.
 //!
 //! The stage cost reads the joint angles from the nodes' transverse displacements z_i, which
 //! the adjoint's stage costs see ([`crate::adjoint::Stage::z`]): pendulum p's attitude has
@@ -34,6 +38,7 @@
 
 use std::sync::Arc;
 
+use super::scatter::node_tangents;
 use super::DesignError;
 use crate::adjoint::{ControlProblem, Objective, Stage};
 use crate::base::Scalar;
@@ -126,13 +131,16 @@ impl StepObserver for AngleSink {
 }
 
 /// One cell's hot-spot damage D and, with `params`, dD/dθ (module docs) on `scene` (the cell's,
-/// its record set), the first `skip` samples left out of the count.
+/// its record set), the first `skip` samples left out of the count: (D, dD/d`params`, dD/dD_b
+/// for the buoyancy diameter of each of the stack-up's segments `segments`), the last two from
+/// the one adjoint sweep (empty without `params`).
 pub(super) fn hot_spot_sweep(
     scene: &Scene,
     hot_spot: &HotSpotSpec,
     skip: usize,
     params: Option<&[Parameter]>,
-) -> Result<(f64, Vec<f64>), HotSpotError> {
+    segments: &[usize],
+) -> Result<(f64, Vec<f64>, Vec<f64>), HotSpotError> {
     if scene.is_spatial() {
         return Err(HotSpotError::Spatial);
     }
@@ -190,7 +198,7 @@ pub(super) fn hot_spot_sweep(
         )
         .map_err(|e| HotSpotError::Study(e.into()))?;
     let Some(params) = params else {
-        return Ok((d, Vec::new()));
+        return Ok((d, Vec::new(), Vec::new()));
     };
     let (ca, cb) = if w.weight == 0.0 {
         (ka, 0.0)
@@ -209,40 +217,53 @@ pub(super) fn hot_spot_sweep(
         .two_axis(false)
         .build_in::<2>()
         .map_err(HotSpotError::Run)?;
-    let r = problem
-        .adjoint(&theta0, params)
+    // The buoyancy diameters' node tangents ride the same sweep: the stage cost reads the
+    // nodes' positions alone, so ∂ℓ_k/∂D_b = 0 at fixed state and their share is the chain's.
+    let nodes = node_tangents::<2>(scene, segments).map_err(HotSpotError::Run)?;
+    let (r, buoyancy) = problem
+        .adjoint_with_nodes(&theta0, params, nodes)
         .map_err(HotSpotError::Run)?;
     let mut gradient = r.parameter_gradient;
-    // The springs' direct term ∂M(t_k)/∂k_i = (weight of joint i) · θ_i(t_k).
     let n = scene.beam.lengths.len();
     for (p, dp) in params.iter().zip(gradient.iter_mut()) {
-        let joint = match *p {
-            Parameter::BaseStiffness => Some(0),
-            Parameter::TipStiffness => Some(n),
-            Parameter::JointStiffness(j) => Some(j),
-            _ => None,
-        };
-        let Some(i) = joint else {
-            continue;
-        };
-        for (slot, (joint_i, weight)) in [
-            (w.lower, if w.weight == 0.0 { 1.0 } else { 1.0 - w.weight }),
-            (w.upper, w.weight),
-        ]
+        *dp += spring_direct_term(*p, n, w, &g, &sink.angles);
+    }
+    Ok((d, gradient, buoyancy))
+}
+
+/// The direct term of a parameter that is one of the hot spot's two joints' springs (`joints`,
+/// their angles θ(t_k) in `angles`, g_k = ∂D/∂M(t_k) in `g`; n pendulums):
+/// Σ_k g_k ∂M(t_k)/∂k_i with ∂M(t_k)/∂k_i = (weight of joint i) · θ_i(t_k); 0 for any other
+/// parameter.
+fn spring_direct_term(
+    p: Parameter,
+    n: usize,
+    joints: JointInterpolation,
+    g: &[f64],
+    angles: &[Vec<f64>; 2],
+) -> f64 {
+    let joint = match p {
+        Parameter::BaseStiffness => 0,
+        Parameter::TipStiffness => n,
+        Parameter::JointStiffness(j) => j,
+        _ => return 0.0,
+    };
+    let lower = if joints.weight == 0.0 {
+        1.0
+    } else {
+        1.0 - joints.weight
+    };
+    let mut term = 0.0;
+    for (slot, (joint_i, weight)) in [(joints.lower, lower), (joints.upper, joints.weight)]
         .into_iter()
         .enumerate()
-        {
-            if joint_i == i && weight != 0.0 {
-                let direct: f64 = g
-                    .iter()
-                    .zip(&sink.angles[slot])
-                    .map(|(gk, th)| gk * th)
-                    .sum();
-                *dp += weight * direct;
-            }
+    {
+        if joint_i == joint && weight != 0.0 {
+            let direct: f64 = g.iter().zip(&angles[slot]).map(|(gk, th)| gk * th).sum();
+            term += weight * direct;
         }
     }
-    Ok((d, gradient))
+    term
 }
 
 /// Why a hot spot's cell failed (mapped to [`DesignError`] with the cell and the hot spot).

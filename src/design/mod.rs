@@ -29,6 +29,8 @@
 //! gradient comes from the damage linearised at the run's rainflow pairing, J = Σ_k g_k M(t_k)
 //! with g_k = ∂D_s/∂M(t_k) from a forward run, whose adjoint seed is the blend of the two joints'
 //! seeds (`design::hotspot`): a forward run and an adjoint sweep per cell, in the planar model.
+//! A segment's buoyancy diameter is differentiated there by the same sweep's node tangents, as
+//! at the chain's base.
 
 //! # The parameters ([`DesignParameter`])
 //! The top tension T (`loads.tension`), the lower flex joint's rotational stiffness (the base
@@ -66,10 +68,13 @@
 //! for all the parameters, where the forward mode took one more run in dual numbers per cell
 //! and per buoyancy parameter; each buoyancy parameter adds per step two `Dual64`
 //! evaluations of the conservative terms and two of Morison's drag (O(n), no Newton solve)
-//! to the sweep. It needs the node-by-node Morison drag, a scene without a control, no joint
-//! damping and the chain's base as the objective; elsewhere a gradient is refused
-//! ([`DesignError::NoGradient`], or the sweep's [`crate::model::ModelError::NodeQuantities`] for
-//! joint damping) and the values alone are evaluated.
+//! to the sweep. The objective at a `[design] hotspot` carries the same node tangents through
+//! its adjoint sweep of the linearised damage J = Σ_k g_k M(t_k) (its stage cost reads the
+//! nodes' positions alone, so D_b enters through the chain;
+//! tests/design/design_buoyancy_hotspot.rs: equal to the forward mode to 10⁻¹²). It needs the node-by-node Morison drag, a scene without
+//! a control and no joint damping; elsewhere a gradient is refused ([`DesignError::NoGradient`],
+//! or the sweep's [`crate::model::ModelError::NodeQuantities`] for joint damping) and the values
+//! alone are evaluated.
 //!
 //! # Cells and executors
 //! The cells are independent: [`DesignStudy::evaluate`] runs them serially or on rayon's pool

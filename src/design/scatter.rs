@@ -147,12 +147,23 @@ fn cell_sweep<const DIM: usize>(
         let r = problem.adjoint(&theta0, params)?;
         return Ok((r.value, r.parameter_gradient, Vec::new()));
     }
+    let nodes = node_tangents::<DIM>(scene, segments)?;
+    let (r, buoyancy) = problem.adjoint_with_nodes(&theta0, params, nodes)?;
+    Ok((r.value, r.parameter_gradient, buoyancy))
+}
+
+/// The node tangents of the buoyancy diameters of the stack-up's segments `segments` on
+/// `scene` ([`seeded_nodes`], one per segment, in their order) for a cell's adjoint sweep
+/// ([`ControlProblem::adjoint_with_nodes`]): the default objective's and the hot spot's.
+pub(super) fn node_tangents<const DIM: usize>(
+    scene: &Scene,
+    segments: &[usize],
+) -> crate::Result<Vec<Box<dyn NodeTangent<f64, DIM>>>> {
     let mut nodes: Vec<Box<dyn NodeTangent<f64, DIM>>> = Vec::with_capacity(segments.len());
     for &segment in segments {
         nodes.push(Box::new(seeded_nodes::<DIM>(scene, segment)?));
     }
-    let (r, buoyancy) = problem.adjoint_with_nodes(&theta0, params, nodes)?;
-    Ok((r.value, r.parameter_gradient, buoyancy))
+    Ok(nodes)
 }
 
 impl DesignStudy<'_> {
@@ -393,48 +404,23 @@ impl DesignStudy<'_> {
             Want::Value => None,
         };
         let lib = lib.as_deref();
-        if let Some(h) = self.hot_spot()? {
-            let (damage, gradient) =
-                hot_spot_sweep(&scene, h, skip, lib).map_err(|e| e.into_design(cell, &h.name))?;
-            let step = scene.time.step;
-            return Ok(CellGradient {
-                probability: self.cells.map_or(1.0, |c| c[cell].probability),
-                damage,
-                duration_s: scene.time.steps as f64 * step - skip as f64 * step,
-                gradient,
-            });
-        }
         // The buoyancy diameters' segments, for a gradient only.
-        let mut segments = Vec::new();
-        if lib.is_some() {
-            for p in point.params.iter().filter(|p| p.is_node_quantity()) {
-                segments.push(p.segment(&scene).ok_or_else(|| DesignError::NotInModel {
-                    name: p.name(),
-                    reason: "the scene has no [[stackup.segment]] of that name",
-                })?);
-            }
-        }
-        let (damage, adjoint, buoyancy) = if scene.is_spatial() {
-            cell_sweep::<3>(&scene, objective, lib, &segments)
+        let segments = match lib {
+            Some(_) => node_segments(point, &scene)?,
+            None => Vec::new(),
+        };
+        let (damage, adjoint, buoyancy) = if let Some(h) = self.hot_spot()? {
+            hot_spot_sweep(&scene, h, skip, lib, &segments)
+                .map_err(|e| e.into_design(cell, &h.name))?
+        } else if scene.is_spatial() {
+            cell_sweep::<3>(&scene, objective, lib, &segments).map_err(run_err)?
         } else {
-            cell_sweep::<2>(&scene, objective, lib, &segments)
-        }
-        .map_err(run_err)?;
-        // The gradient in the design's order: the library's parameters' and the buoyancy
-        // diameters', both from the one adjoint sweep.
-        let mut gradient = Vec::with_capacity(if lib.is_some() { point.params.len() } else { 0 });
-        if lib.is_some() {
-            let mut from_adjoint = adjoint.into_iter();
-            let mut from_nodes = buoyancy.into_iter();
-            for p in point.params {
-                let g = if p.is_node_quantity() {
-                    from_nodes.next()
-                } else {
-                    from_adjoint.next()
-                };
-                gradient.push(g.unwrap_or(f64::NAN));
-            }
-        }
+            cell_sweep::<2>(&scene, objective, lib, &segments).map_err(run_err)?
+        };
+        let gradient = match lib {
+            Some(_) => in_design_order(point.params, adjoint, buoyancy),
+            None => Vec::new(),
+        };
         let h = scene.time.step;
         Ok(CellGradient {
             probability: self.cells.map_or(1.0, |c| c[cell].probability),
@@ -519,25 +505,54 @@ impl DesignStudy<'_> {
     }
 }
 
+/// The stack-up segment of every buoyancy diameter of the design `params`
+/// ([`DesignParameter::is_node_quantity`]), in their order, on the cell's `scene`.
+fn node_segments(point: &DesignPoint<'_>, scene: &Scene) -> Result<Vec<usize>, DesignError> {
+    point
+        .params
+        .iter()
+        .filter(|p| p.is_node_quantity())
+        .map(|p| {
+            p.segment(scene).ok_or_else(|| DesignError::NotInModel {
+                name: p.name(),
+                reason: "the scene has no [[stackup.segment]] of that name",
+            })
+        })
+        .collect()
+}
+
+/// The gradient in the design's order `params`: the library's parameters' (`adjoint`, in their
+/// order) and the buoyancy diameters' (`buoyancy`, in theirs), both from the cell's one adjoint
+/// sweep.
+fn in_design_order(params: &[DesignParameter], adjoint: Vec<f64>, buoyancy: Vec<f64>) -> Vec<f64> {
+    let mut from_adjoint = adjoint.into_iter();
+    let mut from_nodes = buoyancy.into_iter();
+    params
+        .iter()
+        .map(|p| {
+            let g = if p.is_node_quantity() {
+                from_nodes.next()
+            } else {
+                from_adjoint.next()
+            };
+            g.unwrap_or(f64::NAN)
+        })
+        .collect()
+}
+
 impl DesignStudy<'_> {
     /// [`DesignError::NoGradient`] for the first parameter of `point` that moves the chain's
     /// per-node quantities (a segment's buoyancy diameter, [`DesignParameter::is_node_quantity`])
-    /// in a study whose adjoint sweep has no node tangents for it: the objective at a
-    /// `[design] hotspot` (its sweep is not wired to them), a scene with a `[control]` (a driven
-    /// tip's mass has no node-by-node partials), the momentum drag (its constant comes from the
-    /// masses in real arithmetic), joint damping (its M⁻¹ has no node-by-node partials).
+    /// in a study whose adjoint sweep has no node tangents for it: a scene with a `[control]` (a
+    /// driven tip's mass has no node-by-node partials), the momentum drag (its constant comes
+    /// from the masses in real arithmetic), joint damping (its M⁻¹ has no node-by-node partials,
+    /// refused by the sweep itself). The objective at a `[design] hotspot` carries them as the
+    /// chain's base does.
     fn refuse_no_gradient(&self, point: &DesignPoint<'_>) -> Result<(), DesignError> {
         let Some(p) = point.params.iter().find(|p| p.is_node_quantity()) else {
             return Ok(());
         };
-        let reason = if self
-            .scene
-            .design
-            .as_ref()
-            .is_some_and(|d| d.hotspot.is_some())
-        {
-            Some("for the objective at a [design] hotspot")
-        } else if self.scene.control.is_some() {
+        let reason = if self.scene.control.is_some() {
             Some("in a scene with a [control]")
         } else if self
             .scene

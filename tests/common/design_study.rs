@@ -6,11 +6,15 @@
 #![allow(dead_code)]
 
 use crate::gradient_check::{assert_close, central, Tolerance};
+use chainbeam::adjoint::{Objective, Stage};
 use chainbeam::design::{
     DesignParameter, DesignPoint, DesignStudy, Execution, ScatterGradient, Want,
 };
-use chainbeam::fatigue::{ScatterCell, SeaState, WellheadDamage};
-use chainbeam::{Chain, FatigueObjective, Scene};
+use chainbeam::fatigue::{DamageGradient, MomentMeasure, ScatterCell, SeaState, WellheadDamage};
+use chainbeam::hotspots::{
+    interpolation_joints, joint_moment_history, HotSpotSpec, JointInterpolation,
+};
+use chainbeam::{Chain, FatigueObjective, Scalar, Scene};
 use num_dual::Dual64;
 
 /// The 21-inch riser's section (outer diameter, wall thickness) \[m\]: the `[fatigue]` section
@@ -130,12 +134,22 @@ pub fn check_central_differences(
     let fd: Vec<f64> = which.iter().zip(&fd).map(|(&i, d)| v[i] * d).collect();
     let largest = fd.iter().fold(0.0_f64, |m, d| m.max(d.abs()));
     let names: Vec<String> = which.iter().map(|&i| params[i].name()).collect();
-    assert_close(
-        &format!("θ dD_y/dθ for ({}) at {v:?}", names.join(", ")),
+    let label = format!("θ dD_y/dθ for ({}) at {v:?}", names.join(", "));
+    let worst = assert_close(
+        &label,
         &got,
         &fd,
         "central differences, step 1e-5 of each parameter",
         Tolerance::of_scale(1e-5, largest),
+    );
+    let each: Vec<f64> = got
+        .iter()
+        .zip(&fd)
+        .map(|(a, d)| (a - d).abs() / d.abs())
+        .collect();
+    eprintln!(
+        "{label}: adjoint {got:?}, central differences {fd:?}; relative to the largest \
+         {worst:e}, each to itself {each:?}"
     );
     g
 }
@@ -193,6 +207,149 @@ pub fn check_dual_numbers(st: &DesignStudy<'_>, params: &[DesignParameter], v: &
                 cell.gradient[i],
                 d.eps
             );
+        }
+    }
+}
+
+/// Cell scene `cs`'s chain in `Dual64` with the buoyancy diameter `p` of a stack-up segment
+/// seeded: every node quantity it moves set to x + ε ∂x/∂D_b, the derivatives the layout's own
+/// (`Stackup::buoyancy_tangents`: masses with added mass, submerged weights, Morison drag and
+/// the waves' inertia), through the library's public pieces alone (`Chain::set_node_quantities`).
+/// A forward run of it (`adjoint::forward_value`) is the forward-mode reference of ∂J/∂D_b.
+pub fn seeded_buoyancy_chain(cs: &Scene, p: &DesignParameter) -> Chain<Dual64, 2> {
+    use chainbeam::model::{NodeQuantities, WaveTangent};
+    let stack = cs.stackup.as_ref().unwrap();
+    let t = stack.buoyancy_tangents(
+        p.segment(cs).unwrap(),
+        &cs.beam.lengths,
+        cs.water.density,
+        cs.mudline(),
+    );
+    let dual = |re: &[f64], eps: &[f64]| -> Vec<Dual64> {
+        re.iter()
+            .zip(eps)
+            .map(|(&r, &e)| Dual64::new(r, e))
+            .collect()
+    };
+    let mut chain = Chain::<Dual64, 2>::from_scene(cs).unwrap();
+    chain
+        .set_node_quantities(NodeQuantities {
+            masses: dual(&cs.beam.masses, &t.masses),
+            weights: dual(&stack.layout.node_weights, &t.weights),
+            drag: dual(&stack.layout.node_drag, &t.drag),
+            waves: Some(WaveTangent {
+                masses: t.masses.clone(),
+                inertia: t.inertia.clone(),
+                seed: Dual64::new(0.0, 1.0),
+            }),
+        })
+        .unwrap();
+    chain
+}
+
+/// The linearised damage J = Σ_k g_k M(t_k) at a hot spot between joints a and b, written here
+/// independently of the library's stage cost: each pendulum's attitude (q_y, q_z) from the nodes'
+/// z (q_z = (z_p − z_{p−1})/l_p, q_y = √(1 − q_z²)), the joint angle atan2(a_y b_z − a_z b_y,
+/// a·b) as `chainbeam::hotspots::joint_moment` takes it, the springs constant. At the run's
+/// rainflow pairing dD/dθ = Σ_k g_k dM(t_k)/dθ, the derivative part of J in a forward-mode run
+/// (plus, for a parameter that is one of the two springs, its direct term Σ_k g_k ∂M/∂k).
+#[derive(Clone)]
+pub struct LinearisedHotSpot {
+    /// g_k = ∂D/∂M(t_k), k = 0..=N.
+    pub g: std::sync::Arc<[f64]>,
+    /// The pendulums' lengths.
+    pub lengths: std::sync::Arc<[f64]>,
+    /// (joint, coefficient: weight × spring).
+    pub terms: [(usize, f64); 2],
+}
+
+impl LinearisedHotSpot {
+    fn attitude<D: Scalar>(&self, p: usize, z: &[D]) -> (D, D) {
+        if p >= self.lengths.len() {
+            return (D::one(), D::zero());
+        }
+        let below = if p == 0 { D::zero() } else { z[p - 1] };
+        let qz = (z[p] - below) / self.lengths[p];
+        ((D::one() - qz * qz).sqrt(), qz)
+    }
+}
+
+impl Objective for LinearisedHotSpot {
+    fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
+        let mut m = D::zero();
+        for &(j, c) in &self.terms {
+            let (ay, az) = if j == 0 {
+                (D::one(), D::zero())
+            } else {
+                self.attitude(j - 1, s.z)
+            };
+            let (by, bz) = self.attitude(j, s.z);
+            m += (ay * bz - az * by).atan2(ay * by + az * bz) * c;
+        }
+        m * self.g[s.k]
+    }
+    fn uses_positions(&self) -> bool {
+        true
+    }
+}
+
+/// A cell's hot-spot damage by this test's own f64 run of the joint torques
+/// (`hotspots::joint_moment_history`, the whole record counted): the damage D, the two joints
+/// and the upper one's weight, the blended moment's g_k = ∂D/∂M(t_k), and the joints' torques.
+pub struct HotSpotRun {
+    /// D of the whole record.
+    pub damage: f64,
+    /// The two joints around the hot spot and the upper one's weight.
+    pub joints: JointInterpolation,
+    /// g_k = ∂D/∂M(t_k).
+    pub g: Vec<f64>,
+    /// The two joints' torques k θ(t_k) \[N·m\].
+    pub torques: [Vec<f64>; 2],
+}
+
+/// [`HotSpotRun`] of cell scene `cs` at the hot spot `hot`.
+pub fn hot_spot_run(cs: &Scene, hot: &HotSpotSpec) -> HotSpotRun {
+    let w = interpolation_joints(&cs.beam.lengths, hot.elevation);
+    let history = joint_moment_history(cs, &[w.lower, w.upper]).unwrap();
+    let m: Vec<f64> = history.moment[0]
+        .iter()
+        .zip(&history.moment[1])
+        .map(|(&a, &b)| w.blend(a, b))
+        .collect();
+    let damage = WellheadDamage::new(&hot.spec, MomentMeasure::Wellhead).unwrap();
+    let mut g = vec![0.0; m.len()];
+    let d = damage
+        .value_and_gradient(
+            &m,
+            None,
+            DamageGradient {
+                grad: &mut g,
+                grad_x: &mut [],
+            },
+        )
+        .unwrap();
+    let [a, b]: [Vec<f64>; 2] = history.moment.try_into().unwrap();
+    HotSpotRun {
+        damage: d,
+        joints: w,
+        g,
+        torques: [a, b],
+    }
+}
+
+impl HotSpotRun {
+    /// The linearised damage of this run on `cs` ([`LinearisedHotSpot`]), the springs those of
+    /// `cs`'s chain.
+    pub fn linearised(&self, cs: &Scene) -> LinearisedHotSpot {
+        let k = Chain::<f64, 2>::from_scene(cs).unwrap().springs().to_vec();
+        let w = self.joints;
+        LinearisedHotSpot {
+            g: self.g.clone().into(),
+            lengths: cs.beam.lengths.clone().into(),
+            terms: [
+                (w.lower, (1.0 - w.weight) * k[w.lower]),
+                (w.upper, w.weight * k[w.upper]),
+            ],
         }
     }
 }

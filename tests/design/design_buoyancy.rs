@@ -5,7 +5,8 @@
 //! per-node quantities against central differences of the layout, and the design gradient
 //! (the cell's adjoint sweep through the chain's node tangents) against the forward mode
 //! (every cell run in `Dual64` with the node quantities seeded) and against central
-//! differences of the scatter-diagram damage at two designs.
+//! differences of the scatter-diagram damage at two designs; its refusal with the momentum
+//! drag. The same gradient at a named hot spot: tests/design/design_buoyancy_hotspot.rs.
 //!
 //! The reduced riser system of tests/design/design_vessel.rs: its 91.44 m of riser with
 //! buoyancy modules (`riser_buoyant`, 47 in = 1.1938 m, foam 416.48 kg/m³, the Morison
@@ -227,15 +228,14 @@ fn buoyancy_gradient_matches_central_differences_at_two_designs() {
     }
 }
 
-/// The buoyancy diameter's gradient is refused, naming the parameter, where the sweep has no
-/// node tangents for it: the objective at a `[design] hotspot`; the values alone are
-/// evaluated there.
+/// The buoyancy diameter's gradient is refused, naming the parameter and the key that would
+/// make it available, where the sweep has no node tangents for it: the momentum drag
+/// (`stackup.drag_model = "momentum"`, whose constant comes from the masses in real
+/// arithmetic); the values alone are evaluated there.
 #[test]
-fn buoyancy_gradient_is_refused_at_a_hot_spot() {
-    let text = scene_text("", &design(NAME, "0.6", "1.5")).replace(
-        "[design]\n",
-        "[design]\nhotspot = \"keel\"\n\n[[fatigue.hotspot]]\nname = \"keel\"\nelevation = 20.0\n\n",
-    );
+fn buoyancy_gradient_is_refused_with_the_momentum_drag() {
+    let text = scene_text("", &design(NAME, "0.6", "1.5"))
+        .replace("drag_model = \"morison\"", "drag_model = \"momentum\"");
     let scene = Scene::from_toml_str(&text).unwrap();
     let cells = cells();
     let st = study(&scene, &cells, 10.0, 2.0);
@@ -249,9 +249,14 @@ fn buoyancy_gradient_is_refused_at_a_hot_spot() {
         .evaluate(&point, Want::Gradient, Execution::Serial, &|| {})
         .unwrap_err();
     assert!(
-        matches!(&err, DesignError::NoGradient { name, .. } if name == NAME),
+        matches!(&err, DesignError::NoGradient { name, reason }
+            if name == NAME && reason.contains("stackup.drag_model")),
         "{err}"
     );
+    let value = st
+        .evaluate(&point, Want::Value, Execution::Serial, &|| {})
+        .unwrap();
+    assert!(value.damage_per_year > 0.0, "{value:?}");
 }
 
 /// The study's ∂D_s/∂D_b of every cell (its adjoint sweep through the node tangents) = the
@@ -267,7 +272,6 @@ fn buoyancy_gradient_is_refused_at_a_hot_spot() {
 /// for the buoyancy parameter.
 #[test]
 fn adjoint_buoyancy_gradient_equals_the_forward_mode() {
-    use chainbeam::model::{NodeQuantities, WaveTangent};
     use chainbeam::{Chain, Parameter};
     use num_dual::Dual64;
     let scene = scene();
@@ -285,32 +289,7 @@ fn adjoint_buoyancy_gradient_equals_the_forward_mode() {
         let (cs, objective) = crate::design_study::cell_objective(&st, s, &point);
         let steps = cs.time.steps;
         let u = vec![Dual64::from(0.0); steps + 1];
-        let stack = cs.stackup.as_ref().unwrap();
-        let t = stack.buoyancy_tangents(
-            p[0].segment(&cs).unwrap(),
-            &cs.beam.lengths,
-            cs.water.density,
-            cs.mudline(),
-        );
-        let dual = |re: &[f64], eps: &[f64]| -> Vec<Dual64> {
-            re.iter()
-                .zip(eps)
-                .map(|(&r, &e)| Dual64::new(r, e))
-                .collect()
-        };
-        let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();
-        chain
-            .set_node_quantities(NodeQuantities {
-                masses: dual(&cs.beam.masses, &t.masses),
-                weights: dual(&stack.layout.node_weights, &t.weights),
-                drag: dual(&stack.layout.node_drag, &t.drag),
-                waves: Some(WaveTangent {
-                    masses: t.masses.clone(),
-                    inertia: t.inertia.clone(),
-                    seed: Dual64::new(0.0, 1.0),
-                }),
-            })
-            .unwrap();
+        let chain = crate::design_study::seeded_buoyancy_chain(&cs, &p[0]);
         let d =
             chainbeam::adjoint::forward_value(&chain, cs.time.step, steps, &u, &objective).unwrap();
         let rel = (d.re - cell.damage).abs() / cell.damage;

@@ -12,15 +12,13 @@
 //! `beam.base_stiffness`, enters its moment directly as well as through the motion).
 
 use crate::design::scene_text;
-use crate::design_study::{cells, check_central_differences, eval, study, values};
-use chainbeam::adjoint::{Objective, Stage};
+use crate::design_study::{cells, check_central_differences, eval, hot_spot_run, study, values};
 use chainbeam::design::{
     optimise, sensitivities, DesignError, DesignOptions, DesignParameter, DesignPoint,
     DesignReport, DesignStudy, Execution, Want,
 };
-use chainbeam::fatigue::{DamageGradient, MomentMeasure, WellheadDamage};
-use chainbeam::hotspots::{assess_hot_spots, interpolation_joints, joint_moment_history};
-use chainbeam::{Chain, Scalar, Scene};
+use chainbeam::hotspots::{assess_hot_spots, interpolation_joints};
+use chainbeam::{Chain, Scene};
 use num_dual::Dual64;
 
 const PARAMS: [DesignParameter; 3] = [
@@ -98,52 +96,11 @@ fn hot_spot_gradient_matches_central_differences_at_two_designs() {
     }
 }
 
-/// The linearised damage J = Σ_k g_k M(t_k) at the hot spot between joints a and b, written here
-/// independently of the library's stage cost: each pendulum's attitude (q_y, q_z) from the nodes'
-/// z (q_z = (z_p − z_{p−1})/l_p, q_y = √(1 − q_z²)), the joint angle atan2(a_y b_z − a_z b_y,
-/// a·b) as [`chainbeam::hotspots::joint_moment`] takes it, the springs constant.
-#[derive(Clone)]
-struct Linearised {
-    g: std::sync::Arc<[f64]>,
-    lengths: std::sync::Arc<[f64]>,
-    /// (joint, coefficient: weight × spring).
-    terms: [(usize, f64); 2],
-}
-
-impl Linearised {
-    fn attitude<D: Scalar>(&self, p: usize, z: &[D]) -> (D, D) {
-        if p >= self.lengths.len() {
-            return (D::one(), D::zero());
-        }
-        let below = if p == 0 { D::zero() } else { z[p - 1] };
-        let qz = (z[p] - below) / self.lengths[p];
-        ((D::one() - qz * qz).sqrt(), qz)
-    }
-}
-
-impl Objective for Linearised {
-    fn stage<D: Scalar>(&self, s: Stage<'_, D>) -> D {
-        let mut m = D::zero();
-        for &(j, c) in &self.terms {
-            let (ay, az) = if j == 0 {
-                (D::one(), D::zero())
-            } else {
-                self.attitude(j - 1, s.z)
-            };
-            let (by, bz) = self.attitude(j, s.z);
-            m += (ay * bz - az * by).atan2(ay * by + az * bz) * c;
-        }
-        m * self.g[s.k]
-    }
-    fn uses_positions(&self) -> bool {
-        true
-    }
-}
-
 /// ∂D_s/∂θ_i of every cell at the hot spot between joints 1 and 2 by the adjoint = the dual
 /// part of the linearised damage J = Σ_k g_k M(t_k) computed in `Dual64` with θ_i seeded
-/// (forward-mode differentiation of the whole run; g_k = ∂D_s/∂M(t_k) from this test's own f64
-/// run of the joint torques, `hotspots::joint_moment_history`, and the damage's gradient): at
+/// (forward-mode differentiation of the whole run, `design_study::LinearisedHotSpot`;
+/// g_k = ∂D_s/∂M(t_k) from this test's own f64 run of the joint torques,
+/// `design_study::hot_spot_run`, and the damage's gradient): at
 /// the run's rainflow pairing dD_s/dθ_i = Σ_k g_k dM(t_k)/dθ_i, which is that dual part. To
 /// 10⁻⁹ relative (both exact, round-off in different orders). Neither joint's spring is a
 /// parameter here, so M depends on θ through the motion alone; D_s from this test's history =
@@ -166,40 +123,14 @@ fn hot_spot_gradient_matches_dual_numbers_cell_by_cell() {
         .unwrap();
     for (c, cell) in g.cells.iter().enumerate() {
         let cs = st.cell_scene(c, &point).unwrap();
-        let w = interpolation_joints(&cs.beam.lengths, hot.elevation);
-        let history = joint_moment_history(&cs, &[w.lower, w.upper]).unwrap();
-        let m: Vec<f64> = history.moment[0]
-            .iter()
-            .zip(&history.moment[1])
-            .map(|(&a, &b)| w.blend(a, b))
-            .collect();
-        let damage = WellheadDamage::new(&hot.spec, MomentMeasure::Wellhead).unwrap();
-        let mut gk = vec![0.0; m.len()];
-        let d = damage
-            .value_and_gradient(
-                &m,
-                None,
-                DamageGradient {
-                    grad: &mut gk,
-                    grad_x: &mut [],
-                },
-            )
-            .unwrap();
+        let run = hot_spot_run(&cs, hot);
+        let d = run.damage;
         assert!(
             (d - cell.damage).abs() <= 1e-12 * cell.damage,
             "cell {c}: D_s {d} against {}",
             cell.damage
         );
-        let chain = Chain::<f64, 2>::from_scene(&cs).unwrap();
-        let k = chain.springs();
-        let objective = Linearised {
-            g: gk.into(),
-            lengths: cs.beam.lengths.clone().into(),
-            terms: [
-                (w.lower, (1.0 - w.weight) * k[w.lower]),
-                (w.upper, w.weight * k[w.upper]),
-            ],
-        };
+        let objective = run.linearised(&cs);
         let steps = cs.time.steps;
         for (i, p) in PARAMS.iter().enumerate() {
             let mut chain = Chain::<Dual64, 2>::from_scene(&cs).unwrap();

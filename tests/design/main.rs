@@ -12,6 +12,7 @@ mod design_study;
 
 mod design;
 mod design_buoyancy;
+mod design_buoyancy_hotspot;
 mod design_hotspot;
 mod design_node_adjoint;
 mod design_stackup;

@@ -48,7 +48,7 @@ use crate::hotspots::{
     interpolation_joints, joint_moment, pendulum_inclination, HotSpotSpec, JointInterpolation,
 };
 use crate::optimize::any::scene_start;
-use crate::scene::Scene;
+use crate::scene::ValidScene;
 use crate::simulate::{simulate_streaming, StepObserver, StepView, StreamControls, StreamError};
 use crate::Parameter;
 
@@ -135,7 +135,7 @@ impl StepObserver for AngleSink {
 /// for the buoyancy diameter of each of the stack-up's segments `segments`), the last two from
 /// the one adjoint sweep (empty without `params`).
 pub(super) fn hot_spot_sweep(
-    scene: &Scene,
+    scene: &ValidScene,
     hot_spot: &HotSpotSpec,
     skip: usize,
     params: Option<&[Parameter]>,

@@ -11,7 +11,7 @@ use crate::base::Scalar;
 use crate::fatigue::SECONDS_PER_YEAR;
 use crate::fatigue::{combine_scatter, CellDamage, DamageGradient, ScatterCell, WellheadDamage};
 use crate::fatigue_study::{
-    spin_up_steps, with_record, with_sea_state, ControlSettings, ControllerKind, StudyError,
+    cell_scene, spin_up_steps, with_record, ControlSettings, ControllerKind, StudyError,
 };
 use crate::hotspots::HotSpotSpec;
 use crate::model::{Chain, NodeQuantities, WaveTangent};
@@ -128,7 +128,7 @@ impl Objective for CountedDamage {
 /// segments `segments` from the same adjoint sweep (their node tangents, [`seeded_nodes`]).
 /// Returns (D, ∂D/∂params, ∂D/∂D_b per segment).
 fn cell_sweep<const DIM: usize>(
-    scene: &Scene,
+    scene: &ValidScene,
     objective: CountedDamage,
     params: Option<&[crate::Parameter]>,
     segments: &[usize],
@@ -156,7 +156,7 @@ fn cell_sweep<const DIM: usize>(
 /// `scene` ([`seeded_nodes`], one per segment, in their order) for a cell's adjoint sweep
 /// ([`ControlProblem::adjoint_with_nodes`]): the default objective's and the hot spot's.
 pub(super) fn node_tangents<const DIM: usize>(
-    scene: &Scene,
+    scene: &ValidScene,
     segments: &[usize],
 ) -> crate::Result<Vec<Box<dyn NodeTangent<f64, DIM>>>> {
     let mut nodes: Vec<Box<dyn NodeTangent<f64, DIM>>> = Vec::with_capacity(segments.len());
@@ -339,16 +339,16 @@ impl DesignStudy<'_> {
                 source: Box::new(e.into()),
             })?;
         }
-        let scene = match self.cells {
-            Some(cells) => with_sea_state(&scene, &cells[cell].sea, cell)?,
-            None => scene.into_valid().map_err(|e| DesignError::Run {
+        // Validated once for the design, the sea state and the record together.
+        let sea = self.cells.map(|cells| (&cells[cell].sea, cell));
+        let settings = self.settings();
+        let record = self.record.map(|r| (&settings, ControllerKind::Scene, r));
+        Ok(match (sea, record) {
+            (None, None) => scene.into_valid().map_err(|e| DesignError::Run {
                 cell,
                 source: Box::new(e.into()),
             })?,
-        };
-        Ok(match self.record {
-            Some(record) => with_record(&scene, &self.settings(), ControllerKind::Scene, record)?,
-            None => scene,
+            _ => cell_scene(&scene, sea, record)?,
         })
     }
 
@@ -581,7 +581,7 @@ impl DesignStudy<'_> {
 /// weight, Morison drag coefficient and the waves' inertia coefficient;
 /// [`Chain::set_node_quantities`]) and ∂mᵢ/∂D_b ([`SeededNodes`]).
 fn seeded_nodes<const DIM: usize>(
-    scene: &Scene,
+    scene: &ValidScene,
     segment: usize,
 ) -> crate::Result<SeededNodes<DIM>> {
     let Some(st) = scene.stackup.as_ref() else {

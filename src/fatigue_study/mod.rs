@@ -141,8 +141,8 @@ pub use outcome::{
     SeedSpread, Study, WorseThanNone,
 };
 pub use scenes::{
-    fatigue_proxy, scene_sea_state, seeds_run, spin_up_steps, with_record, with_sea_state,
-    with_seed,
+    cell_scene, fatigue_proxy, scene_sea_state, seeds_run, spin_up_steps, with_record,
+    with_sea_state, with_seed,
 };
 
 pub use crate::fatigue::scatter::MAX_SCATTER_CELLS;
@@ -321,16 +321,14 @@ fn run_cell(
     if kind == ControllerKind::Mpc && settings.mpc_fatigue_proxy {
         settings.mpc.objective = fatigue_proxy(input.spec, input.scene)?;
     }
-    // Each edit that can break the scene is validated once, where its error names it (the
-    // seed cannot); the runs take the validated scene without validating it again.
+    // The cell's scene validated once for its sea state and record (the seed cannot break
+    // it); the runs take it without validating it again.
     let seeded = with_seed(input.scene, seed)?;
-    let scene = match input.cells {
-        Some(cells) => with_sea_state(&seeded, &cells[cell].sea, cell)?,
-        None => seeded.into_valid().map_err(|e| run_err(e.into()))?,
-    };
-    let scene = match settings.record {
-        Some(record) => with_record(&scene, &settings, kind, record)?,
-        None => scene,
+    let sea = input.cells.map(|cells| (&cells[cell].sea, cell));
+    let record = settings.record.map(|r| (&settings, kind, r));
+    let scene = match (sea, record) {
+        (None, None) => seeded.into_valid().map_err(|e| run_err(e.into()))?,
+        _ => cell_scene(&seeded, sea, record)?,
     };
     let hotspots = &input.scene.hotspots;
     let (record, hot) = if hotspots.is_empty() {

@@ -2,6 +2,7 @@
 //! seed of the sea and per record length, and the spin-up and the fatigue proxy objective.
 
 use super::*;
+use crate::scene::SceneError;
 
 /// The scene with a cell's sea state: `[loads.waves]` `hs`, `tp` (and `direction` when
 /// given) replaced, every other key (the seed among them) kept (module docs, "Sea states and
@@ -16,6 +17,12 @@ pub fn with_sea_state(
     cell: usize,
 ) -> Result<ValidScene, StudyError> {
     let mut out = scene.clone();
+    set_sea_state(&mut out, sea, cell)?;
+    out.into_valid().map_err(|e| sea_state_error(sea, cell, &e))
+}
+
+/// [`with_sea_state`]'s edit, in place and not validated.
+fn set_sea_state(out: &mut Scene, sea: &SeaState, cell: usize) -> Result<(), StudyError> {
     let Some(waves) = out.loads.waves.as_mut() else {
         return Err(StudyError::SeaState {
             cell,
@@ -29,7 +36,12 @@ pub fn with_sea_state(
     if let Some(direction) = sea.direction {
         waves.direction = direction;
     }
-    out.into_valid().map_err(|e| StudyError::SeaState {
+    Ok(())
+}
+
+/// A cell's sea state that the scene refuses, naming the values and the key.
+fn sea_state_error(sea: &SeaState, cell: usize, e: &SceneError) -> StudyError {
+    StudyError::SeaState {
         cell,
         reason: format!(
             "H_s = {} m, T_p = {} s{}: {e}",
@@ -38,6 +50,42 @@ pub fn with_sea_state(
             sea.direction
                 .map_or_else(String::new, |d| format!(", direction {d}°"))
         ),
+    }
+}
+
+/// A cell's scene: the sea state `sea` = (state, cell) ([`with_sea_state`]) run for `record`
+/// = (settings, controller, seconds) ([`with_record`]), validated once for both edits; the
+/// scene as it is without them. A refusal is reported as when each edit was validated in
+/// turn: the sea state's error when the sea state alone is refused (a second validation, on
+/// the error path only), the record's otherwise.
+///
+/// # Errors
+/// [`with_sea_state`]'s and [`with_record`]'s; without either edit, the scene's own
+/// validation error as [`StudyError::Record`] over the scene's own duration.
+pub fn cell_scene(
+    scene: &Scene,
+    sea: Option<(&SeaState, usize)>,
+    record: Option<(&ControlSettings, ControllerKind, f64)>,
+) -> Result<ValidScene, StudyError> {
+    let mut out = scene.clone();
+    if let Some((sea, cell)) = sea {
+        set_sea_state(&mut out, sea, cell)?;
+    }
+    // The sea state's own refusal first, as when it was validated before the record.
+    let first = |otherwise: StudyError| {
+        sea.and_then(|(sea, cell)| with_sea_state(scene, sea, cell).err())
+            .unwrap_or(otherwise)
+    };
+    if let Some((settings, kind, seconds)) = record {
+        out.time.steps = record_steps(scene, settings, kind, seconds).map_err(first)?;
+    }
+    out.into_valid().map_err(|e| match (sea, record) {
+        (_, Some((.., seconds))) => first(record_error(seconds, &e)),
+        (Some((sea, cell)), None) => sea_state_error(sea, cell, &e),
+        (None, None) => StudyError::Record {
+            record: scene.time.steps as f64 * scene.time.step,
+            reason: e.to_string(),
+        },
     })
 }
 
@@ -101,6 +149,26 @@ pub fn with_record(
     kind: ControllerKind,
     record: f64,
 ) -> Result<ValidScene, StudyError> {
+    let mut out = scene.clone();
+    out.time.steps = record_steps(scene, settings, kind, record)?;
+    out.into_valid().map_err(|e| record_error(record, &e))
+}
+
+/// A record that the scene refuses, naming the key.
+fn record_error(record: f64, e: &SceneError) -> StudyError {
+    StudyError::Record {
+        record,
+        reason: e.to_string(),
+    }
+}
+
+/// [`with_record`]'s number of steps, checked (not validated with the scene).
+fn record_steps(
+    scene: &Scene,
+    settings: &ControlSettings,
+    kind: ControllerKind,
+    record: f64,
+) -> Result<usize, StudyError> {
     let err = |reason: String| StudyError::Record { record, reason };
     if !(record.is_finite() && record > 0.0) {
         return Err(err("must be positive and finite".into()));
@@ -126,9 +194,7 @@ pub fn with_record(
             crate::scene::MAX_STEPS
         )));
     }
-    let mut out = scene.clone();
-    out.time.steps = steps as usize;
-    out.into_valid().map_err(|e| err(e.to_string()))
+    Ok(steps as usize)
 }
 
 /// The objective MPC plans on as the fatigue proxy: Σ|M₀(t_k)|^m with m the first slope of

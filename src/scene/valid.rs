@@ -14,11 +14,11 @@
 //!
 //! let valid = catalogue::riser(5).into_valid()?; // validated here, once
 //! let chain = Chain::<f64, 2>::from_scene(&valid)?; // no second validation
-//! assert_eq!(chain.n(), 5);
+//! assert_eq!(chain.n(), valid.n());
 //! let mut scene = valid.into_inner(); // to edit it again
 //! scene.time.steps = 20;
 //! let chain = Chain::<f64, 2>::from_scene(&scene)?; // validated, since it may have changed
-//! # assert_eq!(chain.n(), 5);
+//! # assert_eq!(chain.n(), scene.n());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -181,5 +181,59 @@ pub(crate) mod sealed {
         fn known_valid(&self) -> Option<Checked<'_>> {
             Some(Checked(&self.0))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `without_control` claims validity without validating: every shipped example scene with
+    /// a `[control]` (read from examples/scenes/) stays valid without it, checked by
+    /// validating what it returns.
+    #[test]
+    fn a_scene_without_its_control_stays_valid() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/scenes");
+        let mut with_control = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let valid = ValidScene::from_file(&path).unwrap();
+            if valid.control.is_none() {
+                continue;
+            }
+            with_control += 1;
+            let free = valid.without_control();
+            assert!(free.control.is_none());
+            free.validate()
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        }
+        assert!(
+            with_control >= 3,
+            "{with_control} example scenes have a control"
+        );
+    }
+
+    /// A `ValidScene` read from text runs as the plain scene read from the same text: the
+    /// moment history of a 50-step run bit for bit (the proof changes what is validated, not
+    /// what is built).
+    #[test]
+    fn a_valid_scene_runs_as_the_plain_scene() {
+        let mut scene = crate::catalogue::riser(4);
+        scene.time.steps = 50;
+        let text = scene.to_toml_string();
+        let valid = ValidScene::from_toml_str(&text).unwrap();
+        let plain = Scene::from_toml_str(&text).unwrap();
+        let a = crate::moment_history(&valid).unwrap();
+        let b = crate::moment_history(&plain).unwrap();
+        assert_eq!(a.moment.len(), 51);
+        assert!(a
+            .moment
+            .iter()
+            .zip(&b.moment)
+            .all(|(x, y)| x.to_bits() == y.to_bits()));
+        assert!(a.moment.iter().any(|&m| m != 0.0));
     }
 }

@@ -631,6 +631,28 @@ pub fn run_study_cell(input: &StudyInput<'_>, cell: usize) -> Result<Vec<CellRun
     Ok(runs)
 }
 
+/// The thrust over the diagram from each cell's (probability, [rms, peak]): the rms weighted by
+/// the probabilities, √(Σ p_s F_s² / Σ p_s) (0 when they sum to 0), and the largest peak;
+/// `None` for a study without thrust.
+fn diagram_thrust(thrusts: Option<&[(f64, [f64; 2])]>) -> (Option<f64>, Option<f64>) {
+    match thrusts {
+        Some(t) if !t.is_empty() => {
+            let weight: f64 = t.iter().map(|(p, _)| p).sum();
+            let ms: f64 = t.iter().map(|(p, x)| p * x[0] * x[0]).sum();
+            let rms = if weight > 0.0 {
+                (ms / weight).sqrt()
+            } else {
+                0.0
+            };
+            (
+                Some(rms),
+                Some(t.iter().fold(0.0f64, |m, (_, x)| m.max(x[1]))),
+            )
+        }
+        _ => (None, None),
+    }
+}
+
 /// Combines a study's runs (module docs): `results` holds every cell's [`run_study_cell`] runs,
 /// cell after cell (cell-major, then seed, then controller).
 ///
@@ -710,22 +732,7 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
         let thrusts: Option<Vec<(f64, [f64; 2])>> = (0..n_cells)
             .map(|s| cell_thrust(s).map(|t| (run_of(s, 0, j).damage.probability, t)))
             .collect();
-        let (thrust_rms, thrust_peak) = match &thrusts {
-            Some(t) if !t.is_empty() => {
-                let weight: f64 = t.iter().map(|(p, _)| p).sum();
-                let ms: f64 = t.iter().map(|(p, x)| p * x[0] * x[0]).sum();
-                let rms = if weight > 0.0 {
-                    (ms / weight).sqrt()
-                } else {
-                    0.0
-                };
-                (
-                    Some(rms),
-                    Some(t.iter().fold(0.0f64, |m, (_, x)| m.max(x[1]))),
-                )
-            }
-            _ => (None, None),
-        };
+        let (thrust_rms, thrust_peak) = diagram_thrust(thrusts.as_deref());
         let cells = (0..n_cells)
             .zip(&combined.cells)
             .map(|(s, &per_year)| {

@@ -65,43 +65,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
         let loads = Self::point_loads(scene);
         let waves = Self::wave_field(scene)?;
         let vessel = Self::vessel_motion(scene, waves.as_ref().map(|w| w.shared_sea()))?;
-        let node_morison = scene
-            .pipe
-            .filter(|p| p.drag_model == crate::scene::DragModel::Morison);
-        // A stack-up's Morison drag: each node's own coefficient from its segments and bodies.
-        let stackup_morison = scene
-            .stackup
-            .as_ref()
-            .filter(|st| st.drag_model == crate::scene::DragModel::Morison)
-            .filter(|st| st.layout.node_drag.len() == n);
-        let morison = node_morison.is_some() || stackup_morison.is_some();
-        let water_drag = !morison
-            && (scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0));
-        let water = || {
-            CurrentDrag::new(
-                scene.loads.current.as_ref(),
-                waves.clone(),
-                D::zero(),
-                DragWeights::new(None),
-                (&lengths, &masses),
-                scene.mudline(),
-            )
-        };
-        let node_drag = match (node_morison, stackup_morison) {
-            (Some(pipe), _) => Some(NodeDrag::new(
-                pipe.drag_coefficient,
-                0.5 * scene.water.density * pipe.outer_diameter,
-                &b.lengths,
-                &b.masses,
-                water(),
-            )),
-            (None, Some(st)) => Some(NodeDrag::from_node_coefficients(
-                &st.layout.node_drag,
-                &b.masses,
-                water(),
-            )),
-            (None, None) => None,
-        };
+        let (node_drag, water_drag) = Self::node_drag_of(scene, waves.as_ref(), &lengths, &masses);
         Ok(Chain {
             n,
             inv_lengths: lengths.iter().map(|l| l.recip()).collect(),
@@ -150,6 +114,58 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             lengths,
             masses,
         })
+    }
+
+    /// Morison's drag node by node ([`NodeDrag`]) of a `[pipe]` or `[stackup]` with
+    /// `drag_model = "morison"`: ½ ρ C_d D |v_r⊥| v_r⊥ per cell on each node's velocity relative
+    /// to the water (the current and the waves); and whether the thesis's momentum drag acts
+    /// relative to the water instead ([`CurrentDrag`]: no Morison drag, and a current or waves
+    /// with `loads.drag` > 0).
+    fn node_drag_of(
+        scene: &Scene,
+        waves: Option<&std::sync::Arc<WaveField>>,
+        lengths: &[D],
+        masses: &[D],
+    ) -> (Option<NodeDrag<D, DIM>>, bool) {
+        let b = &scene.beam;
+        let node_morison = scene
+            .pipe
+            .filter(|p| p.drag_model == crate::scene::DragModel::Morison);
+        // A stack-up's Morison drag: each node's own coefficient from its segments and bodies.
+        let stackup_morison = scene
+            .stackup
+            .as_ref()
+            .filter(|st| st.drag_model == crate::scene::DragModel::Morison)
+            .filter(|st| st.layout.node_drag.len() == scene.n());
+        let morison = node_morison.is_some() || stackup_morison.is_some();
+        let water_drag = !morison
+            && (scene.loads.current.is_some() || (waves.is_some() && scene.loads.drag > 0.0));
+        let water = || {
+            CurrentDrag::new(
+                scene.loads.current.as_ref(),
+                waves.cloned(),
+                D::zero(),
+                DragWeights::new(None),
+                (lengths, masses),
+                scene.mudline(),
+            )
+        };
+        let node_drag = match (node_morison, stackup_morison) {
+            (Some(pipe), _) => Some(NodeDrag::new(
+                pipe.drag_coefficient,
+                0.5 * scene.water.density * pipe.outer_diameter,
+                &b.lengths,
+                &b.masses,
+                water(),
+            )),
+            (None, Some(st)) => Some(NodeDrag::from_node_coefficients(
+                &st.layout.node_drag,
+                &b.masses,
+                water(),
+            )),
+            (None, None) => None,
+        };
+        (node_drag, water_drag)
     }
 
     /// The vessel's motion of the top for `support = "vessel"` ([`VesselMotion`]; the scene is

@@ -10,36 +10,15 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     /// forward-mode derivatives of a whole simulation with respect to it.
     pub fn set_parameter(&mut self, p: Parameter, value: D) -> Result<()> {
         let n = self.n;
-        let missing = |parameter, reason| Error::NoSuchParameter { parameter, reason };
         // A tabulated water momentum ([`Chain::tabulate_water`]) may read the parameter.
         if let Some(nd) = &mut self.node_drag {
             nd.clear_water_table();
         }
         match p {
             Parameter::InteriorStiffness => (1..n).for_each(|i| self.springs.k[i] = value),
-            Parameter::JointStiffness(j) => {
-                if !(1..n).contains(&j) || !self.springs.present[j] {
-                    return Err(missing(
-                        p,
-                        "no interior joint with a spring there (1 ≤ j ≤ n − 1; the end springs \
-                         are BaseStiffness and TipStiffness)",
-                    ));
-                }
-                self.springs.k[j] = value;
-            }
-            Parameter::BaseStiffness => {
-                if !self.springs.present[0] {
-                    return Err(missing(p, "the support has no base spring"));
-                }
-                self.springs.k[0] = value;
-                self.moment_stiffness = value;
-            }
-            Parameter::TipStiffness => {
-                if !self.springs.present[n] {
-                    return Err(missing(p, "the support has no tip spring"));
-                }
-                self.springs.k[n] = value;
-            }
+            Parameter::JointStiffness(j) => self.set_joint_spring(p, j, value)?,
+            Parameter::BaseStiffness => self.set_end_spring(p, 0, value)?,
+            Parameter::TipStiffness => self.set_end_spring(p, n, value)?,
             Parameter::Mass if self.node_drag.is_some() => {
                 return Err(missing(
                     p,
@@ -55,21 +34,7 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                     ))
                 }
             },
-            Parameter::Mass => {
-                self.masses.iter_mut().for_each(|m| *m = value);
-                if let Some(g) = &mut self.gravity {
-                    g.masses.iter_mut().for_each(|m| *m = value);
-                }
-                if let Some(c) = &mut self.current {
-                    c.refresh(&self.lengths, &self.masses)
-                        .map_err(|e| crate::scene::sea_error(e, None))?;
-                    c.weights.refresh(&self.lengths, &self.masses);
-                }
-                if let Some(d) = &mut self.drag {
-                    d.weights.refresh(&self.lengths, &self.masses);
-                }
-                self.refresh_inverses();
-            }
+            Parameter::Mass => self.set_uniform_mass(value)?,
             Parameter::Drag => match (&mut self.drag, &mut self.current) {
                 (Some(d), _) => d.d = value,
                 (None, Some(c)) => c.d = value,
@@ -123,27 +88,83 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             Parameter::LoadForce(i)
             | Parameter::LoadForceX(i)
             | Parameter::LoadAmplitude { load: i, .. }
-            | Parameter::LoadPhase { load: i, .. } => {
-                if !self.has_parameter(p) {
-                    return Err(missing(
-                        p,
-                        "no such point load or harmonic (F_x: only in the spatial model)",
-                    ));
+            | Parameter::LoadPhase { load: i, .. } => self.set_load_parameter(p, i, value)?,
+        }
+        Ok(())
+    }
+
+    /// [`Chain::set_parameter`] of interior joint j's spring.
+    fn set_joint_spring(&mut self, p: Parameter, j: usize, value: D) -> Result<()> {
+        if !(1..self.n).contains(&j) || !self.springs.present[j] {
+            return Err(missing(
+                p,
+                "no interior joint with a spring there (1 ≤ j ≤ n − 1; the end springs are \
+                 BaseStiffness and TipStiffness)",
+            ));
+        }
+        self.springs.k[j] = value;
+        Ok(())
+    }
+
+    /// [`Chain::set_parameter`] of an end's spring, joint `end` = 0 (the base, whose stiffness
+    /// is also the moment's) or n (the tip).
+    fn set_end_spring(&mut self, p: Parameter, end: usize, value: D) -> Result<()> {
+        if !self.springs.present[end] {
+            let reason = if end == 0 {
+                "the support has no base spring"
+            } else {
+                "the support has no tip spring"
+            };
+            return Err(missing(p, reason));
+        }
+        self.springs.k[end] = value;
+        if end == 0 {
+            self.moment_stiffness = value;
+        }
+        Ok(())
+    }
+
+    /// [`Chain::set_parameter`] of the uniform mass m: every node's, gravity's, and the
+    /// quantities built from the masses (the current's drag weights and water momentum, the
+    /// inverse masses).
+    fn set_uniform_mass(&mut self, value: D) -> Result<()> {
+        self.masses.iter_mut().for_each(|m| *m = value);
+        if let Some(g) = &mut self.gravity {
+            g.masses.iter_mut().for_each(|m| *m = value);
+        }
+        if let Some(c) = &mut self.current {
+            c.refresh(&self.lengths, &self.masses)
+                .map_err(|e| crate::scene::sea_error(e, None))?;
+            c.weights.refresh(&self.lengths, &self.masses);
+        }
+        if let Some(d) = &mut self.drag {
+            d.weights.refresh(&self.lengths, &self.masses);
+        }
+        self.refresh_inverses();
+        Ok(())
+    }
+
+    /// [`Chain::set_parameter`] of point load `i` (its scene index): its force (z or x), or a
+    /// harmonic's amplitude or phase.
+    fn set_load_parameter(&mut self, p: Parameter, i: usize, value: D) -> Result<()> {
+        if !self.has_parameter(p) {
+            return Err(missing(
+                p,
+                "no such point load or harmonic (F_x: only in the spatial model)",
+            ));
+        }
+        let l = self.loads.as_mut().and_then(|ls| ls.by_scene_index(i));
+        if let Some(l) = l {
+            match p {
+                Parameter::LoadForce(_) => l.force = value,
+                Parameter::LoadForceX(_) => l.force_x = value,
+                Parameter::LoadAmplitude { harmonic, .. } => {
+                    l.harmonics[harmonic].amplitude = value;
                 }
-                let l = self.loads.as_mut().and_then(|ls| ls.by_scene_index(i));
-                if let Some(l) = l {
-                    match p {
-                        Parameter::LoadForce(_) => l.force = value,
-                        Parameter::LoadForceX(_) => l.force_x = value,
-                        Parameter::LoadAmplitude { harmonic, .. } => {
-                            l.harmonics[harmonic].amplitude = value;
-                        }
-                        Parameter::LoadPhase { harmonic, .. } => {
-                            l.harmonics[harmonic].phase = value;
-                        }
-                        _ => {}
-                    }
+                Parameter::LoadPhase { harmonic, .. } => {
+                    l.harmonics[harmonic].phase = value;
                 }
+                _ => {}
             }
         }
         Ok(())
@@ -198,4 +219,9 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             self.inv_masses[i] = self.masses[i].recip();
         }
     }
+}
+
+/// The error for a parameter the model does not have, with the reason.
+fn missing(parameter: Parameter, reason: &'static str) -> Error {
+    Error::NoSuchParameter { parameter, reason }
 }

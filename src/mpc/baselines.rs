@@ -9,7 +9,7 @@ use crate::base::Scalar;
 use crate::error::{Error, MpcError, Requirement, Result};
 use crate::ocp::{self, OcpOptions, OcpResult};
 use crate::optimize::{minimize, OptimOptions, OptimProblem, OptimResult};
-use crate::scene::Scene;
+use crate::scene::{Scene, SceneInput, ValidScene};
 
 /// u = 0 at every step.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -245,7 +245,8 @@ impl Controller for PdLaw {
 /// spatial model (J = Σ |M₀|² + ρ h Σ |u|², `DualSVec64<4>`).
 #[derive(Clone, Debug)]
 pub struct PdTuning {
-    scene: Scene,
+    /// Validated once here: every cost evaluation builds a plant from it.
+    scene: ValidScene,
     interval_steps: usize,
     bound: f64,
     effort: f64,
@@ -271,7 +272,13 @@ impl PdTuning {
     /// # Errors
     /// [`MpcError::IntervalNotMultiple`]; [`ValueError::OutOfRange`](crate::error::ValueError::OutOfRange) naming `bound` (not positive)
     /// or `effort` (not finite and ≥ 0).
-    pub fn new(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
+    pub fn new<S: SceneInput + ?Sized>(
+        scene: &S,
+        interval: f64,
+        bound: f64,
+        effort: f64,
+    ) -> Result<Self> {
+        let scene = scene.to_valid()?;
         let m = interval_steps(interval, scene.time.step)?;
         for (name, requirement, value) in [
             ("bound", Requirement::Positive, bound),
@@ -280,11 +287,11 @@ impl PdTuning {
             requirement.check(name, value).map_err(MpcError::from)?;
         }
         Ok(PdTuning {
-            scene: scene.clone(),
+            spatial: scene.spatial_key().is_some(),
+            scene,
             interval_steps: m,
             bound,
             effort,
-            spatial: scene.spatial_key().is_some(),
             hotspot: None,
         })
     }
@@ -295,7 +302,12 @@ impl PdTuning {
     ///
     /// # Errors
     /// As [`PdTuning::new`].
-    pub fn spatial(scene: &Scene, interval: f64, bound: f64, effort: f64) -> Result<Self> {
+    pub fn spatial<S: SceneInput + ?Sized>(
+        scene: &S,
+        interval: f64,
+        bound: f64,
+        effort: f64,
+    ) -> Result<Self> {
         let mut t = PdTuning::new(scene, interval, bound, effort)?;
         t.spatial = true;
         Ok(t)
@@ -384,8 +396,8 @@ fn gains<D: Scalar, const N: usize>(
 ///
 /// # Errors
 /// The plant's errors (an unstable law folds the beam: [`Error::Folded`], or Newton fails).
-pub fn pd_closed_loop_cost<D: Scalar>(
-    scene: &Scene,
+pub fn pd_closed_loop_cost<D: Scalar, S: SceneInput + ?Sized>(
+    scene: &S,
     interval_steps: usize,
     gains: &[D; 3],
     bound: f64,
@@ -416,8 +428,8 @@ pub fn pd_closed_loop_cost<D: Scalar>(
 ///
 /// # Errors
 /// As [`pd_closed_loop_cost`].
-pub fn pd_closed_loop_cost_at<D: Scalar>(
-    scene: &Scene,
+pub fn pd_closed_loop_cost_at<D: Scalar, S: SceneInput + ?Sized>(
+    scene: &S,
     interval_steps: usize,
     gains: &[D; 3],
     bound: f64,
@@ -456,8 +468,8 @@ pub fn pd_closed_loop_cost_at<D: Scalar>(
 ///
 /// # Errors
 /// The plant's errors.
-pub fn pd_closed_loop_cost_spatial<D: Scalar>(
-    scene: &Scene,
+pub fn pd_closed_loop_cost_spatial<D: Scalar, S: SceneInput + ?Sized>(
+    scene: &S,
     interval_steps: usize,
     gains: &[D; 4],
     bound: f64,

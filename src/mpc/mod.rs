@@ -281,7 +281,7 @@ use serde::Serialize;
 
 pub use crate::error::MpcError;
 use crate::error::Result;
-use crate::scene::Scene;
+use crate::scene::{Checked, SceneInput};
 use crate::steppers::rattle::State;
 
 /// A force at the control node in the two transverse axes (N): `z` in the plane of a planar
@@ -593,7 +593,7 @@ pub fn interval_steps(interval: f64, h: f64) -> Result<usize> {
 
 /// Runs `controller` against the plant of `scene` (from rest at t = 0) with one decision every
 /// `interval` seconds, to t_N (module docs). The plant runs in the spatial model when the scene
-/// has a load, a current or a control with an x component ([`Scene::spatial_key`]) or the
+/// has a load, a current or a control with an x component ([`Scene::spatial_key`](crate::Scene::spatial_key)) or the
 /// controller plans in it ([`Controller::spatial`]): the plant then holds (u_x, u_z) over each
 /// interval and the summary judges by |M₀|² = M₀ₓ² + M₀_z² and |u|² = u_x² + u_z²; otherwise
 /// in the planar model, holding u_z (u_x must be 0).
@@ -602,11 +602,12 @@ pub fn interval_steps(interval: f64, h: f64) -> Result<usize> {
 /// [`MpcError::IntervalNotMultiple`] when the interval is not a multiple of h,
 /// [`MpcError::RunNotWhole`] when it does not divide the run T = N h; the controller's and the
 /// plant's errors (a failed step, a failed solve, u_x ≠ 0 in the planar model) end the run.
-pub fn run_closed_loop(
-    scene: &Scene,
+pub fn run_closed_loop<S: SceneInput + ?Sized>(
+    scene: &S,
     interval: f64,
     controller: &mut dyn Controller,
 ) -> Result<ClosedLoopResult> {
+    let scene = scene.checked()?;
     if scene.spatial_key().is_some() || controller.spatial() {
         closed_loop::<3>(scene, interval, controller)
     } else {
@@ -616,12 +617,12 @@ pub fn run_closed_loop(
 
 /// The loop of both models: observe, decide, hold, record.
 fn closed_loop<const DIM: usize>(
-    scene: &Scene,
+    checked: Checked<'_>,
     interval: f64,
     controller: &mut dyn Controller,
 ) -> Result<ClosedLoopResult> {
     let start = Instant::now();
-    let mut plant = Plant::<f64, DIM>::new(scene)?;
+    let mut plant = Plant::<f64, DIM>::new(&checked)?;
     let m = interval_steps(interval, plant.h())?;
     let steps = plant.steps();
     if steps % m != 0 {

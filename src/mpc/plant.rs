@@ -5,7 +5,7 @@
 use crate::base::Scalar;
 use crate::error::{Error, MpcError, Result};
 use crate::model::Chain;
-use crate::scene::Scene;
+use crate::scene::SceneInput;
 use crate::steppers::rattle::{Rattle, State};
 use crate::steppers::Stepper;
 
@@ -83,8 +83,10 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
     /// # Errors
     /// The scene's model errors; [`Error::NeedsSpatialModel`] for a planar plant of a scene with
     /// loads along x.
-    pub fn new(scene: &Scene) -> Result<Self> {
-        let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+    pub fn new<S: SceneInput + ?Sized>(scene: &S) -> Result<Self> {
+        let checked = scene.checked()?;
+        let scene = checked.scene();
+        let mut chain = Chain::<f64, DIM>::from_scene(&checked)?;
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }

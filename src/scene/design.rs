@@ -162,99 +162,113 @@ impl Scene {
             ));
         }
         if let Some(name) = &d.hotspot {
-            if !self.hotspots.iter().any(|h| &h.name == name) {
-                let names: Vec<String> = self
-                    .hotspots
-                    .iter()
-                    .map(|h| format!("{:?}", h.name))
-                    .collect();
-                return Err(SceneError::invalid(
-                    "design.hotspot",
-                    format!(
-                        "no [[fatigue.hotspot]] is named {name:?} (the scene's: {})",
-                        if names.is_empty() {
-                            "none".to_string()
-                        } else {
-                            names.join(", ")
-                        }
-                    ),
-                ));
-            }
-            if self.is_spatial() {
-                return Err(SceneError::invalid(
-                    "design.hotspot",
-                    format!(
-                        "the objective at the hot spot {name:?} needs a planar scene (no load, \
-                         current, wave direction or control along x)"
-                    ),
-                ));
-            }
+            self.check_design_hotspot(name)?;
         }
         for (i, p) in d.parameters.iter().enumerate() {
-            let key = |k: &str| format!("design.parameter[{i}].{k}");
-            let value = p.parameter.value(self).map_err(|reason| {
-                SceneError::invalid(key("name"), format!("{}: {reason}", p.parameter.name()))
-            })?;
-            let Some((lo, hi)) = p.bounds else {
-                continue;
-            };
-            for (k, v) in [("lower", lo), ("upper", hi)] {
-                let signed = p.parameter.is_signed();
-                if signed && !v.is_finite() {
-                    return Err(SceneError::invalid(
-                        key(k),
-                        format!("must be finite ({}), got {v}", p.parameter.unit()),
-                    ));
-                }
-                if !(signed || v.is_finite() && v > 0.0) {
-                    return Err(SceneError::invalid(
-                        key(k),
-                        format!(
-                            "must be positive and finite ({}), got {v}",
-                            p.parameter.unit()
-                        ),
-                    ));
-                }
-            }
-            if lo >= hi {
+            self.check_design_parameter(i, p)?;
+        }
+        Ok(())
+    }
+
+    /// `[design] hotspot`: a `[[fatigue.hotspot]]` of the scene, in a planar scene.
+    fn check_design_hotspot(&self, name: &str) -> Result<(), SceneError> {
+        if !self.hotspots.iter().any(|h| h.name == name) {
+            let names: Vec<String> = self
+                .hotspots
+                .iter()
+                .map(|h| format!("{:?}", h.name))
+                .collect();
+            return Err(SceneError::invalid(
+                "design.hotspot",
+                format!(
+                    "no [[fatigue.hotspot]] is named {name:?} (the scene's: {})",
+                    if names.is_empty() {
+                        "none".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            ));
+        }
+        if self.is_spatial() {
+            return Err(SceneError::invalid(
+                "design.hotspot",
+                format!(
+                    "the objective at the hot spot {name:?} needs a planar scene (no load, \
+                     current, wave direction or control along x)"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// `[[design.parameter]]` number `i`: a parameter of the scene, bounds that are finite
+    /// (positive for an unsigned one), ordered, within the stack-up's diameters for a buoyancy
+    /// diameter, and around the scene's own value.
+    fn check_design_parameter(&self, i: usize, p: &FreeParameter) -> Result<(), SceneError> {
+        let key = |k: &str| format!("design.parameter[{i}].{k}");
+        let value = p.parameter.value(self).map_err(|reason| {
+            SceneError::invalid(key("name"), format!("{}: {reason}", p.parameter.name()))
+        })?;
+        let Some((lo, hi)) = p.bounds else {
+            return Ok(());
+        };
+        for (k, v) in [("lower", lo), ("upper", hi)] {
+            let signed = p.parameter.is_signed();
+            if signed && !v.is_finite() {
                 return Err(SceneError::invalid(
-                    key("upper"),
-                    format!("must be above lower = {lo}, got {hi}"),
+                    key(k),
+                    format!("must be finite ({}), got {v}", p.parameter.unit()),
                 ));
             }
-            if let Some(floor) = p.parameter.floor(self) {
-                if lo < floor {
-                    return Err(SceneError::invalid(
-                        key("lower"),
-                        format!(
-                            "must be at least the segment's pipe outer diameter {floor} m \
-                             (buoyancy modules are no thinner than the pipe), got {lo}"
-                        ),
-                    ));
-                }
-                let range = super::stackup_range_of("buoyancy_diameter");
-                if let Some(r) = range.filter(|r| hi > r.max) {
-                    return Err(SceneError::invalid(
-                        key("upper"),
-                        format!(
-                            "must be at most {} {} (the stack-up's diameters), got {hi}",
-                            r.max, r.unit
-                        ),
-                    ));
-                }
-            }
-            if !(lo..=hi).contains(&value) {
-                let k = if value < lo { "lower" } else { "upper" };
+            if !(signed || v.is_finite() && v > 0.0) {
                 return Err(SceneError::invalid(
                     key(k),
                     format!(
-                        "the scene's own {} = {value} {} lies outside [{lo}, {hi}]: the design \
-                         starts there",
-                        p.parameter.name(),
+                        "must be positive and finite ({}), got {v}",
                         p.parameter.unit()
                     ),
                 ));
             }
+        }
+        if lo >= hi {
+            return Err(SceneError::invalid(
+                key("upper"),
+                format!("must be above lower = {lo}, got {hi}"),
+            ));
+        }
+        if let Some(floor) = p.parameter.floor(self) {
+            if lo < floor {
+                return Err(SceneError::invalid(
+                    key("lower"),
+                    format!(
+                        "must be at least the segment's pipe outer diameter {floor} m \
+                         (buoyancy modules are no thinner than the pipe), got {lo}"
+                    ),
+                ));
+            }
+            let range = super::stackup_range_of("buoyancy_diameter");
+            if let Some(r) = range.filter(|r| hi > r.max) {
+                return Err(SceneError::invalid(
+                    key("upper"),
+                    format!(
+                        "must be at most {} {} (the stack-up's diameters), got {hi}",
+                        r.max, r.unit
+                    ),
+                ));
+            }
+        }
+        if !(lo..=hi).contains(&value) {
+            let k = if value < lo { "lower" } else { "upper" };
+            return Err(SceneError::invalid(
+                key(k),
+                format!(
+                    "the scene's own {} = {value} {} lies outside [{lo}, {hi}]: the design \
+                     starts there",
+                    p.parameter.name(),
+                    p.parameter.unit()
+                ),
+            ));
         }
         Ok(())
     }

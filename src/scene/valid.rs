@@ -144,6 +144,10 @@ pub(crate) mod sealed {
         fn scene(&self) -> &Scene;
         /// The proof, when the scene carries one.
         fn known_valid(&self) -> Option<Checked<'_>>;
+        /// An owned validated copy (validated unless it already is).
+        fn to_valid(&self) -> Result<ValidScene, SceneError> {
+            Ok(ValidScene(self.checked()?.scene().clone()))
+        }
     }
 
     impl Validate for Scene {

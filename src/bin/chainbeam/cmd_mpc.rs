@@ -16,7 +16,7 @@ use chainbeam::optimize::{OptimOptions, OptimProblem};
 use chainbeam::scene::{
     Forecast, MomentAbout, MpcSettings, MpcTable, Observe, MAX_STEPS, MPC_KEYS,
 };
-use chainbeam::{ObjectiveKind, Scene};
+use chainbeam::{ObjectiveKind, Scene, ValidScene};
 
 use crate::output::{push_f64, refuse_overwrite, Inputs, Output};
 use crate::progress::Progress;
@@ -268,7 +268,7 @@ pub fn run(a: &MpcArgs, progress: Progress) -> Result<(), CliError> {
 /// The closed loop of a run: the plant's scene and the controller's model.
 struct Loop<'a> {
     setup: &'a Setup<'a>,
-    scene: &'a Scene,
+    scene: &'a ValidScene,
     model_file: &'a Path,
 }
 
@@ -410,7 +410,7 @@ fn pd_tuning_options() -> OptimOptions {
 /// common gains ([`PdLaw`], tuned over the closed-loop Σ |M₀|²).
 fn run_baselines(
     s: &Setup<'_>,
-    scene: &Scene,
+    scene: &ValidScene,
     spatial: bool,
     progress: &Progress,
 ) -> Result<Baselines, CliError> {

@@ -631,6 +631,20 @@ pub fn run_study_cell(input: &StudyInput<'_>, cell: usize) -> Result<Vec<CellRun
     Ok(runs)
 }
 
+/// The design fatigue factor of the damage a study's cells hold: the acted-on hot spot's
+/// ([`MpcOptions::hotspot`](crate::mpc::MpcOptions::hotspot)), else the wellhead's.
+fn study_dff(input: &StudyInput<'_>) -> Result<f64, StudyError> {
+    let acted = acted_hot_spot(input).map_err(|e| StudyError::Run {
+        controller: "mpc",
+        cell: 0,
+        source: Box::new(e),
+    })?;
+    Ok(match acted {
+        Some(h) => input.scene.hotspots[h].spec.dff,
+        None => input.spec.dff,
+    })
+}
+
 /// The thrust over the diagram from each cell's (probability, [rms, peak]): the rms weighted by
 /// the probabilities, √(Σ p_s F_s² / Σ p_s) (0 when they sum to 0), and the largest peak;
 /// `None` for a study without thrust.
@@ -670,15 +684,7 @@ pub fn combine_study(input: &StudyInput<'_>, results: &[CellRun]) -> Result<Stud
         });
     }
     let run_of = |s: usize, i: usize, j: usize| &results[(s * k_seeds + i) * n_ctrl + j];
-    // The DFF of the damage the cells hold: the acted-on hot spot's, else the wellhead's.
-    let dff = match acted_hot_spot(input).map_err(|e| StudyError::Run {
-        controller: "mpc",
-        cell: 0,
-        source: Box::new(e),
-    })? {
-        Some(h) => input.scene.hotspots[h].spec.dff,
-        None => input.spec.dff,
-    };
+    let dff = study_dff(input)?;
     let mut controllers = Vec::with_capacity(n_ctrl);
     for (j, &kind) in input.controllers.iter().enumerate() {
         let seed_damages: Vec<Vec<f64>> = (0..n_cells)

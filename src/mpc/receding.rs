@@ -293,6 +293,41 @@ impl Mpc<3> {
     }
 }
 
+/// The horizon's number of control intervals: `None` to the end of the run, else
+/// s / interval, refused unless a positive whole number.
+fn horizon_pieces(horizon: Horizon, interval: f64) -> Result<Option<usize>> {
+    Ok(match horizon {
+        Horizon::ToEnd => None,
+        Horizon::Seconds(s) => {
+            let p = (s / interval).round();
+            if !(s.is_finite() && p >= 1.0) || (p * interval - s).abs() > 1e-9 * s {
+                return Err(MpcError::HorizonNotWhole {
+                    horizon: s,
+                    interval,
+                }
+                .into());
+            }
+            Some(p as usize)
+        }
+    })
+}
+
+/// The options' iteration counts (each ≥ 1), effort weight (finite, ≥ 0) and objective.
+fn check_counts_and_effort(options: &MpcOptions) -> Result<()> {
+    for (name, v) in [
+        ("iterations", options.iterations),
+        ("first_iterations", options.first_iterations),
+        ("thrust_iterations", options.thrust_iterations),
+    ] {
+        ValueError::check_count(name, v).map_err(MpcError::from)?;
+    }
+    Requirement::FiniteNonNegative
+        .check("effort", options.effort)
+        .map_err(MpcError::from)?;
+    options.objective.check()?;
+    Ok(())
+}
+
 impl<const DIM: usize> Mpc<DIM> {
     /// The controller of [`Mpc::new`] in the model `DIM`.
     ///
@@ -313,31 +348,8 @@ impl<const DIM: usize> Mpc<DIM> {
         let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
-        let pieces = match options.horizon {
-            Horizon::ToEnd => None,
-            Horizon::Seconds(s) => {
-                let p = (s / interval).round();
-                if !(s.is_finite() && p >= 1.0) || (p * interval - s).abs() > 1e-9 * s {
-                    return Err(MpcError::HorizonNotWhole {
-                        horizon: s,
-                        interval,
-                    }
-                    .into());
-                }
-                Some(p as usize)
-            }
-        };
-        for (name, v) in [
-            ("iterations", options.iterations),
-            ("first_iterations", options.first_iterations),
-            ("thrust_iterations", options.thrust_iterations),
-        ] {
-            ValueError::check_count(name, v).map_err(MpcError::from)?;
-        }
-        Requirement::FiniteNonNegative
-            .check("effort", options.effort)
-            .map_err(MpcError::from)?;
-        options.objective.check()?;
+        let pieces = horizon_pieces(options.horizon, interval)?;
+        check_counts_and_effort(&options)?;
         let mut model = model.clone();
         if options.forecast == Forecast::None {
             if model.loads.waves.is_none() {
@@ -367,21 +379,7 @@ impl<const DIM: usize> Mpc<DIM> {
             }),
             None => None,
         };
-        let hotspot = match &options.hotspot {
-            None if options.moment_about == MomentAbout::Mean => {
-                return Err(MpcError::MomentAboutNeedsHotSpot.into())
-            }
-            None => None,
-            Some(_) if DIM == 3 => return Err(MpcError::HotSpotSpatial.into()),
-            Some(_) if thrust.is_none() => return Err(MpcError::HotSpotNeedsThrust.into()),
-            Some(spot) => {
-                let exponent = WellheadDamage::new(&spot.spec, MomentMeasure::Wellhead)?.exponent();
-                Some(
-                    HotSpotObjective::new(&model, spot.elevation, exponent, hotspot_effort)?
-                        .with_about(options.moment_about),
-                )
-            }
-        };
+        let hotspot = Self::hot_spot_of(&model, &options, thrust.is_some(), hotspot_effort)?;
         if options.observe == Observe::Sensors {
             // The sensors read the vessel under thrust (refused with the key named otherwise).
             if DIM == 3 || thrust.is_none() {
@@ -415,6 +413,33 @@ impl<const DIM: usize> Mpc<DIM> {
             noisy,
             observer: None,
             hotspot,
+        })
+    }
+
+    /// The hot spot's objective the plan weighs ([`MpcOptions::hotspot`]: h Σ|M − M̄|^m or
+    /// h Σ|M|^m at its elevation, m the S-N curve's first slope, ρ = `effort`), `None` for the
+    /// base moment; refused about the mean without a hot spot, in the spatial model, or
+    /// without the vessel's thrust.
+    fn hot_spot_of(
+        model: &Scene,
+        options: &MpcOptions,
+        thrust: bool,
+        effort: f64,
+    ) -> Result<Option<HotSpotObjective>> {
+        Ok(match &options.hotspot {
+            None if options.moment_about == MomentAbout::Mean => {
+                return Err(MpcError::MomentAboutNeedsHotSpot.into())
+            }
+            None => None,
+            Some(_) if DIM == 3 => return Err(MpcError::HotSpotSpatial.into()),
+            Some(_) if !thrust => return Err(MpcError::HotSpotNeedsThrust.into()),
+            Some(spot) => {
+                let exponent = WellheadDamage::new(&spot.spec, MomentMeasure::Wellhead)?.exponent();
+                Some(
+                    HotSpotObjective::new(model, spot.elevation, exponent, effort)?
+                        .with_about(options.moment_about),
+                )
+            }
         })
     }
 

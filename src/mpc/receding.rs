@@ -293,6 +293,15 @@ impl Mpc<3> {
     }
 }
 
+/// The plan's model and the plant have the same number of pendulums (a plan's state is the
+/// plant's, [`MpcError::ModelSize`] otherwise).
+fn check_model_size(model: usize, plant: usize) -> Result<()> {
+    if model != plant {
+        return Err(MpcError::ModelSize { model, plant }.into());
+    }
+    Ok(())
+}
+
 /// The horizon's number of control intervals: `None` to the end of the run, else
 /// s / interval, refused unless a positive whole number.
 fn horizon_pieces(horizon: Horizon, interval: f64) -> Result<Option<usize>> {
@@ -567,13 +576,7 @@ impl<const DIM: usize> Mpc<DIM> {
                 template.clone().starting_from(start.clone(), obs.t)
             };
         }
-        if template.chain().n() != obs.state.q.len() {
-            return Err(MpcError::ModelSize {
-                model: template.chain().n(),
-                plant: obs.state.q.len(),
-            }
-            .into());
-        }
+        check_model_size(template.chain().n(), obs.state.q.len())?;
         // The force decided now completes the half-kick of the step into t_k: plan from the
         // state before it (exact: the plan's θ₀ acts on both sides of t_k as in the plant).
         match obs.state_before_kick {

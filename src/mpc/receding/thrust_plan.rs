@@ -36,15 +36,7 @@ impl Mpc {
     pub(super) fn replan_thrust(&mut self, obs: &ModelObservation<'_, 2>) -> Result<()> {
         let pieces = self.horizon_pieces(obs)?;
         let hp = self.model.time.step;
-        let r = (hp / obs.h).round();
-        // r is NaN for a non-finite step: refused as well.
-        if r.is_nan() || r < 1.0 || (r * obs.h - hp).abs() > 1e-9 * hp {
-            return Err(MpcError::ThrustStep {
-                model: hp,
-                plant: obs.h,
-            }
-            .into());
-        }
+        let r = plan_step_ratio(hp, obs.h)?;
         // From t_{k−1} with its thrust fixed (the plant re-takes the step into t_k with the
         // command decided now), or from rest at t = 0. A plan at a coarser step r h starts at
         // t_k from the observed state with the thrust applied there fixed (the plant's re-taken
@@ -65,9 +57,6 @@ impl Mpc {
         let record = self.record_chain(obs, pieces + 1)?;
         let state = self.thrust.as_mut().expect("a thrust controller");
         if state.template.as_ref().map(|t| t.0) != Some(steps) {
-            let mut scene = self.model.clone();
-            scene.time.steps = steps;
-            hold_series_past_end(&mut scene);
             let objective = match &self.hotspot {
                 Some(o) => PlanObjective::HotSpot(o.clone()),
                 None => PlanObjective::Base(BendingObjective {
@@ -75,11 +64,7 @@ impl Mpc {
                     effort: self.options.effort,
                 }),
             };
-            let problem = ControlProblem::builder(&scene)
-                .map(PerStepControl { steps })
-                .objective(objective)
-                .build_in::<2>()?
-                .with_chain(record);
+            let problem = thrust_template(&self.model, steps, objective, record)?;
             state.template = Some((steps, problem));
         }
         if let Some(noisy) = self.noisy.as_mut() {
@@ -91,13 +76,7 @@ impl Mpc {
             state.template = Some((t.0, t.1.with_chain(chain)));
         }
         let template = &state.template.as_ref().expect("set above").1;
-        if template.chain().n() != obs.state.q.len() {
-            return Err(MpcError::ModelSize {
-                model: template.chain().n(),
-                plant: obs.state.q.len(),
-            }
-            .into());
-        }
+        super::check_model_size(template.chain().n(), obs.state.q.len())?;
         let problem = match start {
             Some(prev) => template.clone().starting_from(prev.clone(), t_start)?,
             None => template.clone(),
@@ -129,20 +108,12 @@ impl Mpc {
         let (u0, _) = plan.thrusts(&self.warm);
         let j0 = problem.value(&u0)?;
         plan.sigma = 1e-3 * j0.abs() / (pieces as f64 * actuator.bound * actuator.bound);
-        let opts = OptimOptions {
-            method: Method::Lbfgs,
-            max_iters: if self.decisions == 0 {
-                self.options.first_iterations
-            } else {
-                self.options.thrust_iterations
-            },
-            bounds: Some(Bounds::symmetric(actuator.bound)?),
-            first_step: 0.01 * actuator.bound,
-            trust_radius: 0.1 * actuator.bound,
-            max_trust_radius: actuator.bound,
-            polish_steps: 0,
-            ..OptimOptions::default()
+        let max_iters = if self.decisions == 0 {
+            self.options.first_iterations
+        } else {
+            self.options.thrust_iterations
         };
+        let opts = thrust_search(actuator, max_iters)?;
         let r = minimize(&plan, &self.warm, &opts)?;
         self.plan.clone_from(&r.theta);
         let (thrusts, _) = plan.thrusts(&r.theta);
@@ -188,4 +159,51 @@ impl Mpc {
     pub fn last_thrust_result(&self) -> Option<&crate::optimize::OptimResult> {
         self.thrust.as_ref().and_then(|t| t.last.as_ref())
     }
+}
+
+/// The ratio r = h_plan / h of the plan's step to the plant's, refused unless a whole number
+/// ≥ 1 (to 1e-9; r is NaN for a non-finite step: refused as well).
+fn plan_step_ratio(hp: f64, h: f64) -> Result<f64> {
+    let r = (hp / h).round();
+    if r.is_nan() || r < 1.0 || (r * h - hp).abs() > 1e-9 * hp {
+        return Err(MpcError::ThrustStep {
+            model: hp,
+            plant: h,
+        }
+        .into());
+    }
+    Ok(r)
+}
+
+/// The horizon's problem of `steps` per-step thrusts on the plan's `model` (its load series
+/// held past their end), on the chain `record` whose loads are realised over the run.
+fn thrust_template(
+    model: &Scene,
+    steps: usize,
+    objective: PlanObjective,
+    record: Chain<f64, 2>,
+) -> Result<ControlProblem<PerStepControl, PlanObjective>> {
+    let mut scene = model.clone();
+    scene.time.steps = steps;
+    hold_series_past_end(&mut scene);
+    Ok(ControlProblem::builder(&scene)
+        .map(PerStepControl { steps })
+        .objective(objective)
+        .build_in::<2>()?
+        .with_chain(record))
+}
+
+/// The bounded L-BFGS of a thrust re-plan: |F| ≤ F_max, `max_iters` iterations, steps scaled
+/// to F_max, no polishing.
+fn thrust_search(actuator: Actuator, max_iters: usize) -> Result<OptimOptions> {
+    Ok(OptimOptions {
+        method: Method::Lbfgs,
+        max_iters,
+        bounds: Some(Bounds::symmetric(actuator.bound)?),
+        first_step: 0.01 * actuator.bound,
+        trust_radius: 0.1 * actuator.bound,
+        max_trust_radius: actuator.bound,
+        polish_steps: 0,
+        ..OptimOptions::default()
+    })
 }

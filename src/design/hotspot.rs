@@ -38,7 +38,7 @@
 
 use std::sync::Arc;
 
-use super::scatter::node_tangents;
+use super::tangents::node_tangents;
 use super::DesignError;
 use crate::adjoint::{ControlProblem, Objective, Stage};
 use crate::base::Scalar;

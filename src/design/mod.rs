@@ -120,6 +120,7 @@ mod optimise;
 mod report;
 mod scatter;
 mod search;
+mod tangents;
 
 pub use optimise::{
     optimise, sensitivities, sensitivities_with, CellRunner, DesignIterate, DesignOptions,

@@ -5,8 +5,9 @@
 use rayon::prelude::*;
 
 use super::hotspot::hot_spot_sweep;
+use super::tangents::node_tangents;
 use super::{DesignError, DesignParameter};
-use crate::adjoint::{ControlProblem, History, NodeTangent, Objective, SeededNodes, Stage};
+use crate::adjoint::{ControlProblem, History, Objective, Stage};
 use crate::base::Scalar;
 use crate::fatigue::SECONDS_PER_YEAR;
 use crate::fatigue::{combine_scatter, CellDamage, DamageGradient, ScatterCell, WellheadDamage};
@@ -14,10 +15,8 @@ use crate::fatigue_study::{
     cell_scene, spin_up_steps, with_record, ControlSettings, ControllerKind, StudyError,
 };
 use crate::hotspots::HotSpotSpec;
-use crate::model::{Chain, NodeQuantities, WaveTangent};
 use crate::optimize::any::scene_start;
 use crate::scene::{Scene, ValidScene};
-use num_dual::Dual64;
 
 /// Where the cells of [`DesignStudy::evaluate`] run. The result is the same bit for bit.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -125,7 +124,8 @@ impl Objective for CountedDamage {
 
 /// D and ∂D/∂θ (or D alone, by a forward run, when `params` is `None`) on `scene` in the model
 /// `DIM`: the library's parameters `params` and the buoyancy diameters of the stack-up's
-/// segments `segments` from the same adjoint sweep (their node tangents, [`seeded_nodes`]).
+/// segments `segments` from the same adjoint sweep (their node tangents,
+/// [`node_tangents`]).
 /// Returns (D, ∂D/∂params, ∂D/∂D_b per segment).
 fn cell_sweep<const DIM: usize>(
     scene: &ValidScene,
@@ -150,20 +150,6 @@ fn cell_sweep<const DIM: usize>(
     let nodes = node_tangents::<DIM>(scene, segments)?;
     let (r, buoyancy) = problem.adjoint_with_nodes(&theta0, params, nodes)?;
     Ok((r.value, r.parameter_gradient, buoyancy))
-}
-
-/// The node tangents of the buoyancy diameters of the stack-up's segments `segments` on
-/// `scene` ([`seeded_nodes`], one per segment, in their order) for a cell's adjoint sweep
-/// ([`ControlProblem::adjoint_with_nodes`]): the default objective's and the hot spot's.
-pub(super) fn node_tangents<const DIM: usize>(
-    scene: &ValidScene,
-    segments: &[usize],
-) -> crate::Result<Vec<Box<dyn NodeTangent<f64, DIM>>>> {
-    let mut nodes: Vec<Box<dyn NodeTangent<f64, DIM>>> = Vec::with_capacity(segments.len());
-    for &segment in segments {
-        nodes.push(Box::new(seeded_nodes::<DIM>(scene, segment)?));
-    }
-    Ok(nodes)
 }
 
 impl DesignStudy<'_> {
@@ -572,42 +558,4 @@ impl DesignStudy<'_> {
             None => Ok(()),
         }
     }
-}
-
-/// The node tangents of a cell's scene with respect to the buoyancy diameter of the stack-up's
-/// segment `segment` (a design's [`DesignParameter::BuoyancyDiameter`]) for its adjoint sweep:
-/// the chain in `Dual64` with every node quantity the buoyancy moves seeded with its exact
-/// derivative ([`crate::scene::Stackup::buoyancy_tangents`]: mass with added mass, submerged
-/// weight, Morison drag coefficient and the waves' inertia coefficient;
-/// [`Chain::set_node_quantities`]) and ∂mᵢ/∂D_b ([`SeededNodes`]).
-fn seeded_nodes<const DIM: usize>(
-    scene: &ValidScene,
-    segment: usize,
-) -> crate::Result<SeededNodes<DIM>> {
-    let Some(st) = scene.stackup.as_ref() else {
-        return Err(crate::model::ModelError::NodeQuantities {
-            reason: "a buoyancy diameter needs the scene's [stackup]",
-        }
-        .into());
-    };
-    let lengths = &scene.beam.lengths;
-    let t = st.buoyancy_tangents(segment, lengths, scene.water.density, scene.mudline());
-    let dual = |re: &[f64], eps: &[f64]| -> Vec<Dual64> {
-        re.iter()
-            .zip(eps)
-            .map(|(&r, &e)| Dual64::new(r, e))
-            .collect()
-    };
-    let mut chain = Chain::<Dual64, DIM>::from_scene(scene)?;
-    chain.set_node_quantities(NodeQuantities {
-        masses: dual(&scene.beam.masses, &t.masses),
-        weights: dual(&st.layout.node_weights, &t.weights),
-        drag: dual(&st.layout.node_drag, &t.drag),
-        waves: Some(WaveTangent {
-            masses: t.masses.clone(),
-            inertia: t.inertia.clone(),
-            seed: Dual64::new(0.0, 1.0),
-        }),
-    })?;
-    SeededNodes::new(chain, t.masses)
 }

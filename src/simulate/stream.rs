@@ -254,15 +254,6 @@ pub fn simulate_streaming<S: SceneInput + ?Sized, O: StepObserver>(
     observer: &mut O,
 ) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
     let scene = scene.checked().map_err(Error::from)?;
-    simulate_streaming_checked(scene, controls, observer)
-}
-
-/// [`simulate_streaming`] of a scene validated already.
-pub(crate) fn simulate_streaming_checked<O: StepObserver>(
-    scene: Checked<'_>,
-    controls: StreamControls<'_>,
-    observer: &mut O,
-) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
     fn run<const DIM: usize, O: StepObserver>(
         checked: Checked<'_>,
         controls: StreamControls<'_>,
@@ -440,7 +431,7 @@ pub fn moment_history<S: SceneInput + ?Sized>(scene: &S) -> Result<MomentSeries>
             .try_reserve_exact(steps + 1)
             .map_err(|_| too_large())?;
     }
-    match simulate_streaming_checked(scene, StreamControls::Scene, &mut sink) {
+    match simulate_streaming(&scene, StreamControls::Scene, &mut sink) {
         Ok(_) => {}
         Err(StreamError::Simulation(e)) => return Err(e),
         Err(StreamError::Observer(never)) => match never {},

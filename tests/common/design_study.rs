@@ -98,6 +98,27 @@ pub fn eval(
     st.evaluate(&point, want, execution, &|| {}).unwrap()
 }
 
+/// [`check_central_differences`] for every parameter at each of `designs`, with the checks the
+/// buoyancy tests add: the buoyancy diameter (parameter 0) moves the damage, and the serial
+/// evaluation equals the parallel one bit for bit.
+pub fn check_buoyancy_designs(
+    st: &DesignStudy<'_>,
+    params: &[DesignParameter],
+    designs: [Vec<f64>; 2],
+) {
+    let which: Vec<usize> = (0..params.len()).collect();
+    for v in designs {
+        let g = check_central_differences(st, params, &v, &which);
+        eprintln!(
+            "at {v:?}: D_y = {:e}, dD_y/dθ = {:?}",
+            g.damage_per_year, g.gradient
+        );
+        assert!(g.gradient[0] != 0.0, "the modules move the damage: {g:?}");
+        let serial = eval(st, params, &v, Want::Gradient, Execution::Serial);
+        assert_eq!(serial, g);
+    }
+}
+
 /// ∂D_y/∂θ_i by the adjoint against central differences of D_y (each D_y by forward runs of
 /// every cell) with the step 10⁻⁵ θ_i, to 10⁻⁵ relative, for the parameters `which` (indices
 /// into `params`) at the design `v`; also D_y of the forward runs = the adjoint sweeps' bit for

@@ -14,7 +14,7 @@
 //! the vessel with its surge RAO, the current and the sea; 8 pendulums at h = 0.02 s, two cells
 //! of 10 s records.
 
-use crate::design_study::{check_central_differences, eval, study, values};
+use crate::design_study::{check_buoyancy_designs, eval, study, values};
 use crate::design_vessel::scene_text;
 use chainbeam::design::{DesignError, DesignParameter, DesignPoint, Execution, Want};
 use chainbeam::fatigue::ScatterCell;
@@ -216,16 +216,7 @@ fn buoyancy_gradient_matches_central_differences_at_two_designs() {
     let v0 = values(&scene, &p);
     assert_eq!(v0, vec![1.1938, 1.5e6]);
     let v1 = vec![0.9, 1.8e6];
-    for v in [v0, v1] {
-        let g = check_central_differences(&st, &p, &v, &[0, 1]);
-        eprintln!(
-            "at {v:?}: D_y = {:e}, dD_y/dθ = {:?}",
-            g.damage_per_year, g.gradient
-        );
-        assert!(g.gradient[0] != 0.0, "the modules move the damage: {g:?}");
-        let serial = eval(&st, &p, &v, Want::Gradient, Execution::Serial);
-        assert_eq!(serial, g);
-    }
+    check_buoyancy_designs(&st, &p, [v0, v1]);
 }
 
 /// The buoyancy diameter's gradient is refused, naming the parameter and the key that would

@@ -190,6 +190,7 @@ pub use scene::{
     Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
     SceneBuilder, SceneError, SceneErrorKind, SceneInput, Support, TimeGrid, ValidScene,
 };
+pub use scene::Initial;
 pub use scene::{Current, CurrentProfile, Rao, Vessel};
 pub use simulate::{
     moment_history, simulate_streaming, MomentSeries, StepObserver, StepView, StreamControls,

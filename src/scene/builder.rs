@@ -4,8 +4,8 @@ use super::limits::check_size;
 use super::validate::{check_spring, end_springs, support_name};
 use super::values::NumOrArray;
 use super::{
-    Beam, Control, ControlKind, Current, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
-    Initial, SceneErrorKind, Support, TimeGrid,
+    Beam, Control, ControlKind, Current, Initial, Loads, ObjectiveKind, PointLoad, Scene,
+    SceneError, SceneErrorKind, Support, TimeGrid,
 };
 
 /// Builds a [`Scene`] in code with the same defaults and validation as the file format.

@@ -180,12 +180,16 @@ fn static_start_control_gradient_is_exact() {
         let obj = BendingObjective::summed_moment().with_effort(0.5);
         let prob = ControlProblem::builder(&s)
             .map(map)
-            .objective(obj.clone())
+            .objective(obj)
             .build_in::<2>()
             .unwrap();
         // The start is the static one (the top at the offset), not the straight beam.
         let q0 = prob.chain().start_attitudes().unwrap();
-        let top: f64 = q0.iter().zip(prob.chain().lengths()).map(|(q, l)| q[1] * l).sum();
+        let top: f64 = q0
+            .iter()
+            .zip(prob.chain().lengths())
+            .map(|(q, l)| q[1] * l)
+            .sum();
         assert!((top - 0.02).abs() < 1e-12, "top z {top}");
         let theta = start(&map, steps);
         let adj = prob.adjoint(&theta, &[]).unwrap();

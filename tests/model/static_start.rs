@@ -55,7 +55,9 @@ fn a_calm_run_from_the_static_start_stays_there() {
         let top = reference.last().unwrap()[2];
         assert!((top - 10.0).abs() < 1e-9, "the top at the offset: {top}");
         let worst = largest_departure(&s, &reference);
-        println!("thrust {thrust}: largest departure from the statics over {steps} steps {worst:.2e} m");
+        println!(
+            "thrust {thrust}: largest departure from the statics over {steps} steps {worst:.2e} m"
+        );
         assert!(worst < 1e-9, "thrust {thrust}: {worst:e} m");
         let rest = largest_departure(&riser_1000m_calm(Initial::Rest, steps), &reference);
         assert!(rest > 1.0, "from rest: {rest} m");
@@ -69,12 +71,18 @@ fn a_calm_run_from_the_static_start_stays_there() {
 fn the_static_start_holds_the_offset_in_full() {
     for (initial, want) in [
         (Initial::Static, 10.0),
-        (Initial::Rest, 10.0 * 0.5 * (1.0 - (std::f64::consts::PI / 20.0).cos())),
+        (
+            Initial::Rest,
+            10.0 * 0.5 * (1.0 - (std::f64::consts::PI / 20.0).cos()),
+        ),
     ] {
         let s = riser_1000m_calm(initial, 10);
         let chain = Chain::<f64, 2>::from_scene(&s).unwrap();
         let [z, zd] = chain.prescribed_tip(1.0).unwrap();
-        assert!((z - want).abs() < 1e-12 && zd.abs() < 1.0, "{initial:?}: Z(1) = {z}");
+        assert!(
+            (z - want).abs() < 1e-12 && zd.abs() < 1.0,
+            "{initial:?}: Z(1) = {z}"
+        );
     }
 }
 
@@ -92,7 +100,10 @@ fn a_chain_without_its_static_start_refuses_to_start() {
     chainbeam::statics::set_static_start(&mut chain, &s).unwrap();
     let mut r = Rattle::new(chain, s.time.step).unwrap();
     let st = r.initial_state(0.0).unwrap();
-    assert!(st.q.iter().any(|q| (q[0] - 1.0).abs() > 1e-6), "not straight");
+    assert!(
+        st.q.iter().any(|q| (q[0] - 1.0).abs() > 1e-6),
+        "not straight"
+    );
 }
 
 /// A static start the statics cannot solve is an error naming `time.initial`, not a panic: a

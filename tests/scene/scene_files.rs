@@ -2,8 +2,8 @@
 
 use chainbeam::catalogue;
 use chainbeam::scene::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
-    Initial, SceneErrorKind, Support, TimeGrid, MAX_PENDULUMS, MAX_STEPS,
+    Beam, Control, ControlKind, Initial, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder,
+    SceneError, SceneErrorKind, Support, TimeGrid, MAX_PENDULUMS, MAX_STEPS,
 };
 use proptest::prelude::*;
 
@@ -688,7 +688,11 @@ fn invalid_values() {
             ("kind = 'constant'", "kind = 'linear'", "control.kind"),
             ("kind = 'final'", "kind = 'max'", "objective.kind"),
             // the start: "rest" or "static" only (docs/scene-format.md "[time]")
-            ("steps = 4", "steps = 4\ninitial = 'settled'", "time.initial"),
+            (
+                "steps = 4",
+                "steps = 4\ninitial = 'settled'",
+                "time.initial",
+            ),
             ("steps = 4", "steps = 4\ninitial = 'Static'", "time.initial"),
         ],
         invalid,

@@ -17,12 +17,12 @@ use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::{Initial, Scene};
 
-/// The scene of the calm sea: `scene` without `[loads.waves]`, started from rest (its own
-/// chain needs no static start). The current, the vessel's offset and every other load stay.
+/// The scene of the calm sea: `scene` without `[loads.waves]`. The current, the vessel's
+/// offset, every other load and `[time] initial` stay (the statics of a static scene's calm sea
+/// are solved on its chain as built, [`Chain::from_scene`], which solves nothing itself).
 pub fn calm_scene(scene: &Scene) -> Scene {
     let mut calm = scene.clone();
     calm.loads.waves = None;
-    calm.time.initial = Initial::Rest;
     calm
 }
 

@@ -129,3 +129,25 @@ fn an_unsolvable_static_start_names_time_initial() {
     });
     simulate(&s).unwrap();
 }
+
+/// `vessel.ramp = 0` with the 10 m offset: accepted from the static start (the offset is held
+/// from t = 0, nothing jumps: the calm run stays within 1e-9 m as above), refused from rest
+/// (the top would jump to Z₀ at t = 0) and, with a RAO, refused either way (the surge would
+/// start at t = 0 on a riser at rest), each naming `vessel.ramp`.
+#[test]
+fn a_held_offset_needs_no_ramp() {
+    let mut s = riser_1000m_calm(Initial::Static, 100);
+    s.vessel.as_mut().unwrap().ramp = 0.0;
+    let with_rao = s.clone();
+    s.vessel.as_mut().unwrap().rao = None;
+    let eq = static_equilibrium_at(&calm_scene(&s), 0.0, 0.0).unwrap();
+    let worst = largest_departure(&s, &eq.positions_xyz());
+    assert!(worst < 1e-9, "{worst:e} m");
+    let refused = |scene: &Scene| {
+        let e = Chain::<f64, 2>::from_scene(scene).unwrap_err().to_string();
+        assert!(e.contains("vessel.ramp"), "{e}");
+    };
+    refused(&with_rao);
+    s.time.initial = Initial::Rest;
+    refused(&s);
+}

@@ -209,6 +209,24 @@ pub enum Error {
         /// How the model holds the tip.
         tip: crate::base::TipCondition,
     },
+    /// `[time] initial = "static"`: the static equilibrium the run starts from
+    /// ([`crate::statics::static_start`]) was not found (its statics' error).
+    #[error(
+        "key `time.initial` = \"static\": the static equilibrium of the steady loads at t = 0, \
+         the run's start, was not found ({source}); start from `initial = \"rest\"` instead"
+    )]
+    StaticStart {
+        /// The statics' error.
+        source: Box<Error>,
+    },
+    /// `[time] initial = "static"` on a path that cannot start there: a chain built without its
+    /// static start ([`crate::statics::set_static_start`]), or a derivative the start's own
+    /// dependence would enter.
+    #[error("key `time.initial` = \"static\": {reason}")]
+    StaticStartRefused {
+        /// What cannot start from the static equilibrium, and why.
+        reason: &'static str,
+    },
     /// The planar model (`Chain<_, 2>`) was asked for a scene with a load out of the yz-plane,
     /// which needs the spatial model (`Chain<_, 3>`; [`crate::simulate()`] chooses it itself).
     #[error(

@@ -249,6 +249,7 @@ impl Integrator {
     /// scene's own validation errors; and any error of the first step's set-up (SHAKE's starter).
     pub fn new(scene: &Scene, method: IntegratorMethod, h: f64) -> Result<Self> {
         let mut chain = Chain::<f64, 2>::from_scene(scene)?;
+        crate::statics::set_static_start(&mut chain, scene)?;
         let u = constant_control(scene)?;
         if scene.control.is_none() {
             chain.set_control_node(None)?;

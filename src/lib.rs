@@ -186,6 +186,7 @@ pub use adjoint::{
 pub use error::{Error, Result};
 pub use model::{Chain, Parameter, Scalar, TipCondition};
 pub use rattle::{Multipliers, Rattle, RattleOptions, State, StepStats};
+pub use scene::Initial;
 pub use scene::{
     Beam, Control, ControlKind, Harmonic, LoadSeries, Loads, ObjectiveKind, PointLoad, Scene,
     SceneBuilder, SceneError, SceneErrorKind, SceneInput, Support, TimeGrid, ValidScene,

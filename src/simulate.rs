@@ -617,7 +617,7 @@ pub fn simulate_chain<D: Scalar, const DIM: usize>(
             .extend((0..=steps).map(|k| chain.control_x(k)));
     }
     let mut rattle = Rattle::new(chain, h)?;
-    let mut state: State<D, DIM> = rattle.straight_state();
+    let mut state: State<D, DIM> = rattle.start_state()?;
     rattle.prepare(&mut state, 0, controls[0])?;
     let mut scratch = vec![[D::zero(); DIM]; n];
     let record = |traj: &mut Trajectory<D, DIM>,

@@ -69,11 +69,13 @@
 
 mod planar;
 mod spatial;
+mod start;
+
+pub use start::{calm_scene, set_static_start, static_start};
 
 use crate::error::{Error, Result};
 use crate::model::Chain;
 use crate::scene::Scene;
-use crate::simulate::{scene_controls, scene_controls_x};
 use nalgebra::{DMatrix, DVector};
 
 /// Newton iterations before [`Error::StaticNotConverged`].
@@ -131,8 +133,10 @@ impl StaticSolution {
 /// [`Error::StaticSingular`], [`Error::StaticFolded`] for an iterate that folds the beam,
 /// [`Error::StaticNotIsolated`] for a spatial pinned-pinned scene, and the scene's errors.
 pub fn static_equilibrium(scene: &Scene) -> Result<StaticSolution> {
-    let u = *scene_controls(scene).last().unwrap_or(&0.0);
-    let ux = *scene_controls_x(scene).last().unwrap_or(&0.0);
+    // u_N is the last value of every kind of control (constant, per-step, the last piece).
+    let last = |v: Option<&Vec<f64>>| v.and_then(|v| v.last().copied()).unwrap_or(0.0);
+    let u = last(scene.control.as_ref().map(|c| &c.values));
+    let ux = last(scene.control.as_ref().and_then(|c| c.values_x.as_ref()));
     let t = scene.time.step * scene.time.steps as f64;
     if scene.is_spatial() {
         static_equilibrium_spatial(scene, t, [ux, u])

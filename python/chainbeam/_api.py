@@ -212,8 +212,10 @@ class Trajectory:
 def simulate(
     scene: Scene, controls: ArrayLike | None = None, *, duration: float | None = None
 ) -> Trajectory:
-    """Simulates ``scene`` from the straight beam at rest with RATTLE (h = ``time.step``,
-    N = ``time.steps``, or ``duration`` / h) under its own ``[control]`` or ``controls``.
+    """Simulates ``scene`` from its start with RATTLE (h = ``time.step``, N = ``time.steps``, or
+    ``duration`` / h) under its own ``[control]`` or ``controls``. The start is the scene's
+    ``[time] initial``: the straight beam at rest (``"rest"``, the default) or at rest in the
+    static equilibrium of its steady loads (``"static"``).
 
     ``controls``: one value (a constant force), N + 1 values u_0..u_N, the θ that
     :func:`gradient` or :func:`optimize` return for the scene (one value per piece of a

@@ -54,8 +54,9 @@ assessment is one task. A Ctrl-C (or any exception) while waiting cancels the ta
 started.
 
 ``spin_up`` [s]: the start of every record left out of the count. Every run starts from the
-straight beam at rest and its loads ramp in, a transient that can dominate the damage of a
-short record; not giving ``spin_up`` counts it (``spin_up=0``, the command line's default) and
+scene's ``[time] initial`` (by default the straight beam at rest, its loads ramping in; with
+``"static"`` the static equilibrium of its steady loads, the sea still starting at t = 0), a
+transient that can dominate the damage of a short record; not giving ``spin_up`` counts it (``spin_up=0``, the command line's default) and
 warns (:class:`StartUpWarning`); give ``spin_up=0.0`` to count the start without the warning.
 
 ``progress``: ``True`` for a bar (tqdm, else lines on standard error) or a callable

@@ -109,6 +109,25 @@ fn check_parameters<D: Scalar, const DIM: usize>(
     }
 }
 
+/// Refuses physical parameters (or node quantities, `nodes`) on a run from the chain's static
+/// start (`[time] initial = "static"`, no `start` given): that start depends on them,
+/// H dq₀/dθ = −∂(∇U)/∂θ (H the statics' Hessian), a derivative the sweep does not carry. The
+/// controls' gradient needs none: the start does not depend on u.
+fn check_static_start<D: Scalar, const DIM: usize>(
+    ch: &Chain<D, DIM>,
+    (params, nodes): (&[Parameter], usize),
+    start: bool,
+) -> Result<()> {
+    if ch.has_static_start() && !start && (!params.is_empty() || nodes > 0) {
+        return Err(Error::StaticStartRefused {
+            reason: "the gradient with respect to physical (design) parameters would need the \
+                     static start's own derivative dq₀/dθ, which the adjoint does not carry; \
+                     use `initial = \"rest\"` for parameter gradients and design studies",
+        });
+    }
+    Ok(())
+}
+
 /// Tolerance of [`Start::check`] on the position constraints ½(‖qᵢ‖² − 1) (RATTLE's steps meet
 /// them to 10⁻¹⁴) and, relative to 1 + maxᵢ‖vᵢ‖, on the hidden constraints qᵢ·vᵢ, v = M⁻¹p.
 pub const START_TOLERANCE: f64 = 1e-9;
@@ -117,7 +136,7 @@ pub const START_TOLERANCE: f64 = 1e-9;
 /// t₀ + k h to t₀ + (k + 1) h with the controls u_k, u_{k+1} (indexed from 0 on the horizon);
 /// its multipliers μ, if given, are the Newton predictor of the first step (`None`: the
 /// consistent multiplier is computed). Without a `Start` a horizon starts from the straight beam
-/// at rest at t₀ = 0.
+/// at rest at t₀ = 0 (or from the chain's static start, [`Chain::start_attitudes`]).
 ///
 /// # The control's half-kick at t₀ ([`StartKick`])
 /// A RATTLE step into t₀ takes the control u(t₀) in its second half-kick, and after the
@@ -307,7 +326,7 @@ fn start_state<D: Scalar, const DIM: usize>(
     let t0 = start.map_or(0.0, |s| s.t0);
     let mut rattle = Rattle::new(chain.clone(), h)?.with_start_time(t0);
     let Some(s) = start else {
-        let state = rattle.straight_state();
+        let state = rattle.start_state()?;
         return Ok(Initial {
             rattle,
             state,
@@ -446,6 +465,7 @@ pub fn adjoint_gradient_with_nodes<'a, D: Scalar, O: Objective, const DIM: usize
 ) -> Result<(AdjointResult<D>, Vec<D>)> {
     check_controls(u, steps)?;
     check_parameters(chain, params)?;
+    check_static_start(chain, (params, nodes.len()), start.is_some())?;
     if !nodes.is_empty() {
         node_tangent::check_chain(chain)?;
     }

@@ -66,6 +66,7 @@ impl<P: ControlMap, O: Objective, const DIM: usize> ControlProblem<P, O, DIM> {
         if chain.control_node().is_none() {
             chain.set_control_node(Some(scene.n()))?;
         }
+        crate::statics::set_static_start(&mut chain, scene)?;
         Ok(ControlProblem {
             chain,
             h: scene.time.step,

@@ -146,7 +146,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
             if let (Some(ip), Some(v)) = (self.offset_param, self.ch.vessel()) {
                 // Z₀ enters the drive's step through its prescribed part P(t) = ρ(t)(Z₀ + …):
                 // θ̄ += (Z̄_{k+1}, Ż̄_{k+1}) · ∂(Z_{k+1}, Ż_{k+1})/∂Z₀ at fixed (Z_k, Ż_k).
-                let ramp = |j: usize| v.vessel().ramp_factor(self.t0 + j as f64 * self.h);
+                let ramp = |j: usize| v.offset_ramp(self.t0 + j as f64 * self.h);
                 let d = drive.offset_derivative(ramp(k), ramp(k + 1), self.h);
                 cot.thbar[ip] += cot.tip_bar[0] * d[0] + cot.tip_bar[1] * d[1];
             }
@@ -214,7 +214,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         } else if let (Some(ip), Some(v)) = (self.offset_param, ch.vessel()) {
             // The prescribed tip's rate Ż(t_{k+1}) = ρ̇(Z₀ + …) + ρ d_z Ẋ_w on the tip row:
             // its cotangent ŷ_n times ∂Ż/∂Z₀ = ρ̇(t_{k+1}) (the state is that of step k + 1).
-            let (_, rho_dot) = v.vessel().ramp_factor(self.t0 + (k + 1) as f64 * self.h);
+            let (_, rho_dot) = v.offset_ramp(self.t0 + (k + 1) as f64 * self.h);
             cot.thbar[ip] += self.rhs[ch.n()] * rho_dot;
         }
         Ok(())
@@ -411,7 +411,7 @@ impl<'a, D: Scalar, const DIM: usize> ReverseSweep<'a, D, DIM> {
         } else if let (Some(ip), Some(v)) = (self.offset_param, ch.vessel()) {
             // The prescribed tip's Z(t_{k+1}) = ρ(Z₀ + d_z X_w) held by Newton's tip row: its
             // cotangent ν_n times ∂Z/∂Z₀ = ρ(t_{k+1}).
-            let (rho, _) = v.vessel().ramp_factor(self.t0 + (k + 1) as f64 * self.h);
+            let (rho, _) = v.offset_ramp(self.t0 + (k + 1) as f64 * self.h);
             cot.thbar[ip] += self.rhs[ch.n()] * rho;
         }
         if let Some(ip) = self.mass_param {

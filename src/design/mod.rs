@@ -172,6 +172,15 @@ pub enum DesignError {
         /// Where it is not available.
         reason: &'static str,
     },
+    /// A scene that starts from its static equilibrium (`[time] initial = "static"`): the start
+    /// depends on the design, H dq₀/dθ = −∂(∇U)/∂θ (H the statics' Hessian), a derivative the
+    /// adjoint does not carry, so a design study refuses it.
+    #[error(
+        "time.initial = \"static\": the start then depends on the design (dq₀/dθ, by the statics' \
+         Hessian), which the design gradient does not carry; set `[time] initial = \"rest\"` \
+         for a design study (docs/scene-format.md \"[time]\")"
+    )]
+    StaticStart,
     /// A design vector of the wrong length or with a value that is not finite.
     #[error("design values: {reason}")]
     BadValues {

@@ -221,6 +221,9 @@ impl DesignStudy<'_> {
     /// # Errors
     /// [`DesignError`] naming what is wrong.
     pub fn check(&self, point: &DesignPoint<'_>) -> Result<(), DesignError> {
+        if self.scene.time.initial == crate::scene::Initial::Static {
+            return Err(DesignError::StaticStart);
+        }
         let (params, values) = (point.params, point.values);
         if params.len() != values.len() {
             return Err(DesignError::BadValues {

@@ -49,6 +49,20 @@ pub enum ModelError {
         /// Why.
         reason: &'static str,
     },
+    /// A static start ([`Chain::set_static_start`](crate::model::Chain::set_static_start)) of
+    /// the wrong count, or with an attitude that is not a unit vector.
+    #[error(
+        "invalid argument `time.initial`: the static start needs {n} unit attitudes, got {got}{}",
+        pendulum.map_or(String::new(), |j| format!(" (pendulum {j}'s is not a unit vector)"))
+    )]
+    StartSize {
+        /// The number of pendulums n.
+        n: usize,
+        /// The number of attitudes given.
+        got: usize,
+        /// The first pendulum (1-based) whose attitude is not a finite unit vector.
+        pendulum: Option<usize>,
+    },
     /// A fold limit outside (0°, 180°) ([`Chain::set_fold_limit_deg`](crate::model::Chain::set_fold_limit_deg)).
     #[error("invalid argument `fold limit`: must be in (0, 180) degrees, got {deg}")]
     FoldLimitOutOfRange {

@@ -37,17 +37,17 @@
 //! Every damage reported is the rainflow damage of the moment the controller leaves.
 //!
 //! # The start of a record
-//! Every run starts from the straight riser at rest, with the current and the sea switched on
-//! at t = 0 (the plant of [`crate::mpc`], like `simulate`): the riser swings out to its offset
-//! in the current, a start-up whose one large half cycle a short record would count as
-//! fatigue. The first [`ControlSettings::spin_up`] seconds of every record are therefore left
+//! Every run starts from the scene's start (`[time] initial`, like `simulate` and the plant of
+//! [`crate::mpc`]): by default the straight riser at rest, with the current and the sea switched
+//! on at t = 0, so the riser swings out to its offset in the current, a start-up whose one large
+//! half cycle a short record would count as fatigue. The first [`ControlSettings::spin_up`] seconds of every record are therefore left
 //! out of the count (its damage and its duration T_s): the record of a cell runs spin-up + T_s
 //! seconds (the controllers act, and MPC and the constant force plan, over all of it). The
 //! spin-up must outlast the start-up transient: measured on `riser_300m` (docs/cli.md,
 //! `fatigue`, "The start of a record"). Starting instead from the static equilibrium in the
-//! current ([`crate::statics`]) would remove the current's part but not the sea's (the waves
-//! start at t = 0 on a riser at rest, which then takes the riser's first periods to settle),
-//! so a window is needed either way.
+//! current (`initial = "static"`, [`crate::statics::static_start`]) removes the current's part
+//! but not the sea's (the waves start at t = 0 on a riser at rest, which then takes the riser's
+//! first periods to settle), so a window is needed either way.
 //!
 //! A control that cannot act is refused before any run ([`StudyError::ControlCannotAct`]): a
 //! force at the tip of a beam whose supports lock it (fixed-fixed, pinned-pinned without the

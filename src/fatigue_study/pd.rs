@@ -26,7 +26,7 @@ use crate::model::Chain;
 use crate::mpc::PdTuning;
 use crate::optimize::OptimProblem;
 use crate::scene::{Control, ControlKind, Scene};
-use crate::statics::static_equilibrium_at;
+use crate::statics::{calm_scene, static_equilibrium_at};
 
 /// The half-width B of the box of the scaled parameters: loop gains within e^{±4} (0.018 to
 /// 55), the bias within u_s ± u_max.
@@ -66,8 +66,7 @@ impl PdScales {
     /// # Errors
     /// As [`PdScales::of`].
     pub fn of_at(scene: &Scene, bound: f64, spot: Option<&HotSpotObjective>) -> Result<Self> {
-        let mut calm = scene.clone();
-        calm.loads.waves = None;
+        let mut calm = calm_scene(scene);
         if calm.control.is_none() {
             calm.control = Some(Control {
                 node: scene.n(),

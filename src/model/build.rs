@@ -113,6 +113,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
                 .filter(|s| s.last > 0),
             lengths,
             masses,
+            initial: scene.time.initial,
+            start: None,
         })
     }
 
@@ -199,7 +201,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             _ => None,
         };
         let motion = VesselMotion::new(&vessel, sea, t.steps + 1)
-            .map_err(|e| Error::from(crate::scene::sea_error(e, None)))?;
+            .map_err(|e| Error::from(crate::scene::sea_error(e, None)))?
+            .holding_offset(t.initial == crate::scene::Initial::Static);
         Ok(Some(std::sync::Arc::new(motion)))
     }
 
@@ -348,6 +351,8 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
             vessel: self.vessel.clone(),
             vessel_offset: D2::from(self.vessel_offset.re()),
             soil: self.soil.as_ref().map(|t| t.lift()),
+            initial: self.initial,
+            start: self.start.clone(),
         }
     }
 }

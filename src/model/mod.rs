@@ -17,6 +17,7 @@ pub mod geometry;
 mod mass;
 mod nodes;
 mod params;
+mod start;
 pub mod terms;
 mod vessel;
 
@@ -81,6 +82,11 @@ pub struct Chain<D, const DIM: usize> {
     pub(crate) vessel_offset: D,
     /// Lateral p-y springs on the nodes below the mudline (`[soil]`).
     pub(crate) soil: Option<SoilSprings<D>>,
+    /// The state the scene's runs start from (`[time] initial`, [`Chain::start_attitudes`]).
+    pub(crate) initial: crate::scene::Initial,
+    /// The static start's attitudes qⱼ(0) as (x, y, z) (`[time] initial = "static"`, set by
+    /// [`crate::statics::set_static_start`]); `None`: not set.
+    pub(crate) start: Option<std::sync::Arc<[[f64; 3]]>>,
 }
 
 /// Default fold limit: a joint angle of 179° (s = θ/sin θ ≈ 180) is treated as a folded beam.
@@ -212,9 +218,10 @@ impl<D: Scalar, const DIM: usize> Chain<D, DIM> {
     pub fn prescribed_tip(&self, t: f64) -> Option<[D; 2]> {
         self.vessel.as_ref().map(|v| {
             let [z, zd] = v.at(t);
-            // Z(t) = ρ(t)(Z₀ + d_z X_w): the offset's own part (Z₀ − Z₀,vessel)(ρ, ρ̇) is zero
-            // in value and carries Z₀'s derivative when it is seeded.
-            let (rho, rho_dot) = v.vessel().ramp_factor(t);
+            // Z(t) = ρ(t)(Z₀ + d_z X_w) (Z₀ + ρ(t) d_z X_w held for a static start): the
+            // offset's own part (Z₀ − Z₀,vessel)(∂Z/∂Z₀, ∂Ż/∂Z₀) is zero in value and carries
+            // Z₀'s derivative when it is seeded.
+            let (rho, rho_dot) = v.offset_ramp(t);
             let dz = self.vessel_offset - D::from(v.vessel().offset);
             [D::from(z) + dz * rho, D::from(zd) + dz * rho_dot]
         })

@@ -29,6 +29,8 @@ pub struct VesselMotion {
     vessel: Vessel,
     waves: Option<WaveSurge>,
     thrust: Option<ThrustDrive>,
+    /// The offset held in full from t = 0 (`[time] initial = "static"`): Z₀ is not ramped.
+    offset_held: bool,
 }
 
 /// The vessel's surge under the thrust, (m + m_a) ẍ_v = F − c ẋ_v − k x_v, one-way coupled
@@ -223,7 +225,26 @@ impl VesselMotion {
             vessel: vessel.clone(),
             waves,
             thrust: vessel.thrust().as_ref().map(ThrustDrive::new),
+            offset_held: false,
         })
+    }
+
+    /// The same motion with the mean offset held in full from t = 0 (`held`, the static start
+    /// `[time] initial = "static"`): Z(t) = Z₀ + ρ(t) d_z X_w(t), the ramp bringing in only the
+    /// wave-frequency surge; `false` keeps Z(t) = ρ(t)(Z₀ + d_z X_w(t)).
+    pub fn holding_offset(mut self, held: bool) -> Self {
+        self.offset_held = held;
+        self
+    }
+
+    /// The factor of the mean offset in Z(t) and its rate, (ρ(t), ρ̇(t)), or (1, 0) when the
+    /// offset is held in full ([`VesselMotion::holding_offset`]): ∂Z/∂Z₀ and ∂Ż/∂Z₀.
+    pub fn offset_ramp(&self, t: f64) -> (f64, f64) {
+        if self.offset_held {
+            (1.0, 0.0)
+        } else {
+            self.vessel.ramp_factor(t)
+        }
     }
 
     /// The vessel's description.
@@ -231,13 +252,17 @@ impl VesselMotion {
         &self.vessel
     }
 
-    /// (Z(t), Ż(t)): the top's prescribed z and its rate (module docs).
+    /// (Z(t), Ż(t)): the top's prescribed z and its rate (module docs), with the offset held
+    /// in full for a static start: Z(t) = Z₀ + ρ(t) X (X = d_z X_w(t)).
     pub fn at(&self, t: f64) -> [f64; 2] {
         let (rho, rho_dot) = self.vessel.ramp_factor(t);
         let [x, v] = match &self.waves {
             Some(w) => w.at(t),
             None => [0.0; 2],
         };
+        if self.offset_held {
+            return [self.vessel.offset + rho * x, rho_dot * x + rho * v];
+        }
         let z = self.vessel.offset + x;
         [rho * z, rho_dot * z + rho * v]
     }
@@ -288,6 +313,7 @@ impl VesselMotion {
                 forecast: Some((first, add.to_vec())),
             }),
             thrust: self.thrust,
+            offset_held: self.offset_held,
         })
     }
 

@@ -3,7 +3,7 @@
 //! runs any of them against a plant that may differ from the controller's model.
 //!
 //! # The loop
-//! The plant ([`Plant`]) is a scene simulated by RATTLE from the straight beam at rest. Time is
+//! The plant ([`Plant`]) is a scene simulated by RATTLE from its start (`[time] initial`). Time is
 //! cut into control intervals of m steps (interval = m h); at the start t_{jm} of interval j the
 //! controller observes the plant ([`Observation`]: the state (q, p), M₀, Ṁ₀, the tip) and
 //! returns one force u_j ([`Force2`]; its z component in a planar scene), which the plant holds over the interval:

@@ -75,8 +75,9 @@
 //! fixed ([`crate::mpc`], "MPC through the vessel's thrust"). The filter therefore runs on the
 //! grid t_{jm−1}: the sensors are read at t_{k−1} (one plant step, a few milliseconds, before the
 //! decision at t_k), the estimate there is the plan's start, and the next prediction runs from
-//! it. At t₀ the plan starts from the straight riser at rest, as the plant does (the scene's
-//! initial condition, known to the controller); the estimate starts there too.
+//! it. At t₀ the plan starts from the scene's start (`[time] initial`: the straight riser at rest,
+//! or the static equilibrium), as the plant does (the initial condition, known to the
+//! controller); the estimate starts there too.
 //!
 //! The filter's linear error map (I − K C) Φ and its covariances are exposed
 //! ([`Observer::error_map`], [`Observer::posterior`]) so that a test can compare the estimate's
@@ -93,7 +94,7 @@ use crate::base::Scalar;
 use crate::error::{MpcError, Result};
 use crate::model::Chain;
 use crate::scene::{Scene, Support};
-use crate::statics::static_equilibrium_at;
+use crate::statics::{calm_scene, static_equilibrium_at};
 use crate::steppers::rattle::{Rattle, State};
 use crate::steppers::Stepper;
 
@@ -356,11 +357,11 @@ impl Observer {
         let mut scene = model.clone();
         scene.time.steps = steps.max(1);
         let stepper = Rattle::new(control_chain(&scene)?, h)?;
+        let estimate = stepper.start_state()?;
         // The calm sea's equilibrium after the ramp, and one step's Jacobian there.
         let ramp = model.vessel.as_ref().map_or(0.0, |v| v.ramp.max(0.0));
         let k_eq = ((ramp + 10.0) / h).ceil() as usize;
-        let mut calm = model.clone();
-        calm.loads.waves = None;
+        let mut calm = calm_scene(model);
         calm.time.steps = k_eq + 2;
         let t_eq = k_eq as f64 * h;
         let eq = static_equilibrium_at(&calm, t_eq, 0.0)?;
@@ -400,7 +401,7 @@ impl Observer {
                 change: thrust.rate_bound * h,
             },
             sensors,
-            estimate: State::straight(n),
+            estimate,
             grid: 0,
             thrust: 0.0,
             command: 0.0,
@@ -626,11 +627,7 @@ impl Observer {
 /// The chain of a scene with its control node (the top's, where the thrust's vessel holds the
 /// riser, unless the scene names one), as the plant builds it.
 fn control_chain(scene: &Scene) -> Result<Chain<f64, 2>> {
-    let mut chain = Chain::<f64, 2>::from_scene(scene)?;
-    if chain.control_node().is_none() {
-        chain.set_control_node(Some(scene.n()))?;
-    }
-    Ok(chain)
+    super::plant::plant_chain(scene)
 }
 
 /// The exact Jacobian A (2n × 2n) of one RATTLE step k → k + 1 with thrust 0 in (φ, ω), at the

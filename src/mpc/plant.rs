@@ -5,12 +5,12 @@
 use crate::base::Scalar;
 use crate::error::{Error, MpcError, Result};
 use crate::model::Chain;
-use crate::scene::SceneInput;
+use crate::scene::{Scene, SceneInput};
 use crate::steppers::rattle::{Rattle, State};
 use crate::steppers::Stepper;
 
 /// The true system of a closed loop: the planar RATTLE map (thesis eq. 1.6.1) of a scene, from
-/// the straight beam at rest at t = 0, advanced step by step with the control force u_k at the
+/// the scene's start at t = 0 (`[time] initial`: straight at rest, or static), advanced step by step with the control force u_k at the
 /// scene's control node (default: the tip n). Generic over the scalar, so that a closed loop can
 /// be differentiated with respect to a feedback law's gains by dual numbers.
 ///
@@ -87,9 +87,7 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         let checked = scene.checked()?;
         let scene = checked.scene();
         let mut chain = Chain::<f64, DIM>::from_scene(&checked)?;
-        if chain.control_node().is_none() {
-            chain.set_control_node(Some(scene.n()))?;
-        }
+        with_plant_control(&mut chain, scene)?;
         let mut chain = chain.lift::<D>();
         if DIM == 3 {
             chain.set_control_x(&vec![D::zero(); scene.time.steps + 1])?;
@@ -367,4 +365,25 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         self.k += 1;
         Ok(())
     }
+}
+
+/// The chain of the plant of `scene`: its model with the control at the scene's node (the top
+/// by default, where a thrust's vessel holds the riser) and the scene's start (`[time]
+/// initial`, [`crate::statics::set_static_start`]).
+///
+/// # Errors
+/// The model's and the static start's errors.
+pub(crate) fn plant_chain<const DIM: usize>(scene: &Scene) -> Result<Chain<f64, DIM>> {
+    let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
+    with_plant_control(&mut chain, scene)?;
+    Ok(chain)
+}
+
+/// Sets the control node of `chain` (built from `scene`) to the top when the scene names none,
+/// and gives it the scene's start.
+fn with_plant_control<const DIM: usize>(chain: &mut Chain<f64, DIM>, scene: &Scene) -> Result<()> {
+    if chain.control_node().is_none() {
+        chain.set_control_node(Some(scene.n()))?;
+    }
+    crate::statics::set_static_start(chain, scene)
 }

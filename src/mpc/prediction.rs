@@ -531,10 +531,7 @@ fn moment(chain: &Chain<f64, 2>, q: &[[f64; 2]], joint: usize) -> f64 {
 /// The stepper of a scene with its control at the scene's node (the top by default; the thrust
 /// in a thrust scene).
 fn stepper(scene: &Scene) -> Result<Rattle<f64, 2>, PredictionError> {
-    let mut chain = Chain::<f64, 2>::from_scene(scene)?;
-    if chain.control_node().is_none() {
-        chain.set_control_node(Some(scene.n()))?;
-    }
+    let chain = super::plant::plant_chain::<2>(scene)?;
     Ok(Rattle::new(chain, scene.time.step)?)
 }
 

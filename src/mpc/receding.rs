@@ -585,12 +585,12 @@ impl<const DIM: usize> Mpc<DIM> {
         }
     }
 
-    /// The model's chain with its loads realised from t = 0 to the end of the run plus a horizon
-    /// of `pieces` intervals (built once): a scene's wave kinematics are tabulated over its
-    /// record only (`time.steps`, `WaveField`) and summed component by
+    /// The model's chain (with its start) and its loads realised from t = 0 to the end of the
+    /// run plus a horizon of `pieces` intervals (built once): a scene's wave kinematics are
+    /// tabulated over its record only (`time.steps`, `WaveField`) and summed component by
     /// component beyond it, so a chain built from the horizon's scene alone would sum thousands
-    /// of components per pendulum and step at every re-plan after the first horizon (measured on
-    /// riser_300m.toml: 97 % of a re-plan's time in that sum).
+    /// of components per pendulum and step at every re-plan after the first horizon (measured
+    /// on riser_300m.toml: 97 % of a re-plan's time in that sum).
     fn record_chain(
         &mut self,
         obs: &ModelObservation<'_, DIM>,
@@ -603,10 +603,7 @@ impl<const DIM: usize> Mpc<DIM> {
         let end = obs.steps as f64 * obs.h + pieces as f64 * self.interval;
         scene.time.steps = (end / scene.time.step).ceil() as usize + 1;
         hold_series_past_end(&mut scene);
-        let mut chain = Chain::<f64, DIM>::from_scene(&scene)?;
-        if chain.control_node().is_none() {
-            chain.set_control_node(Some(scene.n()))?;
-        }
+        let chain = super::plant::plant_chain::<DIM>(&scene)?;
         self.record = Some(chain.clone());
         Ok(chain)
     }

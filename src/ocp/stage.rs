@@ -489,7 +489,8 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
         }
     }
 
-    /// Resets `state` to the initial state (the start's S₀, or straight at rest) and computes
+    /// Resets `state` to the initial state (the start's S₀, or the chain's start at rest:
+    /// straight, or the static start, [`crate::model::Chain::start_attitudes`]) and computes
     /// its consistent multiplier for the control u₀ when it has none (the Newton predictor of
     /// step 0).
     pub(crate) fn reset(&mut self, u0: D) -> Result<()> {
@@ -498,13 +499,13 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> {
             st.clone_from(init);
             return self.rattle.prepare(st, 0, u0);
         }
-        for (q, p) in st.q.iter_mut().zip(st.p.iter_mut()) {
-            *q = [D::zero(); DIM];
-            q[DIM - 2] = D::one();
+        let q0 = self.rattle.chain().start_attitudes()?;
+        for ((q, p), q0) in st.q.iter_mut().zip(st.p.iter_mut()).zip(q0) {
+            *q = q0;
             *p = [D::zero(); DIM];
         }
         st.multipliers = None;
-        st.tip_target = [D::zero(); 2];
+        st.tip_target = self.rattle.chain().start_tip_target();
         self.rattle.prepare(st, 0, u0)
     }
 

@@ -4,8 +4,8 @@ use super::limits::check_size;
 use super::validate::{check_spring, end_springs, support_name};
 use super::values::NumOrArray;
 use super::{
-    Beam, Control, ControlKind, Current, Loads, ObjectiveKind, PointLoad, Scene, SceneError,
-    SceneErrorKind, Support, TimeGrid,
+    Beam, Control, ControlKind, Current, Initial, Loads, ObjectiveKind, PointLoad, Scene,
+    SceneError, SceneErrorKind, Support, TimeGrid,
 };
 
 /// Builds a [`Scene`] in code with the same defaults and validation as the file format.
@@ -63,6 +63,7 @@ impl SceneBuilder {
             time: TimeGrid {
                 step: 0.01,
                 steps: 10,
+                initial: Initial::Rest,
             },
             control: None,
             objective: None,
@@ -205,6 +206,12 @@ impl SceneBuilder {
     /// The number of steps N.
     pub fn steps(mut self, steps: usize) -> Self {
         self.time.steps = steps;
+        self
+    }
+
+    /// The state the run starts from (`[time] initial`, [`Initial`]).
+    pub fn initial(mut self, initial: Initial) -> Self {
+        self.time.initial = initial;
         self
     }
 

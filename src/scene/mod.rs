@@ -307,13 +307,38 @@ pub struct Loads {
     pub waves: Option<Waves>,
 }
 
-/// The time grid t_k = k h, k = 0..=N.
+/// The time grid t_k = k h, k = 0..=N, and the state the run starts from at t₀ = 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TimeGrid {
     /// Step h \[s\].
     pub step: f64,
     /// Number of steps N.
     pub steps: usize,
+    /// The initial state (`[time] initial`, default [`Initial::Rest`]).
+    pub initial: Initial,
+}
+
+/// The state a run starts from at t₀ = 0 (`[time] initial`; docs/conventions.md "The start of
+/// a run").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Initial {
+    /// The straight beam at rest: qⱼ = e₂, p = 0 (the thesis's start).
+    #[default]
+    Rest,
+    /// At rest (p = 0) in the static equilibrium of the steady loads at t = 0, ∇U(q₀) = F(0)
+    /// ([`crate::statics::static_start`]): gravity and buoyancy, the tension, the springs and
+    /// the soil, the current's drag at rest and the vessel's mean offset Z₀ in full, without the
+    /// waves and with the control 0. The vessel's offset is then not ramped:
+    /// Z(t) = Z₀ + ρ(t) d_z X_w(t).
+    Static,
+}
+
+impl Initial {
+    /// Whether this is the default [`Initial::Rest`].
+    pub fn is_rest(&self) -> bool {
+        *self == Initial::Rest
+    }
 }
 
 /// How the control force is parametrised in a scene file.

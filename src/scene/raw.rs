@@ -14,7 +14,7 @@ use super::toml_errors::{classify, syntax_error};
 use super::validate::{node_index, positive_count};
 use super::values::{to_i64, NumOrArray, RawValues};
 use super::{
-    Control, ControlKind, Harmonic, LoadSeries, Loads, PointLoad, Scene, SceneError,
+    Control, ControlKind, Harmonic, Initial, LoadSeries, Loads, PointLoad, Scene, SceneError,
     SceneErrorKind, Support, TimeGrid,
 };
 
@@ -259,6 +259,8 @@ impl RawPoint {
 struct RawTime {
     step: f64,
     steps: i64,
+    #[serde(default, skip_serializing_if = "Initial::is_rest")]
+    initial: Initial,
 }
 
 #[derive(Serialize, Deserialize)]
@@ -384,6 +386,7 @@ impl RawScene {
             time: RawTime {
                 step: s.time.step,
                 steps: to_i64(s.time.steps),
+                initial: s.time.initial,
             },
             control: s.control.as_ref().map(|c| RawControl {
                 node: Some(to_i64(c.node)),
@@ -489,6 +492,7 @@ impl RawScene {
             time: TimeGrid {
                 step: self.time.step,
                 steps,
+                initial: self.time.initial,
             },
             control,
             objective,

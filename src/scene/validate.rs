@@ -533,7 +533,7 @@ impl Scene {
                 ),
             )),
             Some(v) => {
-                v.check()?;
+                v.check_for(self.time.initial)?;
                 match self.spatial_key() {
                     Some(key) => Err(SceneError::invalid(
                         "beam.support",

@@ -265,6 +265,15 @@ impl Vessel {
     /// # Errors
     /// [`SceneError`] naming the `vessel.*` key.
     pub fn check(&self) -> Result<(), SceneError> {
+        self.check_for(super::Initial::Rest)
+    }
+
+    /// [`Vessel::check`] for a run that starts from `initial` (`[time] initial`): from the
+    /// static equilibrium the offset is held from t = 0, so `ramp` = 0 needs only no RAO.
+    ///
+    /// # Errors
+    /// As [`Vessel::check`].
+    pub fn check_for(&self, initial: super::Initial) -> Result<(), SceneError> {
         if !self.offset.is_finite() {
             return Err(SceneError::invalid(
                 "vessel.offset",
@@ -277,12 +286,17 @@ impl Vessel {
                 format!("must be finite and non-negative [s], got {}", self.ramp),
             ));
         }
-        if self.ramp == 0.0 && (self.offset != 0.0 || self.rao.is_some()) {
+        let held = initial == super::Initial::Static;
+        if self.ramp == 0.0 && ((self.offset != 0.0 && !held) || self.rao.is_some()) {
             return Err(SceneError::invalid(
                 "vessel.ramp",
-                "must be positive when the vessel moves (an offset or a RAO): every run starts \
-                 from the straight riser at rest, with the top over the wellhead"
-                    .to_string(),
+                if held {
+                    "must be positive with a RAO: the surge starts at t = 0 on a riser at rest"
+                } else {
+                    "must be positive when the vessel moves (an offset or a RAO): a run from \
+                     `[time] initial = \"rest\"` starts from the straight riser at rest, with the \
+                     top over the wellhead"
+                },
             ));
         }
         for (key, value, positive) in [

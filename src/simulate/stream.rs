@@ -261,6 +261,7 @@ pub fn simulate_streaming<S: SceneInput + ?Sized, O: StepObserver>(
     ) -> std::result::Result<StreamSummary, StreamError<O::Error>> {
         let mut chain = Chain::<f64, DIM>::from_checked(checked)?;
         let scene = checked.scene();
+        crate::statics::set_static_start(&mut chain, scene)?;
         let u = match controls {
             StreamControls::Scene => {
                 if let Some(c) = &scene.control {
@@ -307,7 +308,7 @@ fn stream_chain<const DIM: usize, O: StepObserver>(
     let n = chain.n();
     let lengths: Vec<f64> = chain.lengths().to_vec();
     let mut rattle = Rattle::new(chain, h)?;
-    let mut state: State<f64, DIM> = rattle.straight_state();
+    let mut state: State<f64, DIM> = rattle.start_state()?;
     rattle.prepare(&mut state, 0, u.at(0))?;
     let mut scratch = vec![[0.0; DIM]; n];
     let mu0 = rattle.consistent_multiplier().to_vec();

@@ -126,6 +126,21 @@ impl<D: Scalar, const DIM: usize> State<D, DIM> {
         }
     }
 
+    /// The state the runs of `chain` start from at t = 0, at rest (p = 0): the straight beam, or
+    /// the chain's static start (`[time] initial = "static"`, [`Chain::start_attitudes`], with
+    /// its tip target [`Chain::start_tip_target`]).
+    ///
+    /// # Errors
+    /// [`Chain::start_attitudes`]'s: a chain of a static scene without its start.
+    pub fn start(chain: &Chain<D, DIM>) -> Result<Self> {
+        Ok(State {
+            q: chain.start_attitudes()?,
+            p: vec![[D::zero(); DIM]; chain.n()],
+            multipliers: None,
+            tip_target: chain.start_tip_target(),
+        })
+    }
+
     /// The multipliers, created (zero) if the state has none yet: what a step writes into.
     /// Allocates only the first time.
     pub fn multipliers_mut(&mut self, n_constraints: usize) -> &mut Multipliers<D> {
@@ -293,6 +308,15 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
     /// The straight beam at rest.
     pub fn straight_state(&self) -> State<D, DIM> {
         State::straight(self.chain.n())
+    }
+
+    /// The state the chain's runs start from ([`State::start`]: the straight beam at rest, or
+    /// the static start of `[time] initial = "static"`).
+    ///
+    /// # Errors
+    /// [`State::start`]'s.
+    pub fn start_state(&self) -> Result<State<D, DIM>> {
+        State::start(&self.chain)
     }
 
     /// Prepares a step from `state` at step index `k` with control u_k: evaluates U_q(q_k; u_k)
@@ -509,7 +533,7 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Rattle<D, DIM> {
     }
 
     fn initial_state(&mut self, u_0: D) -> Result<State<D, DIM>> {
-        let mut s = self.straight_state();
+        let mut s = self.start_state()?;
         self.prepare(&mut s, 0, u_0)?;
         Ok(s)
     }

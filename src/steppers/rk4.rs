@@ -22,7 +22,7 @@ use super::{
 };
 use crate::base::Scalar;
 use crate::error::Result;
-use crate::model::{e2, Chain, Ctx};
+use crate::model::{Chain, Ctx};
 use crate::steppers::rattle::{RattleOptions, StepStats};
 use crate::tridiag::BorderedTridiag;
 
@@ -215,11 +215,12 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for ProjectedRk4<D, DIM> {
         self.h
     }
 
-    /// The straight beam at rest (u_0 is first used by the first step).
+    /// The start at rest ([`Chain::start_attitudes`]: straight, or the static start; u_0 is
+    /// first used by the first step).
     fn initial_state(&mut self, _u_0: D) -> Result<Rk4State<D, DIM>> {
         let n = self.chain.n();
         Ok(Rk4State {
-            q: vec![e2::<D, DIM>(); n],
+            q: self.chain.start_attitudes()?,
             p: vec![[D::zero(); DIM]; n],
         })
     }

@@ -25,7 +25,7 @@ use super::{
 };
 use crate::base::Scalar;
 use crate::error::Result;
-use crate::model::{e2, Chain, Ctx};
+use crate::model::{Chain, Ctx};
 use crate::steppers::rattle::{RattleOptions, StepStats};
 
 /// SHAKE's state at t_k: the reported (q_k, p_k) and what the recursion carries forward. SHAKE
@@ -140,11 +140,12 @@ impl<D: Scalar, const DIM: usize> Stepper<D, DIM> for Shake<D, DIM> {
         self.h
     }
 
-    /// The straight beam at rest, and SHAKE's starter for q_1 with the force at (q_0, u_0).
+    /// The start at rest ([`Chain::start_attitudes`]: straight, or the static start), and
+    /// SHAKE's starter for q_1 with the force at (q_0, u_0).
     fn initial_state(&mut self, u_0: D) -> Result<ShakeState<D, DIM>> {
         let (n, h) = (self.chain.n(), self.h);
         let mut s = ShakeState {
-            q: vec![e2::<D, DIM>(); n],
+            q: self.chain.start_attitudes()?,
             p: vec![[D::zero(); DIM]; n],
             next: vec![[D::zero(); DIM]; n],
             phalf_prev: vec![[D::zero(); DIM]; n],

@@ -318,3 +318,28 @@ fn bad_vessel_offset_keys_are_refused_naming_the_key() {
     let err = Scene::from_toml_str(&scene_text("", &design("-5.0", "-6.0"))).unwrap_err();
     assert_eq!(err.key(), Some("design.parameter[0].upper"), "{err}");
 }
+
+/// A design study of a scene that starts from its static equilibrium (`[time] initial =
+/// "static"`) is refused before any run, naming `time.initial`: the start depends on the design
+/// (dq₀/dθ), a derivative the design gradient does not carry (docs/scene-format.md "[time]").
+#[test]
+fn a_static_start_is_refused_by_a_design_study() {
+    let mut scene = scene("");
+    scene.time.initial = chainbeam::Initial::Static;
+    let cells = cells();
+    let st = study(&scene, &cells, 10.0, 2.0);
+    let p = params();
+    let v0 = values(&scene, &p);
+    let point = chainbeam::design::DesignPoint {
+        params: &p,
+        values: &v0,
+    };
+    let err = st
+        .evaluate(&point, Want::Gradient, Execution::Serial, &|| {})
+        .unwrap_err();
+    assert!(
+        matches!(err, chainbeam::design::DesignError::StaticStart),
+        "{err}"
+    );
+    assert!(err.to_string().contains("time.initial"), "{err}");
+}

@@ -29,6 +29,7 @@ mod riser_scenes;
 mod riser_system;
 mod soil;
 mod stackup;
+mod static_start;
 mod statics_spatial;
 mod terms;
 mod vessel_thrust;

@@ -465,7 +465,8 @@ fn the_1000m_system_periods_match_a_beam_column_model_of_its_stackup() {
     }
 }
 
-/// The scenes run: 2 s of each from rest, finite, the top following the vessel; and they stand
+/// The scenes run: 2 s of each from its start (rest for 300 m, the static equilibrium for
+/// 1000 m), finite, the top following the vessel; and they stand
 /// in their current (`static_equilibrium`: the vessel's mean offset and the current push the
 /// riser toward +z, the conductor's head held by the soil, moving far less than the top).
 #[test]

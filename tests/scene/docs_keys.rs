@@ -349,7 +349,7 @@ fn every_accepted_key_is_documented_and_every_documented_key_is_accepted() {
         assert_eq!(keys, accepted(table), "keys of [{table}]");
         checked += keys.len();
     }
-    assert_eq!(checked, 151, "number of documented keys");
+    assert_eq!(checked, 152, "number of documented keys");
 }
 
 /// Each documented key, set to a value other than its default, is read: the scene changes.
@@ -394,6 +394,7 @@ fn every_documented_key_is_read() {
         ("loads.current", "direction", "[0.0, -1.0]"),
         ("time", "step", "0.02"),
         ("time", "steps", "6"),
+        ("time", "initial", "\"static\""),
         ("control", "node", "3"),
         ("control", "kind", "\"piecewise\""),
         ("control", "values", "[1.0]"),

@@ -2,8 +2,8 @@
 
 use chainbeam::catalogue;
 use chainbeam::scene::{
-    Beam, Control, ControlKind, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder, SceneError,
-    SceneErrorKind, Support, TimeGrid, MAX_PENDULUMS, MAX_STEPS,
+    Beam, Control, ControlKind, Initial, Loads, ObjectiveKind, PointLoad, Scene, SceneBuilder,
+    SceneError, SceneErrorKind, Support, TimeGrid, MAX_PENDULUMS, MAX_STEPS,
 };
 use proptest::prelude::*;
 
@@ -65,6 +65,7 @@ fn spec_scene() -> Scene {
         time: TimeGrid {
             step: 0.01,
             steps: 10,
+            initial: Initial::Rest,
         },
         control: Some(Control {
             node: 10,
@@ -210,7 +211,8 @@ fn builder_defaults_and_errors() {
         s.time,
         TimeGrid {
             step: 0.01,
-            steps: 10
+            steps: 10,
+            initial: Initial::Rest,
         }
     );
     assert!(s.control.is_none() && s.objective.is_none() && s.loads.points.is_empty());
@@ -685,6 +687,13 @@ fn invalid_values() {
             ("support = 'cantilever'", "support = 'free'", "beam.support"),
             ("kind = 'constant'", "kind = 'linear'", "control.kind"),
             ("kind = 'final'", "kind = 'max'", "objective.kind"),
+            // the start: "rest" or "static" only (docs/scene-format.md "[time]")
+            (
+                "steps = 4",
+                "steps = 4\ninitial = 'settled'",
+                "time.initial",
+            ),
+            ("steps = 4", "steps = 4\ninitial = 'Static'", "time.initial"),
         ],
         invalid,
     );
@@ -1304,4 +1313,18 @@ fn piecewise_scenes_simulate_and_differentiate() {
         );
         assert!((fd - g[j]).abs() <= 1e-6 * scale);
     }
+}
+
+/// `[time] initial`: "rest" by default (and not written back), "static" read and written back
+/// (docs/scene-format.md "[time]").
+#[test]
+fn the_start_key_round_trips() {
+    let rest = parse(&mutate("steps = 4", "steps = 4")).unwrap();
+    assert_eq!(rest.time.initial, Initial::Rest);
+    assert!(!rest.to_toml_string().contains("initial"));
+    let text = mutate("steps = 4", "steps = 4\ninitial = 'static'");
+    let s = parse(&text).unwrap();
+    assert_eq!(s.time.initial, Initial::Static);
+    let back = parse(&s.to_toml_string()).unwrap();
+    assert_eq!(back, s);
 }

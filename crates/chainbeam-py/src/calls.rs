@@ -126,7 +126,7 @@ fn run_simulation(
     })
 }
 
-/// Simulates a scene (RATTLE from the straight beam at rest); see `chainbeam.simulate`.
+/// Simulates a scene (RATTLE from its start, `[time] initial`); see `chainbeam.simulate`.
 ///
 /// The columns are built in the trajectory's own memory on the worker thread
 /// ([`SceneTrajectory::into_columns`]: one pass over the steps, which also checks that every

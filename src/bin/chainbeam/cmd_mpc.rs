@@ -37,7 +37,8 @@ S-N curve's slope m, and the summary reports the rainflow damage of the run) ove
 --model FILE: another drag, a forecast of the loads with errors) by a Gauss-Newton solver \
 (--solver), warm-started from its previous plan and limited to --iterations iterations (real-time \
 iteration), and applies the plan's first force, held over the interval, at control.node \
-(default: the tip). The plant is the scene: RATTLE from the straight beam at rest, t in [0, N·h]. \
+(default: the tip). The plant is the scene: RATTLE from its start ([time] initial: the straight beam \
+at rest by default), t in [0, N·h]. \
 The first plan (at t = 0, cold) gets --first-iterations.
 
 The settings --interval, --horizon, --iterations, --bound, --effort, --plan-pendulums and \

@@ -16,7 +16,8 @@ use crate::{OUTPUT_HELP, SCENE_HELP};
 
 /// `simulate --help`.
 pub const LONG_ABOUT: &str = "\
-Simulate a scene from the straight beam at rest with RATTLE (step h = time.step, N = time.steps), \
+Simulate a scene from its start ([time] initial: the straight beam at rest by default, or at rest in \
+the static equilibrium of its steady loads) with RATTLE (step h = time.step, N = time.steps), \
 applying the scene's [control] (u_k at node control.node; a constant control is applied at every \
 t_k) or the forces of --controls FILE (pairs [u_x, u_z] in the JSON of optimize, or the control_x \
 and control columns of a simulate CSV, are a 2-axis control: both components are applied), and \

@@ -87,7 +87,7 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
         let checked = scene.checked()?;
         let scene = checked.scene();
         let mut chain = Chain::<f64, DIM>::from_scene(&checked)?;
-        with_plant_control(&mut chain, scene)?;
+        give_plant_control_and_start(&mut chain, scene)?;
         let mut chain = chain.lift::<D>();
         if DIM == 3 {
             chain.set_control_x(&vec![D::zero(); scene.time.steps + 1])?;
@@ -375,13 +375,16 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
 /// The model's and the static start's errors.
 pub(crate) fn plant_chain<const DIM: usize>(scene: &Scene) -> Result<Chain<f64, DIM>> {
     let mut chain = Chain::<f64, DIM>::from_scene(scene)?;
-    with_plant_control(&mut chain, scene)?;
+    give_plant_control_and_start(&mut chain, scene)?;
     Ok(chain)
 }
 
 /// Sets the control node of `chain` (built from `scene`) to the top when the scene names none,
 /// and gives it the scene's start.
-fn with_plant_control<const DIM: usize>(chain: &mut Chain<f64, DIM>, scene: &Scene) -> Result<()> {
+fn give_plant_control_and_start<const DIM: usize>(
+    chain: &mut Chain<f64, DIM>,
+    scene: &Scene,
+) -> Result<()> {
     if chain.control_node().is_none() {
         chain.set_control_node(Some(scene.n()))?;
     }

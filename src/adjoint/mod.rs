@@ -92,6 +92,7 @@ use crate::steppers::rattle::{Rattle, State};
 use num_dual::Dual;
 use objective::{HistoryBuf, StageEval};
 
+use crate::steppers::rattle::keeps_gaps;
 use tape::StateStore;
 
 /// Validates the parameters requested for a gradient.
@@ -371,7 +372,7 @@ fn forward_sweep<D: Scalar, O: Objective, const DIM: usize>(
     rattle.prepare(&mut state, 0, u[0])?;
     let mut value = stage.value(chain, 0, &state.q, u[0]);
     let (n, nc) = (chain.n(), chain.n_constraints());
-    let mut checkpoints = StateStore::new(n, nc, steps / kk + 2, half);
+    let mut checkpoints = StateStore::new(n, nc, steps / kk + 2, (half, keeps_gaps(chain)));
     checkpoints.push(&state, (&[], &[]));
     for k in 0..steps {
         rattle.step(&mut state, k, u[k], u[k + 1])?;
@@ -471,7 +472,8 @@ pub fn adjoint_gradient_with_nodes<'a, D: Scalar, O: Objective, const DIM: usize
     }
     let n_nodes = nodes.len();
     let (n, nc) = (chain.n(), chain.n_constraints());
-    let state_size = StateStore::<D, DIM>::state_bytes(n, nc, chain.records_half_step());
+    let state_size =
+        StateStore::<D, DIM>::state_bytes(n, nc, (chain.records_half_step(), keeps_gaps(chain)));
     let kk = checkpointing.interval(steps, state_size);
     let mut stage = StageEval {
         obj: objective,
@@ -510,7 +512,7 @@ pub fn adjoint_gradient_with_nodes<'a, D: Scalar, O: Objective, const DIM: usize
     let mut sweep = ReverseSweep::new(chain, h, params).with_node_tangents(params.len(), nodes);
     sweep.t0 = start.map_or(0.0, |s| s.t0);
     let half = chain.records_half_step();
-    let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), half);
+    let mut buffer = StateStore::<D, DIM>::new(n, nc, kk.saturating_sub(1), (half, false));
     for seg in (0..n_segments).rev() {
         let (a, b) = (seg * kk, (seg * kk + kk).min(steps));
         recompute_segment(u, &mut rattle, (&checkpoints, seg), (a, b), &mut buffer)?;

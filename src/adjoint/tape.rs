@@ -70,6 +70,13 @@ pub(crate) struct StateStore<D, const DIM: usize> {
     p: Vec<[D; DIM]>,
     lambda: Vec<D>,
     mu: Vec<D>,
+    /// The predictor's gaps of each state ([`crate::steppers::rattle::Multipliers::gaps`],
+    /// 2 nc per state) when the chain keeps them, so that a segment recomputed from a
+    /// checkpoint repeats the forward sweep's arithmetic bit for bit; empty otherwise.
+    gaps: Vec<D>,
+    keeps_gaps: bool,
+    /// Whether the state had gaps (only when `keeps_gaps`).
+    has_gaps: Vec<bool>,
     /// Whether the state has multipliers (false for an initial state; λ, μ are stored as zeros).
     has_multipliers: Vec<bool>,
     tip: Vec<[D; 2]>,
@@ -95,9 +102,15 @@ pub(crate) struct StateView<'a, D, const DIM: usize> {
 
 impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     /// Room for `capacity` states of n pendulums with nc multipliers; `records_half_step` when
-    /// the model has drag.
-    pub(super) fn new(n: usize, nc: usize, capacity: usize, records_half_step: bool) -> Self {
+    /// the model has drag, `keeps_gaps` when its states carry the predictor's gaps.
+    pub(super) fn new(
+        n: usize,
+        nc: usize,
+        capacity: usize,
+        (records_half_step, keeps_gaps): (bool, bool),
+    ) -> Self {
         let half = if records_half_step { capacity * n } else { 0 };
+        let gaps = if keeps_gaps { capacity * 2 * nc } else { 0 };
         StateStore {
             n,
             nc,
@@ -106,6 +119,9 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
             p: Vec::with_capacity(capacity * n),
             lambda: Vec::with_capacity(capacity * nc),
             mu: Vec::with_capacity(capacity * nc),
+            gaps: Vec::with_capacity(gaps),
+            keeps_gaps,
+            has_gaps: Vec::with_capacity(if keeps_gaps { capacity } else { 0 }),
             has_multipliers: Vec::with_capacity(capacity),
             tip: Vec::with_capacity(capacity),
             phalf: Vec::with_capacity(half),
@@ -114,14 +130,19 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
     }
 
     /// Bytes of one stored state.
-    pub(super) fn state_bytes(n: usize, nc: usize, records_half_step: bool) -> usize {
+    pub(super) fn state_bytes(
+        n: usize,
+        nc: usize,
+        (records_half_step, keeps_gaps): (bool, bool),
+    ) -> usize {
         let blocks = if records_half_step { 3 } else { 2 };
         let w = if records_half_step {
             n * std::mem::size_of::<BlockSym<D, DIM>>()
         } else {
             0
         };
-        (blocks * n * DIM + 2 * nc + 2) * std::mem::size_of::<D>() + w
+        let gaps = if keeps_gaps { 2 * nc } else { 0 };
+        (blocks * n * DIM + 2 * nc + gaps + 2) * std::mem::size_of::<D>() + w
     }
 
     /// Appends a state and the half-step record (p_{k−½}, W) of the step that produced it (any
@@ -138,6 +159,18 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
                 self.lambda.extend(std::iter::repeat_n(D::zero(), self.nc));
                 self.mu.extend(std::iter::repeat_n(D::zero(), self.nc));
             }
+        }
+        if self.keeps_gaps {
+            // A state without gaps (the initial state, or the first step's) keeps zeros and
+            // is loaded without them.
+            match &s.multipliers {
+                Some(m) if m.gaps.len() == 2 * self.nc => self.gaps.extend_from_slice(&m.gaps),
+                _ => self
+                    .gaps
+                    .extend(std::iter::repeat_n(D::zero(), 2 * self.nc)),
+            }
+            self.has_gaps
+                .push(s.multipliers.as_ref().is_some_and(|m| !m.gaps.is_empty()));
         }
         self.has_multipliers.push(s.multipliers.is_some());
         self.tip.push(s.tip_target);
@@ -160,6 +193,8 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
         self.p.clear();
         self.lambda.clear();
         self.mu.clear();
+        self.gaps.clear();
+        self.has_gaps.clear();
         self.has_multipliers.clear();
         self.tip.clear();
         self.phalf.clear();
@@ -204,6 +239,11 @@ impl<D: Scalar, const DIM: usize> StateStore<D, DIM> {
             let m = s.multipliers_mut(self.nc);
             m.lambda.copy_from_slice(v.lambda);
             m.mu.copy_from_slice(v.mu);
+            m.gaps.clear();
+            if self.keeps_gaps && self.has_gaps[i] {
+                let g = 2 * self.nc;
+                m.gaps.extend_from_slice(&self.gaps[i * g..(i + 1) * g]);
+            }
         } else {
             s.multipliers = None;
         }

@@ -180,6 +180,7 @@ impl<D: Scalar, const DIM: usize> Plant<D, DIM> {
             (Some(h), Some(m)) => {
                 h.lambda.copy_from_slice(&m.lambda);
                 h.mu.copy_from_slice(&m.mu);
+                h.gaps.clone_from(&m.gaps);
             }
             (h, m) => h.clone_from(m),
         }

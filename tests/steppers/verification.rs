@@ -852,6 +852,7 @@ fn step_jacobian<const DIM: usize>(
         multipliers: st.multipliers.as_ref().map(|m| Multipliers {
             lambda: lift(&m.lambda),
             mu: lift(&m.mu),
+            gaps: lift(&m.gaps),
         }),
         tip_target: [
             Dual64::from(st.tip_target[0]),
@@ -873,6 +874,7 @@ fn step_jacobian<const DIM: usize>(
         multipliers: s.multipliers.as_ref().map(|m| Multipliers {
             lambda: m.lambda.iter().map(|x| x.re).collect(),
             mu: m.mu.iter().map(|x| x.re).collect(),
+            gaps: m.gaps.iter().map(|x| x.re).collect(),
         }),
         tip_target: [s.tip_target[0].re, s.tip_target[1].re],
     };

@@ -19,9 +19,10 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         let ops = ch.constraints();
         let ws = &mut self.ws;
         match &state.multipliers {
-            Some(m) => ws.lam.copy_from_slice(&m.mu),
+            Some(m) => m.predictor(&mut ws.lam),
             None => ws.lam.copy_from_slice(&ws.mu0),
         }
+        let keep_gaps = keeps_gaps(ch);
         let updates = derivative_updates::<D>();
         let mut extra_done = 0;
         let mut iterations = 0;
@@ -68,8 +69,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
                 }
                 // (f64: no derivative-only updates.)
                 if rmax <= self.options.tolerance {
-                    let nc = ws.lam.len();
-                    state.multipliers_mut(nc).lambda.copy_from_slice(&ws.lam);
+                    record_lambda(state, &ws.lam, &ws.mu0, keep_gaps);
                     ws.mu0_ready = false;
                     std::mem::swap(&mut state.q, &mut ws.qnew);
                     return Ok(StepStats {
@@ -122,8 +122,7 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
             }
             if rmax <= self.options.tolerance {
                 if extra_done == updates {
-                    let nc = ws.lam.len();
-                    state.multipliers_mut(nc).lambda.copy_from_slice(&ws.lam);
+                    record_lambda(state, &ws.lam, &ws.mu0, keep_gaps);
                     ws.mu0_ready = false;
                     std::mem::swap(&mut state.q, &mut ws.qnew);
                     return Ok(StepStats {
@@ -290,4 +289,17 @@ impl<D: Scalar, const DIM: usize> Rattle<D, DIM> {
         }
         Ok(())
     }
+}
+
+/// Stores the converged λ_{k+1} in `state` (with its gap to μ_k when `keep_gaps`; μ_k is the
+/// state's, or `mu0`, the consistent multiplier, for an initial state without multipliers).
+fn record_lambda<D: Scalar, const DIM: usize>(
+    state: &mut State<D, DIM>,
+    lambda: &[D],
+    mu0: &[D],
+    keep_gaps: bool,
+) {
+    let initial = state.multipliers.is_none();
+    let m = state.multipliers_mut(lambda.len());
+    m.record(lambda, initial.then_some(mu0), keep_gaps);
 }

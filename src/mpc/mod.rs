@@ -120,11 +120,23 @@
 //! re-taken step then moves that thrust by at most Ḟ_max h toward the new command, which the
 //! plan does not see: its approximation), its thrusters clip per plan step (Ḟ_max r h), and its
 //! effort weight is rescaled to its steps as a reduced plan's ([`planning::objective_scale`]);
-//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs). Fewer pendulums
-//! (`plan_pendulums` < n) are refused ([`MpcError::ThrustPlanReduced`]): the map onto a
-//! coarser stack-up with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s
-//! predicts the 300 m system's wellhead connector to 3 %, docs/mpc.md), a thrust plan on it is
-//! not built yet.
+//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs).
+//!
+//! With fewer pendulums (`plan_pendulums` = n_p < n, `plan_step` = h_p a whole multiple of h,
+//! else [`MpcError::ThrustStep`]) the plan runs on the reduced planning model ([`planning`]): the
+//! `[pipe]` or `[stackup]` rebuilt with n_p pendulums by its own rule, the same vessel (mass,
+//! added mass, damping, station keeping, thrust bounds), and the observed state mapped onto it
+//! by [`planning::StateMap`] (the vessel's surge state (Z, Ż) copied one to one, the top held
+//! where the plant's is). It starts as the coarser plan does (from t_k with the applied thrust
+//! fixed when h_p > h, else from t_{k−1}), its thrusters clip per plan step (Ḟ_max h_p). On the
+//! base moment the effort weight is rescaled as [`planning`] says ("The objective"); a hot
+//! spot's objective h_p Σ|M|^m + ρ h_p Σ F² is already in the plant's units (M is the joint's
+//! moment in N·m, interpolated in elevation between the plan's joints,
+//! [`crate::adjoint::HotSpotObjective`], and both sums carry the step), so ρ is kept. The
+//! forecast settings act on the plan's model as on the full plan; with `observe = "sensors"`
+//! the filter runs on the plant's own chain at its step ([`Observer`] needs the plant's grid
+//! t_{k−1}) and its estimate is mapped onto the plan as the plant's state is. The plan's
+//! gradient is the exact adjoint of the reduced model's problem (tests/mpc/thrust_reduced.rs).
 //!
 //! # What the plan knows
 //! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on

@@ -23,6 +23,7 @@ use crate::steppers::rattle::State;
 mod plan_models;
 mod thrust_plan;
 
+use plan_models::{observer_model, zero_control};
 pub use thrust_plan::PlannedThrust;
 use thrust_plan::ThrustState;
 
@@ -212,6 +213,9 @@ pub struct Mpc<const DIM: usize = 2> {
     observer: Option<Observer>,
     /// The objective at [`MpcOptions::hotspot`] on the plan's model, `None` without one.
     hotspot: Option<HotSpotObjective>,
+    /// The scene the filter of [`Observe::Sensors`] runs on when the plan's model is not the
+    /// plant's (a reduced or coarser plan: [`observer_model`]); `None`: the plan's model.
+    observer_model: Option<Scene>,
 }
 
 /// What a plan through the vessel's thrust minimises: the base-moment objective of
@@ -355,6 +359,7 @@ impl<const DIM: usize> Mpc<DIM> {
             Some(coarse) => (Some(coarse), None),
             None => Self::planning_model(model, &mut options)?,
         };
+        let plant = model;
         let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
@@ -377,7 +382,6 @@ impl<const DIM: usize> Mpc<DIM> {
         };
         let thrust = match model.thrust() {
             Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
-            Some(_) if planning.is_some() => return Err(MpcError::ThrustPlanReduced.into()),
             Some(t) => Some(ThrustState {
                 actuator: Actuator {
                     bound: t.bound,
@@ -397,13 +401,12 @@ impl<const DIM: usize> Mpc<DIM> {
             }
             SensorSet::of(&model)?;
         }
-        let node = model.control.as_ref().map_or(model.n(), |c| c.node);
-        model.control = Some(Control {
-            node,
-            kind: ControlKind::Constant,
-            values: vec![0.0],
-            values_x: None,
-        });
+        if thrust.is_some() && planning.is_some() {
+            thrust_plan::plan_step_ratio(model.time.step, plant.time.step)?;
+        }
+        let observer_model = (options.observe == Observe::Sensors && plan_model.is_some())
+            .then(|| observer_model(plant, options.forecast));
+        zero_control(&mut model);
         Ok(Mpc {
             model,
             options,
@@ -422,6 +425,7 @@ impl<const DIM: usize> Mpc<DIM> {
             thrust,
             noisy,
             observer: None,
+            observer_model,
             hotspot,
         })
     }

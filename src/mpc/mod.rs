@@ -122,21 +122,13 @@
 //! effort weight is rescaled to its steps as a reduced plan's ([`planning::objective_scale`]);
 //! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs).
 //!
-//! With fewer pendulums (`plan_pendulums` = n_p < n, `plan_step` = h_p a whole multiple of h,
-//! else [`MpcError::ThrustStep`]) the plan runs on the reduced planning model ([`planning`]): the
-//! `[pipe]` or `[stackup]` rebuilt with n_p pendulums by its own rule, the same vessel (mass,
-//! added mass, damping, station keeping, thrust bounds), and the observed state mapped onto it
-//! by [`planning::StateMap`] (the vessel's surge state (Z, Ż) copied one to one, the top held
-//! where the plant's is). It starts as the coarser plan does (from t_k with the applied thrust
-//! fixed when h_p > h, else from t_{k−1}), its thrusters clip per plan step (Ḟ_max h_p). On the
-//! base moment the effort weight is rescaled as [`planning`] says ("The objective"); a hot
-//! spot's objective h_p Σ|M|^m + ρ h_p Σ F² is already in the plant's units (M is the joint's
-//! moment in N·m, interpolated in elevation between the plan's joints,
-//! [`crate::adjoint::HotSpotObjective`], and both sums carry the step), so ρ is kept. The
-//! forecast settings act on the plan's model as on the full plan; with `observe = "sensors"`
-//! the filter runs on the plant's own chain at its step ([`Observer`] needs the plant's grid
-//! t_{k−1}) and its estimate is mapped onto the plan as the plant's state is. The plan's
-//! gradient is the exact adjoint of the reduced model's problem (tests/mpc/thrust_reduced.rs).
+//! With fewer pendulums (`plan_pendulums` = n_p < n, `plan_step` = h_p a whole multiple of h) it
+//! plans on the reduced model of [`planning`] with the same vessel, from the state mapped by
+//! [`planning::StateMap`] (the vessel's (Z, Ż) copied), from t_k if h_p > h (else t_{k−1}), its
+//! thrusters clipped per plan step; a hot spot's h_p Σ|M|^m + ρ h_p Σ F² (M blended between the
+//! plan's joints) keeps ρ, the base moment's is rescaled ([`planning`], "The objective"); with
+//! `observe = "sensors"` the filter runs on the plant's chain and step and its estimate is mapped
+//! (docs/mpc.md "The reduced thrust plan"; exact gradient: tests/mpc/thrust_reduced.rs).
 //!
 //! # What the plan knows
 //! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on

@@ -105,9 +105,10 @@ pub struct MpcOptions {
     /// The solver's options: the bounds on u (default |u| ≤ 5 N), the rate penalty and the
     /// tolerances; `max_iters` is replaced by the budgets above.
     pub ocp: OcpOptions,
-    /// Pendulums n_p of a reduced planning model: the model scene's `[pipe]` rebuilt as a chain
-    /// of n_p pendulums ([`super::planning`]), onto which each observed state is mapped; the plant
-    /// keeps its n. `None` (default): plan on the model scene as it is.
+    /// Pendulums n_p of a reduced planning model: the model scene's `[pipe]` or `[stackup]`
+    /// rebuilt as a chain of n_p pendulums ([`super::planning`]; through the vessel's thrust with
+    /// the same vessel), onto which each observed state is mapped; the plant keeps its n. `None`
+    /// (default): plan on the model scene as it is.
     pub plan_pendulums: Option<usize>,
     /// The planning model's step h_p \[s\] (the control interval must be a multiple of it).
     /// `None` (default): the model scene's step. With either `plan_*` option set, the effort
@@ -350,7 +351,8 @@ impl<const DIM: usize> Mpc<DIM> {
     /// positive whole number of intervals, zero `iterations` or `first_iterations`, an `effort`
     /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
-    /// exponent; the model's errors.
+    /// exponent; [`MpcError::ThrustStep`] for a reduced plan through the vessel's thrust whose
+    /// `plan_step` is not a whole multiple of the model's step; the model's errors.
     pub fn build(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
         // The hot spot's objective carries h in both its terms: the effort weight is the same
         // at any planning step (not rescaled as the base moment's is, below).

@@ -16,7 +16,8 @@
 //!                        scene, else [mpc] bound, else 5e4)
 //!   --interval T        the forcing's pieces [s] (default [mpc] interval, else 1)
 //!   --rate R            the forcing moves at most R [N/s] (default: jumps between pieces)
-//!   --elevation E       the moment's joint: nearest E [m] above the base (default 0, M_w)
+//!   --elevation E       the moment at E [m] above the base, blended between the two joints
+//!                        around it as a hot spot's (default 0, M_w)
 //!   --thrust            a `support = "vessel"` scene without thrust keys: the vessel's thrust
 //!                        (the documented default mass, damping and bounds) is the control
 //! ```
@@ -207,11 +208,11 @@ fn run() -> Result<(), String> {
     };
     println!(
         "Plan vs plant over {} s from t0 = {:?} s; {}; drag {}; forcing ±{amplitude} N pieces of \
-         {interval} s, rate bound {:?} N/s, seed {}; moment at the joint nearest {} m.\n",
+         {interval} s, rate bound {:?} N/s, seed {}; moment at {} m (blended between the joints around it).\n",
         a.horizon, a.starts, a.scene, a.drag, a.rate, a.seed, a.elevation
     );
     println!(
-        "| H_s [m] | T_p [s] | plan n_p @ h_p | e_total | e_response | e_unforced | e_response per start (min–max) | rms plant ΔM [N·m] | plant s/horizon | plan s/horizon | joint plant/plan [m] |"
+        "| H_s [m] | T_p [s] | plan n_p @ h_p | e_total | e_response | e_unforced | e_response per start (min–max) | rms plant ΔM [N·m] | plant s/horizon | plan s/horizon | moment's elevation plant/plan [m] |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for cell in cells {

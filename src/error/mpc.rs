@@ -120,15 +120,6 @@ pub enum MpcError {
         /// The plant's step \[s\].
         plant: f64,
     },
-    /// A reduced planning model with fewer pendulums
-    /// ([`crate::mpc::MpcOptions::plan_pendulums`]) for a plan through the vessel's thrust: it
-    /// plans on the model scene's own pendulums (at its step or a whole multiple of it,
-    /// `plan_step`).
-    #[error(
-        "MPC through the vessel's thrust plans on the model scene's own pendulums: \
-         plan_pendulums is not taken for it (plan_step, a whole multiple of the step, is)"
-    )]
-    ThrustPlanReduced,
     /// `forecast = "none"` on a scene without `[loads.waves]`: there is no sea to leave out.
     #[error("forecast \"none\" leaves the waves out of the plan: the scene has no [loads.waves]")]
     ForecastWithoutSea,
@@ -251,7 +242,6 @@ impl MpcError {
             MpcError::ObserveNeedsThrust
             | MpcError::ObserveSensors { .. }
             | MpcError::ObserverNotConverged => "observe",
-            MpcError::ThrustPlanReduced => "plan_pendulums",
             MpcError::HotSpotUnknown { .. }
             | MpcError::HotSpotSpatial
             | MpcError::HotSpotNeedsThrust

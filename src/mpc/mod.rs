@@ -120,11 +120,15 @@
 //! re-taken step then moves that thrust by at most Ḟ_max h toward the new command, which the
 //! plan does not see: its approximation), its thrusters clip per plan step (Ḟ_max r h), and its
 //! effort weight is rescaled to its steps as a reduced plan's ([`planning::objective_scale`]);
-//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs). Fewer pendulums
-//! (`plan_pendulums` < n) are refused ([`MpcError::ThrustPlanReduced`]): the map onto a
-//! coarser stack-up with the vessel exists ([`planning`]; a 60-pendulum plan at 0.008 s
-//! predicts the 300 m system's wellhead connector to 3 %, docs/mpc.md), a thrust plan on it is
-//! not built yet.
+//! `plan_step` = h is the full plan bit for bit (tests/mpc/thrust_plan_step.rs).
+//!
+//! With fewer pendulums (`plan_pendulums` = n_p < n, `plan_step` = h_p a whole multiple of h) it
+//! plans on the reduced model of [`planning`] with the same vessel, from the state mapped by
+//! [`planning::StateMap`] (the vessel's (Z, Ż) copied), from t_k if h_p > h (else t_{k−1}), its
+//! thrusters clipped per plan step; a hot spot's h_p Σ|M|^m + ρ h_p Σ F² (M blended between the
+//! plan's joints) keeps ρ, the base moment's is rescaled ([`planning`], "The objective"); with
+//! `observe = "sensors"` the filter runs on the plant's chain and step and its estimate is mapped
+//! (docs/mpc.md "The reduced thrust plan"; exact gradient: tests/mpc/thrust_reduced.rs).
 //!
 //! # What the plan knows
 //! [`MpcOptions::forecast`] ([`Forecast`], `[mpc] forecast`, `--forecast`): `perfect` plans on

@@ -11,9 +11,11 @@
 //! run is mapped onto the plan ([`StateMap`]) and the plan (n_p pendulums at step h_p, a whole
 //! multiple of h: [`planning_scene`], or the plant's scene itself) is rolled out over the
 //! horizon T with the same controls, sampled on its grid (u_p,K = u(t₀ + K h_p)), and the same
-//! sea. On the plan's grid t_K = t₀ + K h_p, K = 0..=T/h_p, with M the moment of the joint
-//! nearest the chosen elevation (joint 1 at elevation 0: the wellhead moment M_w = k₁θ₁ of the
-//! base spring; [`crate::hotspots::joint_moment`]),
+//! sea. On the plan's grid t_K = t₀ + K h_p, K = 0..=T/h_p, with M the moment at the chosen
+//! elevation, blended linearly in elevation between the two joints around it as a hot spot's is
+//! ([`crate::hotspots::interpolation_joints`]; a joint's own moment when one sits there, joint 1
+//! at elevation 0: the wellhead moment M_w = k₁θ₁ of the base spring;
+//! [`crate::hotspots::joint_moment`]),
 //! ```text
 //! e_total    = rms_K(M_plan,f − M_plant,f) / rms_K(M_plant,f)
 //! e_response = rms_K(ΔM_plan − ΔM_plant) / rms_K(ΔM_plant),   ΔM = M_f − M_u,
@@ -40,7 +42,7 @@ use rand_chacha::rand_core::{RngCore, SeedableRng};
 use rand_chacha::ChaCha20Rng;
 
 use super::planning::{planning_scene, StateMap};
-use crate::hotspots::{joint_elevations, joint_moment, nearest_joint};
+use crate::hotspots::{interpolation_joints, joint_elevations, joint_moment, JointInterpolation};
 use crate::model::Chain;
 use crate::scene::Scene;
 use crate::steppers::rattle::{Rattle, State};
@@ -92,8 +94,8 @@ pub struct PredictionSetup {
     pub starts: Vec<f64>,
     /// The forcing of the forced runs.
     pub forcing: Forcing,
-    /// The elevation \[m\] above the chain's base of the moment compared (the joint nearest it
-    /// in each chain; 0: the wellhead moment of the base spring).
+    /// The elevation \[m\] above the chain's base of the moment compared (blended between the
+    /// two joints around it in each chain; 0: the wellhead moment of the base spring).
     pub elevation: f64,
 }
 
@@ -125,7 +127,8 @@ pub struct PredictionReport {
     pub plan_pendulums: usize,
     /// h_p \[s\].
     pub plan_step: f64,
-    /// The elevations \[m\] of the joints compared, plant and plan.
+    /// The elevations \[m\] of the moments compared, plant and plan (the blend's: the chosen
+    /// elevation within the chain, else its end joint).
     pub joint_elevations: [f64; 2],
     /// Per start.
     pub starts: Vec<StartError>,
@@ -224,7 +227,7 @@ pub struct PlantRuns {
     start_steps: Vec<usize>,
     /// The horizon in plant steps.
     horizon_steps: usize,
-    plant_joint: usize,
+    plant_joint: JointInterpolation,
     runs: [Run; 2],
 }
 
@@ -369,7 +372,7 @@ impl PlantRuns {
         plant.time.steps = n_steps;
         let forced = forcing(scene, &setup.forcing, n_steps);
         let zero = vec![0.0; n_steps + 1];
-        let plant_joint = nearest_joint(&plant.beam.lengths, setup.elevation);
+        let plant_joint = interpolation_joints(&plant.beam.lengths, setup.elevation);
         let runs = [
             run(&plant, &forced, plant_joint, &start_steps)?,
             run(&plant, &zero, plant_joint, &start_steps)?,
@@ -416,10 +419,10 @@ impl PlantRuns {
             .collect::<Result<Vec<_>, _>>()?;
         let k_end = k0s.iter().max().copied().unwrap_or(0) + kh;
         plan.time.steps = k_end;
-        let plan_joint = nearest_joint(&plan.beam.lengths, setup.elevation);
+        let plan_joint = interpolation_joints(&plan.beam.lengths, setup.elevation);
         let elevations = [
-            joint_elevations(&scene.beam.lengths)[self.plant_joint],
-            joint_elevations(&plan.beam.lengths)[plan_joint],
+            blended_elevation(&scene.beam.lengths, self.plant_joint),
+            blended_elevation(&plan.beam.lengths, plan_joint),
         ];
         let [run_f, run_u] = &self.runs;
         let n_steps = scene.time.steps;
@@ -514,8 +517,23 @@ fn forcing(scene: &Scene, f: &Forcing, n_steps: usize) -> Vec<f64> {
     u
 }
 
+/// The elevation \[m\] of the blend `w` on a chain of pendulum lengths `lengths`.
+fn blended_elevation(lengths: &[f64], w: JointInterpolation) -> f64 {
+    let s = joint_elevations(lengths);
+    w.blend(s[w.lower], s[w.upper])
+}
+
+/// The moment at the blend `w` of two joints of `chain` at the attitudes `q`,
+/// (1 − w) M_lower + w M_upper.
+fn moment(chain: &Chain<f64, 2>, q: &[[f64; 2]], w: JointInterpolation) -> f64 {
+    w.blend(
+        joint_torque(chain, q, w.lower),
+        joint_torque(chain, q, w.upper),
+    )
+}
+
 /// The moment of joint `joint` (0-based) of `chain` at the attitudes `q`.
-fn moment(chain: &Chain<f64, 2>, q: &[[f64; 2]], joint: usize) -> f64 {
+fn joint_torque(chain: &Chain<f64, 2>, q: &[[f64; 2]], joint: usize) -> f64 {
     let n = q.len();
     let e2 = [1.0, 0.0];
     let k = if chain.has_spring(joint) {
@@ -537,7 +555,12 @@ fn stepper(scene: &Scene) -> Result<Rattle<f64, 2>, PredictionError> {
 
 /// The plant's run under the per-step controls `u`: its moment at every step and its states at
 /// `starts` (plant steps).
-fn run(scene: &Scene, u: &[f64], joint: usize, starts: &[usize]) -> Result<Run, PredictionError> {
+fn run(
+    scene: &Scene,
+    u: &[f64],
+    joint: JointInterpolation,
+    starts: &[usize],
+) -> Result<Run, PredictionError> {
     let mut stepper = stepper(scene)?;
     let n_steps = scene.time.steps;
     let mut moments = Vec::with_capacity(n_steps + 1);
@@ -566,12 +589,12 @@ fn run(scene: &Scene, u: &[f64], joint: usize, starts: &[usize]) -> Result<Run, 
 struct Roller {
     stepper: Rattle<f64, 2>,
     state: State<f64, 2>,
-    joint: usize,
+    joint: JointInterpolation,
     steps: usize,
 }
 
 impl Roller {
-    fn new(plan: &Scene, joint: usize, steps: usize) -> Result<Self, PredictionError> {
+    fn new(plan: &Scene, joint: JointInterpolation, steps: usize) -> Result<Self, PredictionError> {
         Ok(Roller {
             stepper: stepper(plan)?,
             state: State::straight(plan.n()),

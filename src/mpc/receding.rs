@@ -23,6 +23,7 @@ use crate::steppers::rattle::State;
 mod plan_models;
 mod thrust_plan;
 
+use plan_models::{observer_model, zero_control};
 pub use thrust_plan::PlannedThrust;
 use thrust_plan::ThrustState;
 
@@ -104,9 +105,10 @@ pub struct MpcOptions {
     /// The solver's options: the bounds on u (default |u| ≤ 5 N), the rate penalty and the
     /// tolerances; `max_iters` is replaced by the budgets above.
     pub ocp: OcpOptions,
-    /// Pendulums n_p of a reduced planning model: the model scene's `[pipe]` rebuilt as a chain
-    /// of n_p pendulums ([`super::planning`]), onto which each observed state is mapped; the plant
-    /// keeps its n. `None` (default): plan on the model scene as it is.
+    /// Pendulums n_p of a reduced planning model: the model scene's `[pipe]` or `[stackup]`
+    /// rebuilt as a chain of n_p pendulums ([`super::planning`]; through the vessel's thrust with
+    /// the same vessel), onto which each observed state is mapped; the plant keeps its n. `None`
+    /// (default): plan on the model scene as it is.
     pub plan_pendulums: Option<usize>,
     /// The planning model's step h_p \[s\] (the control interval must be a multiple of it).
     /// `None` (default): the model scene's step. With either `plan_*` option set, the effort
@@ -212,6 +214,9 @@ pub struct Mpc<const DIM: usize = 2> {
     observer: Option<Observer>,
     /// The objective at [`MpcOptions::hotspot`] on the plan's model, `None` without one.
     hotspot: Option<HotSpotObjective>,
+    /// The scene the filter of [`Observe::Sensors`] runs on when the plan's model is not the
+    /// plant's (a reduced or coarser plan: [`observer_model`]); `None`: the plan's model.
+    observer_model: Option<Scene>,
 }
 
 /// What a plan through the vessel's thrust minimises: the base-moment objective of
@@ -346,7 +351,8 @@ impl<const DIM: usize> Mpc<DIM> {
     /// positive whole number of intervals, zero `iterations` or `first_iterations`, an `effort`
     /// not finite and ≥ 0; [`OcpError`](crate::error::OcpError) naming the solver option at
     /// fault; [`Error::Scene`](crate::Error::Scene) naming `objective.exponent` for a power objective's invalid
-    /// exponent; the model's errors.
+    /// exponent; [`MpcError::ThrustStep`] for a reduced plan through the vessel's thrust whose
+    /// `plan_step` is not a whole multiple of the model's step; the model's errors.
     pub fn build(model: &Scene, interval: f64, mut options: MpcOptions) -> Result<Self> {
         // The hot spot's objective carries h in both its terms: the effort weight is the same
         // at any planning step (not rescaled as the base moment's is, below).
@@ -355,6 +361,7 @@ impl<const DIM: usize> Mpc<DIM> {
             Some(coarse) => (Some(coarse), None),
             None => Self::planning_model(model, &mut options)?,
         };
+        let plant = model;
         let model = plan_model.as_ref().unwrap_or(model);
         let model_steps = interval_steps(interval, model.time.step)?;
         options.ocp.validate()?;
@@ -377,7 +384,6 @@ impl<const DIM: usize> Mpc<DIM> {
         };
         let thrust = match model.thrust() {
             Some(_) if DIM == 3 => return Err(MpcError::ThrustSpatial.into()),
-            Some(_) if planning.is_some() => return Err(MpcError::ThrustPlanReduced.into()),
             Some(t) => Some(ThrustState {
                 actuator: Actuator {
                     bound: t.bound,
@@ -397,13 +403,12 @@ impl<const DIM: usize> Mpc<DIM> {
             }
             SensorSet::of(&model)?;
         }
-        let node = model.control.as_ref().map_or(model.n(), |c| c.node);
-        model.control = Some(Control {
-            node,
-            kind: ControlKind::Constant,
-            values: vec![0.0],
-            values_x: None,
-        });
+        if thrust.is_some() && planning.is_some() {
+            thrust_plan::plan_step_ratio(model.time.step, plant.time.step)?;
+        }
+        let observer_model = (options.observe == Observe::Sensors && plan_model.is_some())
+            .then(|| observer_model(plant, options.forecast));
+        zero_control(&mut model);
         Ok(Mpc {
             model,
             options,
@@ -422,6 +427,7 @@ impl<const DIM: usize> Mpc<DIM> {
             thrust,
             noisy,
             observer: None,
+            observer_model,
             hotspot,
         })
     }

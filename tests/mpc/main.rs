@@ -21,3 +21,4 @@ mod observe;
 mod one_loop;
 mod plan_prediction;
 mod thrust_plan_step;
+mod thrust_reduced;

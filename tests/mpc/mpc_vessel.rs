@@ -206,31 +206,6 @@ fn forecast_none_plans_without_the_waves() {
     );
 }
 
-/// A reduced planning model is refused for a plan through the thrust, naming `plan_pendulums`
-/// (the thrust re-plan starts from the plant's own state one step back), instead of failing at
-/// the first decision on the model's size.
-#[test]
-fn a_reduced_plan_through_the_thrust_is_refused_by_name() {
-    let s = riser_in_waves(40);
-    let e = Mpc::new(
-        &s,
-        1.0,
-        MpcOptions {
-            plan_pendulums: Some(5),
-            plan_step: Some(0.1),
-            ..MpcOptions::default()
-        },
-    )
-    .unwrap_err();
-    assert!(
-        matches!(e, Error::Mpc(mpc::MpcError::ThrustPlanReduced)),
-        "{e:?}"
-    );
-    if let Error::Mpc(m) = &e {
-        assert_eq!(m.argument(), "plan_pendulums");
-    }
-}
-
 /// A closed loop worse than none is flagged for MPC through the vessel too: `chainbeam
 /// fatigue`'s study reports, per cell, MPC's damage over no control's (the ratio recomputed here
 /// from the two controllers' own cell damages), the thrust MPC applied (within its bound), and

@@ -24,7 +24,7 @@ fn run(s: &Scene, plan_step: Option<f64>) -> mpc::ClosedLoopResult {
 
 /// `plan_step` = 2h runs through the thrust (it was refused as a reduced plan); `plan_step` = h
 /// is the full plan bit for bit; a step that is not a multiple of h is refused naming the model
-/// (`MpcError::ThrustStep`); fewer pendulums are still refused (`ThrustPlanReduced`).
+/// (`MpcError::ThrustStep`). Fewer pendulums: tests/mpc/thrust_reduced.rs.
 #[test]
 fn a_coarser_plan_step_plans_through_the_thrust() {
     let s = riser_in_waves(400);
@@ -55,20 +55,6 @@ fn a_coarser_plan_step_plans_through_the_thrust() {
     .unwrap_err();
     assert!(
         matches!(e, Error::Mpc(mpc::MpcError::ThrustStep { .. })),
-        "{e:?}"
-    );
-    let e = Mpc::new(
-        &s,
-        1.0,
-        MpcOptions {
-            plan_pendulums: Some(5),
-            plan_step: Some(0.1),
-            ..MpcOptions::default()
-        },
-    )
-    .unwrap_err();
-    assert!(
-        matches!(e, Error::Mpc(mpc::MpcError::ThrustPlanReduced)),
         "{e:?}"
     );
 }

@@ -1,6 +1,6 @@
 //! The plan's models of the receding-horizon controller, built once by [`Mpc::build`]: the hot
-//! spot's objective, the thrust plan at a coarser step and the reduced planning model with its
-//! map from the plant (code moved out of `receding.rs`, unchanged).
+//! spot's objective, the thrust plan at a coarser step, the reduced planning model with its
+//! map from the plant, and the filter's scene under a plan whose model is not the plant's.
 
 use super::*;
 
@@ -37,7 +37,7 @@ impl<const DIM: usize> Mpc<DIM> {
     /// pendulums (`plan_pendulums` not given or n), the model scene at the step r h, the effort
     /// weight rescaled to its units as a reduced planning model's
     /// ([`super::planning::objective_scale`]); `None` for any other scene or setting (a thrust
-    /// scene with fewer pendulums is refused by [`Mpc::build`]).
+    /// scene with fewer pendulums plans on the reduced model of [`Mpc::planning_model`]).
     ///
     /// # Errors
     /// [`MpcError::ThrustStep`] when `plan_step` is not a whole multiple of the model's step.
@@ -91,4 +91,34 @@ impl<const DIM: usize> Mpc<DIM> {
         let start = State::straight(np);
         Ok((Some(plan), Some((map, start))))
     }
+}
+
+/// The plan's control on `scene`: a constant zero force at the scene's control node (the top's,
+/// n, unless the scene names one). The plans set their own controls; the filter of
+/// [`Observe::Sensors`] applies the thrusts the thrusters gave.
+pub(super) fn zero_control(scene: &mut Scene) {
+    let node = scene.control.as_ref().map_or(scene.n(), |c| c.node);
+    scene.control = Some(Control {
+        node,
+        kind: ControlKind::Constant,
+        values: vec![0.0],
+        values_x: None,
+    });
+}
+
+/// The scene the filter of [`Observe::Sensors`] runs on under a plan whose model is not the
+/// plant's (a reduced stack-up or a coarser step): the model scene `model` itself, the plant's
+/// n pendulums at its step h, with the forecast's sea (calm for [`Forecast::None`]) and
+/// [`zero_control`]. The filter predicts between readings on the plant's grid t_{k−1} (its
+/// readings are taken on the plant's state), so it needs the plant's step and chain; its estimate
+/// is then mapped onto the plan by the plan's [`StateMap`] as the plant's state is. Its cost per
+/// interval is one simulation of the interval on the plant's chain, against a re-plan's few
+/// simulations and adjoint sweeps of a whole horizon on the plan's chain.
+pub(super) fn observer_model(model: &Scene, forecast: Forecast) -> Scene {
+    let mut scene = model.clone();
+    if forecast == Forecast::None {
+        scene.loads.waves = None;
+    }
+    zero_control(&mut scene);
+    scene
 }

@@ -76,7 +76,18 @@ impl Mpc {
             state.template = Some((t.0, t.1.with_chain(chain)));
         }
         let template = &state.template.as_ref().expect("set above").1;
-        super::check_model_size(template.chain().n(), obs.state.q.len())?;
+        if self.planning.is_none() {
+            super::check_model_size(template.chain().n(), obs.state.q.len())?;
+        }
+        // A reduced plan starts from the plant's state mapped onto its chain (the vessel's
+        // (Z, Ż) copied), as a force plan's does ([`super::planning`]).
+        let start = match (start, self.planning.as_mut()) {
+            (Some(plant), Some((map, mapped))) => {
+                map.map(plant, mapped)?;
+                Some(&*mapped)
+            }
+            (start, _) => start,
+        };
         let problem = match start {
             Some(prev) => template.clone().starting_from(prev.clone(), t_start)?,
             None => template.clone(),
@@ -134,7 +145,10 @@ impl Mpc {
     pub(super) fn control_observed(&mut self, obs: &ModelObservation<'_, 2>) -> Result<f64> {
         let mut observer = match self.observer.take() {
             Some(o) => o,
-            None => Observer::new(&self.model, obs.steps, self.interval, self.options.observer)?,
+            None => {
+                let scene = self.observer_model.as_ref().unwrap_or(&self.model);
+                Observer::new(scene, obs.steps, self.interval, self.options.observer)?
+            }
         };
         observer.observe(obs)?;
         let planned = self.replan_thrust(&observer.observation(obs));
@@ -163,7 +177,7 @@ impl Mpc {
 
 /// The ratio r = h_plan / h of the plan's step to the plant's, refused unless a whole number
 /// ≥ 1 (to 1e-9; r is NaN for a non-finite step: refused as well).
-fn plan_step_ratio(hp: f64, h: f64) -> Result<f64> {
+pub(super) fn plan_step_ratio(hp: f64, h: f64) -> Result<f64> {
     let r = (hp / h).round();
     if r.is_nan() || r < 1.0 || (r * h - hp).abs() > 1e-9 * hp {
         return Err(MpcError::ThrustStep {

@@ -153,6 +153,12 @@ struct SettingsJson {
     /// What MPC measured the hot spot's moment from ("mean"; absent: "zero", as before).
     #[serde(skip_serializing_if = "Option::is_none")]
     moment_about: Option<&'static str>,
+    /// MPC's reduced planning model's pendulums (absent: the model's own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plan_pendulums: Option<usize>,
+    /// MPC's planning step \[s\] (absent: the model's own).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    plan_step: Option<f64>,
 }
 
 /// `--controller` output.
@@ -508,6 +514,8 @@ fn controllers_json(a: &FatigueArgs, solved: &Solved) -> Result<String, CliError
             observe: settings.observe.name(),
             hotspot: settings.hotspot.clone(),
             moment_about: crate::cmd_mpc::moment_about_json(settings.moment_about),
+            plan_pendulums: settings.plan_pendulums,
+            plan_step: settings.plan_step,
         },
         seeds: solved.seeds.clone(),
     })

@@ -60,13 +60,14 @@ pub struct MpcFlags {
     /// else 0.01].
     #[arg(long, value_name = "RHO")]
     pub effort: Option<f64>,
-    /// MPC plans on a reduced model: the model's [pipe] rebuilt with N pendulums (the plant
-    /// keeps its own); the observed state is mapped onto it [default: mpc.plan_pendulums, else
-    /// plan on the model as it is].
+    /// MPC plans on a reduced model: the model's [pipe] or [stackup] rebuilt with N pendulums
+    /// (the plant keeps its own; through the vessel's thrust with the same vessel); the observed
+    /// state is mapped onto it [default: mpc.plan_pendulums, else plan on the model as it is].
     #[arg(long, value_name = "N")]
     pub plan_pendulums: Option<usize>,
-    /// The step [s] of MPC's planning model (the interval must be a multiple of it) [default:
-    /// mpc.plan_step, else the model's time.step].
+    /// The step [s] of MPC's planning model (the interval must be a multiple of it; through the
+    /// vessel's thrust a whole multiple of time.step) [default: mpc.plan_step, else the model's
+    /// time.step].
     #[arg(long, value_name = "S")]
     pub plan_step: Option<f64>,
     /// What MPC's plan knows of the sea ahead: `perfect` = the model scene's waves, `none` = a

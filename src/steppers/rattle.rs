@@ -128,6 +128,9 @@ impl<D: Scalar> Multipliers<D> {
     /// Newton's predictor for the next step's λ_{k+1} into `out`: μ_k, plus, when the gaps are
     /// kept, their quadratic extrapolation 2γ_k − γ_{k−1} (λ_{k+1} − μ_k changes smoothly along
     /// a run where λ and μ alone jump by O(h)).
+    ///
+    /// # Panics
+    /// If `out` is not as long as μ_k (the chain's constraint count), as `copy_from_slice`.
     pub fn predictor(&self, out: &mut [D]) {
         out.copy_from_slice(&self.mu);
         let nc = self.mu.len();
@@ -139,9 +142,10 @@ impl<D: Scalar> Multipliers<D> {
         }
     }
 
-    /// Records the converged λ_{k+1} of a step whose predictor was based on `mu_prev` (μ_k),
-    /// and, when `keep_gaps`, its gap γ_{k+1} = λ_{k+1} − μ_k, shifting γ_k back (both set to
-    /// it on the first record).
+    /// Records the converged λ_{k+1} of a step whose predictor was based on μ_k (`mu_prev`, or
+    /// with `None` these multipliers' own `mu`, which the step has not overwritten yet) and,
+    /// when `keep_gaps`, its gap γ_{k+1} = λ_{k+1} − μ_k, shifting γ_k back (both set to it on
+    /// the first record).
     pub(super) fn record(&mut self, lambda: &[D], mu_prev: Option<&[D]>, keep_gaps: bool) {
         let nc = lambda.len();
         if keep_gaps {

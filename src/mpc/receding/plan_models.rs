@@ -52,14 +52,7 @@ impl<const DIM: usize> Mpc<DIM> {
         if options.plan_pendulums.is_some_and(|n| n != model.n()) || DIM == 3 {
             return Ok(None);
         }
-        let r = (hp / h).round();
-        if !(hp.is_finite() && r >= 1.0) || (r * h - hp).abs() > 1e-9 * hp {
-            return Err(MpcError::ThrustStep {
-                model: hp,
-                plant: h,
-            }
-            .into());
-        }
+        let r = super::thrust_plan::plan_step_ratio(hp, h)?;
         let mut plan = model.clone();
         plan.time.step = r * h;
         plan.time.steps = (model.time.steps / r as usize).max(1);

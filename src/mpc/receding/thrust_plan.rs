@@ -176,10 +176,11 @@ impl Mpc {
 }
 
 /// The ratio r = h_plan / h of the plan's step to the plant's, refused unless a whole number
-/// ≥ 1 (to 1e-9; r is NaN for a non-finite step: refused as well).
+/// ≥ 1 (to 1e-9) of a finite step: [`MpcError::ThrustStep`] otherwise. Shared by the coarser
+/// plan on the plant's pendulums and the reduced plan.
 pub(super) fn plan_step_ratio(hp: f64, h: f64) -> Result<f64> {
     let r = (hp / h).round();
-    if r.is_nan() || r < 1.0 || (r * h - hp).abs() > 1e-9 * hp {
+    if !(hp.is_finite() && r >= 1.0) || (r * h - hp).abs() > 1e-9 * hp {
         return Err(MpcError::ThrustStep {
             model: hp,
             plant: h,

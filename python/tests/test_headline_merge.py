@@ -16,7 +16,8 @@ from typing import Any
 
 import pytest
 
-from conftest import ROOT, wave_riser_toml
+from conftest import ROOT
+from test_fatigue import SCENE as FATIGUE_SCENE
 
 # The harness is a script without a .py suffix: loaded by path.
 _loader = SourceFileLoader("headline", str(ROOT / "scripts" / "headline"))
@@ -25,19 +26,10 @@ assert _spec is not None
 headline = module_from_spec(_spec)
 _loader.exec_module(headline)
 
-# The 60 m riser of conftest.py with a control at node 3, curve D in seawater with CP, and two
-# hot spots (the merge recombines each hot spot's damage and names the critical one).
-SCENE = wave_riser_toml(
-    tail="""
-[control]
-node = 3
-kind = "constant"
-values = [0.0]
-
-[fatigue]
-outer_diameter = 0.5334
-wall_thickness = 0.0222
-
+# test_fatigue.py's scene (the 60 m riser of conftest.py with a control at node 3, curve D in
+# seawater with CP) with two hot spots: the merge recombines each hot spot's damage and names the
+# critical one.
+SCENE = FATIGUE_SCENE + """
 [[fatigue.hotspot]]
 name = "low"
 elevation = 5.0
@@ -46,7 +38,6 @@ elevation = 5.0
 name = "mid"
 elevation = 30.0
 """
-)
 
 DIAGRAM = [(1.5, 7.0, 0.5), (3.0, 9.0, 0.3), (5.0, 11.0, 0.2)]
 

@@ -12,6 +12,7 @@ import subprocess
 from importlib.machinery import SourceFileLoader
 from importlib.util import module_from_spec, spec_from_loader
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -95,3 +96,19 @@ def test_merge_refuses_what_is_not_one_diagram(cli: str, tmp_path: Path) -> None
     assert merged["controllers"]["none"]["damage_per_year"] == pytest.approx(
         one["controllers"]["none"]["damage_per_year"]
         + other["controllers"]["none"]["damage_per_year"], rel=1e-15)
+
+
+def test_merge_writes_no_output_on_its_inputs(tmp_path: Path) -> None:
+    part = tmp_path / "part"
+    part.mkdir()
+    (part / "scene.toml").write_text("# a part\n")
+    (part / "none.json").write_text("{}")
+    before = {f.name: f.read_text() for f in part.iterdir()}
+    args = SimpleNamespace(merge=[str(part)], out=str(part), scatter="", forecast_error=None)
+    with pytest.raises(SystemExit, match="is one of the parts"):
+        headline.merge(args)
+    assert {f.name: f.read_text() for f in part.iterdir()} == before
+    args = SimpleNamespace(merge=[str(tmp_path)], out=str(tmp_path / "out"), scatter="",
+                           forecast_error=None)
+    with pytest.raises(SystemExit, match="not an output of scripts/headline"):
+        headline.merge(args)

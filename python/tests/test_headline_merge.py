@@ -40,6 +40,12 @@ name = "mid"
 elevation = 30.0
 """
 
+def scene_text(seed: int) -> str:
+    """SCENE with its waves' seed replaced (a part over other seeds runs such a scene)."""
+    assert SCENE.count("seed = 7\n") == 1
+    return SCENE.replace("seed = 7\n", f"seed = {seed}\n")
+
+
 DIAGRAM = [(1.5, 7.0, 0.5), (3.0, 9.0, 0.3), (5.0, 11.0, 0.2)]
 
 
@@ -59,9 +65,9 @@ def close(a: Any, b: Any, path: str = "") -> None:
         assert a == b, (path, a, b)
 
 
-def study(cli: str, tmp: Path, rows: list[int], seeds: int = 2) -> Any:
+def study(cli: str, tmp: Path, rows: list[int], seeds: int = 2, seed: int = 7) -> Any:
     scene = tmp / "w.toml"
-    scene.write_text(SCENE)
+    scene.write_text(scene_text(seed))
     scatter = tmp / f"cells_{'_'.join(map(str, rows))}.csv"
     scatter.write_text("hs,tp,probability\n"
                        + "".join("{},{},{}\n".format(*DIAGRAM[i]) for i in rows))
@@ -112,3 +118,57 @@ def test_merge_writes_no_output_on_its_inputs(tmp_path: Path) -> None:
                            forecast_error=None)
     with pytest.raises(SystemExit, match="not an output of scripts/headline"):
         headline.merge(args)
+
+
+def seed_part(report: Any, rows: list[int], seed: int, keep: set[int] | None = None) -> Any:
+    """A part as the merge loads it from a directory (load_part): its seeds from its JSON or its
+    scene, its report restricted to the rows `keep`."""
+    if keep is not None:
+        report, rows = headline.restrict(report, rows, keep, "test")
+    return {"scene": scene_text(seed), "reports": {"test": report}, "rows": {"test": rows},
+            "seeds": headline.part_seeds(report, scene_text(seed), "part")}
+
+
+def test_merge_over_seeds_equals_one_call(cli: str, tmp_path: Path) -> None:
+    """Seed 7 alone over the three cells, and seeds 8, 9 in two calls over disjoint cells, merged:
+    the call over the three cells with seeds 7, 8, 9 (each seed's record is the same whichever
+    call runs it: the seed is the scene's `[loads.waves] seed`, s..s+K−1)."""
+    whole = study(cli, tmp_path, [0, 1, 2], seeds=3)
+    parts = [seed_part(study(cli, tmp_path, [0, 1, 2], seeds=1), [0, 1, 2], 7),
+             seed_part(study(cli, tmp_path, [0], seed=8), [0], 8),
+             seed_part(study(cli, tmp_path, [2, 1], seed=8), [2, 1], 8)]
+    assert [p["seeds"] for p in parts] == [[7], [8, 9], [8, 9]]
+    merged, rows, seeds = headline.merge_parts(parts, ["test"])
+    assert (rows, seeds) == ([0, 1, 2], [7, 8, 9])
+    assert whole["seeds"] == [7, 8, 9]
+    # The check means something: seed 7's own totals are not the three seeds'.
+    seven = parts[0]["reports"]["test"]["controllers"]["constant"]["damage_per_year"]
+    assert abs(seven / whole["controllers"]["constant"]["damage_per_year"] - 1) > 1e-3
+    close(merged["test"], whole)
+
+
+def test_merge_of_some_cells_of_a_part(cli: str, tmp_path: Path) -> None:
+    """`--cells`: seed 7 run over the three cells, restricted to rows 1, 2, and seed 8 over rows
+    1, 2, merged: the call over rows 1, 2 with seeds 7, 8, but for the hot spots (not given per
+    cell: dropped, the acted-on moment's damage is each cell's own)."""
+    whole = study(cli, tmp_path, [1, 2], seeds=2)
+    for c in whole["controllers"].values():
+        del c["hotspots"], c["critical"]
+    parts = [seed_part(study(cli, tmp_path, [0, 1, 2], seeds=1), [0, 1, 2], 7, keep={1, 2}),
+             seed_part(study(cli, tmp_path, [1, 2], seeds=1, seed=8), [1, 2], 8)]
+    merged, rows, seeds = headline.merge_parts(parts, ["test"])
+    assert (rows, seeds) == ([1, 2], [7, 8])
+    close(merged["test"], whole)
+
+
+def test_merge_over_seeds_refuses_what_no_call_runs(cli: str, tmp_path: Path) -> None:
+    seven = seed_part(study(cli, tmp_path, [0, 1], seeds=1), [0, 1], 7)
+    nine = seed_part(study(cli, tmp_path, [0, 1], seeds=1, seed=9), [0, 1], 9)
+    with pytest.raises(SystemExit, match="not s, s"):
+        headline.merge_parts([seven, nine], ["test"])
+    eight = seed_part(study(cli, tmp_path, [1], seeds=1, seed=8), [1], 8)
+    with pytest.raises(SystemExit, match="cover the rows"):
+        headline.merge_parts([seven, eight], ["test"])
+    both = seed_part(study(cli, tmp_path, [0, 1], seeds=2), [0, 1], 7)
+    with pytest.raises(SystemExit, match="overlap"):
+        headline.merge_parts([seven, both], ["test"])

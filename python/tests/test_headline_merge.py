@@ -2,8 +2,9 @@
 diagram, and the merge recombines them into what one call over all the cells gives. The reference
 is chainbeam's own JSON of that one call (the command line computes its totals in Rust): the merge
 of two calls over the cells {0} and {1, 2} must equal the call over {0, 1, 2}, every number to
-1e-12 relative (the sums are taken in another order) and every key the same; the refusals say
-what differs."""
+1e-12 relative (the sums are taken in another order) and every key the same; so must parts over
+disjoint seeds, and parts that ran other controllers over the same cells and seeds; the refusals
+say what differs."""
 
 from __future__ import annotations
 
@@ -172,3 +173,80 @@ def test_merge_over_seeds_refuses_what_no_call_runs(cli: str, tmp_path: Path) ->
     both = seed_part(study(cli, tmp_path, [0, 1], seeds=2), [0, 1], 7)
     with pytest.raises(SystemExit, match="overlap"):
         headline.merge_parts([seven, both], ["test"])
+
+
+def call_dir(cli: str, tmp: Path, name: str, rows: list[int], commands: list[str],
+             cpu: dict[str, float]) -> str:
+    """A directory as one `scripts/headline` call leaves it: the scene, one JSON per command
+    (`chainbeam fatigue --controller C`, which also runs no control), and cpu.json (the CPU
+    seconds given: the merge's arithmetic on them is what is checked, not a timing)."""
+    d = tmp / name
+    d.mkdir()
+    (d / "scene.toml").write_text(scene_text(7))
+    scatter = d / "cells.csv"
+    scatter.write_text("hs,tp,probability\n"
+                       + "".join("{},{},{}\n".format(*DIAGRAM[i]) for i in rows))
+    for c in commands:
+        p = subprocess.run(
+            [cli, "--quiet", "fatigue", str(d / "scene.toml"), "--scatter", str(scatter),
+             "--controller", c, "--seeds", "2", "--record", "8", "--spin-up", "2",
+             "--output", str(d / f"{c}.json")], capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+    scatter.unlink()
+    (d / "cpu.json").write_text(json.dumps({"cpu": cpu, "simulated": 0.0}))
+    return str(d)
+
+
+def merge_dirs(tmp: Path, dirs: list[str], out: str) -> Path:
+    scatter = tmp / "diagram.csv"
+    scatter.write_text("hs,tp,probability\n" + "".join("{},{},{}\n".format(*r) for r in DIAGRAM))
+    headline.merge(SimpleNamespace(merge=dirs, out=str(tmp / out), scatter=str(scatter),
+                                   forecast_error=None, cells="all"))
+    return tmp / out
+
+
+def test_merge_over_controllers_equals_one_call(cli: str, tmp_path: Path) -> None:
+    """The constant thrust run in two calls over disjoint cells and PD in a third call over all
+    three, merged: one call's JSON of none, constant and PD over the three cells (each command's
+    JSON as chainbeam writes it for the three cells, to 1e-12), and each controller's own CPU
+    (its parts' CPU less their `none`'s) in the table and in cpu.json."""
+    whole = call_dir(cli, tmp_path, "whole", [0, 1, 2], ["none", "constant", "pd"],
+                     {"none": 1.0, "constant": 2.0, "pd": 3.0})
+    dirs = [call_dir(cli, tmp_path, "c0", [0], ["none", "constant"],
+                     {"none": 1.0, "constant": 5.0}),
+            call_dir(cli, tmp_path, "c21", [2, 1], ["none", "constant"],
+                     {"none": 2.0, "constant": 4.0}),
+            call_dir(cli, tmp_path, "pd", [0, 1, 2], ["none", "pd"], {"none": 4.0, "pd": 10.0})]
+    out = merge_dirs(tmp_path, dirs, "out")
+    for c in ["none", "constant", "pd"]:
+        close(json.loads((out / f"{c}.json").read_text()),
+              json.loads((Path(whole) / f"{c}.json").read_text()))
+    # Own CPU: constant (5 − 1) + (4 − 2) = 6, PD 10 − 4 = 6; no control the first group's 3.
+    assert json.loads((out / "cpu.json").read_text())["cpu"] == {
+        "none": 3.0, "constant": 9.0, "pd": 9.0}
+    table = (out / "headline.md").read_text()
+    assert "| constant | — |" in table and "| pd | — |" in table
+    assert [l.split("|")[8].strip() for l in table.splitlines()
+            if l.startswith(("| none |", "| constant |", "| pd |"))] == ["3.0", "6.0", "6.0"]
+
+
+def test_merge_over_controllers_refuses_other_records(cli: str, tmp_path: Path) -> None:
+    """Controllers join only over the same records: the same cells and seeds, no control's
+    damages equal, and each command in one kind of part."""
+    cpu = {"none": 1.0, "constant": 2.0, "pd": 3.0}
+    constant = call_dir(cli, tmp_path, "c", [0, 1], ["none", "constant"], cpu)
+    pd_one = call_dir(cli, tmp_path, "p1", [1], ["none", "pd"], cpu)
+    with pytest.raises(SystemExit, match="over the same cells"):
+        merge_dirs(tmp_path, [constant, pd_one], "o1")
+    both = call_dir(cli, tmp_path, "cp", [0, 1], ["none", "constant", "pd"], cpu)
+    with pytest.raises(SystemExit, match="in parts of two kinds"):
+        merge_dirs(tmp_path, [constant, both], "o2")
+    pd_two = call_dir(cli, tmp_path, "p2", [0, 1], ["none", "pd"], cpu)
+    merge_dirs(tmp_path, [constant, pd_two], "o3")
+    none = json.loads((Path(pd_two) / "none.json").read_text())
+    none["controllers"]["none"]["cells"][1]["seed_damages"][0] *= 1.01
+    (Path(pd_two) / "none.json").write_text(json.dumps(none))
+    with pytest.raises(SystemExit, match="not the same records"):
+        merge_dirs(tmp_path, [constant, pd_two], "o4")
+    # A refused merge writes nothing.
+    assert not any((tmp_path / o).exists() for o in ("o1", "o2", "o4"))

@@ -502,6 +502,14 @@ pub trait Controller {
         None
     }
 
+    /// Simulations of the plan's model at the last decision (each a rollout of the horizon, with
+    /// its adjoint sweep when the solver asked for the gradient; None: no optimiser). With
+    /// [`Controller::last_iterations`] it says what a decision cost: a solver that backtracks
+    /// runs more simulations per iteration.
+    fn last_rollouts(&self) -> Option<usize> {
+        None
+    }
+
     /// Whether the controller plans in the spatial model: [`run_closed_loop`] then runs the
     /// plant in it even for a planar scene (false: the scene decides).
     fn spatial(&self) -> bool {
@@ -520,6 +528,8 @@ pub struct Decision {
     pub seconds: f64,
     /// Optimiser iterations, if any.
     pub iterations: Option<usize>,
+    /// Simulations of the plan's model, if any ([`Controller::last_rollouts`]).
+    pub rollouts: Option<usize>,
 }
 
 /// The numbers a closed-loop run is judged by (module docs).
@@ -548,6 +558,9 @@ pub struct Summary {
     pub worst_replan_seconds: f64,
     /// Mean optimiser iterations per decision after the first (None: no optimiser).
     pub mean_iterations: Option<f64>,
+    /// Mean simulations of the plan's model per decision after the first, Σ_{k≥1} r_k / (N/m − 1)
+    /// (None: no optimiser; [`Decision::rollouts`]).
+    pub mean_rollouts: Option<f64>,
     /// T / Σ_{j≥1} (decision wall time): how much faster than real time the controller runs
     /// (the decisions after the first; capped at 10¹² for controllers that take no time).
     pub real_time_factor: f64,
@@ -650,6 +663,7 @@ fn closed_loop<const DIM: usize>(
             control: u.z,
             seconds,
             iterations: controller.last_iterations(),
+            rollouts: controller.last_rollouts(),
         });
         plant.set_controls([u.x, u.z])?;
         for _ in 0..m {
@@ -744,6 +758,14 @@ impl Recorder {
 /// Largest real-time factor reported (a controller that takes no measurable time).
 const MAX_REAL_TIME_FACTOR: f64 = 1e12;
 
+/// A count summed over the decisions after the first, per decision (None without such
+/// decisions or without the count).
+fn per_decision(total: Option<usize>, later: &[Decision], count: f64) -> Option<f64> {
+    total
+        .filter(|_| !later.is_empty())
+        .map(|i| i as f64 / count)
+}
+
 fn summarise(
     controller: String,
     rec: &Recorder,
@@ -757,6 +779,7 @@ fn summarise(
     let replan: f64 = later.iter().map(|d| d.seconds).sum();
     let count = later.len().max(1) as f64;
     let iterations: Option<usize> = later.iter().map(|d| d.iterations).sum();
+    let rollouts: Option<usize> = later.iter().map(|d| d.rollouts).sum();
     let rtf = |s: f64| (simulated / s).min(MAX_REAL_TIME_FACTOR);
     let (c_sum, max_abs_moment, max_abs_control, effort) = if rec.spatial {
         let norms = |a: &[f64], b: &[f64]| -> Vec<f64> {
@@ -788,9 +811,8 @@ fn summarise(
         initial_decision_seconds: decisions.first().map_or(0.0, |d| d.seconds),
         mean_replan_seconds: replan / count,
         worst_replan_seconds: later.iter().fold(0.0, |a, d| a.max(d.seconds)),
-        mean_iterations: iterations
-            .filter(|_| !later.is_empty())
-            .map(|i| i as f64 / count),
+        mean_iterations: per_decision(iterations, later, count),
+        mean_rollouts: per_decision(rollouts, later, count),
         real_time_factor: rtf(replan),
         loop_real_time_factor: rtf(loop_seconds),
         thrust_rate_peak: None,

@@ -689,6 +689,13 @@ impl Controller for Mpc {
             None => self.last.as_ref().map(|r| r.iterations),
         }
     }
+
+    fn last_rollouts(&self) -> Option<usize> {
+        match &self.thrust {
+            Some(t) => t.last.as_ref().map(|r| r.gradient_evals),
+            None => self.last.as_ref().map(|r| r.rollouts),
+        }
+    }
 }
 
 impl Controller for Mpc<3> {
@@ -708,6 +715,10 @@ impl Controller for Mpc<3> {
 
     fn last_iterations(&self) -> Option<usize> {
         self.last.as_ref().map(|r| r.iterations)
+    }
+
+    fn last_rollouts(&self) -> Option<usize> {
+        self.last.as_ref().map(|r| r.rollouts)
     }
 
     fn spatial(&self) -> bool {

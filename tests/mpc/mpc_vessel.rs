@@ -152,6 +152,36 @@ fn mpc_thrust_respects_bound_and_rate_at_every_step() {
     // test's.
 }
 
+/// What a thrust re-plan cost: each decision reports the plan model's simulations beside its
+/// L-BFGS iterations. References: the method's own count (an L-BFGS run simulates its start and
+/// at least one trial point per iteration, so r_k ≥ i_k + 1), the summary's mean recomputed from
+/// the decisions (the first, cold plan excluded), and a law without an optimiser reporting none.
+#[test]
+fn thrust_replans_report_their_rollouts() {
+    let s = scene(200, 1.0, 5.0);
+    let options = MpcOptions {
+        horizon: Horizon::Seconds(0.5),
+        effort: 0.0,
+        ..MpcOptions::default()
+    };
+    let mut controller = Mpc::new(&s, 0.05, options).unwrap();
+    let r = mpc::run_closed_loop(&s, 0.05, &mut controller).unwrap();
+    for (k, d) in r.decisions.iter().enumerate() {
+        let (i, n) = (d.iterations.unwrap(), d.rollouts.unwrap());
+        assert!(n > i, "decision {k}: {n} rollouts for {i} iterations");
+    }
+    let later = &r.decisions[1..];
+    let mean = later.iter().map(|d| d.rollouts.unwrap()).sum::<usize>() as f64 / later.len() as f64;
+    assert_eq!(r.summary.mean_rollouts, Some(mean));
+    println!(
+        "mean per re-plan: {:.2} iterations, {mean:.2} rollouts",
+        r.summary.mean_iterations.unwrap()
+    );
+    let free = mpc::run_closed_loop(&s, 0.05, &mut mpc::NoControl).unwrap();
+    assert!(free.decisions.iter().all(|d| d.rollouts.is_none()));
+    assert_eq!(free.summary.mean_rollouts, None);
+}
+
 /// `forecast`: "perfect" is the controller as before (its default, bit for bit); "none" plans on
 /// a calm sea and decides other thrusts; a scene without a sea refuses "none" by name.
 #[test]

@@ -297,6 +297,10 @@ impl<C: Controller + ?Sized> Controller for Counted<'_, C> {
         self.inner.last_iterations()
     }
 
+    fn last_rollouts(&self) -> Option<usize> {
+        self.inner.last_rollouts()
+    }
+
     fn spatial(&self) -> bool {
         self.inner.spatial()
     }
@@ -380,6 +384,7 @@ fn summary<'py>(py: Python<'py>, s: &Summary) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("mean_replan_seconds", s.mean_replan_seconds)?;
     d.set_item("worst_replan_seconds", s.worst_replan_seconds)?;
     d.set_item("mean_iterations", s.mean_iterations)?;
+    d.set_item("mean_rollouts", s.mean_rollouts)?;
     d.set_item("real_time_factor", s.real_time_factor)?;
     d.set_item("loop_real_time_factor", s.loop_real_time_factor)?;
     Ok(d)

@@ -71,7 +71,8 @@ moment_x_none, moment_x_constant, control_x_constant, moment_x_pd, control_x_pd 
 
 JSON (--summary FILE): settings, and per controller: c_sum = Σ M₀(t_k)² [N²m²], max_abs_moment, \
 max_abs_control, effort h·Σ u² [N²s], decisions, initial_decision_seconds, mean_replan_seconds, \
-worst_replan_seconds (the decisions after the first), mean_iterations, real_time_factor \
+worst_replan_seconds (the decisions after the first), mean_iterations, mean_rollouts (the plan \
+model's simulations per decision after the first), real_time_factor \
 (simulated time / controller wall time), loop_real_time_factor; real_time (worst re-plan ≤ \
 interval); with --baselines the ratios of MPC's c_sum to the constant force's and the PD law's, \
 and pd_gains [u_b, K_p, K_d] (spatial: [u_b,x, u_b,z, K_p, K_d]); a spatial run has model = \
@@ -337,6 +338,10 @@ impl<C: Controller> Controller for Blamed<'_, C> {
         self.inner.last_iterations()
     }
 
+    fn last_rollouts(&self) -> Option<usize> {
+        self.inner.last_rollouts()
+    }
+
     fn spatial(&self) -> bool {
         self.inner.spatial()
     }
@@ -470,6 +475,10 @@ impl Controller for InModel<'_> {
 
     fn last_iterations(&self) -> Option<usize> {
         self.inner.last_iterations()
+    }
+
+    fn last_rollouts(&self) -> Option<usize> {
+        self.inner.last_rollouts()
     }
 
     fn spatial(&self) -> bool {

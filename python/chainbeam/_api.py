@@ -436,7 +436,8 @@ class MpcResult:
             [N m]), the applied force u_k [N] and the tip displacement z_n(t_k) [m] under MPC,
             k = 0..N.
         summary: c_sum, max_abs_moment, max_abs_control, effort, decisions, re-plan times,
-            real-time factors (``chainbeam mpc --summary``'s per-controller keys); its
+            ``mean_iterations`` and ``mean_rollouts`` (the plan model's simulations per
+            re-plan), real-time factors (``chainbeam mpc --summary``'s per-controller keys); its
             ``controller`` is ``"mpc"`` (the baselines': ``"none"``, ``"constant"``, ``"pd"``,
             the names ``fatigue`` takes).
         baselines: with ``baselines=True`` the summaries of no control, the best constant force

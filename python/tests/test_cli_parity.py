@@ -154,7 +154,13 @@ def test_mpc_equals_cli_csv(cli: str, scenes: Path, tmp_path: Path) -> None:
     scene = cb.Scene.from_file(scenes / "mpc_riser.toml").replace({"time.steps": 200})
     path = tmp_path / "short.toml"
     path.write_text(scene.to_toml())
-    cols = read_csv(run(cli, "mpc", str(path), "--horizon", "1.0"))
+    summary = tmp_path / "summary.json"
+    cols = read_csv(run(cli, "mpc", str(path), "--horizon", "1.0", "--summary", str(summary)))
     r = cb.mpc(scene, horizon=1.0)
     for name in ("t", "moment", "control", "tip"):
         assert np.array_equal(bits(getattr(r, name)), bits(cols[name])), name
+    # What the re-plans cost, counted (not timed): the same in both.
+    ref = json.loads(summary.read_text())["mpc"]
+    for key in ("decisions", "mean_iterations", "mean_rollouts"):
+        assert r.summary[key] == ref[key], key
+    assert r.summary["mean_rollouts"] >= r.summary["mean_iterations"] > 0

@@ -107,6 +107,18 @@ fn perfect_model_to_the_end_reaches_the_open_loop_optimum() {
     );
 }
 
+/// MPC through the thrust re-planned every 0.05 s over a 0.5 s horizon, no effort term, in
+/// closed loop on `s`.
+fn short_horizon_loop(s: &Scene) -> mpc::ClosedLoopResult {
+    let options = MpcOptions {
+        horizon: Horizon::Seconds(0.5),
+        effort: 0.0,
+        ..MpcOptions::default()
+    };
+    let mut controller = Mpc::new(s, 0.05, options).unwrap();
+    mpc::run_closed_loop(s, 0.05, &mut controller).unwrap()
+}
+
 /// MPC through thrusters that cannot give what it would like: every step of the closed loop keeps
 /// |F_k| ≤ F_max and |F_k − F_{k−1}| ≤ Ḟ_max h (from F = 0 before t₀), asserted step by step;
 /// both limits bind in this run (so the check is not vacuous).
@@ -115,13 +127,7 @@ fn mpc_thrust_respects_bound_and_rate_at_every_step() {
     let (bound, rate) = (1.0, 5.0);
     let s = scene(300, bound, rate);
     let h = s.time.step;
-    let options = MpcOptions {
-        horizon: Horizon::Seconds(0.5),
-        effort: 0.0,
-        ..MpcOptions::default()
-    };
-    let mut controller = Mpc::new(&s, 0.05, options).unwrap();
-    let r = mpc::run_closed_loop(&s, 0.05, &mut controller).unwrap();
+    let r = short_horizon_loop(&s);
     let free = mpc::run_closed_loop(&s, 0.05, &mut mpc::NoControl).unwrap();
     assert_eq!(r.control.len(), s.time.steps + 1);
     let (mut at_bound, mut at_rate) = (false, false);
@@ -159,13 +165,7 @@ fn mpc_thrust_respects_bound_and_rate_at_every_step() {
 #[test]
 fn thrust_replans_report_their_rollouts() {
     let s = scene(200, 1.0, 5.0);
-    let options = MpcOptions {
-        horizon: Horizon::Seconds(0.5),
-        effort: 0.0,
-        ..MpcOptions::default()
-    };
-    let mut controller = Mpc::new(&s, 0.05, options).unwrap();
-    let r = mpc::run_closed_loop(&s, 0.05, &mut controller).unwrap();
+    let r = short_horizon_loop(&s);
     for (k, d) in r.decisions.iter().enumerate() {
         let (i, n) = (d.iterations.unwrap(), d.rollouts.unwrap());
         assert!(n > i, "decision {k}: {n} rollouts for {i} iterations");

@@ -758,12 +758,13 @@ impl Recorder {
 /// Largest real-time factor reported (a controller that takes no measurable time).
 const MAX_REAL_TIME_FACTOR: f64 = 1e12;
 
-/// A count summed over the decisions after the first, per decision (None without such
-/// decisions or without the count).
-fn per_decision(total: Option<usize>, later: &[Decision], count: f64) -> Option<f64> {
+/// The mean of a decision's count over `later` (the decisions after the first): Σ c_k / len
+/// (None without such decisions or when a decision has no count).
+fn per_decision(later: &[Decision], count: impl Fn(&Decision) -> Option<usize>) -> Option<f64> {
+    let total: Option<usize> = later.iter().map(count).sum();
     total
         .filter(|_| !later.is_empty())
-        .map(|i| i as f64 / count)
+        .map(|t| t as f64 / later.len() as f64)
 }
 
 fn summarise(
@@ -778,8 +779,6 @@ fn summarise(
     let later = decisions.get(1..).unwrap_or(&[]);
     let replan: f64 = later.iter().map(|d| d.seconds).sum();
     let count = later.len().max(1) as f64;
-    let iterations: Option<usize> = later.iter().map(|d| d.iterations).sum();
-    let rollouts: Option<usize> = later.iter().map(|d| d.rollouts).sum();
     let rtf = |s: f64| (simulated / s).min(MAX_REAL_TIME_FACTOR);
     let (c_sum, max_abs_moment, max_abs_control, effort) = if rec.spatial {
         let norms = |a: &[f64], b: &[f64]| -> Vec<f64> {
@@ -811,8 +810,8 @@ fn summarise(
         initial_decision_seconds: decisions.first().map_or(0.0, |d| d.seconds),
         mean_replan_seconds: replan / count,
         worst_replan_seconds: later.iter().fold(0.0, |a, d| a.max(d.seconds)),
-        mean_iterations: per_decision(iterations, later, count),
-        mean_rollouts: per_decision(rollouts, later, count),
+        mean_iterations: per_decision(later, |d| d.iterations),
+        mean_rollouts: per_decision(later, |d| d.rollouts),
         real_time_factor: rtf(replan),
         loop_real_time_factor: rtf(loop_seconds),
         thrust_rate_peak: None,

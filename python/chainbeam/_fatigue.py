@@ -234,7 +234,8 @@ def fatigue(
     ``[[fatigue.hotspot]]``: every controller acts on its moment and the controllers' damages and
     lives are its, docs/cli.md "The moment the controllers act on"), ``moment_about``
     (``"zero"`` or ``"mean"``: MPC plans on the hot spot's moment about zero, h·Σ|M|^m, or about
-    the plan's own mean, h·Σ|M − M̄|^m; ``"mean"`` needs ``hotspot``): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
+    the plan's own mean, h·Σ|M − M̄|^m, and the PD law feeds back M, or M − M̄ with M̄ the
+    moment's running mean; ``"mean"`` needs ``hotspot``): the closed-loop settings of the ``constant``, ``pd`` and ``mpc`` controllers (the flags of the
     same names; ``None``: the scene's ``[mpc]`` key, else the default); ``spin_up`` [s]: the
     start of every record left out of the count (``--spin-up``; not given: 0 with a
     :class:`StartUpWarning`); ``progress``: a bar or a callback over the runs (module docs);

@@ -203,12 +203,12 @@ pub enum MpcError {
         /// The exponent.
         exponent: f64,
     },
-    /// `moment_about = "mean"` without `hotspot`: the moment about its plan's mean is an
-    /// objective on a hot spot's moment only (the chain's base moment objective measures from
-    /// zero).
+    /// `moment_about = "mean"` without `hotspot`: the moment about its mean (MPC's plan's
+    /// mean, the PD law's running mean) is a hot spot's moment only (the chain's base moment is
+    /// measured from zero).
     #[error(
-        "moment_about \"mean\": MPC plans on a moment's fluctuation about its mean at a hot spot \
-         only; name one with hotspot (the chain's base moment is planned about zero)"
+        "moment_about \"mean\": MPC and the PD law act on a moment's fluctuation about its mean \
+         at a hot spot only; name one with hotspot (the chain's base moment is measured from zero)"
     )]
     MomentAboutNeedsHotSpot,
     /// A count (`iterations`, `first_iterations`) of zero, or a number (`effort`, `bound`)

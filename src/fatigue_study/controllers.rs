@@ -3,7 +3,8 @@
 //! scene (the PD law, the best constant at the hot spot, the control bound, the training scene).
 
 use super::*;
-use crate::scene::SceneInput;
+use crate::mpc::running_mean;
+use crate::scene::{MomentAbout, SceneInput};
 
 /// The scene's support as the scene file writes it.
 fn support_name(s: Support) -> &'static str {
@@ -109,7 +110,10 @@ pub fn run_controller<S: SceneInput + ?Sized>(
             let mut pd = pd_law(scene, settings)?;
             let gains = [pd.bias.z, pd.kp, pd.kd];
             match hot_spot_objective(scene, settings)? {
-                Some(spot) => closed(&mut HotSpotPd { law: pd, spot }, None, Some(gains)),
+                Some(spot) => {
+                    let mut law = HotSpotPd::new(pd, spot, interval);
+                    closed(&mut law, None, Some(gains))
+                }
                 None => closed(&mut pd, None, Some(gains)),
             }
         }
@@ -131,26 +135,44 @@ fn hot_spot_objective(
     settings: &ControlSettings,
 ) -> crate::Result<Option<HotSpotObjective>> {
     let Some(spot) = settings.mpc.hotspot.as_ref() else {
+        if settings.mpc.moment_about == MomentAbout::Mean {
+            return Err(MpcError::MomentAboutNeedsHotSpot.into());
+        }
         return Ok(None);
     };
     let exponent =
         WellheadDamage::new(&spot.spec, crate::fatigue::MomentMeasure::Wellhead)?.exponent();
-    Ok(Some(HotSpotObjective::new(
-        scene,
-        spot.elevation,
-        exponent,
-        settings.mpc.effort,
-    )?))
+    Ok(Some(
+        HotSpotObjective::new(scene, spot.elevation, exponent, settings.mpc.effort)?
+            .with_about(settings.mpc.moment_about),
+    ))
 }
 
 /// The PD law on the moment M at a hot spot (module docs, "The moment the controllers act
 /// on"): u = clamp(u_b − K_p M − K_d Ṁ, ±u_max) with M read from the observed attitudes
 /// ([`HotSpotObjective::moment_of_attitudes`]) and Ṁ the difference over the last step,
-/// (M(t_k) − M(t_{k−1}))/h (0 at k = 0): the loop its gains were tuned on
+/// (M(t_k) − M(t_{k−1}))/h (0 at k = 0); about the mean ([`HotSpotObjective::about`]),
+/// u = clamp(u_b − K_p (M − M̄) − K_d Ṁ) with M̄ the running mean of the decisions' moments
+/// ([`crate::mpc::running_mean`]): the loop its gains were tuned on
 /// ([`crate::mpc::pd_closed_loop_cost_at`]).
 struct HotSpotPd {
     law: PdLaw,
     spot: HotSpotObjective,
+    /// The decisions' interval Δt \[s\] (the running mean's sample time).
+    interval: f64,
+    /// The running mean M̄ of the decisions so far (about the mean only).
+    mean: Option<f64>,
+}
+
+impl HotSpotPd {
+    fn new(law: PdLaw, spot: HotSpotObjective, interval: f64) -> Self {
+        HotSpotPd {
+            law,
+            spot,
+            interval,
+            mean: None,
+        }
+    }
 }
 
 impl Controller for HotSpotPd {
@@ -164,7 +186,14 @@ impl Controller for HotSpotPd {
             Some(prev) => (m - self.spot.moment_of_attitudes(&prev.q)) / obs.h,
             None => 0.0,
         };
-        let u = self.law.bias.z - self.law.kp * m - self.law.kd * rate;
+        let about = if self.spot.about == MomentAbout::Mean {
+            let mean = running_mean(self.mean, m, self.interval);
+            self.mean = Some(mean);
+            mean
+        } else {
+            0.0
+        };
+        let u = self.law.bias.z - self.law.kp * (m - about) - self.law.kd * rate;
         Ok(Force2::z(u.clamp(-self.law.bound, self.law.bound)))
     }
 }

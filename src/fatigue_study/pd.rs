@@ -11,7 +11,8 @@
 //! with k_u = ∂M₀/∂u the static gain of the control on the base moment (the static equilibrium
 //! in the scene's steady loads — its current, no waves — at u = 0 and at u = u_max/10,
 //! [`crate::statics::static_equilibrium_at`]), u_s = −M₀(0)/k_u the force that cancels the
-//! static moment (clamped to ±u_max), ω = 2π/T_p of the scene's sea (1 rad/s without one) and
+//! static moment (clamped to ±u_max; 0 for a law about the moment's running mean, which leaves
+//! the steady moment alone), ω = 2π/T_p of the scene's sea (1 rad/s without one) and
 //! B = [`PD_BOX`]. The loop gains g_p = K_p k_u = e^{x_p} and g_d = K_d k_u ω = e^{x_d} are
 //! positive: u = u_b − K_p M₀ − K_d Ṁ₀ then pushes against the moment the force itself makes
 //! (negative feedback, statically M = (M_d + k_u u_b)/(1 + g_p)), whatever the sign convention
@@ -25,7 +26,7 @@ use crate::error::{MpcError, Requirement, Result};
 use crate::model::Chain;
 use crate::mpc::PdTuning;
 use crate::optimize::OptimProblem;
-use crate::scene::{Control, ControlKind, Scene};
+use crate::scene::{Control, ControlKind, MomentAbout, Scene};
 use crate::statics::{calm_scene, static_equilibrium_at};
 
 /// The half-width B of the box of the scaled parameters: loop gains within e^{±4} (0.018 to
@@ -102,8 +103,11 @@ impl PdScales {
             .loads
             .waves
             .map_or(1.0, |w| 2.0 * std::f64::consts::PI / w.tp);
+        // About the mean the law spends nothing on the steady moment: its bias starts at zero.
+        let about_mean = spot.is_some_and(|s| s.about == MomentAbout::Mean);
+        let static_bias = if about_mean { 0.0 } else { -m0 / k_u };
         Ok(PdScales {
-            static_bias: (-m0 / k_u).clamp(-bound, bound),
+            static_bias: static_bias.clamp(-bound, bound),
             bias_step: bound.min(1e12) / PD_BOX,
             kp: 1.0 / k_u,
             kd: 1.0 / (k_u * omega),

@@ -270,8 +270,8 @@ pub use crate::scene::Forecast;
 pub use crate::scene::MomentAbout;
 pub use crate::scene::Observe;
 pub use baselines::{
-    pd_closed_loop_cost, pd_closed_loop_cost_at, pd_closed_loop_cost_spatial, ConstantForce,
-    NoControl, PdLaw, PdTuning,
+    pd_closed_loop_cost, pd_closed_loop_cost_at, pd_closed_loop_cost_spatial, running_mean,
+    ConstantForce, NoControl, PdLaw, PdTuning, PD_MEAN_TIME,
 };
 pub use forecast::{forecast_sigma, NoisyForecast, SIGMA_CAP};
 pub use observer::{Observer, ObserverOptions, SensorNoise, SensorSet};

@@ -176,10 +176,12 @@ def test_merge_over_seeds_refuses_what_no_call_runs(cli: str, tmp_path: Path) ->
 
 
 def call_dir(cli: str, tmp: Path, name: str, rows: list[int], commands: list[str],
-             cpu: dict[str, float]) -> str:
+             cpu: dict[str, float], flags: dict[str, list[str]] | None = None) -> str:
     """A directory as one `scripts/headline` call leaves it: the scene, one JSON per command
     (`chainbeam fatigue --controller C`, which also runs no control), and cpu.json (the CPU
-    seconds given: the merge's arithmetic on them is what is checked, not a timing)."""
+    seconds given: the merge's arithmetic on them is what is checked, not a timing). `flags`:
+    further flags per command, keyed by the JSON's name (`pd_mean`: the PD law's command
+    with `--moment-about mean`, as the harness names it)."""
     d = tmp / name
     d.mkdir()
     (d / "scene.toml").write_text(scene_text(7))
@@ -189,8 +191,9 @@ def call_dir(cli: str, tmp: Path, name: str, rows: list[int], commands: list[str
     for c in commands:
         p = subprocess.run(
             [cli, "--quiet", "fatigue", str(d / "scene.toml"), "--scatter", str(scatter),
-             "--controller", c, "--seeds", "2", "--record", "8", "--spin-up", "2",
-             "--output", str(d / f"{c}.json")], capture_output=True, text=True)
+             "--controller", c.partition("_")[0], "--seeds", "2", "--record", "8",
+             "--spin-up", "2", "--output", str(d / f"{c}.json"), *(flags or {}).get(c, [])],
+            capture_output=True, text=True)
         assert p.returncode == 0, p.stderr
     scatter.unlink()
     (d / "cpu.json").write_text(json.dumps({"cpu": cpu, "simulated": 0.0}))
@@ -250,3 +253,28 @@ def test_merge_over_controllers_refuses_other_records(cli: str, tmp_path: Path) 
         merge_dirs(tmp_path, [constant, pd_two], "o4")
     # A refused merge writes nothing.
     assert not any((tmp_path / o).exists() for o in ("o1", "o2", "o4"))
+
+
+def test_merge_joins_the_pd_law_about_the_mean(cli: str, tmp_path: Path) -> None:
+    """The PD law about zero and about its moment's running mean (`--moment-about mean`, which the
+    harness writes as pd_mean.json) in two calls over the same cells and hot spot: one table with
+    a row for each, the second labelled "about mean", each JSON as its call wrote it; the two
+    laws decide differently (their damages differ)."""
+    hot = ["--hotspot", "mid"]
+    zero = call_dir(cli, tmp_path, "zero", [0, 1, 2], ["none", "pd"], {"none": 1.0, "pd": 2.0},
+                    {"none": hot, "pd": hot})
+    mean = call_dir(cli, tmp_path, "mean", [0, 1, 2], ["none", "pd_mean"],
+                    {"none": 1.0, "pd_mean": 3.0},
+                    {"none": hot, "pd_mean": hot + ["--moment-about", "mean"]})
+    out = merge_dirs(tmp_path, [zero, mean], "out")
+    for d, c in [(zero, "pd"), (mean, "pd_mean")]:
+        close(json.loads((out / f"{c}.json").read_text()),
+              json.loads((Path(d) / f"{c}.json").read_text()))
+    about = json.loads((out / "pd_mean.json").read_text())
+    assert about["settings"]["moment_about"] == "mean"
+    plain = json.loads((out / "pd.json").read_text())
+    assert plain["controllers"]["pd"]["damage_per_year"] != \
+        about["controllers"]["pd"]["damage_per_year"]
+    table = (out / "headline.md").read_text()
+    rows = [l for l in table.splitlines() if l.startswith("| pd |")]
+    assert [r.split("|")[2].strip() for r in rows] == ["—", "—, about mean"], rows

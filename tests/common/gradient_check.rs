@@ -18,6 +18,21 @@ pub fn central(f: &dyn Fn(f64) -> f64, x: f64, d: f64) -> f64 {
     (f(x + d) - f(x - d)) / (2.0 * d)
 }
 
+/// The central differences of f in each component of x, step `d`: the gradient's reference for
+/// a function of several parameters.
+pub fn central_gradient(f: &dyn Fn(&[f64]) -> f64, x: &[f64], d: f64) -> Vec<f64> {
+    (0..x.len())
+        .map(|i| {
+            let at = |t: f64| {
+                let mut y = x.to_vec();
+                y[i] = t;
+                f(&y)
+            };
+            central(&at, x[i], d)
+        })
+        .collect()
+}
+
 /// The five-point central difference (8(f(x + d) − f(x − d)) − (f(x + 2d) − f(x − 2d)))/(12d):
 /// truncation O(d⁴) for a smooth f.
 pub fn five_point(f: &dyn Fn(f64) -> f64, x: f64, d: f64) -> f64 {

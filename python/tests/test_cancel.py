@@ -24,6 +24,11 @@ SCRIPT = textwrap.dedent(
     import json, os, resource, signal, sys, threading, time
     import chainbeam as cb
 
+    # A child of a shell's background job starts with SIGINT ignored, and the interpreter then
+    # installs no KeyboardInterrupt handler: restore it, so the test does not depend on how the
+    # suite was launched.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
     def cpu():
         r = resource.getrusage(resource.RUSAGE_SELF)
         return r.ru_utime + r.ru_stime

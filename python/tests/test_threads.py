@@ -59,7 +59,10 @@ def test_ctrl_c_interrupts_a_long_run() -> None:
     several seconds: 20 simulations of 10⁵ steps in one call would be a loop, so one MPC run of
     the MPC scene's 30 s is used)."""
     code = (
-        "import chainbeam as cb, sys, time\n"
+        "import chainbeam as cb, signal, sys, time\n"
+        # Started from a shell's background job, SIGINT arrives ignored and Python installs no
+        # KeyboardInterrupt handler: restore it (the test is of chainbeam, not of the launcher).
+        "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
         f"s = cb.Scene.from_file({str(ROOT / 'examples/scenes/mpc_riser.toml')!r})\n"
         "print('start', flush=True)\n"
         "t0 = time.perf_counter()\n"

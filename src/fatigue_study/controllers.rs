@@ -3,7 +3,7 @@
 //! scene (the PD law, the best constant at the hot spot, the control bound, the training scene).
 
 use super::*;
-use crate::mpc::running_mean;
+use crate::mpc::{pd, running_mean};
 use crate::scene::{MomentAbout, SceneInput};
 
 /// The scene's support as the scene file writes it.
@@ -193,8 +193,8 @@ impl Controller for HotSpotPd {
         } else {
             0.0
         };
-        let u = self.law.bias.z - self.law.kp * (m - about) - self.law.kd * rate;
-        Ok(Force2::z(u.clamp(-self.law.bound, self.law.bound)))
+        let gains = [self.law.bias.z, self.law.kp, self.law.kd];
+        Ok(Force2::z(pd(&gains, m - about, rate, self.law.bound)))
     }
 }
 

@@ -155,7 +155,7 @@ pub struct PdLaw {
 }
 
 /// The law at one sample, in any scalar (the clamp passes no derivative on the bound).
-fn pd<D: Scalar>(gains: &[D; 3], moment: D, rate: D, bound: f64) -> D {
+pub(crate) fn pd<D: Scalar>(gains: &[D; 3], moment: D, rate: D, bound: f64) -> D {
     let u = gains[0] - gains[1] * moment - gains[2] * rate;
     if u.re() > bound {
         D::from(bound)

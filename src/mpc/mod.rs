@@ -257,6 +257,7 @@
 //! ```
 
 mod baselines;
+pub(crate) use baselines::pd;
 pub mod forecast;
 mod hotspot_setting;
 pub mod observer;
